@@ -1,0 +1,222 @@
+"""The mechanism document: a validated description of a planar compliant mechanism.
+
+Named collections (materials, sections, bodies, elements, loads, outputs) are JSON objects
+keyed by name, so every field has a stable JSON pointer such as /sections/flex/h or
+/loads/actuation/force/1. Numbers are plain (in the document's declared units) or strings
+with units ("25 um"). Cross references and physical ranges are checked when the document is
+compiled (models.mechanism), where each error names its field.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated, Any, Literal, Union
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from models.errors import MechanismError, pointer_of
+
+Number = Union[float, str]
+Vec2 = tuple[Number, Number]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", populate_by_name=True)
+
+
+class Units(_Strict):
+    """Units of the bare numbers in the document; results come back in the same units."""
+
+    length: str = "m"
+    force: str = "N"
+    stress: str = "Pa"
+    angle: str = "deg"
+    mass: str = "kg"
+
+
+class Material(_Strict):
+    E: Number = Field(description="Young's modulus")
+    nu: Number | None = Field(default=None, description="Poisson's ratio")
+    density: Number | None = None
+
+
+class RectangularSection(_Strict):
+    shape: Literal["rectangle"] = "rectangle"
+    b: Number = Field(description="width, out of the plane of motion")
+    h: Number = Field(description="thickness, in the plane of motion (the bending direction)")
+
+
+class Body(_Strict):
+    fixed: bool = False
+    position: Vec2 = Field(description="reference point (e.g. mass centre), undeformed, global frame")
+    angle: Number = 0.0
+    mass: Number | None = None
+    inertia: Number | None = Field(default=None, description="about the reference point")
+
+
+class CurvedBeam(_Strict):
+    """A circular-arc flexure (seed 000). The arc starts at start_angle about `center` on body
+    `from` and runs by arc_angle in `direction` to body `to`."""
+
+    type: Literal["curved_beam"]
+    from_: str = Field(alias="from")
+    to: str
+    center: Vec2
+    radius: Number
+    start_angle: Number
+    arc_angle: Number
+    direction: Literal["ccw", "cw"] = "ccw"
+    material: str
+    section: str
+    model: Literal["linear", "partial_nonlinear"] = "partial_nonlinear"
+
+
+Element = Annotated[Union[CurvedBeam], Field(discriminator="type")]
+
+
+class _PointOnBody(_Strict):
+    body: str
+    at: Vec2 | None = Field(default=None, description="global point, undeformed configuration")
+    offset: Vec2 | None = Field(default=None, description="from the body reference point, body axes")
+
+    @model_validator(mode="after")
+    def _one_location(self):
+        if self.at is not None and self.offset is not None:
+            raise ValueError("give either 'at' or 'offset', not both")
+        return self
+
+
+class ForceLoad(_PointOnBody):
+    """A force of fixed global direction at a point of a body (default: its reference point)."""
+
+    type: Literal["force"]
+    force: Vec2
+
+
+class MomentLoad(_Strict):
+    type: Literal["moment"]
+    body: str
+    moment: Number
+
+
+class PrescribedDisplacement(_Strict):
+    """Prescribed motion of a body's reference point; a component left out stays free."""
+
+    type: Literal["displacement"]
+    body: str
+    dx: Number | None = None
+    dy: Number | None = None
+    rotation: Number | None = None
+
+    @model_validator(mode="after")
+    def _something_prescribed(self):
+        if self.dx is None and self.dy is None and self.rotation is None:
+            raise ValueError("prescribe at least one of dx, dy, rotation")
+        return self
+
+
+Load = Annotated[Union[ForceLoad, MomentLoad, PrescribedDisplacement], Field(discriminator="type")]
+
+
+class PointOutput(_PointOnBody):
+    type: Literal["point"]
+
+
+class ReactionOutput(_Strict):
+    type: Literal["reaction"]
+    body: str
+
+
+Output = Annotated[Union[PointOutput, ReactionOutput], Field(discriminator="type")]
+
+
+class SweepUntil(_Strict):
+    output: str = Field(description="scalar output name, e.g. end_effector.x")
+    equals: Number
+
+
+class SweepSpec(_Strict):
+    """A load path: `path` (a numeric field) goes from start to stop in `steps` steps; with
+    `until`, the path ends where the named output reaches the given value."""
+
+    path: str
+    start: Number
+    stop: Number | None = None
+    steps: int = Field(default=100, ge=1)
+    until: SweepUntil | None = None
+
+    @model_validator(mode="after")
+    def _an_end(self):
+        if self.stop is None and self.until is None:
+            raise ValueError("give 'stop' or 'until'")
+        return self
+
+
+class MechanismDocument(_Strict):
+    schema_version: Literal[1] = 1
+    name: str = "mechanism"
+    description: str = ""
+    units: Units = Units()
+    materials: dict[str, Material] = {}
+    sections: dict[str, RectangularSection] = {}
+    bodies: dict[str, Body]
+    elements: dict[str, Element] = {}
+    loads: dict[str, Load] = {}
+    outputs: dict[str, Output] = {}
+    sweep: SweepSpec | None = None
+
+    def to_json_dict(self) -> dict[str, Any]:
+        return self.model_dump(mode="json", by_alias=True, exclude_none=True)
+
+
+def _raise_first(exc: ValidationError) -> None:
+    """Turn pydantic's error list into our error type, naming the first offending field."""
+    errors = exc.errors()
+    first = errors[0]
+    location = tuple(p for p in first["loc"] if not _is_union_tag(p))
+    message = first["msg"]
+    if first["type"] == "missing":
+        message = "required field is missing"
+    elif first["type"] == "extra_forbidden":
+        message = "unknown field"
+    if len(errors) > 1:
+        message += f" (and {len(errors) - 1} more problem{'s' if len(errors) > 2 else ''})"
+    raise MechanismError(pointer_of(location), message) from None
+
+
+def _is_union_tag(part: Any) -> bool:
+    # pydantic inserts the discriminator value or the union member name into locations
+    return isinstance(part, str) and (part in {"curved_beam", "force", "moment", "displacement",
+                                                "point", "reaction"} or "[" in part)
+
+
+def parse_document(data: dict[str, Any]) -> MechanismDocument:
+    """Validate a document given as a dict (parsed JSON or YAML)."""
+    if not isinstance(data, dict):
+        raise MechanismError("", "a mechanism document must be a JSON object")
+    try:
+        return MechanismDocument.model_validate(data)
+    except ValidationError as exc:
+        _raise_first(exc)
+        raise  # unreachable: _raise_first always raises
+
+
+def load_document(source: str | Path | dict[str, Any]) -> MechanismDocument:
+    """Read and validate a mechanism document from a JSON/YAML file path or a dict."""
+    if isinstance(source, dict):
+        return parse_document(source)
+    path = Path(source)
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise MechanismError("", f"cannot read {path}: {exc.strerror}") from None
+    try:
+        if path.suffix.lower() in {".yaml", ".yml"}:
+            data = yaml.safe_load(text)
+        else:
+            data = json.loads(text)
+    except (json.JSONDecodeError, yaml.YAMLError) as exc:
+        raise MechanismError("", f"{path} is not valid {'YAML' if path.suffix.lower() in {'.yaml', '.yml'} else 'JSON'}: {exc}") from None
+    return parse_document(data)

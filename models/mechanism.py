@@ -1,0 +1,391 @@
+"""Compile a mechanism document into a Mechanism: structure, parameters and CasADi graphs.
+
+The structure (bodies, which coordinates are free, element topology and models, where loads
+and outputs sit) decides the graphs; every number of the document is a parameter. Graphs are
+built once per structure and cached by its hash, so changing a load, a section or a radius
+never rebuilds anything. Parameters are passed nondimensionalized: lengths by the largest
+flexure radius, forces by the largest flexure EI over that length squared, so a case in
+(uN, mm) and its SI copy present the same numbers to the solver.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from dataclasses import dataclass, field, replace
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+
+from models.document import (
+    CurvedBeam,
+    ForceLoad,
+    MechanismDocument,
+    MomentLoad,
+    PointOutput,
+    PrescribedDisplacement,
+    ReactionOutput,
+)
+from models.errors import MechanismError
+from models.units import quantity_to_si, unit_factor
+
+COORDINATES = ("x", "y", "angle")
+MODELS = ("linear", "partial_nonlinear")
+
+
+@dataclass(frozen=True)
+class Parameter:
+    pointer: str
+    kind: str  # length | force | moment | stress | angle
+    check: str | None = None  # positive | arc_angle
+
+
+@dataclass(frozen=True)
+class FlexureTopology:
+    name: str
+    start_body: int  # body the arc starts on (after normalizing a clockwise arc)
+    end_body: int
+    reversed: bool  # document gave a clockwise arc: start/end swapped for the ccw model
+    model: str
+    material: str
+    section: str
+
+
+@dataclass(frozen=True)
+class LoadTopology:
+    name: str
+    kind: str  # force | moment
+    body: int
+    location: str  # reference | at | offset
+
+
+@dataclass(frozen=True)
+class PointTopology:
+    name: str
+    body: int
+    location: str
+
+
+@dataclass(frozen=True)
+class Structure:
+    """Everything that shapes the graphs; no numbers."""
+
+    bodies: tuple[str, ...]
+    parameters: tuple[Parameter, ...]
+    # per body and coordinate: None if free, else the pointer of its prescribed value ("" = 0)
+    prescribed: tuple[tuple[str | None, str | None, str | None], ...]
+    flexures: tuple[FlexureTopology, ...]
+    loads: tuple[LoadTopology, ...]
+    points: tuple[PointTopology, ...]
+    reactions: tuple[tuple[str, int], ...]
+
+    @cached_property
+    def key(self) -> str:
+        payload = json.dumps(_plain(self), sort_keys=True)
+        return hashlib.sha256(payload.encode()).hexdigest()[:16]
+
+    @cached_property
+    def free(self) -> tuple[tuple[int, int], ...]:
+        return tuple((b, c) for b, row in enumerate(self.prescribed) for c in range(3) if row[c] is None)
+
+    @cached_property
+    def index(self) -> dict[str, int]:
+        return {p.pointer: i for i, p in enumerate(self.parameters)}
+
+    def coordinate_name(self, body: int, coordinate: int) -> str:
+        return f"{self.bodies[body]}.{COORDINATES[coordinate]}"
+
+
+def _plain(obj: Any) -> Any:
+    if hasattr(obj, "__dataclass_fields__"):
+        return {k: _plain(getattr(obj, k)) for k in obj.__dataclass_fields__}
+    if isinstance(obj, (tuple, list)):
+        return [_plain(x) for x in obj]
+    return obj
+
+
+@dataclass(frozen=True)
+class Scales:
+    """SI size of one nondimensional unit of each kind of quantity."""
+
+    length: float
+    force: float
+
+    def of(self, kind: str) -> float:
+        return {
+            "length": self.length,
+            "force": self.force,
+            "moment": self.force * self.length,
+            "energy": self.force * self.length,
+            "stress": self.force / self.length**2,
+            "angle": 1.0,
+            "stiffness": self.force / self.length,
+        }[kind]
+
+
+class _Collector:
+    """Walks a validated document: checks references and ranges, gathers parameters."""
+
+    def __init__(self, doc: MechanismDocument):
+        self.doc = doc
+        self.parameters: list[Parameter] = []
+        self.values: list[float] = []
+
+    def unit_of(self, kind: str) -> str:
+        u = self.doc.units
+        return {
+            "length": u.length,
+            "force": u.force,
+            "moment": f"({u.force})*({u.length})",
+            "stress": u.stress,
+            "angle": u.angle,
+        }[kind]
+
+    def add(self, pointer: str, value, kind: str, check: str | None = None) -> None:
+        si = quantity_to_si(value, kind, self.unit_of(kind), pointer)
+        _check_value(pointer, si, check, self.doc.units)
+        self.parameters.append(Parameter(pointer, kind, check))
+        self.values.append(si)
+
+    def add_vec(self, pointer: str, values, kind: str) -> None:
+        for i, v in enumerate(values):
+            self.add(f"{pointer}/{i}", v, kind)
+
+    def body_index(self, name: str, pointer: str, bodies: list[str]) -> int:
+        if name not in bodies:
+            raise MechanismError(pointer, f"unknown body '{name}' (bodies: {', '.join(bodies)})")
+        return bodies.index(name)
+
+
+def _check_value(pointer: str, si: float, check: str | None, units) -> None:
+    if not math.isfinite(si):
+        raise MechanismError(pointer, "must be a finite number")
+    if check == "positive" and si <= 0:
+        raise MechanismError(pointer, f"must be positive, got {si:g} (SI)")
+    if check == "arc_angle" and not (0.0 < si < 2 * math.pi):
+        deg = math.degrees(si)
+        raise MechanismError(pointer, f"arc angle must lie in (0, 360) deg, got {deg:g} deg")
+
+
+def _collect(doc: MechanismDocument, model_override: str | None) -> tuple[Structure, np.ndarray]:
+    if model_override is not None and model_override not in MODELS:
+        raise MechanismError("model", f"unknown model '{model_override}' (choose from {', '.join(MODELS)})")
+    c = _Collector(doc)
+    bodies = list(doc.bodies)
+    if not bodies:
+        raise MechanismError("/bodies", "a mechanism needs at least one body")
+
+    for name, body in doc.bodies.items():
+        c.add_vec(f"/bodies/{name}/position", body.position, "length")
+        c.add(f"/bodies/{name}/angle", body.angle, "angle")
+
+    prescribed: list[list[str | None]] = [["" if b.fixed else None] * 3 for b in doc.bodies.values()]
+    for name, load in doc.loads.items():
+        if not isinstance(load, PrescribedDisplacement):
+            continue
+        b = c.body_index(load.body, f"/loads/{name}/body", bodies)
+        for coord, (field_name, kind) in enumerate((("dx", "length"), ("dy", "length"), ("rotation", "angle"))):
+            value = getattr(load, field_name)
+            if value is None:
+                continue
+            pointer = f"/loads/{name}/{field_name}"
+            if prescribed[b][coord]:
+                raise MechanismError(pointer, f"{bodies[b]}.{COORDINATES[coord]} is already prescribed by {prescribed[b][coord]}")
+            c.add(pointer, value, kind)
+            prescribed[b][coord] = pointer
+    if not any(all(v is not None for v in row) for row in prescribed):
+        raise MechanismError("/bodies", 'no fixed body: mark at least one body "fixed": true (or prescribe all its motions)')
+
+    used_materials: set[str] = set()
+    used_sections: set[str] = set()
+    flexures: list[FlexureTopology] = []
+    for name, el in doc.elements.items():
+        base = f"/elements/{name}"
+        if isinstance(el, CurvedBeam):
+            i = c.body_index(el.from_, f"{base}/from", bodies)
+            j = c.body_index(el.to, f"{base}/to", bodies)
+            if i == j:
+                raise MechanismError(f"{base}/to", f"a flexure must join two different bodies (both ends on '{el.to}')")
+            if el.material not in doc.materials:
+                raise MechanismError(f"{base}/material", f"unknown material '{el.material}' (materials: {', '.join(doc.materials) or 'none'})")
+            if el.section not in doc.sections:
+                raise MechanismError(f"{base}/section", f"unknown section '{el.section}' (sections: {', '.join(doc.sections) or 'none'})")
+            used_materials.add(el.material)
+            used_sections.add(el.section)
+            c.add_vec(f"{base}/center", el.center, "length")
+            c.add(f"{base}/radius", el.radius, "length", "positive")
+            c.add(f"{base}/start_angle", el.start_angle, "angle")
+            c.add(f"{base}/arc_angle", el.arc_angle, "angle", "arc_angle")
+            reversed_ = el.direction == "cw"
+            start, end = (j, i) if reversed_ else (i, j)
+            flexures.append(FlexureTopology(name, start, end, reversed_, model_override or el.model, el.material, el.section))
+    for name in sorted(used_materials):
+        c.add(f"/materials/{name}/E", doc.materials[name].E, "stress", "positive")
+    for name in sorted(used_sections):
+        c.add(f"/sections/{name}/b", doc.sections[name].b, "length", "positive")
+        c.add(f"/sections/{name}/h", doc.sections[name].h, "length", "positive")
+
+    loads: list[LoadTopology] = []
+    for name, load in doc.loads.items():
+        base = f"/loads/{name}"
+        if isinstance(load, ForceLoad):
+            b = c.body_index(load.body, f"{base}/body", bodies)
+            c.add_vec(f"{base}/force", load.force, "force")
+            location = _locate(c, base, load)
+            loads.append(LoadTopology(name, "force", b, location))
+        elif isinstance(load, MomentLoad):
+            b = c.body_index(load.body, f"{base}/body", bodies)
+            c.add(f"{base}/moment", load.moment, "moment")
+            loads.append(LoadTopology(name, "moment", b, "reference"))
+
+    points: list[PointTopology] = []
+    reactions: list[tuple[str, int]] = []
+    for name, out in doc.outputs.items():
+        base = f"/outputs/{name}"
+        if "." in name:
+            raise MechanismError(base, "output names may not contain '.' (it separates the quantity, as in ee.x)")
+        b = c.body_index(out.body, f"{base}/body", bodies)
+        if isinstance(out, PointOutput):
+            points.append(PointTopology(name, b, _locate(c, base, out)))
+        elif isinstance(out, ReactionOutput):
+            if all(v is None for v in prescribed[b]):
+                raise MechanismError(f"{base}/body", f"body '{out.body}' is neither fixed nor has a prescribed motion, so it has no reaction")
+            reactions.append((name, b))
+
+    structure = Structure(
+        bodies=tuple(bodies),
+        parameters=tuple(c.parameters),
+        prescribed=tuple(tuple(row) for row in prescribed),
+        flexures=tuple(flexures),
+        loads=tuple(loads),
+        points=tuple(points),
+        reactions=tuple(reactions),
+    )
+    return structure, np.array(c.values, dtype=float)
+
+
+def _locate(c: _Collector, base: str, item) -> str:
+    if item.at is not None:
+        c.add_vec(f"{base}/at", item.at, "length")
+        return "at"
+    if item.offset is not None:
+        c.add_vec(f"{base}/offset", item.offset, "length")
+        return "offset"
+    return "reference"
+
+
+def _scales(structure: Structure, si: np.ndarray) -> Scales:
+    idx = structure.index
+    radii = [si[idx[f"/elements/{f.name}/radius"]] for f in structure.flexures]
+    if radii:
+        length = max(radii)
+        EIs = []
+        for f in structure.flexures:
+            E = si[idx[f"/materials/{f.material}/E"]]
+            b = si[idx[f"/sections/{f.section}/b"]]
+            h = si[idx[f"/sections/{f.section}/h"]]
+            EIs.append(E * b * h**3 / 12)
+        force = max(EIs) / length**2
+    else:
+        positions = [abs(si[i]) for i, p in enumerate(structure.parameters) if p.kind == "length"]
+        length = max([x for x in positions if x > 0], default=1.0)
+        force = 1.0
+    return Scales(length=length, force=force)
+
+
+@dataclass(frozen=True)
+class Mechanism:
+    """A compiled mechanism: its structure, parameter values (SI) and graphs.
+
+    Unknowns z are the displacements of the free body coordinates from the undeformed pose
+    (nondimensional: lengths / scales.length, angles in rad), in `structure.free` order.
+    """
+
+    document: MechanismDocument
+    structure: Structure
+    si_values: np.ndarray
+    scales: Scales
+    _overrides: dict = field(default_factory=dict, compare=False)
+
+    @property
+    def parameters(self) -> tuple[Parameter, ...]:
+        return self.structure.parameters
+
+    @property
+    def free_coordinates(self) -> list[str]:
+        return [self.structure.coordinate_name(b, c) for b, c in self.structure.free]
+
+    @property
+    def n_free(self) -> int:
+        return len(self.structure.free)
+
+    @cached_property
+    def graphs(self):
+        from models.assembly import graphs_for
+
+        return graphs_for(self.structure)
+
+    # --- units -------------------------------------------------------------------------
+    def doc_unit(self, kind: str) -> str:
+        u = self.document.units
+        return {
+            "length": u.length,
+            "force": u.force,
+            "moment": f"{u.force}*{u.length}",
+            "energy": f"{u.force}*{u.length}",
+            "stress": u.stress,
+            "angle": u.angle,
+            "stiffness": f"{u.force}/{u.length}",
+        }[kind]
+
+    def doc_factor(self, kind: str) -> float:
+        """SI value of one document unit of `kind`."""
+        return unit_factor(self.doc_unit(kind), kind, kind)
+
+    def nd_per_doc(self, kind: str) -> float:
+        """Nondimensional value of one document unit of `kind`."""
+        return self.doc_factor(kind) / self.scales.of(kind)
+
+    # --- parameters ----------------------------------------------------------------------
+    def parameter_index(self, pointer: str) -> int:
+        try:
+            return self.structure.index[pointer]
+        except KeyError:
+            close = [p.pointer for p in self.parameters if p.pointer.startswith(pointer.rsplit("/", 1)[0])]
+            hint = f" (numeric fields here: {', '.join(close[:8])})" if close else ""
+            raise MechanismError(pointer, f"not a numeric field of this mechanism{hint}") from None
+
+    def parameter_kind(self, pointer: str) -> str:
+        return self.parameters[self.parameter_index(pointer)].kind
+
+    def p(self) -> np.ndarray:
+        """Nondimensional parameter vector."""
+        kinds = np.array([self.scales.of(p.kind) for p in self.parameters])
+        return self.si_values / kinds
+
+    def with_values(self, overrides: dict[str, float | str]) -> "Mechanism":
+        """A copy with numeric fields replaced; values in document units (or quantity strings)."""
+        si = self.si_values.copy()
+        collector = _Collector(self.document)
+        for pointer, value in overrides.items():
+            i = self.parameter_index(pointer)
+            param = self.parameters[i]
+            si[i] = quantity_to_si(value, param.kind, collector.unit_of(param.kind), pointer)
+            _check_value(pointer, si[i], param.check, self.document.units)
+        return replace(self, si_values=si, _overrides={**self._overrides, **overrides})
+
+    def value(self, pointer: str) -> float:
+        """Current value of a numeric field, in document units."""
+        i = self.parameter_index(pointer)
+        return float(self.si_values[i] / self.doc_factor(self.parameters[i].kind))
+
+
+def compile_mechanism(document: MechanismDocument, model: str | None = None) -> Mechanism:
+    """Check a validated document and prepare its graphs (built lazily, cached by structure).
+
+    `model` overrides the model of every curved beam ("linear" | "partial_nonlinear").
+    """
+    structure, si = _collect(document, model)
+    return Mechanism(document=document, structure=structure, si_values=si, scales=_scales(structure, si))

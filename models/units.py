@@ -1,0 +1,69 @@
+"""Unit handling with pint: document numbers to SI, SI to the document's units.
+
+A numeric field is either a plain number, read in the document's declared unit for that
+quantity, or a string with its own unit ("25 um", "300 deg"). Internally everything is SI.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import pint
+
+from models.errors import MechanismError
+
+# The kinds of quantity a document holds, with the SI unit each converts to.
+SI_UNITS: dict[str, str] = {
+    "length": "m",
+    "force": "N",
+    "moment": "N*m",
+    "stress": "Pa",
+    "angle": "rad",
+    "mass": "kg",
+    "inertia": "kg*m**2",
+    "energy": "J",
+    "stiffness": "N/m",
+    "dimensionless": "",
+}
+
+
+@lru_cache(maxsize=1)
+def registry() -> pint.UnitRegistry:
+    return pint.UnitRegistry()
+
+
+def unit_factor(unit: str, kind: str, pointer: str) -> float:
+    """SI value of one `unit` of quantity `kind`; raises MechanismError on a bad unit."""
+    ureg = registry()
+    try:
+        quantity = ureg.Quantity(1.0, unit)
+        return float(quantity.to(SI_UNITS[kind]).magnitude)
+    except (pint.errors.UndefinedUnitError, pint.errors.DimensionalityError, AttributeError,
+            ValueError, TypeError) as exc:
+        raise MechanismError(pointer, f"'{unit}' is not a unit of {kind} ({exc})") from None
+
+
+def quantity_to_si(value: float | int | str, kind: str, default_unit: str, pointer: str) -> float:
+    """Convert a document number (bare: in `default_unit`; string: with its own unit) to SI."""
+    if isinstance(value, bool):
+        raise MechanismError(pointer, f"expected a number or a quantity string, got {value!r}")
+    if isinstance(value, (int, float)):
+        return float(value) * unit_factor(default_unit, kind, pointer)
+    if isinstance(value, str):
+        ureg = registry()
+        try:
+            quantity = ureg.Quantity(value)
+        except Exception as exc:  # pint raises many parser-level types for free text
+            raise MechanismError(pointer, f"cannot read {value!r} as a quantity ({exc})") from None
+        if isinstance(quantity, (int, float)) or quantity.dimensionless:
+            magnitude = float(quantity.magnitude if hasattr(quantity, "magnitude") else quantity)
+            if kind == "angle" and hasattr(quantity, "units") and str(quantity.units) != "dimensionless":
+                return float(quantity.to("rad").magnitude)
+            return magnitude * unit_factor(default_unit, kind, pointer)
+        try:
+            return float(quantity.to(SI_UNITS[kind]).magnitude)
+        except pint.errors.DimensionalityError:
+            raise MechanismError(
+                pointer, f"{value!r} is not a {kind} (expected units like {default_unit})"
+            ) from None
+    raise MechanismError(pointer, f"expected a number or a quantity string, got {value!r}")

@@ -1,0 +1,182 @@
+"""Newton's method on R(z, p) = 0 with the exact tangent stiffness.
+
+The paper's update strategies are options: the full K_T or its first term K_T^I only, or
+K_T frozen at one state (Fig. 11). A backtracking line search on |R|^2 is on by default and
+can be switched off to reproduce the paper's plain iteration (Algorithm 1). Non-convergence
+is a status in the result, never an exception.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+
+from models import Mechanism, MechanismError
+from service.units import displacement_to_doc, outputs_in_doc_units
+
+Status = Literal["converged", "not_converged", "singular"]
+JacobianChoice = Literal["full", "first_term", "frozen"]
+
+
+@dataclass(frozen=True)
+class NewtonOptions:
+    """tol_residual and tol_step are on the nondimensional infinity norms (forces in units of
+    the largest flexure's EI / r^2, lengths in units of its radius)."""
+
+    tol_residual: float = 1e-10
+    tol_step: float = 1e-9
+    max_iterations: int = 50
+    line_search: bool = True
+    jacobian: JacobianChoice = "full"
+
+    def __post_init__(self):
+        if self.jacobian not in ("full", "first_term", "frozen"):
+            raise ValueError(f"jacobian: unknown choice '{self.jacobian}' (full, first_term, frozen)")
+        if self.max_iterations < 1:
+            raise ValueError("max_iterations: must be at least 1")
+
+
+@dataclass
+class EquilibriumResult:
+    status: Status
+    z: np.ndarray  # free displacements, nondimensional
+    residual_norm: float  # nondimensional infinity norm
+    iterations: int
+    history: list[float]  # residual norm before each iteration
+    seconds: float
+    mechanism: Mechanism = field(repr=False)
+    message: str = ""
+
+    @property
+    def converged(self) -> bool:
+        return self.status == "converged"
+
+    @property
+    def residual_norm_force(self) -> float:
+        """Residual infinity norm in the document's force unit."""
+        return self.residual_norm / self.mechanism.nd_per_doc("force")
+
+    def outputs(self) -> dict[str, float]:
+        """Every named scalar (poses, reactions, flexure wrenches and stresses, points) in
+        document units."""
+        m = self.mechanism
+        return outputs_in_doc_units(m, m.graphs.outputs(self.z, m.p()))
+
+    def displacements(self) -> dict[str, float]:
+        return dict(zip(self.mechanism.free_coordinates, displacement_to_doc(self.mechanism, self.z)))
+
+    def summary(self) -> dict:
+        m = self.mechanism
+        return {
+            "status": self.status,
+            "message": self.message,
+            "iterations": self.iterations,
+            "residual_norm": self.residual_norm_force,
+            "residual_unit": m.document.units.force,
+            "seconds": self.seconds,
+            "displacements": self.displacements(),
+            "outputs": self.outputs(),
+        }
+
+
+def check_constrained(mech: Mechanism, p: np.ndarray | None = None) -> None:
+    """Raise MechanismError if K_T is singular in the undeformed state (a free motion that no
+    flexure resists), naming the coordinates that move in the mechanism's free motion."""
+    if mech.n_free == 0:
+        return
+    p = mech.p() if p is None else p
+    _, K = mech.graphs.residual_and_tangent(np.zeros(mech.n_free), p)
+    K = np.asarray(K)
+    sv = np.linalg.svd(K, compute_uv=False)
+    if sv[-1] <= 1e-10 * max(sv[0], 1e-300):
+        _, _, vt = np.linalg.svd(K)
+        mode = vt[-1]
+        moving = [name for name, v in zip(mech.free_coordinates, mode) if abs(v) > 1e-6 * np.abs(mode).max()]
+        raise MechanismError(
+            "/bodies",
+            "under-constrained: the tangent stiffness is singular in the undeformed state; "
+            f"nothing resists a motion of {', '.join(moving)} (connect those bodies with flexures or fix them)",
+        )
+
+
+def iterate(evaluate, z0: np.ndarray, options: NewtonOptions, first_term=None,
+            frozen_tangent: np.ndarray | None = None) -> tuple[Status, np.ndarray, float, int, list[float], str]:
+    """Damped Newton iteration on a residual.
+
+    evaluate(z) -> (R, K) with K = dR/dz; first_term(z) -> K_T^I (for jacobian="first_term").
+    Converged when |R|_inf <= tol_residual and the last step |dz|_inf <= tol_step (or the
+    guess already satisfies the residual tolerance).
+    Returns (status, z, |R|_inf, iterations, residual history, message).
+    """
+    z = np.array(z0, dtype=float)
+    R, K = evaluate(z)
+    norm = float(np.abs(R).max()) if R.size else 0.0
+    step_norm = np.inf
+    history: list[float] = []
+    for k in range(options.max_iterations + 1):
+        history.append(norm)
+        if norm <= options.tol_residual and (k == 0 or step_norm <= options.tol_step):
+            return "converged", z, norm, k, history, ""
+        if not np.isfinite(norm):
+            return "not_converged", z, norm, k, history, "residual became non-finite"
+        if k == options.max_iterations:
+            break
+        if options.jacobian == "full":
+            M = K
+        elif options.jacobian == "first_term":
+            M = first_term(z)
+        else:
+            M = frozen_tangent
+        try:
+            dz = np.linalg.solve(M, -R)
+        except np.linalg.LinAlgError:
+            return "singular", z, norm, k, history, f"tangent stiffness singular at iteration {k}"
+        alpha = 1.0
+        z_new = z + dz
+        R_new, K_new = evaluate(z_new)
+        norm_new = float(np.abs(R_new).max())
+        if options.line_search:
+            while not (np.isfinite(norm_new) and norm_new <= (1 - 1e-4 * alpha) * norm) and alpha > 1 / 1024:
+                alpha /= 2
+                z_new = z + alpha * dz
+                R_new, K_new = evaluate(z_new)
+                norm_new = float(np.abs(R_new).max())
+        step_norm = float(np.abs(alpha * dz).max())
+        z, R, K, norm = z_new, R_new, K_new, norm_new
+    return "not_converged", z, norm, options.max_iterations, history, (
+        f"no convergence in {options.max_iterations} iterations")
+
+
+def newton(mech: Mechanism, p: np.ndarray, z0: np.ndarray, options: NewtonOptions,
+           frozen_tangent: np.ndarray | None = None) -> EquilibriumResult:
+    g = mech.graphs
+    started = time.perf_counter()
+
+    def evaluate(z):
+        R, K = g.residual_and_tangent(z, p)
+        return np.asarray(R).ravel(), np.asarray(K)
+
+    def first_term(z):
+        return np.asarray(g.tangent_terms(z, p)[0])
+
+    if options.jacobian == "frozen" and frozen_tangent is None:
+        frozen_tangent = evaluate(np.zeros_like(np.asarray(z0, dtype=float)))[1]
+    status, z, norm, k, history, message = iterate(evaluate, z0, options, first_term, frozen_tangent)
+    return EquilibriumResult(status, z, norm, k, history, time.perf_counter() - started, mech, message)
+
+
+def solve_equilibrium(mech: Mechanism, options: NewtonOptions = NewtonOptions(),
+                      guess: np.ndarray | None = None, frozen_tangent: np.ndarray | None = None,
+                      check: bool = True) -> EquilibriumResult:
+    """Equilibrium of `mech` under its loads. `guess`: nondimensional free displacements
+    (default: the undeformed state)."""
+    p = mech.p()
+    if check:
+        check_constrained(mech, p)
+    z0 = np.zeros(mech.n_free) if guess is None else np.asarray(guess, dtype=float)
+    if z0.shape != (mech.n_free,):
+        raise ValueError(f"guess: expected {mech.n_free} values, got {z0.shape}")
+    return newton(mech, p, z0, options, frozen_tangent)
