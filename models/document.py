@@ -175,7 +175,7 @@ def _raise_first(exc: ValidationError) -> None:
     """Turn pydantic's error list into our error type, naming the first offending field."""
     errors = exc.errors()
     first = errors[0]
-    location = tuple(p for p in first["loc"] if not _is_union_tag(p))
+    location = _field_location(first["loc"])
     message = first["msg"]
     if first["type"] == "missing":
         message = "required field is missing"
@@ -186,10 +186,18 @@ def _raise_first(exc: ValidationError) -> None:
     raise MechanismError(pointer_of(location), message) from None
 
 
-def _is_union_tag(part: Any) -> bool:
-    # pydantic inserts the discriminator value or the union member name into locations
-    return isinstance(part, str) and (part in {"curved_beam", "force", "moment", "displacement",
-                                                "point", "reaction"} or "[" in part)
+_TAGGED_COLLECTIONS = {"elements", "loads", "outputs"}
+_UNION_MEMBERS = {"float", "str", "int", "bool", "none"}
+
+
+def _field_location(loc: tuple) -> tuple:
+    """pydantic's error location without the labels it adds for unions: the discriminator
+    value after the key in a tagged collection (/loads/<name>/<tag>/...) and member type
+    names such as 'float' or 'tuple[...]' of plain unions."""
+    parts = list(loc)
+    if len(parts) > 2 and parts[0] in _TAGGED_COLLECTIONS and isinstance(parts[2], str):
+        del parts[2]
+    return tuple(p for p in parts if not (isinstance(p, str) and (p in _UNION_MEMBERS or "[" in p)))
 
 
 def parse_document(data: dict[str, Any]) -> MechanismDocument:

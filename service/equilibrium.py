@@ -93,8 +93,9 @@ def check_constrained(mech: Mechanism, p: np.ndarray | None = None) -> None:
     sv = np.linalg.svd(K, compute_uv=False)
     if sv[-1] <= 1e-10 * max(sv[0], 1e-300):
         _, _, vt = np.linalg.svd(K)
-        mode = vt[-1]
-        moving = [name for name, v in zip(mech.free_coordinates, mode) if abs(v) > 1e-6 * np.abs(mode).max()]
+        modes = vt[sv <= 1e-10 * max(sv[0], 1e-300)]  # every motion nothing resists
+        amplitude = np.abs(modes).max(axis=0)
+        moving = [name for name, a in zip(mech.free_coordinates, amplitude) if a > 1e-6]
         raise MechanismError(
             "/bodies",
             "under-constrained: the tangent stiffness is singular in the undeformed state; "
