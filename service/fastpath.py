@@ -30,7 +30,7 @@ _VERSION = "1"  # bump when the generated Functions change shape
 
 @dataclass(frozen=True)
 class FastOptions:
-    tol_residual: float = 1e-10  # nondimensional |R|_inf
+    tol_residual: float = 1e-12  # nondimensional |R|_inf
     max_iterations: int = 30
 
 
