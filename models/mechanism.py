@@ -13,7 +13,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import Any
 
@@ -307,7 +307,6 @@ class Mechanism:
     structure: Structure
     si_values: np.ndarray
     scales: Scales
-    _overrides: dict = field(default_factory=dict, compare=False)
 
     @property
     def parameters(self) -> tuple[Parameter, ...]:
@@ -374,7 +373,7 @@ class Mechanism:
             param = self.parameters[i]
             si[i] = quantity_to_si(value, param.kind, collector.unit_of(param.kind), pointer)
             _check_value(pointer, si[i], param.check, self.document.units)
-        return replace(self, si_values=si, _overrides={**self._overrides, **overrides})
+        return replace(self, si_values=si)
 
     def value(self, pointer: str) -> float:
         """Current value of a numeric field, in document units."""

@@ -17,6 +17,9 @@ import numpy as np
 from models import Mechanism, MechanismError
 from service.units import displacement_to_doc, outputs_in_doc_units
 
+# Seed 000, Sec. 2: the constant-stiffness curved beam is faithful up to about +-20 deg.
+ROTATION_VALIDITY_DEG = 20.0
+
 Status = Literal["converged", "not_converged", "singular"]
 JacobianChoice = Literal["full", "first_term", "frozen"]
 
@@ -65,6 +68,20 @@ class EquilibriumResult:
         m = self.mechanism
         return outputs_in_doc_units(m, m.graphs.outputs(self.z, m.p()))
 
+    def warnings(self) -> list[str]:
+        """Where the result leaves the range its models are known to hold in."""
+        m = self.mechanism
+        notes = []
+        rad_per_unit = m.doc_factor("angle")
+        for name, value in self.outputs().items():
+            if name.startswith("elements.") and name.endswith(".rotation"):
+                degrees = abs(value) * rad_per_unit * 180 / np.pi
+                if degrees > ROTATION_VALIDITY_DEG:
+                    element = name.split(".")[1]
+                    notes.append(f"flexure {element} rotates {degrees:.1f} deg: the constant-stiffness "
+                                 f"curved-beam models hold to about {ROTATION_VALIDITY_DEG:.0f} deg (seed 000)")
+        return notes
+
     def displacements(self) -> dict[str, float]:
         return dict(zip(self.mechanism.free_coordinates, displacement_to_doc(self.mechanism, self.z)))
 
@@ -77,6 +94,7 @@ class EquilibriumResult:
             "residual_norm": self.residual_norm_force,
             "residual_unit": m.document.units.force,
             "seconds": self.seconds,
+            "warnings": self.warnings() if self.converged else [],
             "displacements": self.displacements(),
             "outputs": self.outputs(),
         }

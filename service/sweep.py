@@ -18,6 +18,7 @@ import numpy as np
 
 from models import Mechanism, MechanismError
 from models.assembly import Graphs
+from models.units import quantity_to_si
 from service.equilibrium import EquilibriumResult, NewtonOptions, check_constrained, iterate, newton
 from service.units import outputs_in_doc_units
 
@@ -122,7 +123,8 @@ def solve_for_target(mech: Mechanism, path: str, output: str, target: float,
     equilibrium equations augmented with the output condition, from the current value."""
     names = mech.graphs.output_names
     if output not in names:
-        raise MechanismError("output", f"unknown output '{output}' (outputs: {', '.join(n for n in names if not n.startswith('elements.'))}, ...)")
+        named = ", ".join(n for n in names if not n.startswith(("elements.", "bodies.", "reactions.")))
+        raise MechanismError("output", f"unknown output '{output}' (named outputs: {named or 'none'}; also bodies.*, reactions.*, elements.*)")
     k = mech.parameter_index(path)
     m = names.index(output)
     f = _target_function(mech.graphs, k, m, mech.n_free, len(mech.parameters))
@@ -146,35 +148,36 @@ def solve_for_target(mech: Mechanism, path: str, output: str, target: float,
     return TargetResult(status, value, eq)
 
 
-def sweep_values(mech: Mechanism, start: float, stop: float, steps: int) -> np.ndarray:
+def sweep_values(start: float, stop: float, steps: int) -> np.ndarray:
     """`steps` equal steps from start to stop: steps + 1 values."""
     return np.linspace(start, stop, steps + 1)
 
 
 def document_sweep(mech: Mechanism, options: NewtonOptions = NewtonOptions(), start: Start = "previous",
                    progress=None) -> tuple[SweepResult, TargetResult | None]:
-    """Run the sweep declared in the document's `sweep` section."""
+    """Run the sweep declared in the document's `sweep` section; with `until`, the path ends
+    at the value found by solve_for_target."""
     spec = mech.document.sweep
     if spec is None:
         raise MechanismError("/sweep", "the document declares no sweep (give path, start and stop or until)")
-    kind = mech.parameter_kind(spec.path)
-    from models.units import quantity_to_si
-
-    def doc_value(v, pointer):
-        return quantity_to_si(v, kind, mech.doc_unit(kind), pointer) / mech.doc_factor(kind)
-
-    first = doc_value(spec.start, "/sweep/start")
+    first = _doc_value(mech, spec.start, mech.parameter_kind(spec.path), "/sweep/start")
     target = None
     if spec.until is not None:
-        out_kind = mech.graphs.output_kinds[mech.graphs.output_names.index(spec.until.output)] if spec.until.output in mech.graphs.output_names else None
-        if out_kind is None:
+        names = mech.graphs.output_names
+        if spec.until.output not in names:
             raise MechanismError("/sweep/until/output", f"unknown output '{spec.until.output}'")
-        goal = quantity_to_si(spec.until.equals, out_kind, mech.doc_unit(out_kind), "/sweep/until/equals") / mech.doc_factor(out_kind)
+        out_kind = mech.graphs.output_kinds[names.index(spec.until.output)]
+        goal = _doc_value(mech, spec.until.equals, out_kind, "/sweep/until/equals")
         target = solve_for_target(mech, spec.path, spec.until.output, goal, options)
         if target.status != "converged":
             raise MechanismError("/sweep/until", f"could not reach {spec.until.output} = {goal:g}: {target.equilibrium.message}")
         last = target.value
     else:
-        last = doc_value(spec.stop, "/sweep/stop")
-    values = sweep_values(mech, first, last, spec.steps)
+        last = _doc_value(mech, spec.stop, mech.parameter_kind(spec.path), "/sweep/stop")
+    values = sweep_values(first, last, spec.steps)
     return sweep(mech, spec.path, values, options, start, progress), target
+
+
+def _doc_value(mech: Mechanism, value, kind: str, pointer: str) -> float:
+    """A document number (bare or with units) in the document's unit of `kind`."""
+    return quantity_to_si(value, kind, mech.doc_unit(kind), pointer) / mech.doc_factor(kind)

@@ -144,3 +144,11 @@ def test_load_beyond_convergence_is_a_status(gripper_pnl):
 def test_unknown_solver_options_fail_loudly():
     with pytest.raises(ValueError, match="jacobian: unknown choice 'exact'"):
         NewtonOptions(jacobian="exact")
+
+
+def test_rotation_beyond_the_models_range_is_flagged(gripper_pnl):
+    inside = solve_equilibrium(gripper_pnl.with_values({ACTUATION: 10.0}))
+    assert inside.warnings() == []
+    beyond = solve_equilibrium(gripper_pnl.with_values({ACTUATION: 300.0}))
+    assert beyond.converged
+    assert any("hold to about 20 deg" in w for w in beyond.warnings())

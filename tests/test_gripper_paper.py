@@ -156,3 +156,21 @@ def test_si_copy_gives_the_same_physics():
     out_si = solve_equilibrium(si).outputs()
     assert out_si["end_effector.x"] == pytest.approx(out_mm["end_effector.x"] * 1e-3, rel=1e-9)
     assert out_si["elements.a.stress_max"] == pytest.approx(out_mm["elements.a.stress_max"] * 1e9, rel=1e-9)
+
+
+@pytest.mark.parametrize("restart", ["previous", "undeformed"])
+def test_opening_closing_movement(gripper, restart):
+    """Fig. 7/9: from -60 uN (open) until the end effector reaches x = 0 (closed)."""
+    from service.sweep import document_sweep
+
+    result, closing = document_sweep(gripper, start=restart)
+    assert result.all_converged and len(result.values) == 101
+    assert result.values[0] == -60.0 and result.values[-1] == pytest.approx(closing.value, rel=1e-12)
+    x = result.outputs["end_effector.x"]
+    assert abs(x[-1]) < 1e-9
+    assert np.all(np.diff(x) < 0)  # the end effector closes steadily as the force grows
+    undeformed_x = 1.8 - 1.3571
+    assert x[0] > undeformed_x > x[-1]
+    if restart == "previous":  # Fig. 12: continuation needs fewer iterations than restarting
+        cold, _ = document_sweep(gripper, start="undeformed")
+        assert result.iterations.sum() < cold.iterations.sum()
