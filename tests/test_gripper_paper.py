@@ -168,7 +168,8 @@ def test_opening_closing_movement(gripper, restart):
     assert result.values[0] == -60.0 and result.values[-1] == pytest.approx(closing.value, rel=1e-12)
     x = result.outputs["end_effector.x"]
     assert abs(x[-1]) < 1e-9
-    assert np.all(np.diff(x) < 0)  # the end effector closes steadily as the force grows
+    closing_half = result.values >= 0
+    assert np.all(np.diff(x[closing_half]) < 0)  # pushing up closes the gripper steadily
     undeformed_x = 1.8 - 1.3571
     assert x[0] > undeformed_x > x[-1]
     if restart == "previous":  # Fig. 12: continuation needs fewer iterations than restarting
