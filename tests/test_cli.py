@@ -132,3 +132,16 @@ def test_examples_lists_the_gripper(run):
     assert result.exit_code == 0, result.output
     assert "gripper.json" in result.stdout
     assert "MEMS gripper with curved-beam flexures (silicon)" in result.stdout
+
+
+def test_compare_models_plots_both_curves(run, tmp_path):
+    plot, out = tmp_path / "models.svg", tmp_path / "models.json"
+    result = run("sweep", GRIPPER, "--compare-models", "--steps", "10", "--path", ACTUATION, "--start", "-60",
+                 "--until", "end_effector.x=0", "--plot", str(plot), "--json", str(out))
+    assert result.exit_code == 0, result.output
+    assert plot.read_text().lstrip().startswith("<?xml")
+    curves = {c["label"]: c for c in json.loads(out.read_text())["curves"]}
+    assert set(curves) == {"silicon, linear", "silicon, partial_nonlinear"}
+    # The partial non-linear model stiffens the gripper: closing takes more force.
+    assert curves["silicon, partial_nonlinear"]["target"]["value"] == pytest.approx(CLOSING_FORCE, abs=1e-3)
+    assert curves["silicon, linear"]["target"]["value"] < CLOSING_FORCE
