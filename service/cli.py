@@ -408,8 +408,8 @@ def sweep(
     """Sweep a numeric field (a load, by default the document's sweep section) with continuation."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-    from service.sweep import TargetResult, document_sweep, solve_for_target, sweep_values
-    from service.sweep import sweep as run_sweep
+    from models.document import SweepSpec, SweepUntil
+    from service.sweep import run_sweep_spec
 
     out, err = _consoles()
     failed = False
@@ -453,6 +453,18 @@ def sweep(
             first_value = _field_value(first, swept, start, "--start")
             last_value = _field_value(first, swept, stop, "--stop") if stop is not None else None
         unit = first.doc_unit(first.parameter_kind(swept))
+        if path is None:
+            spec = first.document.sweep
+        else:
+            spec = SweepSpec(path=swept, start=first_value, stop=last_value,
+                             steps=100 if steps is None else steps,
+                             until=SweepUntil(output=until_output, equals=goal) if until is not None else None)
+        goal_text = None
+        if spec.until is not None:
+            equals = spec.until.equals
+            if isinstance(equals, (int, float)):
+                equals = _number(equals, output_unit(first, spec.until.output))
+            goal_text = f"{spec.until.output} = {equals}"
 
         out.print(f"[bold]{escape(first.document.name)}[/bold]  ({escape(str(document))}): "
                   f"sweeping {escape(f'{swept} [{unit}]')}, restart from {restart}")
@@ -467,35 +479,17 @@ def sweep(
                 def advance(done: int, total: int, task=task) -> None:
                     progress.update(task, completed=done, total=total)
 
-                target: TargetResult | None = None
-                if path is None:
-                    result, target = document_sweep(mech, options, restart, advance)
-                    spec = mech.document.sweep
-                    goal_text = None
-                    if spec.until is not None:
-                        equals = spec.until.equals
-                        if isinstance(equals, (int, float)):
-                            equals = _number(equals, output_unit(mech, spec.until.output))
-                        goal_text = f"{spec.until.output} = {equals}"
-                else:
-                    goal_text = None
-                    end = last_value
-                    if until is not None:
-                        goal_text = f"{until_output} = {_number(goal, output_unit(mech, until_output))}"
-                        target = solve_for_target(mech, swept, until_output, goal, options)
-                        end = target.value
-                        if target.status != "converged":
-                            progress.update(task, visible=False)
-                            eq = target.equilibrium
-                            out.print(f"{label}: target {goal_text} not reached: status "
-                                      f"[bold red]{target.status}[/bold red] after {eq.iterations} iterations, "
-                                      f"residual {_number(eq.residual_norm_force, mech.doc_unit('force'))}; "
-                                      f"{escape(eq.message or 'no message')}")
-                            records.append({"label": label, "model": m, "target": _target_dict(target, goal_text, unit)})
-                            failed = True
-                            continue
-                    values = sweep_values(first_value, end, 100 if steps is None else steps)
-                    result = run_sweep(mech, swept, values, options, restart, advance)
+                result, target = run_sweep_spec(mech, spec, options, restart, advance)
+                if result is None:  # the end of the path (a target output value) was not reached
+                    progress.update(task, visible=False)
+                    eq = target.equilibrium
+                    out.print(f"{label}: target {goal_text} not reached: status "
+                              f"[bold red]{target.status}[/bold red] after {eq.iterations} iterations, "
+                              f"residual {_number(eq.residual_norm_force, mech.doc_unit('force'))}; "
+                              f"{escape(eq.message or 'no message')}")
+                    records.append({"label": label, "model": m, "target": _target_dict(target, goal_text, unit)})
+                    failed = True
+                    continue
                 curves.append((label, result))
                 records.append({"label": label, "model": m, "sweep": result.to_dict(),
                                 "target": _target_dict(target, goal_text, unit) if target else None})

@@ -57,10 +57,21 @@ class EquilibriumResult:
     def converged(self) -> bool:
         return self.status == "converged"
 
+    def _residual_rows(self, coordinate_kinds: tuple[int, ...]) -> float:
+        m = self.mechanism
+        R = np.asarray(m.graphs.residual(self.z, m.p())).ravel()
+        rows = [R[k] for k, (_, c) in enumerate(m.structure.free) if c in coordinate_kinds]
+        return float(np.abs(rows).max()) if rows else 0.0
+
     @property
     def residual_norm_force(self) -> float:
-        """Residual infinity norm in the document's force unit."""
-        return self.residual_norm / self.mechanism.nd_per_doc("force")
+        """Largest unbalanced force, in the document's force unit."""
+        return self._residual_rows((0, 1)) / self.mechanism.nd_per_doc("force")
+
+    @property
+    def residual_norm_moment(self) -> float:
+        """Largest unbalanced moment, in the document's moment unit."""
+        return self._residual_rows((2,)) / self.mechanism.nd_per_doc("moment")
 
     def outputs(self) -> dict[str, float]:
         """Every named scalar (poses, reactions, flexure wrenches and stresses, points) in
@@ -93,6 +104,8 @@ class EquilibriumResult:
             "iterations": self.iterations,
             "residual_norm": self.residual_norm_force,
             "residual_unit": m.document.units.force,
+            "residual_moment": self.residual_norm_moment,
+            "residual_moment_unit": m.doc_unit("moment"),
             "seconds": self.seconds,
             "warnings": self.warnings() if self.converged else [],
             "displacements": self.displacements(),

@@ -17,10 +17,7 @@ class TangentStiffness:
     terms: dict[str, np.ndarray]  # I, II, III, load; they sum to K
     row_units: list[str]
     column_units: list[str]
-
-    @property
-    def symmetric(self) -> bool:
-        return bool(np.allclose(self.K, self.K.T, rtol=1e-9, atol=1e-12 * np.abs(self.K).max()))
+    symmetric: bool  # in consistent units (radians), where a conservative K_T is symmetric
 
 
 def tangent_stiffness(mech: Mechanism, z: np.ndarray | None = None) -> TangentStiffness:
@@ -31,5 +28,7 @@ def tangent_stiffness(mech: Mechanism, z: np.ndarray | None = None) -> TangentSt
     parts = mech.graphs.tangent_terms(z, p)
     terms = {name: matrix_to_doc(mech, np.asarray(t)) for name, t in zip(("I", "II", "III", "load"), parts)}
     rows, cols = coordinate_kinds(mech)
-    return TangentStiffness(mech.free_coordinates, matrix_to_doc(mech, np.asarray(K)), terms,
-                            [mech.doc_unit(k) for k in rows], [mech.doc_unit(k) for k in cols])
+    K = np.asarray(K)  # nondimensional: lengths and forces scaled alike, angles in radians
+    symmetric = bool(np.allclose(K, K.T, rtol=1e-9, atol=1e-12 * np.abs(K).max()))
+    return TangentStiffness(mech.free_coordinates, matrix_to_doc(mech, K), terms,
+                            [mech.doc_unit(k) for k in rows], [mech.doc_unit(k) for k in cols], symmetric)

@@ -17,6 +17,7 @@ import casadi as ca
 import numpy as np
 
 from models import Mechanism, MechanismError
+from models.document import SweepSpec
 from models.assembly import Graphs
 from models.units import quantity_to_si
 from service.equilibrium import EquilibriumResult, NewtonOptions, check_constrained, iterate, newton
@@ -141,10 +142,12 @@ def solve_for_target(mech: Mechanism, path: str, output: str, target: float,
 
     x0 = np.concatenate([start.z, [p[k]]])
     full = NewtonOptions(options.tol_residual, options.tol_step, options.max_iterations, options.line_search, "full")
+    started = time.perf_counter()
     status, x, norm, iters, history, message = iterate(evaluate, x0, full)
+    seconds = time.perf_counter() - started + start.seconds
     value = float(x[-1] / factor)
     solved = mech.with_values({path: value})
-    eq = EquilibriumResult(status, x[:-1], norm, iters, history, 0.0, solved, message)
+    eq = EquilibriumResult(status, x[:-1], norm, iters, history, seconds, solved, message)
     return TargetResult(status, value, eq)
 
 
@@ -153,13 +156,11 @@ def sweep_values(start: float, stop: float, steps: int) -> np.ndarray:
     return np.linspace(start, stop, steps + 1)
 
 
-def document_sweep(mech: Mechanism, options: NewtonOptions = NewtonOptions(), start: Start = "previous",
-                   progress=None) -> tuple[SweepResult, TargetResult | None]:
-    """Run the sweep declared in the document's `sweep` section; with `until`, the path ends
-    at the value found by solve_for_target."""
-    spec = mech.document.sweep
-    if spec is None:
-        raise MechanismError("/sweep", "the document declares no sweep (give path, start and stop or until)")
+def run_sweep_spec(mech: Mechanism, spec: SweepSpec, options: NewtonOptions = NewtonOptions(),
+                   start: Start = "previous", progress=None) -> tuple[SweepResult | None, TargetResult | None]:
+    """Run a load path: `spec.path` from `spec.start` to `spec.stop`, or, with `spec.until`, to
+    the value found by solve_for_target. A target that is not reached is a result too:
+    (None, the unconverged TargetResult)."""
     first = _doc_value(mech, spec.start, mech.parameter_kind(spec.path), "/sweep/start")
     target = None
     if spec.until is not None:
@@ -170,12 +171,20 @@ def document_sweep(mech: Mechanism, options: NewtonOptions = NewtonOptions(), st
         goal = _doc_value(mech, spec.until.equals, out_kind, "/sweep/until/equals")
         target = solve_for_target(mech, spec.path, spec.until.output, goal, options)
         if target.status != "converged":
-            raise MechanismError("/sweep/until", f"could not reach {spec.until.output} = {goal:g}: {target.equilibrium.message}")
+            return None, target
         last = target.value
     else:
         last = _doc_value(mech, spec.stop, mech.parameter_kind(spec.path), "/sweep/stop")
     values = sweep_values(first, last, spec.steps)
     return sweep(mech, spec.path, values, options, start, progress), target
+
+
+def document_sweep(mech: Mechanism, options: NewtonOptions = NewtonOptions(), start: Start = "previous",
+                   progress=None) -> tuple[SweepResult | None, TargetResult | None]:
+    """Run the sweep declared in the document's `sweep` section (see run_sweep_spec)."""
+    if mech.document.sweep is None:
+        raise MechanismError("/sweep", "the document declares no sweep (give path, start and stop or until)")
+    return run_sweep_spec(mech, mech.document.sweep, options, start, progress)
 
 
 def _doc_value(mech: Mechanism, value, kind: str, pointer: str) -> float:

@@ -145,3 +145,10 @@ def test_compare_models_plots_both_curves(run, tmp_path):
     # The partial non-linear model stiffens the gripper: closing takes more force.
     assert curves["silicon, partial_nonlinear"]["target"]["value"] == pytest.approx(CLOSING_FORCE, abs=1e-3)
     assert curves["silicon, linear"]["target"]["value"] < CLOSING_FORCE
+
+
+def test_unreachable_sweep_target_is_non_convergence_not_an_error(run):
+    result = run("sweep", GRIPPER, "--path", ACTUATION, "--start", "0", "--until", "end_effector.x=-50",
+                 "--steps", "5", "--model", "linear")
+    assert result.exit_code == 1
+    assert "target end_effector.x = -50 mm not reached: status not_converged" in result.output

@@ -98,6 +98,7 @@ def test_tangent_terms_sum_to_tangent(gripper):
     else:
         assert np.abs(ts.terms["III"]).max() > 0.0
     assert not ts.symmetric  # Table 3: not symmetric once deformed
+    assert tangent_stiffness(mech).symmetric  # Table 2: symmetric undeformed (angles in degrees here)
 
 
 def test_inverse_round_trips_a_forward_solve(gripper):
