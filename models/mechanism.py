@@ -29,7 +29,7 @@ from models.document import (
     ReactionOutput,
 )
 from models.errors import MechanismError
-from models.units import quantity_to_si, unit_factor
+from models.units import document_unit, quantity_to_si, unit_factor
 
 COORDINATES = ("x", "y", "angle")
 MODELS = ("linear", "partial_nonlinear")
@@ -134,14 +134,7 @@ class _Collector:
         self.values: list[float] = []
 
     def unit_of(self, kind: str) -> str:
-        u = self.doc.units
-        return {
-            "length": u.length,
-            "force": u.force,
-            "moment": f"({u.force})*({u.length})",
-            "stress": u.stress,
-            "angle": u.angle,
-        }[kind]
+        return document_unit(self.doc.units, kind)
 
     def add(self, pointer: str, value, kind: str, check: str | None = None) -> None:
         si = quantity_to_si(value, kind, self.unit_of(kind), pointer)
@@ -328,16 +321,7 @@ class Mechanism:
 
     # --- units -------------------------------------------------------------------------
     def doc_unit(self, kind: str) -> str:
-        u = self.document.units
-        return {
-            "length": u.length,
-            "force": u.force,
-            "moment": f"{u.force}*{u.length}",
-            "energy": f"{u.force}*{u.length}",
-            "stress": u.stress,
-            "angle": u.angle,
-            "stiffness": f"{u.force}/{u.length}",
-        }[kind]
+        return document_unit(self.document.units, kind)
 
     def doc_factor(self, kind: str) -> float:
         """SI value of one document unit of `kind`."""

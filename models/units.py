@@ -67,3 +67,17 @@ def quantity_to_si(value: float | int | str, kind: str, default_unit: str, point
                 pointer, f"{value!r} is not a {kind} (expected units like {default_unit})"
             ) from None
     raise MechanismError(pointer, f"expected a number or a quantity string, got {value!r}")
+
+
+def document_unit(units, kind: str) -> str:
+    """The unit, as pint text, in which a document with `units` (models.document.Units)
+    states a quantity of `kind`; derived kinds are products of the declared ones."""
+    return {
+        "length": units.length,
+        "force": units.force,
+        "moment": f"{units.force}*{units.length}",
+        "energy": f"{units.force}*{units.length}",
+        "stress": units.stress,
+        "angle": units.angle,
+        "stiffness": f"{units.force}/{units.length}",
+    }[kind]
