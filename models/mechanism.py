@@ -351,11 +351,10 @@ class Mechanism:
     def with_values(self, overrides: dict[str, float | str]) -> "Mechanism":
         """A copy with numeric fields replaced; values in document units (or quantity strings)."""
         si = self.si_values.copy()
-        collector = _Collector(self.document)
         for pointer, value in overrides.items():
             i = self.parameter_index(pointer)
             param = self.parameters[i]
-            si[i] = quantity_to_si(value, param.kind, collector.unit_of(param.kind), pointer)
+            si[i] = quantity_to_si(value, param.kind, self.doc_unit(param.kind), pointer)
             _check_value(pointer, si[i], param.check, self.document.units)
         return replace(self, si_values=si)
 

@@ -32,6 +32,7 @@ def registry() -> pint.UnitRegistry:
     return pint.UnitRegistry()
 
 
+@lru_cache(maxsize=512)
 def unit_factor(unit: str, kind: str, pointer: str) -> float:
     """SI value of one `unit` of quantity `kind`; raises MechanismError on a bad unit."""
     ureg = registry()
