@@ -1,7 +1,8 @@
 """Speed of the seed-000 gripper, side by side in one run:
 
 (a) one warm equilibrium solve (F = 50 uN, from the undeformed state) and
-(b) the 100-step opening-closing sweep (F from -60 uN to the closing force, continuation),
+(b) the 100-step opening-closing sweep (F from -60 uN to the closing force, continuation,
+    giving the configuration and the end-effector trajectory at every point),
 
 through flexmech's compiled fast path, its plain Python API (service.solve_equilibrium /
 service.sweep), and the peer: scipy.optimize.root (hybr, finite-difference Jacobian) on the
@@ -52,7 +53,7 @@ def main() -> None:
     mech = compile_mechanism(load_document(EXAMPLE), model=args.model).with_values({ACTUATION: 50.0})
     closing = solve_for_target(mech, ACTUATION, "end_effector.x", 0.0).value
     values = np.linspace(-60.0, closing, 101)  # 100 steps
-    fast = FastPath(mech)
+    fast = FastPath(mech, outputs=("end_effector.x", "end_effector.y"))  # the trajectory
     peer = NumpyGripperResidual(mech)
     p = mech.p()
     z0 = np.zeros(mech.n_free)

@@ -23,7 +23,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from models import Mechanism
+from models import Mechanism, MechanismError
 
 _VERSION = "1"  # bump when the generated Functions change shape
 
@@ -75,15 +75,24 @@ class FastPath:
     """Compiled equilibrium solves of one mechanism structure.
 
     solve(p, z0) -> (z, |R|_inf); sweep(P, z0) -> (Z, norms, Y) for the columns of P with
-    continuation, where Y are the graphs' outputs at each point (nondimensional).
+    continuation, where Y holds `outputs` (names of mech.graphs.output_names; default: all)
+    at each point, nondimensional, in the order given. Computing only the outputs a caller
+    needs matters: all of them cost about as much as the Newton iterations.
     Not thread-safe: give each thread its own FastPath.
     """
 
-    def __init__(self, mech: Mechanism, options: FastOptions = FastOptions(), compile: bool = True):
+    def __init__(self, mech: Mechanism, options: FastOptions = FastOptions(), compile: bool = True,
+                 outputs: tuple[str, ...] | None = None):
         self.mechanism = mech
         self.options = options
         self.compile = compile
         g = mech.graphs
+        names = g.output_names
+        self.output_names = tuple(names) if outputs is None else tuple(outputs)
+        unknown = [n for n in self.output_names if n not in names]
+        if unknown:
+            raise MechanismError("outputs", f"unknown output(s) {', '.join(unknown)}")
+        selected = [names.index(n) for n in self.output_names]
         rootfinder = ca.rootfinder("equilibrium_newton", "fast_newton", g.residual, {
             "abstol": options.tol_residual,
             "abstolStep": 1e-14,
@@ -94,9 +103,13 @@ class FastPath:
         p = ca.MX.sym("p", len(mech.parameters))
         z = rootfinder(z0, p)
         norm = ca.mmax(ca.fabs(g.residual(z, p))) if mech.n_free else ca.MX(0)
-        self._step = ca.Function("fast_step", [z0, p], [z, norm, g.outputs(z, p)],
-                                 ["z0", "p"], ["z", "residual_norm", "y"])
-        self._key = f"{mech.structure.key}|{options}"
+        # Inline the outputs on SX symbols and keep only the selected entries, so the
+        # generated code computes nothing else (indexing an MX call would evaluate them all).
+        z_sx, p_sx = ca.SX.sym("z", mech.n_free), ca.SX.sym("p", len(mech.parameters))
+        chosen = ca.Function("chosen_outputs", [z_sx, p_sx], [g.outputs(z_sx, p_sx)[selected]], ["z", "p"], ["y"])
+        y = chosen(z, p)
+        self._step = ca.Function("fast_step", [z0, p], [z, norm, y], ["z0", "p"], ["z", "residual_norm", "y"])
+        self._key = f"{mech.structure.key}|{options}|{','.join(self.output_names)}"
         self.solve_function, self.compiled = self._build(
             ca.Function("fast_solve", [z0, p], [z, norm], ["z0", "p"], ["z", "residual_norm"]))
         self._sweeps: dict[int, ca.Function] = {}
@@ -129,7 +142,7 @@ class FastPath:
         """P: (n_params, points) nondimensional parameters per point.
         Returns Z (n_free, points), residual norms (points,), Y (n_outputs, points)."""
         n, points = self.mechanism.n_free, P.shape[1]
-        ny = len(self.mechanism.graphs.output_names)
+        ny = len(self.output_names)
         bound = self._sweep_buffers.get(points)
         if bound is None:
             # CasADi matrices are column-major: a (points, rows) C-array is a (rows, points) matrix

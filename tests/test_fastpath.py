@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from benchmarks.numpy_peer import NumpyGripperResidual
+from models import MechanismError
 from service import NewtonOptions, solve_equilibrium, sweep
 from service.fastpath import FastPath
 
@@ -58,7 +59,13 @@ def test_compiled_sweep_equals_python_continuation(gripper, private_cache):
     assert reference.all_converged
     np.testing.assert_allclose(Z.T, reference.z, atol=1e-10)  # both stop at |R| <= 1e-10 or better
     i = gripper.graphs.output_names.index("end_effector.x")
-    np.testing.assert_allclose(Y[i] / gripper.nd_per_doc("length"), reference.outputs["end_effector.x"], atol=1e-11)
+    np.testing.assert_allclose(Y[i] / gripper.nd_per_doc("length"), reference.outputs["end_effector.x"], atol=1e-10)
+    # a sweep that computes only the outputs asked for gives the same numbers
+    trajectory = FastPath(gripper, outputs=("end_effector.y", "end_effector.x"))
+    _, _, Y2 = trajectory.sweep(trajectory.path_parameters(ACTUATION, values))
+    np.testing.assert_allclose(Y2[1], Y[i], atol=1e-14)
+    with pytest.raises(MechanismError, match="unknown output"):
+        FastPath(gripper, outputs=("end_effector.z",))
 
 
 def test_fast_path_reports_failure_through_the_residual(gripper_pnl, private_cache):
