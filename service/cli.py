@@ -29,6 +29,7 @@ from models import Mechanism, MechanismError, compile_mechanism, load_document
 from models.mechanism import MODELS
 from models.units import quantity_to_si
 from service.equilibrium import EquilibriumResult, NewtonOptions, solve_equilibrium
+from service.examples import examples_directory
 from service.plotting import PLOT_SUFFIXES, field_label, output_unit
 from service.stiffness import TangentStiffness, tangent_stiffness
 
@@ -526,14 +527,6 @@ def _target_dict(target, goal_text: str | None, unit: str) -> dict:
 
 
 # --- examples ------------------------------------------------------------------------------
-def examples_directory() -> Path | None:
-    """examples/ of the current directory, else the one next to the package sources."""
-    for candidate in (Path.cwd() / "examples", Path(__file__).resolve().parents[1] / "examples"):
-        if candidate.is_dir():
-            return candidate
-    return None
-
-
 @app.command()
 def examples() -> None:
     """List the example documents and their names."""

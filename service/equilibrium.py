@@ -20,7 +20,7 @@ from service.units import displacement_to_doc, outputs_in_doc_units
 # Seed 000, Sec. 2: the constant-stiffness curved beam is faithful up to about +-20 deg.
 ROTATION_VALIDITY_DEG = 20.0
 
-Status = Literal["converged", "not_converged", "singular"]
+Status = Literal["converged", "not_converged", "singular", "time_limit"]
 JacobianChoice = Literal["full", "first_term", "frozen"]
 
 
@@ -34,12 +34,15 @@ class NewtonOptions:
     max_iterations: int = 50
     line_search: bool = True
     jacobian: JacobianChoice = "full"
+    time_limit: float | None = None  # seconds of wall time per solve; None: no limit
 
     def __post_init__(self):
         if self.jacobian not in ("full", "first_term", "frozen"):
             raise ValueError(f"jacobian: unknown choice '{self.jacobian}' (full, first_term, frozen)")
         if self.max_iterations < 1:
             raise ValueError("max_iterations: must be at least 1")
+        if self.time_limit is not None and not self.time_limit > 0:
+            raise ValueError("time_limit: must be positive")
 
 
 @dataclass
@@ -143,6 +146,7 @@ def iterate(evaluate, z0: np.ndarray, options: NewtonOptions, first_term=None,
     guess already satisfies the residual tolerance).
     Returns (status, z, |R|_inf, iterations, residual history, message).
     """
+    started = time.perf_counter()
     z = np.array(z0, dtype=float)
     R, K = evaluate(z)
     norm = float(np.abs(R).max()) if R.size else 0.0
@@ -156,6 +160,8 @@ def iterate(evaluate, z0: np.ndarray, options: NewtonOptions, first_term=None,
             return "not_converged", z, norm, k, history, "residual became non-finite"
         if k == options.max_iterations:
             break
+        if options.time_limit is not None and time.perf_counter() - started > options.time_limit:
+            return "time_limit", z, norm, k, history, f"stopped by the time limit of {options.time_limit:g} s"
         if options.jacobian == "full":
             M = K
         elif options.jacobian == "first_term":

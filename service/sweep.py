@@ -9,7 +9,7 @@ status and the sweep goes on from the last converged point.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from typing import Literal
 
@@ -141,7 +141,7 @@ def solve_for_target(mech: Mechanism, path: str, output: str, target: float,
         return np.asarray(G).ravel(), np.asarray(Jx)
 
     x0 = np.concatenate([start.z, [p[k]]])
-    full = NewtonOptions(options.tol_residual, options.tol_step, options.max_iterations, options.line_search, "full")
+    full = replace(options, jacobian="full")
     started = time.perf_counter()
     status, x, norm, iters, history, message = iterate(evaluate, x0, full)
     seconds = time.perf_counter() - started + start.seconds

@@ -1,0 +1,70 @@
+"""The FastAPI application factory. Nothing is built at import: `create_app()` makes an app
+whose lifespan opens the job store, starts the executor and the job runner (which takes up
+jobs a previous process left running), and closes them again at shutdown.
+
+    uvicorn --factory api.app:create_app          (or: flexmech serve)
+"""
+
+from __future__ import annotations
+
+import logging
+from contextlib import asynccontextmanager
+
+from fastapi import FastAPI
+
+from api.errors import install_error_handlers
+from api.limits import BodySizeLimit
+from api.routers import examples, health, jobs, solve, sweeps
+from api.state import Services, SolverThread
+from service.analysis import Limits
+from service.examples import ExampleLibrary, examples_directory
+from service.jobs.executors import make_executor
+from service.jobs.runner import JobRunner
+from service.jobs.store import JobStore
+from service.settings import Settings
+
+log = logging.getLogger("flexmech.api")
+
+DESCRIPTION = """\
+Kinetostatics of planar compliant mechanisms over HTTP.
+
+Numbers are in the units the mechanism document declares. Long work is a job: POST returns
+202 and a job to follow at /v1/jobs/{id}. Every error has the shape
+`{"error": {"status", "code", "message", "pointer"}}`; `pointer` is the JSON pointer of the
+offending field of the request body, when there is one.
+"""
+
+
+def _services(settings: Settings) -> Services:
+    store = JobStore(settings.resolved_database_url())
+    executor = make_executor(settings.dask_address, settings.workers)
+    runner = JobRunner(store, executor, settings.chunk_size, settings.job_time_limit)
+    limits = Limits(settings.max_elements, settings.max_sweep_points, settings.solve_time_limit)
+    library = ExampleLibrary(examples_directory(settings.examples_dir))
+    return Services(settings, limits, store, executor, runner, SolverThread(), library)
+
+
+def create_app(settings: Settings | None = None) -> FastAPI:
+    settings = settings or Settings()
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI):
+        services = _services(settings)
+        app.state.services = services
+        services.runner.start()
+        log.info("flexmech serving: store %s, %s", services.store.engine.url.render_as_string(hide_password=True),
+                 services.executor.description)
+        try:
+            yield
+        finally:
+            services.runner.stop()
+            services.solver.close()
+            services.executor.close()
+            services.store.close()
+
+    app = FastAPI(title="flexmech", version="1", description=DESCRIPTION, lifespan=lifespan)
+    install_error_handlers(app)
+    for module in (solve, sweeps, jobs, examples, health):
+        app.include_router(module.router)
+    app.add_middleware(BodySizeLimit, max_bytes=settings.max_request_bytes)
+    return app

@@ -1,0 +1,117 @@
+"""Every error the API returns, mapped to a status code here and nowhere else.
+
+Shape (api.schemas.ErrorResponse):
+    {"error": {"status": 422, "code": "invalid_input", "message": "...", "pointer": "/document/..."}}
+
+    400 malformed_json     the body is not JSON
+    401 unauthorized       X-API-Key missing or not one of FLEXMECH_API_KEYS
+    404 not_found          no such route, example or job (another key's job included)
+    405 method_not_allowed
+    413 body_too_large     the body exceeds FLEXMECH_MAX_REQUEST_BYTES
+    422 invalid_request    the body does not fit the schema (pointer: the field)
+    422 invalid_input      the mechanism or the analysis cannot be modelled (pointer: the field)
+    409 conflict           e.g. cancelling a job that has finished
+    500 internal_error     a bug: logged with its traceback, never shown to the caller
+"""
+
+from __future__ import annotations
+
+import logging
+
+from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse
+from starlette.exceptions import HTTPException as StarletteHTTPException
+
+from models import MechanismError
+from models.errors import pointer_of
+
+log = logging.getLogger("flexmech.api")
+
+
+class ApiError(Exception):
+    def __init__(self, status: int, code: str, message: str, pointer: str | None = None):
+        self.status = status
+        self.code = code
+        self.message = message
+        self.pointer = pointer
+        super().__init__(message)
+
+
+class BodyTooLarge(ApiError):
+    def __init__(self, limit: int):
+        super().__init__(413, "body_too_large", f"request body larger than the limit of {limit} bytes")
+
+
+def not_found(what: str) -> ApiError:
+    return ApiError(404, "not_found", what)
+
+
+def error_response(status: int, code: str, message: str, pointer: str | None = None,
+                   headers: dict | None = None) -> JSONResponse:
+    body = {"error": {"status": status, "code": code, "message": message, "pointer": pointer}}
+    return JSONResponse(body, status_code=status, headers=headers)
+
+
+def _validation_pointer(loc: tuple) -> str:
+    parts = list(loc)
+    if parts and parts[0] in ("body", "query", "path", "header"):
+        parts = parts[1:]
+    # pydantic names union members and validator types in locations; they are not fields
+    parts = [p for p in parts if not (isinstance(p, str) and (p.startswith("function-") or "[" in p
+                                                              or p in ("float", "str", "int", "bool")))]
+    return pointer_of(tuple(parts))
+
+
+def _on_validation_error(_request: Request, exc: RequestValidationError) -> JSONResponse:
+    errors = exc.errors()
+    for e in errors:
+        if e.get("type") == "json_invalid":
+            detail = e.get("ctx", {}).get("error", "")
+            return error_response(400, "malformed_json", f"the body is not valid JSON: {detail}".rstrip(": "))
+    first = errors[0]
+    pointer = _validation_pointer(tuple(first.get("loc", ())))
+    message = first.get("msg", "invalid")
+    if first.get("type") == "missing":
+        message = "required field is missing"
+    elif first.get("type") == "extra_forbidden":
+        message = "unknown field"
+    elif message.startswith("Value error, "):
+        message = message[len("Value error, "):]
+    if len(errors) > 1:
+        message += f" (and {len(errors) - 1} more problem{'s' if len(errors) > 2 else ''})"
+    where = pointer or "body"
+    return error_response(422, "invalid_request", f"{where}: {message}", pointer)
+
+
+def _on_mechanism_error(_request: Request, exc: MechanismError) -> JSONResponse:
+    return error_response(422, "invalid_input", str(exc), exc.pointer)
+
+
+def _on_api_error(_request: Request, exc: ApiError) -> JSONResponse:
+    headers = {"WWW-Authenticate": "ApiKey"} if exc.status == 401 else None
+    return error_response(exc.status, exc.code, exc.message, exc.pointer, headers)
+
+
+_HTTP_CODES = {404: "not_found", 405: "method_not_allowed", 400: "bad_request", 413: "body_too_large"}
+
+
+def _on_http_error(_request: Request, exc: StarletteHTTPException) -> JSONResponse:
+    code = _HTTP_CODES.get(exc.status_code, "http_error")
+    message = exc.detail if isinstance(exc.detail, str) else "error"
+    return error_response(exc.status_code, code, message, headers=getattr(exc, "headers", None))
+
+
+def _on_unexpected(request: Request, exc: Exception) -> JSONResponse:
+    log.exception("unhandled error on %s %s", request.method, request.url.path)
+    return error_response(500, "internal_error", "internal error; it has been logged")
+
+
+def install_error_handlers(app: FastAPI) -> None:
+    app.add_exception_handler(RequestValidationError, _on_validation_error)
+    app.add_exception_handler(MechanismError, _on_mechanism_error)
+    app.add_exception_handler(ApiError, _on_api_error)
+    app.add_exception_handler(StarletteHTTPException, _on_http_error)
+    app.add_exception_handler(Exception, _on_unexpected)
+
+

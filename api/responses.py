@@ -1,0 +1,21 @@
+"""The documented error responses of the routes (the shape is api.schemas.ErrorResponse)."""
+
+from __future__ import annotations
+
+from api.schemas import ErrorResponse
+
+_TEXT = {
+    400: "Malformed JSON",
+    401: "Missing or unknown API key (when the server has keys)",
+    404: "No such job or example (jobs of other keys are not found either)",
+    409: "The job has finished",
+    413: "Request body over the size limit",
+    422: "The request or its mechanism cannot be used; `pointer` names the field",
+}
+
+
+def errors(*statuses: int) -> dict:
+    return {s: {"model": ErrorResponse, "description": _TEXT[s]} for s in statuses}
+
+
+ERRORS = errors(400, 401, 413, 422)

@@ -1,0 +1,72 @@
+"""/v1/jobs/{id}: status and progress, result, cancel. Jobs of any kind."""
+
+from __future__ import annotations
+
+from datetime import datetime, timezone
+
+from fastapi import APIRouter, Path
+from fastapi.concurrency import run_in_threadpool
+
+from api.deps import OwnerDep, ServicesDep
+from api.errors import ApiError, not_found
+from api.responses import errors
+from api.schemas import JobResultResponse, JobStatusResponse
+from service.jobs.kinds import kind_named
+from service.jobs.store import FINAL, Job
+
+router = APIRouter(prefix="/v1/jobs", tags=["jobs"])
+
+JobId = Path(pattern=r"^[0-9a-f]{32}$", description="the id POST returned")
+
+
+def job_status(job: Job) -> JobStatusResponse:
+    end = job.finished_at or datetime.now(timezone.utc)
+    elapsed = (end - job.started_at).total_seconds() if job.started_at else None
+    return JobStatusResponse(
+        id=job.id, kind=job.kind, status=job.status, error=job.error, restarts=job.restarts,
+        progress={"done": job.done, "total": job.total, "failed_points": job.failed_points,
+                  "fraction": job.done / job.total if job.total else 1.0},
+        timings={"created_at": job.created_at, "started_at": job.started_at, "finished_at": job.finished_at,
+                 "elapsed_seconds": elapsed},
+        links={"self": f"/v1/jobs/{job.id}", "result": f"/v1/jobs/{job.id}/result"},
+    )
+
+
+def _owned(services, job_id: str, owner: str) -> Job:
+    """The job if this caller owns it. Another key's job is 'not found', not 'forbidden', so
+    ids of other users' jobs cannot be probed."""
+    job = services.store.get(job_id)
+    if job is None or job.owner != owner:
+        raise not_found(f"no job '{job_id}'")
+    return job
+
+
+@router.get("/{job_id}", operation_id="get_job", response_model=JobStatusResponse,
+            responses=errors(401, 404), summary="Status, progress and timings of a job")
+async def get_job(services: ServicesDep, owner: OwnerDep, job_id: str = JobId) -> JobStatusResponse:
+    return job_status(await run_in_threadpool(_owned, services, job_id, owner))
+
+
+def _result(services, job: Job) -> JobResultResponse:
+    points = services.store.points(job.id)
+    result = kind_named(job.kind).result(job.spec, job.plan, points)
+    return JobResultResponse(id=job.id, kind=job.kind, status=job.status,
+                             complete=len(points) == job.total, result=result)
+
+
+@router.get("/{job_id}/result", operation_id="get_job_result", response_model=JobResultResponse,
+            responses=errors(401, 404), summary="The job's result (the points so far while it runs)")
+async def get_job_result(services: ServicesDep, owner: OwnerDep, job_id: str = JobId) -> JobResultResponse:
+    job = await run_in_threadpool(_owned, services, job_id, owner)
+    return await run_in_threadpool(_result, services, job)
+
+
+@router.delete("/{job_id}", operation_id="cancel_job", response_model=JobStatusResponse,
+               responses=errors(401, 404, 409), summary="Cancel a queued or running job")
+async def cancel_job(services: ServicesDep, owner: OwnerDep, job_id: str = JobId) -> JobStatusResponse:
+    """Stored points are kept and stay readable at /result."""
+    job = await run_in_threadpool(_owned, services, job_id, owner)
+    if job.status in FINAL or not services.store.finish(job.id, "cancelled", "cancelled by the caller"):
+        raise ApiError(409, "conflict", f"job '{job_id}' has already {services.store.get(job_id).status}")
+    services.runner.wake()
+    return job_status(services.store.get(job_id))

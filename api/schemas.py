@@ -1,0 +1,234 @@
+"""Request and response schemas of the HTTP API, shared by the server and the Python client.
+
+Only pydantic here: the client imports this module without CasADi or FastAPI. Numbers in
+requests and responses are in the units the mechanism document declares (its `units`), and
+each response says which unit goes with which number.
+"""
+
+from __future__ import annotations
+
+from datetime import datetime
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+Analysis = Literal["equilibrium", "inverse", "linearization"]
+Model = Literal["linear", "partial_nonlinear"]
+JobStatusName = Literal["queued", "running", "succeeded", "failed", "cancelled"]
+PointStatus = Literal["converged", "not_converged", "singular", "time_limit"]
+
+
+class _Request(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class _Response(BaseModel):
+    model_config = ConfigDict(extra="allow")
+
+
+# --- requests -------------------------------------------------------------------------------
+class NewtonOptionsIn(_Request):
+    """Newton's method. Tolerances are on nondimensional infinity norms."""
+
+    tol_residual: float | None = Field(None, gt=0, le=1e-2)
+    tol_step: float | None = Field(None, gt=0, le=1e-2)
+    max_iterations: int | None = Field(None, ge=1, le=1000)
+    line_search: bool | None = None
+    jacobian: Literal["full", "first_term", "frozen"] | None = None
+    time_limit: float | None = Field(None, gt=0, description="seconds; the server's limit caps it")
+
+    def given(self) -> dict[str, Any]:
+        return self.model_dump(exclude_none=True)
+
+
+class DocumentRequest(_Request):
+    document: dict[str, Any] | None = Field(
+        None, description="A mechanism document (JSON object). Give this or `example`.")
+    example: str | None = Field(None, min_length=1, max_length=64, pattern=r"^[A-Za-z0-9_.-]+$",
+                                description="The name of an example document (GET /v1/examples)")
+    model: Model | None = Field(None, description="Model of every curved beam (default: as in the document)")
+    overrides: dict[str, float | str] = Field(
+        default_factory=dict, description="Numeric fields replaced, by JSON pointer into the document",
+        examples=[{"/loads/actuation/force/1": 50}])
+    options: NewtonOptionsIn | None = None
+
+    @model_validator(mode="after")
+    def _one_source(self):
+        if (self.document is None) == (self.example is None):
+            raise ValueError("give exactly one of document and example")
+        return self
+
+
+class SolveRequest(DocumentRequest):
+    """One analysis of one mechanism, answered in the response."""
+
+    analysis: Analysis = "equilibrium"
+    stiffness: bool = Field(False, description="equilibrium: also return K_T at the solution")
+    at: Literal["equilibrium", "undeformed"] = Field("equilibrium", description="linearization: where")
+    displacements: dict[str, tuple[float, float, float]] | None = Field(
+        None, description="inverse: [dx, dy, rotation] of bodies; bodies not named stay put")
+
+    @model_validator(mode="after")
+    def _inverse_has_displacements(self):
+        if self.analysis == "inverse" and self.displacements is None:
+            raise ValueError("an inverse analysis needs displacements")
+        return self
+
+
+class SweepParameter(_Request):
+    path: str = Field(pattern=r"^/", max_length=256, description="JSON pointer of a numeric field")
+    values: list[float] | None = Field(None, min_length=1, description="document units")
+    start: float | None = None
+    stop: float | None = None
+    steps: int | None = Field(None, ge=1, description="equal steps: steps + 1 values")
+
+    @model_validator(mode="after")
+    def _values_or_range(self):
+        ranged = (self.start, self.stop, self.steps)
+        if self.values is not None and any(v is not None for v in ranged):
+            raise ValueError("give values, or start, stop and steps, not both")
+        if self.values is None and any(v is None for v in ranged):
+            raise ValueError("give values, or start, stop and steps")
+        return self
+
+
+class SweepRequest(DocumentRequest):
+    """A job: numeric fields varied over a grid, each point an equilibrium."""
+
+    parameters: list[SweepParameter] = Field(min_length=1, max_length=8)
+    grid: Literal["cartesian", "zip"] = "cartesian"
+    continuation: str | None = Field(
+        None, description="path of the swept parameter that is a load path: solved in order, "
+                          "each point from the previous one")
+    outputs: list[str] | None = Field(None, min_length=1, description="outputs to keep (default: all)")
+
+
+# --- responses ------------------------------------------------------------------------------
+class ErrorBody(BaseModel):
+    status: int = Field(description="the HTTP status code")
+    code: str = Field(description="stable machine-readable code, e.g. invalid_input, not_found")
+    message: str = Field(description="what is wrong, naming the field")
+    pointer: str | None = Field(None, description="JSON pointer of the offending field in the request body")
+
+
+class ErrorResponse(BaseModel):
+    """Every error of the API has this shape."""
+
+    error: ErrorBody
+
+
+class StiffnessOut(_Response):
+    coordinates: list[str]
+    row_units: list[str]
+    column_units: list[str]
+    K: list[list[float | None]]
+    terms: dict[str, list[list[float | None]]]
+    symmetric: bool
+
+
+class WrenchOut(_Response):
+    Fx: float | None
+    Fy: float | None
+    M: float | None
+
+
+class SolveResponse(_Response):
+    analysis: Analysis
+    name: str
+    status: PointStatus
+    message: str = ""
+    iterations: int = 0
+    residual_norm: float | None = None
+    residual_unit: str | None = None
+    seconds: float | None = None
+    warnings: list[str] = Field(default_factory=list)
+    displacements: dict[str, float | None] = Field(default_factory=dict)
+    displacement_units: dict[str, str] = Field(default_factory=dict)
+    outputs: dict[str, float | None] = Field(default_factory=dict)
+    output_units: dict[str, str] = Field(default_factory=dict)
+    history: list[float | None] = Field(default_factory=list)
+    stiffness: StiffnessOut | None = None
+    wrenches: dict[str, WrenchOut] | None = None
+    wrench_units: dict[str, str] | None = None
+
+
+class JobLinks(BaseModel):
+    self: str
+    result: str
+
+
+class JobProgress(BaseModel):
+    done: int
+    total: int
+    failed_points: int = Field(description="points stored without a converged equilibrium")
+    fraction: float
+
+
+class JobTimings(BaseModel):
+    created_at: datetime
+    started_at: datetime | None
+    finished_at: datetime | None
+    elapsed_seconds: float | None = Field(description="since it started (until it finished)")
+
+
+class JobStatusResponse(BaseModel):
+    id: str
+    kind: str
+    status: JobStatusName
+    progress: JobProgress
+    timings: JobTimings
+    error: str | None = None
+    restarts: int = Field(0, description="times the job was taken up again after a server restart")
+    links: JobLinks
+
+    @property
+    def finished(self) -> bool:
+        return self.status in ("succeeded", "failed", "cancelled")
+
+
+class SweepParameterOut(BaseModel):
+    path: str
+    unit: str
+    values: list[float]
+
+
+class SweepPoint(_Response):
+    index: int
+    values: list[float]
+    status: PointStatus
+    message: str = ""
+    iterations: int
+    residual_norm: float | None
+    seconds: float
+    outputs: dict[str, float | None]
+
+
+class SweepResult(BaseModel):
+    parameters: list[SweepParameterOut]
+    grid: Literal["cartesian", "zip"]
+    continuation: str | None
+    output_units: dict[str, str]
+    residual_unit: str
+    points: list[SweepPoint]
+
+
+class JobResultResponse(BaseModel):
+    id: str
+    kind: str
+    status: JobStatusName
+    complete: bool = Field(description="every point is stored; otherwise the points so far")
+    result: SweepResult | dict[str, Any]
+
+
+class ExampleSummary(BaseModel):
+    name: str
+    title: str
+    description: str = ""
+
+
+class HealthResponse(BaseModel):
+    status: Literal["ok"]
+    version: str
+    database: str = Field(description="sqlite or postgresql")
+    executor: str
+    active_jobs: int

@@ -1,0 +1,198 @@
+"""The job store: jobs and their finished points, in SQLite (default) or PostgreSQL.
+
+Each finished point is its own row, written as soon as its task returns, so a job that was
+running when the server stopped keeps every point it had finished. (job_id, index) is the
+primary key: a point can be written once only.
+"""
+
+from __future__ import annotations
+
+import uuid
+from collections.abc import Iterable
+from dataclasses import dataclass
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Any, Literal
+
+from sqlalchemy import JSON, DateTime, ForeignKey, Integer, String, Text, create_engine, event, func, select, update
+from sqlalchemy.engine import Engine, make_url
+from sqlalchemy.orm import DeclarativeBase, Mapped, Session, mapped_column, sessionmaker
+
+JobStatus = Literal["queued", "running", "succeeded", "failed", "cancelled"]
+ACTIVE: tuple[JobStatus, ...] = ("queued", "running")
+FINAL: tuple[JobStatus, ...] = ("succeeded", "failed", "cancelled")
+
+
+def utcnow() -> datetime:
+    return datetime.now(timezone.utc)
+
+
+class _Base(DeclarativeBase):
+    pass
+
+
+class JobRow(_Base):
+    __tablename__ = "flexmech_jobs"
+
+    id: Mapped[str] = mapped_column(String(32), primary_key=True)
+    kind: Mapped[str] = mapped_column(String(32))
+    owner: Mapped[str] = mapped_column(String(64), index=True)
+    status: Mapped[str] = mapped_column(String(16), index=True)
+    spec: Mapped[dict] = mapped_column(JSON)
+    plan: Mapped[dict] = mapped_column(JSON)  # the kind's facts about the spec (units, grid)
+    total: Mapped[int] = mapped_column(Integer)
+    done: Mapped[int] = mapped_column(Integer, default=0)
+    failed_points: Mapped[int] = mapped_column(Integer, default=0)
+    error: Mapped[str | None] = mapped_column(Text, nullable=True)
+    created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True))
+    started_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True), nullable=True)
+    finished_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True), nullable=True)
+    restarts: Mapped[int] = mapped_column(Integer, default=0)
+
+
+class PointRow(_Base):
+    __tablename__ = "flexmech_job_points"
+
+    job_id: Mapped[str] = mapped_column(String(32), ForeignKey("flexmech_jobs.id", ondelete="CASCADE"),
+                                        primary_key=True)
+    index: Mapped[int] = mapped_column(Integer, primary_key=True)
+    data: Mapped[dict] = mapped_column(JSON)
+    finished_at: Mapped[datetime] = mapped_column(DateTime(timezone=True))
+
+
+@dataclass(frozen=True)
+class Job:
+    id: str
+    kind: str
+    owner: str
+    status: JobStatus
+    spec: dict
+    plan: dict
+    total: int
+    done: int
+    failed_points: int
+    error: str | None
+    created_at: datetime
+    started_at: datetime | None
+    finished_at: datetime | None
+    restarts: int
+
+
+def _aware(t: datetime | None) -> datetime | None:
+    """SQLite hands back naive datetimes; they were written in UTC."""
+    if t is not None and t.tzinfo is None:
+        return t.replace(tzinfo=timezone.utc)
+    return t
+
+
+def _job(row: JobRow) -> Job:
+    return Job(row.id, row.kind, row.owner, row.status, row.spec, row.plan, row.total, row.done, row.failed_points,
+               row.error, _aware(row.created_at), _aware(row.started_at), _aware(row.finished_at), row.restarts)
+
+
+def make_engine(url: str) -> Engine:
+    """An engine for `url`. SQLite: the file's folder is created, WAL journal so readers do not
+    block the runner's writes, and the engine may be used from several threads."""
+    parsed = make_url(url)
+    if parsed.get_backend_name() == "sqlite":
+        if parsed.database and parsed.database != ":memory:":
+            Path(parsed.database).parent.mkdir(parents=True, exist_ok=True)
+        engine = create_engine(url, connect_args={"check_same_thread": False, "timeout": 30})
+
+        @event.listens_for(engine, "connect")
+        def _pragmas(conn, _record):
+            cur = conn.cursor()
+            cur.execute("PRAGMA journal_mode=WAL")
+            cur.execute("PRAGMA foreign_keys=ON")
+            cur.close()
+
+        return engine
+    return create_engine(url, pool_pre_ping=True)
+
+
+class JobStore:
+    def __init__(self, url: str):
+        self.url = url
+        self.engine = make_engine(url)
+        _Base.metadata.create_all(self.engine)
+        self._session = sessionmaker(self.engine, expire_on_commit=False)
+
+    def close(self) -> None:
+        self.engine.dispose()
+
+    # --- jobs -------------------------------------------------------------------------------
+    def create(self, kind: str, owner: str, spec: dict, plan: dict, total: int) -> Job:
+        row = JobRow(id=uuid.uuid4().hex, kind=kind, owner=owner, status="queued", spec=spec, plan=plan, total=total,
+                     done=0, failed_points=0, created_at=utcnow(), restarts=0)
+        with self._session.begin() as s:
+            s.add(row)
+        return _job(row)
+
+    def get(self, job_id: str) -> Job | None:
+        with self._session() as s:
+            row = s.get(JobRow, job_id)
+            return _job(row) if row is not None else None
+
+    def active(self) -> list[Job]:
+        """Jobs queued or running, oldest first."""
+        with self._session() as s:
+            rows = s.scalars(select(JobRow).where(JobRow.status.in_(ACTIVE)).order_by(JobRow.created_at))
+            return [_job(r) for r in rows]
+
+    def list(self, owner: str, limit: int = 50) -> list[Job]:
+        with self._session() as s:
+            rows = s.scalars(select(JobRow).where(JobRow.owner == owner)
+                             .order_by(JobRow.created_at.desc()).limit(limit))
+            return [_job(r) for r in rows]
+
+    def mark_started(self, job_id: str, resumed: bool) -> None:
+        with self._session.begin() as s:
+            row = s.get(JobRow, job_id)
+            if row is None or row.status in FINAL:
+                return
+            row.status = "running"
+            if row.started_at is None:
+                row.started_at = utcnow()
+            if resumed:
+                row.restarts += 1
+
+    def finish(self, job_id: str, status: JobStatus, error: str | None = None) -> bool:
+        """Move an active job to a final status. False when it was already final (for
+        example cancelled while its last task ran): a final status never changes."""
+        with self._session.begin() as s:
+            result = s.execute(update(JobRow).where(JobRow.id == job_id, JobRow.status.in_(ACTIVE))
+                               .values(status=status, error=error, finished_at=utcnow()))
+            return result.rowcount == 1
+
+    # --- points -----------------------------------------------------------------------------
+    def add_points(self, job_id: str, points: Iterable[tuple[int, dict[str, Any]]], failed: int = 0) -> int:
+        """Store finished points and advance the job's progress in one transaction. Points
+        already stored are left as they are (never overwritten). Returns how many were new."""
+        points = list(points)
+        if not points:
+            return 0
+        with self._session.begin() as s:
+            have = set(s.scalars(select(PointRow.index).where(
+                PointRow.job_id == job_id, PointRow.index.in_([i for i, _ in points]))))
+            now = utcnow()
+            new = [(i, d) for i, d in points if i not in have]
+            s.add_all(PointRow(job_id=job_id, index=i, data=d, finished_at=now) for i, d in new)
+            new_failed = sum(1 for _, d in new if d.get("status") != "converged")
+            s.execute(update(JobRow).where(JobRow.id == job_id).values(
+                done=JobRow.done + len(new), failed_points=JobRow.failed_points + new_failed))
+        return len(new)
+
+    def points(self, job_id: str) -> dict[int, dict]:
+        with self._session() as s:
+            rows = s.execute(select(PointRow.index, PointRow.data).where(PointRow.job_id == job_id)
+                             .order_by(PointRow.index))
+            return {i: d for i, d in rows}
+
+    def point_times(self, job_id: str) -> dict[int, datetime]:
+        with self._session() as s:
+            rows = s.execute(select(PointRow.index, PointRow.finished_at).where(PointRow.job_id == job_id))
+            return {i: _aware(t) for i, t in rows}
+
+    def count_points(self, job_id: str) -> int:
+        with self._session() as s:
+            return s.scalar(select(func.count()).select_from(PointRow).where(PointRow.job_id == job_id)) or 0

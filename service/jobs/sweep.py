@@ -1,0 +1,217 @@
+"""The sweep job: numeric fields of a document varied over a grid.
+
+spec:
+  document      the mechanism document (JSON object)
+  parameters    [{path, values} | {path, start, stop, steps}], document units
+  grid          "cartesian" (every combination; the first parameter varies slowest) | "zip"
+  continuation  optional path of one parameter: the points along it (the others held) form a
+                load path solved in order, each from the previous converged state, in tasks
+                of chunk_size points one after another; without it every point starts from
+                the undeformed state and chunks run in parallel
+  outputs       optional output names to keep (default: all)
+  model, options, overrides   as for /v1/solve
+
+Point index = position in the grid (row-major over `parameters`). Each stored point keeps its
+nondimensional state z, so a load path resumed after a restart starts from exactly the state
+an uninterrupted run would have used, and gives the same numbers.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+from collections.abc import Mapping
+from functools import lru_cache
+
+import numpy as np
+
+from models import Mechanism, MechanismError
+from service.analysis import Limits, compile_request, newton_options, output_units, plain
+from service.equilibrium import check_constrained, newton
+from service.jobs.kinds import Plan, register
+
+
+def parameter_values(parameter: dict, pointer: str) -> list[float]:
+    if parameter.get("values") is not None:
+        values = [float(v) for v in parameter["values"]]
+    else:
+        missing = [k for k in ("start", "stop", "steps") if parameter.get(k) is None]
+        if missing:
+            raise MechanismError(pointer, "give values, or start, stop and steps")
+        steps = int(parameter["steps"])
+        if steps < 1:
+            raise MechanismError(f"{pointer}/steps", "must be at least 1")
+        values = np.linspace(float(parameter["start"]), float(parameter["stop"]), steps + 1).tolist()
+    if not values:
+        raise MechanismError(f"{pointer}/values", "no values")
+    if not all(np.isfinite(values)):
+        raise MechanismError(f"{pointer}/values", "values must be finite numbers")
+    return values
+
+
+def grid_shape(spec: dict) -> tuple[list[list[float]], tuple[int, ...]]:
+    """(values per parameter, grid shape); zip grids have shape (n,)."""
+    values = [parameter_values(p, f"/parameters/{k}") for k, p in enumerate(spec["parameters"])]
+    if spec.get("grid", "cartesian") == "zip":
+        lengths = {len(v) for v in values}
+        if len(lengths) > 1:
+            raise MechanismError("/parameters", f"a zip grid needs equally many values per parameter "
+                                                f"(got {', '.join(str(len(v)) for v in values)})")
+        return values, (len(values[0]),)
+    return values, tuple(len(v) for v in values)
+
+
+def point_values(values: list[list[float]], shape: tuple[int, ...], grid: str, index: int) -> list[float]:
+    if grid == "zip":
+        return [v[index] for v in values]
+    multi = np.unravel_index(index, shape)
+    return [v[int(m)] for v, m in zip(values, multi)]
+
+
+def load_paths(spec: dict, shape: tuple[int, ...]) -> list[list[int]]:
+    """Point indices in solving order: one list per load path (continuation), else one list per
+    point."""
+    total = int(np.prod(shape))
+    path = spec.get("continuation")
+    if path is None:
+        return [[i] for i in range(total)]
+    if spec.get("grid", "cartesian") == "zip":
+        return [list(range(total))]
+    axis = [p["path"] for p in spec["parameters"]].index(path)
+    others = [range(n) for k, n in enumerate(shape) if k != axis]
+    lines = []
+    for rest in itertools.product(*others):
+        line = []
+        for t in range(shape[axis]):
+            multi = list(rest)
+            multi.insert(axis, t)
+            line.append(int(np.ravel_multi_index(multi, shape)))
+        lines.append(line)
+    return lines
+
+
+@lru_cache(maxsize=16)
+def _mechanism(document_json: str, model: str | None, overrides_json: str) -> Mechanism:
+    """One compiled mechanism per document in each worker process; its CasADi Functions are
+    built once per structure (models.assembly.graphs_for is cached) and reused by every task."""
+    return compile_request(json.loads(document_json), model, json.loads(overrides_json))
+
+
+def mechanism_of(spec: dict) -> Mechanism:
+    return _mechanism(json.dumps(spec["document"], sort_keys=True), spec.get("model"),
+                      json.dumps(spec.get("overrides") or {}, sort_keys=True))
+
+
+class SweepJob:
+    name = "sweep"
+
+    def prepare(self, spec: dict, limits: Limits) -> Plan:
+        values, shape = grid_shape(spec)
+        total = int(np.prod(shape))
+        if total > limits.max_sweep_points:
+            raise MechanismError("/parameters", f"{total} sweep points: the limit is {limits.max_sweep_points}")
+        paths = [p["path"] for p in spec["parameters"]]
+        if len(set(paths)) != len(paths):
+            raise MechanismError("/parameters", "a path is listed twice")
+        if spec.get("continuation") is not None and spec["continuation"] not in paths:
+            raise MechanismError("/continuation", f"'{spec['continuation']}' is not one of the swept paths "
+                                                  f"({', '.join(paths)})")
+        mech = compile_request(spec["document"], spec.get("model"), spec.get("overrides"), limits)
+        newton_options(spec.get("options"))
+        units = []
+        for k, path in enumerate(paths):
+            try:
+                units.append(mech.doc_unit(mech.parameter_kind(path)))
+            except MechanismError as exc:
+                raise MechanismError(f"/parameters/{k}/path", exc.problem) from None
+        all_units = output_units(mech)
+        wanted = spec.get("outputs") or list(all_units)
+        for k, name in enumerate(wanted):
+            if name not in all_units:
+                raise MechanismError(f"/outputs/{k}", f"unknown output '{name}'")
+        try:
+            check_constrained(mech)
+        except MechanismError as exc:
+            raise MechanismError("/document" + exc.pointer, exc.problem) from None
+        meta = {"parameters": [{"path": p, "unit": u, "values": v} for p, u, v in zip(paths, units, values)],
+                "shape": list(shape), "output_units": {n: all_units[n] for n in wanted},
+                "force_unit": mech.doc_unit("force")}
+        return Plan(total, meta)
+
+    def tasks(self, spec, plan, finished, chunk_size):
+        tasks = []
+        lines = load_paths(spec, tuple(plan["shape"]))
+        if spec.get("continuation") is None:
+            todo = [line[0] for line in lines if line[0] not in finished]
+            for start in range(0, len(todo), chunk_size):
+                tasks.append({"indices": todo[start:start + chunk_size], "guess": None})
+            return tasks
+        for number, line in enumerate(lines):
+            task = self._next_on_line(line, number, finished, chunk_size)
+            if task is not None:
+                tasks.append(task)
+        return tasks
+
+    def follow_up(self, spec, plan, task, finished, chunk_size):
+        if task.get("line") is None:
+            return []
+        line = load_paths(spec, tuple(plan["shape"]))[task["line"]]
+        nxt = self._next_on_line(line, task["line"], finished, chunk_size)
+        return [nxt] if nxt is not None else []
+
+    @staticmethod
+    def _next_on_line(line: list[int], number: int, finished: Mapping[int, dict], chunk_size: int) -> dict | None:
+        """The next chunk of a load path: from its first unfinished point, starting from the
+        state of the last converged point before it (undeformed if none)."""
+        position = next((k for k, i in enumerate(line) if i not in finished), None)
+        if position is None:
+            return None
+        guess = None
+        for i in reversed(line[:position]):
+            if finished[i]["status"] == "converged":
+                guess = finished[i]["z"]
+                break
+        return {"indices": line[position:position + chunk_size], "guess": guess, "line": number}
+
+    def run(self, spec, task):
+        mech = mechanism_of(spec)
+        options = newton_options(spec.get("options"))
+        values, shape = grid_shape(spec)
+        grid = spec.get("grid", "cartesian")
+        paths = [p["path"] for p in spec["parameters"]]
+        slots = [mech.parameter_index(path) for path in paths]
+        factors = [mech.nd_per_doc(mech.parameters[k].kind) for k in slots]
+        names, kinds = mech.graphs.output_names, mech.graphs.output_kinds
+        wanted = spec.get("outputs") or list(names)
+        columns = [(names.index(n), mech.nd_per_doc(kinds[names.index(n)])) for n in wanted]
+        force = mech.nd_per_doc("force")
+        p0 = mech.p()
+        zero = np.zeros(mech.n_free)
+        z_prev = np.asarray(task["guess"], dtype=float) if task.get("guess") is not None else zero
+        along_path = task.get("line") is not None
+        points = []
+        for index in task["indices"]:
+            here = point_values(values, shape, grid, index)
+            p = p0.copy()
+            for slot, factor, v in zip(slots, factors, here):
+                p[slot] = v * factor
+            r = newton(mech, p, z_prev if along_path else zero, options)
+            if along_path and r.converged:
+                z_prev = r.z
+            y = np.asarray(mech.graphs.outputs(r.z, p)).ravel()
+            points.append((index, plain({
+                "values": here, "status": r.status, "message": r.message, "iterations": r.iterations,
+                "residual_norm": r.residual_norm / force, "seconds": r.seconds,
+                "outputs": {n: y[j] / f for n, (j, f) in zip(wanted, columns)},
+                "z": r.z,
+            })))
+        return points
+
+    def result(self, spec, plan, finished):
+        points = [{"index": i, **{k: v for k, v in d.items() if k != "z"}} for i, d in sorted(finished.items())]
+        return {"parameters": plan["parameters"], "grid": spec.get("grid", "cartesian"),
+                "continuation": spec.get("continuation"), "output_units": plan["output_units"],
+                "residual_unit": plan["force_unit"], "points": points}
+
+
+register(SweepJob())

@@ -1,0 +1,65 @@
+"""The service's settings: one class, read from FLEXMECH_* environment variables.
+
+    FLEXMECH_DATABASE_URL=postgresql+psycopg://user:pw@db/flexmech   (default: SQLite file)
+    FLEXMECH_DASK_ADDRESS=tcp://scheduler:8786                        (default: a process pool)
+    FLEXMECH_API_KEYS=key-one,key-two                                 (default: no keys, open)
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Annotated, Literal
+
+from pydantic import Field, field_validator
+from pydantic_settings import BaseSettings, NoDecode, SettingsConfigDict
+
+
+def default_data_dir() -> Path:
+    """Where the embedded SQLite store lives: $XDG_DATA_HOME/flexmech or ~/.local/share/flexmech."""
+    base = os.environ.get("XDG_DATA_HOME") or str(Path.home() / ".local" / "share")
+    return Path(base) / "flexmech"
+
+
+class Settings(BaseSettings):
+    model_config = SettingsConfigDict(env_prefix="FLEXMECH_", extra="ignore")
+
+    host: str = "127.0.0.1"
+    port: int = Field(8000, ge=1, le=65535)
+    data_dir: Path = Field(default_factory=default_data_dir)
+    database_url: str | None = None  # None: SQLite file data_dir/flexmech.db
+    dask_address: str | None = None  # set: sweeps run on that Dask cluster
+    workers: int = Field(default_factory=lambda: max(1, os.cpu_count() or 1), ge=1, le=256)
+    examples_dir: Path | None = None  # None: ./examples, else the one beside the sources
+
+    # Access: with keys set, every /v1 request but /v1/health needs X-API-Key.
+    api_keys: Annotated[list[str], NoDecode] = Field(default_factory=list)
+
+    # Limits
+    max_request_bytes: int = Field(1_000_000, ge=1024)
+    max_elements: int = Field(200, ge=1)
+    max_sweep_points: int = Field(20_000, ge=1)
+    solve_time_limit: float = Field(10.0, gt=0, description="seconds of Newton per /v1/solve")
+    job_time_limit: float = Field(3600.0, gt=0, description="seconds of wall time per job")
+    chunk_size: int = Field(8, ge=1, le=10_000, description="points per task sent to a worker")
+    log_level: Literal["debug", "info", "warning", "error"] = "info"
+
+    @field_validator("api_keys", mode="before")
+    @classmethod
+    def _split_keys(cls, value):
+        if isinstance(value, str):
+            return [k.strip() for k in value.split(",") if k.strip()]
+        return value
+
+    @field_validator("api_keys")
+    @classmethod
+    def _keys_long_enough(cls, keys: list[str]) -> list[str]:
+        short = [k for k in keys if len(k) < 16]
+        if short:
+            raise ValueError(f"{len(short)} API key(s) shorter than 16 characters")
+        return keys
+
+    def resolved_database_url(self) -> str:
+        if self.database_url:
+            return self.database_url
+        return f"sqlite:///{self.data_dir / 'flexmech.db'}"
