@@ -28,7 +28,6 @@ from models.errors import pointer_of
 
 log = logging.getLogger("flexmech.api")
 
-
 class ApiError(Exception):
     def __init__(self, status: int, code: str, message: str, pointer: str | None = None):
         self.status = status
@@ -37,21 +36,13 @@ class ApiError(Exception):
         self.pointer = pointer
         super().__init__(message)
 
-
-class BodyTooLarge(ApiError):
-    def __init__(self, limit: int):
-        super().__init__(413, "body_too_large", f"request body larger than the limit of {limit} bytes")
-
-
 def not_found(what: str) -> ApiError:
     return ApiError(404, "not_found", what)
-
 
 def error_response(status: int, code: str, message: str, pointer: str | None = None,
                    headers: dict | None = None) -> JSONResponse:
     body = {"error": {"status": status, "code": code, "message": message, "pointer": pointer}}
     return JSONResponse(body, status_code=status, headers=headers)
-
 
 def _validation_pointer(loc: tuple) -> str:
     parts = list(loc)
@@ -61,7 +52,6 @@ def _validation_pointer(loc: tuple) -> str:
     parts = [p for p in parts if not (isinstance(p, str) and (p.startswith("function-") or "[" in p
                                                               or p in ("float", "str", "int", "bool")))]
     return pointer_of(tuple(parts))
-
 
 def _on_validation_error(_request: Request, exc: RequestValidationError) -> JSONResponse:
     errors = exc.errors()
@@ -83,29 +73,23 @@ def _on_validation_error(_request: Request, exc: RequestValidationError) -> JSON
     where = pointer or "body"
     return error_response(422, "invalid_request", f"{where}: {message}", pointer)
 
-
 def _on_mechanism_error(_request: Request, exc: MechanismError) -> JSONResponse:
     return error_response(422, "invalid_input", str(exc), exc.pointer)
-
 
 def _on_api_error(_request: Request, exc: ApiError) -> JSONResponse:
     headers = {"WWW-Authenticate": "ApiKey"} if exc.status == 401 else None
     return error_response(exc.status, exc.code, exc.message, exc.pointer, headers)
 
-
 _HTTP_CODES = {404: "not_found", 405: "method_not_allowed", 400: "bad_request", 413: "body_too_large"}
-
 
 def _on_http_error(_request: Request, exc: StarletteHTTPException) -> JSONResponse:
     code = _HTTP_CODES.get(exc.status_code, "http_error")
     message = exc.detail if isinstance(exc.detail, str) else "error"
     return error_response(exc.status_code, code, message, headers=getattr(exc, "headers", None))
 
-
 def _on_unexpected(request: Request, exc: Exception) -> JSONResponse:
     log.exception("unhandled error on %s %s", request.method, request.url.path)
     return error_response(500, "internal_error", "internal error; it has been logged")
-
 
 def install_error_handlers(app: FastAPI) -> None:
     app.add_exception_handler(RequestValidationError, _on_validation_error)
@@ -113,5 +97,4 @@ def install_error_handlers(app: FastAPI) -> None:
     app.add_exception_handler(ApiError, _on_api_error)
     app.add_exception_handler(StarletteHTTPException, _on_http_error)
     app.add_exception_handler(Exception, _on_unexpected)
-
 

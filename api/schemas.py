@@ -59,10 +59,19 @@ class DocumentRequest(_Request):
         return self
 
 
+class Target(_Request):
+    """Find the value of numeric field `path` at which `output` equals `equals`."""
+
+    path: str = Field(pattern=r"^/", max_length=256, examples=["/loads/actuation/force/1"])
+    output: str = Field(max_length=128, examples=["end_effector.x"])
+    equals: float = Field(description="document units of the output")
+
+
 class SolveRequest(DocumentRequest):
     """One analysis of one mechanism, answered in the response."""
 
     analysis: Analysis = "equilibrium"
+    target: Target | None = Field(None, description="equilibrium: solve for the field value that reaches a target")
     stiffness: bool = Field(False, description="equilibrium: also return K_T at the solution")
     at: Literal["equilibrium", "undeformed"] = Field("equilibrium", description="linearization: where")
     displacements: dict[str, tuple[float, float, float]] | None = Field(
@@ -132,6 +141,13 @@ class WrenchOut(_Response):
     M: float | None
 
 
+class TargetOut(_Response):
+    path: str
+    value: float | None = Field(description="the field's value that reaches the target")
+    unit: str
+    status: PointStatus
+
+
 class SolveResponse(_Response):
     analysis: Analysis
     name: str
@@ -148,6 +164,7 @@ class SolveResponse(_Response):
     output_units: dict[str, str] = Field(default_factory=dict)
     history: list[float | None] = Field(default_factory=list)
     stiffness: StiffnessOut | None = None
+    target: TargetOut | None = None
     wrenches: dict[str, WrenchOut] | None = None
     wrench_units: dict[str, str] | None = None
 

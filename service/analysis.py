@@ -20,6 +20,7 @@ from models.mechanism import MODELS
 from service.equilibrium import NewtonOptions, solve_equilibrium
 from service.inverse import inverse_wrenches
 from service.stiffness import tangent_stiffness
+from service.sweep import solve_for_target
 
 
 @dataclass(frozen=True)
@@ -97,15 +98,35 @@ def compile_request(document: dict, model: str | None = None, overrides: dict[st
     return mech
 
 
-def equilibrium_report(mech: Mechanism, options: NewtonOptions, stiffness: bool = False) -> dict:
-    """Solve the equilibrium; status, diagnostics, displacements and outputs in document units."""
+def equilibrium_report(mech: Mechanism, options: NewtonOptions, stiffness: bool = False,
+                       target: dict | None = None) -> dict:
+    """Solve the equilibrium; status, diagnostics, displacements and outputs in document units.
+
+    target = {path, output, equals}: instead of the document's value of the numeric field
+    `path`, find the value for which `output` equals `equals` (document units), e.g. the
+    actuation force that closes a gripper; reported under "target"."""
+    found = None
     try:
-        result = solve_equilibrium(mech, options)
+        if target is None:
+            result = solve_equilibrium(mech, options)
+        else:
+            try:
+                mech.parameter_index(target["path"])
+            except MechanismError as exc:
+                raise MechanismError("/target/path", exc.problem) from None
+            if target["output"] not in mech.graphs.output_names:
+                raise MechanismError("/target/output", f"unknown output '{target['output']}'")
+            found = solve_for_target(mech, target["path"], target["output"], float(target["equals"]), options)
+            result = found.equilibrium
+            mech = result.mechanism
     except MechanismError as exc:
-        raise under("/document", exc) from None
+        raise (exc if exc.pointer.startswith("/target") else under("/document", exc)) from None
     report = {"analysis": "equilibrium", "name": mech.document.name, **result.summary(),
               "history": result.history, "output_units": output_units(mech),
               "displacement_units": coordinate_units(mech)}
+    if found is not None:
+        report["target"] = {"path": target["path"], "value": found.value, "status": found.status,
+                            "unit": mech.doc_unit(mech.parameter_kind(target["path"]))}
     if stiffness and result.converged:
         report["stiffness"] = stiffness_dict(mech, result.z)
     return plain(report)

@@ -546,3 +546,79 @@ def examples() -> None:
                 name = f"(unreadable: {exc})"
             table.add_row(file.name, escape(str(name)))
         out.print(table)
+
+
+# --- batch ---------------------------------------------------------------------------------
+@app.command()
+def batch(
+    directory: Annotated[Path, typer.Argument(help="Folder of mechanism documents (JSON or YAML).", show_default=False)],
+    out: Annotated[Path, typer.Option("--out", help="Folder for the results (created).")],
+    jacobian: JacobianOpt = "full",
+    line_search: LineSearchOpt = True,
+    max_iterations: MaxIterOpt = 50,
+) -> None:
+    """Solve every document of a folder (sweep it, if it declares a sweep); write one result file
+    per document and summary.json. Exit 1 if any document failed; the others are still written."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from service.batch import batch_documents, run_batch
+
+    out_console, err = _consoles()
+    with _user_errors(err):
+        if not directory.is_dir():
+            raise OptionError("DIRECTORY", f"'{directory}' is not a folder")
+        options = _newton_options(jacobian, line_search, max_iterations)
+        documents = batch_documents(directory)
+        if not documents:
+            raise OptionError("DIRECTORY", f"no documents (*.json, *.yaml) in '{directory}'")
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise OptionError("--out", f"cannot create {out}: {exc.strerror}") from None
+        columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn())
+        with Progress(*columns, console=err, transient=True) as bar:
+            task = bar.add_task("batch", total=len(documents))
+
+            def advance(path: Path, payload: dict) -> None:
+                bar.update(task, advance=1, description=path.name)
+
+            summary = run_batch(directory, out, options, advance)
+        table = _table(f"{summary['documents']} documents -> {out}", "document", "analysis", "status", "seconds",
+                       text=3)
+        for row in summary["results"]:
+            colour = "green" if row["status"] == "converged" else "red"
+            table.add_row(escape(row["document"]), str(row["analysis"] or "-"),
+                          f"[{colour}]{row['status']}[/{colour}]", f"{row['seconds']:.3g}")
+        out_console.print(table)
+        for row in summary["results"]:
+            if row["status"] != "converged":
+                out_console.print(f"[red]{escape(row['document'])}:[/red] {escape(row['message'])}")
+        out_console.print(f"wrote {escape(str(out / 'summary.json'))}")
+    if summary["failed"]:
+        raise typer.Exit(EXIT_NOT_CONVERGED)
+
+
+# --- serve ---------------------------------------------------------------------------------
+@app.command()
+def serve(
+    host: Annotated[str | None, typer.Option("--host", help="Address to listen on (default FLEXMECH_HOST or 127.0.0.1).")] = None,
+    port: Annotated[int | None, typer.Option("--port", help="Port (default FLEXMECH_PORT or 8000).")] = None,
+) -> None:
+    """Run the HTTP API with uvicorn. Settings come from FLEXMECH_* environment variables
+    (database, Dask address, API keys, limits); by default an SQLite file and a process pool."""
+    import uvicorn
+    from pydantic import ValidationError
+
+    from service.settings import Settings
+
+    _, err = _consoles()
+    try:
+        settings = Settings()
+    except ValidationError as exc:
+        first = exc.errors()[0]
+        where = "FLEXMECH_" + str(first["loc"][0]).upper() if first["loc"] else "settings"
+        err.print(f"[bold red]error:[/bold red] {escape(where)}: {escape(first['msg'])}", soft_wrap=True)
+        raise typer.Exit(EXIT_ERROR) from None
+    # The app is named by import string so that the service layer never imports the api package.
+    uvicorn.run("api.app:create_app", factory=True, host=host or settings.host, port=port or settings.port,
+                log_level=settings.log_level)

@@ -32,3 +32,88 @@ def gripper(request):
 @pytest.fixture(scope="session")
 def gripper_pnl():
     return compile_mechanism(load_document(EXAMPLES / "gripper.json"), model="partial_nonlinear")
+
+
+# --- real servers for the service tests (see tests/servers.py) ------------------------------
+def _scratch(prefix: str) -> Path:
+    """A folder under /tmp that other system users (postgres) can reach, unlike tmp_path."""
+    import tempfile
+
+    return Path(tempfile.mkdtemp(prefix=prefix))
+
+
+@pytest.fixture(scope="session")
+def postgres_server_url():
+    """A PostgreSQL server: FLEXMECH_TEST_POSTGRES_URL when .ci/run started one, else a cluster
+    started here (needs the PostgreSQL server programs installed)."""
+    import os
+
+    from servers import PostgresServer
+
+    given = os.environ.get("FLEXMECH_TEST_POSTGRES_URL")
+    if given:
+        yield given
+        return
+    server = PostgresServer(_scratch("flexmech-pg-"))
+    yield server.url
+    server.stop()
+
+
+@pytest.fixture(scope="session")
+def dask_address():
+    """A real Dask cluster: a scheduler and two worker processes, started by the dask CLI."""
+    from servers import DaskCluster
+
+    cluster = DaskCluster(_scratch("flexmech-dask-"), workers=2)
+    yield cluster.address
+    cluster.stop()
+
+
+BACKENDS = ("sqlite", "postgresql", "dask")
+
+
+class Deployment:
+    """The settings of one way to run the service; start() runs a uvicorn server with them."""
+
+    def __init__(self, name: str, env: dict[str, str], logs: Path):
+        self.name = name
+        self.env = env
+        self.logs = logs
+        self._count = 0
+
+    def start(self, **extra: str):
+        from servers import ApiServer
+
+        self._count += 1
+        return ApiServer({**self.env, **extra}, self.logs / f"server{self._count}.log")
+
+
+def make_deployment(backend: str, request, tmp_dir: Path) -> Deployment:
+    env = {"FLEXMECH_DATA_DIR": str(tmp_dir / "data"), "FLEXMECH_WORKERS": "2", "FLEXMECH_CHUNK_SIZE": "4",
+           "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES), "FLEXMECH_API_KEYS": ""}
+    if backend in ("postgresql", "dask"):
+        from servers import fresh_database
+
+        server_url = request.getfixturevalue("postgres_server_url")
+        env["FLEXMECH_DATABASE_URL"] = fresh_database(server_url, f"flexmech_{tmp_dir.name.lower()}"[:60])
+    if backend == "dask":
+        env["FLEXMECH_DASK_ADDRESS"] = request.getfixturevalue("dask_address")
+    return Deployment(backend, env, tmp_dir)
+
+
+@pytest.fixture(params=BACKENDS)
+def deployment(request, tmp_path) -> Deployment:
+    """SQLite with a process pool; PostgreSQL with a process pool; PostgreSQL with Dask."""
+    return make_deployment(request.param, request, tmp_path)
+
+
+@pytest.fixture(scope="module")
+def api_server(tmp_path_factory):
+    """One server (SQLite, process pool, no keys) shared by a test module."""
+    tmp = tmp_path_factory.mktemp("api")
+    server = Deployment("sqlite", {"FLEXMECH_DATA_DIR": str(tmp / "data"), "FLEXMECH_WORKERS": "2",
+                                   "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES), "FLEXMECH_API_KEYS": "",
+                                   "FLEXMECH_MAX_REQUEST_BYTES": "200000", "FLEXMECH_MAX_SWEEP_POINTS": "1000"},
+                        tmp).start()
+    yield server
+    server.stop()

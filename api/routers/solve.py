@@ -27,7 +27,8 @@ def _solve(request: SolveRequest, document: dict, limits: Limits) -> dict:
         return inverse_report(mech, request.displacements or {})
     if request.analysis == "linearization":
         return linearization_report(mech, options, request.at)
-    return equilibrium_report(mech, options, request.stiffness)
+    target = request.target.model_dump() if request.target else None
+    return equilibrium_report(mech, options, request.stiffness, target)
 
 
 @router.post("/solve", operation_id="solve", response_model=SolveResponse, responses=ERRORS,

@@ -1,0 +1,206 @@
+"""Python client of the flexmech HTTP API: sync (`Client`) and async (`AsyncClient`).
+
+Needs only httpx and pydantic; it imports neither CasADi nor FastAPI, so a design tool can
+install it light (`pip install ./api`). Requests are checked against the same schemas the
+server uses before they are sent, and responses come back as those schemas' models.
+
+    with Client("http://127.0.0.1:8000", api_key=...) as flexmech:
+        answer = flexmech.solve(example="gripper", overrides={"/loads/actuation/force/1": 50})
+        job = flexmech.sweep(example="gripper",
+                             parameters=[{"path": "/loads/actuation/force/1", "start": 0, "stop": 60, "steps": 200}],
+                             continuation="/loads/actuation/force/1")
+        flexmech.wait(job.id, progress=lambda s: print(s.progress.done, "/", s.progress.total))
+        points = flexmech.result(job.id).result.points
+"""
+
+from __future__ import annotations
+
+import asyncio
+import time
+from collections.abc import Callable
+from typing import Any, TypeVar
+
+import httpx
+from pydantic import BaseModel, TypeAdapter
+
+from api.schemas import (
+    ExampleSummary,
+    HealthResponse,
+    JobResultResponse,
+    JobStatusResponse,
+    SolveRequest,
+    SolveResponse,
+    SweepRequest,
+)
+
+T = TypeVar("T")
+Progress = Callable[[JobStatusResponse], None]
+DEFAULT_URL = "http://127.0.0.1:8000"
+_EXAMPLES = TypeAdapter(list[ExampleSummary])
+
+
+class FlexmechError(Exception):
+    """An error answer of the API: its status, code, message and the request field's pointer."""
+
+    def __init__(self, status: int, code: str, message: str, pointer: str | None = None):
+        self.status = status
+        self.code = code
+        self.message = message
+        self.pointer = pointer
+        super().__init__(f"{status} {code}: {message}")
+
+
+class JobTimeout(TimeoutError):
+    """wait() gave up before the job finished; the job goes on on the server."""
+
+    def __init__(self, status: JobStatusResponse):
+        self.status = status
+        super().__init__(f"job {status.id} still {status.status} after waiting "
+                         f"({status.progress.done} of {status.progress.total} points)")
+
+
+def _error_of(response: httpx.Response) -> FlexmechError:
+    try:
+        body = response.json()["error"]
+        return FlexmechError(body["status"], body["code"], body["message"], body.get("pointer"))
+    except (ValueError, KeyError, TypeError):
+        return FlexmechError(response.status_code, "http_error", response.text[:500] or response.reason_phrase)
+
+
+def _parse(response: httpx.Response, model: type[T] | TypeAdapter) -> T:
+    if response.status_code >= 400:
+        raise _error_of(response)
+    data = response.json()
+    if isinstance(model, TypeAdapter):
+        return model.validate_python(data)
+    if model is dict:
+        return data
+    return model.model_validate(data)
+
+
+def _request_body(model: type[BaseModel], request: BaseModel | None, fields: dict[str, Any]) -> dict:
+    if request is None:
+        request = model(**fields)
+    elif fields:
+        raise TypeError("give a request object or keyword fields, not both")
+    return request.model_dump(mode="json", exclude_none=True)
+
+
+def _headers(api_key: str | None) -> dict[str, str]:
+    return {"X-API-Key": api_key} if api_key else {}
+
+
+class Client:
+    """Synchronous client. `transport` lets tests pass an httpx transport."""
+
+    def __init__(self, base_url: str = DEFAULT_URL, api_key: str | None = None, timeout: float = 60.0,
+                 transport: httpx.BaseTransport | None = None):
+        self._http = httpx.Client(base_url=base_url, headers=_headers(api_key), timeout=timeout, transport=transport)
+
+    def __enter__(self) -> "Client":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        self._http.close()
+
+    def health(self) -> HealthResponse:
+        return _parse(self._http.get("/v1/health"), HealthResponse)
+
+    def examples(self) -> list[ExampleSummary]:
+        return _parse(self._http.get("/v1/examples"), _EXAMPLES)
+
+    def example(self, name: str) -> dict:
+        return _parse(self._http.get(f"/v1/examples/{name}"), dict)
+
+    def solve(self, request: SolveRequest | None = None, **fields: Any) -> SolveResponse:
+        """One analysis; fields as in SolveRequest (document or example, analysis, overrides, ...)."""
+        return _parse(self._http.post("/v1/solve", json=_request_body(SolveRequest, request, fields)), SolveResponse)
+
+    def sweep(self, request: SweepRequest | None = None, **fields: Any) -> JobStatusResponse:
+        """Start a sweep job; fields as in SweepRequest. Returns the new job's status."""
+        return _parse(self._http.post("/v1/sweeps", json=_request_body(SweepRequest, request, fields)),
+                      JobStatusResponse)
+
+    def job(self, job_id: str) -> JobStatusResponse:
+        return _parse(self._http.get(f"/v1/jobs/{job_id}"), JobStatusResponse)
+
+    def result(self, job_id: str) -> JobResultResponse:
+        return _parse(self._http.get(f"/v1/jobs/{job_id}/result"), JobResultResponse)
+
+    def cancel(self, job_id: str) -> JobStatusResponse:
+        return _parse(self._http.delete(f"/v1/jobs/{job_id}"), JobStatusResponse)
+
+    def wait(self, job_id: str, timeout: float | None = None, poll: float = 0.2,
+             progress: Progress | None = None) -> JobStatusResponse:
+        """Poll until the job has finished (succeeded, failed or cancelled) and return its
+        status. progress(status) is called after every poll. JobTimeout after `timeout` s."""
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while True:
+            status = self.job(job_id)
+            if progress is not None:
+                progress(status)
+            if status.finished:
+                return status
+            if deadline is not None and time.monotonic() >= deadline:
+                raise JobTimeout(status)
+            time.sleep(poll)
+
+
+class AsyncClient:
+    """The same calls, awaitable."""
+
+    def __init__(self, base_url: str = DEFAULT_URL, api_key: str | None = None, timeout: float = 60.0,
+                 transport: httpx.AsyncBaseTransport | None = None):
+        self._http = httpx.AsyncClient(base_url=base_url, headers=_headers(api_key), timeout=timeout,
+                                       transport=transport)
+
+    async def __aenter__(self) -> "AsyncClient":
+        return self
+
+    async def __aexit__(self, *exc) -> None:
+        await self.aclose()
+
+    async def aclose(self) -> None:
+        await self._http.aclose()
+
+    async def health(self) -> HealthResponse:
+        return _parse(await self._http.get("/v1/health"), HealthResponse)
+
+    async def examples(self) -> list[ExampleSummary]:
+        return _parse(await self._http.get("/v1/examples"), _EXAMPLES)
+
+    async def example(self, name: str) -> dict:
+        return _parse(await self._http.get(f"/v1/examples/{name}"), dict)
+
+    async def solve(self, request: SolveRequest | None = None, **fields: Any) -> SolveResponse:
+        body = _request_body(SolveRequest, request, fields)
+        return _parse(await self._http.post("/v1/solve", json=body), SolveResponse)
+
+    async def sweep(self, request: SweepRequest | None = None, **fields: Any) -> JobStatusResponse:
+        body = _request_body(SweepRequest, request, fields)
+        return _parse(await self._http.post("/v1/sweeps", json=body), JobStatusResponse)
+
+    async def job(self, job_id: str) -> JobStatusResponse:
+        return _parse(await self._http.get(f"/v1/jobs/{job_id}"), JobStatusResponse)
+
+    async def result(self, job_id: str) -> JobResultResponse:
+        return _parse(await self._http.get(f"/v1/jobs/{job_id}/result"), JobResultResponse)
+
+    async def cancel(self, job_id: str) -> JobStatusResponse:
+        return _parse(await self._http.delete(f"/v1/jobs/{job_id}"), JobStatusResponse)
+
+    async def wait(self, job_id: str, timeout: float | None = None, poll: float = 0.2,
+                   progress: Progress | None = None) -> JobStatusResponse:
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while True:
+            status = await self.job(job_id)
+            if progress is not None:
+                progress(status)
+            if status.finished:
+                return status
+            if deadline is not None and time.monotonic() >= deadline:
+                raise JobTimeout(status)
+            await asyncio.sleep(poll)
