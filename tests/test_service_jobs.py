@@ -1,0 +1,138 @@
+"""Sweep jobs through a real server, for each way to deploy it: SQLite with a process pool,
+PostgreSQL with a process pool, PostgreSQL with a Dask cluster (scheduler + two workers)."""
+
+from __future__ import annotations
+
+import json
+import time
+
+import numpy as np
+import pytest
+
+from api.client import Client
+from conftest import ACTUATION, EXAMPLES
+from models import compile_mechanism, load_document
+from service import sweep
+from service.jobs.kinds import kind_named
+
+LOAD_PATH = {"path": ACTUATION, "start": -60.0, "stop": 60.0, "steps": 199}  # 200 points
+
+
+def _wait_until(condition, timeout: float, what: str):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        value = condition()
+        if value:
+            return value
+        time.sleep(0.01)
+    raise AssertionError(f"timed out waiting for {what}")
+
+
+def test_200_point_sweep_job_progress_and_result(deployment):
+    server = deployment.start()
+    try:
+        with Client(server.url) as client:
+            job = client.sweep(example="gripper", parameters=[LOAD_PATH], continuation=ACTUATION,
+                               outputs=["end_effector.x", "end_effector.y", "anchor.Fx"])
+            assert job.status == "queued" and job.progress.total == 200
+            seen = []
+            final = client.wait(job.id, timeout=180, poll=0.01, progress=seen.append)
+            assert final.status == "succeeded", final.error
+            done = [s.progress.done for s in seen]
+            assert done == sorted(done) and done[-1] == 200
+            assert any(0 < d < 200 for d in done), f"no progress seen between 0 and 200: {done}"
+            assert final.timings.started_at and final.timings.finished_at and final.timings.elapsed_seconds > 0
+            result = client.result(job.id)
+    finally:
+        server.stop()
+    assert result.complete and result.status == "succeeded"
+    points = result.result.points
+    assert [p.index for p in points] == list(range(200))
+    assert all(p.status == "converged" for p in points)
+    assert result.result.output_units == {"end_effector.x": "mm", "end_effector.y": "mm", "anchor.Fx": "uN"}
+    # the same load path solved by the core's sweep
+    mech = compile_mechanism(load_document(EXAMPLES / "gripper.json"))
+    core = sweep(mech, ACTUATION, np.linspace(-60, 60, 200))
+    x = np.array([p.outputs["end_effector.x"] for p in points])
+    np.testing.assert_allclose(x, core.outputs["end_effector.x"], rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose([p.values[0] for p in points], np.linspace(-60, 60, 200), rtol=1e-15)
+
+
+def test_independent_points_over_a_cartesian_grid(deployment):
+    server = deployment.start()
+    try:
+        with Client(server.url) as client:
+            job = client.sweep(example="gripper", outputs=["end_effector.x"], parameters=[
+                {"path": ACTUATION, "values": [-20, 0, 20, 40]},
+                {"path": "/sections/flexure/h", "values": [0.004, 0.005, 0.006]}])
+            assert client.wait(job.id, timeout=180).status == "succeeded"
+            points = client.result(job.id).result.points
+    finally:
+        server.stop()
+    assert len(points) == 12
+    base = compile_mechanism(load_document(EXAMPLES / "gripper.json"))
+    from service import solve_equilibrium
+
+    for p in points:
+        force, h = p.values
+        assert (force, h) == ([-20, 0, 20, 40][p.index // 3], [0.004, 0.005, 0.006][p.index % 3])
+        core = solve_equilibrium(base.with_values({ACTUATION: force, "/sections/flexure/h": h}))
+        assert p.outputs["end_effector.x"] == pytest.approx(core.outputs()["end_effector.x"], rel=1e-9, abs=1e-12)
+
+
+def test_cancel_a_running_job(deployment):
+    server = deployment.start()
+    try:
+        with Client(server.url) as client:
+            job = client.sweep(example="gripper", continuation=ACTUATION, outputs=["end_effector.x"],
+                               parameters=[{"path": ACTUATION, "start": -60, "stop": 60, "steps": 19_999}])
+            _wait_until(lambda: client.job(job.id).progress.done > 0, 120, "the first points")
+            cancelled = client.cancel(job.id)
+            assert cancelled.status == "cancelled" and cancelled.error == "cancelled by the caller"
+            time.sleep(1.0)  # a task that was running may still land; nothing new starts
+            settled = client.job(job.id).progress.done
+            time.sleep(1.0)
+            after = client.job(job.id)
+            result = client.result(job.id)
+    finally:
+        server.stop()
+    assert after.status == "cancelled" and after.progress.done == settled < 20_000
+    assert not result.complete and len(result.result.points) == settled
+
+
+def test_killed_server_resumes_the_job_and_keeps_every_finished_point(deployment):
+    """SIGKILL the server (and its worker processes) in the middle of a load path; a new server
+    on the same store finishes the job. Points stored before the kill come back untouched (their
+    own solve timings included, so none was recomputed), and every point equals an
+    uninterrupted run to the last bit."""
+    spec_path = {"path": ACTUATION, "start": -60.0, "stop": 60.0, "steps": 1499}
+    server = deployment.start(FLEXMECH_CHUNK_SIZE="2")
+    with Client(server.url) as client:
+        job = client.sweep(example="gripper", parameters=[spec_path], continuation=ACTUATION,
+                           outputs=["end_effector.x", "end_effector.y"])
+        _wait_until(lambda: client.job(job.id).progress.done >= 100, 120, "100 points")
+        before = client.result(job.id)
+        server.kill()
+    assert not before.complete and 100 <= len(before.result.points) < 1500
+
+    server = deployment.start()
+    try:
+        with Client(server.url) as client:
+            final = client.wait(job.id, timeout=300)
+            result = client.result(job.id)
+    finally:
+        server.stop()
+    assert final.status == "succeeded" and final.restarts == 1
+    assert result.complete
+    after = {p.index: p for p in result.result.points}
+    assert sorted(after) == list(range(1500))
+    for p in before.result.points:
+        assert after[p.index] == p
+
+    kind = kind_named("sweep")
+    spec = {"document": json.loads((EXAMPLES / "gripper.json").read_text()), "parameters": [spec_path],
+            "continuation": ACTUATION, "outputs": ["end_effector.x", "end_effector.y"]}
+    uninterrupted = dict(kind.run(spec, {"indices": list(range(1500)), "guess": None, "line": 0}))
+    for i, p in after.items():
+        assert p.outputs == uninterrupted[i]["outputs"]
+        assert p.iterations == uninterrupted[i]["iterations"]
