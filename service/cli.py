@@ -622,3 +622,7 @@ def serve(
     # The app is named by import string so that the service layer never imports the api package.
     uvicorn.run("api.app:create_app", factory=True, host=host or settings.host, port=port or settings.port,
                 log_level=settings.log_level)
+
+
+if __name__ == "__main__":
+    app()

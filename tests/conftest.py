@@ -81,11 +81,11 @@ class Deployment:
         self.logs = logs
         self._count = 0
 
-    def start(self, **extra: str):
+    def start(self, access_log: bool = False, **extra: str):
         from servers import ApiServer
 
         self._count += 1
-        return ApiServer({**self.env, **extra}, self.logs / f"server{self._count}.log")
+        return ApiServer({**self.env, **extra}, self.logs / f"server{self._count}.log", access_log=access_log)
 
 
 def make_deployment(backend: str, request, tmp_dir: Path) -> Deployment:

@@ -36,8 +36,9 @@ class Process:
         self.proc = subprocess.Popen(args, stdout=self._log_file, stderr=subprocess.STDOUT, cwd=REPO,
                                      env={**os.environ, **(env or {})}, start_new_session=True)
 
-    def output(self) -> str:
-        return self.log.read_text(errors="replace")[-4000:]
+    def output(self, tail: int | None = 4000) -> str:
+        text = self.log.read_text(errors="replace")
+        return text[-tail:] if tail else text
 
     def running(self) -> bool:
         return self.proc.poll() is None
@@ -66,11 +67,12 @@ class Process:
 
 
 class ApiServer(Process):
-    def __init__(self, env: dict[str, str], log: Path, port: int | None = None):
+    def __init__(self, env: dict[str, str], log: Path, port: int | None = None, access_log: bool = False):
         self.port = port or free_port()
         self.url = f"http://127.0.0.1:{self.port}"
+        level = "info" if access_log else "warning"
         super().__init__([sys.executable, "-m", "uvicorn", "--factory", "api.app:create_app",
-                          "--host", "127.0.0.1", "--port", str(self.port), "--log-level", "warning"], log, env)
+                          "--host", "127.0.0.1", "--port", str(self.port), "--log-level", level], log, env)
         self.wait_ready()
 
     def wait_ready(self, timeout: float = 90.0) -> None:

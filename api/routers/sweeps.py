@@ -39,8 +39,16 @@ async def create_job(kind_name: str, spec: dict, services, owner: str, response:
     return job_status(job)
 
 
+# OpenAPI links: what a generated client (or schemathesis' stateful tests) can do with the new job
+JOB_LINKS = {
+    name: {"operationId": operation, "parameters": {"job_id": "$response.body#/id"}}
+    for name, operation in (("GetJob", "get_job"), ("GetJobResult", "get_job_result"), ("CancelJob", "cancel_job"))
+}
+
+
 @router.post("/sweeps", operation_id="create_sweep", status_code=202, response_model=JobStatusResponse,
-             responses=ERRORS, summary="Start a sweep job")
+             responses={**ERRORS, 202: {"description": "The job, queued", "links": JOB_LINKS}},
+             summary="Start a sweep job")
 async def create_sweep(request: SweepRequest, services: ServicesDep, owner: OwnerDep,
                        response: Response) -> JobStatusResponse:
     """Every point is stored as soon as its task finishes; follow the job at /v1/jobs/{id} and
