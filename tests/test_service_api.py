@@ -206,3 +206,47 @@ class SolveRequestUnchecked:
 
     def model_dump(self, **_):
         return self.fields
+
+
+# --- limits on work -------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def tight_server(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("tight")
+    server = Deployment("sqlite", {"FLEXMECH_DATA_DIR": str(tmp / "data"), "FLEXMECH_WORKERS": "1",
+                                   "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES), "FLEXMECH_API_KEYS": "",
+                                   "FLEXMECH_SOLVE_TIME_LIMIT": "1e-6", "FLEXMECH_JOB_TIME_LIMIT": "1",
+                                   "FLEXMECH_CHUNK_SIZE": "1", "FLEXMECH_MAX_ELEMENTS": "3"}, tmp).start()
+    yield server
+    server.stop()
+
+
+def test_solve_time_limit_stops_newton_with_a_status(tight_server, gripper_dict):
+    small = json.loads(json.dumps(gripper_dict))
+    del small["elements"]["d"]  # 3 elements: within this server's element limit
+    small["bodies"]["follower"]["fixed"] = True
+    with Client(tight_server.url) as c:
+        answer = c.solve(document=small, options={"time_limit": 60})  # the server's limit wins
+    assert answer.status == "time_limit"
+    assert answer.message == "stopped by the time limit of 1e-06 s"
+
+
+def test_element_limit_is_422(tight_server):
+    with Client(tight_server.url) as c, pytest.raises(FlexmechError) as info:
+        c.solve(example="gripper")
+    assert info.value.status == 422 and info.value.pointer == "/document/elements"
+    assert info.value.message == "/document/elements: 4 elements: the limit is 3"
+
+
+def test_job_time_limit_fails_the_job_and_keeps_its_points(tight_server, gripper_dict):
+    small = json.loads(json.dumps(gripper_dict))
+    del small["elements"]["d"]
+    small["bodies"]["follower"]["fixed"] = True
+    with Client(tight_server.url) as c:
+        job = c.sweep(document=small, parameters=[{"path": ACTUATION, "start": 0, "stop": 50, "steps": 19_999}],
+                      continuation=ACTUATION, outputs=["end_effector.x"])
+        final = c.wait(job.id, timeout=60)
+        stored = c.result(job.id)
+    assert final.status == "failed"
+    assert final.error.startswith("stopped by the job time limit of 1 s; ")
+    assert f"{len(stored.result.points)} of 20000 points are stored" in final.error
+    assert not stored.complete

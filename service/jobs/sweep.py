@@ -135,7 +135,7 @@ class SweepJob:
             raise MechanismError("/document" + exc.pointer, exc.problem) from None
         meta = {"parameters": [{"path": p, "unit": u, "values": v} for p, u, v in zip(paths, units, values)],
                 "shape": list(shape), "output_units": {n: all_units[n] for n in wanted},
-                "force_unit": mech.doc_unit("force")}
+                "force_unit": mech.doc_unit("force"), "solve_time_limit": limits.solve_time_limit}
         return Plan(total, meta)
 
     def tasks(self, spec, plan, finished, chunk_size):
@@ -145,19 +145,19 @@ class SweepJob:
             todo = [line[0] for line in lines if line[0] not in finished]
             for start in range(0, len(todo), chunk_size):
                 tasks.append({"indices": todo[start:start + chunk_size], "guess": None})
-            return tasks
-        for number, line in enumerate(lines):
-            task = self._next_on_line(line, number, finished, chunk_size)
-            if task is not None:
-                tasks.append(task)
-        return tasks
+        else:
+            for number, line in enumerate(lines):
+                task = self._next_on_line(line, number, finished, chunk_size)
+                if task is not None:
+                    tasks.append(task)
+        return [t | {"time_limit": plan.get("solve_time_limit")} for t in tasks]
 
     def follow_up(self, spec, plan, task, finished, chunk_size):
         if task.get("line") is None:
             return []
         line = load_paths(spec, tuple(plan["shape"]))[task["line"]]
         nxt = self._next_on_line(line, task["line"], finished, chunk_size)
-        return [nxt] if nxt is not None else []
+        return [nxt | {"time_limit": plan.get("solve_time_limit")}] if nxt is not None else []
 
     @staticmethod
     def _next_on_line(line: list[int], number: int, finished: Mapping[int, dict], chunk_size: int) -> dict | None:
@@ -175,7 +175,7 @@ class SweepJob:
 
     def run(self, spec, task):
         mech = mechanism_of(spec)
-        options = newton_options(spec.get("options"))
+        options = newton_options(spec.get("options"), task.get("time_limit"))
         values, shape = grid_shape(spec)
         grid = spec.get("grid", "cartesian")
         paths = [p["path"] for p in spec["parameters"]]
