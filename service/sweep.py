@@ -21,7 +21,6 @@ from models.document import SweepSpec
 from models.assembly import Graphs
 from models.units import quantity_to_si
 from service.equilibrium import EquilibriumResult, NewtonOptions, check_constrained, iterate, newton
-from service.units import outputs_in_doc_units
 
 Start = Literal["previous", "undeformed"]
 

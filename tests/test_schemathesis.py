@@ -27,7 +27,7 @@ def test_no_generated_request_gets_a_5xx(tmp_path):
             [st, "run", f"{server.url}/openapi.json", "--checks", "not_a_server_error", "--max-examples", "100",
              "--seed", "20261121", "--generation-database", "none", "--no-color", "--report", "json",
              "--report-json-path", str(report), "--request-timeout", "30"],
-            capture_output=True, text=True, timeout=600)
+            capture_output=True, text=True, timeout=600, cwd=tmp_path)
         served = server.output(tail=None)
     finally:
         server.stop()

@@ -13,7 +13,6 @@ from api.client import AsyncClient, Client, FlexmechError
 from conftest import ACTUATION, EXAMPLES, Deployment
 from models import compile_mechanism, load_document
 from service import inverse_wrenches, solve_equilibrium, solve_for_target, tangent_stiffness
-from service.equilibrium import NewtonOptions
 
 CLOSING = {"path": ACTUATION, "output": "end_effector.x", "equals": 0.0}
 

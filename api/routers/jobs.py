@@ -66,7 +66,10 @@ async def get_job_result(services: ServicesDep, owner: OwnerDep, job_id: str = J
 async def cancel_job(services: ServicesDep, owner: OwnerDep, job_id: str = JobId) -> JobStatusResponse:
     """Stored points are kept and stay readable at /result."""
     job = await run_in_threadpool(_owned, services, job_id, owner)
-    if job.status in FINAL or not services.store.finish(job.id, "cancelled", "cancelled by the caller"):
-        raise ApiError(409, "conflict", f"job '{job_id}' has already {services.store.get(job_id).status}")
+    cancelled = job.status not in FINAL and await run_in_threadpool(
+        services.store.finish, job.id, "cancelled", "cancelled by the caller")
+    job = await run_in_threadpool(services.store.get, job_id)
+    if not cancelled:
+        raise ApiError(409, "conflict", f"job '{job_id}' has already {job.status}")
     services.runner.wake()
-    return job_status(services.store.get(job_id))
+    return job_status(job)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from fastapi import APIRouter, Response
+from fastapi.concurrency import run_in_threadpool
 
 from api.deps import OwnerDep, ServicesDep
 from api.documents import request_document
@@ -32,7 +33,7 @@ async def create_job(kind_name: str, spec: dict, services, owner: str, response:
     job and wake the runner. Any job kind goes through here."""
     kind = kind_named(kind_name)
     plan = await services.solver.call(kind.prepare, spec, services.limits)
-    job = services.store.create(kind_name, owner, spec, plan.meta, plan.total)
+    job = await run_in_threadpool(services.store.create, kind_name, owner, spec, plan.meta, plan.total)
     services.runner.wake()
     response.status_code = 202
     response.headers["Location"] = f"/v1/jobs/{job.id}"

@@ -14,9 +14,9 @@ from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any, Literal
 
-from sqlalchemy import JSON, DateTime, ForeignKey, Integer, String, Text, create_engine, event, func, select, update
+from sqlalchemy import JSON, DateTime, ForeignKey, Integer, String, Text, create_engine, event, select, update
 from sqlalchemy.engine import Engine, make_url
-from sqlalchemy.orm import DeclarativeBase, Mapped, Session, mapped_column, sessionmaker
+from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, sessionmaker
 
 JobStatus = Literal["queued", "running", "succeeded", "failed", "cancelled"]
 ACTIVE: tuple[JobStatus, ...] = ("queued", "running")
@@ -139,12 +139,6 @@ class JobStore:
             rows = s.scalars(select(JobRow).where(JobRow.status.in_(ACTIVE)).order_by(JobRow.created_at))
             return [_job(r) for r in rows]
 
-    def list(self, owner: str, limit: int = 50) -> list[Job]:
-        with self._session() as s:
-            rows = s.scalars(select(JobRow).where(JobRow.owner == owner)
-                             .order_by(JobRow.created_at.desc()).limit(limit))
-            return [_job(r) for r in rows]
-
     def mark_started(self, job_id: str, resumed: bool) -> None:
         with self._session.begin() as s:
             row = s.get(JobRow, job_id)
@@ -187,12 +181,3 @@ class JobStore:
             rows = s.execute(select(PointRow.index, PointRow.data).where(PointRow.job_id == job_id)
                              .order_by(PointRow.index))
             return {i: d for i, d in rows}
-
-    def point_times(self, job_id: str) -> dict[int, datetime]:
-        with self._session() as s:
-            rows = s.execute(select(PointRow.index, PointRow.finished_at).where(PointRow.job_id == job_id))
-            return {i: _aware(t) for i, t in rows}
-
-    def count_points(self, job_id: str) -> int:
-        with self._session() as s:
-            return s.scalar(select(func.count()).select_from(PointRow).where(PointRow.job_id == job_id)) or 0
