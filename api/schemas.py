@@ -70,6 +70,12 @@ class Target(_Request):
 class SolveRequest(DocumentRequest):
     """One analysis of one mechanism, answered in the response."""
 
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"example": "gripper", "overrides": {"/loads/actuation/force/1": 50}},
+        {"example": "gripper", "target": {"path": "/loads/actuation/force/1", "output": "end_effector.x", "equals": 0}},
+        {"example": "gripper", "analysis": "linearization", "at": "undeformed"},
+    ]})
+
     analysis: Analysis = "equilibrium"
     target: Target | None = Field(None, description="equilibrium: solve for the field value that reaches a target")
     stiffness: bool = Field(False, description="equilibrium: also return K_T at the solution")
@@ -103,6 +109,11 @@ class SweepParameter(_Request):
 
 class SweepRequest(DocumentRequest):
     """A job: numeric fields varied over a grid, each point an equilibrium."""
+
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"example": "gripper", "continuation": "/loads/actuation/force/1", "outputs": ["end_effector.x"],
+         "parameters": [{"path": "/loads/actuation/force/1", "start": -60, "stop": 60, "steps": 20}]},
+    ]})
 
     parameters: list[SweepParameter] = Field(min_length=1, max_length=8)
     grid: Literal["cartesian", "zip"] = "cartesian"

@@ -4,7 +4,10 @@ PostgreSQL with a process pool, PostgreSQL with a Dask cluster (scheduler + two 
 from __future__ import annotations
 
 import json
+import os
+import signal
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -32,6 +35,9 @@ def test_200_point_sweep_job_progress_and_result(deployment):
     server = deployment.start()
     try:
         with Client(server.url) as client:
+            health = client.health()
+            assert health.database == ("sqlite" if deployment.name == "sqlite" else "postgresql")
+            assert health.executor.startswith("Dask cluster" if deployment.name == "dask" else "process pool")
             job = client.sweep(example="gripper", parameters=[LOAD_PATH], continuation=ACTUATION,
                                outputs=["end_effector.x", "end_effector.y", "anchor.Fx"])
             assert job.status == "queued" and job.progress.total == 200
@@ -136,3 +142,41 @@ def test_killed_server_resumes_the_job_and_keeps_every_finished_point(deployment
     for i, p in after.items():
         assert p.outputs == uninterrupted[i]["outputs"]
         assert p.iterations == uninterrupted[i]["iterations"]
+
+
+def _pool_workers(server_pid: int) -> list[int]:
+    """Process-pool workers of the server: its children started by multiprocessing's spawn."""
+    found = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            ppid = int(stat.read_text().rsplit(")", 1)[1].split()[1])
+            cmdline = (stat.parent / "cmdline").read_bytes()
+        except (OSError, ValueError, IndexError):
+            continue
+        if ppid == server_pid and b"spawn_main" in cmdline:
+            found.append(int(stat.parent.name))
+    return found
+
+
+def test_a_dead_pool_worker_does_not_lose_the_job(tmp_path, request):
+    """SIGKILL one process-pool worker mid-job: the pool is replaced, the tasks it held are sent
+    again, and the job completes with every point."""
+    from conftest import make_deployment
+
+    server = make_deployment("sqlite", request, tmp_path).start(FLEXMECH_CHUNK_SIZE="2")
+    try:
+        with Client(server.url) as client:
+            job = client.sweep(example="gripper", outputs=["end_effector.x"],
+                               parameters=[{"path": ACTUATION, "start": -60, "stop": 60, "steps": 2999}])
+            _wait_until(lambda: client.job(job.id).progress.done >= 50, 120, "50 points")
+            workers = _pool_workers(server.proc.pid)
+            assert workers, "no pool worker found"
+            os.kill(workers[0], signal.SIGKILL)
+            final = client.wait(job.id, timeout=300)
+            result = client.result(job.id)
+    finally:
+        server.stop()
+    assert final.status == "succeeded", final.error
+    assert result.complete and [p.index for p in result.result.points] == list(range(3000))
+    assert all(p.status == "converged" for p in result.result.points)
+    assert "process pool broke; starting a new one" in server.output(tail=None)

@@ -141,8 +141,13 @@ class JobRunner:
             progressed = False
             for active in list(self._active.values()):  # one task per job per round: fair sharing
                 if active.pending and in_flight < self.executor.capacity:
-                    task = active.pending.popleft()
-                    future = self.executor.executor().submit(run_task, active.job.kind, active.job.spec, task)
+                    task = active.pending[0]
+                    try:
+                        future = self.executor.executor().submit(run_task, active.job.kind, active.job.spec, task)
+                    except BrokenProcessPool:  # a worker died since the last look: new pool, same task
+                        self._renew_executor()
+                        return
+                    active.pending.popleft()
                     active.in_flight[future] = task
                     self._born[future] = self._generation
                     in_flight += 1
@@ -171,14 +176,17 @@ class JobRunner:
         active.attempts[key] = active.attempts.get(key, 0) + 1
         if isinstance(error, BrokenProcessPool):
             if born == self._generation:  # the first to notice renews the pool, for every job
-                self.executor.renew()
-                self._generation += 1
+                self._renew_executor()
             if active.attempts[key] < MAX_TASK_ATTEMPTS:
                 active.pending.appendleft(task)
                 return
         log.error("job %s: task failed: %r", active.job.id, error)
         self.store.finish(active.job.id, "failed", f"a task failed: {type(error).__name__}: {error}")
         self._abandon(active)
+
+    def _renew_executor(self) -> None:
+        self.executor.renew()
+        self._generation += 1
 
     def _maybe_complete(self, active: _ActiveJob) -> None:
         if active.pending or active.in_flight:
