@@ -95,7 +95,7 @@ def test_cancel_a_running_job(deployment):
             _wait_until(lambda: client.job(job.id).progress.done > 0, 120, "the first points")
             cancelled = client.cancel(job.id)
             assert cancelled.status == "cancelled" and cancelled.error == "cancelled by the caller"
-            time.sleep(1.0)  # a task that was running may still land; nothing new starts
+            time.sleep(1.0)  # the runner sees the cancel at its next look; nothing is stored after
             settled = client.job(job.id).progress.done
             time.sleep(1.0)
             after = client.job(job.id)

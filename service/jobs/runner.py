@@ -3,8 +3,9 @@ points each task returns, as it returns them.
 
 On start it takes up every job the store lists as queued or running, including jobs a
 previous server process left running: their stored points are kept and only the missing ones
-are computed (the kind decides the tasks from the stored points). A cancelled job stops
-getting tasks; points of tasks already running are still stored when they come back.
+are computed (the kind decides the tasks from the stored points). A cancelled job, or one
+over its time limit, stops getting tasks, and the points of its tasks still running are
+dropped: after the cancel is seen, its stored points do not change.
 """
 
 from __future__ import annotations
@@ -132,6 +133,7 @@ class JobRunner:
     def _abandon(self, active: _ActiveJob) -> None:
         for future in active.in_flight:
             future.cancel()
+            self._born.pop(future, None)
         del self._active[active.job.id]
 
     def _submit(self) -> None:
