@@ -82,12 +82,13 @@ class EquilibriumResult:
         m = self.mechanism
         return outputs_in_doc_units(m, m.graphs.outputs(self.z, m.p()))
 
-    def warnings(self) -> list[str]:
-        """Where the result leaves the range its models are known to hold in."""
+    def warnings(self, outputs: dict[str, float] | None = None) -> list[str]:
+        """Where the result leaves the range its models are known to hold in (`outputs`: this
+        result's outputs() when already at hand)."""
         m = self.mechanism
         notes = []
         rad_per_unit = m.doc_factor("angle")
-        for name, value in self.outputs().items():
+        for name, value in (outputs if outputs is not None else self.outputs()).items():
             if name.startswith("elements.") and name.endswith(".rotation"):
                 degrees = abs(value) * rad_per_unit * 180 / np.pi
                 if degrees > ROTATION_VALIDITY_DEG:
@@ -101,6 +102,7 @@ class EquilibriumResult:
 
     def summary(self) -> dict:
         m = self.mechanism
+        outputs = self.outputs()
         return {
             "status": self.status,
             "message": self.message,
@@ -110,9 +112,9 @@ class EquilibriumResult:
             "residual_moment": self.residual_norm_moment,
             "residual_moment_unit": m.doc_unit("moment"),
             "seconds": self.seconds,
-            "warnings": self.warnings() if self.converged else [],
+            "warnings": self.warnings(outputs) if self.converged else [],
             "displacements": self.displacements(),
-            "outputs": self.outputs(),
+            "outputs": outputs,
         }
 
 
