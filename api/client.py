@@ -86,6 +86,18 @@ def _request_body(model: type[BaseModel], request: BaseModel | None, fields: dic
     return request.model_dump(mode="json", exclude_none=True)
 
 
+def _finished(status: JobStatusResponse, deadline: float | None, progress: Progress | None) -> bool:
+    """One step of wait(): report progress; True once the job has finished; JobTimeout past
+    the deadline."""
+    if progress is not None:
+        progress(status)
+    if status.finished:
+        return True
+    if deadline is not None and time.monotonic() >= deadline:
+        raise JobTimeout(status)
+    return False
+
+
 def _headers(api_key: str | None) -> dict[str, str]:
     return {"X-API-Key": api_key} if api_key else {}
 
@@ -138,15 +150,9 @@ class Client:
         """Poll until the job has finished (succeeded, failed or cancelled) and return its
         status. progress(status) is called after every poll. JobTimeout after `timeout` s."""
         deadline = None if timeout is None else time.monotonic() + timeout
-        while True:
-            status = self.job(job_id)
-            if progress is not None:
-                progress(status)
-            if status.finished:
-                return status
-            if deadline is not None and time.monotonic() >= deadline:
-                raise JobTimeout(status)
+        while not _finished(status := self.job(job_id), deadline, progress):
             time.sleep(poll)
+        return status
 
 
 class AsyncClient:
@@ -195,12 +201,6 @@ class AsyncClient:
     async def wait(self, job_id: str, timeout: float | None = None, poll: float = 0.2,
                    progress: Progress | None = None) -> JobStatusResponse:
         deadline = None if timeout is None else time.monotonic() + timeout
-        while True:
-            status = await self.job(job_id)
-            if progress is not None:
-                progress(status)
-            if status.finished:
-                return status
-            if deadline is not None and time.monotonic() >= deadline:
-                raise JobTimeout(status)
+        while not _finished(status := await self.job(job_id), deadline, progress):
             await asyncio.sleep(poll)
+        return status

@@ -12,12 +12,11 @@ printed as one line "error: <where>: <problem>" on stderr.
 from __future__ import annotations
 
 import json
-import math
 import os
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
 import numpy as np
 import typer
@@ -28,6 +27,7 @@ from rich.table import Table
 from models import Mechanism, MechanismError, compile_mechanism, load_document
 from models.mechanism import MODELS
 from models.units import quantity_to_si
+from service.analysis import plain
 from service.equilibrium import EquilibriumResult, NewtonOptions, solve_equilibrium
 from service.examples import examples_directory
 from service.plotting import PLOT_SUFFIXES, field_label, output_unit
@@ -111,26 +111,10 @@ def _number(value: float, unit: str | None = None) -> str:
     return f"{text} {unit}" if unit else text
 
 
-def _plain(obj: Any) -> Any:
-    """JSON-able copy: numpy scalars and arrays to Python numbers and lists, non-finite to None."""
-    if isinstance(obj, dict):
-        return {str(k): _plain(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_plain(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _plain(obj.tolist())
-    if isinstance(obj, (np.integer,)):
-        return int(obj)
-    if isinstance(obj, (float, np.floating)):
-        value = float(obj)
-        return value if math.isfinite(value) else None
-    return obj
-
-
 def _write_json(path: Path, payload: dict) -> None:
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps(_plain(payload), indent=2))
+        path.write_text(json.dumps(plain(payload), indent=2))
     except OSError as exc:
         raise OptionError("--json", f"cannot write {path}: {exc.strerror}") from None
 

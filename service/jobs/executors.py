@@ -10,25 +10,27 @@ from __future__ import annotations
 
 import logging
 import multiprocessing
+from abc import ABC, abstractmethod
 from concurrent.futures import Executor, ProcessPoolExecutor
 
 log = logging.getLogger("flexmech.executors")
 
 
-class TaskExecutor:
+class TaskExecutor(ABC):
     """Owns a concurrent.futures executor and knows how to make a new one if it breaks."""
 
     description: str
     capacity: int  # tasks worth keeping in flight
 
-    def executor(self) -> Executor:
-        raise NotImplementedError
+    @abstractmethod
+    def executor(self) -> Executor: ...
 
     def renew(self) -> None:
-        """Replace a broken executor (a worker process died)."""
+        """Replace a broken executor (a process-pool worker died). A Dask cluster replaces
+        lost workers itself, so by default there is nothing to do."""
 
-    def close(self) -> None:
-        raise NotImplementedError
+    @abstractmethod
+    def close(self) -> None: ...
 
 
 class ProcessPool(TaskExecutor):
