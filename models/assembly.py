@@ -19,8 +19,13 @@ from functools import lru_cache
 import casadi as ca
 
 from models import curved_beam
-from models.mechanism import COORDINATES, Structure
-from models.planar import cross, rot
+from models.expression import compile_expression
+from models.link import LinkProperties, LinkShooting
+from models.mechanism import COORDINATES, LinkTopology, Structure
+from models.planar import cross, rot, unit
+
+# Samples per shooting interval of a link, for stresses and drawing.
+LINK_SAMPLES_PER_INTERVAL = 4
 
 # Samples along each arc for the maximum bending stress and for drawing.
 ARC_SAMPLES = 33
@@ -38,7 +43,9 @@ class Graphs:
     outputs: ca.Function  # (z, p) -> y
     output_names: tuple[str, ...]
     output_kinds: tuple[str, ...]
-    shapes: ca.Function  # (z, p) -> (deformed, undeformed): 2 x (flexures * ARC_SAMPLES)
+    shapes: ca.Function  # (z, p) -> (deformed, undeformed): 2 x (samples of every element)
+    # per element drawn: (name, first column in shapes, columns, start body, end body)
+    shape_segments: tuple[tuple[str, int, int, int, int], ...]
 
 
 class _Params:
@@ -48,6 +55,9 @@ class _Params:
 
     def __getitem__(self, pointer: str) -> ca.SX:
         return self.p[self.index[pointer]]
+
+    def __contains__(self, pointer: str) -> bool:
+        return pointer in self.index
 
     def vec(self, pointer: str) -> ca.SX:
         return ca.vertcat(self[f"{pointer}/0"], self[f"{pointer}/1"])
@@ -59,6 +69,126 @@ class _Builder:
         self.p = ca.SX.sym("p", len(structure.parameters))
         self.P = _Params(structure, self.p)
         self.nb = len(structure.bodies)
+        self.shooting = [self._shooting(link) for link in structure.links]
+        self.undeformed = [sh.undeformed_nodes() for sh in self.shooting]
+
+    # --- links -------------------------------------------------------------------------
+    def _shooting(self, link: LinkTopology) -> LinkShooting:
+        return LinkShooting(self.link_properties(link), self.p, link.intervals, link.order)
+
+    def link_properties(self, link: LinkTopology) -> LinkProperties:
+        P = self.P
+        base = f"/elements/{link.name}"
+        E = P[f"/materials/{link.material}/E"]
+        if link.shape == "curved_beam":  # the exact model of a curved beam: the arc itself
+            r, theta_f = P[f"{base}/radius"], P[f"{base}/arc_angle"]
+            start_angle = P[f"{base}/start_angle"] - (theta_f if link.reversed else 0)
+            length = r * theta_f
+            start_point = P.vec(f"{base}/center") + r * unit(start_angle)
+            beta = start_angle + ca.pi / 2
+            eta = lambda u: beta + theta_f * u  # noqa: E731
+        else:
+            length = P[f"{base}/length"]
+            if link.located == "at":
+                start_point = P.vec(f"{base}/at")
+            else:
+                start_point = self.reference(link.start_body)[0]
+            eta = self._shape(link)
+        I, A, fibre = self._section(link)
+        EI = lambda u: E * I(u)  # noqa: E731
+        EA = kGA = None
+        if link.axial:
+            EA = lambda u: E * A(u)  # noqa: E731
+        if link.shear:
+            if f"/materials/{link.material}/G" in P:
+                G = P[f"/materials/{link.material}/G"]
+            else:
+                G = E / (2 * (1 + P[f"/materials/{link.material}/nu"]))
+            kappa_pointer = f"/sections/{link.section}/shear_factor"
+            kappa = P[kappa_pointer] if kappa_pointer in P else 5.0 / 6.0
+            kGA = lambda u: kappa * G * A(u)  # noqa: E731
+        return LinkProperties(length, eta, start_point, EI, EA, kGA, fibre)
+
+    def _shape(self, link: LinkTopology):
+        P = self.P
+        base = f"/elements/{link.name}/shape"
+        if link.shape == "straight":
+            return lambda u: P[f"{base}/angle"] + 0 * u
+        if link.shape == "arc":
+            return lambda u: P[f"{base}/angle"] + P[f"{base}/sweep"] * u
+        coefficients = [P[f"{base}/coefficients/{k}"] for k in range(link.terms)]
+        if link.shape == "polynomial":
+            return lambda u: sum((c * u**k for k, c in enumerate(coefficients)), ca.SX(0))
+        if link.shape == "fourier_sine":
+            return lambda u: P[f"{base}/angle"] + sum(
+                (c * ca.sin((i + 1) * link.omega * u) for i, c in enumerate(coefficients)), ca.SX(0))
+        build = compile_expression(link.expression, f"{base}/expression")
+        return lambda u: ca.SX(build(u))
+
+    def _section(self, link: LinkTopology):
+        """I(u), A(u) and the stress factor c(u) / I(u) (None when unknown), nondimensional."""
+        P = self.P
+        base = f"/sections/{link.section}"
+        if link.section_shape in ("rectangle", "tapered_rectangle"):
+            b = P[f"{base}/b"]
+            if link.section_shape == "rectangle":
+                thickness = lambda u: P[f"{base}/h"] + 0 * u  # noqa: E731
+            else:
+                h0, h1 = P[f"{base}/h_start"], P[f"{base}/h_end"]
+                thickness = lambda u: h0 + (h1 - h0) * u  # noqa: E731
+            I = lambda u: b * thickness(u) ** 3 / 12  # noqa: E731
+            A = lambda u: b * thickness(u)  # noqa: E731
+            fibre = lambda u: 6 / (b * thickness(u) ** 2)  # noqa: E731
+            return I, A, fibre
+        # General: numbers are parameters; expressions are in document length units, and the
+        # parameter /units/length is one document length unit (nondimensional).
+        to_nd = P["/units/length"] if "/units/length" in P else 1.0
+
+        def field(name: str, power: int, expression: str | None):
+            if expression is not None:
+                build = compile_expression(expression, f"{base}/{name}/expression")
+                return lambda u: ca.SX(build(u)) * to_nd**power
+            if f"{base}/{name}" in P:
+                value = P[f"{base}/{name}"]
+                return lambda u: value + 0 * u
+            return None
+
+        I = field("I", 4, link.I_expression)
+        A = field("A", 2, link.A_expression)
+        fibre = None
+        if f"{base}/c" in P:
+            c = P[f"{base}/c"]
+            fibre = lambda u: c / I(u)  # noqa: E731
+        return I, A, fibre
+
+    def link_rows(self, d: list[ca.SX], z: ca.SX):
+        """Per link: wrenches its bodies apply to it (start, end), its residual rows and its
+        solution, for body displacements d and unknowns z."""
+        out = []
+        for link, shooting, undeformed, offset in zip(self.s.links, self.shooting, self.undeformed,
+                                                      self.s.link_offsets):
+            zl = z[offset:offset + link.unknowns]
+            i, j = link.start_body, link.end_body
+            (ri_hat, thi_hat), (rj_hat, thj_hat) = self.reference(i), self.reference(j)
+            start0, end0 = undeformed[0][2:4], undeformed[-1][2:4]
+            s_i = rot(thi_hat).T @ (start0 - ri_hat)
+            s_j = rot(thj_hat).T @ (end0 - rj_hat)
+            arm_i = rot(thi_hat + d[i][2]) @ s_i
+            arm_j = rot(thj_hat + d[j][2]) @ s_j
+            start_xy = ri_hat + d[i][:2] + arm_i
+            end_xy = rj_hat + d[j][:2] + arm_j
+            sol = shooting.solve_nodes(zl, start_xy, undeformed)
+            end = sol.nodes[-1]
+            rows = [zl[2] - d[i][2] if link.start == "clamped" else zl[3]]
+            rows += sol.continuity
+            rows.append(end[2:4] - end_xy)
+            rows.append(end[0] - undeformed[-1][0] - d[j][2] if link.end == "clamped" else end[1])
+            h, v = zl[0], zl[1]
+            n = ca.vertcat(h, v)
+            on_start = ca.vertcat(-n, -zl[3] + cross(arm_i, -n))
+            on_end = ca.vertcat(n, end[1] + cross(arm_j, n))
+            out.append((link, on_start, on_end, ca.vertcat(*rows), sol))
+        return out
 
     # --- bodies ------------------------------------------------------------------------
     def displacements(self, z: ca.SX) -> list[ca.SX]:
@@ -159,26 +289,38 @@ class _Builder:
                 wrenches[b] = wrenches[b] + ca.vertcat(0, 0, self.P[f"{base}/moment"])
         return wrenches
 
+    def with_links(self, el: list[ca.SX], d: list[ca.SX], z: ca.SX):
+        """Body wrenches with the links' added, and the links' own residual rows."""
+        el = list(el)
+        rows = []
+        for link, on_start, on_end, link_rows, _ in self.link_rows(d, z):
+            el[link.start_body] = el[link.start_body] + on_start
+            el[link.end_body] = el[link.end_body] + on_end
+            rows.append(link_rows)
+        return el, rows
+
     def free_rows(self, per_body: list[ca.SX]) -> ca.SX:
         return ca.vertcat(*[per_body[b][c] for b, c in self.s.free]) if self.s.free else ca.SX(0, 1)
 
     # --- graphs ------------------------------------------------------------------------
     def build(self) -> Graphs:
         s, p = self.s, self.p
-        n = len(s.free)
+        n = s.n_unknowns
         z = ca.SX.sym("z", n)
         copies = {k: ca.SX.sym(f"z_{k}", n) for k in ("psi", "N", "T", "load")}
         d = self.displacements(z)
         dc = {k: self.displacements(v) for k, v in copies.items()}
 
-        def residual_of(d_psi, d_N, d_T, d_load):
+        def residual_of(d_psi, d_N, d_T, d_load, z_links):
+            # Links contribute to the first term only: their unknowns enter through psi.
             el, _ = self.elastic(d_psi, d_N, d_T)
+            el, link_rows = self.with_links(el, d_psi, z_links)
             ap = self.applied(d_load)
-            return self.free_rows([el[b] - ap[b] for b in range(self.nb)])
+            return ca.vertcat(self.free_rows([el[b] - ap[b] for b in range(self.nb)]), *link_rows)
 
-        R = residual_of(d, d, d, d)
+        R = residual_of(d, d, d, d, z)
         K = ca.jacobian(R, z)
-        R_split = residual_of(dc["psi"], dc["N"], dc["T"], dc["load"])
+        R_split = residual_of(dc["psi"], dc["N"], dc["T"], dc["load"], copies["psi"])
         terms = [ca.substitute(ca.jacobian(R_split, copies[k]), ca.vertcat(*copies.values()),
                                ca.vertcat(*[z] * 4)) for k in ("psi", "N", "T", "load")]
         fn = dict(cse=True)
@@ -195,12 +337,12 @@ class _Builder:
                                     ["d", "p"], ["elastic", "applied"], fn)
         displacements = ca.Function("displacements", [z, p], [ca.vertcat(*d)], ["z", "p"], ["d"], fn)
 
-        outputs, names, kinds, shapes = self._outputs(z, d)
+        outputs, names, kinds, shapes, segments = self._outputs(z, d)
         for f_ in (residual, residual_and_tangent, tangent_terms, body_wrenches, displacements, outputs, shapes):
             if f_.has_free():
                 raise RuntimeError(f"graph {f_.name()} has free symbols {f_.get_free()}")
         return Graphs(residual, residual_and_tangent, tangent_terms, body_wrenches, displacements,
-                      outputs, tuple(names), tuple(kinds), shapes)
+                      outputs, tuple(names), tuple(kinds), shapes, segments)
 
     def _outputs(self, z, d):
         s = self.s
@@ -219,6 +361,10 @@ class _Builder:
             emit(f"bodies.{body}.y", "length", r_hat[1] + d[b][1])
             emit(f"bodies.{body}.angle", "angle", th_hat + d[b][2])
         el, states = self.elastic(d, d, d)
+        links = self.link_rows(d, z)
+        for link, on_start, on_end, _, _ in links:
+            el[link.start_body] = el[link.start_body] + on_start
+            el[link.end_body] = el[link.end_body] + on_end
         ap = self.applied(d)
         for b, body in enumerate(s.bodies):
             if any(v is not None for v in s.prescribed[b]):
@@ -246,6 +392,30 @@ class _Builder:
             e = 0.5 * ca.dot(st["psi"], st["K"] @ st["psi"])
             emit(f"{base}.energy", "energy", e)
             energy = energy + e
+        link_samples = []
+        for (link, _, _, _, sol), shooting in zip(links, self.shooting):
+            base = f"elements.{link.name}"
+            emit(f"{base}.h", "force", sol.n[0])
+            emit(f"{base}.v", "force", sol.n[1])
+            emit(f"{base}.M_start", "moment", sol.nodes[0][1])
+            emit(f"{base}.M_end", "moment", sol.nodes[-1][1])
+            emit(f"{base}.x_end", "length", sol.nodes[-1][2])
+            emit(f"{base}.y_end", "length", sol.nodes[-1][3])
+            emit(f"{base}.angle_start", "angle", sol.nodes[0][0])
+            emit(f"{base}.angle_end", "angle", sol.nodes[-1][0])
+            emit(f"{base}.rotation_start", "angle", sol.nodes[0][0] - sol.undeformed[0][0])
+            emit(f"{base}.rotation_end", "angle", sol.nodes[-1][0] - sol.undeformed[-1][0])
+            samples = shooting.samples(sol, LINK_SAMPLES_PER_INTERVAL)
+            link_samples.append((link, samples, shooting))
+            if shooting.props.fibre is not None:
+                peak = ca.SX(0)
+                for k, sample in enumerate(samples):
+                    u = k / (len(samples) - 1)
+                    peak = ca.fmax(peak, ca.fabs(sample[1]) * shooting.props.fibre(u))
+                emit(f"{base}.stress_max", "stress", peak)
+            emit(f"{base}.energy", "energy", sol.energy)
+            emit(f"{base}.discretization_error", "dimensionless", shooting.error_estimate(sol))
+            energy = energy + sol.energy
         emit("energy", "energy", energy)
         for pt in s.points:
             base = f"/outputs/{pt.name}"
@@ -261,10 +431,10 @@ class _Builder:
             for c, q in enumerate(("Fx", "Fy", "M")):
                 emit(f"{name}.{q}", "force" if c < 2 else "moment", reaction[c])
         outputs = ca.Function("outputs", [z, self.p], [ca.vertcat(*values)], ["z", "p"], ["y"], dict(cse=True))
-        shapes = self._shapes(z, d, states)
-        return outputs, names, kinds, shapes
+        shapes, segments = self._shapes(z, d, states, link_samples)
+        return outputs, names, kinds, shapes, segments
 
-    def _shapes(self, z, d, states):
+    def _shapes(self, z, d, states, link_samples):
         """Flexure centre lines for drawing: the undeformed arc, and a display of the deformed
         one that blends the two end bodies' rigid motions (exact at both ends, end tangents
         included); the beam's own deflection field is not modelled here."""
@@ -286,10 +456,31 @@ class _Builder:
                 blend = 3 * t**2 - 2 * t**3
                 deformed.append((1 - blend) * pts[0] + blend * pts[1])
                 undeformed.append(pt)
+        segments = [(f.name, k * ARC_SAMPLES, ARC_SAMPLES, f.start_body, f.end_body)
+                    for k, f in enumerate(self.s.flexures)]
+        for link, samples, shooting in link_samples:
+            segments.append((link.name, len(deformed), len(samples), link.start_body, link.end_body))
+            deformed.extend(sample[2:4] for sample in samples)
+            undeformed.extend(self._undeformed_samples(shooting))
         if not deformed:
             deformed = undeformed = [ca.SX.zeros(2, 0)]
         return ca.Function("shapes", [z, self.p], [ca.horzcat(*deformed), ca.horzcat(*undeformed)],
-                           ["z", "p"], ["deformed", "undeformed"])
+                           ["z", "p"], ["deformed", "undeformed"]), tuple(segments)
+
+    def _undeformed_samples(self, shooting: LinkShooting) -> list[ca.SX]:
+        k = self.shooting.index(shooting)
+        nodes = self.undeformed[k]
+        zero = ca.SX.zeros(2)
+        out = []
+        H = shooting.H / LINK_SAMPLES_PER_INTERVAL
+        for i in range(shooting.K):
+            s = nodes[i]
+            out.append(s[2:4])
+            for q in range(1, LINK_SAMPLES_PER_INTERVAL):
+                s = shooting.step(i, s, zero, H=H, u0=i * shooting.H + (q - 1) * H)
+                out.append(s[2:4])
+        out.append(nodes[-1][2:4])
+        return out
 
 
 @lru_cache(maxsize=64)

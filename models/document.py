@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Annotated, Any, Literal, Union
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, ValidationError, model_validator
 
 from models.errors import MechanismError, pointer_of
 
@@ -39,6 +39,7 @@ class Units(_Strict):
 class Material(_Strict):
     E: Number = Field(description="Young's modulus")
     nu: Number | None = Field(default=None, description="Poisson's ratio")
+    G: Number | None = Field(default=None, description="shear modulus (default E / (2 (1 + nu)))")
     density: Number | None = None
 
 
@@ -46,10 +47,50 @@ class RectangularSection(_Strict):
     shape: Literal["rectangle"] = "rectangle"
     b: Number = Field(description="width, out of the plane of motion")
     h: Number = Field(description="thickness, in the plane of motion (the bending direction)")
+    shear_factor: Number | None = Field(default=None, description="Timoshenko kappa (default 5/6)")
+
+
+class TaperedRectangularSection(_Strict):
+    """A rectangle whose thickness varies linearly along a link, from h_start (u = 0) to h_end."""
+
+    shape: Literal["tapered_rectangle"]
+    b: Number
+    h_start: Number
+    h_end: Number
+    shear_factor: Number | None = None
+
+
+class SectionExpression(_Strict):
+    expression: str = Field(description="safe math expression in u (0..1 along the link)")
+
+
+class GeneralSection(_Strict):
+    """Second moment I and area A, each a number or an expression in u, in the document's
+    length unit to the fourth and second power."""
+
+    shape: Literal["general"]
+    I: Union[Number, SectionExpression]
+    A: Union[Number, SectionExpression, None] = None
+    shear_factor: Number | None = None
+    c: Number | None = Field(default=None, description="distance from the neutral axis to the outer fibre, for stresses")
+
+
+def _section_shape(value) -> str:
+    if isinstance(value, dict):
+        return value.get("shape", "rectangle")
+    return getattr(value, "shape", "rectangle")
+
+
+Section = Annotated[Union[Annotated[RectangularSection, Tag("rectangle")],
+                          Annotated[TaperedRectangularSection, Tag("tapered_rectangle")],
+                          Annotated[GeneralSection, Tag("general")]],
+                    Discriminator(_section_shape)]
 
 
 class Body(_Strict):
     fixed: bool = False
+    joint: bool = Field(default=False, description="a zero-size joint of a link network (seed 002): "
+                        "if every link attached to it is pinned, it has no rotation")
     position: Vec2 = Field(description="reference point (e.g. mass centre), undeformed, global frame")
     angle: Number = 0.0
     mass: Number | None = None
@@ -70,10 +111,77 @@ class CurvedBeam(_Strict):
     direction: Literal["ccw", "cw"] = "ccw"
     material: str
     section: str
-    model: Literal["linear", "partial_nonlinear"] = "partial_nonlinear"
+    model: Literal["linear", "partial_nonlinear", "exact"] = "partial_nonlinear"
+    intervals: int = Field(default=8, ge=1, le=256, description="shooting intervals (exact model)")
+    order: int = Field(default=8, ge=2, le=16, description="integration order, even (exact model)")
 
 
-Element = Annotated[Union[CurvedBeam], Field(discriminator="type")]
+class StraightShape(_Strict):
+    type: Literal["straight"]
+    angle: Number = Field(default=0.0, description="direction from the start point")
+
+
+class ArcShape(_Strict):
+    """eta(u) = angle + sweep * u: a circular arc of radius length / |sweep|."""
+
+    type: Literal["arc"]
+    angle: Number = 0.0
+    sweep: Number
+
+
+class PolynomialShape(_Strict):
+    """eta(u) = sum coefficients[k] * u**k, in radians."""
+
+    type: Literal["polynomial"]
+    coefficients: list[Number] = Field(min_length=1, max_length=32)
+
+
+class FourierSineShape(_Strict):
+    """eta(u) = angle + sum over i = 1.. of coefficients[i-1] * sin(i * omega * u); the
+    coefficients in radians, omega (default 2 pi, as in seed 002 Sec. 5.6) in rad."""
+
+    type: Literal["fourier_sine"]
+    angle: Number = 0.0
+    coefficients: list[Number] = Field(min_length=1, max_length=32)
+    omega: float = 2 * 3.141592653589793
+
+
+class ExpressionShape(_Strict):
+    """eta(u), radians, as a safe math expression in u."""
+
+    type: Literal["expression"]
+    expression: str
+
+
+Shape = Annotated[Union[StraightShape, ArcShape, PolynomialShape, FourierSineShape, ExpressionShape],
+                  Field(discriminator="type")]
+
+
+class Link(_Strict):
+    """A distributed elastica (seed 002) from body `from` (u = 0) to body `to` (u = 1).
+
+    It starts at `at` (default: the `from` body's reference point) with the initial tangent
+    angle eta(u) of `shape` (global frame) and ends where that shape ends; both ends are
+    attached to their bodies there, clamped or pinned.
+    """
+
+    type: Literal["link"]
+    from_: str = Field(alias="from")
+    to: str
+    at: Vec2 | None = None
+    length: Number
+    shape: Shape = StraightShape(type="straight")
+    material: str
+    section: str
+    start: Literal["clamped", "pinned"] = "clamped"
+    end: Literal["clamped", "pinned"] = "clamped"
+    shear: bool = Field(default=False, description="Timoshenko shear strain (seed 002 Eq. 5.1)")
+    axial: bool = Field(default=False, description="axial strain (seed 002 App. A.1)")
+    intervals: int = Field(default=8, ge=1, le=256, description="shooting intervals")
+    order: int = Field(default=8, ge=2, le=16, description="integration order (even): 2 x extrapolation levels")
+
+
+Element = Annotated[Union[CurvedBeam, Link], Field(discriminator="type")]
 
 
 class _PointOnBody(_Strict):
@@ -160,7 +268,7 @@ class MechanismDocument(_Strict):
     description: str = ""
     units: Units = Units()
     materials: dict[str, Material] = {}
-    sections: dict[str, RectangularSection] = {}
+    sections: dict[str, Section] = {}
     bodies: dict[str, Body]
     elements: dict[str, Element] = {}
     loads: dict[str, Load] = {}
@@ -186,7 +294,8 @@ def _raise_first(exc: ValidationError) -> None:
     raise MechanismError(pointer_of(location), message) from None
 
 
-_TAGGED_COLLECTIONS = {"elements", "loads", "outputs"}
+_TAGGED_COLLECTIONS = {"elements", "loads", "outputs", "sections"}
+_SHAPE_TAGS = {"straight", "arc", "polynomial", "fourier_sine", "expression"}
 _UNION_MEMBERS = {"float", "str", "int", "bool", "none"}
 
 
@@ -197,6 +306,8 @@ def _field_location(loc: tuple) -> tuple:
     parts = list(loc)
     if len(parts) > 2 and parts[0] in _TAGGED_COLLECTIONS and isinstance(parts[2], str):
         del parts[2]
+    if "shape" in parts[:-2] and parts[parts.index("shape") + 1] in _SHAPE_TAGS:
+        del parts[parts.index("shape") + 1]
     return tuple(p for p in parts if not (isinstance(p, str) and (p in _UNION_MEMBERS or "[" in p)))
 
 

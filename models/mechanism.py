@@ -17,10 +17,16 @@ from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import Any
 
+import casadi as ca
 import numpy as np
 
 from models.document import (
     CurvedBeam,
+    GeneralSection,
+    Link,
+    RectangularSection,
+    SectionExpression,
+    TaperedRectangularSection,
     ForceLoad,
     MechanismDocument,
     MomentLoad,
@@ -29,10 +35,11 @@ from models.document import (
     ReactionOutput,
 )
 from models.errors import MechanismError
+from models.expression import compile_expression
 from models.units import document_unit, quantity_to_si, unit_factor
 
 COORDINATES = ("x", "y", "angle")
-MODELS = ("linear", "partial_nonlinear")
+MODELS = ("linear", "partial_nonlinear", "exact")
 
 
 @dataclass(frozen=True)
@@ -51,6 +58,37 @@ class FlexureTopology:
     model: str
     material: str
     section: str
+
+
+@dataclass(frozen=True)
+class LinkTopology:
+    """A distributed elastica: a `link` element, or a curved beam with the `exact` model."""
+
+    name: str
+    start_body: int
+    end_body: int
+    start: str  # clamped | pinned
+    end: str
+    shape: str  # straight | arc | polynomial | fourier_sine | expression | curved_beam
+    terms: int  # number of shape coefficients
+    expression: str | None
+    omega: float | None
+    located: str  # "at" | "reference" | "arc" (an exact curved beam: from its arc geometry)
+    reversed: bool  # an exact curved beam given clockwise
+    material: str
+    section: str
+    section_shape: str  # rectangle | tapered_rectangle | general
+    I_expression: str | None
+    A_expression: str | None
+    shear: bool
+    axial: bool
+    intervals: int
+    order: int
+
+    @property
+    def unknowns(self) -> int:
+        """h, v, psi(0), m(0) and four states at each inner shooting node."""
+        return 4 * self.intervals
 
 
 @dataclass(frozen=True)
@@ -77,9 +115,11 @@ class Structure:
     # per body and coordinate: None if free, else the pointer of its prescribed value ("" = 0)
     prescribed: tuple[tuple[str | None, str | None, str | None], ...]
     flexures: tuple[FlexureTopology, ...]
+    links: tuple[LinkTopology, ...]
     loads: tuple[LoadTopology, ...]
     points: tuple[PointTopology, ...]
     reactions: tuple[tuple[str, int], ...]
+    length_unit_si: float = 1.0  # SI size of the document's length unit (section expressions use it)
 
     @cached_property
     def key(self) -> str:
@@ -89,6 +129,19 @@ class Structure:
     @cached_property
     def free(self) -> tuple[tuple[int, int], ...]:
         return tuple((b, c) for b, row in enumerate(self.prescribed) for c in range(3) if row[c] is None)
+
+    @cached_property
+    def link_offsets(self) -> tuple[int, ...]:
+        """Where each link's unknowns start in z (after the free body coordinates)."""
+        offsets, k = [], len(self.free)
+        for link in self.links:
+            offsets.append(k)
+            k += link.unknowns
+        return tuple(offsets)
+
+    @cached_property
+    def n_unknowns(self) -> int:
+        return len(self.free) + sum(link.unknowns for link in self.links)
 
     @cached_property
     def index(self) -> dict[str, int]:
@@ -122,6 +175,9 @@ class Scales:
             "stress": self.force / self.length**2,
             "angle": 1.0,
             "stiffness": self.force / self.length,
+            "area": self.length**2,
+            "second_moment": self.length**4,
+            "dimensionless": 1.0,
         }[kind]
 
 
@@ -157,6 +213,8 @@ def _check_value(pointer: str, si: float, check: str | None, units) -> None:
         raise MechanismError(pointer, "must be a finite number")
     if check == "positive" and si <= 0:
         raise MechanismError(pointer, f"must be positive, got {si:g} (SI)")
+    if check == "poisson" and not (-1.0 < si <= 0.5):
+        raise MechanismError(pointer, f"Poisson's ratio must lie in (-1, 0.5], got {si:g}")
     if check == "arc_angle" and not (0.0 < si < 2 * math.pi):
         deg = math.degrees(si)
         raise MechanismError(pointer, f"arc angle must lie in (0, 360) deg, got {deg:g} deg")
@@ -192,33 +250,66 @@ def _collect(doc: MechanismDocument, model_override: str | None) -> tuple[Struct
         raise MechanismError("/bodies", 'no fixed body: mark at least one body "fixed": true (or prescribe all its motions)')
 
     used_materials: set[str] = set()
-    used_sections: set[str] = set()
+    shear_materials: set[str] = set()
+    used_sections: dict[str, str] = {}  # section -> pointer of its first user
     flexures: list[FlexureTopology] = []
+    links: list[LinkTopology] = []
+    rotational: list[int] = [0] * len(bodies)  # connections that can carry a moment, per body
     for name, el in doc.elements.items():
         base = f"/elements/{name}"
+        i = c.body_index(el.from_, f"{base}/from", bodies)
+        j = c.body_index(el.to, f"{base}/to", bodies)
+        if i == j:
+            raise MechanismError(f"{base}/to", f"an element must join two different bodies (both ends on '{el.to}')")
+        if el.material not in doc.materials:
+            raise MechanismError(f"{base}/material", f"unknown material '{el.material}' (materials: {', '.join(doc.materials) or 'none'})")
+        if el.section not in doc.sections:
+            raise MechanismError(f"{base}/section", f"unknown section '{el.section}' (sections: {', '.join(doc.sections) or 'none'})")
+        used_materials.add(el.material)
+        used_sections.setdefault(el.section, f"{base}/section")
+        section = doc.sections[el.section]
         if isinstance(el, CurvedBeam):
-            i = c.body_index(el.from_, f"{base}/from", bodies)
-            j = c.body_index(el.to, f"{base}/to", bodies)
-            if i == j:
-                raise MechanismError(f"{base}/to", f"a flexure must join two different bodies (both ends on '{el.to}')")
-            if el.material not in doc.materials:
-                raise MechanismError(f"{base}/material", f"unknown material '{el.material}' (materials: {', '.join(doc.materials) or 'none'})")
-            if el.section not in doc.sections:
-                raise MechanismError(f"{base}/section", f"unknown section '{el.section}' (sections: {', '.join(doc.sections) or 'none'})")
-            used_materials.add(el.material)
-            used_sections.add(el.section)
+            if not isinstance(section, RectangularSection):
+                raise MechanismError(f"{base}/section", f"a curved beam needs a rectangle section ('{el.section}' is {section.shape})")
             c.add_vec(f"{base}/center", el.center, "length")
             c.add(f"{base}/radius", el.radius, "length", "positive")
             c.add(f"{base}/start_angle", el.start_angle, "angle")
             c.add(f"{base}/arc_angle", el.arc_angle, "angle", "arc_angle")
             reversed_ = el.direction == "cw"
             start, end = (j, i) if reversed_ else (i, j)
-            flexures.append(FlexureTopology(name, start, end, reversed_, model_override or el.model, el.material, el.section))
+            model = model_override or el.model
+            rotational[i] += 1
+            rotational[j] += 1
+            if model == "exact":
+                if el.order % 2:
+                    raise MechanismError(f"{base}/order", f"the integration order must be even, got {el.order}")
+                links.append(LinkTopology(name, start, end, "clamped", "clamped", "curved_beam", 0, None, None,
+                                          "arc", reversed_, el.material, el.section, "rectangle", None, None,
+                                          False, False, el.intervals, el.order))
+            else:
+                flexures.append(FlexureTopology(name, start, end, reversed_, model, el.material, el.section))
+        elif isinstance(el, Link):
+            links.append(_collect_link(c, name, el, i, j, section))
+            rotational[i] += el.start == "clamped"
+            rotational[j] += el.end == "clamped"
+            if el.shear:
+                shear_materials.add(el.material)
     for name in sorted(used_materials):
-        c.add(f"/materials/{name}/E", doc.materials[name].E, "stress", "positive")
+        material = doc.materials[name]
+        c.add(f"/materials/{name}/E", material.E, "stress", "positive")
+        if name in shear_materials:
+            if material.G is not None:
+                c.add(f"/materials/{name}/G", material.G, "stress", "positive")
+            elif material.nu is not None:
+                c.add(f"/materials/{name}/nu", material.nu, "dimensionless", "poisson")
+            else:
+                raise MechanismError(f"/materials/{name}/G", "a link with shear needs the shear modulus G or Poisson's ratio nu")
+    needs_area = {link.section for link in links if link.shear or link.axial}
     for name in sorted(used_sections):
-        c.add(f"/sections/{name}/b", doc.sections[name].b, "length", "positive")
-        c.add(f"/sections/{name}/h", doc.sections[name].h, "length", "positive")
+        _collect_section(c, name, doc.sections[name], name in needs_area)
+
+    _reduce_pinned_joints(doc, bodies, prescribed, rotational)
+    _check_grounded(doc, bodies, prescribed)
 
     loads: list[LoadTopology] = []
     for name, load in doc.loads.items():
@@ -252,11 +343,111 @@ def _collect(doc: MechanismDocument, model_override: str | None) -> tuple[Struct
         parameters=tuple(c.parameters),
         prescribed=tuple(tuple(row) for row in prescribed),
         flexures=tuple(flexures),
+        links=tuple(links),
         loads=tuple(loads),
         points=tuple(points),
         reactions=tuple(reactions),
+        length_unit_si=unit_factor(document_unit(doc.units, "length"), "length", "/units/length"),
     )
     return structure, np.array(c.values, dtype=float)
+
+
+def _collect_link(c: _Collector, name: str, el: Link, i: int, j: int, section) -> LinkTopology:
+    base = f"/elements/{name}"
+    if el.order % 2:
+        raise MechanismError(f"{base}/order", f"the integration order must be even, got {el.order}")
+    c.add(f"{base}/length", el.length, "length", "positive")
+    located = "reference"
+    if el.at is not None:
+        if c.doc.bodies[el.from_].joint:
+            raise MechanismError(f"{base}/at", f"a link starts at its joint's position: leave 'at' out for joint '{el.from_}'")
+        c.add_vec(f"{base}/at", el.at, "length")
+        located = "at"
+    shape = el.shape
+    sbase = f"{base}/shape"
+    terms, expression, omega = 0, None, None
+    if shape.type in ("straight", "arc", "fourier_sine"):
+        c.add(f"{sbase}/angle", shape.angle, "angle")
+    if shape.type == "arc":
+        c.add(f"{sbase}/sweep", shape.sweep, "angle")
+    if shape.type in ("polynomial", "fourier_sine"):
+        terms = len(shape.coefficients)
+        for k, value in enumerate(shape.coefficients):
+            c.add(f"{sbase}/coefficients/{k}", value, "dimensionless")
+    if shape.type == "fourier_sine":
+        omega = float(shape.omega)
+    if shape.type == "expression":
+        compile_expression(shape.expression, f"{sbase}/expression")
+        expression = shape.expression
+    if (el.shear or el.axial) and isinstance(section, GeneralSection) and section.A is None:
+        raise MechanismError(f"/sections/{el.section}/A", f"the area is required: link '{name}' has "
+                             f"{'shear' if el.shear else 'axial'} strain")
+    I_expr = A_expr = None
+    if isinstance(section, GeneralSection):
+        I_expr = section.I.expression if isinstance(section.I, SectionExpression) else None
+        A_expr = section.A.expression if isinstance(section.A, SectionExpression) else None
+    return LinkTopology(name, i, j, el.start, el.end, shape.type, terms, expression, omega, located, False,
+                        el.material, el.section, section.shape, I_expr, A_expr, el.shear, el.axial,
+                        el.intervals, el.order)
+
+
+def _collect_section(c: _Collector, name: str, section, needs_area: bool) -> None:
+    base = f"/sections/{name}"
+    if isinstance(section, RectangularSection):
+        c.add(f"{base}/b", section.b, "length", "positive")
+        c.add(f"{base}/h", section.h, "length", "positive")
+    elif isinstance(section, TaperedRectangularSection):
+        c.add(f"{base}/b", section.b, "length", "positive")
+        c.add(f"{base}/h_start", section.h_start, "length", "positive")
+        c.add(f"{base}/h_end", section.h_end, "length", "positive")
+    else:
+        for field_name, kind in (("I", "second_moment"), ("A", "area")):
+            value = getattr(section, field_name)
+            if isinstance(value, SectionExpression):
+                compile_expression(value.expression, f"{base}/{field_name}/expression")
+                if "/units/length" not in {p.pointer for p in c.parameters}:
+                    c.add("/units/length", 1.0, "length")  # one document length unit, for expressions
+            elif value is not None:
+                c.add(f"{base}/{field_name}", value, kind, "positive")
+        if section.c is not None:
+            c.add(f"{base}/c", section.c, "length", "positive")
+    if section.shear_factor is not None:
+        c.add(f"{base}/shear_factor", section.shear_factor, "dimensionless", "positive")
+
+
+def _reduce_pinned_joints(doc: MechanismDocument, bodies: list[str], prescribed, rotational: list[int]) -> None:
+    """A joint held only by pins has no rotation: its angle is not a coordinate."""
+    for b, name in enumerate(bodies):
+        body = doc.bodies[name]
+        if not body.joint or body.fixed or rotational[b] or prescribed[b][2] is not None:
+            continue
+        for load_name, load in doc.loads.items():
+            if load.body != name:
+                continue
+            if isinstance(load, MomentLoad) or (isinstance(load, ForceLoad) and (load.at or load.offset)):
+                raise MechanismError(f"/loads/{load_name}", f"joint '{name}' is held only by pins, so it "
+                                     "cannot take a moment: apply forces at the joint itself")
+        prescribed[b][2] = ""
+
+
+def _check_grounded(doc: MechanismDocument, bodies: list[str], prescribed) -> None:
+    """Every body must reach a fixed one through elements, or nothing holds it."""
+    neighbours: dict[str, set[str]] = {name: set() for name in bodies}
+    for el in doc.elements.values():
+        neighbours[el.from_].add(el.to)
+        neighbours[el.to].add(el.from_)
+    grounded = [name for b, name in enumerate(bodies) if all(v is not None for v in prescribed[b])]
+    seen, stack = set(grounded), list(grounded)
+    while stack:
+        for other in neighbours[stack.pop()]:
+            if other not in seen:
+                seen.add(other)
+                stack.append(other)
+    for name in bodies:
+        if name not in seen:
+            what = "joint" if doc.bodies[name].joint else "body"
+            raise MechanismError(f"/bodies/{name}", f"floating {what} '{name}' has no path to a fixed body "
+                                 "through elements: connect it to ground by a link or a flexure, or fix it")
 
 
 def _locate(c: _Collector, base: str, item) -> str:
@@ -269,23 +460,46 @@ def _locate(c: _Collector, base: str, item) -> str:
     return "reference"
 
 
+def _nominal_EI(structure: Structure, si: np.ndarray, material: str, section: str) -> float:
+    """E times a representative I of a section (its largest along a taper, mid-length for an
+    expression), for scaling only."""
+    idx = structure.index
+    E = si[idx[f"/materials/{material}/E"]]
+    if f"/sections/{section}/h" in idx:
+        return E * si[idx[f"/sections/{section}/b"]] * si[idx[f"/sections/{section}/h"]] ** 3 / 12
+    if f"/sections/{section}/h_start" in idx:
+        h = max(si[idx[f"/sections/{section}/h_start"]], si[idx[f"/sections/{section}/h_end"]])
+        return E * si[idx[f"/sections/{section}/b"]] * h**3 / 12
+    if f"/sections/{section}/I" in idx:
+        return E * si[idx[f"/sections/{section}/I"]]
+    return E * _expression_I_at_mid_length(structure, section)
+
+
+def _expression_I_at_mid_length(structure: Structure, section: str) -> float:
+    link = next(k for k in structure.links if k.section == section)
+    u = ca.SX.sym("u")
+    value = float(ca.Function("I", [u], [ca.SX(compile_expression(link.I_expression, "")(u))])(0.5))
+    return value * structure.length_unit_si**4  # the expression is in document length units ^ 4
+
+
 def _scales(structure: Structure, si: np.ndarray) -> Scales:
     idx = structure.index
-    radii = [si[idx[f"/elements/{f.name}/radius"]] for f in structure.flexures]
-    if radii:
-        length = max(radii)
-        EIs = []
-        for f in structure.flexures:
-            E = si[idx[f"/materials/{f.material}/E"]]
-            b = si[idx[f"/sections/{f.section}/b"]]
-            h = si[idx[f"/sections/{f.section}/h"]]
-            EIs.append(E * b * h**3 / 12)
-        force = max(EIs) / length**2
-    else:
-        positions = [abs(si[i]) for i, p in enumerate(structure.parameters) if p.kind == "length"]
-        length = max([x for x in positions if x > 0], default=1.0)
-        force = 1.0
-    return Scales(length=length, force=force)
+    sizes, EIs = [], []
+    for f in structure.flexures:
+        sizes.append(si[idx[f"/elements/{f.name}/radius"]])
+        EIs.append(_nominal_EI(structure, si, f.material, f.section))
+    for link in structure.links:
+        if link.shape == "curved_beam":
+            sizes.append(si[idx[f"/elements/{link.name}/radius"]])
+        else:
+            sizes.append(si[idx[f"/elements/{link.name}/length"]])
+        EIs.append(_nominal_EI(structure, si, link.material, link.section))
+    if sizes:
+        length = max(sizes)
+        return Scales(length=length, force=max(EIs) / length**2)
+    positions = [abs(si[i]) for i, p in enumerate(structure.parameters) if p.kind == "length"]
+    length = max([x for x in positions if x > 0], default=1.0)
+    return Scales(length=length, force=1.0)
 
 
 @dataclass(frozen=True)
@@ -311,6 +525,11 @@ class Mechanism:
 
     @property
     def n_free(self) -> int:
+        """Number of unknowns z: free body coordinates, then the links' shooting unknowns."""
+        return self.structure.n_unknowns
+
+    @property
+    def n_body_coordinates(self) -> int:
         return len(self.structure.free)
 
     @cached_property

@@ -24,6 +24,8 @@ SI_UNITS: dict[str, str] = {
     "energy": "J",
     "stiffness": "N/m",
     "dimensionless": "",
+    "area": "m**2",
+    "second_moment": "m**4",
 }
 
 
@@ -88,4 +90,7 @@ def document_unit(units, kind: str) -> str:
         "stress": units.stress,
         "angle": units.angle,
         "stiffness": f"{units.force}/{units.length}",
+        "area": f"({units.length})**2",
+        "second_moment": f"({units.length})**4",
+        "dimensionless": "dimensionless",
     }[kind]

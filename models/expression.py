@@ -1,0 +1,96 @@
+"""Safe math expressions in one variable (u), compiled into CasADi, never evaluated by Python.
+
+The text is parsed by Python's own parser (`ast`, mode "eval"), then walked with a whitelist:
+numbers, the variable, the constants pi and e, + - * / ** and unary minus, and a fixed set
+of functions. Anything else (attributes, subscripts, names, keywords, comparisons, lambdas,
+strings, calls of other functions such as __import__) is rejected with a message naming it.
+"""
+
+from __future__ import annotations
+
+import ast
+import math
+from typing import Callable
+
+import casadi as ca
+
+from models.errors import MechanismError
+
+FUNCTIONS: dict[str, Callable] = {
+    "sin": ca.sin, "cos": ca.cos, "tan": ca.tan,
+    "asin": ca.asin, "acos": ca.acos, "atan": ca.atan, "atan2": ca.atan2,
+    "sinh": ca.sinh, "cosh": ca.cosh, "tanh": ca.tanh,
+    "exp": ca.exp, "log": ca.log, "sqrt": ca.sqrt, "abs": ca.fabs,
+}
+ARITY = {name: (2 if name == "atan2" else 1) for name in FUNCTIONS}
+CONSTANTS = {"pi": math.pi, "e": math.e}
+_OPERATORS = {ast.Add: lambda a, b: a + b, ast.Sub: lambda a, b: a - b, ast.Mult: lambda a, b: a * b,
+              ast.Div: lambda a, b: a / b, ast.Pow: lambda a, b: a**b}
+MAX_LENGTH = 2000
+
+
+def compile_expression(text: str, pointer: str, variable: str = "u") -> Callable[[ca.SX], ca.SX]:
+    """Check `text` now and return a builder: given the variable's SX, the expression's SX.
+
+    Raises MechanismError(pointer, ...) for text that does not parse or is not allowed.
+    """
+    if not isinstance(text, str) or not text.strip():
+        raise MechanismError(pointer, "expected a non-empty expression in u")
+    if len(text) > MAX_LENGTH:
+        raise MechanismError(pointer, f"expression longer than {MAX_LENGTH} characters")
+    try:
+        tree = ast.parse(text.strip(), mode="eval")
+    except SyntaxError as exc:
+        column = f" at column {exc.offset}" if exc.offset else ""
+        raise MechanismError(pointer, f"cannot parse expression {text!r}: {exc.msg}{column}") from None
+    _check(tree.body, pointer, variable)
+    return lambda u: _build(tree.body, u, variable)
+
+
+def _not_allowed(pointer: str, what: str) -> MechanismError:
+    allowed = ", ".join(sorted(FUNCTIONS))
+    return MechanismError(pointer, f"unsafe or unsupported expression: {what} is not allowed "
+                                   f"(use numbers, u, pi, e, + - * / ** and the functions {allowed})")
+
+
+def _check(node: ast.AST, pointer: str, variable: str) -> None:
+    if isinstance(node, ast.Constant):
+        if isinstance(node.value, bool) or not isinstance(node.value, (int, float)):
+            raise _not_allowed(pointer, f"the constant {node.value!r}")
+    elif isinstance(node, ast.Name):
+        if node.id != variable and node.id not in CONSTANTS:
+            raise _not_allowed(pointer, f"the name '{node.id}'")
+    elif isinstance(node, ast.BinOp):
+        if type(node.op) not in _OPERATORS:
+            raise _not_allowed(pointer, f"the operator {type(node.op).__name__}")
+        _check(node.left, pointer, variable)
+        _check(node.right, pointer, variable)
+    elif isinstance(node, ast.UnaryOp):
+        if not isinstance(node.op, (ast.USub, ast.UAdd)):
+            raise _not_allowed(pointer, f"the operator {type(node.op).__name__}")
+        _check(node.operand, pointer, variable)
+    elif isinstance(node, ast.Call):
+        name = node.func.id if isinstance(node.func, ast.Name) else None
+        if name not in FUNCTIONS:
+            label = f"a call of '{name}'" if name else "a call of a computed function"
+            raise _not_allowed(pointer, label)
+        if node.keywords or len(node.args) != ARITY[name]:
+            raise MechanismError(pointer, f"{name}() takes {ARITY[name]} positional argument(s)")
+        for arg in node.args:
+            _check(arg, pointer, variable)
+    else:
+        raise _not_allowed(pointer, f"a {type(node).__name__} expression")
+
+
+def _build(node: ast.AST, u, variable: str):
+    if isinstance(node, ast.Constant):
+        return float(node.value)
+    if isinstance(node, ast.Name):
+        return u if node.id == variable else CONSTANTS[node.id]
+    if isinstance(node, ast.BinOp):
+        return _OPERATORS[type(node.op)](_build(node.left, u, variable), _build(node.right, u, variable))
+    if isinstance(node, ast.UnaryOp):
+        value = _build(node.operand, u, variable)
+        return -value if isinstance(node.op, ast.USub) else value
+    args = [_build(a, u, variable) for a in node.args]  # a checked Call
+    return FUNCTIONS[node.func.id](*args)

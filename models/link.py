@@ -1,0 +1,176 @@
+"""Distributed elastica links (seed 002, Ch. 2 and 5): equations, integrator and shooting.
+
+A link of length L runs from u = 0 to u = 1 with the initial tangent angle eta(u) (global
+frame). Its state along u is s = (psi, m, x, y, e): the cross-section angle, the bending
+moment, the centre-line position and the strain energy accumulated from the interval's
+start. The internal force n = (h, v) (global frame) is constant along a link without
+distributed load (Eq. 5.1b,c). Sign conventions: n(u) and m(u) are what the part beyond u
+exerts on the part before it, so at u = 1 they are the end body's force and moment on the
+link. With N = n . t, V = n . t_perp (t = (cos psi, sin psi)):
+
+    psi' = eta'(u) + L m / EI(u)                      (Eq. 2.17 / 5.1a, m = EI (psi' - eta') / L)
+    m'   = h y' - v x'                                (moment balance of a slice)
+    x'   = L [(1 + N/EA) cos psi - (V/kGA) sin psi]   (axial strain: App. A.1; shear: Eq. 5.1)
+    y'   = L [(1 + N/EA) sin psi + (V/kGA) cos psi]
+    e'   = L [m^2 / 2EI + N^2 / 2EA + V^2 / 2kGA]
+
+With shear on, this is Reissner's geometrically exact beam: the shear strain is V / kGA with V
+normal to the cross-section. Eq. 5.1d of the thesis takes V normal to the deformed centre
+line, which makes gamma implicit; the two agree to first order in gamma.
+
+Each shooting interval is integrated by Gragg's modified midpoint rule extrapolated in h^2
+(the fixed-order Gragg-Bulirsch-Stoer scheme): `order` = 2 x levels, explicit, so the whole
+link is one SX graph with exact derivatives.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import casadi as ca
+
+STATE = ("psi", "m", "x", "y", "e")
+
+
+@dataclass(frozen=True)
+class LinkProperties:
+    """Symbolic description of one link (nondimensional), each field of u a builder."""
+
+    length: ca.SX
+    eta: Callable[[ca.SX], ca.SX]
+    start_point: ca.SX  # (2,) undeformed position of u = 0, global
+    EI: Callable[[ca.SX], ca.SX]
+    EA: Callable[[ca.SX], ca.SX] | None  # None: inextensible
+    kGA: Callable[[ca.SX], ca.SX] | None  # None: no shear strain
+    fibre: Callable[[ca.SX], ca.SX] | None  # outer-fibre distance over I, for stresses; None: none
+
+
+def rhs_function(props: LinkProperties, p: ca.SX) -> ca.Function:
+    """f(u, s, n, p) -> s' for the state s (5,) and internal force n = (h, v)."""
+    u, s, n = ca.SX.sym("u"), ca.SX.sym("s", 5), ca.SX.sym("n", 2)
+    psi, m = s[0], s[1]
+    h, v = n[0], n[1]
+    L = props.length
+    c, sn = ca.cos(psi), ca.sin(psi)
+    N = h * c + v * sn
+    V = -h * sn + v * c
+    EI = props.EI(u)
+    eps = N / props.EA(u) if props.EA is not None else 0
+    gamma = V / props.kGA(u) if props.kGA is not None else 0
+    dx = L * ((1 + eps) * c - gamma * sn)
+    dy = L * ((1 + eps) * sn + gamma * c)
+    u_eta = ca.SX.sym("u_eta")
+    eta_slope = ca.substitute(ca.jacobian(ca.SX(props.eta(u_eta)), u_eta), u_eta, u)
+    energy = m**2 / (2 * EI)
+    if props.EA is not None:
+        energy = energy + N**2 / (2 * props.EA(u))
+    if props.kGA is not None:
+        energy = energy + V**2 / (2 * props.kGA(u))
+    ds = ca.vertcat(eta_slope + L * m / EI, h * dy - v * dx, dx, dy, L * energy)
+    return ca.Function("link_rhs", [u, s, n, p], [ds], ["u", "s", "n", "p"], ["ds"])
+
+
+def extrapolated_step(f: ca.Function, u0, s0, H, order: int, n, p) -> ca.SX:
+    """s at u0 + H from s0: modified midpoint with 2, 4, ..., order substeps, extrapolated
+    to h = 0 by Aitken-Neville in h^2 (Gragg's error expansion); error O(H^(order+1))."""
+    levels = order // 2
+    steps = [2 * (j + 1) for j in range(levels)]
+    table: list[list[ca.SX]] = []
+    for j, count in enumerate(steps):
+        h = H / count
+        previous, current = s0, s0 + h * f(u0, s0, n, p)
+        for i in range(1, count):
+            previous, current = current, previous + 2 * h * f(u0 + i * h, current, n, p)
+        row = [current]
+        for k in range(1, j + 1):
+            ratio = (steps[j] / steps[j - k]) ** 2
+            row.append(row[k - 1] + (row[k - 1] - table[j - 1][k - 1]) / (ratio - 1))
+        table.append(row)
+    return table[-1][-1]
+
+
+@dataclass
+class LinkSolution:
+    """Symbolic node states of one link for given unknowns, and its end quantities."""
+
+    nodes: list[ca.SX]  # deformed states at u_k = k / K, k = 0..K (the last one integrated)
+    undeformed: list[ca.SX]  # undeformed states at the same nodes
+    n: ca.SX  # (h, v)
+    continuity: list[ca.SX]  # residual blocks, 4 each
+    energy: ca.SX
+
+
+class LinkShooting:
+    """Multiple shooting of one link with K intervals: unknowns, residuals, samples."""
+
+    def __init__(self, props: LinkProperties, p: ca.SX, intervals: int, order: int):
+        self.props = props
+        self.p = p
+        self.K = intervals
+        self.order = order
+        self.f = rhs_function(props, p)
+        self.H = 1.0 / intervals
+
+    def step(self, k: int, s, n, H=None, u0=None, order=None):
+        H = self.H if H is None else H
+        u0 = k * self.H if u0 is None else u0
+        return extrapolated_step(self.f, u0, s, H, order or self.order, n, self.p)
+
+    def undeformed_nodes(self) -> list[ca.SX]:
+        """The unloaded link integrated node to node: with these as the reference, the
+        unloaded state is an exact zero of the residual at any resolution."""
+        zero = ca.SX.zeros(2)
+        start = self.props.start_point
+        s = ca.vertcat(ca.SX(self.props.eta(ca.SX(0.0))), 0, start[0], start[1], 0)
+        nodes = [s]
+        for k in range(self.K):
+            s = self.step(k, ca.vertcat(s[:4], 0), zero)
+            nodes.append(s)
+        return nodes
+
+    def solve_nodes(self, zl: ca.SX, start_xy: ca.SX, undeformed: list[ca.SX]) -> LinkSolution:
+        """Deformed node states from the link's unknowns zl = [h, v, dpsi0, m0, (dpsi, m, dx,
+        dy) at nodes 1..K-1] (deviations from `undeformed`), the start at `start_xy`."""
+        n = zl[0:2]
+        nodes = [ca.vertcat(undeformed[0][0] + zl[2], zl[3], start_xy[0], start_xy[1], 0)]
+        for k in range(1, self.K):
+            block = zl[4 * k:4 * k + 4]
+            nodes.append(ca.vertcat(undeformed[k][:4] + ca.vertcat(block[0], block[1], block[2], block[3]), 0))
+        continuity, energy = [], ca.SX(0)
+        for k in range(self.K):
+            end = self.step(k, nodes[k], n)
+            energy = energy + end[4]
+            if k + 1 < self.K:
+                continuity.append(nodes[k + 1][:4] - end[:4])
+            else:
+                nodes.append(end)
+        return LinkSolution(nodes, undeformed, n, continuity, energy)
+
+    def error_estimate(self, solution: LinkSolution) -> ca.SX:
+        """Richardson estimate of the discretization error, relative to the link length: per
+        interval, one step against two half steps from the converged node, summed."""
+        total_position, total_angle = ca.SX(0), ca.SX(0)
+        scale = 1 - 2.0 ** (-self.order)
+        for k in range(self.K):
+            s = solution.nodes[k]
+            full = self.step(k, s, solution.n)
+            half = self.step(k, s, solution.n, H=self.H / 2)
+            half = self.step(k, half, solution.n, H=self.H / 2, u0=(k + 0.5) * self.H)
+            diff = (full - half) / scale
+            total_position = total_position + ca.norm_2(diff[2:4])
+            total_angle = total_angle + ca.fabs(diff[0])
+        return ca.fmax(total_position / self.props.length, total_angle)
+
+    def samples(self, solution: LinkSolution, per_interval: int = 4) -> list[ca.SX]:
+        """States along the link at per_interval points per shooting interval (plus u = 1)."""
+        out = []
+        H = self.H / per_interval
+        for k in range(self.K):
+            s = solution.nodes[k]
+            out.append(s)
+            for i in range(1, per_interval):
+                s = self.step(k, s, solution.n, H=H, u0=k * self.H + (i - 1) * H)
+                out.append(s)
+        out.append(solution.nodes[-1])
+        return out
