@@ -363,8 +363,9 @@ def _sweep_table(mech: Mechanism, label: str, result, x_output: str, y_output: s
 
 
 def _curve_label(mech: Mechanism, model: str | None) -> str:
-    materials = sorted({f.material for f in mech.structure.flexures})
-    models = sorted({f.model for f in mech.structure.flexures})
+    materials = sorted({f.material for f in mech.structure.flexures + mech.structure.links})
+    models = sorted({f.model for f in mech.structure.flexures}
+                    | {"exact" for link in mech.structure.links if link.shape == "curved_beam"})
     parts = [", ".join(materials)] if len(materials) == 1 else []
     parts.append(model or (models[0] if len(models) == 1 else "mixed models"))
     return ", ".join(parts)

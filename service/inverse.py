@@ -16,7 +16,13 @@ def inverse_wrenches(mech: Mechanism, displacements: dict[str, tuple[float, floa
     displacements[body] = (dx, dy, rotation) in document units (absent bodies: not moved).
 
     No iteration: it evaluates the elastic wrenches of the flexures in that configuration.
+    Links are distributed: their shape between given ends is itself an equilibrium problem,
+    so they take the link inverse (service.link_inverse) instead.
     """
+    if mech.structure.links:
+        raise MechanismError("/displacements", "the closed-form inverse holds for curved-beam flexures "
+                             "with the linear or partial_nonlinear model; this mechanism has links "
+                             f"({', '.join(link.name for link in mech.structure.links)})")
     bodies = mech.structure.bodies
     d = np.zeros(3 * len(bodies))
     for name, values in displacements.items():

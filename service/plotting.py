@@ -12,7 +12,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from models.assembly import ARC_SAMPLES
 
 if TYPE_CHECKING:  # matplotlib is imported when a figure is drawn, not with the package
     from matplotlib.axes import Axes
@@ -76,8 +75,8 @@ def plot_configuration(result: "EquilibriumResult", path: str | Path) -> Path:
     """Draw the undeformed (dashed, light) and deformed (solid) mechanism of an equilibrium
     result and save it to `path` (.png or .svg). Returns the path written.
 
-    Flexures are drawn from their centre-line samples; bodies as skeletons joining their
-    reference point to the flexure attachments and point outputs they carry; fixed bodies'
+    Flexures and links are drawn from their centre-line samples; bodies as skeletons joining
+    their reference point to the element attachments and point outputs they carry; fixed bodies'
     reference points are squares, point outputs stars. Axes in the document's length unit,
     equal aspect.
     """
@@ -86,7 +85,7 @@ def plot_configuration(result: "EquilibriumResult", path: str | Path) -> Path:
     structure = mech.structure
     to_doc = 1.0 / mech.nd_per_doc("length")
     deformed_nd, undeformed_nd = mech.graphs.shapes(result.z, mech.p())
-    deformed = np.asarray(deformed_nd, dtype=float) * to_doc  # 2 x (flexures * ARC_SAMPLES)
+    deformed = np.asarray(deformed_nd, dtype=float) * to_doc  # 2 x samples of every element
     undeformed = np.asarray(undeformed_nd, dtype=float) * to_doc
     outputs = result.outputs()
     unit = mech.doc_unit("length")
@@ -98,9 +97,10 @@ def plot_configuration(result: "EquilibriumResult", path: str | Path) -> Path:
                          for b in structure.bodies])
     attached_now: list[list[np.ndarray]] = [[] for _ in range(n_bodies)]
     attached_then: list[list[np.ndarray]] = [[] for _ in range(n_bodies)]
-    for k, flexure in enumerate(structure.flexures):
-        first, last = k * ARC_SAMPLES, (k + 1) * ARC_SAMPLES - 1
-        for body, column in ((flexure.start_body, first), (flexure.end_body, last)):
+    segments = mech.graphs.shape_segments
+    for _, first, count, start_body, end_body in segments:
+        last = first + count - 1
+        for body, column in ((start_body, first), (end_body, last)):
             attached_now[body].append(deformed[:, column])
             attached_then[body].append(undeformed[:, column])
     points_now, points_then = [], []
@@ -120,15 +120,16 @@ def plot_configuration(result: "EquilibriumResult", path: str | Path) -> Path:
             for q in attached[b]:
                 ax.plot([refs[b, 0], q[0]], [refs[b, 1], q[1]], **style, label=label)
                 label = None
-    for k in range(len(structure.flexures)):
-        columns = slice(k * ARC_SAMPLES, (k + 1) * ARC_SAMPLES)
+    for k, (name, first, count, _, _) in enumerate(segments):
+        columns = slice(first, first + count)
         ax.plot(undeformed[0, columns], undeformed[1, columns], **_UNDEFORMED)
         ax.plot(deformed[0, columns], deformed[1, columns], **_FLEXURE,
-                label="deformed flexures" if k == 0 else None)
-        middle = deformed[:, k * ARC_SAMPLES + ARC_SAMPLES // 2]
-        outward = middle - deformed[:, columns].mean(axis=1)  # away from the arc's centre
-        outward = 9 * outward / max(float(np.hypot(*outward)), 1e-300)
-        ax.annotate(structure.flexures[k].name, middle, color="C0", fontsize=9, ha="center",
+                label="deformed elements" if k == 0 else None)
+        middle = deformed[:, first + count // 2]
+        outward = middle - deformed[:, columns].mean(axis=1)  # away from a curve's centre
+        norm = float(np.hypot(*outward))
+        outward = 9 * outward / norm if norm > 1e-12 * max(np.abs(deformed).max(), 1e-300) else np.array([0.0, 9.0])
+        ax.annotate(name, middle, color="C0", fontsize=9, ha="center",
                     va="center", xytext=tuple(outward), textcoords="offset points")
 
     fixed = [all(v is not None for v in row) for row in structure.prescribed]

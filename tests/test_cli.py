@@ -141,7 +141,7 @@ def test_compare_models_plots_both_curves(run, tmp_path):
     assert result.exit_code == 0, result.output
     assert plot.read_text().lstrip().startswith("<?xml")
     curves = {c["label"]: c for c in json.loads(out.read_text())["curves"]}
-    assert set(curves) == {"silicon, linear", "silicon, partial_nonlinear"}
+    assert set(curves) == {"silicon, linear", "silicon, partial_nonlinear", "silicon, exact"}
     # The partial non-linear model stiffens the gripper: closing takes more force.
     assert curves["silicon, partial_nonlinear"]["target"]["value"] == pytest.approx(CLOSING_FORCE, abs=1e-3)
     assert curves["silicon, linear"]["target"]["value"] < CLOSING_FORCE

@@ -186,3 +186,22 @@ def test_link_tangent_stiffness_equals_finite_differences_of_the_residual():
     columns = [(np.asarray(mech.graphs.residual(z + step * e, p)) - np.asarray(mech.graphs.residual(z - step * e, p))).ravel()
                / (2 * step) for e in np.eye(mech.n_free)]
     assert np.allclose(np.asarray(K), np.array(columns).T, rtol=1e-6, atol=1e-7)
+
+
+def test_condensed_tangent_stiffness_of_a_link_is_the_beam_element_stiffness():
+    """Unloaded, the tip's 3x3 K_T (links' unknowns condensed out) is the Euler-Bernoulli
+    beam stiffness: EA/L axially, 12EI/L^3, -6EI/L^2, 4EI/L in bending."""
+    from service.stiffness import tangent_stiffness
+
+    A = 1e-4
+    mech = models.compile_mechanism(models.load_document(
+        link_document(load=(0, 0), axial=True, section={"shape": "general", "I": 1e-9, "A": A})))
+    kt = tangent_stiffness(mech)
+    E = EI / 1e-9
+    expected = np.array([[E * A / L, 0, 0], [0, 12 * EI / L**3, -6 * EI / L**2], [0, -6 * EI / L**2, 4 * EI / L]])
+    assert kt.coordinates == ["tip.x", "tip.y", "tip.angle"]
+    assert np.allclose(kt.K, expected, rtol=1e-9, atol=1e-9 * np.abs(expected).max())
+    assert kt.symmetric
+    inextensible = models.compile_mechanism(models.load_document(link_document(load=(0, 0))))
+    with pytest.raises(models.MechanismError, match="the tangent stiffness is infinite in some direction"):
+        tangent_stiffness(inextensible)
