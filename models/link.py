@@ -71,6 +71,27 @@ def rhs_function(props: LinkProperties, p: ca.SX) -> ca.Function:
     return ca.Function("link_rhs", [u, s, n, p], [ds], ["u", "s", "n", "p"], ["ds"])
 
 
+def inverse_rhs_function(props: LinkProperties, psi: Callable[[ca.SX], ca.SX], p: ca.SX, q: ca.SX) -> ca.Function:
+    """The inverse problem's equations (Eq. 5.4b, inextensible): the deformed angle psi(u) is
+    given (a builder over the data q) and the state carries the initial shape instead,
+    s = (eta, m, x0, y0, e) with (x0, y0) the undeformed centre line:
+
+        eta' = psi'(u) - L m / EI(u),   m' = L (h sin psi - v cos psi),   x0' = L cos eta, ...
+    """
+    u, s, n = ca.SX.sym("u"), ca.SX.sym("s", 5), ca.SX.sym("n", 2)
+    eta, m = s[0], s[1]
+    h, v = n[0], n[1]
+    L = props.length
+    u_psi = ca.SX.sym("u_psi")
+    psi_expr = ca.SX(psi(u_psi))
+    angle = ca.substitute(psi_expr, u_psi, u)
+    slope = ca.substitute(ca.jacobian(psi_expr, u_psi), u_psi, u)
+    EI = props.EI(u)
+    ds = ca.vertcat(slope - L * m / EI, L * (h * ca.sin(angle) - v * ca.cos(angle)),
+                    L * ca.cos(eta), L * ca.sin(eta), L * m**2 / (2 * EI))
+    return ca.Function("link_inverse_rhs", [u, s, n, ca.vertcat(p, q)], [ds], ["u", "s", "n", "p"], ["ds"])
+
+
 def extrapolated_step(f: ca.Function, u0, s0, H, order: int, n, p) -> ca.SX:
     """s at u0 + H from s0: modified midpoint with 2, 4, ..., order substeps, extrapolated
     to h = 0 by Aitken-Neville in h^2 (Gragg's error expansion); error O(H^(order+1))."""
@@ -104,12 +125,13 @@ class LinkSolution:
 class LinkShooting:
     """Multiple shooting of one link with K intervals: unknowns, residuals, samples."""
 
-    def __init__(self, props: LinkProperties, p: ca.SX, intervals: int, order: int):
+    def __init__(self, props: LinkProperties, p: ca.SX, intervals: int, order: int,
+                 rhs: ca.Function | None = None, rhs_parameters: ca.SX | None = None):
         self.props = props
-        self.p = p
+        self.p = p if rhs_parameters is None else rhs_parameters
         self.K = intervals
         self.order = order
-        self.f = rhs_function(props, p)
+        self.f = rhs_function(props, p) if rhs is None else rhs
         self.H = 1.0 / intervals
 
     def step(self, k: int, s, n, H=None, u0=None, order=None):
