@@ -220,3 +220,89 @@ def solve_equilibrium(mech: Mechanism, options: NewtonOptions = NewtonOptions(),
     if z0.shape != (mech.n_free,):
         raise ValueError(f"guess: expected {mech.n_free} values, got {z0.shape}")
     return newton(mech, p, z0, options, frozen_tangent)
+
+
+def unknown_names(mech: Mechanism) -> list[str]:
+    """A name for every entry of z: the free body coordinates ("tip.x"), then per link its
+    internal force, start rotation and start moment ("L1.h", "L1.v", "L1.rotation_start",
+    "L1.M_start") and its inner shooting states ("L1.node3.psi", ...)."""
+    names = list(mech.free_coordinates)
+    for link in mech.structure.links:
+        names += [f"{link.name}.{q}" for q in ("h", "v", "rotation_start", "M_start")]
+        for k in range(1, link.intervals):
+            names += [f"{link.name}.node{k}.{q}" for q in ("psi", "m", "dx", "dy")]
+    return names
+
+
+def _unknown_kind(name: str) -> str:
+    tail = name.rsplit(".", 1)[1]
+    return {"x": "length", "y": "length", "angle": "angle", "h": "force", "v": "force",
+            "rotation_start": "angle", "M_start": "moment", "psi": "angle", "m": "moment",
+            "dx": "length", "dy": "length"}[tail]
+
+
+def solve_bounded(mech: Mechanism, bounds: dict[str, tuple[float | None, float | None]],
+                  options: NewtonOptions = NewtonOptions(), guess: np.ndarray | None = None) -> EquilibriumResult:
+    """Equilibrium with bounds on unknowns (seed 002 Sec. 2.2.2, bounded Gauss-Newton): find
+    R(z) = 0 inside the bounds with IPOPT and exact derivatives (a feasibility problem: the
+    residuals are equality constraints; IPOPT's restoration phase reports an empty set). Bounds are in document
+    units (angles: the document's angle unit), keyed by unknown_names(); None: unbounded.
+    Where several equilibria exist (a buckled column), the bounds pick the branch."""
+    import casadi as ca
+
+    names = unknown_names(mech)
+    lower, upper = np.full(mech.n_free, -np.inf), np.full(mech.n_free, np.inf)
+    for name, (lo, hi) in bounds.items():
+        if name not in names:
+            shown = ", ".join(n for n in names if ".node" not in n)
+            raise MechanismError(f"/bounds/{name}", f"not an unknown of this mechanism (unknowns: {shown})")
+        scale = mech.nd_per_doc(_unknown_kind(name))
+        k = names.index(name)
+        if lo is not None:
+            lower[k] = lo * scale
+        if hi is not None:
+            upper[k] = hi * scale
+        if lower[k] > upper[k]:
+            raise MechanismError(f"/bounds/{name}", f"lower bound {lo} is above the upper bound {hi}")
+    p = mech.p()
+    z0 = np.zeros(mech.n_free) if guess is None else np.asarray(guess, dtype=float)
+    started = time.perf_counter()
+    clipped = np.clip(z0, lower, upper)
+    held = np.flatnonzero((clipped != z0)[:mech.n_body_coordinates])
+    z0 = clipped
+    if held.size:
+        # A consistent start on the bounds: the bounded body coordinates held where the
+        # bounds put them (their balance rows dropped), the rest solved by Newton.
+        free = np.setdiff1d(np.arange(mech.n_free), held)
+
+        def evaluate_held(x):
+            z = z0.copy()
+            z[free] = x
+            R, K = mech.graphs.residual_and_tangent(z, p)
+            return np.asarray(R).ravel()[free], np.asarray(K)[np.ix_(free, free)]
+
+        status, x, _, _, _, _ = iterate(evaluate_held, z0[free], options)
+        if status == "converged":
+            z0[free] = x
+    z_sym, p_sym = ca.SX.sym("z", mech.n_free), ca.SX.sym("p", len(p))
+    R = mech.graphs.residual(z_sym, p_sym)
+    solver = ca.nlpsol("bounded_equilibrium", "ipopt", {"x": z_sym, "p": p_sym, "f": 0, "g": R},
+                       {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
+                        "ipopt.linear_solver": "mumps", "ipopt.tol": 1e-12,
+                        "ipopt.constr_viol_tol": options.tol_residual,
+                        "ipopt.max_iter": max(options.max_iterations, 200)})
+    solution = solver(x0=z0, p=p, lbx=lower, ubx=upper, lbg=0, ubg=0)
+    z = np.asarray(solution["x"]).ravel()
+    norm = float(np.abs(np.asarray(mech.graphs.residual(z, p))).max())
+    # Polish inside the bounds: Newton from the IPOPT point, kept only if it stays inside.
+    status, z_newton, norm_newton, k, history, message = iterate(
+        lambda x: tuple(np.asarray(a).reshape(-1) if i == 0 else np.asarray(a)
+                        for i, a in enumerate(mech.graphs.residual_and_tangent(x, p))), z, options)
+    if status == "converged" and np.all(z_newton >= lower - 1e-12) and np.all(z_newton <= upper + 1e-12):
+        z, norm = z_newton, norm_newton
+    iterations = int(solver.stats()["iter_count"])
+    if norm <= options.tol_residual:
+        return EquilibriumResult("converged", z, norm, iterations, [norm], time.perf_counter() - started, mech)
+    return EquilibriumResult("not_converged", z, norm, iterations, [norm], time.perf_counter() - started, mech,
+                             f"no equilibrium within the bounds: the least residual there is {norm:.3g} "
+                             f"(IPOPT: {solver.stats()['return_status']})")

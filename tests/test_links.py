@@ -205,3 +205,37 @@ def test_condensed_tangent_stiffness_of_a_link_is_the_beam_element_stiffness():
     inextensible = models.compile_mechanism(models.load_document(link_document(load=(0, 0))))
     with pytest.raises(models.MechanismError, match="the tangent stiffness is infinite in some direction"):
         tangent_stiffness(inextensible)
+
+
+def test_bounds_pick_the_buckled_branch_of_a_column():
+    """A clamped column under 1.2 x Euler's load P_cr = pi^2 EI / (4 L^2): Newton from the
+    straight state stays straight; bounds on the tip's sideways motion (Sec. 2.2.2) find the
+    buckled elastica, whose tip rotation alpha solves k L = K(sin(alpha / 2)), k^2 = P / EI,
+    with sideways deflection y* = 2 sin(alpha / 2) / k. (The bounds must put the start in
+    the branch's basin: here the tip is held beyond 0.7 y*.)"""
+    from scipy.optimize import brentq
+    from scipy.special import ellipk
+
+    from service.equilibrium import solve_bounded
+
+    P = 1.2 * math.pi**2 * EI / (4 * L**2)
+    k = math.sqrt(P / EI)
+    alpha = brentq(lambda a: ellipk(math.sin(a / 2) ** 2) - k * L, 1e-6, math.pi - 1e-9, xtol=1e-15)
+    deflection = 2 * math.sin(alpha / 2) / k
+    document = link_document(load=(-P, 0.0))
+    _, straight, out = solve(document)
+    assert abs(out["bodies.tip.y"]) < 1e-12
+    mech = models.compile_mechanism(models.load_document(document))
+    for sign in (1, -1):
+        bounds = {"tip.y": (0.7 * deflection, None)} if sign > 0 else {"tip.y": (None, -0.7 * deflection)}
+        result = solve_bounded(mech, bounds, TIGHT)
+        assert result.converged, result.message
+        buckled = result.outputs()
+        assert buckled["bodies.tip.angle"] == pytest.approx(sign * alpha, rel=1e-9)
+        assert buckled["bodies.tip.y"] == pytest.approx(sign * deflection, rel=1e-9)
+    # Bounds that hold no equilibrium give a status and the reason, not an exception.
+    beyond = solve_bounded(mech, {"tip.y": (0.9 * L, None)}, TIGHT)
+    assert beyond.status == "not_converged"
+    assert beyond.message.startswith("no equilibrium within the bounds: the least residual there is")
+    with pytest.raises(models.MechanismError, match="/bounds/tip.y: lower bound 1 is above the upper bound 0"):
+        solve_bounded(mech, {"tip.y": (1, 0)})
