@@ -8,7 +8,7 @@ Public surface:
 
 from models.errors import MechanismError
 from models.document import MechanismDocument, load_document
-from models.mechanism import Mechanism, compile_mechanism
+from models.mechanism import MODELS, Mechanism, compile_mechanism
 
 __all__ = [
     "MechanismError",
@@ -16,4 +16,5 @@ __all__ = [
     "load_document",
     "Mechanism",
     "compile_mechanism",
+    "MODELS",
 ]

@@ -17,12 +17,23 @@ Multiplying by theta' and integrating with zero curvature at the tip (theta = ps
 Substituting 1 + sin(theta) = 2 p^2 sin^2(phi) with p^2 = (1 + sin psi0) / 2 turns
 ds = d(theta) / (k sqrt(2 (sin psi0 - sin theta))) into d(phi) / (k sqrt(1 - p^2 sin^2 phi));
 phi runs from phi1 (sin phi1 = 1 / (p sqrt 2), the clamp) to pi/2 (the tip). This gives
+Frisch-Fay's solution ("Flexible Bars", 1962; SciPy's elliptic functions take m = p^2):
 
     k L     = K(p) - F(phi1|p)                      (fixes psi0),
     x_tip   = sqrt(2 sin psi0) / k                  (exact integral of cos(theta) ds),
-    y_tip   = L - 2 [E(p) - E(phi1|p)] / k          (integral of sin(theta) ds),
+    y_tip   = L - 2 [E(p) - E(phi1|p)] / k          (integral of sin(theta) ds).
 
-as in Frisch-Fay, "Flexible Bars" (1962). SciPy's elliptic functions take m = p^2.
+Both differences cancel badly for small loads (y_tip loses ~ eps (EI / F L^2)^1.5
+relative), so `cantilever_tip` evaluates an equivalent form. By the addition theorem
+K - F(phi1|m) = F(chi|m) with tan(chi) = sqrt(sin psi0 / (1 - m)), and mapping phi to chi
+turns sin(theta) ds into (sin psi0 - m sin^2 chi) d(chi) / (k Delta^3), Delta^2 = 1 - m sin^2 chi:
+
+    k L   = F(chi|m)          = sin(chi) R_F(cos^2 chi, Delta^2, 1),
+    y_tip = L sin psi0 - 2 m (1 - m) J / k,
+    J     = int_0^chi sin^2 / Delta^3 = sin^3(chi) R_D(cos^2 chi, 1, Delta^2) / 3,
+
+with Carlson's R_F, R_D (scipy.special.elliprf, elliprd) and every argument formed without
+cancellation. Agrees with the Legendre form above to rounding where that one is accurate.
 """
 
 from __future__ import annotations
@@ -30,11 +41,19 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.integrate import solve_bvp
+from scipy.integrate import cumulative_trapezoid, solve_bvp
 from scipy.optimize import brentq
-from scipy.special import ellipe, ellipeinc, ellipkinc, ellipkm1
+from scipy.special import elliprd, elliprf
 
 _EPS = np.finfo(float).eps
+
+
+def _chi_terms(psi0: float) -> tuple[float, float, float, float, float]:
+    """For tip rotation psi0: (sin psi0, 1 - m, sin chi, cos^2 chi, Delta^2), all accurate."""
+    S = math.sin(psi0)
+    m1 = math.sin(math.pi / 4 - psi0 / 2) ** 2  # 1 - m = (1 - sin psi0) / 2
+    d = m1 + S  # sin^2 chi = S / d, cos^2 chi = m1 / d
+    return S, m1, math.sqrt(S / d), m1 / d, m1 * (1 + S) / d
 
 
 def cantilever_tip(EI: float, L: float, F: float) -> tuple[float, float, float]:
@@ -44,58 +63,58 @@ def cantilever_tip(EI: float, L: float, F: float) -> tuple[float, float, float]:
     and keeps its direction. EI [N m^2], L [m]. Returns (x_tip, y_tip, tip_rotation):
     the tip coordinate along the undeformed axis [m] (-> L as F -> 0), the transverse
     deflection [m] (-> F L^3 / (3 EI)) and the tip slope angle [rad], counter-clockwise
-    positive (-> F L^2 / (2 EI)).
-
-    Valid for F L^2 / EI up to about 800 (tip rotation within 1e-12 rad of pi/2). y_tip is
-    L minus a quantity close to L, so for tiny loads its relative accuracy is only about
-    eps * EI / (F L^2).
+    positive (-> F L^2 / (2 EI)). Accurate to a few ulp-level relative errors (scaled by
+    the conditioning of the root) for F L^2 / EI up to about 800 (tip rotation within
+    1e-12 rad of pi/2); larger loads raise ValueError.
     """
     if not (EI > 0 and L > 0 and F > 0):
         raise ValueError("need EI > 0, L > 0 and F > 0")
     k = math.sqrt(F / EI)
 
-    def parts(psi0: float) -> tuple[float, float, float]:
-        """Return (m, 1 - m, phi1) accurately for the tip rotation psi0."""
-        s = math.sin(psi0)
-        m1 = math.sin(math.pi / 4 - psi0 / 2) ** 2  # 1 - m = (1 - sin psi0) / 2
-        phi1 = math.atan2(1.0, math.sqrt(s))  # sin phi1 = 1 / sqrt(1 + sin psi0)
-        return (1 + s) / 2, m1, phi1
+    def residual(psi0: float) -> float:  # F(chi|m) - k L, increasing in psi0
+        _, _, s, c2, D2 = _chi_terms(psi0)
+        return s * float(elliprf(c2, D2, 1.0)) - k * L
 
-    def residual(psi0: float) -> float:
-        m, m1, phi1 = parts(psi0)
-        return float(ellipkm1(m1) - ellipkinc(phi1, m)) - k * L
-
-    # residual(0) = -kL < 0; residual grows without bound as psi0 -> pi/2.
-    upper = math.pi / 2 - 1e-12
+    upper = math.pi / 2 - 1e-12  # residual(0) = -k L < 0, residual -> +inf at pi/2
     if residual(upper) <= 0:
         raise ValueError("load too large for this bracket (F L^2 / EI above ~800)")
     psi0 = brentq(residual, 0.0, upper, xtol=1e-300, rtol=4 * _EPS, maxiter=500)
 
-    m, _, phi1 = parts(psi0)
-    x_tip = math.sqrt(2 * math.sin(psi0)) / k
-    y_tip = L - 2 * float(ellipe(m) - ellipeinc(phi1, m)) / k
+    S, m1, s, c2, D2 = _chi_terms(psi0)
+    J = s**3 * float(elliprd(c2, 1.0, D2)) / 3
+    x_tip = math.sqrt(2 * S) / k
+    y_tip = L * S - 2 * (1 - m1) * m1 * J / k
     return x_tip, y_tip, psi0
 
 
-def cantilever_tip_bvp(EI: float, L: float, F: float, tol: float = 1e-12) -> tuple[float, float, float]:
+def cantilever_tip_bvp(EI: float, L: float, F: float, tol: float = 1e-10) -> tuple[float, float, float]:
     """Same quantities as `cantilever_tip`, by scipy.integrate.solve_bvp (cross-check only).
 
     Solves theta'' = -(F L^2 / EI) cos(theta) in u = s / L with theta(0) = 0, theta'(1) = 0,
     carrying x' = cos(theta), y' = sin(theta) (x(0) = y(0) = 0) as extra states, so the tip
     follows without a separate quadrature. Returns (x_tip, y_tip, tip_rotation) in m, m, rad.
+
+    tol is solve_bvp's bound on the relative collocation residual, not on the tip values:
+    1e-10 already gives tip values good to ~1e-13, while tol near 1e-12 reaches the
+    residual's rounding floor, where mesh refinement runs to max_nodes and fails.
     """
     lam = F * L**2 / EI
 
     def rhs(u, z):
-        th, dth = z[0], z[1]
-        return np.vstack([dth, -lam * np.cos(th), np.cos(th), np.sin(th)])
+        th = z[0]
+        return np.vstack([z[1], -lam * np.cos(th), np.cos(th), np.sin(th)])
 
     def bc(za, zb):
         return np.array([za[0], zb[1], za[2], za[3]])
 
-    u = np.linspace(0.0, 1.0, 2001)  # a fine start mesh keeps tol = 1e-12 reachable
-    th = lam * (u - u**2 / 2)  # linear (small-deflection) guess
-    guess = np.vstack([th, lam * (1 - u), u, lam * (u**2 / 2 - u**3 / 6)])
+    # Guess: quadratic slope whose tip angle saturates below pi/2 (a linear guess with
+    # theta(1) = lam / 2 lands on a wrong, looping branch for large loads).
+    u = np.linspace(0.0, 1.0, 201)
+    a = (math.pi / 2) * math.tanh(lam / math.pi)
+    th = a * (2 * u - u**2)
+    guess = np.vstack([th, 2 * a * (1 - u),
+                       cumulative_trapezoid(np.cos(th), u, initial=0.0),
+                       cumulative_trapezoid(np.sin(th), u, initial=0.0)])
     sol = solve_bvp(rhs, bc, u, guess, tol=tol, bc_tol=tol, max_nodes=100_000)
     if not sol.success:
         raise RuntimeError(f"solve_bvp failed: {sol.message}")
