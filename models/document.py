@@ -112,8 +112,8 @@ class CurvedBeam(_Strict):
     material: str
     section: str
     model: Literal["linear", "partial_nonlinear", "exact"] = "partial_nonlinear"
-    intervals: int = Field(default=8, ge=1, le=256, description="shooting intervals (exact model)")
-    order: int = Field(default=8, ge=2, le=16, description="integration order, even (exact model)")
+    intervals: int = Field(default=8, ge=1, le=64, description="shooting intervals (exact model)")
+    order: int = Field(default=8, ge=2, le=12, description="integration order, even (exact model)")
 
 
 class StraightShape(_Strict):
@@ -177,8 +177,8 @@ class Link(_Strict):
     end: Literal["clamped", "pinned"] = "clamped"
     shear: bool = Field(default=False, description="Timoshenko shear strain (seed 002 Eq. 5.1)")
     axial: bool = Field(default=False, description="axial strain (seed 002 App. A.1)")
-    intervals: int = Field(default=8, ge=1, le=256, description="shooting intervals")
-    order: int = Field(default=8, ge=2, le=16, description="integration order (even): 2 x extrapolation levels")
+    intervals: int = Field(default=8, ge=1, le=64, description="shooting intervals")
+    order: int = Field(default=8, ge=2, le=12, description="integration order (even): 2 x extrapolation levels")
 
 
 Element = Annotated[Union[CurvedBeam, Link], Field(discriminator="type")]

@@ -16,7 +16,7 @@ import pytest
 import models
 from models import curved_beam
 from service.equilibrium import NewtonOptions, solve_equilibrium
-from tests.elastica_oracles import cantilever_tip, circular_arc_tip, timoshenko_tip_deflection
+from elastica_oracles import cantilever_tip, circular_arc_tip, timoshenko_tip_deflection
 
 # The thesis cantilever (Sec. 2.5.1): EI = 0.08 N m^2, L = 101.6 mm, F = 15 N.
 EI, L, F = 0.08, 0.1016, 15.0
