@@ -262,6 +262,16 @@ class SweepSpec(_Strict):
         return self
 
 
+class InverseSpec(_Strict):
+    """Data of the link inverse (seed 002 Sec. 5.3): the deformed angle psi(u) of every link
+    ({"polynomial": [c0, ...]} or {"samples": [...], "u": [...]}, radians), internal forces
+    ({link: {"h": value, "v": value}}) and the load components they determine."""
+
+    shapes: dict[str, Any]
+    internal_forces: dict[str, Any] = {}
+    unknown_loads: list[str] = []
+
+
 class MechanismDocument(_Strict):
     schema_version: Literal[1] = 1
     name: str = "mechanism"
@@ -274,6 +284,7 @@ class MechanismDocument(_Strict):
     loads: dict[str, Load] = {}
     outputs: dict[str, Output] = {}
     sweep: SweepSpec | None = None
+    inverse: InverseSpec | None = None
 
     def to_json_dict(self) -> dict[str, Any]:
         return self.model_dump(mode="json", by_alias=True, exclude_none=True)

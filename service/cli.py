@@ -334,6 +334,62 @@ def solve(
         raise typer.Exit(EXIT_NOT_CONVERGED)
 
 
+# --- inverse (links) ------------------------------------------------------------------------
+@app.command()
+def inverse(
+    document: DocArg,
+    sets: SetOpt = None,
+    h: Annotated[list[str] | None, typer.Option("--internal-force", metavar="LINK.h=VALUE",
+                                                help="Replace an internal force of the document's inverse section (repeatable).")] = None,
+    max_iterations: MaxIterOpt = 50,
+    json_out: JsonOpt = None,
+) -> None:
+    """Link inverse (seed 002 Sec. 5.3): initial shapes and unknown loads from the deformed
+    shapes and internal forces of the document's `inverse` section."""
+    from service.link_inverse import inverse_links
+
+    out, err = _consoles()
+    with _user_errors(err):
+        mech = _mechanism(document, None, sets)
+        spec = mech.document.inverse
+        if spec is None:
+            raise MechanismError("/inverse", "the document has no inverse section (shapes, internal_forces, unknown_loads)")
+        forces = {name: dict(values) for name, values in spec.internal_forces.items()}
+        for item in h or []:
+            target, sep, text = item.partition("=")
+            link, dot, component = target.strip().rpartition(".")
+            if not sep or not dot or component not in ("h", "v"):
+                raise OptionError("--internal-force", f"expected LINK.h=VALUE or LINK.v=VALUE, got '{item}'")
+            try:
+                forces.setdefault(link, {})[component] = float(text)
+            except ValueError:
+                raise OptionError("--internal-force", f"'{text}' is not a number") from None
+        result = inverse_links(mech, spec.shapes, forces, spec.unknown_loads,
+                               NewtonOptions(max_iterations=max_iterations))
+        out.print(f"[bold]{escape(mech.document.name)}[/bold]  ({escape(str(document))}): link inverse")
+        given = ", ".join(f"{name}.{c} = {_number(v, mech.document.units.force)}"
+                          for name, values in forces.items() for c, v in values.items())
+        out.print(f"given internal forces: {escape(given)}")
+        out.print(f"status: {result.status} after {result.iterations} iterations"
+                  + (f" ({escape(result.message)})" if result.message else ""))
+        if result.converged:
+            table = _table("unknown loads", "field", "value")
+            for pointer, value in result.loads.items():
+                table.add_row(pointer, _number(value, mech.doc_unit(mech.parameter_kind(pointer))))
+            out.print(table)
+            table = _table("links", "link", "h", "v", "M start", "M end", "eta(0) [rad]", "eta(1) [rad]")
+            for name, values in result.links.items():
+                table.add_row(name, *(_number(values[k]) for k in ("h", "v", "M_start", "M_end")),
+                              _number(values["eta"][0]), _number(values["eta"][-1]))
+            out.print(table)
+        if json_out is not None:
+            _write_json(json_out, {"document": str(document), "name": mech.document.name,
+                                   "internal_forces": forces, **result.__dict__})
+            out.print(f"wrote {escape(str(json_out))}")
+    if not result.converged:
+        raise typer.Exit(EXIT_NOT_CONVERGED)
+
+
 # --- sweep ---------------------------------------------------------------------------------
 def _default_xy(mech: Mechanism) -> tuple[str, str]:
     """The first point output, else the first body that is not fixed."""

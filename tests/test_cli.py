@@ -152,3 +152,21 @@ def test_unreachable_sweep_target_is_non_convergence_not_an_error(run):
                  "--steps", "5", "--model", "linear")
     assert result.exit_code == 1
     assert "target end_effector.x = -50 mm not reached: status not_converged" in result.output
+
+
+def test_inverse_command_reports_the_unknown_load_and_non_convergence(run):
+    four_bar = str(EXAMPLES / "inverse_four_bar.json")
+    result = run("inverse", four_bar)
+    assert result.exit_code == 0, result.output
+    assert "given internal forces: L3.h = -5 N" in result.output
+    assert "/loads/F/force/0" in result.output and "35.9" in result.output
+    # h3 = +5 N lies beyond the branch's fold (h3 peaks near +3 N): a status, exit code 1.
+    beyond = run("inverse", four_bar, "--internal-force", "L3.h=5", "--max-iterations", "30")
+    assert beyond.exit_code == 1
+    assert "status: not_converged after 30 iterations" in beyond.output
+    wrong = run("inverse", four_bar, "--internal-force", "L3.x=5")
+    assert wrong.exit_code == 2
+    assert "--internal-force: expected LINK.h=VALUE or LINK.v=VALUE, got 'L3.x=5'" in wrong.output
+    no_section = run("inverse", str(EXAMPLES / "cantilever.json"))
+    assert no_section.exit_code == 2
+    assert "/inverse: the document has no inverse section" in no_section.output
