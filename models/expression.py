@@ -40,10 +40,15 @@ def compile_expression(text: str, pointer: str, variable: str = "u") -> Callable
         raise MechanismError(pointer, f"expression longer than {MAX_LENGTH} characters")
     try:
         tree = ast.parse(text.strip(), mode="eval")
+    except RecursionError:
+        raise MechanismError(pointer, "expression nested too deeply") from None
     except SyntaxError as exc:
         column = f" at column {exc.offset}" if exc.offset else ""
         raise MechanismError(pointer, f"cannot parse expression {text!r}: {exc.msg}{column}") from None
-    _check(tree.body, pointer, variable)
+    try:
+        _check(tree.body, pointer, variable)
+    except RecursionError:
+        raise MechanismError(pointer, "expression nested too deeply") from None
     return lambda u: _build(tree.body, u, variable)
 
 

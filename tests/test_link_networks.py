@@ -156,6 +156,8 @@ def test_a_moment_on_a_pin_joint_is_refused():
      "/elements/L1/shape/expression", "cannot parse expression '0.3 * sin(2 * pi * u': '(' was never closed"),
     (lambda e: e.update(shape={"type": "expression", "expression": "x + 1"}),
      "/elements/L1/shape/expression", "unsafe or unsupported expression: the name 'x' is not allowed"),
+    (lambda e: e.update(shape={"type": "expression", "expression": "-" * 1900 + "u"}),
+     "/elements/L1/shape/expression", "expression nested too deeply"),
     (lambda e: e.update(order=5), "/elements/L1/order", "the integration order must be even, got 5"),
     (lambda e: e.update(shear=True), "/materials/steel/G", "a link with shear needs the shear modulus G or Poisson's ratio nu"),
 ])
