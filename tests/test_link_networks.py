@@ -183,3 +183,23 @@ def test_expressions_are_built_not_evaluated():
     _, b = solve(as_polynomial)
     assert a["elements.L1.x_end"] == pytest.approx(b["elements.L1.x_end"], rel=1e-14)
     assert a["elements.L1.angle_end"] == pytest.approx(b["elements.L1.angle_end"], rel=1e-14)
+
+
+def test_a_rigid_body_with_offset_attachment_and_load_point_rotates_consistently():
+    """The tip body's reference point sits off the beam; the link attaches to it at the beam's
+    end and the load acts at that same material point. Arms rotate with the body, so the
+    beam still sees a plain dead tip force: the elliptic-integral cantilever."""
+    EI, L, F = 0.08, 0.1016, 15.0
+    document = {
+        "name": "offset tip body", "units": SI,
+        "materials": {"m": {"E": EI / 1e-9}}, "sections": {"s": {"shape": "general", "I": 1e-9}},
+        "bodies": {"ground": {"fixed": True, "position": [0, 0]}, "tip": {"position": [L + 0.03, -0.02], "angle": 0.4}},
+        "elements": {"beam": {"type": "link", "from": "ground", "to": "tip", "length": L, "material": "m", "section": "s"}},
+        "loads": {"F": {"type": "force", "body": "tip", "at": [L, 0], "force": [0, F]}},
+        "outputs": {"end": {"type": "point", "body": "tip", "at": [L, 0]}},
+    }
+    _, out = solve(document)
+    x, y, rotation = cantilever_tip(EI, L, F)
+    assert out["end.x"] == pytest.approx(x, rel=1e-9)
+    assert out["end.y"] == pytest.approx(y, rel=1e-9)
+    assert out["bodies.tip.angle"] - 0.4 == pytest.approx(rotation, rel=1e-9)
