@@ -245,9 +245,10 @@ def solve_bounded(mech: Mechanism, bounds: dict[str, tuple[float | None, float |
                   options: NewtonOptions = NewtonOptions(), guess: np.ndarray | None = None) -> EquilibriumResult:
     """Equilibrium with bounds on unknowns (seed 002 Sec. 2.2.2, bounded Gauss-Newton): find
     R(z) = 0 inside the bounds with IPOPT and exact derivatives (a feasibility problem: the
-    residuals are equality constraints; IPOPT's restoration phase reports an empty set). Bounds are in document
-    units (angles: the document's angle unit), keyed by unknown_names(); None: unbounded.
-    Where several equilibria exist (a buckled column), the bounds pick the branch."""
+    residuals are equality constraints; IPOPT's restoration phase reports an empty set).
+    Bounds are in document units (angles: the document's angle unit), keyed by
+    unknown_names(); None: unbounded. Where several equilibria exist (a buckled column), the
+    bounds pick the branch whose basin holds the start on the bounds."""
     import casadi as ca
 
     names = unknown_names(mech)
@@ -295,9 +296,11 @@ def solve_bounded(mech: Mechanism, bounds: dict[str, tuple[float | None, float |
     z = np.asarray(solution["x"]).ravel()
     norm = float(np.abs(np.asarray(mech.graphs.residual(z, p))).max())
     # Polish inside the bounds: Newton from the IPOPT point, kept only if it stays inside.
-    status, z_newton, norm_newton, k, history, message = iterate(
-        lambda x: tuple(np.asarray(a).reshape(-1) if i == 0 else np.asarray(a)
-                        for i, a in enumerate(mech.graphs.residual_and_tangent(x, p))), z, options)
+    def evaluate(x):
+        R, K = mech.graphs.residual_and_tangent(x, p)
+        return np.asarray(R).ravel(), np.asarray(K)
+
+    status, z_newton, norm_newton, _, _, _ = iterate(evaluate, z, options)
     if status == "converged" and np.all(z_newton >= lower - 1e-12) and np.all(z_newton <= upper + 1e-12):
         z, norm = z_newton, norm_newton
     iterations = int(solver.stats()["iter_count"])
