@@ -380,6 +380,7 @@ class _Builder:
             emit(f"{base}.Fy", "force", w[1])
             emit(f"{base}.M", "moment", w[2])
             emit(f"{base}.rotation", "angle", st["psi"][2])
+            emit(f"{base}.length", "length", st["r"] * st["theta_f"])
             modulus = 6 / (st["b"] * st["h"] ** 2)  # bending stress per unit moment, rectangle
             emit(f"{base}.stress_start", "stress", modulus * ca.fabs(w_start[2]))
             emit(f"{base}.stress_end", "stress", modulus * ca.fabs(w[2]))
@@ -405,6 +406,9 @@ class _Builder:
             emit(f"{base}.angle_end", "angle", sol.nodes[-1][0])
             emit(f"{base}.rotation_start", "angle", sol.nodes[0][0] - sol.undeformed[0][0])
             emit(f"{base}.rotation_end", "angle", sol.nodes[-1][0] - sol.undeformed[-1][0])
+            emit(f"{base}.length", "length", shooting.props.length)
+            emit(f"{base}.x_end_undeformed", "length", sol.undeformed[-1][2])
+            emit(f"{base}.y_end_undeformed", "length", sol.undeformed[-1][3])
             samples = shooting.samples(sol, LINK_SAMPLES_PER_INTERVAL)
             link_samples.append((link, samples, shooting))
             if shooting.props.fibre is not None:

@@ -1,0 +1,352 @@
+"""Design optimization: one NLP over the design variables and every load case's equilibrium,
+solved by IPOPT with exact derivatives, from one or more starts.
+
+Results are data: a status (optimal | acceptable | infeasible | not_converged | off_branch:
+an optimum whose equilibrium is not the one reached by loading the mechanism), the optimum
+in document units, the multipliers, IPOPT's iterations and history, and, when the problem is
+infeasible, how far each constraint stays from its bounds.
+
+Multipliers follow CasADi's sign convention (positive on an active upper bound, negative on
+an active lower bound) in document units: raising an active bound by one unit changes the
+optimal objective by minus the multiplier.
+"""
+
+from __future__ import annotations
+
+import re
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from models import Mechanism
+from service.design import Bounded, DesignProblem, OutputRef
+from service.design_nlp import DesignNlp, design_nlp, solver_for
+from service.equilibrium import NewtonOptions, iterate
+
+IPOPT_STATUS = {
+    "Solve_Succeeded": "optimal",
+    "Solved_To_Acceptable_Level": "acceptable",
+    "Infeasible_Problem_Detected": "infeasible",
+    "Maximum_Iterations_Exceeded": "not_converged",
+    "Maximum_CpuTime_Exceeded": "time_limit",
+}
+# A constraint counts as active within this (scaled) distance of its bound.
+ACTIVE_TOLERANCE = 1e-7
+
+
+@dataclass
+class StartResult:
+    """One IPOPT run from one start."""
+
+    start: int
+    status: str
+    message: str
+    ipopt_status: str
+    iterations: int
+    seconds: float
+    x: np.ndarray  # NLP unknowns (scaled design, then every case's z)
+    lam_g: np.ndarray
+    lam_x: np.ndarray
+    objective: float  # document units
+    design: dict[str, float]  # document units
+    design_start: dict[str, float]
+    history: list[dict]
+    equilibrium_residual: float  # nondimensional infinity norm over all cases, after polishing
+    on_branch: bool  # every case's state is the one reached by loading the optimal design
+    constraints: list[dict]
+    multipliers: dict[str, list[float]]
+
+    @property
+    def succeeded(self) -> bool:
+        return self.status in ("optimal", "acceptable")
+
+    def summary(self) -> dict:
+        return {k: v for k, v in self.__dict__.items() if k not in ("x", "lam_g", "lam_x")}
+
+
+@dataclass
+class OptimizationResult:
+    status: str
+    message: str
+    best: StartResult | None
+    starts: list[StartResult]
+    seconds: float
+    problem: DesignProblem = field(repr=False)
+
+    def outputs(self) -> dict[str, dict[str, float]]:
+        """Every output of every case at the optimum (document units)."""
+        if self.best is None:
+            return {}
+        return case_outputs(self.problem, self.best.x)
+
+    def summary(self) -> dict:
+        best = self.best
+        report = {"analysis": "optimize", "name": self.problem.mechanism.document.name, "status": self.status,
+                  "message": self.message, "seconds": self.seconds,
+                  "units": design_units(self.problem)}
+        if best is not None:
+            report.update({k: v for k, v in best.summary().items() if k not in ("status", "message", "seconds")})
+            report["outputs"] = self.outputs()
+        report["starts"] = [{"start": s.start, "status": s.status, "objective": s.objective,
+                             "iterations": s.iterations, "seconds": s.seconds, "design": s.design,
+                             "design_start": s.design_start} for s in self.starts]
+        return report
+
+
+@dataclass
+class Prepared:
+    """What every start of a problem shares: the NLP, its parameters and the bounds."""
+
+    problem: DesignProblem
+    nlp: DesignNlp
+    P: np.ndarray
+    objective_scale: float
+    constraint_scales: np.ndarray
+    lbx: np.ndarray
+    ubx: np.ndarray
+    lbg: np.ndarray
+    ubg: np.ndarray
+
+
+def design_units(problem: DesignProblem) -> dict[str, str]:
+    mech = problem.mechanism
+    units = {path: mech.doc_unit(mech.parameters[slot].kind) for path, slot in zip(problem.paths, problem.slots)}
+    units["objective"] = mech.doc_unit(problem.objective.kind)
+    return units
+
+
+def case_params(problem: DesignProblem, design: np.ndarray) -> list[np.ndarray]:
+    """Nondimensional parameters of every case for a design (document units)."""
+    ps = []
+    for p in problem.case_p:
+        p = p.copy()
+        p[list(problem.slots)] = design * problem.nd_per_doc
+        ps.append(p)
+    return ps
+
+
+LOAD_MAGNITUDE = re.compile(r"^/loads/[^/]+/(force/[01]|moment|dx|dy|rotation)$")
+LOAD_STEPS = 8
+
+
+def _load_slots(mech: Mechanism) -> list[int]:
+    return [k for k, param in enumerate(mech.parameters) if LOAD_MAGNITUDE.match(param.pointer)]
+
+
+def loaded_state(mech: Mechanism, p: np.ndarray, steps: int = LOAD_STEPS,
+                 options: NewtonOptions = NewtonOptions(max_iterations=100)) -> tuple[str, np.ndarray]:
+    """The equilibrium the mechanism reaches when its loads (forces, moments, prescribed
+    motions) grow from zero in equal steps, each from the previous state: the branch a real
+    mechanism follows, where a single Newton solve (or an optimizer) may find another."""
+    g = mech.graphs
+    slots = _load_slots(mech)
+    z = np.zeros(mech.n_free)
+    for k in range(1, steps + 1):
+        pk = p.copy()
+        pk[slots] = p[slots] * k / steps
+
+        def evaluate(x, pk=pk):
+            R, K = g.residual_and_tangent(x, pk)
+            return np.asarray(R).ravel(), np.asarray(K)
+
+        status, z, *_ = iterate(evaluate, z, options)
+        if status != "converged":
+            return status, z
+    return "converged", z
+
+
+def equilibria(problem: DesignProblem, design: np.ndarray) -> list[tuple[str, np.ndarray]]:
+    """(status, z) of every case at a design (document units), reached by loading."""
+    return [loaded_state(problem.mechanism, p) for p in case_params(problem, design)]
+
+
+def same_state(a: np.ndarray, b: np.ndarray) -> bool:
+    return bool(np.abs(a - b).max(initial=0.0) <= 1e-6 * (1 + np.abs(b).max(initial=0.0)))
+
+
+def _value(problem: DesignProblem, ref: OutputRef, z: np.ndarray, p: np.ndarray) -> float:
+    """An output's nondimensional value at a state."""
+    g = problem.mechanism.graphs
+    if ref.source == "parameter":
+        return float(p[ref.index])
+    if ref.source == "stiffness":
+        K = np.asarray(g.residual_and_tangent(z, p)[1])
+        return float(1 / np.linalg.inv(K)[ref.index, ref.index])
+    return float(np.asarray(g.outputs(z, p)).ravel()[ref.index])
+
+
+def prepare(problem: DesignProblem) -> Prepared:
+    """Scales from the document's design (its equilibria), the NLP and the bounds."""
+    nlp = design_nlp(problem)
+    states = equilibria(problem, problem.start)
+    ps = case_params(problem, problem.start)
+
+    def typical(ref: OutputRef, *bounds: float) -> float:
+        factor = problem.output_factor(ref)
+        sizes = [abs(b) * factor for b in bounds if np.isfinite(b)]
+        status, z = states[ref.case]
+        if status == "converged":
+            sizes.append(abs(_value(problem, ref, z, ps[ref.case])))
+        size = max(sizes, default=0.0)
+        return size if size > 1e-12 else 1.0
+
+    objective_scale = typical(problem.objective)
+    constraint_scales = np.array([typical(c.output, c.lower, c.upper) for c in problem.constraints])
+    P = nlp.pack(problem, objective_scale, constraint_scales)
+    n_z = nlp.n_state * nlp.n_cases
+    lbx = np.concatenate([problem.lower / problem.scale, np.full(n_z, -np.inf)])
+    ubx = np.concatenate([problem.upper / problem.scale, np.full(n_z, np.inf)])
+    factors = np.array([problem.output_factor(c.output) for c in problem.constraints])
+    lower = np.array([c.lower for c in problem.constraints]) * factors / constraint_scales if problem.constraints else []
+    upper = np.array([c.upper for c in problem.constraints]) * factors / constraint_scales if problem.constraints else []
+    lbg = np.concatenate([np.zeros(nlp.n_residuals), lower])
+    ubg = np.concatenate([np.zeros(nlp.n_residuals), upper])
+    return Prepared(problem, nlp, P, objective_scale, constraint_scales, lbx, ubx, lbg, ubg)
+
+
+def start_design(problem: DesignProblem, start: int) -> np.ndarray:
+    """Start 0: the document's values (moved into the bounds); start k: a random point of
+    the bounds (seeded by the spec's seed and k), or within half a scale where unbounded."""
+    if start == 0:
+        return np.clip(problem.start, problem.lower, problem.upper)
+    rng = np.random.default_rng([problem.spec.seed, start])
+    lo = np.where(np.isfinite(problem.lower), problem.lower, problem.start - 0.5 * problem.scale)
+    hi = np.where(np.isfinite(problem.upper), problem.upper, problem.start + 0.5 * problem.scale)
+    return lo + rng.random(len(lo)) * (hi - lo)
+
+
+def run_start(prepared: Prepared, start: int) -> StartResult:
+    problem, nlp = prepared.problem, prepared.nlp
+    spec = problem.spec
+    started = time.perf_counter()
+    design0 = start_design(problem, start)
+    guesses = [z if status == "converged" else np.zeros(nlp.n_state)
+               for status, z in equilibria(problem, design0)]
+    x0 = np.concatenate([design0 / problem.scale, *guesses])
+    solver = solver_for(nlp, spec.max_iterations, spec.tolerance)
+    solution = solver(x0=x0, p=prepared.P, lbx=prepared.lbx, ubx=prepared.ubx, lbg=prepared.lbg, ubg=prepared.ubg)
+    stats = solver.stats()
+    x = np.asarray(solution["x"]).ravel()
+    lam_g = np.asarray(solution["lam_g"]).ravel()
+    lam_x = np.asarray(solution["lam_x"]).ravel()
+    ipopt_status = str(stats.get("return_status", "unknown"))
+    status = IPOPT_STATUS.get(ipopt_status, "not_converged")
+    # IPOPT may end a hair outside the bounds (its bound relaxation): report the design inside.
+    design = np.clip(x[:nlp.n_design] * problem.scale, problem.lower, problem.upper)
+    # The state the NLP found must be the one the mechanism reaches when loaded at that design
+    # (an optimizer can land on another equilibrium branch, e.g. a snapped-through shape).
+    zs = np.split(x[nlp.n_design:], nlp.n_cases)
+    loaded = equilibria(problem, design)
+    on_branch = all(s == "converged" and same_state(z, zc) for (s, z), zc in zip(loaded, zs))
+    for c, (s, z) in enumerate(loaded):
+        if s == "converged" and same_state(z, zs[c]):
+            zs[c] = z  # polished by Newton at the design found
+    residual = max((float(np.abs(np.asarray(problem.mechanism.graphs.residual(z, p))).max(initial=0.0))
+                    for z, p in zip(zs, case_params(problem, design))), default=0.0)
+    x = np.concatenate([design / problem.scale, *zs])
+    f, _ = nlp.evaluate(x, prepared.P)
+    objective = _objective_doc(prepared, float(f))
+    message = "" if status in ("optimal", "acceptable") else f"IPOPT: {ipopt_status}"
+    if status in ("optimal", "acceptable") and not on_branch:
+        status = "off_branch"
+        message = ("the optimum's equilibrium is not the one the mechanism reaches when loaded at that "
+                   "design (another branch); try other starts or tighter bounds")
+    return StartResult(
+        start=start, status=status, message=message, ipopt_status=ipopt_status,
+        iterations=int(stats.get("iter_count", 0)), seconds=time.perf_counter() - started,
+        x=x, lam_g=lam_g, lam_x=lam_x, objective=objective,
+        design=dict(zip(problem.paths, design.tolist())),
+        design_start=dict(zip(problem.paths, design0.tolist())),
+        history=_history(prepared, stats), equilibrium_residual=residual, on_branch=on_branch,
+        constraints=constraint_report(prepared, x, lam_g),
+        multipliers=_multipliers(prepared, lam_g, lam_x),
+    )
+
+
+def _objective_doc(prepared: Prepared, f: float) -> float:
+    problem = prepared.problem
+    return f * prepared.objective_scale / problem.output_factor(problem.objective)
+
+
+def _history(prepared: Prepared, stats: dict) -> list[dict]:
+    it = stats.get("iterations") or {}
+    objective = it.get("obj", [])
+    return [{"iteration": k, "objective": _objective_doc(prepared, float(objective[k])),
+             "constraint_violation": float(it["inf_pr"][k]), "dual_infeasibility": float(it["inf_du"][k])}
+            for k in range(len(objective))]
+
+
+def _multipliers(prepared: Prepared, lam_g: np.ndarray, lam_x: np.ndarray) -> dict[str, list[float]]:
+    problem, nlp = prepared.problem, prepared.nlp
+    per_objective = prepared.objective_scale / problem.output_factor(problem.objective)
+    constraints = [float(lam_g[nlp.n_residuals + k]) * per_objective
+                   / (prepared.constraint_scales[k] / problem.output_factor(c.output))
+                   for k, c in enumerate(problem.constraints)]
+    design = (lam_x[:nlp.n_design] * per_objective / problem.scale).tolist()
+    return {"constraints": constraints, "design": design}
+
+
+def constraint_report(prepared: Prepared, x: np.ndarray, lam_g: np.ndarray) -> list[dict]:
+    """Each constraint's value, bounds, violation and whether it is active (document units)."""
+    problem, nlp = prepared.problem, prepared.nlp
+    _, g = nlp.evaluate(x, prepared.P)
+    g = np.asarray(g).ravel()[nlp.n_residuals:]
+    multipliers = _multipliers(prepared, lam_g, np.zeros(nlp.n_design))["constraints"]
+    rows = []
+    for k, c in enumerate(problem.constraints):
+        value = g[k] * prepared.constraint_scales[k] / problem.output_factor(c.output)
+        violation = max(c.lower - value, value - c.upper, 0.0)
+        scaled_gap = min(abs(g[k] - prepared.lbg[nlp.n_residuals + k]), abs(g[k] - prepared.ubg[nlp.n_residuals + k]))
+        rows.append({"output": c.output.name, "case": problem.case_names[c.output.case], "value": value,
+                     "lower": c.lower, "upper": c.upper, "violation": violation,
+                     "active": bool(scaled_gap <= ACTIVE_TOLERANCE), "multiplier": multipliers[k]})
+    return rows
+
+
+def _best(starts: list[StartResult], sign: float) -> StartResult | None:
+    good = [s for s in starts if s.succeeded]
+    if good:
+        return min(good, key=lambda s: sign * s.objective)
+    return min(starts, key=lambda s: max((c["violation"] for c in s.constraints), default=0.0)) if starts else None
+
+
+def combine(problem: DesignProblem, starts: list[StartResult], seconds: float) -> OptimizationResult:
+    """The result of a set of starts: the best feasible one, else the least infeasible."""
+    best = _best(starts, problem.sign)
+    if best is None:
+        return OptimizationResult("not_converged", "no start ran", None, starts, seconds, problem)
+    if best.succeeded:
+        status, message = best.status, ""
+    elif all(s.status == "infeasible" for s in starts):
+        worst = max(best.constraints, key=lambda c: c["violation"], default=None)
+        detail = (f"; the closest point misses {worst['output']} ({worst['case']}) by {worst['violation']:.4g} "
+                  f"(value {worst['value']:.6g}, bounds [{worst['lower']:.6g}, {worst['upper']:.6g}])"
+                  if worst is not None and worst["violation"] > 0 else "")
+        status, message = "infeasible", f"no design satisfies the constraints and bounds{detail}"
+    else:
+        status, message = best.status, best.message
+    return OptimizationResult(status, message, best, starts, seconds, problem)
+
+
+def optimize(problem: DesignProblem, progress=None) -> OptimizationResult:
+    """Every start of the problem in turn; progress(done, total) after each."""
+    started = time.perf_counter()
+    prepared = prepare(problem)
+    starts = []
+    for k in range(problem.spec.starts):
+        starts.append(run_start(prepared, k))
+        if progress is not None:
+            progress(k + 1, problem.spec.starts)
+    return combine(problem, starts, time.perf_counter() - started)
+
+
+def case_outputs(problem: DesignProblem, x: np.ndarray) -> dict[str, dict[str, float]]:
+    from service.units import outputs_in_doc_units
+
+    mech: Mechanism = problem.mechanism
+    n_design = len(problem.slots)
+    zs = np.split(x[n_design:], len(problem.case_p))
+    ps = case_params(problem, x[:n_design] * problem.scale)
+    return {name: outputs_in_doc_units(mech, mech.graphs.outputs(z, p))
+            for name, z, p in zip(problem.case_names, zs, ps)}
