@@ -36,7 +36,8 @@ class DesignNlp:
 
     def pack(self, problem: DesignProblem, objective_scale: float, constraint_scales: np.ndarray) -> np.ndarray:
         """The NLP parameter vector: every case's parameters, the design scales (nondim per
-        scaled unit), the objective's and the constraints' scales (nondimensional)."""
+        scaled unit), the objective's scale (negative to maximize) and the constraints'
+        scales (nondimensional)."""
         design_scale = problem.scale * problem.nd_per_doc
         return np.concatenate([*problem.case_p, design_scale, [objective_scale], constraint_scales])
 

@@ -191,7 +191,7 @@ def prepare(problem: DesignProblem) -> Prepared:
         size = max(sizes, default=0.0)
         return size if size > 1e-12 else 1.0
 
-    objective_scale = typical(problem.objective)
+    objective_scale = problem.sign * typical(problem.objective)  # negative: maximize
     constraint_scales = np.array([typical(c.output, c.lower, c.upper) for c in problem.constraints])
     P = nlp.pack(problem, objective_scale, constraint_scales)
     n_z = nlp.n_state * nlp.n_cases
