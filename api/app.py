@@ -14,7 +14,7 @@ from fastapi import FastAPI
 
 from api.errors import install_error_handlers
 from api.limits import BodySizeLimit
-from api.routers import examples, health, jobs, solve, sweeps
+from api.routers import examples, health, jobs, optimize, solve, sweeps
 from api.state import Services, SolverThread
 from service.analysis import Limits
 from service.examples import ExampleLibrary, examples_directory
@@ -64,7 +64,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     app = FastAPI(title="flexmech", version="1", description=DESCRIPTION, lifespan=lifespan)
     install_error_handlers(app)
-    for module in (solve, sweeps, jobs, examples, health):
+    for module in (solve, sweeps, optimize, jobs, examples, health):
         app.include_router(module.router)
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_request_bytes)
     return app

@@ -28,6 +28,7 @@ from api.schemas import (
     HealthResponse,
     JobResultResponse,
     JobStatusResponse,
+    OptimizeRequest,
     SolveRequest,
     SolveResponse,
     SweepRequest,
@@ -136,6 +137,11 @@ class Client:
         return _parse(self._http.post("/v1/sweeps", json=_request_body(SweepRequest, request, fields)),
                       JobStatusResponse)
 
+    def optimize(self, request: OptimizeRequest | None = None, **fields: Any) -> JobStatusResponse:
+        """Start an optimization job; fields as in OptimizeRequest. Returns the new job's status."""
+        return _parse(self._http.post("/v1/optimize", json=_request_body(OptimizeRequest, request, fields)),
+                      JobStatusResponse)
+
     def job(self, job_id: str) -> JobStatusResponse:
         return _parse(self._http.get(f"/v1/jobs/{job_id}"), JobStatusResponse)
 
@@ -188,6 +194,10 @@ class AsyncClient:
     async def sweep(self, request: SweepRequest | None = None, **fields: Any) -> JobStatusResponse:
         body = _request_body(SweepRequest, request, fields)
         return _parse(await self._http.post("/v1/sweeps", json=body), JobStatusResponse)
+
+    async def optimize(self, request: OptimizeRequest | None = None, **fields: Any) -> JobStatusResponse:
+        body = _request_body(OptimizeRequest, request, fields)
+        return _parse(await self._http.post("/v1/optimize", json=body), JobStatusResponse)
 
     async def job(self, job_id: str) -> JobStatusResponse:
         return _parse(await self._http.get(f"/v1/jobs/{job_id}"), JobStatusResponse)

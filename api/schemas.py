@@ -123,6 +123,25 @@ class SweepRequest(DocumentRequest):
     outputs: list[str] | None = Field(None, min_length=1, description="outputs to keep (default: all)")
 
 
+class OptimizeRequest(DocumentRequest):
+    """A job: a design problem solved as one NLP (design variables and every load case's
+    equilibrium), from one or more starts."""
+
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"example": "grasper_shape"},
+        {"example": "grasper_shape", "problem": {
+            "design": [{"path": "/elements/link/length", "lower": 0.0508, "upper": 0.085},
+                       {"path": "/elements/link/shape/coefficients/0", "lower": 0, "upper": 2}],
+            "objective": {"output": "reactions.tip.Fy"},
+            "constraints": [{"output": "elements.link.x_end_undeformed", "equals": 0.0508}], "starts": 2}},
+    ]})
+
+    problem: dict[str, Any] | None = Field(
+        None, description="design problem: design [{path, lower, upper, scale}], objective {output, case, sense}, "
+                          "constraints [{output, case, lower, upper | equals}], cases {name: {overrides}}, starts, "
+                          "seed, max_iterations, tolerance (default: the document's optimize section)")
+
+
 # --- responses ------------------------------------------------------------------------------
 class ErrorBody(BaseModel):
     status: int = Field(description="the HTTP status code")

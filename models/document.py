@@ -387,6 +387,17 @@ def parse_document(data: dict[str, Any]) -> MechanismDocument:
         raise  # unreachable: _raise_first always raises
 
 
+def parse_optimize_spec(data: Any) -> OptimizeSpec:
+    """Validate a design problem given on its own (pointers relative to it)."""
+    if not isinstance(data, dict):
+        raise MechanismError("", "a design problem must be a JSON object")
+    try:
+        return OptimizeSpec.model_validate(data)
+    except ValidationError as exc:
+        _raise_first(exc)
+        raise
+
+
 def load_document(source: str | Path | dict[str, Any]) -> MechanismDocument:
     """Read and validate a mechanism document from a JSON/YAML file path or a dict."""
     if isinstance(source, dict):

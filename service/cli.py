@@ -2,6 +2,8 @@
 
     flexmech solve examples/gripper.json --set /loads/actuation/force/1=77 --stiffness
     flexmech sweep examples/gripper.json --compare-models --plot sweep.png
+    flexmech optimize examples/grasper_shape.json
+    flexmech trace examples/snap_through_arch.json --path /loads/P/force/1 --stop -300 --step 20
     flexmech examples
 
 Exit codes: 0 success; 1 the solver did not converge (status and diagnostics are printed,
@@ -387,6 +389,124 @@ def inverse(
                                    "internal_forces": forces, **result.__dict__})
             out.print(f"wrote {escape(str(json_out))}")
     if not result.converged:
+        raise typer.Exit(EXIT_NOT_CONVERGED)
+
+
+# --- optimize and trace ----------------------------------------------------------------------
+@app.command()
+def optimize(
+    document: DocArg,
+    sets: SetOpt = None,
+    starts: Annotated[int | None, typer.Option(min=1, max=64, help="Number of starts (default: the document's).")] = None,
+    sensitivity: Annotated[list[str] | None, typer.Option(
+        "--sensitivity", metavar="PATH", help="Also give d(optimum)/d(field) for this numeric field (repeatable).")] = None,
+    json_out: JsonOpt = None,
+) -> None:
+    """Solve the design problem of the document's `optimize` section: one NLP over the design
+    variables and the equilibrium of every load case (IPOPT, exact derivatives)."""
+    from service.design import design_problem
+    from service.optimize import combine, prepare, run_start
+    from service.sensitivity import optimum_sensitivities
+
+    out, err = _consoles()
+    with _user_errors(err):
+        mech = _mechanism(document, None, sets)
+        spec = mech.document.optimize
+        if spec is None:
+            raise MechanismError("/optimize", "the document has no optimize section (design, objective, constraints)")
+        if starts is not None:
+            spec = spec.model_copy(update={"starts": starts})
+        problem = design_problem(mech, spec)
+        prepared = prepare(problem)
+        runs = []
+        for k in range(spec.starts):
+            runs.append(run_start(prepared, k))
+            if spec.starts > 1:
+                err.print(f"start {k + 1}/{spec.starts}: {runs[-1].status}, objective {runs[-1].objective:.6g}")
+        result = combine(problem, runs, sum(r.seconds for r in runs))
+        best = result.best
+        units = mech.doc_unit(problem.objective.kind)
+        out.print(f"[bold]{escape(mech.document.name)}[/bold]  ({escape(str(document))}): optimize")
+        out.print(f"status: {result.status}" + (f" ({escape(result.message)})" if result.message else ""))
+        report = result.summary()
+        if best is not None:
+            out.print(f"objective {spec.objective.output}: {_number(best.objective, units)}  "
+                      f"({best.iterations} IPOPT iterations, {best.seconds:.3g} s, equilibrium residual "
+                      f"{best.equilibrium_residual:.2g})")
+            table = _table("design", "field", "start", "optimum", "lower", "upper", "multiplier")
+            for k, path in enumerate(problem.paths):
+                unit = mech.doc_unit(mech.parameter_kind(path))
+                table.add_row(path, _number(best.design_start[path], unit), _number(best.design[path], unit),
+                              _number(problem.lower[k]), _number(problem.upper[k]),
+                              _number(best.multipliers["design"][k]))
+            out.print(table)
+            if best.constraints:
+                table = _table("constraints", "output", "case", "value", "lower", "upper", "active", "multiplier")
+                for row in best.constraints:
+                    table.add_row(row["output"], row["case"], _number(row["value"]),
+                                  "-" if row["lower"] is None else _number(row["lower"]),
+                                  "-" if row["upper"] is None else _number(row["upper"]),
+                                  "yes" if row["active"] else "no", _number(row["multiplier"]))
+                out.print(table)
+            if sensitivity and best.succeeded:
+                sens = optimum_sensitivities(prepared, best, list(sensitivity))
+                table = _table("sensitivities of the optimum", "of", *sensitivity)
+                for name, row, row_units in zip(sens.outputs, sens.matrix, sens.units):
+                    table.add_row(name, *(_number(v, u) for v, u in zip(row, row_units)))
+                out.print(table)
+                report["sensitivities"] = sens.to_dict()
+        if json_out is not None:
+            _write_json(json_out, {"document": str(document), **report})
+            out.print(f"wrote {escape(str(json_out))}")
+    if result.status not in ("optimal", "acceptable"):
+        raise typer.Exit(EXIT_NOT_CONVERGED)
+
+
+@app.command()
+def trace(
+    document: DocArg,
+    path: Annotated[str, typer.Option(help="The numeric field to follow, e.g. /loads/P/force/1.")],
+    stop: Annotated[float, typer.Option(help="Stop once the field passes this value (document units).")],
+    step: Annotated[float, typer.Option(help="First arc-length step, document units of the field.")],
+    sets: SetOpt = None,
+    max_points: Annotated[int, typer.Option(min=2, max=100_000)] = 400,
+    json_out: JsonOpt = None,
+) -> None:
+    """Pseudo-arc-length continuation of the equilibrium path through limit points (snap-through),
+    with the stability of every point and the limit loads located exactly."""
+    from service.continuation import trace_path
+
+    out, err = _consoles()
+    with _user_errors(err):
+        mech = _mechanism(document, None, sets)
+        try:
+            mech.parameter_index(path)
+        except MechanismError as exc:
+            raise OptionError("--path", exc.problem) from None
+        if not step > 0:
+            raise OptionError("--step", f"must be positive, got {step:g}")
+        result = trace_path(mech, path, stop, step, max_points)
+        x_name, y_name = _default_xy(mech)
+        shown = y_name.replace(".y", ".dy") if y_name.replace(".y", ".dy") in mech.graphs.output_names else y_name
+        out.print(f"[bold]{escape(mech.document.name)}[/bold]  ({escape(str(document))}): path of {path}")
+        out.print(f"status: {result.status}, {len(result.points)} points, {result.seconds:.3g} s"
+                  + (f" ({escape(result.message)})" if result.message else ""))
+        table = _table("limit points", "kind", f"{path} [{result.unit}]", f"{shown} [{output_unit(mech, shown)}]",
+                       "after point")
+        for lp in result.limit_points:
+            table.add_row(lp.kind, _number(lp.value), _number(lp.outputs[shown]), str(lp.after_point))
+        out.print(table)
+        table = _table("path", "point", f"{path} [{result.unit}]", f"{shown} [{output_unit(mech, shown)}]", "stable")
+        n = len(result.points)
+        for i in sorted(set(np.linspace(0, n - 1, min(n, 12)).round().astype(int).tolist())):
+            pt = result.points[i]
+            table.add_row(str(i), _number(pt.value), _number(pt.outputs[shown]),
+                          {True: "yes", False: "no", None: "?"}[pt.stability.stable])
+        out.print(table)
+        if json_out is not None:
+            _write_json(json_out, {"document": str(document), **result.to_dict()})
+            out.print(f"wrote {escape(str(json_out))}")
+    if result.status != "completed":
         raise typer.Exit(EXIT_NOT_CONVERGED)
 
 

@@ -298,9 +298,10 @@ def constraint_report(prepared: Prepared, x: np.ndarray, lam_g: np.ndarray) -> l
         value = g[k] * prepared.constraint_scales[k] / problem.output_factor(c.output)
         violation = max(c.lower - value, value - c.upper, 0.0)
         scaled_gap = min(abs(g[k] - prepared.lbg[nlp.n_residuals + k]), abs(g[k] - prepared.ubg[nlp.n_residuals + k]))
-        rows.append({"output": c.output.name, "case": problem.case_names[c.output.case], "value": value,
-                     "lower": c.lower, "upper": c.upper, "violation": violation,
-                     "active": bool(scaled_gap <= ACTIVE_TOLERANCE), "multiplier": multipliers[k]})
+        rows.append({"output": c.output.name, "case": problem.case_names[c.output.case], "value": float(value),
+                     "lower": c.lower if np.isfinite(c.lower) else None,
+                     "upper": c.upper if np.isfinite(c.upper) else None, "violation": float(violation),
+                     "active": bool(scaled_gap <= ACTIVE_TOLERANCE), "multiplier": float(multipliers[k])})
     return rows
 
 
@@ -320,9 +321,11 @@ def combine(problem: DesignProblem, starts: list[StartResult], seconds: float) -
         status, message = best.status, ""
     elif all(s.status == "infeasible" for s in starts):
         worst = max(best.constraints, key=lambda c: c["violation"], default=None)
-        detail = (f"; the closest point misses {worst['output']} ({worst['case']}) by {worst['violation']:.4g} "
-                  f"(value {worst['value']:.6g}, bounds [{worst['lower']:.6g}, {worst['upper']:.6g}])"
-                  if worst is not None and worst["violation"] > 0 else "")
+        detail = ""
+        if worst is not None and worst["violation"] > 0:
+            bounds = ", ".join("-" if b is None else f"{b:.6g}" for b in (worst["lower"], worst["upper"]))
+            detail = (f"; the closest point misses {worst['output']} ({worst['case']}) by {worst['violation']:.4g} "
+                      f"(value {worst['value']:.6g}, bounds [{bounds}])")
         status, message = "infeasible", f"no design satisfies the constraints and bounds{detail}"
     else:
         status, message = best.status, best.message

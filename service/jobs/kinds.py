@@ -61,6 +61,7 @@ def kind_named(name: str) -> JobKind:
 
 def _load_builtin_kinds() -> None:
     # Imported here, not at module import, so a worker loads kinds only when it first runs a task.
+    import service.jobs.optimize  # noqa: F401  (registers "optimize")
     import service.jobs.sweep  # noqa: F401  (registers "sweep")
 
 

@@ -1,0 +1,98 @@
+"""The optimize job: a design problem whose starts are its points.
+
+spec:
+  document     the mechanism document (JSON object)
+  problem      optional design problem (the document's `optimize` section when absent)
+  model, overrides   as for /v1/solve
+Each start (0: the document's design; k: a seeded random point in the bounds) is one point,
+run by any worker; the result is the best feasible start (the least infeasible if none).
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+from functools import lru_cache
+
+import numpy as np
+
+from models import MechanismError
+from models.document import parse_optimize_spec
+from service.analysis import Limits, compile_request, plain, under
+from service.design import DesignProblem, design_problem
+from service.jobs.kinds import Plan, register
+from service.optimize import Prepared, StartResult, combine, prepare, run_start
+
+
+def problem_of(spec: dict) -> DesignProblem:
+    return _problem(json.dumps(spec["document"], sort_keys=True), spec.get("model"),
+                    json.dumps(spec.get("overrides") or {}, sort_keys=True),
+                    json.dumps(spec.get("problem"), sort_keys=True))
+
+
+@lru_cache(maxsize=8)
+def _problem(document_json: str, model: str | None, overrides_json: str, problem_json: str) -> DesignProblem:
+    mech = compile_request(json.loads(document_json), model, json.loads(overrides_json))
+    given = json.loads(problem_json)
+    if given is not None:
+        try:
+            spec = parse_optimize_spec(given)
+        except MechanismError as exc:
+            raise under("/problem", exc) from None
+        return design_problem(mech, spec, "/problem")
+    if mech.document.optimize is None:
+        raise MechanismError("/document/optimize", "the document has no optimize section: add one or give 'problem'")
+    return design_problem(mech, mech.document.optimize, "/document/optimize")
+
+
+@lru_cache(maxsize=8)
+def _prepared(key: tuple) -> Prepared:
+    return prepare(_problem(*key))
+
+
+def prepared_of(spec: dict) -> Prepared:
+    return _prepared((json.dumps(spec["document"], sort_keys=True), spec.get("model"),
+                      json.dumps(spec.get("overrides") or {}, sort_keys=True),
+                      json.dumps(spec.get("problem"), sort_keys=True)))
+
+
+def start_from_point(data: dict) -> StartResult:
+    fields = {k: v for k, v in data.items() if k in StartResult.__dataclass_fields__}
+    for name in ("x", "lam_g", "lam_x"):
+        fields[name] = np.asarray(data[name], dtype=float)
+    return StartResult(**fields)
+
+
+class OptimizeJob:
+    name = "optimize"
+
+    def prepare(self, spec: dict, limits: Limits) -> Plan:
+        problem = problem_of(spec)
+        if len(problem.mechanism.document.elements) > limits.max_elements:
+            raise MechanismError("/document/elements", f"the limit is {limits.max_elements} elements")
+        return Plan(problem.spec.starts, {"starts": problem.spec.starts})
+
+    def tasks(self, spec, plan, finished, chunk_size):
+        todo = [k for k in range(plan["starts"]) if k not in finished]
+        return [{"indices": todo[i:i + chunk_size]} for i in range(0, len(todo), chunk_size)]
+
+    def follow_up(self, spec, plan, task, finished, chunk_size):
+        return []
+
+    def run(self, spec, task):
+        prepared = prepared_of(spec)
+        points = []
+        for k in task["indices"]:
+            start = run_start(prepared, k)
+            points.append((k, plain({**start.summary(), "start": k, "x": start.x, "lam_g": start.lam_g,
+                                     "lam_x": start.lam_x})))
+        return points
+
+    def result(self, spec, plan, finished: Mapping[int, dict]):
+        problem = problem_of(spec)
+        starts = [start_from_point(data) for _, data in sorted(finished.items())]
+        outcome = combine(problem, starts, sum(s.seconds for s in starts))
+        return plain(outcome.summary())
+
+
+register(OptimizeJob())
