@@ -21,7 +21,7 @@ import numpy as np
 
 from models import Mechanism
 from service.design import Bounded, DesignProblem, OutputRef
-from service.design_nlp import DesignNlp, design_nlp, solver_for
+from service.design_nlp import DesignNlp, design_nlp, least_violation, solver_for
 from service.equilibrium import NewtonOptions, iterate
 
 IPOPT_STATUS = {
@@ -33,6 +33,8 @@ IPOPT_STATUS = {
 }
 # A constraint counts as active within this (scaled) distance of its bound.
 ACTIVE_TOLERANCE = 1e-7
+# Least total violation (scaled constraints) above which a problem is reported infeasible.
+INFEASIBLE_VIOLATION = 1e-6
 
 
 @dataclass
@@ -232,6 +234,16 @@ def run_start(prepared: Prepared, start: int) -> StartResult:
     lam_x = np.asarray(solution["lam_x"]).ravel()
     ipopt_status = str(stats.get("return_status", "unknown"))
     status = IPOPT_STATUS.get(ipopt_status, "not_converged")
+    feasibility = ""
+    if status not in ("optimal", "acceptable") and problem.constraints:
+        # Did IPOPT fail because no design meets the constraints? Find the least violation.
+        x_least, violation, least_status = least_violation(
+            nlp, x0, prepared.P, prepared.lbx, prepared.ubx, prepared.lbg, prepared.ubg, spec.max_iterations)
+        if least_status == "Solve_Succeeded" and violation > INFEASIBLE_VIOLATION:
+            status, x = "infeasible", x_least
+            lam_g, lam_x = np.zeros_like(lam_g), np.zeros_like(lam_x)
+        elif least_status == "Solve_Succeeded":
+            feasibility = "; feasible designs exist (try other starts or more iterations)"
     # IPOPT may end a hair outside the bounds (its bound relaxation): report the design inside.
     design = np.clip(x[:nlp.n_design] * problem.scale, problem.lower, problem.upper)
     # The state the NLP found must be the one the mechanism reaches when loaded at that design
@@ -247,7 +259,9 @@ def run_start(prepared: Prepared, start: int) -> StartResult:
     x = np.concatenate([design / problem.scale, *zs])
     f, _ = nlp.evaluate(x, prepared.P)
     objective = _objective_doc(prepared, float(f))
-    message = "" if status in ("optimal", "acceptable") else f"IPOPT: {ipopt_status}"
+    message = "" if status in ("optimal", "acceptable") else f"IPOPT: {ipopt_status}{feasibility}"
+    if status == "infeasible":
+        message = "no design within the bounds meets the constraints: this is the point of least violation"
     if status in ("optimal", "acceptable") and not on_branch:
         status = "off_branch"
         message = ("the optimum's equilibrium is not the one the mechanism reaches when loaded at that "
