@@ -67,6 +67,14 @@ class Target(_Request):
     equals: float = Field(description="document units of the output")
 
 
+class SensitivitiesIn(_Request):
+    """Exact derivatives of outputs with respect to numeric fields at the equilibrium (with a
+    target: the target's field follows, and may be named among the outputs)."""
+
+    parameters: list[str] = Field(min_length=1, max_length=64, examples=[["/sections/flexure/h"]])
+    outputs: list[str] = Field(min_length=1, max_length=256, examples=[["end_effector.x"]])
+
+
 class SolveRequest(DocumentRequest):
     """One analysis of one mechanism, answered in the response."""
 
@@ -79,6 +87,8 @@ class SolveRequest(DocumentRequest):
     analysis: Analysis = "equilibrium"
     target: Target | None = Field(None, description="equilibrium: solve for the field value that reaches a target")
     stiffness: bool = Field(False, description="equilibrium: also return K_T at the solution")
+    sensitivities: SensitivitiesIn | None = Field(
+        None, description="equilibrium: also return d(outputs)/d(parameters) by the implicit function theorem")
     at: Literal["equilibrium", "undeformed"] = Field("equilibrium", description="linearization: where")
     displacements: dict[str, tuple[float, float, float]] | None = Field(
         None, description="inverse: [dx, dy, rotation] of bodies; bodies not named stay put")
@@ -195,6 +205,7 @@ class SolveResponse(_Response):
     history: list[float | None] = Field(default_factory=list)
     stiffness: StiffnessOut | None = None
     target: TargetOut | None = None
+    sensitivities: dict[str, Any] | None = None
     wrenches: dict[str, WrenchOut] | None = None
     wrench_units: dict[str, str] | None = None
 

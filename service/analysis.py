@@ -99,12 +99,14 @@ def compile_request(document: dict, model: str | None = None, overrides: dict[st
 
 
 def equilibrium_report(mech: Mechanism, options: NewtonOptions, stiffness: bool = False,
-                       target: dict | None = None) -> dict:
+                       target: dict | None = None, sensitivities: dict | None = None) -> dict:
     """Solve the equilibrium; status, diagnostics, displacements and outputs in document units.
 
     target = {path, output, equals}: instead of the document's value of the numeric field
     `path`, find the value for which `output` equals `equals` (document units), e.g. the
-    actuation force that closes a gripper; reported under "target"."""
+    actuation force that closes a gripper; reported under "target".
+    sensitivities = {parameters, outputs}: d(outputs)/d(parameters) at the solution (the
+    target's field following), reported under "sensitivities"."""
     found = None
     try:
         if target is None:
@@ -129,6 +131,15 @@ def equilibrium_report(mech: Mechanism, options: NewtonOptions, stiffness: bool 
                             "unit": mech.doc_unit(mech.parameter_kind(target["path"]))}
     if stiffness and result.converged:
         report["stiffness"] = stiffness_dict(mech, result.z)
+    if sensitivities is not None and result.converged:
+        from service.sensitivity import equilibrium_sensitivities
+
+        try:
+            found_target = (target["path"], target["output"]) if target is not None else None
+            report["sensitivities"] = equilibrium_sensitivities(
+                mech, result.z, sensitivities["parameters"], sensitivities["outputs"], found_target).to_dict()
+        except MechanismError as exc:
+            raise MechanismError("/sensitivities" + exc.pointer, exc.problem) from None
     return plain(report)
 
 

@@ -112,3 +112,23 @@ def test_cli_trace_reports_the_limit_points(tmp_path):
     bad = run("trace", str(EXAMPLES / "snap_through_arch.json"), "--path", "/loads/Q/force/1", "--stop", "-3",
               "--step", "1")
     assert bad.exit_code == 2 and "--path: not a numeric field" in bad.output
+
+
+def test_solve_returns_closing_force_sensitivities_equal_to_the_core(client):
+    from service.sensitivity import equilibrium_sensitivities
+    from service.sweep import solve_for_target
+
+    actuation = "/loads/actuation/force/1"
+    answer = client.solve(example="gripper", target={"path": actuation, "output": "end_effector.x", "equals": 0},
+                          sensitivities={"parameters": ["/sections/flexure/h"], "outputs": [actuation]})
+    mech = compile_mechanism(load_document(EXAMPLES / "gripper.json"))
+    found = solve_for_target(mech, actuation, "end_effector.x", 0.0)
+    core = equilibrium_sensitivities(found.equilibrium.mechanism, found.equilibrium.z, ["/sections/flexure/h"],
+                                     [actuation], target=(actuation, "end_effector.x"))
+    assert answer.sensitivities["derivatives"][actuation]["/sections/flexure/h"] == pytest.approx(
+        core.matrix[0, 0], rel=1e-9)
+    assert answer.sensitivities["units"][actuation]["/sections/flexure/h"] == "uN/mm"
+    with pytest.raises(FlexmechError) as info:
+        client.solve(example="gripper", sensitivities={"parameters": ["/sections/flexure/q"], "outputs": ["x"]})
+    assert info.value.status == 422 and info.value.pointer == "/sensitivities/parameters/0"
+    assert "not a numeric field" in info.value.message

@@ -28,7 +28,8 @@ def _solve(request: SolveRequest, document: dict, limits: Limits) -> dict:
     if request.analysis == "linearization":
         return linearization_report(mech, options, request.at)
     target = request.target.model_dump() if request.target else None
-    return equilibrium_report(mech, options, request.stiffness, target)
+    sensitivities = request.sensitivities.model_dump() if request.sensitivities else None
+    return equilibrium_report(mech, options, request.stiffness, target, sensitivities)
 
 
 @router.post("/solve", operation_id="solve", response_model=SolveResponse, responses=ERRORS,
