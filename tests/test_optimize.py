@@ -155,3 +155,25 @@ def test_a_constraint_with_equals_and_bounds_is_refused_by_the_document():
         parse_document(data)
     assert info.value.pointer == "/optimize/constraints/0"
     assert "give equals, or lower and/or upper, not both" in info.value.problem
+
+
+def test_a_stiffness_constraint_is_the_condensed_tangent_stiffness():
+    """The thinnest flexures whose input stiffness K_T[y, y] reaches a target: the optimum
+    meets it, and service.stiffness gives the same stiffness at the optimal design."""
+    from service.stiffness import tangent_stiffness
+
+    data = json.loads((EXAMPLES / "gripper.json").read_text())
+    data.pop("sweep")
+    data["optimize"] = {"design": [{"path": "/sections/flexure/h", "lower": 0.002, "upper": 0.02}],
+                        "objective": {"output": "/sections/flexure/h"},
+                        "constraints": [{"output": "stiffness.input.y", "lower": 1000.0}]}
+    result = solve(data)
+    assert result.status == "optimal"
+    mech = compile_mechanism(parse_document(data)).with_values(result.best.design)
+    z = solve_equilibrium(mech).z
+    kt = tangent_stiffness(mech, z)
+    k = kt.coordinates.index("input.y")
+    compliance = np.linalg.inv(kt.K)[k, k]
+    assert 1 / compliance == pytest.approx(1000.0, rel=1e-7)
+    assert result.best.constraints[0]["value"] == pytest.approx(1000.0, rel=1e-7)
+    assert result.best.design["/sections/flexure/h"] > 0.002  # the bound does not hold it: the stiffness does
