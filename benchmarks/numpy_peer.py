@@ -32,7 +32,7 @@ class NumpyGripperResidual:
         self.ref = [(np.array([p[idx[f"/bodies/{b}/position/0"]], p[idx[f"/bodies/{b}/position/1"]]]),
                      p[idx[f"/bodies/{b}/angle"]]) for b in s.bodies]
         self.flexures = []
-        for f in s.flexures:
+        for f in s.of_family("curved_beam"):
             base = f"/elements/{f.name}"
             r, th = p[idx[f"{base}/radius"]], p[idx[f"{base}/arc_angle"]]
             a0 = p[idx[f"{base}/start_angle"]] - (th if f.reversed else 0.0)

@@ -8,7 +8,8 @@ Public surface:
 
 from models.errors import MechanismError
 from models.document import MechanismDocument, load_document
-from models.mechanism import MODELS, Mechanism, compile_mechanism
+from models.elements import MODELS
+from models.mechanism import Mechanism, compile_mechanism
 
 __all__ = [
     "MechanismError",

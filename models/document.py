@@ -14,19 +14,16 @@ from pathlib import Path
 from typing import Annotated, Any, Literal, Union
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, ValidationError, model_validator
+from pydantic import Field, ValidationError, model_validator
 
+from models.elements import FAMILIES
+from models.elements.link import SHAPE_TYPES
 from models.errors import MechanismError, pointer_of
-
-Number = Union[float, str]
-Vec2 = tuple[Number, Number]
-
-
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", populate_by_name=True)
+from models.fields import Number, StrictModel, Vec2
+from models.sections import Section
 
 
-class Units(_Strict):
+class Units(StrictModel):
     """Units of the bare numbers in the document; results come back in the same units."""
 
     length: str = "m"
@@ -36,155 +33,31 @@ class Units(_Strict):
     mass: str = "kg"
 
 
-class Material(_Strict):
+class Material(StrictModel):
     E: Number = Field(description="Young's modulus")
     nu: Number | None = Field(default=None, description="Poisson's ratio")
     G: Number | None = Field(default=None, description="shear modulus (default E / (2 (1 + nu)))")
-    density: Number | None = None
+    density: Number | None = Field(default=None, description="mass per volume: links made of it have mass "
+                                   "(and weight under gravity)")
 
 
-class RectangularSection(_Strict):
-    shape: Literal["rectangle"] = "rectangle"
-    b: Number = Field(description="width, out of the plane of motion")
-    h: Number = Field(description="thickness, in the plane of motion (the bending direction)")
-    shear_factor: Number | None = Field(default=None, description="Timoshenko kappa (default 5/6)")
-
-
-class TaperedRectangularSection(_Strict):
-    """A rectangle whose thickness varies linearly along a link, from h_start (u = 0) to h_end."""
-
-    shape: Literal["tapered_rectangle"]
-    b: Number
-    h_start: Number
-    h_end: Number
-    shear_factor: Number | None = None
-
-
-class SectionExpression(_Strict):
-    expression: str = Field(description="safe math expression in u (0..1 along the link)")
-
-
-class GeneralSection(_Strict):
-    """Second moment I and area A, each a number or an expression in u, in the document's
-    length unit to the fourth and second power."""
-
-    shape: Literal["general"]
-    I: Union[Number, SectionExpression]
-    A: Union[Number, SectionExpression, None] = None
-    shear_factor: Number | None = None
-    c: Number | None = Field(default=None, description="distance from the neutral axis to the outer fibre, for stresses")
-
-
-def _section_shape(value) -> str:
-    if isinstance(value, dict):
-        return value.get("shape", "rectangle")
-    return getattr(value, "shape", "rectangle")
-
-
-Section = Annotated[Union[Annotated[RectangularSection, Tag("rectangle")],
-                          Annotated[TaperedRectangularSection, Tag("tapered_rectangle")],
-                          Annotated[GeneralSection, Tag("general")]],
-                    Discriminator(_section_shape)]
-
-
-class Body(_Strict):
+class Body(StrictModel):
     fixed: bool = False
     joint: bool = Field(default=False, description="a zero-size joint of a link network (seed 002): "
                         "if every link attached to it is pinned, it has no rotation")
     position: Vec2 = Field(description="reference point (e.g. mass centre), undeformed, global frame")
     angle: Number = 0.0
-    mass: Number | None = None
+    mass: Number | None = Field(default=None, description="in the document's mass unit: the mass matrix, "
+                                "and a weight at the mass centre under gravity")
     inertia: Number | None = Field(default=None, description="about the reference point")
+    center_of_mass: Vec2 | None = Field(default=None, description="from the reference point, body axes "
+                                        "(default: the reference point)")
 
 
-class CurvedBeam(_Strict):
-    """A circular-arc flexure (seed 000). The arc starts at start_angle about `center` on body
-    `from` and runs by arc_angle in `direction` to body `to`."""
-
-    type: Literal["curved_beam"]
-    from_: str = Field(alias="from")
-    to: str
-    center: Vec2
-    radius: Number
-    start_angle: Number
-    arc_angle: Number
-    direction: Literal["ccw", "cw"] = "ccw"
-    material: str
-    section: str
-    model: Literal["linear", "partial_nonlinear", "exact"] = "partial_nonlinear"
-    intervals: int = Field(default=8, ge=1, le=64, description="shooting intervals (exact model)")
-    order: int = Field(default=8, ge=2, le=12, description="integration order, even (exact model)")
+Element = Annotated[Union[FAMILIES.schemas()], Field(discriminator="type")]
 
 
-class StraightShape(_Strict):
-    type: Literal["straight"]
-    angle: Number = Field(default=0.0, description="direction from the start point")
-
-
-class ArcShape(_Strict):
-    """eta(u) = angle + sweep * u: a circular arc of radius length / |sweep|."""
-
-    type: Literal["arc"]
-    angle: Number = 0.0
-    sweep: Number
-
-
-class PolynomialShape(_Strict):
-    """eta(u) = sum coefficients[k] * u**k, in radians."""
-
-    type: Literal["polynomial"]
-    coefficients: list[Number] = Field(min_length=1, max_length=32)
-
-
-class FourierSineShape(_Strict):
-    """eta(u) = angle + sum over i = 1.. of coefficients[i-1] * sin(i * omega * u); the
-    coefficients in radians, omega (default 2 pi, as in seed 002 Sec. 5.6) in rad."""
-
-    type: Literal["fourier_sine"]
-    angle: Number = 0.0
-    coefficients: list[Number] = Field(min_length=1, max_length=32)
-    omega: float = 2 * 3.141592653589793
-
-
-class ExpressionShape(_Strict):
-    """eta(u), radians, as a safe math expression in u."""
-
-    type: Literal["expression"]
-    expression: str
-
-
-Shape = Annotated[Union[StraightShape, ArcShape, PolynomialShape, FourierSineShape, ExpressionShape],
-                  Field(discriminator="type")]
-
-
-class Link(_Strict):
-    """A distributed elastica (seed 002) from body `from` (u = 0) to body `to` (u = 1).
-
-    It starts at `at` (default: the `from` body's reference point) with the initial tangent
-    angle eta(u) of `shape` (global frame) and ends where that shape ends; both ends are
-    attached to their bodies there, clamped or pinned.
-    """
-
-    type: Literal["link"]
-    from_: str = Field(alias="from")
-    to: str
-    at: Vec2 | None = None
-    length: Number
-    shape: Shape = StraightShape(type="straight")
-    material: str
-    section: str
-    start: Literal["clamped", "pinned"] = "clamped"
-    end: Literal["clamped", "pinned"] = "clamped"
-    shear: bool = Field(default=False, description="Timoshenko shear strain (seed 002 Eq. 5.1)")
-    axial: bool = Field(default=False, description="axial strain (seed 002 App. A.1)")
-    intervals: int = Field(default=8, ge=1, le=64, description="shooting intervals")
-    order: int = Field(default=8, ge=2, le=12, description="integration order (even): 2 x extrapolation levels")
-
-
-Element = Annotated[Union[CurvedBeam, Link], Field(discriminator="type")]
-
-
-class _PointOnBody(_Strict):
+class _PointOnBody(StrictModel):
     body: str
     at: Vec2 | None = Field(default=None, description="global point, undeformed configuration")
     offset: Vec2 | None = Field(default=None, description="from the body reference point, body axes")
@@ -203,13 +76,13 @@ class ForceLoad(_PointOnBody):
     force: Vec2
 
 
-class MomentLoad(_Strict):
+class MomentLoad(StrictModel):
     type: Literal["moment"]
     body: str
     moment: Number
 
 
-class PrescribedDisplacement(_Strict):
+class PrescribedDisplacement(StrictModel):
     """Prescribed motion of a body's reference point; a component left out stays free."""
 
     type: Literal["displacement"]
@@ -232,7 +105,7 @@ class PointOutput(_PointOnBody):
     type: Literal["point"]
 
 
-class ReactionOutput(_Strict):
+class ReactionOutput(StrictModel):
     type: Literal["reaction"]
     body: str
 
@@ -240,12 +113,12 @@ class ReactionOutput(_Strict):
 Output = Annotated[Union[PointOutput, ReactionOutput], Field(discriminator="type")]
 
 
-class SweepUntil(_Strict):
+class SweepUntil(StrictModel):
     output: str = Field(description="scalar output name, e.g. end_effector.x")
     equals: Number
 
 
-class SweepSpec(_Strict):
+class SweepSpec(StrictModel):
     """A load path: `path` (a numeric field) goes from start to stop in `steps` steps; with
     `until`, the path ends where the named output reaches the given value."""
 
@@ -262,7 +135,7 @@ class SweepSpec(_Strict):
         return self
 
 
-class InverseSpec(_Strict):
+class InverseSpec(StrictModel):
     """Data of the link inverse (seed 002 Sec. 5.3): the deformed angle psi(u) of every link
     ({"polynomial": [c0, ...]} or {"samples": [...], "u": [...]}, radians), internal forces
     ({link: {"h": value, "v": value}}) and the load components they determine."""
@@ -272,7 +145,7 @@ class InverseSpec(_Strict):
     unknown_loads: list[str] = []
 
 
-class DesignVariable(_Strict):
+class DesignVariable(StrictModel):
     """A numeric field of the document that the optimizer may change, in document units."""
 
     path: str = Field(pattern=r"^/", max_length=256, description="JSON pointer of a numeric field")
@@ -281,13 +154,13 @@ class DesignVariable(_Strict):
     scale: float | None = Field(default=None, gt=0, description="typical size (default: the start value)")
 
 
-class OptimizationObjective(_Strict):
+class OptimizationObjective(StrictModel):
     output: str = Field(description="an output name, as /v1/solve reports them (e.g. reactions.tip.Fy)")
     case: str | None = Field(default=None, description="load case (required with more than one)")
     sense: Literal["minimize", "maximize"] = "minimize"
 
 
-class OptimizationConstraint(_Strict):
+class OptimizationConstraint(StrictModel):
     """lower <= output <= upper, or output = equals (document units)."""
 
     output: str
@@ -305,13 +178,13 @@ class OptimizationConstraint(_Strict):
         return self
 
 
-class LoadCase(_Strict):
+class LoadCase(StrictModel):
     """The document with some numeric fields changed (document units)."""
 
     overrides: dict[str, Number] = {}
 
 
-class OptimizeSpec(_Strict):
+class OptimizeSpec(StrictModel):
     """A design problem (seed 000 Sec. 5.2, seed 002 Sec. 5.6): one NLP whose unknowns are the
     design variables and the equilibrium state of every load case."""
 
@@ -325,7 +198,7 @@ class OptimizeSpec(_Strict):
     tolerance: float = Field(default=1e-9, gt=0, le=1e-2, description="IPOPT tol (scaled problem)")
 
 
-class MechanismDocument(_Strict):
+class MechanismDocument(StrictModel):
     schema_version: Literal[1] = 1
     name: str = "mechanism"
     description: str = ""
@@ -333,6 +206,8 @@ class MechanismDocument(_Strict):
     materials: dict[str, Material] = {}
     sections: dict[str, Section] = {}
     bodies: dict[str, Body]
+    gravity: Vec2 | None = Field(default=None, description="acceleration of gravity (length unit / s^2): "
+                                 "body masses and links with a density weigh")
     elements: dict[str, Element] = {}
     loads: dict[str, Load] = {}
     outputs: dict[str, Output] = {}
@@ -360,7 +235,7 @@ def _raise_first(exc: ValidationError) -> None:
 
 
 _TAGGED_COLLECTIONS = {"elements", "loads", "outputs", "sections"}
-_SHAPE_TAGS = {"straight", "arc", "polynomial", "fourier_sine", "expression"}
+_SHAPE_TAGS = set(SHAPE_TYPES)
 _UNION_MEMBERS = {"float", "str", "int", "bool", "none"}
 
 

@@ -44,6 +44,14 @@ class LinkProperties:
     EA: Callable[[ca.SX], ca.SX] | None  # None: inextensible
     kGA: Callable[[ca.SX], ca.SX] | None  # None: no shear strain
     fibre: Callable[[ca.SX], ca.SX] | None  # outer-fibre distance over I, for stresses; None: none
+    half_thickness: Callable[[ca.SX], ca.SX] | None = None  # its surfaces' offset; None: unknown
+    line_mass: Callable[[ca.SX], ca.SX] | None = None  # mass per unit u (L rho A); None: massless
+    gravity: ca.SX | None = None  # (2,) acceleration, with line_mass: the link's own weight
+
+    @property
+    def states(self) -> int:
+        """psi, m, x, y, e, and the mass mu from u = 0 when the link has mass."""
+        return 6 if self.line_mass is not None else 5
 
 
 def rhs_function(props: LinkProperties, p: ca.SX) -> ca.Function:
@@ -132,12 +140,22 @@ class LinkShooting:
         self.K = intervals
         self.order = order
         self.f = rhs_function(props, p) if rhs is None else rhs
+        self.weighed = rhs is None and props.line_mass is not None and props.gravity is not None
+        # The unloaded link: no internal force and no weight (its own weight is a load).
+        self.f_unloaded = rhs_function(props, p, weighed=False) if self.weighed else self.f
         self.H = 1.0 / intervals
 
-    def step(self, k: int, s, n, H=None, u0=None, order=None):
+    def step(self, k: int, s, n, H=None, u0=None, order=None, unloaded: bool = False):
         H = self.H if H is None else H
         u0 = k * self.H if u0 is None else u0
-        return extrapolated_step(self.f, u0, s, H, order or self.order, n, self.p)
+        f = self.f_unloaded if unloaded else self.f
+        return extrapolated_step(f, u0, s, H, order or self.order, n, self.p)
+
+    def _with_energy_reset(self, head: ca.SX, state: ca.SX) -> ca.SX:
+        """(psi, m, x, y) `head`, the energy restarted at 0, and the mass carried over."""
+        if self.props.states == 6:
+            return ca.vertcat(head, 0, state[5])
+        return ca.vertcat(head, 0)
 
     def undeformed_nodes(self) -> list[ca.SX]:
         """The unloaded link integrated node to node: with these as the reference, the
@@ -145,9 +163,11 @@ class LinkShooting:
         zero = ca.SX.zeros(2)
         start = self.props.start_point
         s = ca.vertcat(ca.SX(self.props.eta(ca.SX(0.0))), 0, start[0], start[1], 0)
+        if self.props.states == 6:
+            s = ca.vertcat(s, 0)
         nodes = [s]
         for k in range(self.K):
-            s = self.step(k, ca.vertcat(s[:4], 0), zero)
+            s = self.step(k, self._with_energy_reset(s[:4], s), zero, unloaded=True)
             nodes.append(s)
         return nodes
 
@@ -155,10 +175,12 @@ class LinkShooting:
         """Deformed node states from the link's unknowns zl = [h, v, dpsi0, m0, (dpsi, m, dx,
         dy) at nodes 1..K-1] (deviations from `undeformed`), the start at `start_xy`."""
         n = zl[0:2]
-        nodes = [ca.vertcat(undeformed[0][0] + zl[2], zl[3], start_xy[0], start_xy[1], 0)]
+        nodes = [self._with_energy_reset(ca.vertcat(undeformed[0][0] + zl[2], zl[3], start_xy[0], start_xy[1]),
+                                         undeformed[0])]
         for k in range(1, self.K):
             block = zl[4 * k:4 * k + 4]
-            nodes.append(ca.vertcat(undeformed[k][:4] + ca.vertcat(block[0], block[1], block[2], block[3]), 0))
+            head = undeformed[k][:4] + ca.vertcat(block[0], block[1], block[2], block[3])
+            nodes.append(self._with_energy_reset(head, undeformed[k]))
         continuity, energy = [], ca.SX(0)
         for k in range(self.K):
             end = self.step(k, nodes[k], n)
@@ -168,6 +190,12 @@ class LinkShooting:
             else:
                 nodes.append(end)
         return LinkSolution(nodes, undeformed, n, continuity, energy)
+
+    def internal_force(self, solution: LinkSolution, state: ca.SX) -> ca.SX:
+        """The internal force (h, v) at a state along the link: n(0) less the weight behind."""
+        if self.weighed:
+            return solution.n - state[5] * self.props.gravity
+        return solution.n
 
     def error_estimate(self, solution: LinkSolution) -> ca.SX:
         """Richardson estimate of the discretization error, relative to the link length: per
@@ -195,4 +223,18 @@ class LinkShooting:
                 s = self.step(k, s, solution.n, H=H, u0=k * self.H + (i - 1) * H)
                 out.append(s)
         out.append(solution.nodes[-1])
+        return out
+
+    def undeformed_samples(self, nodes: list[ca.SX], per_interval: int = 4) -> list[ca.SX]:
+        """The unloaded link at the same positions as samples() (states; [2:4] is the point)."""
+        zero = ca.SX.zeros(2)
+        out = []
+        H = self.H / per_interval
+        for k in range(self.K):
+            s = nodes[k]
+            out.append(s)
+            for q in range(1, per_interval):
+                s = self.step(k, s, zero, H=H, u0=k * self.H + (q - 1) * H, unloaded=True)
+                out.append(s)
+        out.append(nodes[-1])
         return out

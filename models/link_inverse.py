@@ -28,10 +28,15 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
-from models.assembly import _Builder
+from models.context import AssemblyContext
+from models.elements import FAMILIES
+from models.elements.base import Contribution
+from models.elements.link import LinkTopology, link_shooting
 from models.link import LinkShooting, inverse_rhs_function
-from models.mechanism import Structure
+from models.loads import applied_wrenches
 from models.planar import cross, rot
+from models.residual import residual_of
+from models.structure import Structure
 
 
 @dataclass(frozen=True)
@@ -62,7 +67,7 @@ class PsiLayout:
 class InverseLayout:
     """The structure of one inverse problem; numbers go in q."""
 
-    psi: tuple[PsiLayout, ...]  # per link, in structure.links order
+    psi: tuple[PsiLayout, ...]  # per link, in document order
     unknown_loads: tuple[int, ...]  # parameter indices that become unknowns
     specified: tuple[tuple[int, int], ...]  # (link index, 0 for h / 1 for v)
 
@@ -88,98 +93,95 @@ class InverseGraphs:
     n_unknowns: int
 
 
-class _InverseBuilder(_Builder):
-    def __init__(self, structure: Structure, layout: InverseLayout):
-        super().__init__(structure)
-        self.layout = layout
-        self.q = ca.SX.sym("q", layout.q_size)
-        n_loads = len(layout.unknown_loads)
-        self.n = structure.n_unknowns + n_loads
-        self.z = ca.SX.sym("z", self.n)
-        # the parameter vector with the unknown loads taken from z
-        p_list = [self.p[i] for i in range(self.p.numel())]
-        for k, index in enumerate(layout.unknown_loads):
-            p_list[index] = self.z[structure.n_unknowns + k]
-        self.p_eff = ca.vertcat(*p_list)
-        self.psi_builders = []
-        offset = 0
-        for layout_k in layout.psi:
-            data = self.q[offset:offset + layout_k.size]
-            offset += layout_k.size
-            matrix = ca.DM(layout_k.to_chebyshev())
-            coefficients = matrix @ data
-            self.psi_builders.append(
-                lambda u, c=coefficients: chebyshev_series([c[i] for i in range(c.numel())], 2 * u - 1))
-        self.specified_values = self.q[offset:]
+def _psi_builders(layout: InverseLayout, q: ca.SX) -> list:
+    """psi(u) of every link, a Chebyshev series whose coefficients are linear in the data q."""
+    builders, offset = [], 0
+    for layout_k in layout.psi:
+        data = q[offset:offset + layout_k.size]
+        offset += layout_k.size
+        coefficients = ca.DM(layout_k.to_chebyshev()) @ data
+        builders.append(lambda u, c=coefficients: chebyshev_series([c[i] for i in range(c.numel())], 2 * u - 1))
+    return builders
 
-    def build(self) -> InverseGraphs:
-        s = self.s
-        z = self.z
-        # Loads as unknowns: substitute them into every parameter-dependent expression.
-        d = self.displacements(z)
-        rotations = [ca.vertcat(0, 0, d[b][2]) for b in range(self.nb)]
-        el, _ = self.elastic(rotations, rotations, rotations)
-        rows, names, kinds, values = [], [], [], []
-        for k, (link, forward, undeformed, offset) in enumerate(zip(s.links, self.shooting, self.undeformed,
-                                                                    s.link_offsets)):
-            inverse = LinkShooting(forward.props, self.p, link.intervals, link.order,
-                                   inverse_rhs_function(forward.props, self.psi_builders[k], self.p, self.q),
-                                   ca.vertcat(self.p, self.q))
-            psi = self.psi_builders[k]
-            zl = z[offset:offset + link.unknowns]
-            i, j = link.start_body, link.end_body
-            (ri_hat, thi_hat), (rj_hat, thj_hat) = self.reference(i), self.reference(j)
-            s_i = rot(thi_hat).T @ (undeformed[0][2:4] - ri_hat)
-            s_j = rot(thj_hat).T @ (undeformed[-1][2:4] - rj_hat)
-            start_xy = ri_hat + d[i][:2] + rot(thi_hat) @ s_i  # undeformed: shifted, not rotated
-            end_xy = rj_hat + d[j][:2] + rot(thj_hat) @ s_j
-            sol = inverse.solve_nodes(zl, start_xy, undeformed)
-            end = sol.nodes[-1]
-            psi0, psi1 = ca.SX(psi(ca.SX(0.0))), ca.SX(psi(ca.SX(1.0)))
-            start_row = psi0 - sol.nodes[0][0] - d[i][2] if link.start == "clamped" else zl[3]
-            end_row = psi1 - end[0] - d[j][2] if link.end == "clamped" else end[1]
-            rows.append(ca.vertcat(start_row, *sol.continuity, end[2:4] - end_xy, end_row))
-            n = ca.vertcat(zl[0], zl[1])
-            arm_i, arm_j = rot(thi_hat + d[i][2]) @ s_i, rot(thj_hat + d[j][2]) @ s_j
-            el[i] = el[i] + ca.vertcat(-n, -zl[3] + cross(arm_i, -n))
-            el[j] = el[j] + ca.vertcat(n, end[1] + cross(arm_j, n))
-            for q_name, kind, value in (("h", "force", zl[0]), ("v", "force", zl[1]),
-                                        ("M_start", "moment", zl[3]), ("M_end", "moment", end[1]),
-                                        ("energy", "energy", sol.energy)):
-                names.append(f"elements.{link.name}.{q_name}")
+
+def _inverse_link(ctx: AssemblyContext, t: LinkTopology, psi, q: ca.SX, d, zl):
+    """A link's rows on its undeformed centre line (its deformed angle psi given), the
+    wrenches its bodies apply to it, and its reported values."""
+    forward = link_shooting(ctx, t)
+    undeformed = forward.undeformed_nodes()
+    inverse = LinkShooting(forward.props, ctx.p, t.intervals, t.order,
+                           inverse_rhs_function(forward.props, psi, ctx.p, q), ca.vertcat(ctx.p, q))
+    i, j = t.start_body, t.end_body
+    s_i, s_j = ctx.body_axes(i, undeformed[0][2:4]), ctx.body_axes(j, undeformed[-1][2:4])
+    start_xy = ctx.reference(i)[0] + d[i][:2] + rot(ctx.reference(i)[1]) @ s_i  # undeformed: shifted, not rotated
+    end_xy = ctx.reference(j)[0] + d[j][:2] + rot(ctx.reference(j)[1]) @ s_j
+    sol = inverse.solve_nodes(zl, start_xy, undeformed)
+    end = sol.nodes[-1]
+    psi0, psi1 = ca.SX(psi(ca.SX(0.0))), ca.SX(psi(ca.SX(1.0)))
+    start_row = psi0 - sol.nodes[0][0] - d[i][2] if t.start == "clamped" else zl[3]
+    end_row = psi1 - end[0] - d[j][2] if t.end == "clamped" else end[1]
+    rows = ca.vertcat(start_row, *sol.continuity, end[2:4] - end_xy, end_row)
+    n = ca.vertcat(zl[0], zl[1])
+    arm_i, arm_j = ctx.arm(i, s_i, d), ctx.arm(j, s_j, d)
+    wrenches = {i: ca.vertcat(-n, -zl[3] + cross(arm_i, -n)), j: ca.vertcat(n, end[1] + cross(arm_j, n))}
+    values = [("h", "force", zl[0]), ("v", "force", zl[1]), ("M_start", "moment", zl[3]),
+              ("M_end", "moment", end[1]), ("energy", "energy", sol.energy)]
+    for node, state in enumerate(sol.nodes):
+        values += [(f"eta.{node}", "angle", state[0]), (f"x0.{node}", "length", state[2]),
+                   (f"y0.{node}", "length", state[3])]
+    return Contribution(wrenches, rows, values)
+
+
+def _build(structure: Structure, layout: InverseLayout) -> InverseGraphs:
+    ctx = AssemblyContext(structure)
+    q = ca.SX.sym("q", layout.q_size)
+    n_loads = len(layout.unknown_loads)
+    n = structure.n_unknowns + n_loads
+    z = ca.SX.sym("z", n)
+    # The unknown loads are taken from z: substituted into every parameter-dependent expression.
+    p_list = [ctx.p[i] for i in range(ctx.p.numel())]
+    for k, index in enumerate(layout.unknown_loads):
+        p_list[index] = z[structure.n_unknowns + k]
+    p_eff = ca.vertcat(*p_list)
+    d = ctx.displacements(z)
+    rotations = [ca.vertcat(0, 0, d[b][2]) for b in range(ctx.n_bodies)]
+    psi_builders = iter(_psi_builders(layout, q))
+    parts, names, kinds, values = [], [], [], []
+    for t, offset in zip(structure.elements, structure.element_offsets):
+        if t.family == "link":
+            part = _inverse_link(ctx, t, next(psi_builders), q, d, z[offset:offset + t.unknowns])
+            for quantity, kind, value in part.outputs:
+                names.append(f"elements.{t.name}.{quantity}")
                 kinds.append(kind)
                 values.append(value)
-            for node, state in enumerate(sol.nodes):
-                for q_name, kind, value in (("eta", "angle", state[0]), ("x0", "length", state[2]),
-                                            ("y0", "length", state[3])):
-                    names.append(f"elements.{link.name}.{q_name}.{node}")
-                    kinds.append(kind)
-                    values.append(value)
-        applied = self.applied(rotations)
-        body_rows = self.free_rows([el[b] - applied[b] for b in range(self.nb)])
-        specified_rows = [z[s.link_offsets[link]] if component == 0 else z[s.link_offsets[link] + 1]
-                          for link, component in self.layout.specified]
-        specified_rows = [row - self.specified_values[k] for k, row in enumerate(specified_rows)]
-        R = ca.vertcat(body_rows, *rows, *specified_rows)
-        R = ca.substitute(R, self.p, self.p_eff)
-        values = [ca.substitute(v, self.p, self.p_eff) for v in values]
-        for b, body in enumerate(s.bodies):
-            r_hat, th_hat = self.reference(b)
-            for q_name, kind, value in (("x0", "length", r_hat[0] + d[b][0]), ("y0", "length", r_hat[1] + d[b][1]),
-                                        ("rotation", "angle", d[b][2])):
-                names.append(f"bodies.{body}.{q_name}")
-                kinds.append(kind)
-                values.append(value)
-        K = ca.jacobian(R, z)
-        inputs, labels = [z, self.p, self.q], ["z", "p", "q"]
-        residual_and_tangent = ca.Function("link_inverse", inputs, [R, K], labels, ["R", "K"], dict(cse=True))
-        results = ca.Function("link_inverse_results", inputs, [ca.vertcat(*values)], labels, ["y"], dict(cse=True))
-        for f in (residual_and_tangent, results):
-            if f.has_free():
-                raise RuntimeError(f"graph {f.name()} has free symbols {f.get_free()}")
-        return InverseGraphs(residual_and_tangent, results, tuple(names), tuple(kinds), self.n)
+        else:
+            part = FAMILIES.of(t).contribute(ctx, t, rotations, ca.SX(0, 1))
+            part = Contribution(part.from_bodies)
+        parts.append(part)
+    links = [k for k, t in enumerate(structure.elements) if t.family == "link"]
+    specified_values = q[layout.q_size - len(layout.specified):]
+    specified_rows = [z[structure.element_offsets[links[link]] + component] - specified_values[k]
+                      for k, (link, component) in enumerate(layout.specified)]
+    R = ca.vertcat(residual_of(ctx, parts, applied_wrenches(ctx, rotations)), *specified_rows)
+    R = ca.substitute(R, ctx.p, p_eff)
+    values = [ca.substitute(v, ctx.p, p_eff) for v in values]
+    for b, body in enumerate(structure.bodies):
+        r_hat, th_hat = ctx.reference(b)
+        for q_name, kind, value in (("x0", "length", r_hat[0] + d[b][0]), ("y0", "length", r_hat[1] + d[b][1]),
+                                    ("rotation", "angle", d[b][2])):
+            names.append(f"bodies.{body}.{q_name}")
+            kinds.append(kind)
+            values.append(value)
+    K = ca.jacobian(R, z)
+    inputs, labels = [z, ctx.p, q], ["z", "p", "q"]
+    residual_and_tangent = ca.Function("link_inverse", inputs, [R, K], labels, ["R", "K"], dict(cse=True))
+    results = ca.Function("link_inverse_results", inputs, [ca.vertcat(*values)], labels, ["y"], dict(cse=True))
+    for f in (residual_and_tangent, results):
+        if f.has_free():
+            raise RuntimeError(f"graph {f.name()} has free symbols {f.get_free()}")
+    return InverseGraphs(residual_and_tangent, results, tuple(names), tuple(kinds), n)
 
 
 @lru_cache(maxsize=16)
 def inverse_graphs_for(structure: Structure, layout: InverseLayout) -> InverseGraphs:
-    return _InverseBuilder(structure, layout).build()
+    return _build(structure, layout)

@@ -26,6 +26,9 @@ SI_UNITS: dict[str, str] = {
     "dimensionless": "",
     "area": "m**2",
     "second_moment": "m**4",
+    "density": "kg/m**3",
+    "acceleration": "m/s**2",
+    "rotational_stiffness": "N*m/rad",
 }
 
 
@@ -93,4 +96,9 @@ def document_unit(units, kind: str) -> str:
         "area": f"({units.length})**2",
         "second_moment": f"({units.length})**4",
         "dimensionless": "dimensionless",
+        "mass": units.mass,
+        "inertia": f"{units.mass}*({units.length})**2",
+        "density": f"{units.mass}/({units.length})**3",
+        "acceleration": f"{units.length}/s**2",
+        "rotational_stiffness": f"{units.force}*{units.length}/{units.angle}",
     }[kind]

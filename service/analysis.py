@@ -16,7 +16,7 @@ import numpy as np
 
 from models import Mechanism, MechanismError, compile_mechanism
 from models.document import parse_document
-from models.mechanism import MODELS
+from models import MODELS
 from service.equilibrium import NewtonOptions, solve_equilibrium
 from service.inverse import inverse_wrenches
 from service.stiffness import tangent_stiffness

@@ -27,7 +27,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from models import Mechanism, MechanismError, compile_mechanism, load_document
-from models.mechanism import MODELS
+from models import MODELS
 from models.units import quantity_to_si
 from service.analysis import plain
 from service.equilibrium import EquilibriumResult, NewtonOptions, solve_equilibrium
@@ -239,13 +239,14 @@ def _print_solution(out: Console, result: EquilibriumResult) -> None:
             reactions.add_row(name, *(_number(values[f"reactions.{name}.{q}"]) for q in ("Fx", "Fy", "M")))
         out.print(reactions)
 
-    if structure.flexures:
-        models = sorted({f.model for f in structure.flexures})
+    beams = structure.of_family("curved_beam")
+    if beams:
+        models = sorted({f.model for f in beams})
         heads = ["flexure", "bodies"] + (["model"] if len(models) > 1 else [])
         flexures = _table(f"flexures ({models[0]} model)" if len(models) == 1 else "flexures",
                           *heads, f"rotation [{A}]", f"M end [{M}]", f"σ start [{S}]", f"σ end [{S}]",
                           f"σ max [{S}]", text=len(heads))
-        for f in structure.flexures:
+        for f in beams:
             e = f"elements.{f.name}"
             cells = [f.name, f"{structure.bodies[f.start_body]}→{structure.bodies[f.end_body]}"]
             cells += [f.model] if len(models) > 1 else []
@@ -539,9 +540,10 @@ def _sweep_table(mech: Mechanism, label: str, result, x_output: str, y_output: s
 
 
 def _curve_label(mech: Mechanism, model: str | None) -> str:
-    materials = sorted({f.material for f in mech.structure.flexures + mech.structure.links})
-    models = sorted({f.model for f in mech.structure.flexures}
-                    | {"exact" for link in mech.structure.links if link.shape == "curved_beam"})
+    elements = mech.structure.elements
+    materials = sorted({t.material for t in elements if hasattr(t, "material")})
+    models = sorted({t.model for t in mech.structure.of_family("curved_beam")}
+                    | {"exact" for t in mech.structure.of_family("link") if mech.document.elements[t.name].type == "curved_beam"})
     parts = [", ".join(materials)] if len(materials) == 1 else []
     parts.append(model or (models[0] if len(models) == 1 else "mixed models"))
     return ", ".join(parts)

@@ -22,7 +22,7 @@ import numpy as np
 
 from models import Mechanism, MechanismError
 from models.assembly import graphs_for
-from models.mechanism import Structure
+from models.structure import Structure
 from service.equilibrium import NewtonOptions, iterate
 from service.units import outputs_in_doc_units
 

@@ -16,7 +16,7 @@ import numpy as np
 
 from models import Mechanism, MechanismError
 from models.document import OptimizeSpec
-from models.mechanism import COORDINATES
+from models.structure import COORDINATES
 
 STIFFNESS_PREFIX = "stiffness."
 _STIFFNESS_KINDS = {"x": "stiffness", "y": "stiffness", "angle": "moment"}  # per unit length / per rad

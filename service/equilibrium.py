@@ -15,6 +15,7 @@ from typing import Literal
 import numpy as np
 
 from models import Mechanism, MechanismError
+from models.residual import unknown_names as element_unknowns
 from service.units import displacement_to_doc, outputs_in_doc_units
 
 # Seed 000, Sec. 2: the constant-stiffness curved beam is faithful up to about +-20 deg.
@@ -223,22 +224,10 @@ def solve_equilibrium(mech: Mechanism, options: NewtonOptions = NewtonOptions(),
 
 
 def unknown_names(mech: Mechanism) -> list[str]:
-    """A name for every entry of z: the free body coordinates ("tip.x"), then per link its
-    internal force, start rotation and start moment ("L1.h", "L1.v", "L1.rotation_start",
-    "L1.M_start") and its inner shooting states ("L1.node3.psi", ...)."""
-    names = list(mech.free_coordinates)
-    for link in mech.structure.links:
-        names += [f"{link.name}.{q}" for q in ("h", "v", "rotation_start", "M_start")]
-        for k in range(1, link.intervals):
-            names += [f"{link.name}.node{k}.{q}" for q in ("psi", "m", "dx", "dy")]
-    return names
-
-
-def _unknown_kind(name: str) -> str:
-    tail = name.rsplit(".", 1)[1]
-    return {"x": "length", "y": "length", "angle": "angle", "h": "force", "v": "force",
-            "rotation_start": "angle", "M_start": "moment", "psi": "angle", "m": "moment",
-            "dx": "length", "dy": "length"}[tail]
+    """A name for every entry of z: the free body coordinates ("tip.x"), then each element's
+    own unknowns, e.g. per link its internal force, start rotation and start moment ("L1.h",
+    "L1.v", "L1.rotation_start", "L1.M_start") and its inner shooting states ("L1.node3.psi")."""
+    return [name for name, _ in element_unknowns(mech.structure)]
 
 
 def solve_bounded(mech: Mechanism, bounds: dict[str, tuple[float | None, float | None]],
@@ -251,13 +240,14 @@ def solve_bounded(mech: Mechanism, bounds: dict[str, tuple[float | None, float |
     bounds pick the branch whose basin holds the start on the bounds."""
     import casadi as ca
 
-    names = unknown_names(mech)
+    kinds = dict(element_unknowns(mech.structure))
+    names = list(kinds)
     lower, upper = np.full(mech.n_free, -np.inf), np.full(mech.n_free, np.inf)
     for name, (lo, hi) in bounds.items():
         if name not in names:
             shown = ", ".join(n for n in names if ".node" not in n)
             raise MechanismError(f"/bounds/{name}", f"not an unknown of this mechanism (unknowns: {shown})")
-        scale = mech.nd_per_doc(_unknown_kind(name))
+        scale = mech.nd_per_doc(kinds[name])
         k = names.index(name)
         if lo is not None:
             lower[k] = lo * scale

@@ -19,10 +19,12 @@ def inverse_wrenches(mech: Mechanism, displacements: dict[str, tuple[float, floa
     Links are distributed: their shape between given ends is itself an equilibrium problem,
     so they take the link inverse (service.link_inverse) instead.
     """
-    if mech.structure.links:
-        raise MechanismError("/displacements", "the closed-form inverse holds for curved-beam flexures "
-                             "with the linear or partial_nonlinear model; this mechanism has links "
-                             f"({', '.join(link.name for link in mech.structure.links)})")
+    owning = [t.name for t in mech.structure.elements if t.unknowns]
+    if owning:
+        raise MechanismError("/displacements", "the closed-form inverse holds for elements whose forces follow "
+                             "from the body motions (curved beams with the linear or partial_nonlinear model, "
+                             f"springs); these elements have unknowns of their own: {', '.join(owning)} "
+                             "(links take the link inverse)")
     bodies = mech.structure.bodies
     d = np.zeros(3 * len(bodies))
     for name, values in displacements.items():

@@ -15,22 +15,23 @@ import casadi as ca
 import numpy as np
 
 from models import Mechanism, MechanismError
-from models.assembly import _Builder
+from models.context import AssemblyContext
 from models.document import PrescribedDisplacement
+from models.elements.link import attach, link_shooting
 from models.link_inverse import InverseLayout, PsiLayout, inverse_graphs_for
-from models.mechanism import Structure
+from models.structure import Structure
 from service.equilibrium import NewtonOptions, Status, iterate
 
 
 # --- forward dense output -------------------------------------------------------------------
 @lru_cache(maxsize=32)
 def _sampler(structure: Structure, name: str, at: tuple[float, ...]) -> ca.Function:
-    builder = _Builder(structure)
-    index = [link.name for link in structure.links].index(name)
-    link, shooting = structure.links[index], builder.shooting[index]
+    ctx = AssemblyContext(structure)
+    index = [t.name for t in structure.elements].index(name)
+    link, offset = structure.elements[index], structure.element_offsets[index]
     z = ca.SX.sym("z", structure.n_unknowns)
-    d = builder.displacements(z)
-    solution = builder.link_rows(d, z)[index][4]
+    shooting = link_shooting(ctx, link)
+    solution = attach(ctx, link, shooting, ctx.displacements(z), z[offset:offset + link.unknowns]).solution
     states = []
     for u in at:
         k = min(int(u * link.intervals), link.intervals - 1)
@@ -39,13 +40,13 @@ def _sampler(structure: Structure, name: str, at: tuple[float, ...]) -> ca.Funct
         if u > start:
             state = shooting.step(k, state, solution.n, H=u - start, u0=start)
         states.append(state[:4])
-    return ca.Function("link_states", [z, builder.p], [ca.horzcat(*states)], ["z", "p"], ["states"])
+    return ca.Function("link_states", [z, ctx.p], [ca.horzcat(*states)], ["z", "p"], ["states"])
 
 
 def link_states(mech: Mechanism, z: np.ndarray, name: str, u) -> dict[str, np.ndarray]:
     """psi [rad], m, x, y (document units) of link `name` at the positions u in [0, 1], from
     the nodes of the solution z with one high-order step each."""
-    names = [link.name for link in mech.structure.links]
+    names = [link.name for link in mech.structure.of_family("link")]
     if name not in names:
         raise MechanismError("/elements", f"no link named '{name}' (links: {', '.join(names) or 'none'})")
     at = tuple(float(x) for x in np.atleast_1d(u))
@@ -108,16 +109,23 @@ def inverse_links(mech: Mechanism, shapes: dict, internal_forces: dict, unknown_
     "/loads/F/force/0"; the other loads keep their document values.
     """
     structure = mech.structure
-    links = [link.name for link in structure.links]
+    link_elements = structure.of_family("link")
+    links = [link.name for link in link_elements]
     if not links:
         raise MechanismError("/shapes", "this mechanism has no links to invert")
     for name, load in mech.document.loads.items():
         if isinstance(load, PrescribedDisplacement):
             raise MechanismError(f"/loads/{name}", "the link inverse takes forces and moments; prescribed "
                                  "displacements belong to the forward problem")
-    for link in structure.links:
-        if link.shear or link.axial:
-            raise MechanismError(f"/elements/{link.name}", "the link inverse takes inextensible links without shear")
+    for element in structure.elements:
+        if element.family != "link" and element.unknowns:
+            raise MechanismError(f"/elements/{element.name}", "the link inverse takes links and elements whose "
+                                 f"forces follow from the body motions; '{element.name}' ({element.family}) "
+                                 "has unknowns of its own")
+    for link in link_elements:
+        if link.shear or link.axial or link.weighs:
+            raise MechanismError(f"/elements/{link.name}", "the link inverse takes inextensible, massless links "
+                                 "without shear")
     if not isinstance(shapes, dict):
         raise MechanismError("/shapes", "expected an object: link name -> deformed shape")
     for name in shapes:
@@ -174,7 +182,7 @@ def inverse_links(mech: Mechanism, shapes: dict, internal_forces: dict, unknown_
         kind = mech.parameters[index].kind
         loads[mech.parameters[index].pointer] = float(z[structure.n_unknowns + k]) / mech.nd_per_doc(kind)
     result = LinkInverseResult(status, message, iterations, norm, seconds, loads)
-    for link in structure.links:
+    for link in link_elements:
         base = f"elements.{link.name}"
         nodes = range(link.intervals + 1)
         result.links[link.name] = {

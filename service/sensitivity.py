@@ -19,7 +19,7 @@ import numpy as np
 
 from models import Mechanism, MechanismError
 from models.assembly import graphs_for
-from models.mechanism import Structure
+from models.structure import Structure
 from service.optimize import ACTIVE_TOLERANCE, Prepared, StartResult
 
 

@@ -1,0 +1,17 @@
+"""Element families, one module each, registered here: one line per family.
+
+A family reads its section of the document and contributes its part of every graph (see
+models.elements.base for the contract). The document schema, the collector and the
+assembly ask this registry; none of them names an element type.
+"""
+
+from models.elements.base import Families
+from models.elements.curved_beam import CURVED_BEAM, MODELS
+from models.elements.link import LINK
+
+FAMILIES = Families([
+    CURVED_BEAM,
+    LINK,
+])
+
+__all__ = ["FAMILIES", "MODELS"]

@@ -1,0 +1,159 @@
+"""The contract of an element family, and the registry of families.
+
+A family is one element type of the document (`"type": "spring"`). It says:
+  schema                       the pydantic model of its document section (with `type`, `from`, `to`)
+  collect(c, name, el, i, j)   check the section, add its numbers to the parameters (through
+                               the collector c), return its topology (an ElementTopology: no
+                               numbers); i, j are the `from` and `to` body indices
+  contribute(ctx, t, d, z)     its part of the residual form for body displacements d and its
+                               own unknowns z (t.unknowns of them): a Contribution
+  unknowns(t)                  (name, kind) of each of its own unknowns, in order
+  energy_terms(ctx, t, d)      its part of the energy form (strain energy, equality and
+                               inequality constraints whose multipliers are its unknowns), or
+                               raise NoEnergyForm saying why its model has none
+  scale_hint(t, values)        sizes for nondimensionalizing (lengths, EI, stiffnesses)
+
+Signs: a Contribution's `from_bodies[b]` is the wrench [Fx, Fy, M about b's reference point]
+(global axes, nondimensional) that body b applies to the element: minus the element's force
+on the body. The residual row of a free body coordinate is sum(from_bodies) - applied = 0.
+For an element with an energy V(d) and constraints g(d) = 0 with multipliers lam (its
+unknowns), from_bodies[b] = dV/dd_b + (dg/dd_b)^T lam and its rows are g: the residual form
+is then the gradient of the Lagrangian, which tests check.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Callable, Protocol
+
+import casadi as ca
+from pydantic import Field
+
+from models.errors import MechanismError
+from models.fields import StrictModel
+from models.structure import ElementTopology
+
+if TYPE_CHECKING:
+    from models.collect import Collector
+    from models.context import AssemblyContext
+
+
+class TwoBodyElement(StrictModel):
+    """Every element joins body `from` to body `to`."""
+
+    from_: str = Field(alias="from")
+    to: str
+
+
+@dataclass
+class CentreLine:
+    """Samples along an element for drawing and for contact: undeformed and deformed points
+    (2-vectors, global, nondimensional) and, where the element is a solid of known thickness,
+    the half thickness at each sample (its surfaces lie that far either side)."""
+
+    deformed: list[ca.SX]
+    undeformed: list[ca.SX]
+    half_thickness: list[ca.SX] | None = None
+
+
+@dataclass
+class Contribution:
+    from_bodies: dict[int, ca.SX]  # wrench each body applies to the element (3,)
+    rows: ca.SX | None = None  # the element's own residual rows (as many as its unknowns)
+    outputs: list[tuple[str, str, ca.SX]] = field(default_factory=list)  # (name, kind, value)
+    energy: ca.SX | None = None  # strain energy, for reporting (models without an energy form too)
+    centre_line: CentreLine | None = None
+
+
+@dataclass
+class EnergyTerms:
+    energy: ca.SX
+    equalities: list[tuple[str, ca.SX]] = field(default_factory=list)  # g(d) = 0; multipliers: the unknowns
+    inequalities: list[tuple[str, ca.SX]] = field(default_factory=list)  # g(d) >= 0
+
+
+class NoEnergyForm(Exception):
+    """An element whose model is not the gradient of an energy in the body displacements."""
+
+
+@dataclass(frozen=True)
+class SiValues:
+    """Parameter values in SI, by pointer, for scale hints."""
+
+    values: dict[str, float]
+    length_unit_si: float  # one document length unit (section expressions are in it)
+
+    def __getitem__(self, pointer: str) -> float:
+        return self.values[pointer]
+
+    def __contains__(self, pointer: str) -> bool:
+        return pointer in self.values
+
+
+@dataclass(frozen=True)
+class ScaleHint:
+    """Sizes of an element (SI), for nondimensionalizing: a length and a bending stiffness EI
+    (beams), or a translational (N/m) or rotational (N m/rad) stiffness (springs)."""
+
+    length: float | None = None
+    EI: float | None = None
+    stiffness: float | None = None
+    rotational_stiffness: float | None = None
+
+
+class ElementFamily(Protocol):
+    type: str
+    schema: type[TwoBodyElement]
+
+    def collect(self, c: "Collector", name: str, element: Any, i: int, j: int) -> ElementTopology: ...
+
+    def contribute(self, ctx: "AssemblyContext", topology: Any, d: list[ca.SX], z: ca.SX) -> Contribution: ...
+
+    def unknowns(self, topology: Any) -> list[tuple[str, str]]: ...
+
+    def energy_terms(self, ctx: "AssemblyContext", topology: Any, d: list[ca.SX]) -> EnergyTerms: ...
+
+    def scale_hint(self, topology: Any, values: SiValues) -> ScaleHint: ...
+
+
+class Families:
+    """The registered families, by document type and by topology family name."""
+
+    def __init__(self, families: list[ElementFamily]):
+        self._by_type: dict[str, ElementFamily] = {}
+        for family in families:
+            if family.type in self._by_type:
+                raise ValueError(f"two element families of type '{family.type}'")
+            self._by_type[family.type] = family
+
+    def __iter__(self) -> Iterator[ElementFamily]:
+        return iter(self._by_type.values())
+
+    def named(self, name: str) -> ElementFamily:
+        try:
+            return self._by_type[name]
+        except KeyError:
+            raise KeyError(f"unknown element family '{name}' (families: {', '.join(self._by_type)})") from None
+
+    def of(self, topology: ElementTopology) -> ElementFamily:
+        return self.named(topology.family)
+
+    def schemas(self) -> tuple[type[TwoBodyElement], ...]:
+        return tuple(family.schema for family in self)
+
+
+def constraint_wrenches(ctx: "AssemblyContext", bodies: tuple[int, ...], d: list[ca.SX], lam: ca.SX,
+                        constraints: Callable[[list[ca.SX]], ca.SX]) -> dict[int, ca.SX]:
+    """(dg/dd_b)^T lam for the listed bodies: the wrench each applies to a joint whose
+    constraints g(d) = 0 have the multipliers lam (the joint's unknowns)."""
+    symbols = {b: ca.SX.sym(f"d{b}", 3) for b in bodies}
+    local = [symbols.get(b, d[b]) for b in range(ctx.n_bodies)]
+    work = ca.dot(lam, constraints(local))
+    actual = ca.vertcat(*[d[b] for b in bodies])
+    stacked = ca.vertcat(*[symbols[b] for b in bodies])
+    return {b: ca.substitute(ca.gradient(work, symbols[b]), stacked, actual) for b in bodies}
+
+
+def missing_reference(pointer: str, what: str, name: str, known) -> MechanismError:
+    return MechanismError(pointer, f"unknown {what} '{name}' ({what}s: {', '.join(known) or 'none'})")

@@ -1,0 +1,202 @@
+"""The curved-beam family (seed 000): a circular-arc flexure between two bodies.
+
+Models: `linear` (balance of the beam in its undeformed state, Eq. 15) and
+`partial_nonlinear` (in its deformed state, Eq. 17), both with the closed-form constant
+stiffness of Eq. 2; `exact` is the geometrically exact elastica of the same arc, solved by
+shooting: that element is a link built from the arc (models.elements.link).
+
+Neither constant-stiffness model is the gradient of an energy: their tangent stiffness is
+unsymmetric once deformed (the wrench turns with the bodies while K_f stays in the undeformed
+frames), so they have no energy form. The strain energy 1/2 psi.K.psi they report is the
+energy stored for the computed deformation, not a potential of the balance.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import casadi as ca
+from pydantic import Field
+
+from models import curved_beam as kernel
+from models.context import AssemblyContext
+from models.elements.base import CentreLine, Contribution, NoEnergyForm, ScaleHint, SiValues, TwoBodyElement
+from models.errors import MechanismError
+from models.fields import Number, Vec2
+from models.planar import cross, rot
+from models.sections import RectangularSection, SectionTopology, nominal_EI
+from models.structure import ElementTopology
+
+MODELS = ("linear", "partial_nonlinear", "exact")
+
+# Samples along each arc for the maximum bending stress and for drawing.
+ARC_SAMPLES = 33
+
+
+class CurvedBeam(TwoBodyElement):
+    """A circular-arc flexure (seed 000). The arc starts at start_angle about `center` on body
+    `from` and runs by arc_angle in `direction` to body `to`."""
+
+    type: Literal["curved_beam"]
+    center: Vec2
+    radius: Number
+    start_angle: Number
+    arc_angle: Number
+    direction: Literal["ccw", "cw"] = "ccw"
+    material: str
+    section: str
+    model: Literal["linear", "partial_nonlinear", "exact"] = "partial_nonlinear"
+    intervals: int = Field(default=8, ge=1, le=64, description="shooting intervals (exact model)")
+    order: int = Field(default=8, ge=2, le=12, description="integration order, even (exact model)")
+
+
+@dataclass(frozen=True)
+class FlexureTopology(ElementTopology):
+    reversed: bool  # document gave a clockwise arc: start/end swapped for the ccw model
+    model: str
+    material: str
+    section: str
+
+
+@dataclass(frozen=True)
+class ArcGeometry:
+    """The centre line of a link that is a curved beam's arc (its exact model)."""
+
+    element: str  # the curved beam's name: its fields give the arc
+    reversed: bool
+
+    def build(self, ctx: AssemblyContext, topology):
+        """(length, start point, eta(u)) of the arc run counter-clockwise."""
+        P = ctx.P
+        base = f"/elements/{self.element}"
+        r, theta_f = P[f"{base}/radius"], P[f"{base}/arc_angle"]
+        start_angle = P[f"{base}/start_angle"] - (theta_f if self.reversed else 0)
+        start_point = P.vec(f"{base}/center") + r * ca.vertcat(ca.cos(start_angle), ca.sin(start_angle))
+        beta = start_angle + ca.pi / 2
+        return r * theta_f, start_point, lambda u: beta + theta_f * u
+
+    def size(self, values, name: str) -> float:
+        return values[f"/elements/{self.element}/radius"]
+
+
+class CurvedBeamFamily:
+    type = "curved_beam"
+    schema = CurvedBeam
+
+    def collect(self, c, name: str, el: CurvedBeam, i: int, j: int) -> ElementTopology:
+        base = f"/elements/{name}"
+        c.use_material(el.material, f"{base}/material")
+        section = c.use_section(el.section, f"{base}/section")
+        if not isinstance(section, RectangularSection):
+            raise MechanismError(f"{base}/section", f"a curved beam needs a rectangle section ('{el.section}' is {section.shape})")
+        c.add_vec(f"{base}/center", el.center, "length")
+        c.add(f"{base}/radius", el.radius, "length", "positive")
+        c.add(f"{base}/start_angle", el.start_angle, "angle")
+        c.add(f"{base}/arc_angle", el.arc_angle, "angle", "arc_angle")
+        reversed_ = el.direction == "cw"
+        start, end = (j, i) if reversed_ else (i, j)
+        model = c.model_override or el.model
+        c.holds_rotation(i)
+        c.holds_rotation(j)
+        if model == "exact":
+            from models.elements.link import exact_arc  # the exact model is a link
+
+            return exact_arc(c, name, el, start, end, ArcGeometry(name, reversed_), SectionTopology(el.section, "rectangle"))
+        return FlexureTopology(name, self.type, start, end, reversed_, model, el.material, el.section)
+
+    def contribute(self, ctx: AssemblyContext, t: FlexureTopology, d, z) -> Contribution:
+        on_i, on_j, state = flexure_wrenches(ctx, t, d, d, d)
+        return Contribution({t.start_body: on_i, t.end_body: on_j}, outputs=_outputs(state),
+                            energy=state["energy"], centre_line=_centre_line(ctx, t, state, d))
+
+    def unknowns(self, t: FlexureTopology) -> list[tuple[str, str]]:
+        return []
+
+    def energy_terms(self, ctx, t: FlexureTopology, d):
+        raise NoEnergyForm(f"the {t.model} curved-beam model balances a constant stiffness in frames that "
+                           "do not turn with the bodies: its tangent stiffness is unsymmetric once deformed, "
+                           "so it is not the gradient of an energy (the exact model is a link)")
+
+    def scale_hint(self, t: FlexureTopology, values: SiValues) -> ScaleHint:
+        E = values[f"/materials/{t.material}/E"]
+        section = SectionTopology(t.section, "rectangle")
+        return ScaleHint(length=values[f"/elements/{t.name}/radius"], EI=nominal_EI(values, section, E, values.length_unit_si))
+
+
+def flexure_wrenches(ctx: AssemblyContext, f: FlexureTopology, d_psi, d_N, d_T):
+    """Wrenches of one curved beam on its two bodies (by the bodies on the beam), and its
+    state. The three displacement sets split K_T into the terms of Eqs. 26-28: psi (term I),
+    the body rotations carrying the attachments, N (term II), and T'_f (term III)."""
+    P = ctx.P
+    base = f"/elements/{f.name}"
+    r = P[f"{base}/radius"]
+    theta_f = P[f"{base}/arc_angle"]
+    start_angle = P[f"{base}/start_angle"] - (theta_f if f.reversed else 0)
+    E = P[f"/materials/{f.material}/E"]
+    b_w, h = P[f"/sections/{f.section}/b"], P[f"/sections/{f.section}/h"]
+    EI = E * b_w * h**3 / 12
+    arc = kernel.arc_geometry(P.vec(f"{base}/center"), r, start_angle, theta_f)
+    i, j = f.start_body, f.end_body
+    (ri_hat, thi_hat), (rj_hat, thj_hat) = ctx.reference(i), ctx.reference(j)
+    s_i = rot(thi_hat).T @ (arc.start_point - ri_hat)  # s-bar_if, body i axes
+    s_j = rot(thj_hat).T @ (arc.end_point - rj_hat)  # s-bar_jf, body j axes
+
+    def deformation(d):
+        p_f = (rj_hat + d[j][:2] + rot(thj_hat + d[j][2]) @ s_j
+               - ri_hat - d[i][:2] - rot(thi_hat + d[i][2]) @ s_i)
+        x_prime = rot(-d[i][2]) @ p_f - (arc.end_point - arc.start_point)  # Eq. 5
+        return ca.vertcat(rot(arc.end_frame_angle).T @ x_prime, d[j][2] - d[i][2])  # Eqs. 6-8
+
+    psi = deformation(d_psi)
+    K = kernel.stiffness(r, theta_f, EI)
+    w = K @ psi  # wrench on the beam's end, S_fj
+    tip = deformation(d_T)[:2] if f.model == "partial_nonlinear" else None
+    w_start = kernel.transfer_matrix(r, theta_f, tip) @ w  # by body i on the beam, S_if
+
+    def on_body(b, s_local, frame_angle, th_hat, wrench):  # N of Eq. 22
+        A_local = rot(frame_angle - th_hat)
+        force = rot(th_hat + d_N[b][2]) @ A_local @ wrench[:2]
+        moment = wrench[2] + cross(s_local, A_local @ wrench[:2])
+        return ca.vertcat(force, moment)
+
+    on_i = on_body(i, s_i, arc.start_frame_angle, thi_hat, w_start)
+    on_j = on_body(j, s_j, arc.end_frame_angle, thj_hat, w)
+    state = dict(psi=psi, w=w, w_start=w_start, r=r, theta_f=theta_f, b=b_w, h=h, arc=arc,
+                 energy=0.5 * ca.dot(psi, K @ psi))
+    return on_i, on_j, state
+
+
+def _outputs(st: dict) -> list[tuple[str, str, ca.SX]]:
+    w, w_start = st["w"], st["w_start"]
+    modulus = 6 / (st["b"] * st["h"] ** 2)  # bending stress per unit moment, rectangle
+    peak = ca.fabs(w_start[2])
+    for k in range(ARC_SAMPLES):
+        peak = ca.fmax(peak, ca.fabs(kernel.internal_moment(st["r"], st["theta_f"] * k / (ARC_SAMPLES - 1), w)))
+    return [("Fx", "force", w[0]), ("Fy", "force", w[1]), ("M", "moment", w[2]),
+            ("rotation", "angle", st["psi"][2]), ("length", "length", st["r"] * st["theta_f"]),
+            ("stress_start", "stress", modulus * ca.fabs(w_start[2])),
+            ("stress_end", "stress", modulus * ca.fabs(w[2])), ("stress_max", "stress", modulus * peak),
+            ("energy", "energy", st["energy"])]
+
+
+def _centre_line(ctx: AssemblyContext, f: FlexureTopology, st: dict, d) -> CentreLine:
+    """The undeformed arc, and a display of the deformed one that blends the two end bodies'
+    rigid motions (exact at both ends, end tangents included); the beam's own deflection
+    field is not modelled by the constant-stiffness models."""
+    arc = st["arc"]
+    start_angle = arc.start_frame_angle - ca.pi / 2
+    center = arc.start_point - st["r"] * ca.vertcat(ca.cos(start_angle), ca.sin(start_angle))
+    deformed, undeformed = [], []
+    for k in range(ARC_SAMPLES):
+        t = k / (ARC_SAMPLES - 1)
+        a = start_angle + t * st["theta_f"]
+        pt = center + st["r"] * ca.vertcat(ca.cos(a), ca.sin(a))
+        ends = [ctx.place(b, ctx.body_axes(b, pt), d) for b in (f.start_body, f.end_body)]
+        blend = 3 * t**2 - 2 * t**3
+        deformed.append((1 - blend) * ends[0] + blend * ends[1])
+        undeformed.append(pt)
+    return CentreLine(deformed, undeformed, [st["h"] / 2] * ARC_SAMPLES)
+
+
+CURVED_BEAM = CurvedBeamFamily()

@@ -1,0 +1,111 @@
+"""Graphs kept in memory and on disk, by structural hash.
+
+Building the graphs of a link structure takes seconds (the shooting integrator unrolled into
+SX); loading them serialized takes milliseconds. So the Functions of a structure are saved
+under <cache dir>/graphs/<structure key>-<code version>/ when first built, and a new process
+(a CLI run, a pool worker, a restarted server) loads the ones it needs. The code version
+hashes the sources of the models package and the CasADi version: any change to how graphs
+are built makes a new folder. Files are written to a temporary name and renamed, so a
+concurrent reader never sees half a file; a file that does not load is rebuilt.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+import os
+from functools import lru_cache
+from pathlib import Path
+
+import casadi as ca
+
+from models.structure import Structure
+
+log = logging.getLogger("flexmech.graphs")
+
+
+def cache_dir() -> Path:
+    """FLEXMECH_CACHE_DIR, else ~/.cache/flexmech: compiled libraries and saved graphs."""
+    root = os.environ.get("FLEXMECH_CACHE_DIR")
+    return Path(root) if root else Path.home() / ".cache" / "flexmech"
+
+
+@lru_cache(maxsize=1)
+def code_version() -> str:
+    """A hash of the models package's sources and the CasADi version."""
+    digest = hashlib.sha256(ca.__version__.encode())
+    root = Path(__file__).resolve().parent
+    for path in sorted(root.rglob("*.py")):
+        digest.update(str(path.relative_to(root)).encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()[:12]
+
+
+def write_atomically(target: Path, write) -> None:
+    """write(path) to a temporary name beside target, then rename it into place."""
+    staged = target.with_name(f".{target.name}.{os.getpid()}.tmp")
+    write(staged)
+    os.replace(staged, target)
+
+
+class GraphStore:
+    """The Functions of one structure: from memory, else from disk, else built (and saved)."""
+
+    def __init__(self, structure: Structure):
+        self.structure = structure
+        self.folder = cache_dir() / "graphs" / f"{structure.key}-{code_version()}"
+        self._functions: dict[str, ca.Function] = {}
+        self._meta: dict | None = None
+
+    @property
+    def meta(self) -> dict:
+        if self._meta is None:
+            self._meta = self._load_meta()
+            if self._meta is None:
+                self._build()
+        return self._meta
+
+    def function(self, name: str) -> ca.Function:
+        if name not in self._functions:
+            self.meta  # noqa: B018  (on a miss this builds, and so holds, every Function)
+        if name not in self._functions:
+            loaded = self._load(name)
+            if loaded is None:
+                self._build()
+            else:
+                self._functions[name] = loaded
+        return self._functions[name]
+
+    def _load_meta(self) -> dict | None:
+        try:
+            return json.loads((self.folder / "meta.json").read_text())
+        except (OSError, ValueError):
+            return None
+
+    def _load(self, name: str) -> ca.Function | None:
+        path = self.folder / f"{name}.casadi"
+        if not path.exists():
+            return None
+        try:
+            return ca.Function.load(str(path))
+        except RuntimeError:  # a damaged file: rebuild rather than fail
+            log.warning("cannot load %s: rebuilding the graphs", path)
+            return None
+
+    def _build(self) -> None:
+        from models.assembly import build_functions
+
+        functions, meta = build_functions(self.structure)
+        self._functions.update(functions)
+        self._meta = meta
+        self._save(functions, meta)
+
+    def _save(self, functions: dict[str, ca.Function], meta: dict) -> None:
+        try:
+            self.folder.mkdir(parents=True, exist_ok=True)
+            for name, fn in functions.items():
+                write_atomically(self.folder / f"{name}.casadi", lambda path, fn=fn: fn.save(str(path)))
+            write_atomically(self.folder / "meta.json", lambda path: path.write_text(json.dumps(meta)))
+        except OSError as exc:  # a read-only home: graphs are rebuilt per process, nothing breaks
+            log.warning("cannot save graphs in %s: %s", self.folder, exc)

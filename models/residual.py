@@ -1,0 +1,49 @@
+"""The pieces of the residual form that every graph builder shares: the elements'
+contributions, the wrench each body applies to its elements, and the rows of free
+coordinates."""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from models.context import AssemblyContext
+from models.elements import FAMILIES
+from models.elements.base import Contribution
+from models.structure import Structure
+
+
+def contributions(ctx: AssemblyContext, z: ca.SX, d: list[ca.SX]) -> list[Contribution]:
+    """Every element's contribution for unknowns z and body displacements d."""
+    s = ctx.structure
+    return [FAMILIES.of(t).contribute(ctx, t, d, z[offset:offset + t.unknowns])
+            for t, offset in zip(s.elements, s.element_offsets)]
+
+
+def unknown_names(structure: Structure) -> list[tuple[str, str]]:
+    """(name, kind) of every entry of z: the free body coordinates ("tip.x", length or angle),
+    then each element's own unknowns ("L1.h", "L1.node3.psi", ...)."""
+    kinds = ("length", "length", "angle")
+    names = [(structure.coordinate_name(b, c), kinds[c]) for b, c in structure.free]
+    for t in structure.elements:
+        names += [(f"{t.name}.{name}", kind) for name, kind in FAMILIES.of(t).unknowns(t)]
+    return names
+
+
+def held_wrenches(ctx: AssemblyContext, parts: list[Contribution]) -> list[ca.SX]:
+    """Per body, the wrench it applies to all its elements."""
+    held = [ca.SX.zeros(3) for _ in range(ctx.n_bodies)]
+    for part in parts:
+        for b, wrench in part.from_bodies.items():
+            held[b] = held[b] + wrench
+    return held
+
+
+def free_rows(structure: Structure, per_body: list[ca.SX]) -> ca.SX:
+    return ca.vertcat(*[per_body[b][c] for b, c in structure.free]) if structure.free else ca.SX(0, 1)
+
+
+def residual_of(ctx: AssemblyContext, parts: list[Contribution], applied: list[ca.SX]) -> ca.SX:
+    """Free body rows (held - applied), then every element's own rows."""
+    held = held_wrenches(ctx, parts)
+    rows = [part.rows for part in parts if part.rows is not None]
+    return ca.vertcat(free_rows(ctx.structure, [held[b] - applied[b] for b in range(ctx.n_bodies)]), *rows)
