@@ -23,7 +23,7 @@ import numpy as np
 from models import Mechanism, MechanismError
 from models.assembly import graphs_for
 from models.structure import Structure
-from service.equilibrium import NewtonOptions, iterate
+from service.newton import NewtonOptions, iterate_dense
 from service.units import outputs_in_doc_units
 
 CORRECTOR_ITERATIONS = 12
@@ -146,7 +146,7 @@ def trace_path(mech: Mechanism, path: str, stop: float, step: float, max_points:
             return np.asarray(R).ravel(), np.asarray(K)
         return evaluate
 
-    status, z, *_ = iterate(evaluate_at(lam), np.zeros(n), options)
+    status, z, *_ = iterate_dense(evaluate_at(lam), np.zeros(n), options)
     if status != "converged":
         return PathResult("not_converged", f"no equilibrium at the start value ({status})", path, unit, [], [],
                           time.perf_counter() - started)
@@ -169,7 +169,7 @@ def trace_path(mech: Mechanism, path: str, stop: float, step: float, max_points:
         new_tangent = _tangent(path_fn, x_new[:n], x_new[n], p, tangent, direction)
         if (x_new[n] - target) * direction >= 0 and new_tangent[n] * direction > 0:
             # Passed the stop value while rising: end exactly on it.
-            status, z_end, *_ = iterate(evaluate_at(target), _interpolate(x, x_new, target, n), options)
+            status, z_end, *_ = iterate_dense(evaluate_at(target), _interpolate(x, x_new, target, n), options)
             if status == "converged":
                 if np.sign(new_tangent[n]) != np.sign(tangent[n]):
                     limits.append(_limit(mech, x, x_new, tangent, len(points) - 1, p, slot, factor, options))

@@ -17,6 +17,7 @@ import numpy as np
 
 from models.assembly import graphs_for
 from service.design import DesignProblem, OutputRef
+from service.ipopt import nlp_solver, solve
 
 
 @dataclass(frozen=True, eq=False)
@@ -103,31 +104,21 @@ def _design_nlp(key: tuple) -> DesignNlp:
     return DesignNlp(key, n_design, n_state, n_cases, n_params, n_state * n_cases, evaluate, kkt, x, P, f, g)
 
 
-@lru_cache(maxsize=16)
-def _solver(key: tuple, max_iterations: int, tolerance: float) -> ca.Function:
-    nlp = _design_nlp(key)
-    options = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes",
-               "ipopt.linear_solver": "mumps", "ipopt.tol": tolerance,
-               "ipopt.max_iter": max_iterations, "ipopt.mu_strategy": "adaptive"}
-    return ca.nlpsol("design", "ipopt", {"x": nlp.x, "p": nlp.P, "f": nlp.f, "g": nlp.g}, options)
-
-
 def solver_for(nlp: DesignNlp, max_iterations: int, tolerance: float) -> ca.Function:
-    """IPOPT on the design NLP (mumps; exact Hessian of the Lagrangian), one per setting."""
-    return _solver(nlp.key, max_iterations, tolerance)
+    """IPOPT on the design NLP (exact Hessian of the Lagrangian), one per setting."""
+    return nlp_solver("design", nlp.key, lambda: {"x": nlp.x, "p": nlp.P, "f": nlp.f, "g": nlp.g},
+                      {"tol": tolerance, "max_iter": max_iterations, "mu_strategy": "adaptive"})
 
 
-@lru_cache(maxsize=16)
-def _elastic_solver(key: tuple, max_iterations: int) -> ca.Function:
-    nlp = _design_nlp(key)
-    n_con = nlp.g.shape[0] - nlp.n_residuals
-    slack = ca.SX.sym("s", n_con)
-    residuals, constraints = nlp.g[:nlp.n_residuals], nlp.g[nlp.n_residuals:]
-    problem = {"x": ca.vertcat(nlp.x, slack), "p": nlp.P, "f": ca.sum1(slack),
-               "g": ca.vertcat(residuals, constraints - slack, constraints + slack)}
-    options = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.linear_solver": "mumps",
-               "ipopt.tol": 1e-10, "ipopt.max_iter": max_iterations}
-    return ca.nlpsol("design_feasibility", "ipopt", problem, options)
+def _elastic_solver(nlp: DesignNlp, max_iterations: int) -> ca.Function:
+    def problem() -> dict:
+        n_con = nlp.g.shape[0] - nlp.n_residuals
+        slack = ca.SX.sym("s", n_con)
+        residuals, constraints = nlp.g[:nlp.n_residuals], nlp.g[nlp.n_residuals:]
+        return {"x": ca.vertcat(nlp.x, slack), "p": nlp.P, "f": ca.sum1(slack),
+                "g": ca.vertcat(residuals, constraints - slack, constraints + slack)}
+
+    return nlp_solver("design_feasibility", nlp.key, problem, {"tol": 1e-10, "max_iter": max_iterations})
 
 
 def least_violation(nlp: DesignNlp, x0: np.ndarray, P: np.ndarray, lbx: np.ndarray, ubx: np.ndarray,
@@ -135,16 +126,16 @@ def least_violation(nlp: DesignNlp, x0: np.ndarray, P: np.ndarray, lbx: np.ndarr
     """The point of least total constraint violation (in scaled units) with every case in
     equilibrium and the design within its bounds: minimize the sum of elastic slacks s >= 0
     with lower - s <= g <= upper + s. Returns (x, total violation, IPOPT status)."""
-    solver = _elastic_solver(nlp.key, max_iterations)
+    solver = _elastic_solver(nlp, max_iterations)
     n_res = nlp.n_residuals
     lower, upper = lbg[n_res:], ubg[n_res:]
     _, g = nlp.evaluate(x0, P)
     g = np.asarray(g).ravel()[n_res:]
     s0 = np.maximum(np.maximum(lower - g, g - upper), 0.0) + 1e-3
     n_con = len(lower)
-    solution = solver(x0=np.concatenate([x0, s0]), p=P,
-                      lbx=np.concatenate([lbx, np.zeros(n_con)]), ubx=np.concatenate([ubx, np.full(n_con, np.inf)]),
-                      lbg=np.concatenate([np.zeros(n_res), np.full(n_con, -np.inf), lower]),
-                      ubg=np.concatenate([np.zeros(n_res), upper, np.full(n_con, np.inf)]))
-    x = np.asarray(solution["x"]).ravel()
-    return x[:len(x0)], float(np.sum(x[len(x0):])), str(solver.stats().get("return_status", "unknown"))
+    outcome = solve(solver, x0=np.concatenate([x0, s0]), p=P,
+                    lbx=np.concatenate([lbx, np.zeros(n_con)]), ubx=np.concatenate([ubx, np.full(n_con, np.inf)]),
+                    lbg=np.concatenate([np.zeros(n_res), np.full(n_con, -np.inf), lower]),
+                    ubg=np.concatenate([np.zeros(n_res), upper, np.full(n_con, np.inf)]))
+    x = outcome.x
+    return x[:len(x0)], float(np.sum(x[len(x0):])), outcome.status

@@ -1,50 +1,29 @@
-"""Newton's method on R(z, p) = 0 with the exact tangent stiffness.
+"""The equilibrium of a mechanism: Newton's method on R(z, p) = 0 with the exact tangent
+stiffness (service.newton), and within bounds on the unknowns with IPOPT.
 
 The paper's update strategies are options: the full K_T or its first term K_T^I only, or
-K_T frozen at one state (Fig. 11). A backtracking line search on |R|^2 is on by default and
-can be switched off to reproduce the paper's plain iteration (Algorithm 1). Non-convergence
-is a status in the result, never an exception.
+K_T frozen at one state (Fig. 11). Non-convergence is a status in the result, never an
+exception.
 """
 
 from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Literal
+from functools import lru_cache
 
+import casadi as ca
 import numpy as np
 
 from models import Mechanism, MechanismError
+from models.assembly import graphs_for
 from models.residual import unknown_names as element_unknowns
+from service import ipopt
+from service.newton import NewtonOptions, Status, dense_solve, iterate, iterate_dense, sparse_direction, sparse_step  # noqa: F401 (NewtonOptions, Status: re-exported)
 from service.units import displacement_to_doc, outputs_in_doc_units
 
 # Seed 000, Sec. 2: the constant-stiffness curved beam is faithful up to about +-20 deg.
 ROTATION_VALIDITY_DEG = 20.0
-
-Status = Literal["converged", "not_converged", "singular", "time_limit"]
-JacobianChoice = Literal["full", "first_term", "frozen"]
-
-
-@dataclass(frozen=True)
-class NewtonOptions:
-    """tol_residual and tol_step are on the nondimensional infinity norms (forces in units of
-    the largest flexure's EI / r^2, lengths in units of its radius)."""
-
-    tol_residual: float = 1e-10
-    tol_step: float = 1e-9
-    max_iterations: int = 50
-    line_search: bool = True
-    jacobian: JacobianChoice = "full"
-    time_limit: float | None = None  # seconds of wall time per solve; None: no limit
-
-    def __post_init__(self):
-        if self.jacobian not in ("full", "first_term", "frozen"):
-            raise ValueError(f"jacobian: unknown choice '{self.jacobian}' (full, first_term, frozen)")
-        if self.max_iterations < 1:
-            raise ValueError("max_iterations: must be at least 1")
-        if self.time_limit is not None and not self.time_limit > 0:
-            raise ValueError("time_limit: must be positive")
-
 
 @dataclass
 class EquilibriumResult:
@@ -87,7 +66,7 @@ class EquilibriumResult:
         """Where the result leaves the range its models are known to hold in (`outputs`: this
         result's outputs() when already at hand)."""
         m = self.mechanism
-        notes = []
+        notes = list(m.notes)
         rad_per_unit = m.doc_factor("angle")
         for name, value in (outputs if outputs is not None else self.outputs()).items():
             if name.startswith("elements.") and name.endswith(".rotation"):
@@ -119,10 +98,14 @@ class EquilibriumResult:
         }
 
 
-def check_constrained(mech: Mechanism, p: np.ndarray | None = None) -> None:
+_CHECKED: set[str] = set()  # structures whose undeformed stiffness was found regular
+
+
+def check_constrained(mech: Mechanism, p: np.ndarray | None = None, again: bool = False) -> None:
     """Raise MechanismError if K_T is singular in the undeformed state (a free motion that no
-    flexure resists), naming the coordinates that move in the mechanism's free motion."""
-    if mech.n_free == 0:
+    element resists), naming the coordinates that move in the mechanism's free motion. Done
+    once per structure (a dense SVD), and again (`again`) when a solve meets a singular K."""
+    if mech.n_free == 0 or (mech.structure.key in _CHECKED and not again):
         return
     p = mech.p() if p is None else p
     _, K = mech.graphs.residual_and_tangent(np.zeros(mech.n_free), p)
@@ -138,74 +121,36 @@ def check_constrained(mech: Mechanism, p: np.ndarray | None = None) -> None:
             "under-constrained: the tangent stiffness is singular in the undeformed state; "
             f"nothing resists a motion of {', '.join(moving)} (connect those bodies with flexures or fix them)",
         )
+    _CHECKED.add(mech.structure.key)
 
 
-def iterate(evaluate, z0: np.ndarray, options: NewtonOptions, first_term=None,
-            frozen_tangent: np.ndarray | None = None) -> tuple[Status, np.ndarray, float, int, list[float], str]:
-    """Damped Newton iteration on a residual.
-
-    evaluate(z) -> (R, K) with K = dR/dz; first_term(z) -> K_T^I (for jacobian="first_term").
-    Converged when |R|_inf <= tol_residual and the last step |dz|_inf <= tol_step (or the
-    guess already satisfies the residual tolerance).
-    Returns (status, z, |R|_inf, iterations, residual history, message).
-    """
-    started = time.perf_counter()
-    z = np.array(z0, dtype=float)
-    R, K = evaluate(z)
-    norm = float(np.abs(R).max()) if R.size else 0.0
-    step_norm = np.inf
-    history: list[float] = []
-    for k in range(options.max_iterations + 1):
-        history.append(norm)
-        if norm <= options.tol_residual and (k == 0 or step_norm <= options.tol_step):
-            return "converged", z, norm, k, history, ""
-        if not np.isfinite(norm):
-            return "not_converged", z, norm, k, history, "residual became non-finite"
-        if k == options.max_iterations:
-            break
-        if options.time_limit is not None and time.perf_counter() - started > options.time_limit:
-            return "time_limit", z, norm, k, history, f"stopped by the time limit of {options.time_limit:g} s"
-        if options.jacobian == "full":
-            M = K
-        elif options.jacobian == "first_term":
-            M = first_term(z)
-        else:
-            M = frozen_tangent
-        try:
-            dz = np.linalg.solve(M, -R)
-        except np.linalg.LinAlgError:
-            return "singular", z, norm, k, history, f"tangent stiffness singular at iteration {k}"
-        alpha = 1.0
-        z_new = z + dz
-        R_new, K_new = evaluate(z_new)
-        norm_new = float(np.abs(R_new).max())
-        if options.line_search:
-            while not (np.isfinite(norm_new) and norm_new <= (1 - 1e-4 * alpha) * norm) and alpha > 1 / 1024:
-                alpha /= 2
-                z_new = z + alpha * dz
-                R_new, K_new = evaluate(z_new)
-                norm_new = float(np.abs(R_new).max())
-        step_norm = float(np.abs(alpha * dz).max())
-        z, R, K, norm = z_new, R_new, K_new, norm_new
-    return "not_converged", z, norm, options.max_iterations, history, (
-        f"no convergence in {options.max_iterations} iterations")
+@lru_cache(maxsize=64)
+def _newton_step(structure) -> ca.Function:
+    return sparse_step(graphs_for(structure).residual_and_tangent)
 
 
 def newton(mech: Mechanism, p: np.ndarray, z0: np.ndarray, options: NewtonOptions,
            frozen_tangent: np.ndarray | None = None) -> EquilibriumResult:
+    """Newton from z0 with the matrix options.jacobian chooses: the full K_T (factored
+    sparsely), its first term K_T^I, or K_T frozen (at the undeformed state by default)."""
     g = mech.graphs
     started = time.perf_counter()
 
-    def evaluate(z):
-        R, K = g.residual_and_tangent(z, p)
-        return np.asarray(R).ravel(), np.asarray(K)
+    def residual(z):
+        return np.asarray(g.residual(z, p)).ravel()
 
-    def first_term(z):
-        return np.asarray(g.tangent_terms(z, p)[0])
+    if options.jacobian == "full" and mech.n_free:
+        direction = sparse_direction(_newton_step(mech.structure), p)
+    elif options.jacobian == "first_term":
+        def direction(z, R):
+            return dense_solve(np.asarray(g.tangent_terms(z, p)[0]), R)
+    else:
+        if frozen_tangent is None:
+            frozen_tangent = np.asarray(g.residual_and_tangent(np.zeros(mech.n_free), p)[1])
 
-    if options.jacobian == "frozen" and frozen_tangent is None:
-        frozen_tangent = evaluate(np.zeros_like(np.asarray(z0, dtype=float)))[1]
-    status, z, norm, k, history, message = iterate(evaluate, z0, options, first_term, frozen_tangent)
+        def direction(z, R):
+            return dense_solve(frozen_tangent, R)
+    status, z, norm, k, history, message = iterate(residual, direction, z0, options)
     return EquilibriumResult(status, z, norm, k, history, time.perf_counter() - started, mech, message)
 
 
@@ -220,7 +165,10 @@ def solve_equilibrium(mech: Mechanism, options: NewtonOptions = NewtonOptions(),
     z0 = np.zeros(mech.n_free) if guess is None else np.asarray(guess, dtype=float)
     if z0.shape != (mech.n_free,):
         raise ValueError(f"guess: expected {mech.n_free} values, got {z0.shape}")
-    return newton(mech, p, z0, options, frozen_tangent)
+    result = newton(mech, p, z0, options, frozen_tangent)
+    if check and result.status == "singular":
+        check_constrained(mech, p, again=True)
+    return result
 
 
 def unknown_names(mech: Mechanism) -> list[str]:
@@ -238,8 +186,29 @@ def solve_bounded(mech: Mechanism, bounds: dict[str, tuple[float | None, float |
     Bounds are in document units (angles: the document's angle unit), keyed by
     unknown_names(); None: unbounded. Where several equilibria exist (a buckled column), the
     bounds pick the branch whose basin holds the start on the bounds."""
-    import casadi as ca
+    lower, upper = _bounds(mech, bounds)
+    p = mech.p()
+    started = time.perf_counter()
+    z0 = _start_on_bounds(mech, p, np.zeros(mech.n_free) if guess is None else np.asarray(guess, dtype=float),
+                          lower, upper, options)
+    run = ipopt.solve(_bounded_solver(mech.structure, options), x0=z0, p=p, lbx=lower, ubx=upper, lbg=0, ubg=0)
+    z = run.x
+    norm = float(np.abs(np.asarray(mech.graphs.residual(z, p))).max())
+    # Polish inside the bounds: Newton from the IPOPT point, kept only if it stays inside.
+    polished = newton(mech, p, z, options)
+    status, z_newton, norm_newton = polished.status, polished.z, polished.residual_norm
+    if status == "converged" and np.all(z_newton >= lower - 1e-12) and np.all(z_newton <= upper + 1e-12):
+        z, norm = z_newton, norm_newton
+    seconds = time.perf_counter() - started
+    if norm <= options.tol_residual:
+        return EquilibriumResult("converged", z, norm, run.iterations, [norm], seconds, mech)
+    return EquilibriumResult("not_converged", z, norm, run.iterations, [norm], seconds, mech,
+                             f"no equilibrium within the bounds: the least residual there is {norm:.3g} "
+                             f"(IPOPT: {run.return_status})")
 
+
+def _bounds(mech: Mechanism, bounds: dict) -> tuple[np.ndarray, np.ndarray]:
+    """Nondimensional lower and upper bounds of z from bounds in document units, by name."""
     kinds = dict(element_unknowns(mech.structure))
     names = list(kinds)
     lower, upper = np.full(mech.n_free, -np.inf), np.full(mech.n_free, np.inf)
@@ -255,15 +224,16 @@ def solve_bounded(mech: Mechanism, bounds: dict[str, tuple[float | None, float |
             upper[k] = hi * scale
         if lower[k] > upper[k]:
             raise MechanismError(f"/bounds/{name}", f"lower bound {lo} is above the upper bound {hi}")
-    p = mech.p()
-    z0 = np.zeros(mech.n_free) if guess is None else np.asarray(guess, dtype=float)
-    started = time.perf_counter()
+    return lower, upper
+
+
+def _start_on_bounds(mech: Mechanism, p: np.ndarray, z0: np.ndarray, lower, upper, options) -> np.ndarray:
+    """A consistent start on the bounds: the bounded body coordinates held where the bounds
+    put them (their balance rows dropped), the rest solved by Newton."""
     clipped = np.clip(z0, lower, upper)
     held = np.flatnonzero((clipped != z0)[:mech.n_body_coordinates])
     z0 = clipped
     if held.size:
-        # A consistent start on the bounds: the bounded body coordinates held where the
-        # bounds put them (their balance rows dropped), the rest solved by Newton.
         free = np.setdiff1d(np.arange(mech.n_free), held)
 
         def evaluate_held(x):
@@ -272,30 +242,20 @@ def solve_bounded(mech: Mechanism, bounds: dict[str, tuple[float | None, float |
             R, K = mech.graphs.residual_and_tangent(z, p)
             return np.asarray(R).ravel()[free], np.asarray(K)[np.ix_(free, free)]
 
-        status, x, _, _, _, _ = iterate(evaluate_held, z0[free], options)
+        status, x, _, _, _, _ = iterate_dense(evaluate_held, z0[free], options)
         if status == "converged":
             z0[free] = x
-    z_sym, p_sym = ca.SX.sym("z", mech.n_free), ca.SX.sym("p", len(p))
-    R = mech.graphs.residual(z_sym, p_sym)
-    solver = ca.nlpsol("bounded_equilibrium", "ipopt", {"x": z_sym, "p": p_sym, "f": 0, "g": R},
-                       {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
-                        "ipopt.linear_solver": "mumps", "ipopt.tol": 1e-12,
-                        "ipopt.constr_viol_tol": options.tol_residual,
-                        "ipopt.max_iter": max(options.max_iterations, 200)})
-    solution = solver(x0=z0, p=p, lbx=lower, ubx=upper, lbg=0, ubg=0)
-    z = np.asarray(solution["x"]).ravel()
-    norm = float(np.abs(np.asarray(mech.graphs.residual(z, p))).max())
-    # Polish inside the bounds: Newton from the IPOPT point, kept only if it stays inside.
-    def evaluate(x):
-        R, K = mech.graphs.residual_and_tangent(x, p)
-        return np.asarray(R).ravel(), np.asarray(K)
+    return z0
 
-    status, z_newton, norm_newton, _, _, _ = iterate(evaluate, z, options)
-    if status == "converged" and np.all(z_newton >= lower - 1e-12) and np.all(z_newton <= upper + 1e-12):
-        z, norm = z_newton, norm_newton
-    iterations = int(solver.stats()["iter_count"])
-    if norm <= options.tol_residual:
-        return EquilibriumResult("converged", z, norm, iterations, [norm], time.perf_counter() - started, mech)
-    return EquilibriumResult("not_converged", z, norm, iterations, [norm], time.perf_counter() - started, mech,
-                             f"no equilibrium within the bounds: the least residual there is {norm:.3g} "
-                             f"(IPOPT: {solver.stats()['return_status']})")
+
+def _bounded_solver(structure, options: NewtonOptions):
+    """IPOPT on R(z) = 0 within bounds (a feasibility problem), built once per structure."""
+    def problem() -> dict:
+        import casadi as ca
+
+        z, p = ca.SX.sym("z", structure.n_unknowns), ca.SX.sym("p", len(structure.parameters))
+        return {"x": z, "p": p, "f": 0, "g": graphs_for(structure).residual(z, p)}
+
+    return ipopt.nlp_solver("bounded_equilibrium", structure, problem,
+                            {"tol": 1e-12, "constr_viol_tol": options.tol_residual,
+                             "max_iter": max(options.max_iterations, 200)})

@@ -20,7 +20,7 @@ from models.document import PrescribedDisplacement
 from models.elements.link import attach, link_shooting
 from models.link_inverse import InverseLayout, PsiLayout, inverse_graphs_for
 from models.structure import Structure
-from service.equilibrium import NewtonOptions, Status, iterate
+from service.newton import NewtonOptions, Status, iterate_dense
 
 
 # --- forward dense output -------------------------------------------------------------------
@@ -173,7 +173,7 @@ def inverse_links(mech: Mechanism, shapes: dict, internal_forces: dict, unknown_
         R, K = graphs.residual_and_tangent(z, p, q)
         return np.asarray(R).ravel(), np.asarray(K)
 
-    status, z, norm, iterations, _, message = iterate(evaluate, np.zeros(graphs.n_unknowns), options)
+    status, z, norm, iterations, _, message = iterate_dense(evaluate, np.zeros(graphs.n_unknowns), options)
     seconds = time.perf_counter() - started
     y = np.asarray(graphs.results(z, p, q)).ravel()
     values = {n: float(v) / mech.nd_per_doc(k) for n, k, v in zip(graphs.result_names, graphs.result_kinds, y)}

@@ -20,17 +20,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from models import Mechanism
-from service.design import Bounded, DesignProblem, OutputRef
+from service.design import DesignProblem, OutputRef
 from service.design_nlp import DesignNlp, design_nlp, least_violation, solver_for
-from service.equilibrium import NewtonOptions, iterate
+from service.ipopt import solve
+from service.equilibrium import newton
+from service.newton import NewtonOptions
 
-IPOPT_STATUS = {
-    "Solve_Succeeded": "optimal",
-    "Solved_To_Acceptable_Level": "acceptable",
-    "Infeasible_Problem_Detected": "infeasible",
-    "Maximum_Iterations_Exceeded": "not_converged",
-    "Maximum_CpuTime_Exceeded": "time_limit",
-}
 # A constraint counts as active within this (scaled) distance of its bound.
 ACTIVE_TOLERANCE = 1e-7
 # Least total violation (scaled constraints) above which a problem is reported infeasible.
@@ -128,7 +123,7 @@ def case_params(problem: DesignProblem, design: np.ndarray) -> list[np.ndarray]:
     return ps
 
 
-LOAD_MAGNITUDE = re.compile(r"^/loads/[^/]+/(force/[01]|moment|dx|dy|rotation)$")
+LOAD_MAGNITUDE = re.compile(r"^(/loads/[^/]+/(force/[01]|moment|dx|dy|rotation)|/gravity/[01])$")
 LOAD_STEPS = 8
 
 
@@ -141,20 +136,16 @@ def loaded_state(mech: Mechanism, p: np.ndarray, steps: int = LOAD_STEPS,
     """The equilibrium the mechanism reaches when its loads (forces, moments, prescribed
     motions) grow from zero in equal steps, each from the previous state: the branch a real
     mechanism follows, where a single Newton solve (or an optimizer) may find another."""
-    g = mech.graphs
     slots = _load_slots(mech)
     z = np.zeros(mech.n_free)
     for k in range(1, steps + 1):
         pk = p.copy()
         pk[slots] = p[slots] * k / steps
 
-        def evaluate(x, pk=pk):
-            R, K = g.residual_and_tangent(x, pk)
-            return np.asarray(R).ravel(), np.asarray(K)
-
-        status, z, *_ = iterate(evaluate, z, options)
-        if status != "converged":
-            return status, z
+        result = newton(mech, pk, z, options)
+        z = result.z
+        if result.status != "converged":
+            return result.status, z
     return "converged", z
 
 
@@ -226,56 +217,61 @@ def run_start(prepared: Prepared, start: int) -> StartResult:
     guesses = [z if status == "converged" else np.zeros(nlp.n_state)
                for status, z in equilibria(problem, design0)]
     x0 = np.concatenate([design0 / problem.scale, *guesses])
-    solver = solver_for(nlp, spec.max_iterations, spec.tolerance)
-    solution = solver(x0=x0, p=prepared.P, lbx=prepared.lbx, ubx=prepared.ubx, lbg=prepared.lbg, ubg=prepared.ubg)
-    stats = solver.stats()
-    x = np.asarray(solution["x"]).ravel()
-    lam_g = np.asarray(solution["lam_g"]).ravel()
-    lam_x = np.asarray(solution["lam_x"]).ravel()
-    ipopt_status = str(stats.get("return_status", "unknown"))
-    status = IPOPT_STATUS.get(ipopt_status, "not_converged")
-    feasibility = ""
-    if status not in ("optimal", "acceptable") and problem.constraints:
-        # Did IPOPT fail because no design meets the constraints? Find the least violation.
-        x_least, violation, least_status = least_violation(
-            nlp, x0, prepared.P, prepared.lbx, prepared.ubx, prepared.lbg, prepared.ubg, spec.max_iterations)
-        if least_status == "Solve_Succeeded" and violation > INFEASIBLE_VIOLATION:
-            status, x = "infeasible", x_least
-            lam_g, lam_x = np.zeros_like(lam_g), np.zeros_like(lam_x)
-        elif least_status == "Solve_Succeeded":
-            feasibility = "; feasible designs exist (try other starts or more iterations)"
+    run = solve(solver_for(nlp, spec.max_iterations, spec.tolerance), x0=x0, p=prepared.P,
+                lbx=prepared.lbx, ubx=prepared.ubx, lbg=prepared.lbg, ubg=prepared.ubg)
+    status, x, lam_g, lam_x, message = _judged(prepared, run, x0)
     # IPOPT may end a hair outside the bounds (its bound relaxation): report the design inside.
     design = np.clip(x[:nlp.n_design] * problem.scale, problem.lower, problem.upper)
-    # The state the NLP found must be the one the mechanism reaches when loaded at that design
-    # (an optimizer can land on another equilibrium branch, e.g. a snapped-through shape).
-    zs = np.split(x[nlp.n_design:], nlp.n_cases)
-    loaded = equilibria(problem, design)
-    on_branch = all(s == "converged" and same_state(z, zc) for (s, z), zc in zip(loaded, zs))
-    for c, (s, z) in enumerate(loaded):
-        if s == "converged" and same_state(z, zs[c]):
-            zs[c] = z  # polished by Newton at the design found
+    zs, on_branch = _loaded_states(problem, design, np.split(x[nlp.n_design:], nlp.n_cases))
     residual = max((float(np.abs(np.asarray(problem.mechanism.graphs.residual(z, p))).max(initial=0.0))
                     for z, p in zip(zs, case_params(problem, design))), default=0.0)
     x = np.concatenate([design / problem.scale, *zs])
     f, _ = nlp.evaluate(x, prepared.P)
-    objective = _objective_doc(prepared, float(f))
-    message = "" if status in ("optimal", "acceptable") else f"IPOPT: {ipopt_status}{feasibility}"
-    if status == "infeasible":
-        message = "no design within the bounds meets the constraints: this is the point of least violation"
     if status in ("optimal", "acceptable") and not on_branch:
         status = "off_branch"
         message = ("the optimum's equilibrium is not the one the mechanism reaches when loaded at that "
                    "design (another branch); try other starts or tighter bounds")
     return StartResult(
-        start=start, status=status, message=message, ipopt_status=ipopt_status,
-        iterations=int(stats.get("iter_count", 0)), seconds=time.perf_counter() - started,
-        x=x, lam_g=lam_g, lam_x=lam_x, objective=objective,
+        start=start, status=status, message=message, ipopt_status=run.return_status,
+        iterations=run.iterations, seconds=time.perf_counter() - started,
+        x=x, lam_g=lam_g, lam_x=lam_x, objective=_objective_doc(prepared, float(f)),
         design=dict(zip(problem.paths, design.tolist())),
         design_start=dict(zip(problem.paths, design0.tolist())),
-        history=_history(prepared, stats), equilibrium_residual=residual, on_branch=on_branch,
+        history=_history(prepared, run.history), equilibrium_residual=residual, on_branch=on_branch,
         constraints=constraint_report(prepared, x, lam_g),
         multipliers=_multipliers(prepared, lam_g, lam_x),
     )
+
+
+def _judged(prepared: Prepared, run, x0: np.ndarray):
+    """(status, x, lam_g, lam_x, message) of an IPOPT run: when it failed on a constrained
+    problem, whether because no design meets the constraints (the least violation problem)."""
+    problem, nlp = prepared.problem, prepared.nlp
+    if run.succeeded:
+        return run.status, run.x, run.lam_g, run.lam_x, ""
+    feasibility = ""
+    if problem.constraints:
+        x_least, violation, least_status = least_violation(
+            nlp, x0, prepared.P, prepared.lbx, prepared.ubx, prepared.lbg, prepared.ubg, problem.spec.max_iterations)
+        if least_status == "optimal" and violation > INFEASIBLE_VIOLATION:
+            return ("infeasible", x_least, np.zeros_like(run.lam_g), np.zeros_like(run.lam_x),
+                    "no design within the bounds meets the constraints: this is the point of least violation")
+        if least_status == "optimal":
+            feasibility = "; feasible designs exist (try other starts or more iterations)"
+    if run.status == "infeasible":
+        return run.status, run.x, run.lam_g, run.lam_x, ("no design within the bounds meets the constraints: "
+                                                         "this is the point of least violation")
+    return run.status, run.x, run.lam_g, run.lam_x, f"IPOPT: {run.return_status}{feasibility}"
+
+
+def _loaded_states(problem: DesignProblem, design: np.ndarray, zs: list[np.ndarray]):
+    """The states the NLP found, polished by Newton where they are the ones the mechanism
+    reaches when loaded at that design (an optimizer can land on another equilibrium branch,
+    e.g. a snapped-through shape), and whether every case's is."""
+    loaded = equilibria(problem, design)
+    on_branch = all(s == "converged" and same_state(z, zc) for (s, z), zc in zip(loaded, zs))
+    zs = [z if s == "converged" and same_state(z, zc) else zc for (s, z), zc in zip(loaded, zs)]
+    return zs, on_branch
 
 
 def _objective_doc(prepared: Prepared, f: float) -> float:
@@ -283,8 +279,7 @@ def _objective_doc(prepared: Prepared, f: float) -> float:
     return f * prepared.objective_scale / problem.output_factor(problem.objective)
 
 
-def _history(prepared: Prepared, stats: dict) -> list[dict]:
-    it = stats.get("iterations") or {}
+def _history(prepared: Prepared, it: dict) -> list[dict]:
     objective = it.get("obj", [])
     return [{"iteration": k, "objective": _objective_doc(prepared, float(objective[k])),
              "constraint_violation": float(it["inf_pr"][k]), "dual_infeasibility": float(it["inf_du"][k])}

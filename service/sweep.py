@@ -20,7 +20,8 @@ from models import Mechanism, MechanismError
 from models.document import SweepSpec
 from models.assembly import Graphs
 from models.units import quantity_to_si
-from service.equilibrium import EquilibriumResult, NewtonOptions, check_constrained, iterate, newton
+from service.equilibrium import EquilibriumResult, NewtonOptions, check_constrained, newton
+from service.newton import iterate_dense
 
 Start = Literal["previous", "undeformed"]
 
@@ -142,7 +143,7 @@ def solve_for_target(mech: Mechanism, path: str, output: str, target: float,
     x0 = np.concatenate([start.z, [p[k]]])
     full = replace(options, jacobian="full")
     started = time.perf_counter()
-    status, x, norm, iters, history, message = iterate(evaluate, x0, full)
+    status, x, norm, iters, history, message = iterate_dense(evaluate, x0, full)
     seconds = time.perf_counter() - started + start.seconds
     value = float(x[-1] / factor)
     solved = mech.with_values({path: value})
