@@ -100,6 +100,21 @@ class Graphs:
         return tuple(tuple(s) for s in self._store.meta["shape_segments"])
 
     @cached_property
+    def energy_form(self):
+        """The total potential and its constraints (models.forms.EnergyForm); MechanismError
+        naming the first element whose model has none."""
+        from models.forms import energy_form
+
+        return energy_form(self.structure)
+
+    @cached_property
+    def mass_matrix(self) -> ca.Function:
+        """(z, p) -> M (models.forms.mass_matrix)."""
+        from models.forms import mass_matrix
+
+        return mass_matrix(self.structure)
+
+    @cached_property
     def tangent_terms(self) -> ca.Function:
         """(z, p) -> (K_I, K_II, K_III, K_load): the split of K_T of seed 000 (Eqs. 26-28)."""
         from models.tangent_split import tangent_terms

@@ -18,6 +18,10 @@ With shear on, this is Reissner's geometrically exact beam: the shear strain is 
 normal to the cross-section. Eq. 5.1d of the thesis takes V normal to the deformed centre
 line, which makes gamma implicit; the two agree to first order in gamma.
 
+A link with mass (line mass L rho A(u) per unit u) carries a sixth state, its mass mu from
+u = 0: mu' = L rho A. Under gravity g its own weight is a distributed load, and the internal
+force falls along it, n(u) = n(0) - mu(u) g (a slice's balance: n' = -mu' g).
+
 Each shooting interval is integrated by Gragg's modified midpoint rule extrapolated in h^2
 (the fixed-order Gragg-Bulirsch-Stoer scheme): `order` = 2 x levels, explicit, so the whole
 link is one SX graph with exact derivatives.
@@ -30,7 +34,7 @@ from typing import Callable
 
 import casadi as ca
 
-STATE = ("psi", "m", "x", "y", "e")
+STATE = ("psi", "m", "x", "y", "e", "mu")  # mu only for links with mass
 
 
 @dataclass(frozen=True)
@@ -54,10 +58,15 @@ class LinkProperties:
         return 6 if self.line_mass is not None else 5
 
 
-def rhs_function(props: LinkProperties, p: ca.SX) -> ca.Function:
-    """f(u, s, n, p) -> s' for the state s (5,) and internal force n = (h, v)."""
-    u, s, n = ca.SX.sym("u"), ca.SX.sym("s", 5), ca.SX.sym("n", 2)
+def rhs_function(props: LinkProperties, p: ca.SX, weighed: bool = True) -> ca.Function:
+    """f(u, s, n, p) -> s' for the state s (props.states) and the internal force n = (h, v)
+    at u = 0; weighed (with gravity and a line mass), the force at u is n - mu(u) g: n less
+    the weight of the part behind."""
+    u, s, n_start = ca.SX.sym("u"), ca.SX.sym("s", props.states), ca.SX.sym("n", 2)
     psi, m = s[0], s[1]
+    n = n_start
+    if weighed and props.line_mass is not None and props.gravity is not None:
+        n = n_start - s[5] * props.gravity
     h, v = n[0], n[1]
     L = props.length
     c, sn = ca.cos(psi), ca.sin(psi)
@@ -75,8 +84,10 @@ def rhs_function(props: LinkProperties, p: ca.SX) -> ca.Function:
         energy = energy + N**2 / (2 * props.EA(u))
     if props.kGA is not None:
         energy = energy + V**2 / (2 * props.kGA(u))
-    ds = ca.vertcat(eta_slope + L * m / EI, h * dy - v * dx, dx, dy, L * energy)
-    return ca.Function("link_rhs", [u, s, n, p], [ds], ["u", "s", "n", "p"], ["ds"])
+    ds = [eta_slope + L * m / EI, h * dy - v * dx, dx, dy, L * energy]
+    if props.line_mass is not None:
+        ds.append(props.line_mass(u))
+    return ca.Function("link_rhs", [u, s, n_start, p], [ca.vertcat(*ds)], ["u", "s", "n", "p"], ["ds"])
 
 
 def inverse_rhs_function(props: LinkProperties, psi: Callable[[ca.SX], ca.SX], p: ca.SX, q: ca.SX) -> ca.Function:

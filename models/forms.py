@@ -1,0 +1,95 @@
+"""The other problem forms of a structure, built on demand: the energy form (a total potential
+with named equality and inequality constraints, for minimization: contact will add its
+inequalities) and the mass form (the mass matrix of the unknowns, for time simulation).
+
+Energy form: unknowns x are the free body coordinates (nondimensional, as in z);
+    V(x, p) = sum of the elements' strain energies - work of the dead loads,
+    g(x, p) = 0 the elements' equalities (their multipliers are the elements' unknowns in
+    the residual form, in element order), h(x, p) >= 0 their inequalities.
+Its stationarity, grad V + J_g^T lam = 0 and g = 0, is the residual form R(z) = 0 with
+z = [x; lam]. Elements whose model is not the gradient of an energy (the constant-stiffness
+curved beams, the shooting links) have no energy form and say why.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+
+from models.context import AssemblyContext
+from models.elements import FAMILIES
+from models.elements.base import NoEnergyForm
+from models.errors import MechanismError
+from models.loads import kinetic_energy, load_potential
+from models.structure import Structure
+
+
+@dataclass(frozen=True)
+class EnergyForm:
+    unknowns: tuple[str, ...]  # the free body coordinates
+    potential: ca.Function  # (x, p) -> V
+    equalities: ca.Function  # (x, p) -> g
+    equality_names: tuple[str, ...]  # "<element>.<name>"
+    inequalities: ca.Function  # (x, p) -> h
+    inequality_names: tuple[str, ...]
+    n_multipliers: int  # residual-form unknowns beyond x: the equalities' multipliers
+
+
+def energy_form(structure: Structure) -> EnergyForm:
+    ctx = AssemblyContext(structure)
+    x = ca.SX.sym("x", len(structure.free))
+    d = ctx.displacements(x)
+    V = load_potential(ctx, d)
+    equalities, inequalities = [], []
+    for t in structure.elements:
+        family = FAMILIES.of(t)
+        try:
+            terms = family.energy_terms(ctx, t, d)
+        except NoEnergyForm as reason:
+            raise MechanismError(f"/elements/{t.name}", f"element '{t.name}' ({family.type}) has no energy "
+                                 f"form: {reason}") from None
+        if len(terms.equalities) != t.unknowns:
+            raise RuntimeError(f"family {family.type}: {t.unknowns} unknowns but {len(terms.equalities)} equalities")
+        V = V + terms.energy
+        equalities += [(f"{t.name}.{name}", g) for name, g in terms.equalities]
+        inequalities += [(f"{t.name}.{name}", h) for name, h in terms.inequalities]
+    p = ctx.p
+
+    def function(name: str, rows: list[tuple[str, ca.SX]]) -> ca.Function:
+        value = ca.vertcat(*[row for _, row in rows]) if rows else ca.SX(0, 1)
+        return ca.Function(name, [x, p], [value], ["x", "p"], [name[0]])
+
+    form = EnergyForm(tuple(structure.coordinate_name(b, c) for b, c in structure.free),
+                      ca.Function("potential", [x, p], [V], ["x", "p"], ["V"]),
+                      function("g_equalities", equalities), tuple(name for name, _ in equalities),
+                      function("h_inequalities", inequalities), tuple(name for name, _ in inequalities),
+                      len(equalities))
+    for fn in (form.potential, form.equalities, form.inequalities):
+        if fn.has_free():
+            raise RuntimeError(f"graph {fn.name()} has free symbols {fn.get_free()}")
+    return form
+
+
+def mass_matrix(structure: Structure) -> ca.Function:
+    """(z, p) -> M: the Hessian of the kinetic energy in the unknowns' rates. Body masses fill
+    the rows of free body coordinates; the elements' own unknowns (multipliers, shooting
+    states) carry none. A link with mass has no mass matrix in its shooting unknowns."""
+    heavy = [t.name for t in structure.of_family("link") if getattr(t, "weighs", False)]
+    if heavy:
+        raise MechanismError(f"/elements/{heavy[0]}", f"link '{heavy[0]}' has mass (its material's density), but "
+                             "its shooting unknowns have no mass matrix: time simulation of links needs the "
+                             "dynamic link model")
+    ctx = AssemblyContext(structure)
+    n = structure.n_unknowns
+    z, rate = ca.SX.sym("z", n), ca.SX.sym("zdot", n)
+    T = kinetic_energy(ctx, ctx.displacements(z), _body_rates(structure, rate))
+    M = ca.hessian(T, rate)[0]
+    return ca.Function("mass_matrix", [z, ctx.p], [M], ["z", "p"], ["M"])
+
+
+def _body_rates(structure: Structure, rate: ca.SX) -> list[ca.SX]:
+    """[vx, vy, omega] per body: the free coordinates' rates, zero where prescribed."""
+    free_index = {bc: k for k, bc in enumerate(structure.free)}
+    return [ca.vertcat(*[rate[free_index[(b, c)]] if (b, c) in free_index else ca.SX(0) for c in range(3)])
+            for b in range(len(structure.bodies))]
