@@ -1,0 +1,83 @@
+"""Rigid joints between two bodies: the shared part of the pin and slider families.
+
+A joint holds two constraints g(d) = 0 between points of its bodies that coincide in the
+drawn mechanism (at `at`, global; default the `to` body's reference point). Its unknowns are
+their multipliers lam; the wrench each body applies to the joint is (dg/dd_b)^T lam, and its
+rows are g (models.elements.base). The energy form states g as equalities whose multipliers
+are the same lam.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+
+import casadi as ca
+from pydantic import Field
+
+from models.context import AssemblyContext
+from models.elements.base import Contribution, EnergyTerms, ScaleHint, SiValues, TwoBodyElement, constraint_wrenches
+from models.fields import Vec2
+from models.structure import ElementTopology
+
+class RigidJoint(TwoBodyElement):
+    at: Vec2 | None = Field(default=None, description="where the joint is (global, undeformed; default: "
+                            "the `to` body's reference point)")
+
+
+@dataclass(frozen=True)
+class JointTopology(ElementTopology):
+    located: str  # at | reference
+
+    @property
+    def unknowns(self) -> int:
+        return 2
+
+
+def collect_joint(c, family: str, name: str, el: RigidJoint, i: int, j: int) -> JointTopology:
+    if el.at is not None:
+        c.add_vec(f"/elements/{name}/at", el.at, "length")
+    return JointTopology(name, family, i, j, "at" if el.at is not None else "reference")
+
+
+def joint_points(ctx: AssemblyContext, t: JointTopology, d: list[ca.SX]):
+    """The joint's point on each body (global) and their arms from the reference points."""
+    point = ctx.P.vec(f"/elements/{t.name}/at") if t.located == "at" else ctx.reference(t.end_body)[0]
+    i, j = t.start_body, t.end_body
+    local_a, local_b = ctx.body_axes(i, point), ctx.body_axes(j, point)
+    return ctx.place(i, local_a, d), ctx.place(j, local_b, d), ctx.arm(i, local_a, d), ctx.arm(j, local_b, d)
+
+
+class JointFamily(ABC):
+    """A family of rigid joints given by its constraints g(d) and its outputs."""
+
+    type: str
+    schema: type[RigidJoint]
+    constraint_names: tuple[str, str]
+    multiplier_names: tuple[tuple[str, str], tuple[str, str]]  # (name, kind) of lam
+
+    @abstractmethod
+    def constraints(self, ctx: AssemblyContext, t: JointTopology, d: list[ca.SX]) -> ca.SX:
+        """g(d): two rows, zero where the joint holds."""
+
+    @abstractmethod
+    def joint_outputs(self, ctx: AssemblyContext, t: JointTopology, d, lam) -> list[tuple[str, str, ca.SX]]:
+        """(name, kind, value) of its reported quantities."""
+
+    def collect(self, c, name: str, el: RigidJoint, i: int, j: int) -> JointTopology:
+        return collect_joint(c, self.type, name, el, i, j)
+
+    def contribute(self, ctx: AssemblyContext, t: JointTopology, d, z) -> Contribution:
+        wrenches = constraint_wrenches(ctx, (t.start_body, t.end_body), d, z,
+                                       lambda local: self.constraints(ctx, t, local))
+        return Contribution(wrenches, self.constraints(ctx, t, d), self.joint_outputs(ctx, t, d, z))
+
+    def unknowns(self, t: JointTopology) -> list[tuple[str, str]]:
+        return list(self.multiplier_names)
+
+    def energy_terms(self, ctx: AssemblyContext, t: JointTopology, d) -> EnergyTerms:
+        g = self.constraints(ctx, t, d)
+        return EnergyTerms(ca.SX(0), equalities=[(name, g[k]) for k, name in enumerate(self.constraint_names)])
+
+    def scale_hint(self, t: JointTopology, values: SiValues) -> ScaleHint:
+        return ScaleHint()
