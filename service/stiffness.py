@@ -32,8 +32,8 @@ def condensed(K: np.ndarray, n_bodies: int) -> np.ndarray:
     singular = np.linalg.svd(compliance, compute_uv=False)
     if singular[-1] <= 1e-12 * singular[0]:
         raise MechanismError("/elements", "the tangent stiffness is infinite in some direction: inextensible "
-                             "links make a motion of the bodies rigid; set \"axial\": true on the links "
-                             "for a finite stiffness")
+                             "links or rigid joints (pins, sliders) make a motion of the bodies rigid; set "
+                             "\"axial\": true on the links for a finite stiffness")
     return np.linalg.inv(compliance)
 
 
