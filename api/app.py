@@ -16,7 +16,9 @@ from api.errors import install_error_handlers
 from api.limits import BodySizeLimit
 from api.routers import examples, health, jobs, optimize, solve, sweeps
 from api.state import Services, SolverThread
-from service.analysis import Limits
+from service.analyses import ANALYSES
+from service.requests import Limits
+from service.threads import single_threaded_blas
 from service.examples import ExampleLibrary, examples_directory
 from service.jobs.executors import make_executor
 from service.jobs.runner import JobRunner
@@ -49,6 +51,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     @asynccontextmanager
     async def lifespan(app: FastAPI):
+        single_threaded_blas()  # the solver thread shares the cores with the pool's workers
         services = _services(settings)
         app.state.services = services
         services.runner.start()
@@ -67,4 +70,23 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     for module in (solve, sweeps, optimize, jobs, examples, health):
         app.include_router(module.router)
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_request_bytes)
+    _list_analyses_in_schema(app)
     return app
+
+
+def _list_analyses_in_schema(app: FastAPI) -> None:
+    """The analyses are a registry of the service (service.analyses), not a list the client
+    schemas keep: the OpenAPI schema enumerates them for generated clients."""
+    build = app.openapi
+
+    def openapi() -> dict:
+        schema = build()
+        components = schema.get("components", {}).get("schemas", {})
+        for name, which in (("SolveRequest", ANALYSES.names()),
+                            ("SweepRequest", [a["name"] for a in ANALYSES.describe() if a["sweepable"]])):
+            field = components.get(name, {}).get("properties", {}).get("analysis")
+            if field is not None:
+                field["enum"] = which
+        return schema
+
+    app.openapi = openapi

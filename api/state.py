@@ -8,7 +8,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from functools import partial
 
-from service.analysis import Limits
+from service.requests import Limits
 from service.examples import ExampleLibrary
 from service.jobs.executors import TaskExecutor
 from service.jobs.runner import JobRunner

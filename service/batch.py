@@ -10,7 +10,8 @@ from collections.abc import Callable
 from pathlib import Path
 
 from models import MechanismError, compile_mechanism, load_document
-from service.analysis import equilibrium_report, plain
+from service.analyses.equilibrium import equilibrium_report
+from service.reports import plain
 from service.equilibrium import NewtonOptions
 from service.sweep import document_sweep
 

@@ -38,12 +38,13 @@ def _solver(mech: Mechanism, options: NewtonOptions):
 
 
 def minimize_energy(mech: Mechanism, options: NewtonOptions = NewtonOptions(),
-                    guess: np.ndarray | None = None) -> EquilibriumResult:
+                    guess: np.ndarray | None = None, p: np.ndarray | None = None) -> EquilibriumResult:
     """The minimum of the total potential from `guess` (free body coordinates, nondimensional;
-    default the undeformed state). Its residual_norm is that of the residual form there."""
+    default the undeformed state) at the parameters p (default the mechanism's). Its
+    solver_residual is that of the residual form there."""
     started = time.perf_counter()
     form, solver = _solver(mech, options)
-    p = mech.p()
+    p = mech.p() if p is None else p
     n_eq, n_in = len(form.equality_names), len(form.inequality_names)
     x0 = np.zeros(len(form.unknowns)) if guess is None else np.asarray(guess, dtype=float)
     run = ipopt.solve(solver, x0=x0, p=p, lbg=np.zeros(n_eq + n_in),

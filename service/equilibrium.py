@@ -20,7 +20,7 @@ from models.assembly import graphs_for
 from models.residual import unknown_names as element_unknowns
 from service import ipopt
 from service.newton import NewtonOptions, Status, dense_solve, iterate, iterate_dense, sparse_direction, sparse_step  # noqa: F401 (NewtonOptions, Status: re-exported)
-from service.units import displacement_to_doc, outputs_in_doc_units
+from service.units import displacement_to_doc, outputs_in_doc_units, residual_report
 
 # Seed 000, Sec. 2: the constant-stiffness curved beam is faithful up to about +-20 deg.
 ROTATION_VALIDITY_DEG = 20.0
@@ -29,7 +29,7 @@ ROTATION_VALIDITY_DEG = 20.0
 class EquilibriumResult:
     status: Status
     z: np.ndarray  # free displacements, nondimensional
-    residual_norm: float  # nondimensional infinity norm
+    solver_residual: float  # nondimensional infinity norm of every row of R (Newton's test)
     iterations: int
     history: list[float]  # residual norm before each iteration
     seconds: float
@@ -40,21 +40,19 @@ class EquilibriumResult:
     def converged(self) -> bool:
         return self.status == "converged"
 
-    def _residual_rows(self, coordinate_kinds: tuple[int, ...]) -> float:
-        m = self.mechanism
-        R = np.asarray(m.graphs.residual(self.z, m.p())).ravel()
-        rows = [R[k] for k, (_, c) in enumerate(m.structure.free) if c in coordinate_kinds]
-        return float(np.abs(rows).max()) if rows else 0.0
+    def residuals(self) -> dict:
+        """service.units.residual_report of this state."""
+        return residual_report(self.mechanism, self.z)
 
     @property
     def residual_norm_force(self) -> float:
         """Largest unbalanced force, in the document's force unit."""
-        return self._residual_rows((0, 1)) / self.mechanism.nd_per_doc("force")
+        return self.residuals()["residual_norm"]
 
     @property
     def residual_norm_moment(self) -> float:
         """Largest unbalanced moment, in the document's moment unit."""
-        return self._residual_rows((2,)) / self.mechanism.nd_per_doc("moment")
+        return self.residuals()["residual_moment"]
 
     def outputs(self) -> dict[str, float]:
         """Every named scalar (poses, reactions, flexure wrenches and stresses, points) in
@@ -87,10 +85,7 @@ class EquilibriumResult:
             "status": self.status,
             "message": self.message,
             "iterations": self.iterations,
-            "residual_norm": self.residual_norm_force,
-            "residual_unit": m.document.units.force,
-            "residual_moment": self.residual_norm_moment,
-            "residual_moment_unit": m.doc_unit("moment"),
+            **residual_report(m, self.z),
             "seconds": self.seconds,
             "warnings": self.warnings(outputs) if self.converged else [],
             "displacements": self.displacements(),
@@ -196,7 +191,7 @@ def solve_bounded(mech: Mechanism, bounds: dict[str, tuple[float | None, float |
     norm = float(np.abs(np.asarray(mech.graphs.residual(z, p))).max())
     # Polish inside the bounds: Newton from the IPOPT point, kept only if it stays inside.
     polished = newton(mech, p, z, options)
-    status, z_newton, norm_newton = polished.status, polished.z, polished.residual_norm
+    status, z_newton, norm_newton = polished.status, polished.z, polished.solver_residual
     if status == "converged" and np.all(z_newton >= lower - 1e-12) and np.all(z_newton <= upper + 1e-12):
         z, norm = z_newton, norm_newton
     seconds = time.perf_counter() - started

@@ -21,6 +21,7 @@ from models.document import SweepSpec
 from models.assembly import Graphs
 from models.units import quantity_to_si
 from service.equilibrium import EquilibriumResult, NewtonOptions, check_constrained, newton
+from service.units import residual_report
 from service.newton import iterate_dense
 
 Start = Literal["previous", "undeformed"]
@@ -32,11 +33,16 @@ class SweepResult:
     values: np.ndarray  # document units
     status: list[str]
     iterations: np.ndarray
-    residual_norms: np.ndarray  # nondimensional
+    solver_residuals: np.ndarray  # nondimensional, every row (service.units.residual_report)
     z: np.ndarray  # (points, n_free), nondimensional
     outputs: dict[str, np.ndarray]  # document units, one entry per point
     seconds: float
     mechanism: Mechanism = field(repr=False)
+
+    def residuals(self, point: int) -> dict:
+        """service.units.residual_report of one point."""
+        mech = self.mechanism.with_values({self.path: float(self.values[point])})
+        return residual_report(mech, self.z[point])
 
     @property
     def all_converged(self) -> bool:
@@ -82,7 +88,7 @@ def sweep(mech: Mechanism, path: str, values, options: NewtonOptions = NewtonOpt
         r = newton(mech, p, guess, options, frozen)
         if r.converged:
             z_prev = r.z
-        Z[i], iterations[i], norms[i] = r.z, r.iterations, r.residual_norm
+        Z[i], iterations[i], norms[i] = r.z, r.iterations, r.solver_residual
         status.append(r.status)
         Y.append(np.asarray(mech.graphs.outputs(r.z, p)).ravel())
         if progress is not None:

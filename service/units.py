@@ -15,6 +15,25 @@ def outputs_in_doc_units(mech: Mechanism, y_nd: np.ndarray) -> dict[str, float]:
     return {n: float(v) / mech.nd_per_doc(k) for n, k, v in zip(names, kinds, np.asarray(y_nd, dtype=float).ravel())}
 
 
+def residual_report(mech: Mechanism, z: np.ndarray, p: np.ndarray | None = None) -> dict:
+    """The residual of a state in words an engineer reads, one definition for every report:
+    residual_norm, the largest unbalanced force on a free body coordinate (residual_unit, the
+    document's force unit); residual_moment, the largest unbalanced moment (its unit); and
+    solver_residual, the nondimensional infinity norm of every row (elements' own rows
+    included), which is what Newton's tolerance applies to."""
+    R = np.asarray(mech.graphs.residual(z, mech.p() if p is None else p), dtype=float).ravel()
+    free = mech.structure.free
+
+    def largest(coordinates: tuple[int, ...]) -> float:
+        rows = [abs(R[k]) for k, (_, c) in enumerate(free) if c in coordinates]
+        return float(max(rows)) if rows else 0.0
+
+    return {"residual_norm": largest((0, 1)) / mech.nd_per_doc("force"), "residual_unit": mech.doc_unit("force"),
+            "residual_moment": largest((2,)) / mech.nd_per_doc("moment"),
+            "residual_moment_unit": mech.doc_unit("moment"),
+            "solver_residual": float(np.abs(R).max()) if R.size else 0.0}
+
+
 def coordinate_kinds(mech: Mechanism) -> tuple[list[str], list[str]]:
     """(row kinds, column kinds) of K_T over the free coordinates."""
     rows = [_ROW_KINDS[c] for _, c in mech.structure.free]

@@ -7,7 +7,7 @@ from fastapi import APIRouter, Response
 from api.deps import OwnerDep, ServicesDep
 from api.documents import request_document
 from api.responses import ERRORS
-from api.routers.sweeps import JOB_LINKS, create_job
+from api.job_creation import JOB_LINKS, create_job
 from api.schemas import JobStatusResponse, OptimizeRequest
 
 router = APIRouter(prefix="/v1", tags=["jobs"])

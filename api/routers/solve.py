@@ -8,32 +8,24 @@ from api.deps import OwnerDep, ServicesDep
 from api.documents import request_document
 from api.responses import ERRORS
 from api.schemas import SolveRequest, SolveResponse
-from service.analysis import (
-    Limits,
-    compile_request,
-    equilibrium_report,
-    inverse_report,
-    linearization_report,
-    newton_options,
-)
+from service.analyses import ANALYSES, AnalysisRequest
+from service.requests import Limits, compile_request, newton_options
 
 router = APIRouter(prefix="/v1", tags=["solve"])
 
+# The request fields an analysis may read (the rest say which mechanism and how to solve it).
+ANALYSIS_FIELDS = ("target", "stiffness", "sensitivities", "at", "displacements")
+
 
 def _solve(request: SolveRequest, document: dict, limits: Limits) -> dict:
+    analysis = ANALYSES.named(request.analysis)
     options = newton_options(request.options.given() if request.options else None, limits.solve_time_limit)
     mech = compile_request(document, request.model, request.overrides, limits)
-    if request.analysis == "inverse":
-        return inverse_report(mech, request.displacements or {})
-    if request.analysis == "linearization":
-        return linearization_report(mech, options, request.at)
-    target = request.target.model_dump() if request.target else None
-    sensitivities = request.sensitivities.model_dump() if request.sensitivities else None
-    return equilibrium_report(mech, options, request.stiffness, target, sensitivities)
+    return analysis.run(mech, AnalysisRequest(options, request.model_dump(include=set(ANALYSIS_FIELDS))))
 
 
 @router.post("/solve", operation_id="solve", response_model=SolveResponse, responses=ERRORS,
-             summary="Solve one mechanism: equilibrium, inverse or linearization")
+             summary="Solve one mechanism: equilibrium, linearization, inverse, energy")
 async def solve(request: SolveRequest, services: ServicesDep, _owner: OwnerDep) -> dict:
     """Runs in the server process. Non-convergence is a 200 with `status` and diagnostics; a
     document that cannot be modelled is a 422 naming the field."""

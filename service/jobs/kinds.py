@@ -1,70 +1,39 @@
-"""What a kind of job must say, and the registry of kinds.
+"""The registry of job kinds (one line per kind), and the function workers run.
 
-A job is a spec (a JSON object kept in the store) whose work splits into points, each
-persisted when it finishes. A kind says:
-  prepare(spec, limits) -> Plan      on the server, before the job exists: validate the spec
-                                     (MechanismError naming the field) and count its points
-  tasks(spec, plan, finished)        the tasks that can run now, given the stored points
-                                     (on a fresh job, finished is empty; after a restart, not)
-  follow_up(spec, plan, task, finished)  tasks unblocked once `task`'s points are stored
-  run(spec, task)                    in a worker process: [(index, point data)]
-  result(spec, plan, finished)       the job's result from its points
-Tasks and point data are JSON-able dicts, so they travel to process pools and Dask workers
-and are stored as they are. The runner and the store know nothing else about a kind.
+The kinds are loaded when first asked for, not when this module is imported, so a worker
+loads the solvers only when it first runs a task. The contract is service.jobs.base.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from dataclasses import dataclass, field
-from typing import Any, Protocol
+from functools import lru_cache
 
-from service.analysis import Limits
+from service.jobs.base import JobKind, Plan
+from service.threads import single_threaded_blas
 
-
-@dataclass(frozen=True)
-class Plan:
-    total: int  # points
-    meta: dict[str, Any] = field(default_factory=dict)  # JSON-able facts for result(): units, names
+__all__ = ["JobKind", "Plan", "kind_named", "run_task"]
 
 
-class JobKind(Protocol):
-    name: str
+@lru_cache(maxsize=1)
+def _kinds() -> dict[str, JobKind]:
+    from service.jobs.optimize import OPTIMIZE
+    from service.jobs.sweep import SWEEP
 
-    def prepare(self, spec: dict, limits: Limits) -> Plan: ...
-
-    def tasks(self, spec: dict, plan: dict, finished: Mapping[int, dict], chunk_size: int) -> list[dict]: ...
-
-    def follow_up(self, spec: dict, plan: dict, task: dict, finished: Mapping[int, dict],
-                  chunk_size: int) -> list[dict]: ...
-
-    def run(self, spec: dict, task: dict) -> list[tuple[int, dict]]: ...
-
-    def result(self, spec: dict, plan: dict, finished: Mapping[int, dict]) -> dict: ...
-
-
-_KINDS: dict[str, JobKind] = {}
-
-
-def register(kind: JobKind) -> JobKind:
-    _KINDS[kind.name] = kind
-    return kind
+    return {kind.name: kind for kind in (
+        SWEEP,
+        OPTIMIZE,
+    )}
 
 
 def kind_named(name: str) -> JobKind:
-    _load_builtin_kinds()
+    kinds = _kinds()
     try:
-        return _KINDS[name]
+        return kinds[name]
     except KeyError:
-        raise KeyError(f"unknown job kind '{name}' (kinds: {', '.join(sorted(_KINDS))})") from None
-
-
-def _load_builtin_kinds() -> None:
-    # Imported here, not at module import, so a worker loads kinds only when it first runs a task.
-    import service.jobs.optimize  # noqa: F401  (registers "optimize")
-    import service.jobs.sweep  # noqa: F401  (registers "sweep")
+        raise KeyError(f"unknown job kind '{name}' (kinds: {', '.join(sorted(kinds))})") from None
 
 
 def run_task(kind: str, spec: dict, task: dict) -> list[tuple[int, dict]]:
     """The function workers execute (a module-level name, so pools and Dask can ship it)."""
+    single_threaded_blas()
     return kind_named(kind).run(spec, task)

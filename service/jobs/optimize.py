@@ -18,9 +18,10 @@ import numpy as np
 
 from models import MechanismError
 from models.document import parse_optimize_spec
-from service.analysis import Limits, compile_request, plain, under
+from service.reports import plain
+from service.requests import Limits, compile_request, under
 from service.design import DesignProblem, design_problem
-from service.jobs.kinds import Plan, register
+from service.jobs.base import Plan
 from service.optimize import Prepared, StartResult, combine, prepare, run_start
 
 
@@ -72,6 +73,10 @@ class OptimizeJob:
             raise MechanismError("/document/elements", f"the limit is {limits.max_elements} elements")
         return Plan(problem.spec.starts, {"starts": problem.spec.starts})
 
+    def failed(self, point: dict) -> bool:
+        """A start that found no optimum (infeasible, off its branch, not converged)."""
+        return point.get("status") not in ("optimal", "acceptable")
+
     def tasks(self, spec, plan, finished, chunk_size):
         todo = [k for k in range(plan["starts"]) if k not in finished]
         return [{"indices": todo[i:i + chunk_size]} for i in range(0, len(todo), chunk_size)]
@@ -95,4 +100,4 @@ class OptimizeJob:
         return plain(outcome.summary())
 
 
-register(OptimizeJob())
+OPTIMIZE = OptimizeJob()

@@ -168,7 +168,7 @@ class JobRunner:
             self._task_failed(owner, task, error, born)
             return
         points = future.result()
-        self.store.add_points(owner.job.id, points)
+        self.store.add_points(owner.job.id, points, owner.kind.failed)
         owner.finished.update(points)
         owner.pending.extend(owner.kind.follow_up(owner.job.spec, owner.job.plan, task, owner.finished,
                                                   self.chunk_size))

@@ -8,7 +8,7 @@ primary key: a point can be written once only.
 from __future__ import annotations
 
 import uuid
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
@@ -159,22 +159,35 @@ class JobStore:
             return result.rowcount == 1
 
     # --- points -----------------------------------------------------------------------------
-    def add_points(self, job_id: str, points: Iterable[tuple[int, dict[str, Any]]], failed: int = 0) -> int:
+    def add_points(self, job_id: str, points: Iterable[tuple[int, dict[str, Any]]],
+                   failed: Callable[[dict], bool] | None = None) -> int:
         """Store finished points and advance the job's progress in one transaction. Points
-        already stored are left as they are (never overwritten). Returns how many were new."""
+        already stored are left as they are (never overwritten). Returns how many were new.
+        Which points count as failed is the job kind's to say (`failed`, by default the kind
+        of the job asked); the store only counts them."""
         points = list(points)
         if not points:
             return 0
+        if failed is None:
+            failed = self._kind_of(job_id).failed
         with self._session.begin() as s:
             have = set(s.scalars(select(PointRow.index).where(
                 PointRow.job_id == job_id, PointRow.index.in_([i for i, _ in points]))))
             now = utcnow()
             new = [(i, d) for i, d in points if i not in have]
             s.add_all(PointRow(job_id=job_id, index=i, data=d, finished_at=now) for i, d in new)
-            new_failed = sum(1 for _, d in new if d.get("status") != "converged")
+            new_failed = sum(1 for _, d in new if failed(d))
             s.execute(update(JobRow).where(JobRow.id == job_id).values(
                 done=JobRow.done + len(new), failed_points=JobRow.failed_points + new_failed))
         return len(new)
+
+    def _kind_of(self, job_id: str):
+        from service.jobs.kinds import kind_named  # the kinds load the solvers: only when asked
+
+        job = self.get(job_id)
+        if job is None:
+            raise KeyError(f"no job '{job_id}'")
+        return kind_named(job.kind)
 
     def points(self, job_id: str) -> dict[int, dict]:
         with self._session() as s:

@@ -9,6 +9,7 @@ spec:
                 of chunk_size points one after another; without it every point starts from
                 the undeformed state and chunks run in parallel
   outputs       optional output names to keep (default: all)
+  analysis      the sweepable analysis of every point (default: equilibrium)
   model, options, overrides   as for /v1/solve
 
 Point index = position in the grid (row-major over `parameters`). Each stored point keeps its
@@ -26,9 +27,12 @@ from functools import lru_cache
 import numpy as np
 
 from models import Mechanism, MechanismError
-from service.analysis import Limits, compile_request, newton_options, output_units, plain
-from service.equilibrium import check_constrained, newton
-from service.jobs.kinds import Plan, register
+from service.reports import output_units, plain
+from service.requests import Limits, compile_request, newton_options
+from service.units import residual_report
+from service.analyses import ANALYSES
+from service.equilibrium import check_constrained
+from service.jobs.base import Plan
 
 
 def parameter_values(parameter: dict, pointer: str) -> list[float]:
@@ -102,20 +106,30 @@ def mechanism_of(spec: dict) -> Mechanism:
                       json.dumps(spec.get("overrides") or {}, sort_keys=True))
 
 
+def _check_spec(spec: dict, limits: Limits) -> tuple[list[list[float]], tuple[int, ...], list[str]]:
+    """The grid (values per parameter, shape) and the swept paths of a valid spec."""
+    values, shape = grid_shape(spec)
+    total = int(np.prod(shape))
+    if total > limits.max_sweep_points:
+        raise MechanismError("/parameters", f"{total} sweep points: the limit is {limits.max_sweep_points}")
+    paths = [p["path"] for p in spec["parameters"]]
+    if len(set(paths)) != len(paths):
+        raise MechanismError("/parameters", "a path is listed twice")
+    if spec.get("continuation") is not None and spec["continuation"] not in paths:
+        raise MechanismError("/continuation", f"'{spec['continuation']}' is not one of the swept paths "
+                                              f"({', '.join(paths)})")
+    analysis = ANALYSES.named(spec.get("analysis") or "equilibrium")
+    if not analysis.sweepable:
+        sweepable = ", ".join(a["name"] for a in ANALYSES.describe() if a["sweepable"])
+        raise MechanismError("/analysis", f"the {analysis.name} analysis has no points to sweep (sweepable: {sweepable})")
+    return values, shape, paths
+
+
 class SweepJob:
     name = "sweep"
 
     def prepare(self, spec: dict, limits: Limits) -> Plan:
-        values, shape = grid_shape(spec)
-        total = int(np.prod(shape))
-        if total > limits.max_sweep_points:
-            raise MechanismError("/parameters", f"{total} sweep points: the limit is {limits.max_sweep_points}")
-        paths = [p["path"] for p in spec["parameters"]]
-        if len(set(paths)) != len(paths):
-            raise MechanismError("/parameters", "a path is listed twice")
-        if spec.get("continuation") is not None and spec["continuation"] not in paths:
-            raise MechanismError("/continuation", f"'{spec['continuation']}' is not one of the swept paths "
-                                                  f"({', '.join(paths)})")
+        values, shape, paths = _check_spec(spec, limits)
         mech = compile_request(spec["document"], spec.get("model"), spec.get("overrides"), limits)
         newton_options(spec.get("options"))
         units = []
@@ -135,8 +149,12 @@ class SweepJob:
             raise MechanismError("/document" + exc.pointer, exc.problem) from None
         meta = {"parameters": [{"path": p, "unit": u, "values": v} for p, u, v in zip(paths, units, values)],
                 "shape": list(shape), "output_units": {n: all_units[n] for n in wanted},
-                "force_unit": mech.doc_unit("force"), "solve_time_limit": limits.solve_time_limit}
-        return Plan(total, meta)
+                "force_unit": mech.doc_unit("force"), "moment_unit": mech.doc_unit("moment"),
+                "solve_time_limit": limits.solve_time_limit}
+        return Plan(int(np.prod(shape)), meta)
+
+    def failed(self, point: dict) -> bool:
+        return point.get("status") != "converged"
 
     def tasks(self, spec, plan, finished, chunk_size):
         tasks = []
@@ -175,16 +193,15 @@ class SweepJob:
 
     def run(self, spec, task):
         mech = mechanism_of(spec)
+        analysis = ANALYSES.named(spec.get("analysis") or "equilibrium")
         options = newton_options(spec.get("options"), task.get("time_limit"))
         values, shape = grid_shape(spec)
         grid = spec.get("grid", "cartesian")
-        paths = [p["path"] for p in spec["parameters"]]
-        slots = [mech.parameter_index(path) for path in paths]
+        slots = [mech.parameter_index(p["path"]) for p in spec["parameters"]]
         factors = [mech.nd_per_doc(mech.parameters[k].kind) for k in slots]
         names, kinds = mech.graphs.output_names, mech.graphs.output_kinds
         wanted = spec.get("outputs") or list(names)
         columns = [(names.index(n), mech.nd_per_doc(kinds[names.index(n)])) for n in wanted]
-        force = mech.nd_per_doc("force")
         p0 = mech.p()
         zero = np.zeros(mech.n_free)
         z_prev = np.asarray(task["guess"], dtype=float) if task.get("guess") is not None else zero
@@ -193,17 +210,16 @@ class SweepJob:
         for index in task["indices"]:
             here = point_values(values, shape, grid, index)
             p = p0.copy()
-            for slot, factor, v in zip(slots, factors, here):
-                p[slot] = v * factor
-            r = newton(mech, p, z_prev if along_path else zero, options)
+            p[slots] = np.asarray(here) * factors
+            r = analysis.point(mech, p, z_prev if along_path else zero, options)
             if along_path and r.converged:
                 z_prev = r.z
             y = np.asarray(mech.graphs.outputs(r.z, p)).ravel()
+            residuals = residual_report(mech, r.z, p)
             points.append((index, plain({
                 "values": here, "status": r.status, "message": r.message, "iterations": r.iterations,
-                "residual_norm": r.residual_norm / force, "seconds": r.seconds,
-                "outputs": {n: y[j] / f for n, (j, f) in zip(wanted, columns)},
-                "z": r.z,
+                **{k: residuals[k] for k in ("residual_norm", "residual_moment", "solver_residual")},
+                "seconds": r.seconds, "outputs": {n: y[j] / f for n, (j, f) in zip(wanted, columns)}, "z": r.z,
             })))
         return points
 
@@ -211,7 +227,8 @@ class SweepJob:
         points = [{"index": i, **{k: v for k, v in d.items() if k != "z"}} for i, d in sorted(finished.items())]
         return {"parameters": plan["parameters"], "grid": spec.get("grid", "cartesian"),
                 "continuation": spec.get("continuation"), "output_units": plan["output_units"],
-                "residual_unit": plan["force_unit"], "points": points}
+                "residual_unit": plan["force_unit"], "residual_moment_unit": plan.get("moment_unit"),
+                "analysis": spec.get("analysis") or "equilibrium", "points": points}
 
 
-register(SweepJob())
+SWEEP = SweepJob()

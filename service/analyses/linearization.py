@@ -1,0 +1,45 @@
+"""The linearization analysis: the tangent stiffness K_T (and the seed-000 terms I-III where
+they apply) at the equilibrium under the document's loads, or undeformed."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from models import Mechanism, MechanismError
+from service.analyses.base import Analysis, AnalysisRequest
+from service.equilibrium import solve_equilibrium
+from service.newton import NewtonOptions
+from service.reports import plain, stiffness_dict
+from service.requests import under
+
+
+def linearization_report(mech: Mechanism, options: NewtonOptions, at: str = "equilibrium") -> dict:
+    """K_T and its terms at the equilibrium under the document's loads (or undeformed)."""
+    if at not in ("equilibrium", "undeformed"):
+        raise MechanismError("/at", f"unknown state '{at}' (equilibrium, undeformed)")
+    report: dict[str, Any] = {"analysis": "linearization", "name": mech.document.name, "at": at}
+    z = None
+    if at == "equilibrium":
+        try:
+            result = solve_equilibrium(mech, options)
+        except MechanismError as exc:
+            raise under("/document", exc) from None
+        report.update(result.summary())
+        if not result.converged:
+            return plain(report)
+        z = result.z
+    else:
+        report.update(status="converged", message="", iterations=0)
+    report["stiffness"] = stiffness_dict(mech, z)
+    return plain(report)
+
+
+class LinearizationAnalysis(Analysis):
+    name = "linearization"
+    summary = "The tangent stiffness K_T at the equilibrium (or undeformed: at=undeformed), in document units"
+
+    def run(self, mech: Mechanism, request: AnalysisRequest) -> dict:
+        return linearization_report(mech, request.options, request.get("at", "equilibrium"))
+
+
+LINEARIZATION = LinearizationAnalysis()

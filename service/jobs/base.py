@@ -1,0 +1,46 @@
+"""What a kind of job must say.
+
+A job is a spec (a JSON object kept in the store) whose work splits into points, each
+persisted when it finishes. A kind says:
+  prepare(spec, limits) -> Plan      on the server, before the job exists: validate the spec
+                                     (MechanismError naming the field) and count its points
+  tasks(spec, plan, finished)        the tasks that can run now, given the stored points
+                                     (on a fresh job, finished is empty; after a restart, not)
+  follow_up(spec, plan, task, finished)  tasks unblocked once `task`'s points are stored
+  run(spec, task)                    in a worker process: [(index, point data)]
+  failed(point)                      whether a stored point counts as failed (progress.failed_points)
+  result(spec, plan, finished)       the job's result from its points
+Tasks and point data are JSON-able dicts, so they travel to process pools and Dask workers
+and are stored as they are. The runner and the store know nothing else about a kind.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+from service.requests import Limits
+
+
+@dataclass(frozen=True)
+class Plan:
+    total: int  # points
+    meta: dict[str, Any] = field(default_factory=dict)  # JSON-able facts for result(): units, names
+
+
+class JobKind(Protocol):
+    name: str
+
+    def prepare(self, spec: dict, limits: Limits) -> Plan: ...
+
+    def tasks(self, spec: dict, plan: dict, finished: Mapping[int, dict], chunk_size: int) -> list[dict]: ...
+
+    def follow_up(self, spec: dict, plan: dict, task: dict, finished: Mapping[int, dict],
+                  chunk_size: int) -> list[dict]: ...
+
+    def run(self, spec: dict, task: dict) -> list[tuple[int, dict]]: ...
+
+    def failed(self, point: dict) -> bool: ...
+
+    def result(self, spec: dict, plan: dict, finished: Mapping[int, dict]) -> dict: ...

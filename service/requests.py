@@ -1,0 +1,71 @@
+"""A request's mechanism and options, checked: every problem is a MechanismError whose pointer
+is relative to the request (the document's fields under /document), so the HTTP layer, the
+CLI and the job kinds report the same field."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+from typing import Any
+
+from models import MODELS, Mechanism, MechanismError, compile_mechanism
+from models.document import parse_document
+from service.newton import NewtonOptions
+
+
+@dataclass(frozen=True)
+class Limits:
+    max_elements: int = 200
+    max_sweep_points: int = 20_000
+    solve_time_limit: float | None = 10.0
+
+
+def escape_pointer_part(part: str) -> str:
+    return str(part).replace("~", "~0").replace("/", "~1")
+
+
+def under(prefix: str, exc: MechanismError) -> MechanismError:
+    """The same error, its pointer placed under `prefix` (e.g. /document)."""
+    return MechanismError(prefix + exc.pointer, exc.problem)
+
+
+def newton_options(options: dict | None, time_limit: float | None = None, pointer: str = "/options") -> NewtonOptions:
+    """NewtonOptions from a request's options object; unknown or bad options name the field.
+    The service's time limit caps any time limit asked for."""
+    options = dict(options or {})
+    known = {f.name for f in fields(NewtonOptions)}
+    for name in options:
+        if name not in known:
+            raise MechanismError(f"{pointer}/{escape_pointer_part(name)}",
+                                 f"unknown option (options: {', '.join(sorted(known))})")
+    asked = options.get("time_limit")
+    if time_limit is not None:
+        options["time_limit"] = time_limit if asked is None else min(float(asked), time_limit)
+    try:
+        return NewtonOptions(**options)
+    except (TypeError, ValueError) as exc:
+        name = str(exc).split(":", 1)[0] if ":" in str(exc) else ""
+        field = f"{pointer}/{name}" if name in known else pointer
+        raise MechanismError(field, str(exc).split(": ", 1)[-1]) from None
+
+
+def compile_request(document: dict, model: str | None = None, overrides: dict[str, Any] | None = None,
+                    limits: Limits = Limits()) -> Mechanism:
+    """Validate and compile a request's document, with its model choice and overrides."""
+    try:
+        doc = parse_document(document)
+    except MechanismError as exc:
+        raise under("/document", exc) from None
+    if len(doc.elements) > limits.max_elements:
+        raise MechanismError("/document/elements", f"{len(doc.elements)} elements: the limit is {limits.max_elements}")
+    if model is not None and model not in MODELS:
+        raise MechanismError("/model", f"unknown model '{model}' ({', '.join(MODELS)})")
+    try:
+        mech = compile_mechanism(doc, model)
+    except MechanismError as exc:
+        raise under("/document", exc) from None
+    for pointer, value in (overrides or {}).items():
+        try:
+            mech = mech.with_values({pointer: value})
+        except MechanismError as exc:
+            raise MechanismError(f"/overrides/{escape_pointer_part(pointer)}", exc.problem) from None
+    return mech
