@@ -1,0 +1,27 @@
+"""The flexmech command line: solve a mechanism document, sweep a load, list the examples.
+
+    flexmech solve examples/gripper.json --set /loads/actuation/force/1=77 --stiffness
+    flexmech solve examples/gripper.json --analysis linearization
+    flexmech sweep examples/gripper.json --compare-models --plot sweep.png
+    flexmech optimize examples/grasper_shape.json
+    flexmech trace examples/snap_through_arch.json --path /loads/P/force/1 --stop -300 --step 20
+    flexmech examples
+
+Exit codes: 0 success; 1 the solver did not converge (status and diagnostics are printed,
+and --json/--plot files are still written); 2 a problem with the document or the options,
+printed as one line "error: <where>: <problem>" on stderr.
+
+One module per command; importing it registers the command on the shared typer app.
+"""
+
+from service.cli.application import app
+from service.cli import solve  # noqa: F401 (registers its command)
+from service.cli import inverse  # noqa: F401
+from service.cli import optimize  # noqa: F401
+from service.cli import trace  # noqa: F401
+from service.cli import sweep  # noqa: F401
+from service.cli import examples  # noqa: F401
+from service.cli import batch  # noqa: F401
+from service.cli import serve  # noqa: F401
+
+__all__ = ["app"]

@@ -1,0 +1,118 @@
+"""What every command shares: the consoles, tables and numbers it prints, the one-line errors
+and exit codes, and the files it writes."""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+import typer
+from rich.console import Console
+from rich.markup import escape
+from rich.table import Table
+
+from models import Mechanism, MechanismError
+from service.plotting import PLOT_SUFFIXES
+from service.reports import plain
+
+EXIT_NOT_CONVERGED = 1
+EXIT_ERROR = 2
+FILE_WIDTH = 160
+
+
+class OptionError(Exception):
+    """A command-line option that cannot be used; `where` names the option."""
+
+    def __init__(self, where: str, problem: str):
+        self.where = where
+        self.problem = problem
+        super().__init__(f"{where}: {problem}")
+
+
+# --- console and errors --------------------------------------------------------------------
+def consoles() -> tuple[Console, Console]:
+    """(stdout, stderr) consoles, made per command so they follow the current streams. Output
+    that is not a terminal (a file, a pipe) gets wide lines rather than squeezed tables,
+    unless COLUMNS says otherwise."""
+    out = Console()
+    if not out.is_terminal and "COLUMNS" not in os.environ:
+        out = Console(width=FILE_WIDTH)
+    return out, Console(stderr=True, highlight=False)
+
+
+def table_of(title: str | None, *columns: str, text: int = 1) -> Table:
+    """A table whose first `text` columns are words and the others numbers (right-aligned,
+    folded rather than cut when the console is narrow)."""
+    table = Table(title=escape(title) if title else None, title_justify="left")
+    for k, head in enumerate(columns):
+        if k < text:
+            table.add_column(escape(head))
+        else:
+            table.add_column(escape(head), justify="right", overflow="fold")
+    return table
+
+
+@contextmanager
+def user_errors(err: Console) -> Iterator[None]:
+    """Turn problems with the document or the options into one red line and exit code 2."""
+    try:
+        yield
+    except (MechanismError, OptionError) as exc:
+        print_error(err, str(exc))
+        raise typer.Exit(EXIT_ERROR) from None
+
+
+def print_error(err: Console, text: str) -> None:
+    """The one line "error: <where>: <problem>"."""
+    err.print(f"[bold red]error:[/bold red] {escape(text)}", soft_wrap=True)
+
+
+def number(value: float | None, unit: str | None = None) -> str:
+    """Six significant figures, with the unit when given. None is a report's non-finite
+    number (service.reports.plain)."""
+    text = "-" if value is None else f"{value:.6g}"
+    return f"{text} {unit}" if unit else text
+
+
+# --- files ---------------------------------------------------------------------------------
+def write_json(path: Path, payload: dict) -> None:
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(plain(payload), indent=2))
+    except OSError as exc:
+        raise OptionError("--json", f"cannot write {path}: {exc.strerror}") from None
+
+
+def check_plot_option(plot: Path | None) -> None:
+    if plot is not None and plot.suffix.lower() not in PLOT_SUFFIXES:
+        raise OptionError("--plot", f"cannot tell the figure format of '{plot}': use a name ending in "
+                          f"{' or '.join(PLOT_SUFFIXES)}")
+
+
+def save_plot(draw, *args) -> None:
+    """draw(*args), whose last argument is the file."""
+    try:
+        draw(*args)
+    except OSError as exc:
+        raise OptionError("--plot", f"cannot write {args[-1]}: {exc.strerror}") from None
+
+
+# --- outputs -------------------------------------------------------------------------------
+def default_xy(mech: Mechanism) -> tuple[str, str]:
+    """The outputs to plot by default: the first point output, else the first body that is
+    not fixed."""
+    if mech.structure.points:
+        name = mech.structure.points[0].name
+    else:
+        free = [b for b, row in enumerate(mech.structure.prescribed) if any(v is None for v in row)]
+        name = f"bodies.{mech.structure.bodies[free[0] if free else 0]}"
+    return f"{name}.x", f"{name}.y"
+
+
+def output_hint(mech: Mechanism) -> str:
+    """The first named outputs, for a message about an unknown one."""
+    names = [n for n in mech.graphs.output_names if not n.startswith("elements.")]
+    return "outputs: " + ", ".join(names[:12]) + (", ..." if len(names) > 12 else "")

@@ -1,0 +1,124 @@
+"""`flexmech solve`: one analysis of one mechanism, dispatched through the analyses registry
+(service.analyses), so the --json file is the report POST /v1/solve answers plus the
+command's own keys (document, model, overrides)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.markup import escape
+
+from models import Mechanism, MechanismError
+from service.analyses import ANALYSES, Analysis, AnalysisRequest
+from service.analyses.equilibrium import solution_report
+from service.cli.application import app
+from service.cli.common import (EXIT_NOT_CONVERGED, OptionError, check_plot_option, consoles, number, save_plot,
+                                user_errors, write_json)
+from service.cli.options import (DocArg, JacobianOpt, JsonOpt, LineSearchOpt, MaxIterOpt, ModelOpt, PlotOpt, SetOpt,
+                                 mechanism, newton_options, overrides)
+from service.cli.report_tables import print_solution, print_stiffness, print_status, print_wrenches
+from service.energy import minimize_energy
+from service.equilibrium import EquilibriumResult, solve_equilibrium
+from service.newton import NewtonOptions
+from service.reports import stiffness_dict
+
+# The analyses whose report is a solution (an EquilibriumResult): the CLI calls their solver
+# itself, for the result that --plot draws, and builds the same report the registry does.
+SOLVERS = {"equilibrium": solve_equilibrium, "energy": minimize_energy}
+
+
+def analysis_named(name: str) -> Analysis:
+    try:
+        return ANALYSES.named(name)
+    except MechanismError as exc:
+        raise OptionError("--analysis", exc.problem) from None
+
+
+def in_the_file(exc: MechanismError) -> MechanismError:
+    """The registry places document errors under /document (the request's field); here the
+    document is the file, whose fields are named from its root."""
+    if exc.pointer == "/document" or exc.pointer.startswith("/document/"):
+        return MechanismError(exc.pointer.removeprefix("/document"), exc.problem)
+    return exc
+
+
+def run_analysis(mech: Mechanism, analysis: Analysis, options: NewtonOptions,
+                 stiffness: bool) -> tuple[EquilibriumResult | None, dict]:
+    """(the solution, or None for an analysis that has none; the analysis' report)."""
+    solver = SOLVERS.get(analysis.name)
+    if solver is None:
+        try:
+            return None, analysis.run(mech, AnalysisRequest(options, {"stiffness": stiffness}))
+        except MechanismError as exc:
+            raise in_the_file(exc) from None
+    result = solver(mech, options)
+    report = solution_report(mech, result, analysis.name)
+    if stiffness and result.converged:
+        report["stiffness"] = stiffness_dict(mech, result.z)
+    return result, report
+
+
+def print_report(out: Console, mech: Mechanism, report: dict, stiffness: bool) -> None:
+    print_status(out, report)
+    if report["analysis"] in SOLVERS:
+        if report["status"] == "converged":
+            print_solution(out, mech, report)
+            for note in report["warnings"]:
+                out.print(f"[yellow]warning:[/yellow] {escape(note)}")
+        else:
+            out.print("[yellow]no equilibrium found: the last iterate is not reported as a solution[/yellow]")
+    if "wrenches" in report:
+        print_wrenches(out, report)
+    if "stiffness" in report:
+        print_stiffness(out, report["stiffness"])
+    elif stiffness and report["status"] == "converged":
+        out.print(f"[yellow]warning:[/yellow] --stiffness: the {report['analysis']} analysis reports no stiffness")
+
+
+def check_solve_options(analysis: Analysis, plot: Path | None) -> None:
+    check_plot_option(plot)
+    if plot is not None and analysis.name not in SOLVERS:
+        raise OptionError("--plot", f"draws a solution: use it with --analysis {' or '.join(SOLVERS)}, "
+                          f"not {analysis.name}")
+
+
+@app.command()
+def solve(
+    document: DocArg,
+    analysis: Annotated[str, typer.Option(
+        "--analysis", help=f"The analysis: {' | '.join(ANALYSES.names())}.")] = "equilibrium",
+    model: ModelOpt = None,
+    sets: SetOpt = None,
+    jacobian: JacobianOpt = "full",
+    line_search: LineSearchOpt = True,
+    max_iterations: MaxIterOpt = 50,
+    json_out: JsonOpt = None,
+    plot: PlotOpt = None,
+    stiffness: Annotated[bool, typer.Option("--stiffness", help="Print the tangent stiffness K_T at the solution.")] = False,
+) -> None:
+    """Solve the equilibrium of a mechanism under its loads (or another analysis of it)."""
+    out, err = consoles()
+    with user_errors(err):
+        chosen = analysis_named(analysis)
+        check_solve_options(chosen, plot)
+        options = newton_options(jacobian, line_search, max_iterations)
+        mech = mechanism(document, model, sets)
+        result, report = run_analysis(mech, chosen, options, stiffness)
+
+        out.print(f"[bold]{escape(mech.document.name)}[/bold]  ({escape(str(document))})")
+        for pointer in overrides(sets):
+            out.print(f"  {pointer} = {number(mech.value(pointer), mech.doc_unit(mech.parameter_kind(pointer)))}")
+        print_report(out, mech, report, stiffness)
+        if json_out is not None:
+            write_json(json_out, {"document": str(document), "model": model, "overrides": overrides(sets), **report})
+            out.print(f"wrote {escape(str(json_out))}")
+        if plot is not None:
+            from service.plotting import plot_configuration
+
+            save_plot(plot_configuration, result, plot)
+            out.print(f"wrote {escape(str(plot))}")
+    if report["status"] != "converged":
+        raise typer.Exit(EXIT_NOT_CONVERGED)

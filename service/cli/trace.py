@@ -1,0 +1,77 @@
+"""`flexmech trace`: the equilibrium path through limit points, by arc-length continuation."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Annotated
+
+import numpy as np
+import typer
+from rich.console import Console
+from rich.markup import escape
+
+from models import Mechanism, MechanismError
+from service.cli.application import app
+from service.cli.common import (EXIT_NOT_CONVERGED, OptionError, consoles, default_xy, number, table_of, user_errors,
+                                write_json)
+from service.cli.options import DocArg, JsonOpt, SetOpt, mechanism
+from service.plotting import output_unit
+
+if TYPE_CHECKING:  # continuation is imported when the command runs
+    from service.continuation import PathResult
+
+# Points of the path printed (the --json file has every one).
+SHOWN_POINTS = 12
+
+
+def print_path(out: Console, mech: Mechanism, path: str, result: PathResult) -> None:
+    """The limit points and a dozen points of the path, with the displacement of the first
+    point output (its y, or dy where there is one) and their stability."""
+    _, y_name = default_xy(mech)
+    shown = y_name.replace(".y", ".dy") if y_name.replace(".y", ".dy") in mech.graphs.output_names else y_name
+    field, output = f"{path} [{result.unit}]", f"{shown} [{output_unit(mech, shown)}]"
+    table = table_of("limit points", "kind", field, output, "after point")
+    for lp in result.limit_points:
+        table.add_row(lp.kind, number(lp.value), number(lp.outputs[shown]), str(lp.after_point))
+    out.print(table)
+    table = table_of("path", "point", field, output, "stable")
+    n = len(result.points)
+    for i in sorted(set(np.linspace(0, n - 1, min(n, SHOWN_POINTS)).round().astype(int).tolist())):
+        pt = result.points[i]
+        table.add_row(str(i), number(pt.value), number(pt.outputs[shown]),
+                      {True: "yes", False: "no", None: "?"}[pt.stability.stable])
+    out.print(table)
+
+
+@app.command()
+def trace(
+    document: DocArg,
+    path: Annotated[str, typer.Option(help="The numeric field to follow, e.g. /loads/P/force/1.")],
+    stop: Annotated[float, typer.Option(help="Stop once the field passes this value (document units).")],
+    step: Annotated[float, typer.Option(help="First arc-length step, document units of the field.")],
+    sets: SetOpt = None,
+    max_points: Annotated[int, typer.Option(min=2, max=100_000)] = 400,
+    json_out: JsonOpt = None,
+) -> None:
+    """Pseudo-arc-length continuation of the equilibrium path through limit points (snap-through),
+    with the stability of every point and the limit loads located exactly."""
+    from service.continuation import trace_path
+
+    out, err = consoles()
+    with user_errors(err):
+        mech = mechanism(document, None, sets)
+        try:
+            mech.parameter_index(path)
+        except MechanismError as exc:
+            raise OptionError("--path", exc.problem) from None
+        if not step > 0:
+            raise OptionError("--step", f"must be positive, got {step:g}")
+        result = trace_path(mech, path, stop, step, max_points)
+        out.print(f"[bold]{escape(mech.document.name)}[/bold]  ({escape(str(document))}): path of {path}")
+        out.print(f"status: {result.status}, {len(result.points)} points, {result.seconds:.3g} s"
+                  + (f" ({escape(result.message)})" if result.message else ""))
+        print_path(out, mech, path, result)
+        if json_out is not None:
+            write_json(json_out, {"document": str(document), **result.to_dict()})
+            out.print(f"wrote {escape(str(json_out))}")
+    if result.status != "completed":
+        raise typer.Exit(EXIT_NOT_CONVERGED)
