@@ -8,7 +8,7 @@ through flexmech's compiled fast path, its plain Python API (service.solve_equil
 service.sweep), and the peer: scipy.optimize.root (hybr, finite-difference Jacobian) on the
 same residual written in numpy. Prints medians and ratios; run as a script:
 
-    python benchmarks/gripper.py [--model partial_nonlinear|linear] [--repeats N]
+    python3 benchmarks/gripper.py [--model partial_nonlinear|linear] [--repeats N] [--sweep-repeats N]
 """
 
 from __future__ import annotations
@@ -47,7 +47,8 @@ def median_seconds(fn, repeats: int) -> float:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--model", default="partial_nonlinear", choices=["linear", "partial_nonlinear"])
-    parser.add_argument("--repeats", type=int, default=200)
+    parser.add_argument("--repeats", type=int, default=200, help="timed single solves (x10 for the fast path)")
+    parser.add_argument("--sweep-repeats", type=int, default=None, help="timed sweeps (default: repeats / 20, at least 5)")
     args = parser.parse_args()
 
     mech = compile_mechanism(load_document(EXAMPLE), model=args.model).with_values({ACTUATION: 50.0})
@@ -82,6 +83,7 @@ def main() -> None:
           f"sweep: max |Z_fast - Z_scipy| = {np.abs(Z_fast.T - Z_peer).max():.2e}, max residual {norms.max():.1e}")
 
     r = args.repeats
+    rs = args.sweep_repeats if args.sweep_repeats is not None else max(5, r // 20)
     single = {
         "flexmech fast path": median_seconds(lambda: fast.solve(p), 10 * r),
         "flexmech Python API": median_seconds(lambda: solve_equilibrium(mech), r),
@@ -89,8 +91,8 @@ def main() -> None:
     }
     sweeps = {
         "flexmech fast path": median_seconds(lambda: fast.sweep(P), r),
-        "flexmech Python API": median_seconds(lambda: sweep(mech, ACTUATION, values, NewtonOptions()), max(5, r // 20)),
-        "scipy root (hybr, FD)": median_seconds(peer_sweep, max(5, r // 20)),
+        "flexmech Python API": median_seconds(lambda: sweep(mech, ACTUATION, values, NewtonOptions()), rs),
+        "scipy root (hybr, FD)": median_seconds(peer_sweep, rs),
     }
     peer_name = "scipy root (hybr, FD)"
     for title, table, unit, scale in (("(a) warm single solve", single, "us", 1e6),

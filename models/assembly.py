@@ -19,6 +19,7 @@ import casadi as ca
 
 from models.context import AssemblyContext
 from models.elements import FAMILIES
+from models.graph_cache import GraphStore
 from models.loads import applied_wrenches
 from models.outputs import output_graph, shape_graph
 from models.residual import contributions, held_wrenches, residual_of
@@ -71,10 +72,8 @@ class Graphs:
     first asked for."""
 
     def __init__(self, structure: Structure):
-        from models.graph_cache import GraphStore
-
         self.structure = structure
-        self._store = GraphStore(structure)
+        self._store = GraphStore(structure, build_functions)
 
     def _get(self, name: str) -> ca.Function:
         return self._store.function(name)

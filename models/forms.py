@@ -19,7 +19,7 @@ import casadi as ca
 
 from models.context import AssemblyContext
 from models.elements import FAMILIES
-from models.elements.base import NoEnergyForm
+from models.elements.base import NoEnergyForm, NoMassForm
 from models.errors import MechanismError
 from models.loads import kinetic_energy, load_potential
 from models.structure import Structure
@@ -73,17 +73,23 @@ def energy_form(structure: Structure) -> EnergyForm:
 
 def mass_matrix(structure: Structure) -> ca.Function:
     """(z, p) -> M: the Hessian of the kinetic energy in the unknowns' rates. Body masses fill
-    the rows of free body coordinates; the elements' own unknowns (multipliers, shooting
-    states) carry none. A link with mass has no mass matrix in its shooting unknowns."""
-    heavy = [t.name for t in structure.of_family("link") if getattr(t, "weighs", False)]
-    if heavy:
-        raise MechanismError(f"/elements/{heavy[0]}", f"link '{heavy[0]}' has mass (its material's density), but "
-                             "its shooting unknowns have no mass matrix: time simulation of links needs the "
-                             "dynamic link model")
+    the rows of free body coordinates; elements add theirs where they declare it (none of
+    today's families carries mass in its unknowns); an element that has mass its unknowns
+    cannot carry is refused by name."""
     ctx = AssemblyContext(structure)
     n = structure.n_unknowns
     z, rate = ca.SX.sym("z", n), ca.SX.sym("zdot", n)
-    T = kinetic_energy(ctx, ctx.displacements(z), _body_rates(structure, rate))
+    d, v = ctx.displacements(z), _body_rates(structure, rate)
+    T = kinetic_energy(ctx, d, v)
+    for t in structure.elements:
+        family = FAMILIES.of(t)
+        try:
+            element = family.kinetic_energy(ctx, t, d, v)
+        except NoMassForm as reason:
+            raise MechanismError(f"/elements/{t.name}", f"element '{t.name}' ({family.type}) has no mass "
+                                 f"form: {reason}") from None
+        if element is not None:
+            T = T + element
     M = ca.hessian(T, rate)[0]
     return ca.Function("mass_matrix", [z, ctx.p], [M], ["z", "p"], ["M"])
 

@@ -17,6 +17,7 @@ import logging
 import os
 from functools import lru_cache
 from pathlib import Path
+from typing import Callable
 
 import casadi as ca
 
@@ -52,8 +53,9 @@ def write_atomically(target: Path, write) -> None:
 class GraphStore:
     """The Functions of one structure: from memory, else from disk, else built (and saved)."""
 
-    def __init__(self, structure: Structure):
+    def __init__(self, structure: Structure, build: Callable[[Structure], tuple[dict[str, ca.Function], dict]]):
         self.structure = structure
+        self.build = build  # structure -> (Functions by name, their metadata)
         self.folder = cache_dir() / "graphs" / f"{structure.key}-{code_version()}"
         self._functions: dict[str, ca.Function] = {}
         self._meta: dict | None = None
@@ -94,9 +96,7 @@ class GraphStore:
             return None
 
     def _build(self) -> None:
-        from models.assembly import build_functions
-
-        functions, meta = build_functions(self.structure)
+        functions, meta = self.build(self.structure)
         self._functions.update(functions)
         self._meta = meta
         self._save(functions, meta)

@@ -15,7 +15,8 @@ from functools import cached_property
 
 import numpy as np
 
-from models.collect import check_value, collect
+from models.collect import collect
+from models.collector import check_value
 from models.document import MechanismDocument
 from models.elements import FAMILIES
 from models.elements.base import SiValues

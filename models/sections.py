@@ -19,7 +19,7 @@ from models.expression import compile_expression
 from models.fields import Number, StrictModel
 
 if TYPE_CHECKING:
-    from models.collect import Collector
+    from models.collector import Collector
     from models.context import Params
 
 

@@ -117,6 +117,39 @@ def body_stability(mech: Mechanism, K: np.ndarray) -> Stability:
     return Stability(bool(eig[0] > 0), symmetric, eig.tolist())
 
 
+@dataclass
+class _Trace:
+    """The followed field: its slot, document factor and unit, the parameters, and the stop."""
+
+    slot: int
+    factor: float
+    unit: str
+    p: np.ndarray
+    target: float  # nondimensional
+    direction: float  # +1: the field rises towards the stop
+    path_fn: ca.Function
+
+    def evaluate_at(self, lam_value: float):
+        def evaluate(z):
+            R, K, _ = self.path_fn(z, lam_value, self.p)
+            return np.asarray(R).ravel(), np.asarray(K)
+        return evaluate
+
+
+def _trace(mech: Mechanism, path: str, stop: float, step: float) -> _Trace:
+    slot = mech.parameter_index(path)
+    kind = mech.parameters[slot].kind
+    factor, unit = mech.nd_per_doc(kind), mech.doc_unit(kind)
+    if not step > 0:
+        raise MechanismError("/step", f"must be positive, got {step:g}")
+    p = mech.p()
+    target = stop * factor
+    if target == float(p[slot]):
+        raise MechanismError("/stop", f"the path starts at {stop:g} {unit}: give another stop value")
+    return _Trace(slot, factor, unit, p, target, 1.0 if target > p[slot] else -1.0,
+                  _path_graphs(mech.structure, slot)[0])
+
+
 def trace_path(mech: Mechanism, path: str, stop: float, step: float, max_points: int = 400,
                options: NewtonOptions = NewtonOptions(), max_step: float | None = None) -> PathResult:
     """Follow the equilibrium path from the document's value of `path` until the field passes
@@ -125,41 +158,21 @@ def trace_path(mech: Mechanism, path: str, stop: float, step: float, max_points:
     steps near limit points move the state rather than the load); max_step caps it (default
     10 x step)."""
     started = time.perf_counter()
-    slot = mech.parameter_index(path)
-    kind = mech.parameters[slot].kind
-    factor = mech.nd_per_doc(kind)
-    unit = mech.doc_unit(kind)
-    if not step > 0:
-        raise MechanismError("/step", f"must be positive, got {step:g}")
-    p = mech.p()
-    lam = float(p[slot])
-    target = stop * factor
-    if target == lam:
-        raise MechanismError("/stop", f"the path starts at {stop:g} {unit}: give another stop value")
-    direction = 1.0 if target > lam else -1.0
-    path_fn, _ = _path_graphs(mech.structure, slot)
-    n = mech.n_free
-
-    def evaluate_at(lam_value):
-        def evaluate(z):
-            R, K, _ = path_fn(z, lam_value, p)
-            return np.asarray(R).ravel(), np.asarray(K)
-        return evaluate
-
-    status, z, *_ = iterate_dense(evaluate_at(lam), np.zeros(n), options)
+    t = _trace(mech, path, stop, step)
+    slot, factor, unit, p, path_fn, direction = t.slot, t.factor, t.unit, t.p, t.path_fn, t.direction
+    n, lam = mech.n_free, float(t.p[t.slot])
+    status, z, *_ = iterate_dense(t.evaluate_at(lam), np.zeros(n), options)
     if status != "converged":
         return PathResult("not_converged", f"no equilibrium at the start value ({status})", path, unit, [], [],
                           time.perf_counter() - started)
-    ds = step * factor
-    ds_max = (max_step if max_step is not None else 10 * step) * factor
+    ds, ds_max = step * factor, (max_step if max_step is not None else 10 * step) * factor
     ds_min = ds * 1e-6
     tangent = _tangent(path_fn, z, lam, p, None, direction)
     points = [_point(mech, path_fn, z, lam, p, slot, tangent, factor)]
     limits: list[LimitPoint] = []
     while len(points) < max_points:
         x = np.append(z, lam)
-        predicted = x + ds * tangent
-        ok, x_new, iterations = _correct(path_fn, predicted, tangent, p, options)
+        ok, x_new, iterations = _correct(path_fn, x + ds * tangent, tangent, p, options)
         if not ok:
             ds /= 2
             if ds < ds_min:
@@ -167,22 +180,19 @@ def trace_path(mech: Mechanism, path: str, stop: float, step: float, max_points:
                                   "tiny steps", path, unit, points, limits, time.perf_counter() - started)
             continue
         new_tangent = _tangent(path_fn, x_new[:n], x_new[n], p, tangent, direction)
-        if (x_new[n] - target) * direction >= 0 and new_tangent[n] * direction > 0:
+        if (x_new[n] - t.target) * direction >= 0 and new_tangent[n] * direction > 0:
             # Passed the stop value while rising: end exactly on it.
-            status, z_end, *_ = iterate_dense(evaluate_at(target), _interpolate(x, x_new, target, n), options)
+            status, z_end, *_ = iterate_dense(t.evaluate_at(t.target), _interpolate(x, x_new, t.target, n), options)
             if status == "converged":
                 if np.sign(new_tangent[n]) != np.sign(tangent[n]):
                     limits.append(_limit(mech, x, x_new, tangent, len(points) - 1, p, slot, factor, options))
-                points.append(_point(mech, path_fn, z_end, target, p, slot, new_tangent, factor))
+                points.append(_point(mech, path_fn, z_end, t.target, p, slot, new_tangent, factor))
                 return PathResult("completed", "", path, unit, points, limits, time.perf_counter() - started)
         if np.sign(new_tangent[n]) != np.sign(tangent[n]):
             limits.append(_limit(mech, x, x_new, tangent, len(points) - 1, p, slot, factor, options))
         z, lam, tangent = x_new[:n], float(x_new[n]), new_tangent
         points.append(_point(mech, path_fn, z, lam, p, slot, tangent, factor))
-        if iterations <= 3:
-            ds = min(ds * 1.5, ds_max)
-        elif iterations > 6:
-            ds /= 1.5
+        ds = min(ds * 1.5, ds_max) if iterations <= 3 else (ds / 1.5 if iterations > 6 else ds)
     return PathResult("max_points", f"stopped after {max_points} points at {lam / factor:.6g} {unit}", path, unit,
                       points, limits, time.perf_counter() - started)
 

@@ -24,6 +24,7 @@ import casadi as ca
 import numpy as np
 
 from models import Mechanism, MechanismError
+from models.graph_cache import cache_dir
 
 _VERSION = "1"  # bump when the generated Functions change shape
 
@@ -32,11 +33,6 @@ _VERSION = "1"  # bump when the generated Functions change shape
 class FastOptions:
     tol_residual: float = 1e-12  # nondimensional |R|_inf
     max_iterations: int = 30
-
-
-def cache_dir() -> Path:
-    root = os.environ.get("FLEXMECH_CACHE_DIR")
-    return Path(root) if root else Path.home() / ".cache" / "flexmech"
 
 
 def compiler() -> str | None:

@@ -63,7 +63,7 @@ class LinkInverseResult:
     status: Status
     message: str
     iterations: int
-    residual_norm: float  # nondimensional infinity norm
+    solver_residual: float  # nondimensional infinity norm of every row
     seconds: float
     loads: dict[str, float]  # the unknown load components, document units
     links: dict[str, dict] = field(default_factory=dict)  # h, v, moments; u, eta, x0, y0 at the nodes
@@ -108,65 +108,17 @@ def inverse_links(mech: Mechanism, shapes: dict, internal_forces: dict, unknown_
     unknown_loads: pointers of load components whose values are sought, e.g.
     "/loads/F/force/0"; the other loads keep their document values.
     """
-    structure = mech.structure
-    link_elements = structure.of_family("link")
-    links = [link.name for link in link_elements]
-    if not links:
-        raise MechanismError("/shapes", "this mechanism has no links to invert")
-    for name, load in mech.document.loads.items():
-        if isinstance(load, PrescribedDisplacement):
-            raise MechanismError(f"/loads/{name}", "the link inverse takes forces and moments; prescribed "
-                                 "displacements belong to the forward problem")
-    for element in structure.elements:
-        if element.family != "link" and element.unknowns:
-            raise MechanismError(f"/elements/{element.name}", "the link inverse takes links and elements whose "
-                                 f"forces follow from the body motions; '{element.name}' ({element.family}) "
-                                 "has unknowns of its own")
-    for link in link_elements:
-        if link.shear or link.axial or link.weighs:
-            raise MechanismError(f"/elements/{link.name}", "the link inverse takes inextensible, massless links "
-                                 "without shear")
-    if not isinstance(shapes, dict):
-        raise MechanismError("/shapes", "expected an object: link name -> deformed shape")
-    for name in shapes:
-        if name not in links:
-            raise MechanismError(f"/shapes/{name}", f"no link named '{name}' (links: {', '.join(links)})")
-    layouts, data = [], []
-    for name in links:
-        if name not in shapes:
-            raise MechanismError(f"/shapes/{name}", "inconsistent inverse data: the deformed shape of every link "
-                                 "is needed")
-        layout, values = _psi_layout(f"/shapes/{name}", shapes[name])
-        layouts.append(layout)
-        data.extend(values)
-    specified, specified_values = [], []
-    for name, forces in (internal_forces or {}).items():
-        if name not in links:
-            raise MechanismError(f"/internal_forces/{name}", f"no link named '{name}' (links: {', '.join(links)})")
-        if not isinstance(forces, dict) or not forces or not set(forces) <= {"h", "v"}:
-            raise MechanismError(f"/internal_forces/{name}", 'expected {"h": value} and/or {"v": value}')
-        for component, value in forces.items():
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
-                raise MechanismError(f"/internal_forces/{name}/{component}", "expected a finite number")
-            specified.append((links.index(name), 0 if component == "h" else 1))
-            specified_values.append(float(value) * mech.nd_per_doc("force"))
-    unknown_indices = []
-    for k, pointer in enumerate(unknown_loads or []):
-        index = mech.parameter_index(pointer)
-        if not pointer.startswith("/loads/") or mech.parameters[index].kind not in ("force", "moment"):
-            raise MechanismError(f"/unknown_loads/{k}", f"'{pointer}' is not a force or moment component of a load")
-        if index in unknown_indices:
-            raise MechanismError(f"/unknown_loads/{k}", f"'{pointer}' is listed twice")
-        unknown_indices.append(index)
+    links = _invertible_links(mech)
+    layouts, data = _shape_data(links, shapes)
+    specified, specified_values = _specified_forces(mech, links, internal_forces)
+    unknown_indices = _unknown_loads(mech, unknown_loads)
     if len(specified) != len(unknown_indices):
         raise MechanismError("/internal_forces", (
             f"inconsistent inverse data: {len(specified)} internal force component(s) given for "
             f"{len(unknown_indices)} unknown load component(s); they must be equal (seed 002 Sec. 5.3.2)"))
-
     layout = InverseLayout(tuple(layouts), tuple(unknown_indices), tuple(specified))
-    graphs = inverse_graphs_for(structure, layout)
-    p = mech.p()
-    q = np.array(data + specified_values)
+    graphs = inverse_graphs_for(mech.structure, layout)
+    p, q = mech.p(), np.array(data + specified_values)
     started = time.perf_counter()
 
     def evaluate(z):
@@ -180,9 +132,81 @@ def inverse_links(mech: Mechanism, shapes: dict, internal_forces: dict, unknown_
     loads = {}
     for k, index in enumerate(unknown_indices):
         kind = mech.parameters[index].kind
-        loads[mech.parameters[index].pointer] = float(z[structure.n_unknowns + k]) / mech.nd_per_doc(kind)
+        loads[mech.parameters[index].pointer] = float(z[mech.structure.n_unknowns + k]) / mech.nd_per_doc(kind)
     result = LinkInverseResult(status, message, iterations, norm, seconds, loads)
-    for link in link_elements:
+    _report_links(mech, values, result)
+    return result
+
+
+def _invertible_links(mech: Mechanism) -> list:
+    structure = mech.structure
+    links = list(structure.of_family("link"))
+    if not links:
+        raise MechanismError("/shapes", "this mechanism has no links to invert")
+    for name, load in mech.document.loads.items():
+        if isinstance(load, PrescribedDisplacement):
+            raise MechanismError(f"/loads/{name}", "the link inverse takes forces and moments; prescribed "
+                                 "displacements belong to the forward problem")
+    for element in structure.elements:
+        if element.family != "link" and element.unknowns:
+            raise MechanismError(f"/elements/{element.name}", "the link inverse takes links and elements whose "
+                                 f"forces follow from the body motions; '{element.name}' ({element.family}) "
+                                 "has unknowns of its own")
+    for link in links:
+        if link.shear or link.axial or link.weighs:
+            raise MechanismError(f"/elements/{link.name}", "the link inverse takes inextensible, massless links "
+                                 "without shear")
+    return links
+
+
+def _shape_data(links: list, shapes) -> tuple[list[PsiLayout], list[float]]:
+    names = [link.name for link in links]
+    if not isinstance(shapes, dict):
+        raise MechanismError("/shapes", "expected an object: link name -> deformed shape")
+    for name in shapes:
+        if name not in names:
+            raise MechanismError(f"/shapes/{name}", f"no link named '{name}' (links: {', '.join(names)})")
+    layouts, data = [], []
+    for name in names:
+        if name not in shapes:
+            raise MechanismError(f"/shapes/{name}", "inconsistent inverse data: the deformed shape of every link "
+                                 "is needed")
+        layout, values = _psi_layout(f"/shapes/{name}", shapes[name])
+        layouts.append(layout)
+        data.extend(values)
+    return layouts, data
+
+
+def _specified_forces(mech: Mechanism, links: list, internal_forces) -> tuple[list[tuple[int, int]], list[float]]:
+    names = [link.name for link in links]
+    specified, values = [], []
+    for name, forces in (internal_forces or {}).items():
+        if name not in names:
+            raise MechanismError(f"/internal_forces/{name}", f"no link named '{name}' (links: {', '.join(names)})")
+        if not isinstance(forces, dict) or not forces or not set(forces) <= {"h", "v"}:
+            raise MechanismError(f"/internal_forces/{name}", 'expected {"h": value} and/or {"v": value}')
+        for component, value in forces.items():
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
+                raise MechanismError(f"/internal_forces/{name}/{component}", "expected a finite number")
+            specified.append((names.index(name), 0 if component == "h" else 1))
+            values.append(float(value) * mech.nd_per_doc("force"))
+    return specified, values
+
+
+def _unknown_loads(mech: Mechanism, unknown_loads) -> list[int]:
+    indices = []
+    for k, pointer in enumerate(unknown_loads or []):
+        index = mech.parameter_index(pointer)
+        if not pointer.startswith("/loads/") or mech.parameters[index].kind not in ("force", "moment"):
+            raise MechanismError(f"/unknown_loads/{k}", f"'{pointer}' is not a force or moment component of a load")
+        if index in indices:
+            raise MechanismError(f"/unknown_loads/{k}", f"'{pointer}' is listed twice")
+        indices.append(index)
+    return indices
+
+
+def _report_links(mech: Mechanism, values: dict[str, float], result: LinkInverseResult) -> None:
+    for link in mech.structure.of_family("link"):
         base = f"elements.{link.name}"
         nodes = range(link.intervals + 1)
         result.links[link.name] = {
@@ -192,6 +216,5 @@ def inverse_links(mech: Mechanism, shapes: dict, internal_forces: dict, unknown_
             "x0": [values[f"{base}.x0.{k}"] for k in nodes],
             "y0": [values[f"{base}.y0.{k}"] for k in nodes],
         }
-    for body in structure.bodies:
+    for body in mech.structure.bodies:
         result.bodies[body] = {q_name: values[f"bodies.{body}.{q_name}"] for q_name in ("x0", "y0", "rotation")}
-    return result

@@ -82,44 +82,62 @@ def plot_configuration(result: "EquilibriumResult", path: str | Path) -> Path:
     """
     path = check_plot_path(path)
     mech = result.mechanism
-    structure = mech.structure
     to_doc = 1.0 / mech.nd_per_doc("length")
     deformed_nd, undeformed_nd = mech.graphs.shapes(result.z, mech.p())
     deformed = np.asarray(deformed_nd, dtype=float) * to_doc  # 2 x samples of every element
     undeformed = np.asarray(undeformed_nd, dtype=float) * to_doc
     outputs = result.outputs()
+    fig = _new_figure(7.0, 6.5)
+    ax = fig.add_subplot()
+    _draw_skeletons(ax, mech, outputs, deformed, undeformed)
+    _draw_elements(ax, mech.graphs.shape_segments, deformed, undeformed)
+    _draw_bodies_and_points(ax, mech, outputs)
     unit = mech.doc_unit("length")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel(f"x [{unit}]")
+    ax.set_ylabel(f"y [{unit}]")
+    ax.grid(True, linewidth=0.4, alpha=0.5)
+    if ax.get_legend_handles_labels()[0]:  # a spring chain may have no labelled element
+        ax.legend(loc="best", fontsize=8)
+    status = result.status if result.converged else f"{result.status} (last iterate, not an equilibrium)"
+    ax.set_title(f"{mech.document.name}\n{status}, {result.iterations} iterations", fontsize=10)
+    _save(fig, path)
+    return path
 
-    # Body skeletons: reference point -> attachments and point outputs on the body.
+
+def _reference_points(mech, outputs: dict) -> tuple[np.ndarray, np.ndarray]:
+    """Every body's reference point now and undeformed, document units."""
+    bodies = mech.structure.bodies
+    now = np.array([[outputs[f"bodies.{b}.x"], outputs[f"bodies.{b}.y"]] for b in bodies])
+    then = np.array([[mech.value(f"/bodies/{b}/position/0"), mech.value(f"/bodies/{b}/position/1")] for b in bodies])
+    return now, then
+
+
+def _draw_skeletons(ax, mech, outputs: dict, deformed: np.ndarray, undeformed: np.ndarray) -> None:
+    """Body skeletons: reference point -> attachments and point outputs on the body."""
+    structure = mech.structure
     n_bodies = len(structure.bodies)
-    ref_now = np.array([[outputs[f"bodies.{b}.x"], outputs[f"bodies.{b}.y"]] for b in structure.bodies])
-    ref_then = np.array([[mech.value(f"/bodies/{b}/position/0"), mech.value(f"/bodies/{b}/position/1")]
-                         for b in structure.bodies])
+    ref_now, ref_then = _reference_points(mech, outputs)
     attached_now: list[list[np.ndarray]] = [[] for _ in range(n_bodies)]
     attached_then: list[list[np.ndarray]] = [[] for _ in range(n_bodies)]
-    segments = mech.graphs.shape_segments
-    for _, first, count, start_body, end_body in segments:
+    for _, first, count, start_body, end_body in mech.graphs.shape_segments:
         last = first + count - 1
         for body, column in ((start_body, first), (end_body, last)):
             attached_now[body].append(deformed[:, column])
             attached_then[body].append(undeformed[:, column])
-    points_now, points_then = [], []
     for point in structure.points:
         now = np.array([outputs[f"{point.name}.x"], outputs[f"{point.name}.y"]])
-        then = now - np.array([outputs[f"{point.name}.dx"], outputs[f"{point.name}.dy"]])
-        points_now.append(now)
-        points_then.append(then)
         attached_now[point.body].append(now)
-        attached_then[point.body].append(then)
-
-    fig = _new_figure(7.0, 6.5)
-    ax = fig.add_subplot()
+        attached_then[point.body].append(now - np.array([outputs[f"{point.name}.dx"], outputs[f"{point.name}.dy"]]))
     for refs, attached, style, label in ((ref_then, attached_then, _UNDEFORMED, "undeformed"),
                                          (ref_now, attached_now, _BODY, "deformed bodies")):
         for b in range(n_bodies):
             for q in attached[b]:
                 ax.plot([refs[b, 0], q[0]], [refs[b, 1], q[1]], **style, label=label)
                 label = None
+
+
+def _draw_elements(ax, segments, deformed: np.ndarray, undeformed: np.ndarray) -> None:
     for k, (name, first, count, _, _) in enumerate(segments):
         columns = slice(first, first + count)
         ax.plot(undeformed[0, columns], undeformed[1, columns], **_UNDEFORMED)
@@ -132,6 +150,10 @@ def plot_configuration(result: "EquilibriumResult", path: str | Path) -> Path:
         ax.annotate(name, middle, color="C0", fontsize=9, ha="center",
                     va="center", xytext=tuple(outward), textcoords="offset points")
 
+
+def _draw_bodies_and_points(ax, mech, outputs: dict) -> None:
+    structure = mech.structure
+    ref_now, ref_then = _reference_points(mech, outputs)
     fixed = [all(v is not None for v in row) for row in structure.prescribed]
     for b, name in enumerate(structure.bodies):
         marker = "s" if fixed[b] else "o"
@@ -140,22 +162,12 @@ def plot_configuration(result: "EquilibriumResult", path: str | Path) -> Path:
         ax.annotate(name + (" (fixed)" if fixed[b] else ""), ref_now[b], fontsize=9,
                     xytext=(5, -11), textcoords="offset points")
     for i, point in enumerate(structure.points):
-        ax.plot(*points_then[i], marker="*", markersize=10, color="0.65", markerfacecolor="none",
-                linestyle="none")
-        ax.plot(*points_now[i], marker="*", markersize=12, color="C3", linestyle="none",
+        now = np.array([outputs[f"{point.name}.x"], outputs[f"{point.name}.y"]])
+        then = now - np.array([outputs[f"{point.name}.dx"], outputs[f"{point.name}.dy"]])
+        ax.plot(*then, marker="*", markersize=10, color="0.65", markerfacecolor="none", linestyle="none")
+        ax.plot(*now, marker="*", markersize=12, color="C3", linestyle="none",
                 label="point outputs" if i == 0 else None)
-        ax.annotate(point.name, points_now[i], color="C3", fontsize=9, xytext=(6, 4),
-                    textcoords="offset points")
-
-    ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel(f"x [{unit}]")
-    ax.set_ylabel(f"y [{unit}]")
-    ax.grid(True, linewidth=0.4, alpha=0.5)
-    ax.legend(loc="best", fontsize=8)
-    status = result.status if result.converged else f"{result.status} (last iterate, not an equilibrium)"
-    ax.set_title(f"{mech.document.name}\n{status}, {result.iterations} iterations", fontsize=10)
-    _save(fig, path)
-    return path
+        ax.annotate(point.name, now, color="C3", fontsize=9, xytext=(6, 4), textcoords="offset points")
 
 
 def plot_sweeps(curves: "list[tuple[str, SweepResult]]", x_output: str, y_output: str,

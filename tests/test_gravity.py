@@ -66,3 +66,18 @@ def test_a_tapered_strip_has_the_mass_of_its_section():
     out = solve_equilibrium(mech, TIGHT).outputs()
     assert out["elements.strip.mass"] == pytest.approx(RHO * B * (h0 + h1) / 2 * L, rel=1e-12)
     assert out["wall.Fy"] == pytest.approx(RHO * B * (h0 + h1) / 2 * L * G, rel=1e-12)
+
+
+def test_a_link_with_mass_needs_its_area_and_has_no_mass_matrix():
+    from models import MechanismError
+    from service.inertia import mass_matrix
+
+    document = hanging_strip({"shape": "general", "I": B * H**3 / 12})
+    with pytest.raises(MechanismError) as info:
+        compile_mechanism(load_document(document))
+    assert info.value.pointer == "/sections/strip/A"
+    assert info.value.problem == "the area is required: link 'strip' has mass (material 'steel' has a density)"
+    with pytest.raises(MechanismError) as info:
+        mass_matrix(compile_mechanism(load_document(hanging_strip())))
+    assert info.value.pointer == "/elements/strip"
+    assert info.value.problem.startswith("element 'strip' (link) has no mass form: it has mass")

@@ -11,6 +11,9 @@ A family is one element type of the document (`"type": "spring"`). It says:
   energy_terms(ctx, t, d)      its part of the energy form (strain energy, equality and
                                inequality constraints whose multipliers are its unknowns), or
                                raise NoEnergyForm saying why its model has none
+  kinetic_energy(ctx, t, d, v) its kinetic energy for body displacements d and velocities v
+                               (None: massless), or raise NoMassForm saying why its unknowns
+                               cannot carry its mass (the mass form is the Hessian of the total)
   scale_hint(t, values)        sizes for nondimensionalizing (lengths, EI, stiffnesses)
 
 Signs: a Contribution's `from_bodies[b]` is the wrench [Fx, Fy, M about b's reference point]
@@ -35,7 +38,7 @@ from models.fields import StrictModel
 from models.structure import ElementTopology
 
 if TYPE_CHECKING:
-    from models.collect import Collector
+    from models.collector import Collector
     from models.context import AssemblyContext
 
 
@@ -77,6 +80,10 @@ class NoEnergyForm(Exception):
     """An element whose model is not the gradient of an energy in the body displacements."""
 
 
+class NoMassForm(Exception):
+    """An element with mass whose unknowns cannot express its kinetic energy."""
+
+
 @dataclass(frozen=True)
 class SiValues:
     """Parameter values in SI, by pointer, for scale hints."""
@@ -113,6 +120,9 @@ class ElementFamily(Protocol):
     def unknowns(self, topology: Any) -> list[tuple[str, str]]: ...
 
     def energy_terms(self, ctx: "AssemblyContext", topology: Any, d: list[ca.SX]) -> EnergyTerms: ...
+
+    def kinetic_energy(self, ctx: "AssemblyContext", topology: Any, d: list[ca.SX],
+                       v: list[ca.SX]) -> ca.SX | None: ...
 
     def scale_hint(self, topology: Any, values: SiValues) -> ScaleHint: ...
 

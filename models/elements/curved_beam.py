@@ -118,6 +118,9 @@ class CurvedBeamFamily:
                            "do not turn with the bodies: its tangent stiffness is unsymmetric once deformed, "
                            "so it is not the gradient of an energy (the exact model is a link)")
 
+    def kinetic_energy(self, ctx, t: FlexureTopology, d, v) -> None:
+        return None  # the constant-stiffness flexure is massless (seed 000, seed 004)
+
     def scale_hint(self, t: FlexureTopology, values: SiValues) -> ScaleHint:
         E = values[f"/materials/{t.material}/E"]
         section = SectionTopology(t.section, "rectangle")

@@ -79,5 +79,8 @@ class JointFamily(ABC):
         g = self.constraints(ctx, t, d)
         return EnergyTerms(ca.SX(0), equalities=[(name, g[k]) for k, name in enumerate(self.constraint_names)])
 
+    def kinetic_energy(self, ctx: AssemblyContext, t: JointTopology, d, v) -> None:
+        return None  # massless: the bodies carry the mass
+
     def scale_hint(self, t: JointTopology, values: SiValues) -> ScaleHint:
         return ScaleHint()

@@ -23,7 +23,7 @@ import casadi as ca
 from pydantic import Field
 
 from models.context import AssemblyContext
-from models.elements.base import CentreLine, Contribution, NoEnergyForm, ScaleHint, SiValues, TwoBodyElement
+from models.elements.base import CentreLine, Contribution, NoEnergyForm, NoMassForm, ScaleHint, SiValues, TwoBodyElement
 from models.errors import MechanismError
 from models.expression import compile_expression
 from models.fields import Number, StrictModel, Vec2
@@ -171,16 +171,17 @@ class LinkFamily:
             c.add_vec(f"{base}/at", el.at, "length")
             located = "at"
         geometry = _collect_shape(c, f"{base}/shape", el.shape, located)
-        if (el.shear or el.axial) and isinstance(section, GeneralSection) and section.A is None:
-            raise MechanismError(f"/sections/{el.section}/A", f"the area is required: link '{name}' has "
-                                 f"{'shear' if el.shear else 'axial'} strain")
+        weighs = c.has_density(el.material, needs_area=True, section=el.section)
+        if (el.shear or el.axial or weighs) and isinstance(section, GeneralSection) and section.A is None:
+            why = "shear strain" if el.shear else ("axial strain" if el.axial else f"mass (material '{el.material}' "
+                                                                                  "has a density)")
+            raise MechanismError(f"/sections/{el.section}/A", f"the area is required: link '{name}' has {why}")
         if el.start == "clamped":
             c.holds_rotation(i)
         if el.end == "clamped":
             c.holds_rotation(j)
         return LinkTopology(name, self.type, i, j, el.start, el.end, geometry, el.material,
-                            section_topology(el.section, section), el.shear, el.axial, el.intervals, el.order,
-                            c.has_density(el.material, needs_area=True, section=el.section))
+                            section_topology(el.section, section), el.shear, el.axial, el.intervals, el.order, weighs)
 
     def contribute(self, ctx: AssemblyContext, t: LinkTopology, d, z) -> Contribution:
         shooting = link_shooting(ctx, t)
@@ -219,6 +220,12 @@ class LinkFamily:
     def energy_terms(self, ctx, t: LinkTopology, d):
         raise NoEnergyForm("the shooting unknowns of a link mix internal forces and displacements, so its "
                            "balance is not the gradient of an energy in them")
+
+    def kinetic_energy(self, ctx, t: LinkTopology, d, v) -> None:
+        if t.weighs:
+            raise NoMassForm("it has mass (its material's density), but its shooting unknowns have no mass "
+                             "matrix: time simulation of links needs the dynamic link model")
+        return None
 
     def scale_hint(self, t: LinkTopology, values: SiValues) -> ScaleHint:
         E = values[f"/materials/{t.material}/E"]

@@ -127,6 +127,9 @@ class SpringFamily:
         x, _ = _deflection(ctx, t, d)
         return EnergyTerms(_energy(ctx, t, x))
 
+    def kinetic_energy(self, ctx, t: SpringTopology, d, v) -> None:
+        return None  # massless
+
     def scale_hint(self, t: SpringTopology, values: SiValues) -> ScaleHint:
         k = values[f"/elements/{t.name}/stiffness"] if f"/elements/{t.name}/stiffness" in values else None
         if t.kind == "torsional":

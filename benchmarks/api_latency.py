@@ -5,9 +5,7 @@ tool would). Side by side in the same run: the same solve through the Python API
 (no HTTP), so the ratio shows what the service adds. Prints p50/p99 over the requests, and
 requests per second with 4 concurrent clients (each its own keep-alive connection).
 
-    python -m benchmarks.service [--requests 200] [--clients 4] [--url URL]
-
-(Run it as a module from the repository root: as a file, its name would hide the service package.)
+    python3 -m benchmarks.api_latency [--requests 200] [--clients 4] [--url URL]
 
 Without --url it starts `uvicorn --factory api.app:create_app` on a free port (SQLite store in
 a temporary folder) and stops it afterwards.

@@ -1,0 +1,101 @@
+"""The shape of the code (issue 11): small modules and functions, private names kept private,
+no import cycles. Read from the sources with ast, nothing imported."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGES = ("models", "service", "api")
+MAX_MODULE_LINES = 400
+MAX_FUNCTION_LINES = 60
+
+
+def modules() -> dict[str, Path]:
+    """Dotted module name -> file, for every module of the three packages."""
+    found = {}
+    for package in PACKAGES:
+        for path in sorted((ROOT / package).rglob("*.py")):
+            parts = list(path.relative_to(ROOT).with_suffix("").parts)
+            if parts[-1] == "__init__":
+                parts.pop()
+            found[".".join(parts)] = path
+    return found
+
+
+def trees() -> dict[str, ast.Module]:
+    return {name: ast.parse(path.read_text(), str(path)) for name, path in modules().items()}
+
+
+def imported(name: str, tree: ast.Module, known: set[str]) -> list[tuple[str, str | None]]:
+    """(module, imported name or None) for every import of a flexmech module, anywhere in it."""
+    out = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            out += [(alias.name, None) for alias in node.names if alias.name.split(".")[0] in PACKAGES]
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            if node.module.split(".")[0] not in PACKAGES:
+                continue
+            for alias in node.names:
+                sub = f"{node.module}.{alias.name}"
+                out.append((sub, None) if sub in known else (node.module, alias.name))
+    return out
+
+
+def test_modules_are_small():
+    long = {name: len(path.read_text().splitlines()) for name, path in modules().items()}
+    assert not {name: n for name, n in long.items() if n > MAX_MODULE_LINES}
+
+
+def test_functions_are_short():
+    long = []
+    for name, tree in trees().items():
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                start = min([node.lineno, *(d.lineno for d in node.decorator_list)])
+                if node.end_lineno - start + 1 > MAX_FUNCTION_LINES:
+                    long.append(f"{name}.{node.name}: {node.end_lineno - start + 1} lines")
+    assert not long
+
+
+def test_private_names_stay_in_their_module():
+    known = set(modules())
+    used = []
+    for name, tree in trees().items():
+        aliases = {}
+        for module, item in imported(name, tree, known):
+            if item is not None and item.startswith("_") and not item.startswith("__"):
+                used.append(f"{name} imports {module}.{item}")
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                aliases.update({(a.asname or a.name): a.name for a in node.names})
+            elif isinstance(node, ast.ImportFrom) and node.module and f"{node.module}.{node.names[0].name}" in known:
+                aliases.update({(a.asname or a.name): f"{node.module}.{a.name}" for a in node.names})
+        for node in ast.walk(tree):
+            if (isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.value.id in aliases
+                    and aliases[node.value.id] in known and node.attr.startswith("_")
+                    and not node.attr.startswith("__")):
+                used.append(f"{name} uses {aliases[node.value.id]}.{node.attr}")
+    assert not used
+
+
+def test_no_import_cycles():
+    known = set(modules())
+    graph = {name: {module for module, _ in imported(name, tree, known) if module in known and module != name}
+             for name, tree in trees().items()}
+    cycles, state = [], {}
+
+    def visit(node: str, path: list[str]) -> None:
+        state[node] = "open"
+        for nxt in sorted(graph[node]):
+            if state.get(nxt) == "open":
+                cycles.append(" -> ".join(path[path.index(nxt):] + [node, nxt]) if nxt in path else f"{node} -> {nxt}")
+            elif nxt not in state:
+                visit(nxt, path + [node])
+        state[node] = "done"
+
+    for name in sorted(graph):
+        if name not in state:
+            visit(name, [])
+    assert not cycles
