@@ -93,6 +93,11 @@ def nlp_solver(name: str, key: Any, problem: Callable[[], dict], options: dict[s
     return solver
 
 
+def cached_solvers() -> int:
+    """How many solvers are built and kept (for tests and diagnostics)."""
+    return len(_SOLVERS)
+
+
 @dataclass
 class IpoptResult:
     status: str  # optimal | acceptable | infeasible | not_converged | time_limit
