@@ -43,6 +43,8 @@ def minimize_energy(mech: Mechanism, options: NewtonOptions = NewtonOptions(),
     default the undeformed state) at the parameters p (default the mechanism's). Its
     solver_residual is that of the residual form there."""
     started = time.perf_counter()
+    if mech.n_free == 0:  # nothing moves: the undeformed state is the whole answer
+        return EquilibriumResult("converged", np.zeros(0), 0.0, 0, [], time.perf_counter() - started, mech)
     form, solver = _solver(mech, options)
     p = mech.p() if p is None else p
     n_eq, n_in = len(form.equality_names), len(form.inequality_names)

@@ -33,7 +33,6 @@ from typing import TYPE_CHECKING, Any, Callable, Protocol
 import casadi as ca
 from pydantic import Field
 
-from models.errors import MechanismError
 from models.fields import StrictModel
 from models.structure import ElementTopology
 
@@ -163,7 +162,3 @@ def constraint_wrenches(ctx: "AssemblyContext", bodies: tuple[int, ...], d: list
     actual = ca.vertcat(*[d[b] for b in bodies])
     stacked = ca.vertcat(*[symbols[b] for b in bodies])
     return {b: ca.substitute(ca.gradient(work, symbols[b]), stacked, actual) for b in bodies}
-
-
-def missing_reference(pointer: str, what: str, name: str, known) -> MechanismError:
-    return MechanismError(pointer, f"unknown {what} '{name}' ({what}s: {', '.join(known) or 'none'})")
