@@ -13,12 +13,14 @@ import numpy as np
 from models.collector import Collector
 from models.document import ForceLoad, MechanismDocument, MomentLoad, PointOutput, PrescribedDisplacement, ReactionOutput
 from models.elements import FAMILIES, MODELS
-from models.errors import MechanismError
+from models.errors import MechanismError, pointer_of
 from models.sections import collect_section
 from models.structure import COORDINATES, InertiaTopology, LoadTopology, PointTopology, Structure
 from models.units import document_unit, unit_factor
 
 DISPLACEMENT_FIELDS = (("dx", "length"), ("dy", "length"), ("rotation", "angle"))
+MAX_NAME = 64
+DOCUMENT_UNITS = (("length", "length"), ("force", "force"), ("stress", "stress"), ("angle", "angle"), ("mass", "mass"))
 
 
 def collect(doc: MechanismDocument, model_override: str | None) -> tuple[Structure, np.ndarray, list[str]]:
@@ -27,6 +29,9 @@ def collect(doc: MechanismDocument, model_override: str | None) -> tuple[Structu
         raise MechanismError("model", f"unknown model '{model_override}' (choose from {', '.join(MODELS)})")
     if not doc.bodies:
         raise MechanismError("/bodies", "a mechanism needs at least one body")
+    _check_names(doc)
+    for field_name, kind in DOCUMENT_UNITS:  # a bad unit is blamed on itself, not on a field using it
+        unit_factor(getattr(doc.units, field_name), kind, f"/units/{field_name}")
     c = Collector(doc, model_override)
     masses = _collect_bodies(c)
     prescribed = _collect_supports(c)
@@ -51,6 +56,20 @@ def collect(doc: MechanismDocument, model_override: str | None) -> tuple[Structu
         masses=tuple(masses), gravity=doc.gravity is not None,
         length_unit_si=unit_factor(document_unit(doc.units, "length"), "length", "/units/length"))
     return structure, np.array(c.values, dtype=float), c.notes
+
+
+def _check_names(doc: MechanismDocument) -> None:
+    """Names become parts of JSON pointers (/elements/<name>/radius): no '/' or '~' (RFC 6901
+    would escape them, and every pointer would need it), no blanks, at most MAX_NAME characters."""
+    for collection in ("materials", "sections", "bodies", "elements", "loads", "outputs"):
+        for name in getattr(doc, collection):
+            pointer = pointer_of((collection, name))
+            if not name.strip() or name != name.strip():
+                raise MechanismError(pointer, "a name may not be empty or start or end with a blank")
+            if "/" in name or "~" in name:
+                raise MechanismError(pointer, "a name may not contain '/' or '~' (they are special in JSON pointers)")
+            if len(name) > MAX_NAME:
+                raise MechanismError(pointer, f"a name is at most {MAX_NAME} characters")
 
 
 def _collect_bodies(c: Collector) -> list[InertiaTopology]:

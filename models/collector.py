@@ -9,17 +9,27 @@ from typing import Any
 
 from models.errors import MechanismError
 from models.structure import Parameter
-from models.units import document_unit, quantity_to_si
+from models.units import document_unit, quantity_to_si, unit_factor
 
 
-def check_value(pointer: str, si: float, check: str | None) -> None:
-    """A numeric field's physical range (SI value)."""
+# Numbers of any kind, in SI, lie within these magnitudes (or are zero): beyond them a
+# document holds a typo, and the solver's nondimensional numbers would overflow or vanish.
+LARGEST, SMALLEST = 1e30, 1e-30
+
+
+def check_value(pointer: str, si: float, check: str | None, unit: str = "", factor: float = 1.0) -> None:
+    """A numeric field's physical range. `si` in SI; `unit` and `factor` (SI per unit) say how
+    the document states it, for the message."""
+    shown = f"{si:g} (SI)" if factor == 1.0 or not unit else f"{si / factor:g} {unit}"
     if not math.isfinite(si):
         raise MechanismError(pointer, "must be a finite number")
+    if abs(si) > LARGEST or 0 < abs(si) < SMALLEST:
+        raise MechanismError(pointer, f"{shown} is out of range: magnitudes from {SMALLEST:g} to {LARGEST:g} "
+                             "in SI units (or zero)")
     if check == "positive" and si <= 0:
-        raise MechanismError(pointer, f"must be positive, got {si:g} (SI)")
+        raise MechanismError(pointer, f"must be positive, got {shown}")
     if check == "nonnegative" and si < 0:
-        raise MechanismError(pointer, f"must not be negative, got {si:g} (SI)")
+        raise MechanismError(pointer, f"must not be negative, got {shown}")
     if check == "poisson" and not (-1.0 < si <= 0.5):
         raise MechanismError(pointer, f"Poisson's ratio must lie in (-1, 0.5], got {si:g}")
     if check == "arc_angle" and not (0.0 < si < 2 * math.pi):
@@ -46,8 +56,9 @@ class Collector:
         return document_unit(self.doc.units, kind)
 
     def add(self, pointer: str, value, kind: str, check: str | None = None) -> None:
-        si = quantity_to_si(value, kind, self.unit_of(kind), pointer)
-        check_value(pointer, si, check)
+        unit = self.unit_of(kind)
+        si = quantity_to_si(value, kind, unit, pointer)
+        check_value(pointer, si, check, unit, unit_factor(unit, kind, pointer))
         self.parameters.append(Parameter(pointer, kind, check))
         self.values.append(si)
 

@@ -9,17 +9,19 @@ compiled (models.mechanism), where each error names its field.
 
 from __future__ import annotations
 
+import difflib
 import json
+from functools import lru_cache
 from pathlib import Path
 from typing import Annotated, Any, Literal, Union
 
-import yaml
 from pydantic import Field, ValidationError, model_validator
 
 from models.elements import FAMILIES
 from models.elements.link import SHAPE_TYPES
 from models.errors import MechanismError, pointer_of
-from models.fields import Number, StrictModel, Vec2
+from models.fields import MAX_QUANTITY_CHARS, Number, StrictModel, Vec2
+from models.reading import parse_json, parse_yaml
 from models.sections import Section
 
 
@@ -219,24 +221,73 @@ class MechanismDocument(StrictModel):
         return self.model_dump(mode="json", by_alias=True, exclude_none=True)
 
 
+# pydantic's error types when a value is not a number (a Number is a float or a quantity string)
+_NOT_A_NUMBER = {"float_type", "string_type", "float_parsing", "finite_number", "string_too_long", "bool_type"}
+
+
 def _raise_first(exc: ValidationError) -> None:
-    """Turn pydantic's error list into our error type, naming the first offending field."""
+    """Turn pydantic's error list into our error type, naming one offending field: an unknown
+    field first (a typo explains the rest), and counting the other fields with problems."""
     errors = exc.errors()
-    first = errors[0]
+    first = next((e for e in errors if e["type"] == "extra_forbidden"), errors[0])
     location = _field_location(first["loc"])
+    here = [e for e in errors if _field_location(e["loc"]) == location]
     message = first["msg"]
     if first["type"] == "missing":
         message = "required field is missing"
     elif first["type"] == "extra_forbidden":
-        message = "unknown field"
-    if len(errors) > 1:
-        message += f" (and {len(errors) - 1} more problem{'s' if len(errors) > 2 else ''})"
+        message = unknown_field_message(str(location[-1]) if location else "")
+    elif all(e["type"] in _NOT_A_NUMBER for e in here):
+        message = (f"expected a number (or a quantity string like '25 um', at most {MAX_QUANTITY_CHARS} "
+                   f"characters), got {_shown(first.get('input'))}")
+    others = len({_field_location(e["loc"]) for e in errors} - {location})
+    if others:
+        message += f" (and {others} more field{'s' if others > 1 else ''} with problems)"
     raise MechanismError(pointer_of(location), message) from None
+
+
+def _shown(value: Any) -> str:
+    text = json.dumps(value) if isinstance(value, (bool, int, float, str)) or value is None else type(value).__name__
+    return text if len(text) <= 40 else text[:40] + "..."
+
+
+@lru_cache(maxsize=1)
+def _field_names() -> tuple[str, ...]:
+    """Every field name (and alias) of the document's models, for suggestions."""
+    names, seen, stack = set(), set(), [MechanismDocument]
+    while stack:
+        model = stack.pop()
+        if model in seen:
+            continue
+        seen.add(model)
+        for name, info in model.model_fields.items():
+            names.add(info.alias or name)
+            stack.extend(_models_in(info.annotation))
+    return tuple(sorted(names))
+
+
+def _models_in(annotation: Any) -> list[type]:
+    """The document models an annotation holds (through unions, containers and Annotated)."""
+    found, stack = [], [annotation]
+    while stack:
+        item = stack.pop()
+        if isinstance(item, type) and issubclass(item, StrictModel):
+            found.append(item)
+        stack.extend(getattr(item, "__args__", ()) or ())
+        if getattr(item, "__origin__", None) is not None and hasattr(item, "__metadata__"):
+            stack.append(item.__origin__)  # Annotated[X, ...]
+    return found
+
+
+def unknown_field_message(key: str) -> str:
+    """"unknown field 'radious' (did you mean 'radius'?)"."""
+    close = difflib.get_close_matches(key, _field_names(), n=1, cutoff=0.75)
+    return f"unknown field '{key}'" + (f" (did you mean '{close[0]}'?)" if close else "")
 
 
 _TAGGED_COLLECTIONS = {"elements", "loads", "outputs", "sections"}
 _SHAPE_TAGS = set(SHAPE_TYPES)
-_UNION_MEMBERS = {"float", "str", "int", "bool", "none"}
+_UNION_MEMBERS = {"float", "str", "int", "bool", "none", "constrained-str"}
 
 
 def _field_location(loc: tuple) -> tuple:
@@ -279,14 +330,9 @@ def load_document(source: str | Path | dict[str, Any]) -> MechanismDocument:
         return parse_document(source)
     path = Path(source)
     try:
-        text = path.read_text()
+        text = path.read_bytes()
     except OSError as exc:
         raise MechanismError("", f"cannot read {path}: {exc.strerror}") from None
-    try:
-        if path.suffix.lower() in {".yaml", ".yml"}:
-            data = yaml.safe_load(text)
-        else:
-            data = json.loads(text)
-    except (json.JSONDecodeError, yaml.YAMLError) as exc:
-        raise MechanismError("", f"{path} is not valid {'YAML' if path.suffix.lower() in {'.yaml', '.yml'} else 'JSON'}: {exc}") from None
-    return parse_document(data)
+    if path.suffix.lower() in {".yaml", ".yml"}:
+        return parse_document(parse_yaml(text, str(path)))
+    return parse_document(parse_json(text, str(path)))

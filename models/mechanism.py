@@ -125,14 +125,22 @@ class Mechanism:
         kinds = np.array([self.scales.of(p.kind) for p in self.parameters])
         return self.si_values / kinds
 
+    def checked_si(self, path: str, value: float | str, pointer: str | None = None, own_checks: bool = True) -> float:
+        """A value of the numeric field `path` (document units, or a quantity string) in SI,
+        checked like the document's own (magnitude; with own_checks, the field's sign or
+        range too); errors name `pointer` (default: path)."""
+        param = self.parameters[self.parameter_index(path)]
+        unit = self.doc_unit(param.kind)
+        where = path if pointer is None else pointer
+        si = quantity_to_si(value, param.kind, unit, where)
+        check_value(where, si, param.check if own_checks else None, unit, self.doc_factor(param.kind))
+        return si
+
     def with_values(self, overrides: dict[str, float | str]) -> "Mechanism":
         """A copy with numeric fields replaced; values in document units (or quantity strings)."""
         si = self.si_values.copy()
         for pointer, value in overrides.items():
-            i = self.parameter_index(pointer)
-            param = self.parameters[i]
-            si[i] = quantity_to_si(value, param.kind, self.doc_unit(param.kind), pointer)
-            check_value(pointer, si[i], param.check)
+            si[self.parameter_index(pointer)] = self.checked_si(pointer, value)
         return replace(self, si_values=si)
 
     def value(self, pointer: str) -> float:

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Annotated, Callable, Literal, Union
 import casadi as ca
 from pydantic import Discriminator, Field, Tag
 
-from models.expression import compile_expression
+from models.expression import compile_expression, finite_on
 from models.fields import Number, StrictModel
 
 if TYPE_CHECKING:
@@ -67,6 +67,9 @@ Section = Annotated[Union[Annotated[RectangularSection, Tag("rectangle")],
                     Discriminator(_section_shape)]
 
 
+ALONG = tuple(k / 16 for k in range(17))  # where a section expression must be positive
+
+
 @dataclass(frozen=True)
 class SectionTopology:
     """What of a section shapes the graphs: its name, shape and expressions (no numbers)."""
@@ -99,7 +102,8 @@ def collect_section(c: "Collector", name: str, section, needs_area: bool) -> Non
         for field_name, kind in (("I", "second_moment"), ("A", "area")):
             value = getattr(section, field_name)
             if isinstance(value, SectionExpression):
-                compile_expression(value.expression, f"{base}/{field_name}/expression")
+                pointer = f"{base}/{field_name}/expression"
+                finite_on(compile_expression(value.expression, pointer), pointer, ALONG, positive=True)
                 c.unit_parameter("length")  # expressions are in document length units
             elif value is not None:
                 c.add(f"{base}/{field_name}", value, kind, "positive")

@@ -1,11 +1,20 @@
-"""Unit handling with pint: document numbers to SI, SI to the document's units.
+"""Units: document numbers to SI, SI to the document's units, by a small bounded grammar.
 
-A numeric field is either a plain number, read in the document's declared unit for that
-quantity, or a string with its own unit ("25 um", "300 deg"). Internally everything is SI.
+A numeric field is a plain number, read in the document's declared unit for its kind, or a
+string "<number> <unit>" ("25 um", "300 deg", "1.77 N*m/rad"). The string is read by this
+module, not evaluated by pint: a decimal number (at most MAX_NUMBER_CHARS characters), then a
+unit made of at most MAX_UNIT_FACTORS unit names joined by * and /, each with an optional
+integer power up to MAX_POWER (** or ^), parentheses allowed. pint only looks up single unit
+names (their size and dimension); nothing a user writes is run as an expression.
+
+Angles are a dimension of their own here (pint counts the radian as dimensionless): "5 rad"
+is not a modulus and "5 percent" not an angle. A unit must have exactly the kind's dimension.
 """
 
 from __future__ import annotations
 
+import re
+from collections import Counter
 from functools import lru_cache
 
 import pint
@@ -32,6 +41,17 @@ SI_UNITS: dict[str, str] = {
     "rotational_stiffness": "N*m/rad",
 }
 
+MAX_NUMBER_CHARS = 32
+MAX_UNIT_CHARS = 64
+MAX_UNIT_FACTORS = 8
+MAX_POWER = 4
+ANGLE_UNITS = {"rad", "radian", "radians", "deg", "degree", "degrees", "arcmin", "arcminute", "arcsec",
+               "arcsecond", "turn", "revolution", "grad", "gon", "mrad", "urad"}
+_NUMBER = re.compile(r"\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d{1,3})?)\s*(.*?)\s*$", re.DOTALL)
+_TOKEN = re.compile(r"\s*(\*\*|\^|\*|/|\(|\)|[+-]?\d+|[^\W\d]\w*)")
+
+Dimension = tuple[tuple[str, int], ...]  # sorted (base dimension, power), powers not zero
+
 
 @lru_cache(maxsize=1)
 def registry() -> pint.UnitRegistry:
@@ -42,16 +62,113 @@ def registry() -> pint.UnitRegistry:
         return pint.UnitRegistry()
 
 
+def _shown(text: str, limit: int = 40) -> str:
+    """A user's text in a message: quoted, and cut when long (never echoed whole)."""
+    return repr(text) if len(text) <= limit else repr(text[:limit]) + f"... ({len(text)} characters)"
+
+
+@lru_cache(maxsize=512)
+def _named(name: str) -> tuple[float, Dimension]:
+    """SI size and dimension of one unit name (pint looks the name up; nothing is evaluated)."""
+    ureg = registry()
+    if name in ANGLE_UNITS:
+        return float(ureg.Quantity(1.0, name).to("rad").magnitude), (("[angle]", 1),)
+    try:
+        quantity = ureg.Quantity(1.0, ureg.Unit(name)).to_base_units()
+    except (pint.errors.PintError, AttributeError, ValueError, TypeError):
+        raise ValueError(f"unknown unit '{name}'") from None
+    dimension = tuple(sorted((str(d), int(p)) for d, p in quantity.dimensionality.items() if p))
+    return float(quantity.magnitude), dimension
+
+
+class _UnitParser:
+    """unit := factor (('*' | '/') factor)*;  factor := (name | '(' unit ')') [('**' | '^') int]"""
+
+    def __init__(self, text: str):
+        self.tokens, position = [], 0
+        while position < len(text):
+            match = _TOKEN.match(text, position)
+            if match is None:
+                if text[position:].strip():
+                    raise ValueError(f"cannot read {_shown(text[position:], 12)}")
+                break
+            self.tokens.append(match.group(1))
+            position = match.end()
+        self.at, self.factors = 0, 0
+
+    def peek(self) -> str | None:
+        return self.tokens[self.at] if self.at < len(self.tokens) else None
+
+    def take(self) -> str:
+        token = self.peek()
+        if token is None:
+            raise ValueError("the unit ends too soon")
+        self.at += 1
+        return token
+
+    def unit(self) -> tuple[float, Counter]:
+        size, dims = self.factor()
+        while self.peek() in ("*", "/"):
+            divide = self.take() == "/"
+            f, d = self.factor()
+            size = size / f if divide else size * f
+            dims.update({k: -v if divide else v for k, v in d.items()})
+        return size, dims
+
+    def factor(self) -> tuple[float, Counter]:
+        self.factors += 1
+        if self.factors > MAX_UNIT_FACTORS:
+            raise ValueError(f"more than {MAX_UNIT_FACTORS} unit factors")
+        token = self.take()
+        if token == "(":
+            size, dims = self.unit()
+            if self.take() != ")":
+                raise ValueError("a parenthesis is not closed")
+        elif token[0].isalpha() or token[0] == "_":
+            size, dimension = _named(token)
+            dims = Counter(dict(dimension))
+        else:
+            raise ValueError(f"expected a unit name, got '{token}'")
+        if self.peek() in ("**", "^"):
+            self.take()
+            power = self.take()
+            if not re.fullmatch(r"[+-]?\d+", power) or abs(int(power)) > MAX_POWER:
+                raise ValueError(f"powers of units are integers up to {MAX_POWER}, got '{power}'")
+            size, dims = size ** int(power), Counter({k: v * int(power) for k, v in dims.items()})
+        return size, dims
+
+
+@lru_cache(maxsize=1024)
+def parse_unit(text: str) -> tuple[float, Dimension]:
+    """(SI size, dimension) of a unit text; ValueError saying what is wrong."""
+    if not isinstance(text, str) or not text.strip():
+        raise ValueError("expected a unit")
+    if len(text) > MAX_UNIT_CHARS:
+        raise ValueError(f"a unit is at most {MAX_UNIT_CHARS} characters")
+    if text.strip() == "dimensionless":
+        return 1.0, ()
+    parser = _UnitParser(text)
+    size, dims = parser.unit()
+    if parser.peek() is not None:
+        raise ValueError(f"unexpected '{parser.peek()}' (join units with * or /)")
+    return size, tuple(sorted((k, v) for k, v in dims.items() if v))
+
+
+@lru_cache(maxsize=None)
+def dimension_of(kind: str) -> Dimension:
+    return parse_unit(SI_UNITS[kind] or "dimensionless")[1]
+
+
 @lru_cache(maxsize=512)
 def unit_factor(unit: str, kind: str, pointer: str) -> float:
-    """SI value of one `unit` of quantity `kind`; raises MechanismError on a bad unit."""
-    ureg = registry()
+    """SI value of one `unit` of quantity `kind`; MechanismError(pointer) on a bad unit."""
     try:
-        quantity = ureg.Quantity(1.0, unit)
-        return float(quantity.to(SI_UNITS[kind]).magnitude)
-    except (pint.errors.UndefinedUnitError, pint.errors.DimensionalityError, AttributeError,
-            ValueError, TypeError) as exc:
-        raise MechanismError(pointer, f"'{unit}' is not a unit of {kind} ({exc})") from None
+        size, dimension = parse_unit(unit)
+    except ValueError as exc:
+        raise MechanismError(pointer, f"{_shown(str(unit))} is not a unit of {kind}: {exc}") from None
+    if dimension != dimension_of(kind):
+        raise MechanismError(pointer, f"{_shown(unit)} is not a unit of {kind} (like {SI_UNITS[kind] or '1'})")
+    return size
 
 
 def quantity_to_si(value: float | int | str, kind: str, default_unit: str, pointer: str) -> float:
@@ -62,34 +179,31 @@ def quantity_to_si(value: float | int | str, kind: str, default_unit: str, point
         return float(value) * unit_factor(default_unit, kind, pointer)
     if isinstance(value, str):
         return _string_to_si(value, kind, default_unit, pointer)
-    raise MechanismError(pointer, f"expected a number or a quantity string, got {value!r}")
+    raise MechanismError(pointer, f"expected a number or a quantity string, got {_shown(repr(value))}")
 
 
 @lru_cache(maxsize=4096)
 def _string_to_si(value: str, kind: str, default_unit: str, pointer: str) -> float:
-    """A quantity string in SI. Cached: pint's parser takes about half a millisecond, and the
-    same strings ("25 um") come back with every request for a document."""
-    ureg = registry()
+    """A quantity string "<number> [unit]" in SI (without a unit: the document's unit)."""
+    match = _NUMBER.match(value) if len(value) <= MAX_NUMBER_CHARS + MAX_UNIT_CHARS + 2 else None
+    if match is None or len(match.group(1)) > MAX_NUMBER_CHARS:
+        raise MechanismError(pointer, f"cannot read {_shown(value)} as a quantity: expected a number "
+                             f"(at most {MAX_NUMBER_CHARS} characters) and a unit, like '25 um'")
+    number, unit = float(match.group(1)), match.group(2)
+    if not unit:
+        return number * unit_factor(default_unit, kind, pointer)
     try:
-        quantity = ureg.Quantity(value)
-    except Exception as exc:  # pint raises many parser-level types for free text
-        raise MechanismError(pointer, f"cannot read {value!r} as a quantity ({exc})") from None
-    if isinstance(quantity, (int, float)) or quantity.dimensionless:
-        magnitude = float(quantity.magnitude if hasattr(quantity, "magnitude") else quantity)
-        if kind == "angle" and hasattr(quantity, "units") and str(quantity.units) != "dimensionless":
-            return float(quantity.to("rad").magnitude)
-        return magnitude * unit_factor(default_unit, kind, pointer)
-    try:
-        return float(quantity.to(SI_UNITS[kind]).magnitude)
-    except pint.errors.DimensionalityError:
-        raise MechanismError(
-            pointer, f"{value!r} is not a {kind} (expected units like {default_unit})"
-        ) from None
+        size, dimension = parse_unit(unit)
+    except ValueError as exc:
+        raise MechanismError(pointer, f"cannot read {_shown(value)} as a quantity: {exc}") from None
+    if dimension != dimension_of(kind):
+        raise MechanismError(pointer, f"{_shown(value)} is not a {kind} (expected units like {default_unit})")
+    return number * size
 
 
 def document_unit(units, kind: str) -> str:
-    """The unit, as pint text, in which a document with `units` (models.document.Units)
-    states a quantity of `kind`; derived kinds are products of the declared ones."""
+    """The unit, as text, in which a document with `units` (models.document.Units) states a
+    quantity of `kind`; derived kinds are products of the declared ones."""
     return {
         "length": units.length,
         "force": units.force,

@@ -25,7 +25,7 @@ from pydantic import Field
 from models.context import AssemblyContext
 from models.elements.base import CentreLine, Contribution, NoEnergyForm, NoMassForm, ScaleHint, SiValues, TwoBodyElement
 from models.errors import MechanismError
-from models.expression import compile_expression
+from models.expression import compile_expression, finite_on
 from models.fields import Number, StrictModel, Vec2
 from models.link import LinkProperties, LinkShooting, LinkSolution
 from models.planar import cross
@@ -34,6 +34,7 @@ from models.structure import ElementTopology
 
 # Samples per shooting interval of a link, for stresses and drawing.
 SAMPLES_PER_INTERVAL = 4
+ALONG = tuple(k / 16 for k in range(17))  # where a shape expression must be a finite number
 
 
 class StraightShape(StrictModel):
@@ -245,7 +246,7 @@ def _collect_shape(c, base: str, shape, located: str) -> ShapeGeometry:
     if shape.type == "fourier_sine":
         omega = float(shape.omega)
     if shape.type == "expression":
-        compile_expression(shape.expression, f"{base}/expression")
+        finite_on(compile_expression(shape.expression, f"{base}/expression"), f"{base}/expression", ALONG)
         expression = shape.expression
     return ShapeGeometry(shape.type, terms, expression, omega, located)
 

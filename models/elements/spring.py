@@ -28,7 +28,7 @@ from pydantic import Field, model_validator
 from models.context import AssemblyContext
 from models.elements.base import Contribution, EnergyTerms, ScaleHint, SiValues, TwoBodyElement
 from models.errors import MechanismError
-from models.expression import CONSTANTS, FUNCTIONS, compile_expression
+from models.expression import CONSTANTS, FUNCTIONS, compile_expression, finite_on
 from models.fields import Number, Vec2
 from models.planar import cross
 from models.structure import ElementTopology
@@ -139,12 +139,15 @@ class SpringFamily:
 
 def _collect_law(c, base: str, el: Spring) -> None:
     reserved = {"x", *CONSTANTS, *FUNCTIONS}
+    env = {}
     for key, value in el.parameters.items():
         if not key.isidentifier() or key in reserved:
             raise MechanismError(f"{base}/parameters/{key}", f"'{key}' cannot name a parameter (use a name like k3, "
                                  f"not x, pi, e or a function name)")
         c.add(f"{base}/parameters/{key}", value, "dimensionless")
-    compile_expression(el.law, f"{base}/law", "x", tuple(el.parameters))
+        env[key] = c.values[-1]
+    build = compile_expression(el.law, f"{base}/law", "x", tuple(el.parameters))
+    finite_on(build, f"{base}/law", (0.0,), "x", env)  # the drawn state is unloaded: F(0) must be a number
 
 
 def _deflection(ctx: AssemblyContext, t: SpringTopology, d):
