@@ -73,6 +73,9 @@ def design_problem(mech: Mechanism, spec: OptimizeSpec, pointer: str = "/optimiz
             raise MechanismError(f"{here}/path", f"'{var.path}' is {exc.problem}") from None
         if var.path in paths:
             raise MechanismError(f"{here}/path", f"'{var.path}' is already a design variable")
+        for bound in ("lower", "upper", "scale"):  # the field's own checks (a positive h, an arc angle)
+            if getattr(var, bound) is not None:
+                mech.checked_si(var.path, getattr(var, bound), f"{here}/{bound}", own_checks=bound != "scale")
         lo = -np.inf if var.lower is None else float(var.lower)
         hi = np.inf if var.upper is None else float(var.upper)
         if lo > hi:

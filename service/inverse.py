@@ -32,6 +32,8 @@ def inverse_wrenches(mech: Mechanism, displacements: dict[str, tuple[float, floa
             raise MechanismError(f"/displacements/{name}", f"unknown body '{name}' (bodies: {', '.join(bodies)})")
         if len(values) != 3:
             raise MechanismError(f"/displacements/{name}", "expected [dx, dy, rotation]")
+        if not all(np.isfinite(values)):
+            raise MechanismError(f"/displacements/{name}", "displacements must be finite numbers")
         b = bodies.index(name)
         d[3 * b:3 * b + 3] = [v * mech.nd_per_doc(k) for v, k in zip(values, _KINDS)]
     elastic, _ = mech.graphs.body_wrenches(d, mech.p())

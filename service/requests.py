@@ -4,19 +4,15 @@ CLI and the job kinds report the same field."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import fields
 from typing import Any
 
 from models import MODELS, Mechanism, MechanismError, compile_mechanism
 from models.document import parse_document
+from service.costs import Limits, check_document_cost
 from service.newton import NewtonOptions
 
-
-@dataclass(frozen=True)
-class Limits:
-    max_elements: int = 200
-    max_sweep_points: int = 20_000
-    solve_time_limit: float | None = 10.0
+__all__ = ["Limits", "compile_request", "escape_pointer_part", "newton_options", "under"]
 
 
 def escape_pointer_part(part: str) -> str:
@@ -55,10 +51,9 @@ def compile_request(document: dict, model: str | None = None, overrides: dict[st
         doc = parse_document(document)
     except MechanismError as exc:
         raise under("/document", exc) from None
-    if len(doc.elements) > limits.max_elements:
-        raise MechanismError("/document/elements", f"{len(doc.elements)} elements: the limit is {limits.max_elements}")
     if model is not None and model not in MODELS:
         raise MechanismError("/model", f"unknown model '{model}' ({', '.join(MODELS)})")
+    check_document_cost(doc, model, limits)
     try:
         mech = compile_mechanism(doc, model)
     except MechanismError as exc:

@@ -14,6 +14,8 @@ from typing import Annotated, Literal
 from pydantic import Field, field_validator
 from pydantic_settings import BaseSettings, NoDecode, SettingsConfigDict
 
+from service.costs import Limits
+
 
 def default_data_dir() -> Path:
     """Where the embedded SQLite store lives: $XDG_DATA_HOME/flexmech or ~/.local/share/flexmech."""
@@ -35,10 +37,16 @@ class Settings(BaseSettings):
     # Access: with keys set, every /v1 request but /v1/health needs X-API-Key.
     api_keys: Annotated[list[str], NoDecode] = Field(default_factory=list)
 
-    # Limits
+    # Limits (service.costs): every request is costed against them before anything is built
     max_request_bytes: int = Field(1_000_000, ge=1024)
+    request_read_timeout: float = Field(10.0, gt=0, description="seconds to receive a request's body")
     max_elements: int = Field(200, ge=1)
+    max_bodies: int = Field(200, ge=1)
+    max_loads: int = Field(500, ge=1)
+    max_outputs: int = Field(500, ge=1, description="named outputs of a document")
+    max_link_work: int = Field(8192, ge=1, description="intervals x order^2 summed over links")
     max_sweep_points: int = Field(20_000, ge=1)
+    max_result_values: int = Field(1_000_000, ge=1, description="numbers a job stores")
     solve_time_limit: float = Field(10.0, gt=0, description="seconds of Newton per /v1/solve")
     job_time_limit: float = Field(3600.0, gt=0, description="seconds of wall time per job")
     chunk_size: int = Field(8, ge=1, le=10_000, description="points per task sent to a worker")
@@ -48,7 +56,10 @@ class Settings(BaseSettings):
     @classmethod
     def _split_keys(cls, value):
         if isinstance(value, str):
-            return [k.strip() for k in value.split(",") if k.strip()]
+            keys = [k.strip() for k in value.split(",") if k.strip()]
+            if value.strip() and not keys:  # " , ," would run the server open by accident
+                raise ValueError("lists no key (leave it empty to run without keys)")
+            return keys
         return value
 
     @field_validator("api_keys")
@@ -58,6 +69,12 @@ class Settings(BaseSettings):
         if short:
             raise ValueError(f"{len(short)} API key(s) shorter than 16 characters")
         return keys
+
+    def limits(self) -> Limits:
+        return Limits(max_elements=self.max_elements, max_sweep_points=self.max_sweep_points,
+                      solve_time_limit=self.solve_time_limit, max_bodies=self.max_bodies, max_loads=self.max_loads,
+                      max_outputs=self.max_outputs, max_link_work=self.max_link_work,
+                      max_result_values=self.max_result_values, job_time_limit=self.job_time_limit)
 
     def resolved_database_url(self) -> str:
         if self.database_url:

@@ -28,24 +28,34 @@ import numpy as np
 
 from models import Mechanism, MechanismError
 from service.reports import output_units, plain
-from service.requests import Limits, compile_request, newton_options
+from service.costs import Limits, check_grid_size, check_result_size
+from service.requests import compile_request, newton_options
 from service.units import residual_report
 from service.analyses import ANALYSES
 from service.equilibrium import check_constrained
 from service.jobs.base import Plan
+from service.jobs.control import TaskControl
+
+
+def value_count(parameter: dict, pointer: str) -> int:
+    """How many values a parameter takes, without making them."""
+    if parameter.get("values") is not None:
+        return len(parameter["values"])
+    missing = [k for k in ("start", "stop", "steps") if parameter.get(k) is None]
+    if missing:
+        raise MechanismError(pointer, "give values, or start, stop and steps")
+    steps = parameter["steps"]
+    if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
+        raise MechanismError(f"{pointer}/steps", "must be a whole number of at least 1")
+    return steps + 1
 
 
 def parameter_values(parameter: dict, pointer: str) -> list[float]:
     if parameter.get("values") is not None:
         values = [float(v) for v in parameter["values"]]
     else:
-        missing = [k for k in ("start", "stop", "steps") if parameter.get(k) is None]
-        if missing:
-            raise MechanismError(pointer, "give values, or start, stop and steps")
-        steps = int(parameter["steps"])
-        if steps < 1:
-            raise MechanismError(f"{pointer}/steps", "must be at least 1")
-        values = np.linspace(float(parameter["start"]), float(parameter["stop"]), steps + 1).tolist()
+        value_count(parameter, pointer)
+        values = np.linspace(float(parameter["start"]), float(parameter["stop"]), int(parameter["steps"]) + 1).tolist()
     if not values:
         raise MechanismError(f"{pointer}/values", "no values")
     if not all(np.isfinite(values)):
@@ -53,8 +63,19 @@ def parameter_values(parameter: dict, pointer: str) -> list[float]:
     return values
 
 
+def grid_size(spec: dict, limits: Limits) -> int:
+    """The number of points, checked against the limit before any value is made."""
+    counts = [value_count(p, f"/parameters/{k}") for k, p in enumerate(spec["parameters"])]
+    if spec.get("grid", "cartesian") == "zip":
+        if len(set(counts)) > 1:
+            raise MechanismError("/parameters", f"a zip grid needs equally many values per parameter "
+                                                f"(got {', '.join(str(c) for c in counts)})")
+        counts = counts[:1]
+    return check_grid_size(counts, limits)
+
+
 def grid_shape(spec: dict) -> tuple[list[list[float]], tuple[int, ...]]:
-    """(values per parameter, grid shape); zip grids have shape (n,)."""
+    """(values per parameter, grid shape); zip grids have shape (n,). Call grid_size first."""
     values = [parameter_values(p, f"/parameters/{k}") for k, p in enumerate(spec["parameters"])]
     if spec.get("grid", "cartesian") == "zip":
         lengths = {len(v) for v in values}
@@ -108,10 +129,8 @@ def mechanism_of(spec: dict) -> Mechanism:
 
 def _check_spec(spec: dict, limits: Limits) -> tuple[list[list[float]], tuple[int, ...], list[str]]:
     """The grid (values per parameter, shape) and the swept paths of a valid spec."""
+    grid_size(spec, limits)
     values, shape = grid_shape(spec)
-    total = int(np.prod(shape))
-    if total > limits.max_sweep_points:
-        raise MechanismError("/parameters", f"{total} sweep points: the limit is {limits.max_sweep_points}")
     paths = [p["path"] for p in spec["parameters"]]
     if len(set(paths)) != len(paths):
         raise MechanismError("/parameters", "a path is listed twice")
@@ -138,11 +157,17 @@ class SweepJob:
                 units.append(mech.doc_unit(mech.parameter_kind(path)))
             except MechanismError as exc:
                 raise MechanismError(f"/parameters/{k}/path", exc.problem) from None
+        for k, (path, parameter_values_k) in enumerate(zip(paths, values)):
+            for i, value in enumerate(parameter_values_k):  # the same checks as the document's own
+                where = f"/parameters/{k}/values/{i}" if spec["parameters"][k].get("values") is not None else f"/parameters/{k}"
+                mech.checked_si(path, value, where)
         all_units = output_units(mech)
         wanted = spec.get("outputs") or list(all_units)
         for k, name in enumerate(wanted):
             if name not in all_units:
                 raise MechanismError(f"/outputs/{k}", f"unknown output '{name}'")
+        stored = len(wanted) + (mech.n_free if spec.get("continuation") is not None else 0)
+        check_result_size(int(np.prod(shape)), stored, limits)
         try:
             check_constrained(mech)
         except MechanismError as exc:
@@ -194,7 +219,7 @@ class SweepJob:
     def run(self, spec, task):
         mech = mechanism_of(spec)
         analysis = ANALYSES.named(spec.get("analysis") or "equilibrium")
-        options = newton_options(spec.get("options"), task.get("time_limit"))
+        control = TaskControl(task)
         values, shape = grid_shape(spec)
         grid = spec.get("grid", "cartesian")
         slots = [mech.parameter_index(p["path"]) for p in spec["parameters"]]
@@ -208,6 +233,9 @@ class SweepJob:
         along_path = task.get("line") is not None
         points = []
         for index in task["indices"]:
+            if control.should_stop():  # cancelled, or out of the job's time: the runner drops the rest
+                break
+            options = newton_options(spec.get("options"), control.time_limit(task.get("time_limit")))
             here = point_values(values, shape, grid, index)
             p = p0.copy()
             p[slots] = np.asarray(here) * factors
@@ -219,7 +247,8 @@ class SweepJob:
             points.append((index, plain({
                 "values": here, "status": r.status, "message": r.message, "iterations": r.iterations,
                 **{k: residuals[k] for k in ("residual_norm", "residual_moment", "solver_residual")},
-                "seconds": r.seconds, "outputs": {n: y[j] / f for n, (j, f) in zip(wanted, columns)}, "z": r.z,
+                "seconds": r.seconds, "outputs": {n: y[j] / f for n, (j, f) in zip(wanted, columns)},
+                **({"z": r.z} if along_path else {}),  # the state a resumed load path starts from
             })))
         return points
 

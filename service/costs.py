@@ -1,0 +1,71 @@
+"""What a request costs, counted before anything is allocated or built, against the limits.
+
+The work of building a structure's graphs grows with its links: each shooting interval
+unrolls the integrator, about order^2 evaluations of the link's equations, and a build costs
+about 0.6 ms per unit of intervals x order^2 on a 2-core machine (8 links of 64 intervals of
+order 12 took 113 s). Counts of bodies, elements, loads and outputs, and the size of what a
+job stores, are bounded the same way. Every refusal names the field and the limit.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from models import MechanismError
+from models.document import MechanismDocument
+
+
+@dataclass(frozen=True)
+class Limits:
+    max_elements: int = 200
+    max_sweep_points: int = 20_000
+    solve_time_limit: float | None = 10.0
+    max_bodies: int = 200
+    max_loads: int = 500
+    max_outputs: int = 500  # named outputs of a document
+    max_link_work: int = 8192  # intervals x order^2, summed over links (and exact curved beams)
+    max_result_values: int = 1_000_000  # numbers a job stores: points x values per point
+    job_time_limit: float | None = 3600.0
+
+
+def link_work(doc: MechanismDocument, model: str | None) -> list[tuple[str, int]]:
+    """(element, intervals x order^2) of every element solved by shooting."""
+    work = []
+    for name, element in doc.elements.items():
+        exact = element.type == "curved_beam" and (model or element.model) == "exact"
+        if element.type == "link" or exact:
+            work.append((name, element.intervals * element.order**2))
+    return work
+
+
+def check_document_cost(doc: MechanismDocument, model: str | None, limits: Limits, prefix: str = "/document") -> None:
+    """MechanismError (under `prefix`) where the document exceeds a limit."""
+    for collection, limit in (("bodies", limits.max_bodies), ("elements", limits.max_elements),
+                              ("loads", limits.max_loads), ("outputs", limits.max_outputs)):
+        count = len(getattr(doc, collection))
+        if count > limit:
+            raise MechanismError(f"{prefix}/{collection}", f"{count} {collection}: the limit is {limit}")
+    total = 0
+    for name, work in link_work(doc, model):
+        total += work
+        if total > limits.max_link_work:
+            raise MechanismError(f"{prefix}/elements/{name}/intervals", (
+                f"the links need {sum(w for _, w in link_work(doc, model))} units of graph work (intervals x "
+                f"order^2, summed): the limit is {limits.max_link_work}; use fewer intervals or a lower order"))
+
+
+def check_grid_size(counts: list[int], limits: Limits, pointer: str = "/parameters") -> int:
+    """The number of points of a cartesian grid of `counts` values per axis, counted with
+    Python integers (exact, no overflow) before any value is made."""
+    total = 1
+    for count in counts:
+        total *= count
+    if total > limits.max_sweep_points:
+        raise MechanismError(pointer, f"{total} sweep points: the limit is {limits.max_sweep_points}")
+    return total
+
+
+def check_result_size(points: int, per_point: int, limits: Limits, pointer: str = "/outputs") -> None:
+    if points * per_point > limits.max_result_values:
+        raise MechanismError(pointer, f"{points} points x {per_point} stored values = {points * per_point}: the "
+                             f"limit is {limits.max_result_values}; keep fewer outputs or points")
