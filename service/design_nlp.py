@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Callable
 
 import casadi as ca
 import numpy as np
@@ -122,7 +123,8 @@ def _elastic_solver(nlp: DesignNlp, max_iterations: int) -> ca.Function:
 
 
 def least_violation(nlp: DesignNlp, x0: np.ndarray, P: np.ndarray, lbx: np.ndarray, ubx: np.ndarray,
-                    lbg: np.ndarray, ubg: np.ndarray, max_iterations: int) -> tuple[np.ndarray, float, str]:
+                    lbg: np.ndarray, ubg: np.ndarray, max_iterations: int,
+                    stop: Callable[[], bool] | None = None) -> tuple[np.ndarray, float, str]:
     """The point of least total constraint violation (in scaled units) with every case in
     equilibrium and the design within its bounds: minimize the sum of elastic slacks s >= 0
     with lower - s <= g <= upper + s. Returns (x, total violation, IPOPT status)."""
@@ -133,7 +135,7 @@ def least_violation(nlp: DesignNlp, x0: np.ndarray, P: np.ndarray, lbx: np.ndarr
     g = np.asarray(g).ravel()[n_res:]
     s0 = np.maximum(np.maximum(lower - g, g - upper), 0.0) + 1e-3
     n_con = len(lower)
-    outcome = solve(solver, x0=np.concatenate([x0, s0]), p=P,
+    outcome = solve(solver, stop=stop, x0=np.concatenate([x0, s0]), p=P,
                     lbx=np.concatenate([lbx, np.zeros(n_con)]), ubx=np.concatenate([ubx, np.full(n_con, np.inf)]),
                     lbg=np.concatenate([np.zeros(n_res), np.full(n_con, -np.inf), lower]),
                     ubg=np.concatenate([np.zeros(n_res), upper, np.full(n_con, np.inf)]))

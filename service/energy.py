@@ -33,8 +33,7 @@ def _solver(mech: Mechanism, options: NewtonOptions):
 
     return form, ipopt.nlp_solver("minimum_energy", mech.structure, problem,
                                   {"tol": 1e-14, "constr_viol_tol": 1e-14, "acceptable_tol": 1e-10,
-                                   "max_iter": max(options.max_iterations, 200),
-                                   **({"max_wall_time": options.time_limit} if options.time_limit else {})})
+                                   "max_iter": max(options.max_iterations, 200)})
 
 
 def minimize_energy(mech: Mechanism, options: NewtonOptions = NewtonOptions(),
@@ -49,7 +48,7 @@ def minimize_energy(mech: Mechanism, options: NewtonOptions = NewtonOptions(),
     p = mech.p() if p is None else p
     n_eq, n_in = len(form.equality_names), len(form.inequality_names)
     x0 = np.zeros(len(form.unknowns)) if guess is None else np.asarray(guess, dtype=float)
-    run = ipopt.solve(solver, x0=x0, p=p, lbg=np.zeros(n_eq + n_in),
+    run = ipopt.solve(solver, stop=ipopt.deadline(options.time_limit), x0=x0, p=p, lbg=np.zeros(n_eq + n_in),
                       ubg=np.concatenate([np.zeros(n_eq), np.full(n_in, np.inf)]))
     z = np.concatenate([run.x, run.lam_g[:n_eq]])
     norm = float(np.abs(np.asarray(mech.graphs.residual(z, p))).max(initial=0.0))

@@ -186,7 +186,8 @@ def solve_bounded(mech: Mechanism, bounds: dict[str, tuple[float | None, float |
     started = time.perf_counter()
     z0 = _start_on_bounds(mech, p, np.zeros(mech.n_free) if guess is None else np.asarray(guess, dtype=float),
                           lower, upper, options)
-    run = ipopt.solve(_bounded_solver(mech.structure, options), x0=z0, p=p, lbx=lower, ubx=upper, lbg=0, ubg=0)
+    run = ipopt.solve(_bounded_solver(mech.structure, options), stop=ipopt.deadline(options.time_limit), x0=z0, p=p,
+                      lbx=lower, ubx=upper, lbg=0, ubg=0)
     z = run.x
     norm = float(np.abs(np.asarray(mech.graphs.residual(z, p))).max())
     # Polish inside the bounds: Newton from the IPOPT point, kept only if it stays inside.

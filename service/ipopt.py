@@ -73,7 +73,42 @@ def checked_options(options: dict[str, Any]) -> tuple[tuple[str, Any], ...]:
 
 
 _SOLVERS: OrderedDict[tuple, ca.Function] = OrderedDict()
+_WATCHES: dict[int, "_Watch"] = {}  # id(solver) -> its iteration hook
 MAX_SOLVERS = 64  # the least recently used go first
+
+
+class _Watch(ca.Callback):
+    """IPOPT's iteration hook: asks `stop` (set for the duration of a solve) whether to end
+    the run now (a cancelled job, a deadline): IPOPT then returns User_Requested_Stop."""
+
+    def __init__(self, name: str, n_x: int, n_g: int, n_p: int):
+        ca.Callback.__init__(self)
+        self.sizes = {"x": n_x, "lam_x": n_x, "g": n_g, "lam_g": n_g, "f": 1, "lam_p": n_p}
+        self.stop: Callable[[], bool] | None = None
+        self.stopped = False
+        self.construct(name, {})
+
+    def get_n_in(self) -> int:
+        return ca.nlpsol_n_out()
+
+    def get_n_out(self) -> int:
+        return 1
+
+    def get_name_in(self, i: int) -> str:
+        return ca.nlpsol_out(i)
+
+    def get_name_out(self, i: int) -> str:
+        return "ret"
+
+    def get_sparsity_in(self, i: int) -> ca.Sparsity:
+        n = self.sizes.get(ca.nlpsol_out(i), 0)
+        return ca.Sparsity.scalar() if ca.nlpsol_out(i) == "f" else ca.Sparsity.dense(n, 1)
+
+    def eval(self, arg):
+        if self.stop is not None and self.stop():
+            self.stopped = True
+            return [1]
+        return [0]
 
 
 def nlp_solver(name: str, key: Any, problem: Callable[[], dict], options: dict[str, Any]) -> ca.Function:
@@ -85,17 +120,30 @@ def nlp_solver(name: str, key: Any, problem: Callable[[], dict], options: dict[s
         _SOLVERS.move_to_end(cache_key)
         return _SOLVERS[cache_key]
     ipopt = {f"ipopt.{k}": v for k, v in settings}
-    solver = ca.nlpsol(name, "ipopt", problem(), {"print_time": False, "ipopt.sb": "yes", "ipopt.print_level": 0,
-                                                  **ipopt})
+    nlp = problem()
+    p = nlp.get("p")
+    watch = _Watch(f"{name}_watch", nlp["x"].numel(), nlp["g"].numel() if "g" in nlp else 0,
+                   0 if p is None else p.numel())
+    solver = ca.nlpsol(name, "ipopt", nlp, {"print_time": False, "ipopt.sb": "yes", "ipopt.print_level": 0,
+                                            "iteration_callback": watch, **ipopt})
     _SOLVERS[cache_key] = solver
+    _WATCHES[id(solver)] = watch
     if len(_SOLVERS) > MAX_SOLVERS:
-        _SOLVERS.popitem(last=False)
+        _WATCHES.pop(id(_SOLVERS.popitem(last=False)[1]), None)
     return solver
 
 
 def cached_solvers() -> int:
     """How many solvers are built and kept (for tests and diagnostics)."""
     return len(_SOLVERS)
+
+
+def deadline(seconds: float | None) -> Callable[[], bool] | None:
+    """A stop() for solve(): True once `seconds` have passed (None: never)."""
+    if seconds is None:
+        return None
+    end = time.monotonic() + seconds
+    return lambda: time.monotonic() > end
 
 
 @dataclass
@@ -116,16 +164,27 @@ class IpoptResult:
         return self.status in ("optimal", "acceptable")
 
 
-def solve(solver: ca.Function, **arguments) -> IpoptResult:
+def solve(solver: ca.Function, stop: Callable[[], bool] | None = None,
+          stop_status: str = "time_limit", **arguments) -> IpoptResult:
     """Run a solver (x0, p, lbx, ubx, lbg, ubg); the status is 'optimal' or 'acceptable' only
-    when CasADi reports success."""
+    when CasADi reports success. stop() is asked at every iteration: True ends the run with
+    `stop_status`."""
     started = time.perf_counter()
-    solution = solver(**arguments)
+    watch = _WATCHES.get(id(solver))
+    if watch is not None:
+        watch.stop, watch.stopped = stop, False
+    try:
+        solution = solver(**arguments)
+    finally:
+        if watch is not None:
+            watch.stop = None
     stats = solver.stats()
     return_status = str(stats.get("return_status", "unknown"))
     status = STATUS.get(return_status, "not_converged")
     if status in ("optimal", "acceptable") and not stats.get("success", False):
         status = "not_converged"
+    if watch is not None and watch.stopped:
+        status = stop_status
 
     def array(name: str) -> np.ndarray:
         return np.asarray(solution[name], dtype=float).ravel()

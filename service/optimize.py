@@ -16,6 +16,7 @@ from __future__ import annotations
 import re
 import time
 from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 
@@ -209,7 +210,8 @@ def start_design(problem: DesignProblem, start: int) -> np.ndarray:
     return lo + rng.random(len(lo)) * (hi - lo)
 
 
-def run_start(prepared: Prepared, start: int) -> StartResult:
+def run_start(prepared: Prepared, start: int, stop: Callable[[], bool] | None = None) -> StartResult:
+    """One IPOPT run from start `start`; stop() (asked every iteration) ends it early."""
     problem, nlp = prepared.problem, prepared.nlp
     spec = problem.spec
     started = time.perf_counter()
@@ -217,9 +219,9 @@ def run_start(prepared: Prepared, start: int) -> StartResult:
     guesses = [z if status == "converged" else np.zeros(nlp.n_state)
                for status, z in equilibria(problem, design0)]
     x0 = np.concatenate([design0 / problem.scale, *guesses])
-    run = solve(solver_for(nlp, spec.max_iterations, spec.tolerance), x0=x0, p=prepared.P,
+    run = solve(solver_for(nlp, spec.max_iterations, spec.tolerance), stop=stop, x0=x0, p=prepared.P,
                 lbx=prepared.lbx, ubx=prepared.ubx, lbg=prepared.lbg, ubg=prepared.ubg)
-    status, x, lam_g, lam_x, message = _judged(prepared, run, x0)
+    status, x, lam_g, lam_x, message = _judged(prepared, run, x0, stop)
     # IPOPT may end a hair outside the bounds (its bound relaxation): report the design inside.
     design = np.clip(x[:nlp.n_design] * problem.scale, problem.lower, problem.upper)
     zs, on_branch = _loaded_states(problem, design, np.split(x[nlp.n_design:], nlp.n_cases))
@@ -243,16 +245,19 @@ def run_start(prepared: Prepared, start: int) -> StartResult:
     )
 
 
-def _judged(prepared: Prepared, run, x0: np.ndarray):
+def _judged(prepared: Prepared, run, x0: np.ndarray, stop: Callable[[], bool] | None = None):
     """(status, x, lam_g, lam_x, message) of an IPOPT run: when it failed on a constrained
     problem, whether because no design meets the constraints (the least violation problem)."""
     problem, nlp = prepared.problem, prepared.nlp
     if run.succeeded:
         return run.status, run.x, run.lam_g, run.lam_x, ""
+    if run.status == "time_limit":
+        return run.status, run.x, run.lam_g, run.lam_x, "stopped: the job was cancelled or ran out of time"
     feasibility = ""
     if problem.constraints:
         x_least, violation, least_status = least_violation(
-            nlp, x0, prepared.P, prepared.lbx, prepared.ubx, prepared.lbg, prepared.ubg, problem.spec.max_iterations)
+            nlp, x0, prepared.P, prepared.lbx, prepared.ubx, prepared.lbg, prepared.ubg, problem.spec.max_iterations,
+            stop)
         if least_status == "optimal" and violation > INFEASIBLE_VIOLATION:
             return ("infeasible", x_least, np.zeros_like(run.lam_g), np.zeros_like(run.lam_x),
                     "no design within the bounds meets the constraints: this is the point of least violation")

@@ -2,16 +2,27 @@
 
 Both are concurrent.futures executors, so the runner treats them alike. Worker processes
 import flexmech once and keep their compiled mechanisms and CasADi Functions between tasks
-(service.jobs.sweep caches them per document, models.assembly per structure). No CasADi
-object ever crosses a process boundary: tasks carry JSON-able specs only.
+(service.jobs.sweep caches them per document, models.assembly per structure, and built
+graphs are on disk for every new worker). No CasADi object ever crosses a process boundary:
+tasks carry JSON-able specs only.
+
+Each executor also carries stop signals to running tasks (service.jobs.control reads them):
+a flag file per job for the process pool, a Dask Event per job on a cluster. A process pool
+can kill its workers (a task that will not stop, or the server shutting down); a Dask
+cluster's workers are the cluster's to manage.
 """
 
 from __future__ import annotations
 
 import logging
 import multiprocessing
+import shutil
+import tempfile
 from abc import ABC, abstractmethod
 from concurrent.futures import Executor, ProcessPoolExecutor
+from pathlib import Path
+
+from service.jobs.control import worker_started
 
 log = logging.getLogger("flexmech.executors")
 
@@ -22,6 +33,9 @@ class TaskExecutor(ABC):
     description: str
     capacity: int  # tasks worth keeping in flight
 
+    def __init__(self):
+        self._signalled: set[str] = set()
+
     @abstractmethod
     def executor(self) -> Executor: ...
 
@@ -29,46 +43,116 @@ class TaskExecutor(ABC):
         """Replace a broken executor (a process-pool worker died). A Dask cluster replaces
         lost workers itself, so by default there is nothing to do."""
 
+    def kill(self) -> bool:
+        """Stop every worker now, whatever it runs; False where this executor cannot."""
+        return False
+
+    @abstractmethod
+    def control_for(self, job_id: str) -> dict:
+        """What a task of the job carries to learn that it should stop (JSON)."""
+
+    def stop(self, job_id: str) -> None:
+        """Tell the job's running tasks to stop."""
+        self._signalled.add(job_id)
+
+    def signalled(self) -> list[str]:
+        return sorted(self._signalled)
+
+    def forget(self, job_id: str) -> None:
+        """The job's tasks have all ended: drop its stop signal."""
+        self._signalled.discard(job_id)
+
     @abstractmethod
     def close(self) -> None: ...
 
 
 class ProcessPool(TaskExecutor):
     def __init__(self, workers: int):
+        super().__init__()
         self.workers = workers
         self.capacity = 2 * workers
         self.description = f"process pool ({workers} workers)"
+        self._flags = Path(tempfile.mkdtemp(prefix="flexmech-stop-"))
         self._pool = self._new()
 
     def _new(self) -> ProcessPoolExecutor:
         # spawn: the server has threads (uvicorn, the solver thread); forking them is unsafe.
-        return ProcessPoolExecutor(self.workers, mp_context=multiprocessing.get_context("spawn"))
+        return ProcessPoolExecutor(self.workers, mp_context=multiprocessing.get_context("spawn"),
+                                   initializer=worker_started)
 
     def executor(self) -> Executor:
         return self._pool
 
     def renew(self) -> None:
         log.warning("process pool broke; starting a new one")
-        self._pool.shutdown(wait=False, cancel_futures=True)
+        self._end_pool()
         self._pool = self._new()
 
-    def close(self) -> None:
+    def kill(self) -> bool:
+        self._end_pool()
+        self._pool = self._new()
+        return True
+
+    def _end_pool(self) -> None:
+        """Shut the pool down and end its workers now (a running task included)."""
         self._pool.shutdown(wait=False, cancel_futures=True)
+        workers = multiprocessing.active_children()  # this process' children: the pool's workers
+        for process in workers:
+            process.terminate()
+        for process in workers:
+            process.join(5)
+            if process.is_alive():
+                process.kill()
+                process.join(5)
+
+    def control_for(self, job_id: str) -> dict:
+        return {"file": str(self._flags / f"{job_id}.stop")}
+
+    def stop(self, job_id: str) -> None:
+        super().stop(job_id)
+        (self._flags / f"{job_id}.stop").touch()
+
+    def forget(self, job_id: str) -> None:
+        super().forget(job_id)
+        (self._flags / f"{job_id}.stop").unlink(missing_ok=True)
+
+    def close(self) -> None:
+        self._end_pool()
+        self._pool.shutdown(wait=True)  # joins the pool's own threads: nothing is left behind
+        shutil.rmtree(self._flags, ignore_errors=True)
 
 
 class DaskCluster(TaskExecutor):
     def __init__(self, address: str, timeout: float = 30.0):
         from distributed import Client  # imported only when a cluster is configured
 
+        super().__init__()
         self.address = address
         self._client = Client(address, timeout=timeout, set_as_default=False)
         workers = max(1, len(self._client.scheduler_info(n_workers=-1).get("workers", {})))
         self.capacity = 2 * workers
-        self.description = f"Dask cluster at {address} ({workers} workers)"
+        # /v1/health shows this to anyone: the cluster's address stays in the server's log
+        self.description = f"Dask cluster ({workers} workers)"
+        log.info("Dask cluster at %s (%d workers)", address, workers)
         self._executor = self._client.get_executor(pure=False)
 
     def executor(self) -> Executor:
         return self._executor
+
+    def control_for(self, job_id: str) -> dict:
+        return {"dask_event": f"flexmech-stop-{job_id}"}
+
+    def stop(self, job_id: str) -> None:
+        from distributed import Event
+
+        super().stop(job_id)
+        Event(f"flexmech-stop-{job_id}", client=self._client).set()
+
+    def forget(self, job_id: str) -> None:
+        from distributed import Event
+
+        super().forget(job_id)
+        Event(f"flexmech-stop-{job_id}", client=self._client).clear()
 
     def close(self) -> None:
         self._client.close()

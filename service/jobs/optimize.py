@@ -22,6 +22,7 @@ from service.reports import plain
 from service.requests import Limits, compile_request, under
 from service.design import DesignProblem, design_problem
 from service.jobs.base import Plan
+from service.jobs.control import TaskControl
 from service.optimize import Prepared, StartResult, combine, prepare, run_start
 
 
@@ -87,8 +88,11 @@ class OptimizeJob:
     def run(self, spec, task):
         prepared = prepared_of(spec)
         points = []
+        control = TaskControl(task)
         for k in task["indices"]:
-            start = run_start(prepared, k)
+            if control.should_stop():  # cancelled, or out of the job's time: the runner drops the rest
+                break
+            start = run_start(prepared, k, stop=control.should_stop)
             points.append((k, plain({**start.summary(), "start": k, "x": start.x, "lam_g": start.lam_g,
                                      "lam_x": start.lam_x})))
         return points

@@ -3,9 +3,18 @@ points each task returns, as it returns them.
 
 On start it takes up every job the store lists as queued or running, including jobs a
 previous server process left running: their stored points are kept and only the missing ones
-are computed (the kind decides the tasks from the stored points). A cancelled job, or one
-over its time limit, stops getting tasks, and the points of its tasks still running are
-dropped: after the cancel is seen, its stored points do not change.
+are computed (the kind decides the tasks from the stored points).
+
+Stopping: every task carries its job's deadline and a stop signal (service.jobs.control). A
+cancelled job, or one over its time limit, stops getting tasks; its running tasks are told to
+stop (they check between points, Newton by its time limit, IPOPT every iteration), and a task
+that has not stopped after STOP_GRACE seconds has its workers killed (a process pool is
+renewed; tasks of other jobs lost that way are run again, not counted as failures). After the
+cancel is seen, the job's stored points do not change.
+
+The store may fail (a locked SQLite file, a full disk): points that could not be written are
+kept and written again with backoff (service.jobs.store_guard), so none is lost, and a job
+is finished only once all its points are stored.
 """
 
 from __future__ import annotations
@@ -21,10 +30,12 @@ from dataclasses import dataclass, field
 from service.jobs.executors import TaskExecutor
 from service.jobs.kinds import JobKind, kind_named, run_task
 from service.jobs.store import Job, JobStore
+from service.jobs.store_guard import StoreGuard
 
 log = logging.getLogger("flexmech.runner")
 
 MAX_TASK_ATTEMPTS = 2  # a task whose worker died is tried once more before its job fails
+STOP_GRACE = 5.0  # seconds a told-to-stop task may run on before its workers are killed
 
 
 @dataclass
@@ -34,14 +45,17 @@ class _ActiveJob:
     finished: dict[int, dict]
     pending: deque
     activated: float  # time.monotonic() when this process took the job up
+    deadline: float  # time.time() by which its tasks must end (the job time limit)
     in_flight: dict[Future, dict] = field(default_factory=dict)
     attempts: dict[int, int] = field(default_factory=dict)  # id(task) -> attempts
+    unsaved: deque = field(default_factory=deque)  # (task, points) whose points are not stored yet
 
 
 class JobRunner:
     def __init__(self, store: JobStore, executor: TaskExecutor, chunk_size: int = 8,
                  job_time_limit: float = 3600.0, poll_seconds: float = 0.2):
         self.store = store
+        self.guard = StoreGuard(on_recovery=store.compact)
         self.executor = executor
         self.chunk_size = chunk_size
         self.job_time_limit = job_time_limit
@@ -51,7 +65,10 @@ class JobRunner:
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._generation = 0  # bumped when the executor is renewed
+        self._killed: set[int] = set()  # generations killed on purpose (their lost tasks run again)
         self._born: dict[Future, int] = {}  # executor generation each future was submitted to
+        self._stopping: dict[Future, float] = {}  # told-to-stop tasks, and when they were told
+        self._finishing: dict[str, tuple[str, str | None]] = {}  # final statuses not written yet
         self._last_look = -float("inf")  # when the store was last asked for new and cancelled jobs
 
     # --- control ---------------------------------------------------------------------------
@@ -85,11 +102,10 @@ class JobRunner:
 
     def _step(self) -> None:
         now = time.monotonic()
-        if self._wake.is_set() or now - self._last_look >= self.poll_seconds:
+        if (self._wake.is_set() or now - self._last_look >= self.poll_seconds) and self.guard.ready():
             self._wake.clear()
             self._last_look = now
-            self._take_up_new_jobs()
-            self._drop_finished_jobs()
+            self.guard.attempt(self._look_at_store)
         self._submit()
         futures = [f for a in self._active.values() for f in a.in_flight]
         if futures:
@@ -98,12 +114,19 @@ class JobRunner:
                 self._collect(future)
         else:
             self._wake.wait(self.poll_seconds)
-        for job_id in list(self._active):
-            self._maybe_complete(self._active[job_id])
+        for active in list(self._active.values()):
+            self._save(active)
+            self._maybe_complete(active)
+        self._write_final_statuses()
+        self._reap_stopping()
+
+    def _look_at_store(self) -> None:
+        self._take_up_new_jobs()
+        self._drop_finished_jobs()
 
     def _take_up_new_jobs(self) -> None:
         for job in self.store.active():
-            if job.id in self._active:
+            if job.id in self._active or job.id in self._finishing:
                 continue
             resumed = job.status == "running"
             try:
@@ -116,7 +139,8 @@ class JobRunner:
             self.store.mark_started(job.id, resumed)
             if resumed:
                 log.info("resuming job %s: %d of %d points already stored", job.id, len(finished), job.total)
-            self._active[job.id] = _ActiveJob(job, kind, finished, deque(tasks), time.monotonic())
+            self._active[job.id] = _ActiveJob(job, kind, finished, deque(tasks), time.monotonic(),
+                                              time.time() + self.job_time_limit)
 
     def _drop_finished_jobs(self) -> None:
         """Jobs cancelled through the API (their status is final in the store), and jobs over
@@ -124,18 +148,38 @@ class JobRunner:
         for job_id, active in list(self._active.items()):
             current = self.store.get(job_id)
             if current is None or current.status not in ("queued", "running"):
-                self._abandon(active)
+                self._stop_job(active)
             elif time.monotonic() - active.activated > self.job_time_limit:
-                self.store.finish(job_id, "failed", f"stopped by the job time limit of {self.job_time_limit:g} s; "
-                                                    f"{len(active.finished)} of {active.job.total} points are stored")
-                self._abandon(active)
+                self._stop_job(active)
+                self._finish(job_id, "failed", f"stopped by the job time limit of {self.job_time_limit:g} s; "
+                                               f"{len(active.finished)} of {active.job.total} points are stored")
 
-    def _abandon(self, active: _ActiveJob) -> None:
+    def _stop_job(self, active: _ActiveJob) -> None:
+        """No more tasks; the running ones are told to stop. Their points, and any the store
+        has not taken yet, are dropped: a stopped job's stored points do not change."""
+        self.executor.stop(active.job.id)
         for future in active.in_flight:
-            future.cancel()
-            self._born.pop(future, None)
+            if not future.cancel():
+                self._stopping[future] = time.monotonic()
         del self._active[active.job.id]
 
+    def _reap_stopping(self) -> None:
+        """Forget stopped tasks that ended; kill the workers of one that would not stop."""
+        for future in [f for f in self._stopping if f.done()]:
+            del self._stopping[future]
+            self._born.pop(future, None)
+        overdue = [f for f, told in self._stopping.items() if time.monotonic() - told > STOP_GRACE]
+        if overdue and self.executor.kill():
+            log.warning("%d stopped task(s) ran on for %.0f s: their workers were killed", len(overdue), STOP_GRACE)
+            self._killed.add(self._generation)
+            self._generation += 1
+            self._stopping.clear()
+        if not self._stopping:
+            for job_id in self.executor.signalled():
+                if job_id not in self._active:
+                    self.executor.forget(job_id)
+
+    # --- tasks -----------------------------------------------------------------------------
     def _submit(self) -> None:
         in_flight = sum(len(a.in_flight) for a in self._active.values())
         progressed = True
@@ -144,8 +188,9 @@ class JobRunner:
             for active in list(self._active.values()):  # one task per job per round: fair sharing
                 if active.pending and in_flight < self.executor.capacity:
                     task = active.pending[0]
+                    sent = {**task, "deadline": active.deadline, "control": self.executor.control_for(active.job.id)}
                     try:
-                        future = self.executor.executor().submit(run_task, active.job.kind, active.job.spec, task)
+                        future = self.executor.executor().submit(run_task, active.job.kind, active.job.spec, sent)
                     except BrokenProcessPool:  # a worker died since the last look: new pool, same task
                         self._renew_executor()
                         return
@@ -167,35 +212,58 @@ class JobRunner:
         if error is not None:
             self._task_failed(owner, task, error, born)
             return
-        points = future.result()
-        self.store.add_points(owner.job.id, points, owner.kind.failed)
-        owner.finished.update(points)
-        owner.pending.extend(owner.kind.follow_up(owner.job.spec, owner.job.plan, task, owner.finished,
-                                                  self.chunk_size))
+        owner.unsaved.append((task, future.result()))
+        self._save(owner)
+
+    def _save(self, active: _ActiveJob) -> None:
+        """Store the job's computed points (in order), each write retried until it lands."""
+        while active.unsaved and self.guard.ready():
+            task, points = active.unsaved[0]
+            if not self.guard.attempt(self.store.add_points, active.job.id, points, active.kind.failed):
+                return
+            active.unsaved.popleft()
+            active.finished.update(points)
+            active.pending.extend(active.kind.follow_up(active.job.spec, active.job.plan, task, active.finished,
+                                                        self.chunk_size))
 
     def _task_failed(self, active: _ActiveJob, task: dict, error: BaseException, born: int) -> None:
-        key = id(task)
-        active.attempts[key] = active.attempts.get(key, 0) + 1
         if isinstance(error, BrokenProcessPool):
+            if born in self._killed:  # killed on purpose to stop another job's task: not this task's fault
+                active.pending.appendleft(task)
+                return
+            key = id(task)
+            active.attempts[key] = active.attempts.get(key, 0) + 1
             if born == self._generation:  # the first to notice renews the pool, for every job
                 self._renew_executor()
             if active.attempts[key] < MAX_TASK_ATTEMPTS:
                 active.pending.appendleft(task)
                 return
         log.error("job %s: task failed: %r", active.job.id, error)
-        self.store.finish(active.job.id, "failed", f"a task failed: {type(error).__name__}: {error}")
-        self._abandon(active)
+        self._stop_job(active)
+        self._finish(active.job.id, "failed", f"a task failed: {type(error).__name__}: {error}")
 
     def _renew_executor(self) -> None:
         self.executor.renew()
         self._generation += 1
 
+    # --- the end of a job --------------------------------------------------------------------
     def _maybe_complete(self, active: _ActiveJob) -> None:
-        if active.pending or active.in_flight:
+        if active.pending or active.in_flight or active.unsaved:
             return
         stored = len(active.finished)
-        if stored < active.job.total:
-            self.store.finish(active.job.id, "failed", f"only {stored} of {active.job.total} points could be computed")
-        else:
-            self.store.finish(active.job.id, "succeeded")
         del self._active[active.job.id]
+        if stored < active.job.total:
+            self._finish(active.job.id, "failed", f"only {stored} of {active.job.total} points could be computed")
+        else:
+            self._finish(active.job.id, "succeeded")
+
+    def _finish(self, job_id: str, status: str, error: str | None = None) -> None:
+        """A job's final status, written at the end of the step (and again while the store
+        cannot take it)."""
+        self._finishing[job_id] = (status, error)
+
+    def _write_final_statuses(self) -> None:
+        for job_id, (status, error) in list(self._finishing.items()):
+            if not self.guard.ready() or not self.guard.attempt(self.store.finish, job_id, status, error):
+                return
+            del self._finishing[job_id]

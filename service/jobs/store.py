@@ -120,6 +120,13 @@ class JobStore:
     def close(self) -> None:
         self.engine.dispose()
 
+    def compact(self) -> None:
+        """After an outage: fold SQLite's write-ahead log back into the database file and
+        truncate it (a full disk may have left it large). Nothing to do on PostgreSQL."""
+        if self.engine.dialect.name == "sqlite":
+            with self.engine.connect() as connection:
+                connection.exec_driver_sql("PRAGMA wal_checkpoint(TRUNCATE)")
+
     # --- jobs -------------------------------------------------------------------------------
     def create(self, kind: str, owner: str, spec: dict, plan: dict, total: int) -> Job:
         row = JobRow(id=uuid.uuid4().hex, kind=kind, owner=owner, status="queued", spec=spec, plan=plan, total=total,
