@@ -11,13 +11,13 @@ import logging
 from contextlib import asynccontextmanager
 
 from fastapi import FastAPI
+from fastapi_offline import FastAPIOffline
 
 from api.errors import install_error_handlers
 from api.limits import BodySizeLimit
 from api.routers import examples, health, jobs, optimize, solve, sweeps
 from api.state import Services, SolverThread
 from service.analyses import ANALYSES
-from service.requests import Limits
 from service.threads import single_threaded_blas
 from service.examples import ExampleLibrary, examples_directory
 from service.jobs.executors import make_executor
@@ -41,7 +41,7 @@ def _services(settings: Settings) -> Services:
     store = JobStore(settings.resolved_database_url())
     executor = make_executor(settings.dask_address, settings.workers)
     runner = JobRunner(store, executor, settings.chunk_size, settings.job_time_limit)
-    limits = Limits(settings.max_elements, settings.max_sweep_points, settings.solve_time_limit)
+    limits = settings.limits()
     library = ExampleLibrary(examples_directory(settings.examples_dir))
     return Services(settings, limits, store, executor, runner, SolverThread(), library)
 
@@ -65,11 +65,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             services.executor.close()
             services.store.close()
 
-    app = FastAPI(title="flexmech", version="1", description=DESCRIPTION, lifespan=lifespan)
+    # The /docs page's scripts come from the package (fastapi-offline), not a CDN: it works offline.
+    app = FastAPIOffline(title="flexmech", version="1", description=DESCRIPTION, lifespan=lifespan, redoc_url=None)
     install_error_handlers(app)
     for module in (solve, sweeps, optimize, jobs, examples, health):
         app.include_router(module.router)
-    app.add_middleware(BodySizeLimit, max_bytes=settings.max_request_bytes)
+    app.add_middleware(BodySizeLimit, max_bytes=settings.max_request_bytes, read_timeout=settings.request_read_timeout)
     _list_analyses_in_schema(app)
     return app
 

@@ -10,19 +10,26 @@ Shape (api.schemas.ErrorResponse):
     413 body_too_large     the body exceeds FLEXMECH_MAX_REQUEST_BYTES
     422 invalid_request    the body does not fit the schema (pointer: the field)
     422 invalid_input      the mechanism or the analysis cannot be modelled (pointer: the field)
+    408 request_timeout    the body did not arrive within FLEXMECH_REQUEST_READ_TIMEOUT
     409 conflict           e.g. cancelling a job that has finished
+    503 store_unavailable  the job store is locked or its disk full (Retry-After); nothing is lost
     500 internal_error     a bug: logged with its traceback, never shown to the caller
 """
 
 from __future__ import annotations
 
+import difflib
 import logging
+from functools import lru_cache
 
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
+from pydantic import BaseModel
+from sqlalchemy.exc import SQLAlchemyError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
+from api import schemas
 from models import MechanismError
 from models.errors import pointer_of
 
@@ -53,25 +60,53 @@ def _validation_pointer(loc: tuple) -> str:
                                                               or p in ("float", "str", "int", "bool")))]
     return pointer_of(tuple(parts))
 
+# Top-level fields of a mechanism document: a body made of them is a document sent unwrapped.
+_DOCUMENT_FIELDS = {"schema_version", "units", "materials", "sections", "bodies", "elements", "loads", "outputs"}
+
+
+def _unwrapped_document(body) -> bool:
+    return isinstance(body, dict) and "document" not in body and "example" not in body and \
+        len(_DOCUMENT_FIELDS & set(body)) >= 2
+
+
+@lru_cache(maxsize=1)
+def _request_field_names() -> tuple[str, ...]:
+    names, stack = set(), [m for m in vars(schemas).values() if isinstance(m, type) and issubclass(m, BaseModel)]
+    for model in stack:
+        names.update(info.alias or name for name, info in model.model_fields.items())
+    return tuple(sorted(names))
+
+
+def _message(first: dict) -> str:
+    message = first.get("msg", "invalid")
+    if first.get("type") == "missing":
+        return "required field is missing"
+    if first.get("type") == "extra_forbidden":
+        key = str(first.get("loc", ("",))[-1])
+        close = difflib.get_close_matches(key, _request_field_names(), n=1, cutoff=0.75)
+        return f"unknown field '{key}'" + (f" (did you mean '{close[0]}'?)" if close else "")
+    return message[len("Value error, "):] if message.startswith("Value error, ") else message
+
+
 def _on_validation_error(_request: Request, exc: RequestValidationError) -> JSONResponse:
     errors = exc.errors()
     for e in errors:
         if e.get("type") == "json_invalid":
             detail = e.get("ctx", {}).get("error", "")
             return error_response(400, "malformed_json", f"the body is not valid JSON: {detail}".rstrip(": "))
-    first = errors[0]
+    if _unwrapped_document(getattr(exc, "body", None)):
+        return error_response(422, "invalid_request", "body: this is a mechanism document itself: send it as "
+                              '{"document": <the document>} (or name one of GET /v1/examples as {"example": "<name>"})',
+                              "")
+    first = next((e for e in errors if e.get("type") == "extra_forbidden"), errors[0])
     pointer = _validation_pointer(tuple(first.get("loc", ())))
-    message = first.get("msg", "invalid")
-    if first.get("type") == "missing":
-        message = "required field is missing"
-    elif first.get("type") == "extra_forbidden":
-        message = "unknown field"
-    elif message.startswith("Value error, "):
-        message = message[len("Value error, "):]
-    if len(errors) > 1:
-        message += f" (and {len(errors) - 1} more problem{'s' if len(errors) > 2 else ''})"
+    message = _message(first)
+    others = len({_validation_pointer(tuple(e.get("loc", ()))) for e in errors} - {pointer})
+    if others:
+        message += f" (and {others} more field{'s' if others > 1 else ''} with problems)"
     where = pointer or "body"
     return error_response(422, "invalid_request", f"{where}: {message}", pointer)
+
 
 def _on_mechanism_error(_request: Request, exc: MechanismError) -> JSONResponse:
     return error_response(422, "invalid_input", str(exc), exc.pointer)
@@ -87,6 +122,12 @@ def _on_http_error(_request: Request, exc: StarletteHTTPException) -> JSONRespon
     message = exc.detail if isinstance(exc.detail, str) else "error"
     return error_response(exc.status_code, code, message, headers=getattr(exc, "headers", None))
 
+def _on_store_error(request: Request, exc: SQLAlchemyError) -> JSONResponse:
+    log.error("job store unavailable on %s %s: %s", request.method, request.url.path, str(exc).splitlines()[0][:300])
+    return error_response(503, "store_unavailable", "the job store cannot be read or written just now (the "
+                          "database is locked or its disk is full): try again shortly", headers={"Retry-After": "5"})
+
+
 def _on_unexpected(request: Request, exc: Exception) -> JSONResponse:
     log.exception("unhandled error on %s %s", request.method, request.url.path)
     return error_response(500, "internal_error", "internal error; it has been logged")
@@ -96,5 +137,6 @@ def install_error_handlers(app: FastAPI) -> None:
     app.add_exception_handler(MechanismError, _on_mechanism_error)
     app.add_exception_handler(ApiError, _on_api_error)
     app.add_exception_handler(StarletteHTTPException, _on_http_error)
+    app.add_exception_handler(SQLAlchemyError, _on_store_error)
     app.add_exception_handler(Exception, _on_unexpected)
 

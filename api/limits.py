@@ -1,39 +1,72 @@
-"""Request size limit as ASGI middleware. The body is read (and counted) before the app sees
-it, so a chunked request without Content-Length is stopped too, with the API's error shape;
-bodies are small (the limit is about a megabyte), so holding one in memory is fine."""
+"""The request body, guarded before the app sees it (ASGI middleware).
+
+- Size: counted as it arrives, so a chunked request without Content-Length is stopped too (413).
+- Time: the whole body must arrive within read_timeout seconds; a client that declares more
+  than it sends no longer holds a connection forever (408).
+- JSON: parsed once here with the document reader's bounds (models.reading): a duplicate key,
+  nesting deeper than 64 levels or an integer of thousands of digits is malformed_json (400),
+  never a merged object, a recursion error or a 500.
+Bodies are small (the limit is about a megabyte), so holding one in memory is fine.
+"""
 
 from __future__ import annotations
 
+import asyncio
+import time
+
 from api.errors import error_response
+from models import MechanismError
+from models.reading import parse_json
+
+_WITH_BODY = {"POST", "PUT", "PATCH"}
 
 
 class BodySizeLimit:
-    def __init__(self, app, max_bytes: int):
+    def __init__(self, app, max_bytes: int, read_timeout: float = 10.0):
         self.app = app
         self.max_bytes = max_bytes
+        self.read_timeout = read_timeout
 
     def _too_large(self, size: str):
         return error_response(413, "body_too_large",
                               f"request body of {size} bytes is over the limit of {self.max_bytes} bytes")
 
-    async def __call__(self, scope, receive, send):
-        if scope["type"] != "http":
-            return await self.app(scope, receive, send)
-        declared = dict(scope.get("headers") or []).get(b"content-length")
-        if declared is not None and declared.isdigit() and int(declared) > self.max_bytes:
-            return await self._too_large(str(int(declared)))(scope, receive, send)
+    async def _read(self, scope, receive, send) -> bytes | None:
+        """The whole body, or None when an error was answered (or the client went away)."""
         chunks, size = [], 0
+        deadline = time.monotonic() + self.read_timeout
         while True:
-            message = await receive()
+            try:
+                message = await asyncio.wait_for(receive(), max(deadline - time.monotonic(), 0.0))
+            except asyncio.TimeoutError:
+                await error_response(408, "request_timeout", f"the request body did not arrive within "
+                                     f"{self.read_timeout:g} s")(scope, receive, send)
+                return None
             if message["type"] != "http.request":  # the client went away
-                return
+                return None
             chunks.append(message.get("body", b""))
             size += len(chunks[-1])
             if size > self.max_bytes:
-                return await self._too_large(f"more than {self.max_bytes}")(scope, receive, send)
+                await self._too_large(f"more than {self.max_bytes}")(scope, receive, send)
+                return None
             if not message.get("more_body", False):
-                break
-        body = b"".join(chunks)
+                return b"".join(chunks)
+
+    async def __call__(self, scope, receive, send):
+        if scope["type"] != "http":
+            return await self.app(scope, receive, send)
+        headers = dict(scope.get("headers") or [])
+        declared = headers.get(b"content-length")
+        if declared is not None and declared.isdigit() and int(declared) > self.max_bytes:
+            return await self._too_large(str(int(declared)))(scope, receive, send)
+        body = await self._read(scope, receive, send)
+        if body is None:
+            return
+        if body.strip() and scope.get("method") in _WITH_BODY and b"json" in headers.get(b"content-type", b"json"):
+            try:
+                parse_json(body, "the body")
+            except MechanismError as exc:
+                return await error_response(400, "malformed_json", exc.problem)(scope, receive, send)
         replayed = False
 
         async def replay():

@@ -20,7 +20,7 @@ PointStatus = Literal["converged", "not_converged", "singular", "time_limit"]
 
 
 class _Request(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
 
 class _Response(BaseModel):
