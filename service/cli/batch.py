@@ -1,4 +1,5 @@
-"""`flexmech batch`: every document of a folder to a folder of results."""
+"""`flexmech batch`: every document of a folder, by the analysis it declares, to a folder of
+results (another folder than the input's)."""
 
 from __future__ import annotations
 
@@ -32,17 +33,20 @@ def run_with_progress(err: Console, directory: Path, out: Path, options: NewtonO
 
 
 def print_summary(console: Console, summary: dict, out: Path) -> None:
-    """One row per document, then the message of each that failed."""
-    table = table_of(f"{summary['documents']} documents -> {out}", "document", "analysis", "status", "seconds",
-                     text=3)
-    for row in summary["results"]:
-        colour = "green" if row["status"] == "converged" else "red"
+    """One row per document (green when it succeeded, by service.batch.succeeded), then the
+    message of each that failed."""
+    from service.batch import succeeded
+
+    table = table_of(f"{summary['documents']} documents -> {out}", "document", "analysis", "status", "result",
+                     "seconds", text=4)
+    rows = [(row, succeeded(row["analysis"], row["status"])) for row in summary["results"]]
+    for row, ok in rows:
+        colour = "green" if ok else "red"
         table.add_row(escape(row["document"]), str(row["analysis"] or "-"),
-                      f"[{colour}]{row['status']}[/{colour}]", f"{row['seconds']:.3g}")
+                      f"[{colour}]{escape(row['status'])}[/{colour}]", escape(row["result"]), f"{row['seconds']:.3g}")
     console.print(table)
-    for row in summary["results"]:
-        if row["status"] != "converged":
-            console.print(f"[red]{escape(row['document'])}:[/red] {escape(row['message'])}")
+    for row in (row for row, ok in rows if not ok):
+        console.print(f"[red]{escape(row['document'])}:[/red] {escape(row['message'])}")
     console.print(f"wrote {escape(str(out / 'summary.json'))}")
 
 
@@ -54,9 +58,11 @@ def batch(
     line_search: LineSearchOpt = True,
     max_iterations: MaxIterOpt = 50,
 ) -> None:
-    """Solve every document of a folder (sweep it, if it declares a sweep); write one result file
-    per document and summary.json. Exit 1 if any document failed; the others are still written."""
-    from service.batch import batch_documents
+    """Run every document of a folder through the analysis it declares (its optimize section,
+    else its inverse section, else its sweep, else the equilibrium); write one result file per
+    document (<stem>.json, or <file name>.json when stems clash) and summary.json. Exit 1 if
+    any document failed; the others are still written. Exit 2 if --out is the input folder."""
+    from service.batch import batch_documents, same_folder
 
     out_console, err = consoles()
     with user_errors(err):
@@ -66,6 +72,9 @@ def batch(
         documents = batch_documents(directory)
         if not documents:
             raise OptionError("DIRECTORY", f"no documents (*.json, *.yaml) in '{directory}'")
+        if same_folder(directory, out):
+            raise OptionError("--out", f"'{out}' is the input folder: the results would overwrite its documents; "
+                              "choose another folder")
         try:
             out.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
