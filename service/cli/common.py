@@ -15,7 +15,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from models import Mechanism, MechanismError
-from service.plotting import PLOT_SUFFIXES
+from service.figures import PLOT_SUFFIXES
 from service.reports import plain
 
 EXIT_NOT_CONVERGED = 1
@@ -92,10 +92,10 @@ def check_plot_option(plot: Path | None) -> None:
                           f"{' or '.join(PLOT_SUFFIXES)}")
 
 
-def save_plot(draw, *args) -> None:
-    """draw(*args), whose last argument is the file."""
+def save_plot(draw, *args, **options) -> None:
+    """draw(*args, **options), whose last positional argument is the file."""
     try:
-        draw(*args)
+        draw(*args, **options)
     except OSError as exc:
         raise OptionError("--plot", f"cannot write {args[-1]}: {exc.strerror}") from None
 
@@ -110,6 +110,52 @@ def default_xy(mech: Mechanism) -> tuple[str, str]:
         free = [b for b, row in enumerate(mech.structure.prescribed) if any(v is None for v in row)]
         name = f"bodies.{mech.structure.bodies[free[0] if free else 0]}"
     return f"{name}.x", f"{name}.y"
+
+
+# A prescribed displacement component, the reaction component and body coordinate along it.
+REACTION_ALONG = {"dx": "Fx", "dy": "Fy", "rotation": "M"}
+COORDINATE_ALONG = {"dx": "x", "dy": "y", "rotation": "angle"}
+
+
+def prescribed_motion(mech: Mechanism, pointer: str) -> tuple[str, str] | None:
+    """(body, component) when `pointer` is a prescribed displacement, /loads/<name>/dx, dy or
+    rotation, of a displacement load; else None."""
+    parts = pointer.split("/")
+    if len(parts) != 4 or parts[0] or parts[1] != "loads" or parts[3] not in REACTION_ALONG:
+        return None
+    load = mech.document.loads.get(parts[2])
+    if load is None or load.type != "displacement":
+        return None
+    return load.body, parts[3]
+
+
+def reaction_along(mech: Mechanism, pointer: str) -> list[str]:
+    """The reaction components along the prescribed displacement `pointer` (none if it is
+    not one): those of the document's reaction outputs of its body, then the built-in
+    reactions.<body>."""
+    motion = prescribed_motion(mech, pointer)
+    if motion is None:
+        return []
+    body, component = motion
+    names = [f"{name}.{REACTION_ALONG[component]}" for name, spec in mech.document.outputs.items()
+             if spec.type == "reaction" and spec.body == body]
+    names.append(f"reactions.{body}.{REACTION_ALONG[component]}")
+    return [name for name in names if name in mech.graphs.output_names]
+
+
+def displacement_xy(mech: Mechanism, pointer: str) -> tuple[str, str] | None:
+    """The outputs to plot by default for a sweep of the prescribed displacement `pointer`:
+    the moved body's displacement along it (its first point output's dx or dy, else the
+    body's x, y or angle) and the reaction along it (reaction_along). None if `pointer` is no
+    prescribed displacement."""
+    reactions = reaction_along(mech, pointer)
+    if not reactions:
+        return None
+    body, component = prescribed_motion(mech, pointer)
+    points = [pt.name for pt in mech.structure.points if mech.structure.bodies[pt.body] == body]
+    if points and component != "rotation":
+        return f"{points[0]}.{component}", reactions[0]
+    return f"bodies.{body}.{COORDINATE_ALONG[component]}", reactions[0]
 
 
 def output_hint(mech: Mechanism) -> str:

@@ -106,15 +106,41 @@ def flexures_table(mech: Mechanism, values: dict) -> Table | None:
     return table
 
 
+# The terms of K_T of Cammarata et al. 2022 (Eqs. 26-28), as service.stiffness names them.
+STIFFNESS_TERMS = {
+    "I": "term I of K_T (Cammarata et al. 2022, Eqs. 26-28): through the flexures' deformation",
+    "II": "term II of K_T (Cammarata et al. 2022): through the body rotations that carry the flexures' ends",
+    "III": "term III of K_T (Cammarata et al. 2022): through the tip displacement in the flexure frames "
+           "(partial non-linear model)",
+    "load": "load term of K_T: through the arms of forces applied away from a reference point",
+}
+
+
 def print_stiffness(out: Console, stiffness: dict) -> None:
     """K_T (service.reports.stiffness_dict) in blocks of columns that fit the console;
-    K[i][j] in (row unit)/(column unit)."""
-    coordinates, rows, columns, K = (stiffness[k] for k in ("coordinates", "row_units", "column_units", "K"))
-    n = len(coordinates)
-    label = max(len(f"{c} [{u}]") for c, u in zip(coordinates, rows)) + 3
-    per_block = max(1, (out.width - label) // 17)
+    K[i][j] in (row unit)/(column unit). Then each of its terms I, II, III and load that is
+    not zero (curved-beam mechanisms without links have them), titled, in the same units."""
     out.print(escape("tangent stiffness K_T = dR/dz at the solution: row i is the generalized force on "
                      "coordinate i, column j a displacement; K[i, j] in (row unit)/(column unit)"))
+    print_matrix(out, stiffness, stiffness["K"])
+    terms = stiffness.get("terms") or {}
+    nonzero = {name for name, term in terms.items() if any(value != 0 for row in term for value in row)}
+    for name, title in STIFFNESS_TERMS.items():
+        if name in nonzero:
+            out.print(escape(f"{title} (same units; the terms sum to K_T)"))
+            print_matrix(out, stiffness, terms[name])
+    zero = [name for name in STIFFNESS_TERMS if name in terms and name not in nonzero]
+    if zero:
+        out.print(f"zero term{'s' if len(zero) > 1 else ''} of K_T here: {', '.join(zero)}")
+
+
+def print_matrix(out: Console, stiffness: dict, K: list[list[float | None]]) -> None:
+    """A matrix over the coordinates of `stiffness` (its units), in blocks of columns that fit
+    the console."""
+    coordinates, rows, columns = (stiffness[k] for k in ("coordinates", "row_units", "column_units"))
+    n = len(coordinates)
+    label = max((len(f"{c} [{u}]") for c, u in zip(coordinates, rows)), default=0) + 3
+    per_block = max(1, (out.width - label) // 17)
     for first in range(0, n, per_block):
         block = range(first, min(n, first + per_block))
         table = table_of(None, "R \\ z", *(f"{coordinates[j]} [{columns[j]}]" for j in block))

@@ -97,7 +97,7 @@ def solve(
     max_iterations: MaxIterOpt = 50,
     json_out: JsonOpt = None,
     plot: PlotOpt = None,
-    stiffness: Annotated[bool, typer.Option("--stiffness", help="Print the tangent stiffness K_T at the solution.")] = False,
+    stiffness: Annotated[bool, typer.Option("--stiffness", help="Print the tangent stiffness K_T at the solution, and its terms I, II, III (Cammarata et al. 2022) and load term where they apply.")] = False,
 ) -> None:
     """Solve the equilibrium of a mechanism under its loads (or another analysis of it)."""
     out, err = consoles()

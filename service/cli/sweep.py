@@ -16,12 +16,15 @@ from models import MODELS, Mechanism, MechanismError
 from models.document import SweepSpec, SweepUntil
 from models.units import quantity_to_si
 from service.cli.application import app
-from service.cli.common import (EXIT_NOT_CONVERGED, OptionError, check_plot_option, consoles, default_xy, number,
-                                output_hint, save_plot, table_of, user_errors, write_json)
+from service.cli.common import (EXIT_NOT_CONVERGED, OptionError, check_plot_option, consoles, default_xy,
+                                displacement_xy, number, output_hint, reaction_along, save_plot, table_of,
+                                user_errors, write_json)
 from service.cli.options import (RESTARTS, DocArg, JacobianOpt, JsonOpt, LineSearchOpt, MaxIterOpt, ModelOpt,
                                  PlotOpt, SetOpt, choice, mechanism, newton_options)
 from service.newton import NewtonOptions
 from service.plotting import field_label, output_unit
+
+SI_UNITS = {"force": "N", "moment": "N*m", "length": "m", "angle": "rad"}
 
 if TYPE_CHECKING:  # the sweep is imported when the command runs
     from service.sweep import SweepResult, TargetResult
@@ -40,6 +43,7 @@ class SweepPlan:
     x_output: str
     y_output: str
     restart: str
+    stiffness: bool  # the field is a prescribed displacement and y_output the reaction along it
 
 
 # --- the options -----------------------------------------------------------------------------
@@ -93,9 +97,11 @@ def swept_field(mech: Mechanism, path: str | None) -> str:
     return swept
 
 
-def axes(mech: Mechanism, x_output: str | None, y_output: str | None) -> tuple[str, str]:
-    """The outputs of the table and the figure: as given, else default_xy."""
-    default_x, default_y = default_xy(mech)
+def axes(mech: Mechanism, swept: str, x_output: str | None, y_output: str | None) -> tuple[str, str]:
+    """The outputs of the table and the figure: as given, else for a prescribed displacement
+    the moved body's displacement and the reaction along it (displacement_xy), else the first
+    point output's x and y (default_xy)."""
+    default_x, default_y = displacement_xy(mech, swept) or default_xy(mech)
     x_output, y_output = x_output or default_x, y_output or default_y
     for option, name in (("--x-output", x_output), ("--y-output", y_output)):
         if name not in mech.graphs.output_names:
@@ -134,8 +140,9 @@ def curve_label(mech: Mechanism, model: str | None) -> str:
     models = sorted({t.model for t in mech.structure.of_family("curved_beam")}
                     | {"exact" for t in mech.structure.of_family("link") if mech.document.elements[t.name].type == "curved_beam"})
     parts = [", ".join(materials)] if len(materials) == 1 else []
-    parts.append(model or (models[0] if len(models) == 1 else "mixed models"))
-    return ", ".join(parts)
+    if model or models:  # a mechanism without curved beams has no model to name
+        parts.append(model or (models[0] if len(models) == 1 else "mixed models"))
+    return ", ".join(parts) or "curve"
 
 
 def sweep_table(mech: Mechanism, label: str, result: SweepResult, x_output: str, y_output: str) -> Table:
@@ -172,6 +179,52 @@ def print_unconverged_points(out: Console, label: str, result: SweepResult, plan
               f"{result.iterations[first]} iterations)")
 
 
+# --- the stiffness of a prescribed displacement --------------------------------------------
+def stiffness_record(result: SweepResult, y_output: str) -> dict | None:
+    """The secant stiffness of the reaction `y_output` against the prescribed displacement the
+    sweep moves (document units: the reaction's unit per the field's), from the first point to
+    the second ("first_step") and to the last ("last"); and at the start ("start"), the secant
+    over a hundredth of the first step, solved from the first point's state (None if that
+    solve fails). None when the first, second or last point did not converge."""
+    from service.equilibrium import solve_equilibrium
+
+    mech, values, force = result.mechanism, result.values, result.outputs[y_output]
+    if len(values) < 2 or values[1] == values[0] or any(result.status[i] != "converged" for i in (0, 1, -1)):
+        return None
+    small = (values[1] - values[0]) / 100
+    near = solve_equilibrium(mech.with_values({result.path: float(values[0] + small)}), guess=result.z[0])
+    y_kind = mech.graphs.output_kinds[mech.graphs.output_names.index(y_output)]
+    x_kind = mech.parameter_kind(result.path)
+    return {"output": y_output, "unit": f"{output_unit(mech, y_output)}/{mech.doc_unit(x_kind)}",
+            "si_unit": f"{SI_UNITS[y_kind]}/{SI_UNITS[x_kind]}",
+            "si_per_unit": mech.doc_factor(y_kind) / mech.doc_factor(x_kind),
+            "first_step": float((force[1] - force[0]) / (values[1] - values[0])), "at_first_step": float(values[1]),
+            "last": float((force[-1] - force[0]) / (values[-1] - values[0])), "at_last": float(values[-1]),
+            "start": float((near.outputs()[y_output] - force[0]) / small) if near.converged else None,
+            "start_step": float(small)}
+
+
+def si_number(value: float) -> str:
+    """3.25729e4, as a paper writes it."""
+    mantissa, exponent = f"{value:.5e}".split("e")
+    return f"{mantissa}e{int(exponent)}"
+
+
+def print_stiffness(out: Console, label: str, record: dict, plan: SweepPlan) -> None:
+    """The secant stiffness at the first step and at the last, and the stiffness at the start,
+    in document units and SI."""
+    def both(k: float) -> str:
+        return f"[bold]{escape(number(k, record['unit']))}[/bold] ({si_number(k * record['si_per_unit'])} {record['si_unit']})"
+
+    first, last, start = record["first_step"], record["last"], record["start"]
+    out.print(f"{escape(label)}: secant stiffness {escape(record['output'])} / {escape(field_label(plan.spec.path))}: "
+              f"{both(first)} at the first step, {both(last)} at the last ({100 * (last / first - 1):+.2f} %)")
+    if start is not None:
+        out.print(f"{escape(label)}: stiffness at the start {both(start)} (secant over "
+                  f"{number(record['start_step'], plan.unit)}); the last secant (at "
+                  f"{number(record['at_last'], plan.unit)}) is {100 * (last / start - 1):+.2f} % relative to it")
+
+
 def run_curve(out: Console, mech: Mechanism, model: str | None, plan: SweepPlan, options: NewtonOptions,
               advance) -> tuple[tuple[str, SweepResult] | None, dict, bool]:
     """One model's sweep, printed: (the curve to plot or None, its JSON record, whether it failed)."""
@@ -189,6 +242,9 @@ def run_curve(out: Console, mech: Mechanism, model: str | None, plan: SweepPlan,
     record = {"label": label, "model": model, "sweep": result.to_dict(),
               "target": target_dict(target, plan) if target else None}
     out.print(sweep_table(mech, label, result, plan.x_output, plan.y_output))
+    if plan.stiffness and (stiffness := stiffness_record(result, plan.y_output)) is not None:
+        record["stiffness"] = stiffness
+        print_stiffness(out, label, stiffness, plan)
     if target is not None:
         out.print(f"{label}: {plan.goal} at {field_label(plan.spec.path)} = "
                   f"[bold]{number(target.value, plan.unit)}[/bold]")
@@ -237,8 +293,8 @@ def sweep(
     max_iterations: MaxIterOpt = 50,
     json_out: JsonOpt = None,
     plot: PlotOpt = None,
-    x_output: Annotated[str | None, typer.Option("--x-output", help="Output on the horizontal axis (default: the first point output's x).")] = None,
-    y_output: Annotated[str | None, typer.Option("--y-output", help="Output of the trajectory's vertical axis (default: its y).")] = None,
+    x_output: Annotated[str | None, typer.Option("--x-output", help="Output on the horizontal axis (default: the first point output's x; for a prescribed displacement, the moved body's displacement along it).")] = None,
+    y_output: Annotated[str | None, typer.Option("--y-output", help="Output on the left panel's vertical axis (default: the point's y; for a prescribed displacement, the reaction along it, and its secant stiffness is printed and drawn).")] = None,
 ) -> None:
     """Sweep a numeric field (a load, by default the document's sweep section) with continuation."""
     out, err = consoles()
@@ -253,22 +309,23 @@ def sweep(
         mechs = [mechanism(document, m, sets) for m in models]
         first = mechs[0]
         swept = swept_field(first, path)
-        x_output, y_output = axes(first, x_output, y_output)
+        x_output, y_output = axes(first, swept, x_output, y_output)
         spec = first.document.sweep if path is None else path_spec(first, swept, start, stop, steps, until)
         plan = SweepPlan(spec, first.doc_unit(first.parameter_kind(swept)), goal_text(first, spec),
-                         x_output, y_output, restart)
+                         x_output, y_output, restart, y_output in reaction_along(first, swept))
 
         out.print(f"[bold]{escape(first.document.name)}[/bold]  ({escape(str(document))}): "
                   f"sweeping {escape(f'{swept} [{plan.unit}]')}, restart from {restart}")
         curves, records, failed = run_curves(out, err, mechs, models, plan, options)
         if json_out is not None:
             write_json(json_out, {"document": str(document), "name": first.document.name, "path": swept,
-                                  "unit": plan.unit, "restart": restart, "curves": records})
+                                  "unit": plan.unit, "restart": restart, "x_output": x_output,
+                                  "y_output": y_output, "curves": records})
             out.print(f"wrote {escape(str(json_out))}")
         if plot is not None and curves:
             from service.plotting import plot_sweeps
 
-            save_plot(plot_sweeps, curves, x_output, y_output, swept, plot)
+            save_plot(plot_sweeps, curves, x_output, y_output, swept, plot, secant=plan.stiffness)
             out.print(f"wrote {escape(str(plot))}")
     if failed:
         raise typer.Exit(EXIT_NOT_CONVERGED)

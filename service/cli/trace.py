@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
 import numpy as np
@@ -11,8 +12,8 @@ from rich.markup import escape
 
 from models import Mechanism, MechanismError
 from service.cli.application import app
-from service.cli.common import (EXIT_NOT_CONVERGED, OptionError, consoles, default_xy, number, table_of, user_errors,
-                                write_json)
+from service.cli.common import (EXIT_NOT_CONVERGED, OptionError, check_plot_option, consoles, default_xy, number,
+                                save_plot, table_of, user_errors, write_json)
 from service.cli.options import DocArg, JsonOpt, SetOpt, mechanism
 from service.plotting import output_unit
 
@@ -23,11 +24,18 @@ if TYPE_CHECKING:  # continuation is imported when the command runs
 SHOWN_POINTS = 12
 
 
+def shown_output(mech: Mechanism) -> str:
+    """The output the path is shown against: the first point output's dy where there is one,
+    else the y of default_xy."""
+    _, y_name = default_xy(mech)
+    dy = y_name.removesuffix(".y") + ".dy"
+    return dy if dy in mech.graphs.output_names else y_name
+
+
 def print_path(out: Console, mech: Mechanism, path: str, result: PathResult) -> None:
     """The limit points and a dozen points of the path, with the displacement of the first
-    point output (its y, or dy where there is one) and their stability."""
-    _, y_name = default_xy(mech)
-    shown = y_name.replace(".y", ".dy") if y_name.replace(".y", ".dy") in mech.graphs.output_names else y_name
+    point output (shown_output) and their stability."""
+    shown = shown_output(mech)
     field, output = f"{path} [{result.unit}]", f"{shown} [{output_unit(mech, shown)}]"
     table = table_of("limit points", "kind", field, output, "after point")
     for lp in result.limit_points:
@@ -51,6 +59,9 @@ def trace(
     sets: SetOpt = None,
     max_points: Annotated[int, typer.Option(min=2, max=100_000)] = 400,
     json_out: JsonOpt = None,
+    plot: Annotated[Path | None, typer.Option(
+        "--plot", metavar="OUT.png|svg", help="Draw the field against the shown output along the path: stable "
+        "stretches solid, unstable dashed, limit points marked with their value.")] = None,
 ) -> None:
     """Pseudo-arc-length continuation of the equilibrium path through limit points (snap-through),
     with the stability of every point and the limit loads located exactly."""
@@ -58,6 +69,7 @@ def trace(
 
     out, err = consoles()
     with user_errors(err):
+        check_plot_option(plot)
         mech = mechanism(document, None, sets)
         try:
             mech.parameter_index(path)
@@ -73,5 +85,10 @@ def trace(
         if json_out is not None:
             write_json(json_out, {"document": str(document), **result.to_dict()})
             out.print(f"wrote {escape(str(json_out))}")
+        if plot is not None and result.points:
+            from service.plotting import plot_trace
+
+            save_plot(plot_trace, mech, result, shown_output(mech), plot)
+            out.print(f"wrote {escape(str(plot))}")
     if result.status != "completed":
         raise typer.Exit(EXIT_NOT_CONVERGED)
