@@ -99,6 +99,10 @@ def _finished(status: JobStatusResponse, deadline: float | None, progress: Progr
     return False
 
 
+def _page(offset: int, limit: int | None) -> dict[str, int]:
+    return {"offset": offset} | ({"limit": limit} if limit is not None else {})
+
+
 def _headers(api_key: str | None) -> dict[str, str]:
     return {"X-API-Key": api_key} if api_key else {}
 
@@ -145,8 +149,9 @@ class Client:
     def job(self, job_id: str) -> JobStatusResponse:
         return _parse(self._http.get(f"/v1/jobs/{job_id}"), JobStatusResponse)
 
-    def result(self, job_id: str) -> JobResultResponse:
-        return _parse(self._http.get(f"/v1/jobs/{job_id}/result"), JobResultResponse)
+    def result(self, job_id: str, offset: int = 0, limit: int | None = None) -> JobResultResponse:
+        """The job's result; a sweep's points a page at a time (offset, limit: at most 10,000)."""
+        return _parse(self._http.get(f"/v1/jobs/{job_id}/result", params=_page(offset, limit)), JobResultResponse)
 
     def cancel(self, job_id: str) -> JobStatusResponse:
         return _parse(self._http.delete(f"/v1/jobs/{job_id}"), JobStatusResponse)
@@ -202,8 +207,9 @@ class AsyncClient:
     async def job(self, job_id: str) -> JobStatusResponse:
         return _parse(await self._http.get(f"/v1/jobs/{job_id}"), JobStatusResponse)
 
-    async def result(self, job_id: str) -> JobResultResponse:
-        return _parse(await self._http.get(f"/v1/jobs/{job_id}/result"), JobResultResponse)
+    async def result(self, job_id: str, offset: int = 0, limit: int | None = None) -> JobResultResponse:
+        return _parse(await self._http.get(f"/v1/jobs/{job_id}/result", params=_page(offset, limit)),
+                      JobResultResponse)
 
     async def cancel(self, job_id: str) -> JobStatusResponse:
         return _parse(await self._http.delete(f"/v1/jobs/{job_id}"), JobStatusResponse)

@@ -121,7 +121,8 @@ class Graphs:
         return tangent_terms(self.structure)
 
 
-@lru_cache(maxsize=64)
+@lru_cache(maxsize=16)
 def graphs_for(structure: Structure) -> Graphs:
-    """Graphs of a structure, built once per process and reused for every parameter value."""
+    """Graphs of a structure, built once per process and reused for every parameter value.
+    Few are kept in memory: a structure seen before loads from disk in milliseconds."""
     return Graphs(structure)

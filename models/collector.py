@@ -17,13 +17,20 @@ from models.units import document_unit, quantity_to_si, unit_factor
 LARGEST, SMALLEST = 1e30, 1e-30
 
 
-def check_value(pointer: str, si: float, check: str | None, unit: str = "", factor: float = 1.0) -> None:
+def _in_range(value: float) -> bool:
+    return value == 0 or SMALLEST <= abs(value) <= LARGEST
+
+
+def check_value(pointer: str, si: float, check: str | None, unit: str = "", factor: float = 1.0,
+                given: object = None) -> None:
     """A numeric field's physical range. `si` in SI; `unit` and `factor` (SI per unit) say how
-    the document states it, for the message."""
+    the document states it, for the message; `given` is the number as written, when it was one."""
     shown = f"{si:g} (SI)" if factor == 1.0 or not unit else f"{si / factor:g} {unit}"
-    if not math.isfinite(si):
-        raise MechanismError(pointer, "must be a finite number")
-    if abs(si) > LARGEST or 0 < abs(si) < SMALLEST:
+    if isinstance(given, (int, float)) and not isinstance(given, bool):
+        shown = f"{given:g}" + (f" {unit}" if unit and factor != 1.0 else " (SI)" if factor == 1.0 else "")
+        if not math.isfinite(given) or not _in_range(float(given)):
+            si = float("inf")
+    if not math.isfinite(si) or not _in_range(si):
         raise MechanismError(pointer, f"{shown} is out of range: magnitudes from {SMALLEST:g} to {LARGEST:g} "
                              "in SI units (or zero)")
     if check == "positive" and si <= 0:
@@ -58,7 +65,7 @@ class Collector:
     def add(self, pointer: str, value, kind: str, check: str | None = None) -> None:
         unit = self.unit_of(kind)
         si = quantity_to_si(value, kind, unit, pointer)
-        check_value(pointer, si, check, unit, unit_factor(unit, kind, pointer))
+        check_value(pointer, si, check, unit, unit_factor(unit, kind, pointer), value)
         self.parameters.append(Parameter(pointer, kind, check))
         self.values.append(si)
 

@@ -45,7 +45,7 @@ class Material(StrictModel):
 
 class Body(StrictModel):
     fixed: bool = False
-    joint: bool = Field(default=False, description="a zero-size joint of a link network (seed 002): "
+    joint: bool = Field(default=False, description="a zero-size joint of a link network (Lan 2005): "
                         "if every link attached to it is pinned, it has no rotation")
     position: Vec2 = Field(description="reference point (e.g. mass centre), undeformed, global frame")
     angle: Number = 0.0
@@ -138,7 +138,7 @@ class SweepSpec(StrictModel):
 
 
 class InverseSpec(StrictModel):
-    """Data of the link inverse (seed 002 Sec. 5.3): the deformed angle psi(u) of every link
+    """Data of the link inverse (Lan 2005 Sec. 5.3): the deformed angle psi(u) of every link
     ({"polynomial": [c0, ...]} or {"samples": [...], "u": [...]}, radians), internal forces
     ({link: {"h": value, "v": value}}) and the load components they determine."""
 
@@ -187,7 +187,7 @@ class LoadCase(StrictModel):
 
 
 class OptimizeSpec(StrictModel):
-    """A design problem (seed 000 Sec. 5.2, seed 002 Sec. 5.6): one NLP whose unknowns are the
+    """A design problem (Cammarata et al. 2022 Sec. 5.2, Lan 2005 Sec. 5.6): one NLP whose unknowns are the
     design variables and the equilibrium state of every load case."""
 
     design: list[DesignVariable] = Field(min_length=1, max_length=64)

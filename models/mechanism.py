@@ -133,7 +133,7 @@ class Mechanism:
         unit = self.doc_unit(param.kind)
         where = path if pointer is None else pointer
         si = quantity_to_si(value, param.kind, unit, where)
-        check_value(where, si, param.check if own_checks else None, unit, self.doc_factor(param.kind))
+        check_value(where, si, param.check if own_checks else None, unit, self.doc_factor(param.kind), value)
         return si
 
     def with_values(self, overrides: dict[str, float | str]) -> "Mechanism":

@@ -72,7 +72,7 @@ class EquilibriumResult:
                 if degrees > ROTATION_VALIDITY_DEG:
                     element = name.split(".")[1]
                     notes.append(f"flexure {element} rotates {degrees:.1f} deg: the constant-stiffness "
-                                 f"curved-beam models hold to about {ROTATION_VALIDITY_DEG:.0f} deg (seed 000)")
+                                 f"curved-beam models hold to about {ROTATION_VALIDITY_DEG:.0f} deg (Cammarata et al. 2022)")
         return notes
 
     def displacements(self) -> dict[str, float]:
@@ -175,7 +175,7 @@ def unknown_names(mech: Mechanism) -> list[str]:
 
 def solve_bounded(mech: Mechanism, bounds: dict[str, tuple[float | None, float | None]],
                   options: NewtonOptions = NewtonOptions(), guess: np.ndarray | None = None) -> EquilibriumResult:
-    """Equilibrium with bounds on unknowns (seed 002 Sec. 2.2.2, bounded Gauss-Newton): find
+    """Equilibrium with bounds on unknowns (Lan 2005 Sec. 2.2.2, bounded Gauss-Newton): find
     R(z) = 0 inside the bounds with IPOPT and exact derivatives (a feasibility problem: the
     residuals are equality constraints; IPOPT's restoration phase reports an empty set).
     Bounds are in document units (angles: the document's angle unit), keyed by

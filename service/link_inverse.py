@@ -1,4 +1,4 @@
-"""Forward samples and the inverse analysis of link networks (seed 002, Sec. 5.3).
+"""Forward samples and the inverse analysis of link networks (Lan 2005, Sec. 5.3).
 
 `link_states` samples a solved link anywhere along u (the forward model's dense output).
 `inverse_links` takes the deformed angle psi(u) of every link and some internal forces and
@@ -115,7 +115,7 @@ def inverse_links(mech: Mechanism, shapes: dict, internal_forces: dict, unknown_
     if len(specified) != len(unknown_indices):
         raise MechanismError("/internal_forces", (
             f"inconsistent inverse data: {len(specified)} internal force component(s) given for "
-            f"{len(unknown_indices)} unknown load component(s); they must be equal (seed 002 Sec. 5.3.2)"))
+            f"{len(unknown_indices)} unknown load component(s); they must be equal (Lan 2005 Sec. 5.3.2)"))
     layout = InverseLayout(tuple(layouts), tuple(unknown_indices), tuple(specified))
     graphs = inverse_graphs_for(mech.structure, layout)
     p, q = mech.p(), np.array(data + specified_values)

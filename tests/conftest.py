@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import shutil
 from pathlib import Path
 
 import pytest
@@ -54,9 +55,11 @@ def postgres_server_url():
     if given:
         yield given
         return
-    server = PostgresServer(_scratch("flexmech-pg-"))
+    folder = _scratch("flexmech-pg-")
+    server = PostgresServer(folder)
     yield server.url
     server.stop()
+    shutil.rmtree(folder, ignore_errors=True)  # nothing left in the system's temp folder
 
 
 @pytest.fixture(scope="session")
@@ -64,9 +67,11 @@ def dask_address():
     """A real Dask cluster: a scheduler and two worker processes, started by the dask CLI."""
     from servers import DaskCluster
 
-    cluster = DaskCluster(_scratch("flexmech-dask-"), workers=2)
+    folder = _scratch("flexmech-dask-")
+    cluster = DaskCluster(folder, workers=2)
     yield cluster.address
     cluster.stop()
+    shutil.rmtree(folder, ignore_errors=True)
 
 
 BACKENDS = ("sqlite", "postgresql", "dask")

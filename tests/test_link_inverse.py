@@ -107,7 +107,7 @@ def test_inverse_from_a_polynomial_psi():
 @pytest.mark.parametrize("shapes, forces, unknown, pointer, message", [
     ("measured", {"L1": {"h": 1.0}}, ["/loads/F/force/0", "/loads/F/force/1"], "/internal_forces",
      "inconsistent inverse data: 1 internal force component(s) given for 2 unknown load component(s); "
-     "they must be equal (seed 002 Sec. 5.3.2)"),
+     "they must be equal (Lan 2005 Sec. 5.3.2)"),
     ({"L1": {"polynomial": [0.1]}}, {"L1": {"h": 1.0}}, ["/loads/F/force/0"], "/shapes/L2",
      "inconsistent inverse data: the deformed shape of every link is needed"),
     ({"L1": {"polynomial": [0.1]}, "L2": {"samples": [0.1, 0.2], "u": [0.0, 0.5, 1.0]}}, {"L1": {"h": 1.0}},

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from datetime import datetime, timezone
 
-from fastapi import APIRouter, Path
+from fastapi import APIRouter, Path, Query
 from fastapi.concurrency import run_in_threadpool
 
 from api.deps import OwnerDep, ServicesDep
@@ -16,6 +16,7 @@ from service.jobs.store import FINAL, Job
 
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"])
 
+PAGE = MAX_PAGE = 10_000  # points in a page of a result (stored results are bounded: FLEXMECH_MAX_RESULT_VALUES)
 JobId = Path(pattern=r"^[0-9a-f]{32}$", description="the id POST returned")
 
 
@@ -47,18 +48,27 @@ async def get_job(services: ServicesDep, owner: OwnerDep, job_id: str = JobId) -
     return job_status(await run_in_threadpool(_owned, services, job_id, owner))
 
 
-def _result(services, job: Job) -> JobResultResponse:
-    points = services.store.points(job.id)
-    result = kind_named(job.kind).result(job.spec, job.plan, points)
-    return JobResultResponse(id=job.id, kind=job.kind, status=job.status,
-                             complete=len(points) == job.total, result=result)
+def _result(services, job: Job, offset: int, limit: int) -> JobResultResponse:
+    kind = kind_named(job.kind)
+    if not kind.paged:
+        return JobResultResponse(id=job.id, kind=job.kind, status=job.status, complete=job.done == job.total,
+                                 result=kind.result(job.spec, job.plan, services.store.points(job.id)))
+    points = services.store.points(job.id, offset, limit)
+    page = {"offset": offset, "limit": limit, "returned": len(points), "total": job.done}
+    return JobResultResponse(id=job.id, kind=job.kind, status=job.status, complete=job.done == job.total,
+                             page=page, result=kind.result(job.spec, job.plan, points))
 
 
 @router.get("/{job_id}/result", operation_id="get_job_result", response_model=JobResultResponse,
-            responses=errors(401, 404), summary="The job's result (the points so far while it runs)")
-async def get_job_result(services: ServicesDep, owner: OwnerDep, job_id: str = JobId) -> JobResultResponse:
+            responses=errors(401, 404), summary="The job's result (the points so far while it runs), a page at a time")
+async def get_job_result(services: ServicesDep, owner: OwnerDep, job_id: str = JobId,
+                         offset: int = Query(0, ge=0, le=10**9, description="points to skip (in index order)"),
+                         limit: int = Query(PAGE, ge=1, le=MAX_PAGE, description="points in the page")
+                         ) -> JobResultResponse:
+    """A sweep's points come a page at a time (`page` says which; ask again with offset +
+    limit while page.returned == limit); an optimization's result is whole."""
     job = await run_in_threadpool(_owned, services, job_id, owner)
-    return await run_in_threadpool(_result, services, job)
+    return await run_in_threadpool(_result, services, job, offset, limit)
 
 
 @router.delete("/{job_id}", operation_id="cancel_job", response_model=JobStatusResponse,

@@ -1,4 +1,4 @@
-"""The link family (seed 002): a distributed elastica between two bodies, solved by multiple
+"""The link family (Lan 2005): a distributed elastica between two bodies, solved by multiple
 shooting inside the graph (models.link). Also the exact model of a curved beam, whose centre
 line is the beam's arc.
 
@@ -59,7 +59,7 @@ class PolynomialShape(StrictModel):
 
 class FourierSineShape(StrictModel):
     """eta(u) = angle + sum over i = 1.. of coefficients[i-1] * sin(i * omega * u); the
-    coefficients in radians, omega (default 2 pi, as in seed 002 Sec. 5.6) in rad."""
+    coefficients in radians, omega (default 2 pi, as in Lan 2005 Sec. 5.6) in rad."""
 
     type: Literal["fourier_sine"]
     angle: Number = 0.0
@@ -79,7 +79,7 @@ SHAPE_TYPES = ("straight", "arc", "polynomial", "fourier_sine", "expression")
 
 
 class Link(TwoBodyElement):
-    """A distributed elastica (seed 002) from body `from` (u = 0) to body `to` (u = 1).
+    """A distributed elastica (Lan 2005) from body `from` (u = 0) to body `to` (u = 1).
 
     It starts at `at` (default: the `from` body's reference point) with the initial tangent
     angle eta(u) of `shape` (global frame) and ends where that shape ends; both ends are
@@ -94,8 +94,8 @@ class Link(TwoBodyElement):
     section: str
     start: Literal["clamped", "pinned"] = "clamped"
     end: Literal["clamped", "pinned"] = "clamped"
-    shear: bool = Field(default=False, description="Timoshenko shear strain (seed 002 Eq. 5.1)")
-    axial: bool = Field(default=False, description="axial strain (seed 002 App. A.1)")
+    shear: bool = Field(default=False, description="Timoshenko shear strain (Lan 2005 Eq. 5.1)")
+    axial: bool = Field(default=False, description="axial strain (Lan 2005 App. A.1)")
     intervals: int = Field(default=8, ge=1, le=64, description="shooting intervals")
     order: int = Field(default=8, ge=2, le=12, description="integration order (even): 2 x extrapolation levels")
 

@@ -62,7 +62,7 @@ def inverse(
     max_iterations: MaxIterOpt = 50,
     json_out: JsonOpt = None,
 ) -> None:
-    """Link inverse (seed 002 Sec. 5.3): initial shapes and unknown loads from the deformed
+    """Link inverse (Lan 2005 Sec. 5.3): initial shapes and unknown loads from the deformed
     shapes and internal forces of the document's `inverse` section."""
     from service.link_inverse import inverse_links
 

@@ -9,7 +9,7 @@ persisted when it finishes. A kind says:
   follow_up(spec, plan, task, finished)  tasks unblocked once `task`'s points are stored
   run(spec, task)                    in a worker process: [(index, point data)]
   failed(point)                      whether a stored point counts as failed (progress.failed_points)
-  result(spec, plan, finished)       the job's result from its points
+  result(spec, plan, finished)       the job's result from its points (a page of them, if paged)
 Tasks and point data are JSON-able dicts, so they travel to process pools and Dask workers
 and are stored as they are. The runner and the store know nothing else about a kind.
 """
@@ -31,6 +31,7 @@ class Plan:
 
 class JobKind(Protocol):
     name: str
+    paged: bool  # its result lists its points, so GET /result may page them (False: it needs them all)
 
     def prepare(self, spec: dict, limits: Limits) -> Plan: ...
 

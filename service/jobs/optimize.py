@@ -67,6 +67,7 @@ def start_from_point(data: dict) -> StartResult:
 
 class OptimizeJob:
     name = "optimize"
+    paged = False  # the result is the best start: it needs every start (at most 64)
 
     def prepare(self, spec: dict, limits: Limits) -> Plan:
         problem = problem_of(spec)

@@ -151,8 +151,7 @@ class JobRunner:
                 self._stop_job(active)
             elif time.monotonic() - active.activated > self.job_time_limit:
                 self._stop_job(active)
-                self._finish(job_id, "failed", f"stopped by the job time limit of {self.job_time_limit:g} s; "
-                                               f"{len(active.finished)} of {active.job.total} points are stored")
+                self._finish(job_id, "failed", self._out_of_time(active))
 
     def _stop_job(self, active: _ActiveJob) -> None:
         """No more tasks; the running ones are told to stop. Their points, and any the store
@@ -252,10 +251,16 @@ class JobRunner:
             return
         stored = len(active.finished)
         del self._active[active.job.id]
-        if stored < active.job.total:
-            self._finish(active.job.id, "failed", f"only {stored} of {active.job.total} points could be computed")
-        else:
+        if stored == active.job.total:
             self._finish(active.job.id, "succeeded")
+        elif time.time() >= active.deadline:  # its tasks ended at the deadline, before the runner looked
+            self._finish(active.job.id, "failed", self._out_of_time(active))
+        else:
+            self._finish(active.job.id, "failed", f"only {stored} of {active.job.total} points could be computed")
+
+    def _out_of_time(self, active: _ActiveJob) -> str:
+        return (f"stopped by the job time limit of {self.job_time_limit:g} s; {len(active.finished)} of "
+                f"{active.job.total} points are stored")
 
     def _finish(self, job_id: str, status: str, error: str | None = None) -> None:
         """A job's final status, written at the end of the step (and again while the store

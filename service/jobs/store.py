@@ -196,8 +196,12 @@ class JobStore:
             raise KeyError(f"no job '{job_id}'")
         return kind_named(job.kind)
 
-    def points(self, job_id: str) -> dict[int, dict]:
+    def points(self, job_id: str, offset: int = 0, limit: int | None = None) -> dict[int, dict]:
+        """Stored points by index, in index order; a page of them with offset and limit."""
+        query = select(PointRow.index, PointRow.data).where(PointRow.job_id == job_id).order_by(PointRow.index)
+        if offset:
+            query = query.offset(offset)
+        if limit is not None:
+            query = query.limit(limit)
         with self._session() as s:
-            rows = s.execute(select(PointRow.index, PointRow.data).where(PointRow.job_id == job_id)
-                             .order_by(PointRow.index))
-            return {i: d for i, d in rows}
+            return {i: d for i, d in s.execute(query)}

@@ -146,6 +146,7 @@ def _check_spec(spec: dict, limits: Limits) -> tuple[list[list[float]], tuple[in
 
 class SweepJob:
     name = "sweep"
+    paged = True
 
     def prepare(self, spec: dict, limits: Limits) -> Plan:
         values, shape, paths = _check_spec(spec, limits)

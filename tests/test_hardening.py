@@ -1,0 +1,180 @@
+"""Issue 12's edges, one test each beyond the abusive requests of tests/test_abuse.py: bounded
+results and counts, strict reading of files and bodies, field checks on design bounds, API
+keys, the offline /docs page, the health page, names in pointers, and messages a new user
+can act on."""
+
+from __future__ import annotations
+
+import json
+import re
+
+import httpx
+import pytest
+from typer.testing import CliRunner
+
+from abuse_cases import gripper
+from api.client import Client
+from conftest import EXAMPLES, Deployment
+from models import MechanismError, compile_mechanism, load_document
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("hardening")
+    server = Deployment("sqlite", {"FLEXMECH_DATA_DIR": str(tmp / "data"), "FLEXMECH_WORKERS": "1",
+                                   "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES), "FLEXMECH_API_KEYS": "",
+                                   "FLEXMECH_MAX_RESULT_VALUES": "5000", "FLEXMECH_MAX_LOADS": "3"}, tmp).start()
+    yield server
+    server.stop()
+
+
+def error(r: httpx.Response) -> dict:
+    return r.json()["error"]
+
+
+# --- 1. bounded work and results -----------------------------------------------------------
+def test_stored_results_are_bounded_and_paged(server):
+    r = httpx.post(server.url + "/v1/sweeps", json={"example": "gripper", "parameters": [
+        {"path": "/loads/actuation/force/1", "start": 0, "stop": 50, "steps": 99}]})
+    assert r.status_code == 422 and error(r)["pointer"] == "/outputs"
+    assert re.match(r"/outputs: 100 points x \d+ stored values = \d+: the limit is 5000; keep fewer outputs or points",
+                    error(r)["message"])
+    with Client(server.url) as client:
+        job = client.sweep(example="gripper", outputs=["end_effector.x"],
+                           parameters=[{"path": "/loads/actuation/force/1", "start": 0, "stop": 50, "steps": 99}])
+        assert client.wait(job.id, timeout=120).status == "succeeded"
+        whole = client.result(job.id)
+        page = client.result(job.id, offset=30, limit=25)
+    assert whole.complete and whole.page.total == 100 and len(whole.result.points) == 100
+    assert page.page.model_dump() == {"offset": 30, "limit": 25, "returned": 25, "total": 100}
+    assert [p.index for p in page.result.points] == list(range(30, 55))
+    assert [p.outputs for p in page.result.points] == [p.outputs for p in whole.result.points[30:55]]
+
+
+def test_counts_of_a_document_are_bounded(server):
+    document = gripper()
+    document["loads"] |= {f"extra{k}": {"type": "moment", "body": "input", "moment": 0} for k in range(3)}
+    r = httpx.post(server.url + "/v1/solve", json={"document": document})
+    assert r.status_code == 422 and error(r)["message"] == "/document/loads: 4 loads: the limit is 3"
+
+
+# --- 2. strict reading -------------------------------------------------------------------
+@pytest.mark.parametrize("text, suffix, message", [
+    ('{"bodies": {}, "bodies": {"a": {"position": [0, 0]}}}', ".json", "duplicate key 'bodies'"),
+    ("bodies: {}\nbodies: {}\n", ".yaml", "duplicate key 'bodies'"),
+    ("[" * 100_000, ".json", "nests deeper than 64 levels"),
+    (b"\xff\xfe{}", ".json", "is not UTF-8 text"),
+    ('{"bodies": {"a": {"position": [' + "1" * 5000 + ', 0]}}}', ".json", "is not valid JSON"),
+])
+def test_files_are_read_strictly(tmp_path, text, suffix, message):
+    path = tmp_path / f"doc{suffix}"
+    path.write_bytes(text if isinstance(text, bytes) else text.encode())
+    with pytest.raises(MechanismError) as info:
+        load_document(path)
+    assert message in info.value.problem
+
+
+@pytest.mark.parametrize("units, pointer, message", [
+    ({"length": "uN/0"}, "/units/length", "'uN/0' is not a unit of length: expected a unit name, got '0'"),
+    ({"force": "mm"}, "/units/force", "'mm' is not a unit of force (like N)"),
+])
+def test_a_bad_unit_is_blamed_on_itself(units, pointer, message):
+    document = gripper()
+    document["units"].update(units)
+    with pytest.raises(MechanismError) as info:
+        compile_mechanism(load_document(document))
+    assert (info.value.pointer, info.value.problem) == (pointer, message)
+
+
+def test_a_negative_radius_is_reported_in_the_document_unit():
+    document = gripper()
+    document["elements"]["a"]["radius"] = -0.2
+    with pytest.raises(MechanismError, match=r"^/elements/a/radius: must be positive, got -0.2 mm$"):
+        compile_mechanism(load_document(document))
+
+
+# --- 5. field checks on design bounds --------------------------------------------------------
+@pytest.mark.parametrize("variable, pointer, message", [
+    ({"path": "/sections/flexure/h", "lower": -1, "upper": 8}, "/problem/design/0/lower", "must be positive, got -1 mm"),
+    ({"path": "/sections/flexure/h", "lower": 1, "upper": 8, "scale": 1e-320}, "/problem/design/0/scale",
+     "out of range"),
+    ({"path": "/elements/a/arc_angle", "lower": 10, "upper": 400}, "/problem/design/0/upper",
+     "arc angle must lie in (0, 360) deg"),
+])
+def test_design_bounds_pass_the_field_checks(server, variable, pointer, message):
+    problem = {"design": [variable], "objective": {"output": "end_effector.x"}}
+    r = httpx.post(server.url + "/v1/optimize", json={"example": "gripper", "problem": problem})
+    assert r.status_code == 422 and error(r)["pointer"] == pointer and message in error(r)["message"]
+
+
+def test_nan_bounds_are_refused_at_post(server):
+    body = b'{"example": "gripper", "problem": {"design": [{"path": "/sections/flexure/h", "lower": NaN}], ' \
+           b'"objective": {"output": "end_effector.x"}}}'
+    r = httpx.post(server.url + "/v1/optimize", content=body, headers={"Content-Type": "application/json"})
+    assert r.status_code == 422 and error(r)["pointer"] == "/problem/design/0/lower"
+
+
+# --- 7. security and transport -------------------------------------------------------------
+def test_api_keys_that_list_no_key_refuse_to_start():
+    from service.cli import app
+
+    result = CliRunner().invoke(app, ["serve"], env={"FLEXMECH_API_KEYS": " , ,", "NO_COLOR": "1"})
+    assert result.exit_code == 2
+    assert "error: FLEXMECH_API_KEYS: Value error, lists no key (leave it empty to run without keys)" in result.stderr
+
+
+def test_docs_are_served_from_the_package(server):
+    page = httpx.get(server.url + "/docs")
+    assert page.status_code == 200
+    sources = re.findall(r'(?:src|href)="([^"]+)"', page.text)
+    assert sources and all(s.startswith("/") for s in sources)  # nothing from a CDN
+    for source in sources:
+        assert httpx.get(server.url + source).status_code == 200, source
+    assert httpx.get(server.url + "/openapi.json").status_code == 200  # public, as documented
+
+
+def test_health_does_not_show_the_dask_address(dask_address):
+    from service.jobs.executors import DaskCluster
+
+    cluster = DaskCluster(dask_address)
+    try:
+        host = dask_address.removeprefix("tcp://")
+        assert cluster.description.startswith("Dask cluster (") and host not in cluster.description
+    finally:
+        cluster.close()
+
+
+def test_names_cannot_break_json_pointers():
+    document = gripper()
+    document["materials"]["si/1~x"] = document["materials"].pop("silicon")
+    with pytest.raises(MechanismError) as info:
+        compile_mechanism(load_document(document))
+    assert info.value.pointer == "/materials/si~11~0x"
+    assert info.value.problem == "a name may not contain '/' or '~' (they are special in JSON pointers)"
+
+
+# --- 9. messages a new user can act on ----------------------------------------------------
+def test_a_document_posted_unwrapped_is_named_as_such(server):
+    r = httpx.post(server.url + "/v1/solve", json=gripper())
+    assert r.status_code == 422
+    assert error(r)["message"].startswith('body: this is a mechanism document itself: send it as {"document": ')
+
+
+def test_a_misspelled_key_is_named(server):
+    r = httpx.post(server.url + "/v1/solve", json={"exmaple": "gripper"})
+    assert r.status_code == 422 and error(r)["pointer"] == "/exmaple"
+    assert error(r)["message"].startswith("/exmaple: unknown field 'exmaple' (did you mean 'example'?)")
+    document = gripper()
+    document["elements"]["a"]["radious"] = document["elements"]["a"].pop("radius")
+    with pytest.raises(MechanismError) as info:
+        load_document(document)
+    assert info.value.problem.startswith("unknown field 'radious' (did you mean 'radius'?)")
+
+
+def test_documents_read_from_files_keep_their_meaning(tmp_path):
+    """A YAML copy of an example solves as the JSON does (the strict loader changes nothing else)."""
+    import yaml
+
+    path = tmp_path / "gripper.yaml"
+    path.write_text(yaml.safe_dump(json.loads((EXAMPLES / "gripper.json").read_text())))
+    assert load_document(path) == load_document(EXAMPLES / "gripper.json")
