@@ -39,7 +39,7 @@ offending field of the request body, when there is one.
 
 def _services(settings: Settings) -> Services:
     store = JobStore(settings.resolved_database_url())
-    executor = make_executor(settings.dask_address, settings.workers)
+    executor = make_executor(settings.dask_address, settings.workers, settings.data_dir)
     runner = JobRunner(store, executor, settings.chunk_size, settings.job_time_limit)
     limits = settings.limits()
     library = ExampleLibrary(examples_directory(settings.examples_dir))

@@ -125,3 +125,32 @@ def test_a_stopped_server_leaves_no_worker_behind(tmp_path):
         raise AssertionError("workers outlived the server:\n" + server.output())
     assert "leaked semaphore" not in server.output(tail=None)
     server.stop()
+
+
+def test_a_cancelled_job_stops_on_a_dask_cluster_too(request, tmp_path):
+    """On a cluster the stop signal is a Dask Event: tasks look between points (no killing)."""
+    from conftest import make_deployment
+
+    deployment = make_deployment("dask", request, tmp_path)
+    deployment.env["FLEXMECH_CHUNK_SIZE"] = "16"
+    server = deployment.start()
+    slow_job = {**SLOW, "parameters": [{"path": "/loads/actuation/force/1", "values": [1e7 + k for k in range(16)]}]}
+    try:
+        with Client(server.url) as client:
+            point = slow_point_seconds(client)
+            slow = [client.sweep(**slow_job) for _ in range(2)]  # the cluster's two workers busy
+            for job in slow:
+                wait_running(client, job.id)
+            time.sleep(1.0)
+            cancelled = time.perf_counter()
+            for job in slow:
+                client.cancel(job.id)
+            quick = client.sweep(**QUICK)
+            assert client.wait(quick.id, timeout=120).status == "succeeded"
+            freed = time.perf_counter() - cancelled
+        # Without stopping, the quick sweep waited for the rest of two 16-point tasks (about 15
+        # slow points); a task now ends after the point in progress.
+        print(f"\nDask: slow point {point:.1f} s; quick sweep done {freed:.1f} s after the cancel")
+        assert freed < 8 * point
+    finally:
+        server.stop()

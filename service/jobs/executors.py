@@ -18,6 +18,7 @@ import logging
 import multiprocessing
 import shutil
 import tempfile
+import time
 from abc import ABC, abstractmethod
 from concurrent.futures import Executor, ProcessPoolExecutor
 from pathlib import Path
@@ -34,7 +35,7 @@ class TaskExecutor(ABC):
     capacity: int  # tasks worth keeping in flight
 
     def __init__(self):
-        self._signalled: set[str] = set()
+        self._signalled: dict[str, float] = {}  # job id -> time.monotonic() of its stop signal
 
     @abstractmethod
     def executor(self) -> Executor: ...
@@ -53,26 +54,30 @@ class TaskExecutor(ABC):
 
     def stop(self, job_id: str) -> None:
         """Tell the job's running tasks to stop."""
-        self._signalled.add(job_id)
+        self._signalled[job_id] = time.monotonic()
 
-    def signalled(self) -> list[str]:
-        return sorted(self._signalled)
+    def signalled_before(self, moment: float) -> list[str]:
+        """Jobs whose stop signal was given before `moment` (time.monotonic())."""
+        return sorted(job_id for job_id, when in self._signalled.items() if when < moment)
 
     def forget(self, job_id: str) -> None:
         """The job's tasks have all ended: drop its stop signal."""
-        self._signalled.discard(job_id)
+        self._signalled.pop(job_id, None)
 
     @abstractmethod
     def close(self) -> None: ...
 
 
 class ProcessPool(TaskExecutor):
-    def __init__(self, workers: int):
+    def __init__(self, workers: int, flags: Path | None = None):
+        """flags: where the stop signals go (default: a new folder in the system's temp)."""
         super().__init__()
         self.workers = workers
         self.capacity = 2 * workers
         self.description = f"process pool ({workers} workers)"
-        self._flags = Path(tempfile.mkdtemp(prefix="flexmech-stop-"))
+        if flags is not None:
+            flags.mkdir(parents=True, exist_ok=True)
+        self._flags = Path(tempfile.mkdtemp(prefix="stop-", dir=flags))
         self._pool = self._new()
 
     def _new(self) -> ProcessPoolExecutor:
@@ -158,7 +163,7 @@ class DaskCluster(TaskExecutor):
         self._client.close()
 
 
-def make_executor(dask_address: str | None, workers: int) -> TaskExecutor:
+def make_executor(dask_address: str | None, workers: int, data_dir: Path | None = None) -> TaskExecutor:
     if dask_address:
         return DaskCluster(dask_address)
-    return ProcessPool(workers)
+    return ProcessPool(workers, None if data_dir is None else data_dir / "signals")

@@ -173,10 +173,10 @@ class JobRunner:
             self._killed.add(self._generation)
             self._generation += 1
             self._stopping.clear()
-        if not self._stopping:
-            for job_id in self.executor.signalled():
-                if job_id not in self._active:
-                    self.executor.forget(job_id)
+        # A stop signal outlives every task that may read it: a Dask future reports itself
+        # cancelled while its function still runs, so the signal is kept past the job's deadline.
+        for job_id in self.executor.signalled_before(time.monotonic() - self.job_time_limit - STOP_GRACE):
+            self.executor.forget(job_id)
 
     # --- tasks -----------------------------------------------------------------------------
     def _submit(self) -> None:
