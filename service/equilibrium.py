@@ -119,7 +119,7 @@ def check_constrained(mech: Mechanism, p: np.ndarray | None = None, again: bool 
     _CHECKED.add(mech.structure.key)
 
 
-@lru_cache(maxsize=64)
+@lru_cache(maxsize=16)
 def _newton_step(structure) -> ca.Function:
     return sparse_step(graphs_for(structure).residual_and_tangent)
 
