@@ -38,7 +38,7 @@ def _solver(mech: Mechanism, options: NewtonOptions):
 
 def minimize_energy(mech: Mechanism, options: NewtonOptions = NewtonOptions(),
                     guess: np.ndarray | None = None, p: np.ndarray | None = None) -> EquilibriumResult:
-    """The minimum of the total potential from `guess` (free body coordinates, nondimensional;
+    """The minimum of the total potential from `guess` (the energy form's x, nondimensional;
     default the undeformed state) at the parameters p (default the mechanism's). Its
     solver_residual is that of the residual form there."""
     started = time.perf_counter()
@@ -50,10 +50,12 @@ def minimize_energy(mech: Mechanism, options: NewtonOptions = NewtonOptions(),
     x0 = np.zeros(len(form.unknowns)) if guess is None else np.asarray(guess, dtype=float)
     run = ipopt.solve(solver, stop=ipopt.deadline(options.time_limit), x0=x0, p=p, lbg=np.zeros(n_eq + n_in),
                       ubg=np.concatenate([np.zeros(n_eq), np.full(n_in, np.inf)]))
-    z = np.concatenate([run.x, run.lam_g[:n_eq]])
+    z = form.to_state(run.x, run.lam_g[:n_eq])
     norm = float(np.abs(np.asarray(mech.graphs.residual(z, p))).max(initial=0.0))
     status = {"optimal": "converged", "acceptable": "converged", "time_limit": "time_limit"}.get(
         run.status, "not_converged")
+    if run.return_status == "Search_Direction_Becomes_Too_Small" and norm <= options.tol_residual:
+        status = "converged"  # IPOPT stopped at rounding level: the residual form says so
     message = "" if status == "converged" else f"IPOPT: {run.return_status}"
     history = [float(v) for v in run.history.get("inf_du", [])]
     return EquilibriumResult(status, z, norm, run.iterations, history, time.perf_counter() - started, mech, message)

@@ -8,6 +8,7 @@ assembly ask this registry; none of them names an element type.
 from models.elements.base import Families
 from models.elements.curved_beam import CURVED_BEAM, MODELS
 from models.elements.link import LINK
+from models.elements.link_elements import LINK_ELEMENTS
 from models.elements.pin import PIN
 from models.elements.slider import SLIDER
 from models.elements.spring import SPRING
@@ -15,6 +16,7 @@ from models.elements.spring import SPRING
 FAMILIES = Families([
     CURVED_BEAM,
     LINK,
+    LINK_ELEMENTS,
     SPRING,
     PIN,
     SLIDER,

@@ -9,8 +9,9 @@ A family is one element type of the document (`"type": "spring"`). It says:
                                own unknowns z (t.unknowns of them): a Contribution
   unknowns(t)                  (name, kind) of each of its own unknowns, in order
   energy_terms(ctx, t, d)      its part of the energy form (strain energy, equality and
-                               inequality constraints whose multipliers are its unknowns), or
-                               raise NoEnergyForm saying why its model has none
+                               inequality constraints, its own variables if it has any; its
+                               unknowns are those variables, then the equalities'
+                               multipliers), or raise NoEnergyForm saying why its model has none
   kinetic_energy(ctx, t, d, v) its kinetic energy for body displacements d and velocities v
                                (None: massless), or raise NoMassForm saying why its unknowns
                                cannot carry its mass (the mass form is the Hessian of the total)
@@ -70,9 +71,14 @@ class Contribution:
 
 @dataclass
 class EnergyTerms:
+    """An element's part of the energy form. Its unknowns in the residual form are its own
+    variables (if any), then the equalities' multipliers."""
+
     energy: ca.SX
-    equalities: list[tuple[str, ca.SX]] = field(default_factory=list)  # g(d) = 0; multipliers: the unknowns
-    inequalities: list[tuple[str, ca.SX]] = field(default_factory=list)  # g(d) >= 0
+    equalities: list[tuple[str, ca.SX]] = field(default_factory=list)  # g(d, q) = 0
+    inequalities: list[tuple[str, ca.SX]] = field(default_factory=list)  # g(d, q) >= 0
+    variables: ca.SX | None = None  # q: the element's own symbols (zero: undeformed), or None
+    surfaces: Any = None  # where contact can touch it (models.contact.geometry.ElementSurfaces), or None
 
 
 class NoEnergyForm(Exception):
@@ -110,7 +116,7 @@ class ScaleHint:
 
 class ElementFamily(Protocol):
     type: str
-    schema: type[TwoBodyElement]
+    schema: type[TwoBodyElement] | None
 
     def collect(self, c: "Collector", name: str, element: Any, i: int, j: int) -> ElementTopology: ...
 
@@ -149,7 +155,9 @@ class Families:
         return self.named(topology.family)
 
     def schemas(self) -> tuple[type[TwoBodyElement], ...]:
-        return tuple(family.schema for family in self)
+        """The document sections (a family with no schema of its own is reached through
+        another's: a link with discretization 'elements')."""
+        return tuple(family.schema for family in self if family.schema is not None)
 
 
 def constraint_wrenches(ctx: "AssemblyContext", bodies: tuple[int, ...], d: list[ca.SX], lam: ca.SX,

@@ -16,7 +16,7 @@ mu(u) the mass from u = 0 (a sixth state, integrated with the others).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Literal, Union
 
 import casadi as ca
@@ -96,8 +96,12 @@ class Link(TwoBodyElement):
     end: Literal["clamped", "pinned"] = "clamped"
     shear: bool = Field(default=False, description="Timoshenko shear strain (Lan 2005 Eq. 5.1)")
     axial: bool = Field(default=False, description="axial strain (Lan 2005 App. A.1)")
-    intervals: int = Field(default=8, ge=1, le=64, description="shooting intervals")
-    order: int = Field(default=8, ge=2, le=12, description="integration order (even): 2 x extrapolation levels")
+    discretization: Literal["shooting", "elements"] = Field(
+        default="shooting", description="multiple shooting (mixes forces and displacements), or displacement-based "
+        "elements (an energy: needed for minimum energy and contact)")
+    intervals: int = Field(default=8, ge=1, le=64, description="shooting intervals, or elements")
+    order: int = Field(default=8, ge=2, le=12, description="shooting: integration order (even), 2 x extrapolation levels")
+    degree: int = Field(default=3, ge=1, le=6, description="elements: polynomial degree of the rotation")
 
 
 @dataclass(frozen=True)
@@ -154,6 +158,26 @@ class LinkTopology(ElementTopology):
         return 4 * self.intervals
 
 
+@dataclass(frozen=True)
+class LinkElementsTopology(LinkTopology):
+    """A link discretized by elements (models.elements.link_elements contributes it)."""
+
+    degree: int = 3
+
+    @property
+    def unknowns(self) -> int:
+        """Free nodal rotations, strain coefficients, and the end conditions' multipliers."""
+        rotations = self.intervals * self.degree + (1 if self.start == "pinned" else 0)
+        strains = self.intervals * self.degree * (int(self.shear) + int(self.axial))
+        return rotations + strains + 2 + (1 if self.end == "clamped" else 0)
+
+
+def as_elements(t: LinkTopology, degree: int) -> LinkElementsTopology:
+    """The same link, discretized by elements."""
+    values = {f.name: getattr(t, f.name) for f in fields(t)}
+    return LinkElementsTopology(**{**values, "family": "link_elements"}, degree=degree)
+
+
 class LinkFamily:
     type = "link"
     schema = Link
@@ -181,8 +205,11 @@ class LinkFamily:
             c.holds_rotation(i)
         if el.end == "clamped":
             c.holds_rotation(j)
-        return LinkTopology(name, self.type, i, j, el.start, el.end, geometry, el.material,
-                            section_topology(el.section, section), el.shear, el.axial, el.intervals, el.order, weighs)
+        topology = LinkTopology(name, self.type, i, j, el.start, el.end, geometry, el.material,
+                                section_topology(el.section, section), el.shear, el.axial, el.intervals, el.order, weighs)
+        if el.discretization == "elements":
+            return as_elements(topology, el.degree)
+        return topology
 
     def contribute(self, ctx: AssemblyContext, t: LinkTopology, d, z) -> Contribution:
         shooting = link_shooting(ctx, t)

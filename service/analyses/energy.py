@@ -32,7 +32,7 @@ class EnergyAnalysis(Analysis):
         return plain(report)
 
     def point(self, mech: Mechanism, p: np.ndarray, guess: np.ndarray, options: NewtonOptions) -> EquilibriumResult:
-        return minimize_energy(mech, options, guess[:mech.n_body_coordinates], p)
+        return minimize_energy(mech, options, mech.graphs.energy_form.x_of_state(guess), p)
 
 
 ENERGY = EnergyAnalysis()

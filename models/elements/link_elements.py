@@ -1,0 +1,155 @@
+"""Links with the displacement-based discretization (models.link_fe): a link document with
+`discretization: "elements"`. Its model is an energy, so it has an energy form (minimum
+energy, contact) as well as a residual form (the stationarity of that energy).
+
+Unknowns: the nodal rotations theta_k (deviations from the unloaded link; theta_0 only when
+the start is pinned: clamped, it is the start body's rotation), the shear and axial strain
+coefficients when the link has them, then the multipliers of the end conditions: the end
+position on the end body (two) and, clamped, the end rotation (one).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+
+from models.context import AssemblyContext
+from models.elements.base import CentreLine, Contribution, EnergyTerms, NoMassForm, ScaleHint, SiValues
+from models.elements.link import LINK, Link, LinkElementsTopology, link_properties
+from models.elements.surfaces import ElementSurfaces, SurfacePoint
+from models.elements.variational import variational_parts
+from models.link_fe import LinkElements, LinkKinematics
+from models.planar import cross
+
+
+@dataclass
+class _Stated:
+    terms: EnergyTerms
+    kinematics: LinkKinematics
+    undeformed: LinkKinematics
+    arms: tuple[ca.SX, ca.SX]  # from the start and end bodies' reference points to the link's ends
+
+
+class LinkElementsFamily:
+    type = "link_elements"
+    schema = None  # a `link` document with discretization "elements"
+
+    def collect(self, c, name: str, el: Link, i: int, j: int) -> LinkElementsTopology:
+        raise RuntimeError("links by elements are collected by the link family")
+
+    def _state(self, ctx: AssemblyContext, t: LinkElementsTopology, d: list[ca.SX]) -> _Stated:
+        props = link_properties(ctx, t)
+        disc = LinkElements(props, t.intervals, t.degree)
+        i, j = t.start_body, t.end_body
+        n_free_rotations = disc.n_rotations - (1 if t.start == "clamped" else 0)
+        parts = [ca.SX.sym(f"{t.name}_theta", n_free_rotations)]
+        theta = ca.vertcat(d[i][2], parts[0]) if t.start == "clamped" else parts[0]
+        strains = {}
+        for field_name, present in (("gamma", t.shear), ("eps", t.axial)):
+            if present:
+                strains[field_name] = ca.SX.sym(f"{t.name}_{field_name}", disc.n_strains)
+                parts.append(strains[field_name])
+        undeformed = disc.kinematics(ca.SX.zeros(disc.n_rotations), None, None, props.start_point)
+        arm_i = ctx.arm(i, ctx.body_axes(i, props.start_point), d)
+        arm_j = ctx.arm(j, ctx.body_axes(j, undeformed.node_position[-1]), d)
+        start = ctx.reference(i)[0] + d[i][:2] + arm_i
+        kin = disc.kinematics(theta, strains.get("gamma"), strains.get("eps"), start)
+        end_target = ctx.reference(j)[0] + d[j][:2] + arm_j
+        equalities = [("end.x", kin.node_position[-1][0] - end_target[0]),
+                      ("end.y", kin.node_position[-1][1] - end_target[1])]
+        if t.end == "clamped":
+            equalities.append(("end.rotation", kin.node_psi[-1] - undeformed.node_psi[-1] - d[j][2]))
+        energy = kin.strain_energy
+        if props.line_mass is not None and props.gravity is not None:  # the link's own weight
+            for point in kin.points:
+                energy = energy - point.weight * props.line_mass(ca.SX(point.u)) * ca.dot(props.gravity, point.position)
+        half = props.half_thickness
+        surface = [SurfacePoint(0.0, start, _normal(kin.node_psi[0]), half(ca.SX(0.0)) if half else None)]
+        surface += [SurfacePoint(q.u, q.position, q.normal, half(ca.SX(q.u)) if half else None, q.weight)
+                    for q in kin.points]
+        surface.append(SurfacePoint(1.0, kin.node_position[-1], _normal(kin.node_psi[-1]),
+                                    half(ca.SX(1.0)) if half else None))
+        surfaces = ElementSurfaces({"start": (start, kin.node_psi[0]), "end": (kin.node_position[-1], kin.node_psi[-1])},
+                                   surface)
+        terms = EnergyTerms(energy, equalities, [], ca.vertcat(*parts), surfaces)
+        return _Stated(terms, kin, undeformed, (arm_i, arm_j))
+
+    def energy_terms(self, ctx: AssemblyContext, t: LinkElementsTopology, d: list[ca.SX]) -> EnergyTerms:
+        return self._state(ctx, t, d).terms
+
+    def contribute(self, ctx: AssemblyContext, t: LinkElementsTopology, d, z) -> Contribution:
+        i, j = t.start_body, t.end_body
+        stated = {}
+
+        def build(local):
+            stated["s"] = s = self._state(ctx, t, local)
+            kin, und = s.kinematics, s.undeformed
+            extras = [kin.node_position[-1], kin.node_psi[0], kin.node_psi[-1], *kin.node_position,
+                      *[q.position for q in kin.points], *s.arms]
+            return s.terms, extras
+
+        wrenches, rows, energy, extras = variational_parts((i, j), ctx.n_bodies, d, z, build)
+        s = stated["s"]
+        n_nodes, n_points = len(s.kinematics.node_position), len(s.kinematics.points)
+        end, psi_start, psi_end = extras[0], extras[1], extras[2]
+        nodes = extras[3:3 + n_nodes]
+        points = extras[3 + n_nodes:3 + n_nodes + n_points]
+        arm_i, arm_j = extras[-2:]
+        on_start, on_end = wrenches[i], wrenches[j]
+        n_start = -on_start[:2]  # the internal force at u = 0 (what the part beyond exerts on the start)
+        m_start = -(on_start[2] - cross(arm_i, on_start[:2]))
+        m_end = on_end[2] - cross(arm_j, on_end[:2])
+        und = s.undeformed
+        outputs = [("h", "force", n_start[0]), ("v", "force", n_start[1]),
+                   ("M_start", "moment", m_start), ("M_end", "moment", m_end),
+                   ("x_end", "length", end[0]), ("y_end", "length", end[1]),
+                   ("angle_start", "angle", psi_start), ("angle_end", "angle", psi_end),
+                   ("rotation_start", "angle", psi_start - und.node_psi[0]),
+                   ("rotation_end", "angle", psi_end - und.node_psi[-1]),
+                   ("length", "length", link_properties(ctx, t).length),
+                   ("x_end_undeformed", "length", und.node_position[-1][0]),
+                   ("y_end_undeformed", "length", und.node_position[-1][1]),
+                   ("energy", "energy", energy)]
+        deformed = _ordered(nodes, points, s.kinematics)
+        undeformed = _ordered(und.node_position, [q.position for q in und.points], und)
+        half = link_properties(ctx, t).half_thickness
+        thickness = [half(ca.SX(u)) for u in _ordered_u(s.kinematics)] if half is not None else None
+        return Contribution({i: on_start, j: on_end}, rows, outputs, energy, CentreLine(deformed, undeformed, thickness))
+
+    def unknowns(self, t: LinkElementsTopology) -> list[tuple[str, str]]:
+        first = 0 if t.start == "pinned" else 1
+        names = [(f"theta{k}", "angle") for k in range(first, t.intervals * t.degree + 1)]
+        for field_name, present in (("gamma", t.shear), ("eps", t.axial)):
+            if present:
+                names += [(f"{field_name}{k}", "dimensionless") for k in range(t.intervals * t.degree)]
+        names += [("end.lambda_x", "force"), ("end.lambda_y", "force")]
+        if t.end == "clamped":
+            names.append(("end.lambda_moment", "moment"))
+        return names
+
+    def kinetic_energy(self, ctx, t: LinkElementsTopology, d, v):
+        if t.weighs:
+            raise NoMassForm("it has mass (its material's density); the mass of links by elements is not "
+                             "modelled yet")
+        return None
+
+    def scale_hint(self, t: LinkElementsTopology, values: SiValues) -> ScaleHint:
+        return LINK.scale_hint(t, values)
+
+
+def _normal(psi: ca.SX) -> ca.SX:
+    return ca.vertcat(-ca.sin(psi), ca.cos(psi))
+
+
+def _ordered_u(kin: LinkKinematics) -> list[float]:
+    return sorted([*kin.node_u, *[q.u for q in kin.points]])
+
+
+def _ordered(nodes: list[ca.SX], points: list[ca.SX], kin: LinkKinematics) -> list[ca.SX]:
+    """Nodes and quadrature points in the order of u, for drawing."""
+    tagged = [(u, x) for u, x in zip(kin.node_u, nodes)] + [(q.u, x) for q, x in zip(kin.points, points)]
+    return [x for _, x in sorted(tagged, key=lambda pair: pair[0])]
+
+
+LINK_ELEMENTS = LinkElementsFamily()
