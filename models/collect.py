@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from models.collector import Collector
+from models.contact.collect import collect_contacts
 from models.document import ForceLoad, MechanismDocument, MomentLoad, PointOutput, PrescribedDisplacement, ReactionOutput
 from models.elements import FAMILIES, MODELS
 from models.errors import MechanismError, pointer_of
@@ -43,6 +44,7 @@ def collect(doc: MechanismDocument, model_override: str | None) -> tuple[Structu
         if i == j:
             raise MechanismError(f"{base}/to", f"an element must join two different bodies (both ends on '{el.to}')")
         elements.append(FAMILIES.named(el.type).collect(c, name, el, i, j))
+    contacts = collect_contacts(c, doc.contacts, elements)
     _collect_materials(c)
     for name in sorted(c.sections):
         collect_section(c, name, doc.sections[name], c.sections[name])
@@ -53,7 +55,7 @@ def collect(doc: MechanismDocument, model_override: str | None) -> tuple[Structu
     structure = Structure(
         bodies=tuple(c.bodies), parameters=tuple(c.parameters), prescribed=tuple(tuple(row) for row in prescribed),
         elements=tuple(elements), loads=tuple(loads), points=tuple(points), reactions=tuple(reactions),
-        masses=tuple(masses), gravity=doc.gravity is not None,
+        masses=tuple(masses), gravity=doc.gravity is not None, contacts=contacts,
         length_unit_si=unit_factor(document_unit(doc.units, "length"), "length", "/units/length"))
     return structure, np.array(c.values, dtype=float), c.notes
 
@@ -61,9 +63,13 @@ def collect(doc: MechanismDocument, model_override: str | None) -> tuple[Structu
 def _check_names(doc: MechanismDocument) -> None:
     """Names become parts of JSON pointers (/elements/<name>/radius): no '/' or '~' (RFC 6901
     would escape them, and every pointer would need it), no blanks, at most MAX_NAME characters."""
-    for collection in ("materials", "sections", "bodies", "elements", "loads", "outputs"):
-        for name in getattr(doc, collection):
-            pointer = pointer_of((collection, name))
+    named = [((collection,), getattr(doc, collection))
+             for collection in ("materials", "sections", "bodies", "elements", "loads", "outputs")]
+    if doc.contacts is not None:
+        named += [(("contacts", part), getattr(doc.contacts, part)) for part in ("objects", "sites", "pairs")]
+    for where, names in named:
+        for name in names:
+            pointer = pointer_of((*where, name))
             if not name.strip() or name != name.strip():
                 raise MechanismError(pointer, "a name may not be empty or start or end with a blank")
             if "/" in name or "~" in name:

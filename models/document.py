@@ -17,6 +17,7 @@ from typing import Annotated, Any, Literal, Union
 
 from pydantic import Field, ValidationError, model_validator
 
+from models.contact.document import OBJECT_TYPES, SITE_TYPES, Contacts
 from models.elements import FAMILIES
 from models.elements.link import SHAPE_TYPES
 from models.errors import MechanismError, pointer_of
@@ -213,6 +214,8 @@ class MechanismDocument(StrictModel):
     elements: dict[str, Element] = {}
     loads: dict[str, Load] = {}
     outputs: dict[str, Output] = {}
+    contacts: Contacts | None = Field(default=None, description="rigid objects, contact sites and pairs (the "
+                                      "contact analysis)")
     sweep: SweepSpec | None = None
     inverse: InverseSpec | None = None
     optimize: OptimizeSpec | None = None
@@ -287,6 +290,7 @@ def unknown_field_message(key: str) -> str:
 
 _TAGGED_COLLECTIONS = {"elements", "loads", "outputs", "sections"}
 _SHAPE_TAGS = set(SHAPE_TYPES)
+_CONTACT_TAGS = set(OBJECT_TYPES) | set(SITE_TYPES)
 _UNION_MEMBERS = {"float", "str", "int", "bool", "none", "constrained-str"}
 
 
@@ -299,6 +303,8 @@ def _field_location(loc: tuple) -> tuple:
         del parts[2]
     if "shape" in parts[:-2] and parts[parts.index("shape") + 1] in _SHAPE_TAGS:
         del parts[parts.index("shape") + 1]
+    if len(parts) > 3 and parts[0] == "contacts" and parts[1] in ("objects", "sites") and parts[3] in _CONTACT_TAGS:
+        del parts[3]
     return tuple(p for p in parts if not (isinstance(p, str) and (p in _UNION_MEMBERS or "[" in p)))
 
 

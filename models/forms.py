@@ -56,6 +56,7 @@ class SymbolicEnergy:
 
     ctx: AssemblyContext
     x: ca.SX
+    d: list[ca.SX]  # every body's displacement, in x and p
     names: list[str]
     potential: ca.SX
     equalities: list[tuple[str, ca.SX]]
@@ -95,7 +96,7 @@ def symbolic_energy(structure: Structure) -> SymbolicEnergy:
         V = V + terms.energy
         equalities += [(f"{t.name}.{name}", g) for name, g in terms.equalities]
         inequalities += [(f"{t.name}.{name}", h) for name, h in terms.inequalities]
-    return SymbolicEnergy(ctx, ca.vertcat(*variables), names, V, equalities, inequalities, surfaces,
+    return SymbolicEnergy(ctx, ca.vertcat(*variables), d, names, V, equalities, inequalities, surfaces,
                           x_in_state, multipliers_in_state)
 
 

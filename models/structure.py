@@ -77,6 +77,7 @@ class Structure:
     masses: tuple[InertiaTopology, ...] = ()
     gravity: bool = False
     length_unit_si: float = 1.0  # SI size of the document's length unit (section expressions use it)
+    contacts: Any = None  # models.contact.topology.ContactTopology, or None
 
     @cached_property
     def key(self) -> str:

@@ -34,6 +34,11 @@ ALLOWED_OPTIONS: dict[str, tuple[type, Callable[[Any], bool]]] = {
     "hessian_approximation": (str, lambda v: v in ("exact", "limited-memory")),
     "bound_relax_factor": (float, lambda v: v >= 0),
     "print_level": (int, lambda v: 0 <= v <= 12),
+    "mu_init": _POSITIVE,
+    "warm_start_init_point": (str, lambda v: v in ("yes", "no")),
+    "warm_start_bound_push": _POSITIVE,
+    "warm_start_mult_bound_push": _POSITIVE,
+    "warm_start_slack_bound_push": _POSITIVE,
 }
 
 # IPOPT's return status -> ours (optimal | acceptable | infeasible | not_converged | time_limit).

@@ -1,0 +1,214 @@
+"""The contact problem of a structure, as CasADi Functions built once per structure.
+
+Unknowns w = [x; a]: the energy form's x (free body coordinates, the links' variables) and
+the separating axes a. Parameters: the mechanism's p, and a shift s per contact row (the
+approach from a penetrating start relaxes h >= 0 to h + s >= 0 and lets s fall to 0).
+
+    NLP:  minimize V(x, p)  s.t.  g(x, p) = 0,  h_el(x, p) >= 0,  h(w, p) + s >= 0
+
+The active-set KKT system (for friction and for sensitivities) in v = [w; lam_eq; lam_in; tau]:
+
+    grad_w V + J_eq^T lam_eq - J_in^T lam_in - Q_friction = 0     (rows of frozen axes: a - a_ref = 0)
+    g = 0
+    active: h = 0,  inactive: lam = 0
+    sticking pair j: its slide over the step = 0,  otherwise tau_j = 0
+
+with Q_friction = sum_k (dP_k/dw)^T f_k t_k: at a slipping row f_k = phi_k (= mu sigma) times
+the row's normal force, at a sticking pair's rows f_k = weight_k tau_j, t_k the unit tangent,
+acting at the site's material point P_k. A row's slide is the tangential motion of the
+site's material point relative to the object's material point at the contact, from the
+reference (previous) state: the object's point is carried back by the object's rigid motion.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import casadi as ca
+import numpy as np
+
+from models.contact.constraints import ContactGeometry, contact_constraints
+from models.errors import MechanismError
+from models.planar import rot
+from models.forms import symbolic_energy
+from models.structure import Structure
+
+
+@dataclass(frozen=True)
+class ContactProblem:
+    structure: Structure
+    n_x: int
+    n_axes: int
+    n_eq: int
+    n_in: int  # inequality rows: the elements' own, then the contact rows
+    n_element_in: int
+    row_pairs: tuple[int, ...]  # per contact row, its pair
+    row_pushes: tuple[bool, ...]  # per contact row, whether it pushes a site point
+    axis_pairs: tuple[int, ...]
+    x_in_state: tuple[int, ...]
+    multipliers_in_state: tuple[int, ...]
+    nlp: dict  # {x, p, f, g} (SX), for service.ipopt
+    axes_guess: ca.Function  # (x, p) -> a
+    element_inequalities: ca.Function  # (x, p) -> h_el
+    rows: ca.Function  # (w, p) -> h, normals (2 x rows), points (2 x rows), along
+    frames: ca.Function  # (w, p) -> origins (2 x objects), angles
+    kkt: ca.Function  # (v = [w; lam_eq; lam_in; tau], p, mode...) -> F, dF/dv (see _kkt_functions)
+    kkt_parameters: ca.Function  # the same inputs -> dF/dp
+    slides: ca.Function  # (w, p, points_old, origins_old, angles_old) -> per row, the site's tangential slide
+    pair_results: ca.Function  # (v, p, phi, stick, weights) -> per pair: force on the site, normal and
+    #                            tangential force, contact point, site parameter (pair_results())
+    n_p: int
+    n_pairs: int
+    pair_objects: tuple[int, ...]
+
+    @property
+    def n_w(self) -> int:
+        return self.n_x + self.n_axes
+
+    @property
+    def n_rows(self) -> int:
+        return self.n_in - self.n_element_in
+
+    def to_state(self, w: np.ndarray, lam_eq: np.ndarray) -> np.ndarray:
+        """The residual form's z (for the structure's outputs and reactions)."""
+        z = np.zeros(len(self.x_in_state) + len(self.multipliers_in_state))
+        z[list(self.x_in_state)] = w[:self.n_x]
+        z[list(self.multipliers_in_state)] = lam_eq
+        return z
+
+
+@lru_cache(maxsize=16)
+def contact_problem(structure: Structure) -> ContactProblem:
+    if structure.contacts is None or not structure.contacts.pairs:
+        raise MechanismError("/contacts/pairs", "the contact analysis needs at least one contact pair")
+    energy = symbolic_energy(structure)
+    geometry = ContactGeometry(energy.ctx, energy.d, energy.surfaces, structure.contacts)
+    constraints = contact_constraints(geometry)
+    x, a, p = energy.x, constraints.axes, energy.ctx.p
+    w = ca.vertcat(x, a)
+    n_rows = len(constraints.rows)
+    shift = ca.SX.sym("shift", n_rows)
+    g_eq = _stack([g for _, g in energy.equalities])
+    h_el = _stack([h for _, h in energy.inequalities])
+    h = _stack([row.value for row in constraints.rows])
+    nlp = {"x": w, "p": ca.vertcat(p, shift), "f": energy.potential, "g": ca.vertcat(g_eq, h_el, h + shift)}
+    zero2 = ca.SX.zeros(2)
+    normals = ca.horzcat(*[row.normal if row.normal is not None else zero2 for row in constraints.rows])
+    points = ca.horzcat(*[row.point if row.point is not None else zero2 for row in constraints.rows])
+    along = _stack([row.site_parameter if row.site_parameter is not None else ca.SX(0) for row in constraints.rows])
+    rows = ca.Function("contact_rows", [w, p], [h, normals, points, along], ["w", "p"],
+                       ["h", "normals", "points", "along"])
+    frames = ca.Function("object_frames", [w, p], [ca.horzcat(*[f.origin for f in constraints.object_frames]),
+                                                   _stack([f.angle for f in constraints.object_frames])],
+                         ["w", "p"], ["origins", "angles"])
+    axes_guess = ca.Function("axes_guess", [x, p], [constraints.axes_guess], ["x", "p"], ["a"])
+    n_pairs, n_objects = len(structure.contacts.pairs), len(structure.contacts.objects)
+    kkt, kkt_p, slides = _kkt_functions(energy.potential, g_eq, ca.vertcat(h_el, h), constraints, x, a, p,
+                                        n_pairs, n_objects)
+    results = pair_results(constraints, w, p, g_eq.numel(), h_el.numel(), n_pairs)
+    problem = ContactProblem(structure, x.numel(), a.numel(), g_eq.numel(), h_el.numel() + n_rows, h_el.numel(),
+                             tuple(row.pair for row in constraints.rows),
+                             tuple(row.point is not None for row in constraints.rows), tuple(constraints.axis_pairs),
+                             tuple(energy.x_in_state), tuple(energy.multipliers_in_state), nlp, axes_guess,
+                             ca.Function("element_inequalities", [x, p], [h_el], ["x", "p"], ["h"]), rows,
+                             frames, kkt, kkt_p, slides, results, p.numel(), n_pairs,
+                             tuple(pair.object for pair in structure.contacts.pairs))
+    for fn in (rows, frames, axes_guess, kkt, slides, results):
+        if fn.has_free():
+            raise RuntimeError(f"graph {fn.name()} has free symbols {fn.get_free()}")
+    return problem
+
+
+def _stack(items: list) -> ca.SX:
+    return ca.vertcat(*items) if items else ca.SX(0, 1)
+
+
+def _kkt_functions(V, g_eq, h_in, constraints, x, a, p, n_pairs: int, n_objects: int):
+    """The active-set KKT system with friction (slipping rows: phi = mu sigma; sticking pairs:
+    their tangential force tau and the condition that the contact does not slide relative to
+    the object over the step from the reference state), its p-Jacobian, and the slides."""
+    w = ca.vertcat(x, a)
+    n_w, n_eq, n_in, n_a = w.numel(), g_eq.numel(), h_in.numel(), a.numel()
+    n_rows = len(constraints.rows)
+    n_element = n_in - n_rows
+    lam_eq, lam_in, tau = ca.SX.sym("lam_eq", n_eq), ca.SX.sym("lam_in", n_in), ca.SX.sym("tau", n_pairs)
+    active, phi = ca.SX.sym("active", n_in), ca.SX.sym("phi", n_in)
+    freeze, ref = ca.SX.sym("freeze", n_a), ca.SX.sym("ref", n_a)
+    stick, weights = ca.SX.sym("stick", n_pairs), ca.SX.sym("weights", n_rows)
+    points_old = ca.SX.sym("points_old", 2, n_rows)
+    origins_old, angles_old = ca.SX.sym("origins_old", 2, n_objects), ca.SX.sym("angles_old", n_objects)
+    lagrangian = V + ca.dot(lam_eq, g_eq) - ca.dot(lam_in, h_in)
+    stationarity = ca.gradient(lagrangian, w)
+    slides = []
+    pair_slide = [ca.SX(0) for _ in range(n_pairs)]
+    friction = ca.SX.zeros(n_w)
+    for k, row in enumerate(constraints.rows):
+        if row.point is None:
+            slides.append(ca.SX(0))
+            continue
+        unit_tangent = ca.vertcat(-row.normal[1], row.normal[0]) / ca.norm_2(row.normal)
+        obj = constraints.pair_objects[row.pair]
+        frame = constraints.object_frames[obj]
+        carried = origins_old[:, obj] + rot(angles_old[obj] - frame.angle) @ (row.point - frame.origin)
+        slide = ca.dot(unit_tangent, carried - points_old[:, k])  # the site's slide relative to the object
+        slides.append(slide)
+        pair_slide[row.pair] = pair_slide[row.pair] + weights[k] * slide
+        force = (phi[n_element + k] * lam_in[n_element + k] * ca.norm_2(row.normal)
+                 + stick[row.pair] * weights[k] * tau[row.pair]) * unit_tangent
+        friction = friction + ca.mtimes(ca.jacobian(row.point, w).T, force)
+    stationarity = stationarity - friction
+    if n_a:
+        held = ca.vertcat(ca.SX.zeros(n_w - n_a), freeze)
+        target = ca.vertcat(ca.SX.zeros(n_w - n_a), a - ref)
+        stationarity = (1 - held) * stationarity + held * target
+    complementarity = active * h_in + (1 - active) * lam_in
+    sticking = ca.vertcat(*[stick[j] * pair_slide[j] + (1 - stick[j]) * tau[j] for j in range(n_pairs)])
+    v = ca.vertcat(w, lam_eq, lam_in, tau)
+    F = ca.vertcat(stationarity, g_eq, complementarity, sticking)
+    inputs = [v, p, active, phi, freeze, ref, stick, weights, points_old, origins_old, angles_old]
+    names = ["v", "p", "active", "phi", "freeze", "ref", "stick", "weights", "points_old", "origins_old", "angles_old"]
+    kkt = ca.Function("contact_kkt", inputs, [F, ca.jacobian(F, v)], names, ["F", "J"])
+    kkt_p = ca.Function("contact_kkt_p", inputs, [ca.jacobian(F, p)], names, ["Fp"])
+    slide_fn = ca.Function("contact_slides", [w, p, points_old, origins_old, angles_old], [_stack(slides)],
+                           ["w", "p", "points_old", "origins_old", "angles_old"], ["slides"])
+    return kkt, kkt_p, slide_fn
+
+
+
+def pair_results(constraints, w: ca.SX, p: ca.SX, n_eq: int, n_element: int, n_pairs: int) -> ca.Function:
+    """Per pair, from the state v = [w; lam_eq; lam_in; tau]: the force on the site (normal
+    part lam dh/dP at each pushing row, plus friction), its normal and tangential components
+    (the tangent turns the normal by +90 deg), the contact point and the site parameter
+    (normal-force weighted means over the pair's rows)."""
+    n_rows = len(constraints.rows)
+    lam = ca.SX.sym("lam_in", n_element + n_rows)
+    tau = ca.SX.sym("tau", n_pairs)
+    lam_eq = ca.SX.sym("lam_eq", n_eq)
+    phi, stick, weights = ca.SX.sym("phi", n_element + n_rows), ca.SX.sym("stick", n_pairs), ca.SX.sym("weights", n_rows)
+    normal_sum = [ca.SX.zeros(2) for _ in range(n_pairs)]
+    friction_sum = [ca.SX.zeros(2) for _ in range(n_pairs)]
+    magnitude = [ca.SX(0) for _ in range(n_pairs)]
+    point = [ca.SX.zeros(2) for _ in range(n_pairs)]
+    along = [ca.SX(0) for _ in range(n_pairs)]
+    for k, row in enumerate(constraints.rows):
+        if row.point is None:
+            continue
+        j = row.pair
+        size = ca.norm_2(row.normal)
+        unit_tangent = ca.vertcat(-row.normal[1], row.normal[0]) / size
+        pushing = lam[n_element + k] * size
+        normal_sum[j] = normal_sum[j] + lam[n_element + k] * row.normal
+        friction_sum[j] = friction_sum[j] + (phi[n_element + k] * pushing + stick[j] * weights[k] * tau[j]) * unit_tangent
+        magnitude[j] = magnitude[j] + pushing
+        point[j] = point[j] + pushing * row.point
+        along[j] = along[j] + pushing * row.site_parameter
+    tiny = 1e-300
+    normal_force = [ca.norm_2(n) for n in normal_sum]
+    tangential = [ca.dot(f, ca.vertcat(-n[1], n[0])) / (ca.norm_2(n) + tiny) for f, n in zip(friction_sum, normal_sum)]
+    v = ca.vertcat(w, lam_eq, lam, tau)
+    outputs = [ca.horzcat(*[n + f for n, f in zip(normal_sum, friction_sum)]), ca.vertcat(*normal_force),
+               ca.vertcat(*tangential), ca.horzcat(*[q / (m + tiny) for q, m in zip(point, magnitude)]),
+               ca.vertcat(*[s / (m + tiny) for s, m in zip(along, magnitude)])]
+    return ca.Function("pair_results", [v, p, phi, stick, weights], outputs, ["v", "p", "phi", "stick", "weights"],
+                       ["force", "normal_force", "tangential_force", "point", "along"])

@@ -1,0 +1,258 @@
+"""One contact state: the minimum of the total potential under non-penetration by IPOPT
+(warm-started from the previous state of a path, or approached from a penetrating start),
+polished by Newton on the active-set KKT system, then friction.
+
+Friction, consistently: at a slipping pair the tangential force mu F_n acts on the site,
+opposing the site's slide relative to the object over the step from the reference (previous)
+state, and the shape is in equilibrium with it; a pair whose slide would run with its
+friction force sticks instead (its contact point moves with the object; the tangential
+force is whatever holds it, up to mu F_n). Without a reference state, friction cannot know
+its direction and the state is frictionless.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from service import ipopt
+from service.contact.kkt import CONSISTENCY, Mode, consistent_active_set, inequality_values, split
+from service.contact.problem import ContactProblem
+
+IPOPT_OPTIONS = {"tol": 1e-12, "constr_viol_tol": 1e-12, "acceptable_tol": 1e-9, "max_iter": 500}
+WARM = {"warm_start_init_point": "yes", "warm_start_bound_push": 1e-9, "warm_start_mult_bound_push": 1e-9,
+        "warm_start_slack_bound_push": 1e-9, "mu_init": 1e-6}
+APPROACH_STEP = 0.02  # largest fall of the relaxation per approach step (nondimensional length)
+FRICTION_ROUNDS = 8
+
+
+class PenetratingStart(Exception):
+    """The start state penetrates an object (and the caller asked not to approach it)."""
+
+    def __init__(self, pair: int, depth: float):
+        self.pair, self.depth = pair, depth
+        super().__init__(f"pair {pair} penetrates by {depth:g}")
+
+
+@dataclass(frozen=True)
+class ContactOptions:
+    penetrating_start: str = "approach"  # approach | refuse
+    time_limit: float | None = None
+
+
+@dataclass
+class ContactState:
+    status: str  # converged | not_converged | infeasible | time_limit
+    p: np.ndarray
+    v: np.ndarray  # [w; lam_eq; lam_in; tau]
+    mode: Mode
+    pair_states: list[str]  # per pair: open | frictionless | slipping | sticking
+    sigma: np.ndarray  # per pair: the sign of a slipping pair's friction along its tangent
+    iterations: int
+    seconds: float
+    message: str = ""
+    kkt_norm: float = float("nan")
+    approach_steps: int = 0
+    history: list[float] = field(default_factory=list)
+
+    @property
+    def converged(self) -> bool:
+        return self.status == "converged"
+
+
+def start_point(problem: ContactProblem, p: np.ndarray) -> np.ndarray:
+    """The undeformed state, with separating lines between every jaw piece and object."""
+    x = np.zeros(problem.n_x)
+    axes = np.asarray(problem.axes_guess(x, p), dtype=float).ravel()
+    return np.concatenate([x, axes])
+
+
+def penetrations(problem: ContactProblem, w: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """Per pair, how deep (nondimensional, >= 0) its rows are violated at w."""
+    h = np.asarray(problem.rows(w, p)[0], dtype=float).ravel()
+    depth = np.zeros(problem.n_pairs)
+    for k, pair in enumerate(problem.row_pairs):
+        depth[pair] = max(depth[pair], -h[k])
+    return depth
+
+
+def empty_mode(problem: ContactProblem) -> Mode:
+    n_rows, n_objects = problem.n_rows, len(problem.structure.contacts.objects)
+    return Mode(np.zeros(problem.n_in), np.zeros(problem.n_in), np.zeros(problem.n_axes), np.zeros(problem.n_axes),
+                np.zeros(problem.n_pairs), np.zeros(n_rows), np.zeros((2, n_rows)), np.zeros((2, n_objects)),
+                np.zeros(n_objects))
+
+
+def _solver(problem: ContactProblem, warm: bool):
+    options = {**IPOPT_OPTIONS, **(WARM if warm else {})}
+    return ipopt.nlp_solver("contact_warm" if warm else "contact", problem.structure, lambda: problem.nlp, options)
+
+
+def _ipopt(problem: ContactProblem, p: np.ndarray, shift: np.ndarray, w0: np.ndarray, v_warm: np.ndarray | None,
+           stop) -> ipopt.IpoptResult:
+    n_eq, n_in = problem.n_eq, problem.n_in
+    arguments = {"x0": w0, "p": np.concatenate([p, shift]), "lbg": np.zeros(n_eq + n_in),
+                 "ubg": np.concatenate([np.zeros(n_eq), np.full(n_in, np.inf)])}
+    if v_warm is not None:
+        parts = split(problem, v_warm)
+        arguments["lam_g0"] = np.concatenate([parts.lam_eq, -parts.lam_in])
+    return ipopt.solve(_solver(problem, v_warm is not None), stop=stop, **arguments)
+
+
+def _from_ipopt(problem: ContactProblem, run: ipopt.IpoptResult) -> tuple[np.ndarray, np.ndarray]:
+    """(v, active) of an IPOPT solution."""
+    lam_eq = run.lam_g[:problem.n_eq]
+    lam_in = np.maximum(-run.lam_g[problem.n_eq:], 0.0)
+    h = run.g[problem.n_eq:]
+    active = (lam_in > h).astype(float)  # complementarity lam h ~ 0: whichever is nearer zero says
+    return np.concatenate([run.x, lam_eq, lam_in, np.zeros(problem.n_pairs)]), active
+
+
+def frictionless(problem: ContactProblem, p: np.ndarray, previous: ContactState | None,
+                 options: ContactOptions) -> tuple[ipopt.IpoptResult, int]:
+    """IPOPT from the previous state (warm), or from the undeformed state, approaching a
+    penetrating object by relaxing its rows and tightening them in steps (following the
+    branch that grows from the contact-free state)."""
+    stop = ipopt.deadline(options.time_limit)
+    if previous is not None:
+        return _ipopt(problem, p, np.zeros(problem.n_in), split(problem, previous.v).w, previous.v, stop), 0
+    w0 = start_point(problem, p)
+    h0 = np.asarray(problem.rows(w0, p)[0], dtype=float).ravel()
+    depth = penetrations(problem, w0, p)
+    if depth.max(initial=0.0) <= 0:
+        return _ipopt(problem, p, np.zeros(problem.n_in), w0, None, stop), 0
+    if options.penetrating_start == "refuse":
+        worst = int(np.argmax(depth))
+        raise PenetratingStart(worst, float(depth[worst]))
+    relaxation = np.concatenate([np.zeros(problem.n_element_in), np.maximum(-h0, 0.0) * (1 + 1e-6) + 1e-9])
+    steps = int(np.clip(np.ceil(depth.max() / APPROACH_STEP), 2, 200))
+    run, v = None, None
+    for step in range(steps + 1):
+        shift = relaxation * (1 - step / steps)
+        run = _ipopt(problem, p, shift, w0 if run is None else run.x, v, stop)
+        if not run.succeeded:
+            return run, step
+        v = _from_ipopt(problem, run)[0]
+    return run, steps
+
+
+def solve_state(problem: ContactProblem, p: np.ndarray, mu: np.ndarray, previous: ContactState | None = None,
+                options: ContactOptions = ContactOptions(), reference: ContactState | None = None) -> ContactState:
+    """The contact state at parameters p (nondimensional). `previous`: the state to start
+    from (a path's last); `reference`: the state friction slides from (default previous)."""
+    started = time.perf_counter()
+    reference = previous if reference is None else reference
+    run, approach_steps = frictionless(problem, p, previous, options)
+    base = empty_mode(problem)
+    states = ["open"] * problem.n_pairs
+    if not run.succeeded:
+        v = np.concatenate([run.x, np.zeros(problem.n_eq + problem.n_in + problem.n_pairs)])
+        return ContactState(run.status if run.status != "optimal" else "not_converged", p, v, base, states,
+                            np.zeros(problem.n_pairs), run.iterations, time.perf_counter() - started,
+                            f"IPOPT: {run.return_status}", approach_steps=approach_steps)
+    v, active = _from_ipopt(problem, run)
+    newton_run, mode = consistent_active_set(problem, v, p, replace(base, active=active))
+    iterations = run.iterations + newton_run.iterations
+    sigma = np.zeros(problem.n_pairs)
+    if newton_run.converged and reference is not None and np.any(mu > 0):
+        newton_run, mode, sigma, rounds = _with_friction(problem, newton_run.v, p, mu, mode, reference)
+        iterations += rounds
+    status = "converged" if newton_run.converged else "not_converged"
+    message = "" if newton_run.converged else "the contact's KKT system did not converge (Newton, active set)"
+    states = _pair_states(problem, newton_run.v, mode, mu, sigma)
+    return ContactState(status, p, newton_run.v, mode, states, sigma, iterations, time.perf_counter() - started,
+                        message, newton_run.norm, approach_steps, newton_run.history)
+
+
+def _row_forces(problem: ContactProblem, v: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """Per contact row, the size of its normal force on the site (0 for object rows)."""
+    parts = split(problem, v)
+    normals = np.asarray(problem.rows(parts.w, p)[1], dtype=float)
+    lam = parts.lam_in[problem.n_element_in:]
+    return np.maximum(lam, 0.0) * np.linalg.norm(normals, axis=0) * np.asarray(problem.row_pushes, dtype=float)
+
+
+def _pair_sums(problem: ContactProblem, per_row: np.ndarray) -> np.ndarray:
+    sums = np.zeros(problem.n_pairs)
+    np.add.at(sums, np.asarray(problem.row_pairs, dtype=int), per_row)
+    return sums
+
+
+def _with_friction(problem, v, p, mu, mode, reference):
+    """Friction on every touching pair with mu > 0: slipping against the slide from the
+    reference state, or sticking where slipping would contradict itself."""
+    parts_ref = split(problem, reference.v)
+    points_old = np.asarray(problem.rows(parts_ref.w, reference.p)[2], dtype=float)
+    origins_old, angles_old = (np.asarray(a, dtype=float) for a in problem.frames(parts_ref.w, reference.p))
+    mode = replace(mode, points_old=points_old, origins_old=origins_old, angles_old=angles_old.ravel())
+    row_pairs = np.asarray(problem.row_pairs, dtype=int)
+    sigma, sticking = np.zeros(problem.n_pairs), np.zeros(problem.n_pairs)
+    forces = _row_forces(problem, v, p)
+    slide = _pair_slides(problem, v, p, mode, forces)
+    for j in np.flatnonzero((_pair_sums(problem, forces) > 0) & (mu > 0)):
+        previous_sigma = reference.sigma[j] if j < len(reference.sigma) else 0.0
+        if abs(slide[j]) > 1e-13:
+            sigma[j] = -np.sign(slide[j])
+        elif previous_sigma:
+            sigma[j] = previous_sigma
+        else:
+            sticking[j] = 1.0
+    run, rounds = None, 0
+    for _ in range(FRICTION_ROUNDS):
+        forces = _row_forces(problem, v, p)
+        totals = _pair_sums(problem, forces)
+        weights = np.where(totals[row_pairs] > 0, forces / np.maximum(totals[row_pairs], 1e-300), 0.0)
+        phi_rows = np.where(sticking[row_pairs] > 0, 0.0, mu[row_pairs] * sigma[row_pairs])
+        phi = np.concatenate([np.zeros(problem.n_element_in), phi_rows])
+        mode = replace(mode, phi=phi, stick=sticking.copy(), weights=weights)
+        run, mode = consistent_active_set(problem, v, p, mode)
+        rounds += run.iterations
+        if not run.converged:
+            break
+        v = run.v
+        changed = False
+        forces = _row_forces(problem, v, p)
+        totals = _pair_sums(problem, forces)
+        slide = _pair_slides(problem, v, p, mode, forces)
+        tau = split(problem, v).tau
+        for j in range(problem.n_pairs):
+            if mu[j] <= 0 or totals[j] <= 0:
+                continue
+            if sticking[j] and abs(tau[j]) > mu[j] * totals[j] * (1 + 1e-9):
+                sticking[j], sigma[j], changed = 0.0, np.sign(tau[j]), True
+            elif not sticking[j] and sigma[j] * slide[j] > CONSISTENCY:
+                sticking[j], changed = 1.0, True
+            elif not sticking[j] and not sigma[j]:
+                sigma[j], changed = -np.sign(slide[j]) or 1.0, True
+        if not changed:
+            break
+    return run, mode, np.where(sticking > 0, 0.0, sigma), rounds
+
+
+def _pair_slides(problem, v, p, mode, forces) -> np.ndarray:
+    """Per pair, the normal-force weighted slide of its rows from the reference state."""
+    w = split(problem, v).w
+    slides = np.asarray(problem.slides(w, p, mode.points_old, mode.origins_old, mode.angles_old), dtype=float).ravel()
+    totals = _pair_sums(problem, forces)
+    weighted = _pair_sums(problem, forces * slides)
+    return np.where(totals > 0, weighted / np.maximum(totals, 1e-300), 0.0)
+
+
+def _pair_states(problem, v, mode, mu, sigma) -> list[str]:
+    active = mode.active[problem.n_element_in:] > 0.5
+    touching = np.zeros(problem.n_pairs, dtype=bool)
+    for k, pair in enumerate(problem.row_pairs):
+        touching[pair] |= bool(active[k])
+    out = []
+    for j in range(problem.n_pairs):
+        if not touching[j]:
+            out.append("open")
+        elif mode.stick[j] > 0.5:
+            out.append("sticking")
+        elif sigma[j] != 0 and mu[j] > 0:
+            out.append("slipping")
+        else:
+            out.append("frictionless")
+    return out
