@@ -104,6 +104,14 @@ class SolveRequest(DocumentRequest):
     at: Literal["equilibrium", "undeformed"] = Field("equilibrium", description="linearization: where")
     displacements: dict[str, tuple[float, float, float]] | None = Field(
         None, description="inverse: [dx, dy, rotation] of bodies; bodies not named stay put")
+    penetrating_start: Literal["approach", "refuse"] = Field(
+        "approach", description="contact: an object inside a site in the undeformed state is approached from "
+                                "outside (relaxed, then tightened in steps), or refused naming the pair and depth")
+    motion: dict[str, float] | None = Field(
+        None, max_length=64, description="contact: how the moving fields change (document units per unit of "
+                                         "progress): friction opposes the sliding this motion causes")
+    thesis_recovery: bool = Field(False, description="contact: also the thesis' recovery of the forces from the "
+                                                     "frictionless shape (Lan 2005 Eqs. 6.6-6.10), labelled")
 
     @model_validator(mode="after")
     def _inverse_has_displacements(self):
@@ -156,6 +164,25 @@ class SweepRequest(DocumentRequest):
     outputs: list[str] | None = Field(None, min_length=1, description="outputs to keep (default: all)")
     analysis: str = Field("equilibrium", min_length=1, max_length=64, pattern=r"^[a-z_]+$",
                           description="the analysis of every point (a sweepable one the schema lists)")
+
+
+class ContactPathRequest(DocumentRequest):
+    """A job: a quasi-static contact path (fields changing together, state after state, each
+    from the one before); without `path`, the document's contacts.path."""
+
+    model_config = ConfigDict(json_schema_extra={"examples": [
+        {"example": "gripper_jaw_contact"},
+        {"example": "gripper_jaw_contact", "outputs": ["contacts.insertion.force_x"],
+         "path": [{"path": "/contacts/objects/fixture/centre/0", "start": 78, "stop": 50, "steps": 28}]},
+        {"example": "gripper_jaw_contact", "path": [{"path": "/contacts/objects/fixture/centre/0", "start": 78,
+                                                      "stop": 50, "steps": 10**12}]},
+    ]})
+
+    path: list[SweepParameter] | None = Field(None, min_length=1, max_length=8,
+                                              description="fields that change together along the path")
+    outputs: list[str] | None = Field(None, min_length=1, max_length=256,
+                                      description="outputs kept per state (default: every pair's results)")
+    penetrating_start: Literal["approach", "refuse"] = "approach"
 
 
 class OptimizeRequest(DocumentRequest):

@@ -46,10 +46,25 @@ def _lagrange(nodes: np.ndarray, xi: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 @dataclass(frozen=True)
+class PartialRule:
+    """Positions at points xi_j of an element: the element's quadrature mapped onto [0, xi_j]
+    (the rotation's and strains' bases at its points, and its weights, summing to xi_j)."""
+
+    xi: np.ndarray  # (m,)
+    rotation: np.ndarray  # (m, degree + 1): the rotation's basis at xi_j
+    strain: np.ndarray  # (m, degree): the strains' basis at xi_j
+    quadrature_xi: np.ndarray  # (q,): the element's quadrature points (mapped by xi_j)
+    partial_rotation: np.ndarray  # (m, q, degree + 1)
+    partial_strain: np.ndarray  # (m, q, degree)
+    partial_weights: np.ndarray  # (m, q)
+
+
+@dataclass(frozen=True)
 class ElementRule:
-    """Numbers of one element (xi from 0 to 1): quadrature points and weights; the rotation's
-    basis (values, slopes) at them; the strains' basis at them; and, per quadrature point q,
-    the rule mapped onto [0, xi_q] (points' bases and weights) for the position there."""
+    """Numbers of one element (xi from 0 to 1): the quadrature (degree + 2 Gauss points) and
+    the bases at its points; where positions are needed: at the quadrature points (a link's
+    weight) and at the contact points (the degree-point Gauss rule: as many per element as it
+    has rotations, so a wrapped part keeps its constraints independent)."""
 
     degree: int
     xi: np.ndarray
@@ -57,18 +72,18 @@ class ElementRule:
     rotation: np.ndarray  # (q, degree + 1)
     slope: np.ndarray  # (q, degree + 1), d/dxi
     strain: np.ndarray  # (q, degree)
-    partial_rotation: np.ndarray  # (q, q, degree + 1): basis at the points of [0, xi_q]
-    partial_strain: np.ndarray  # (q, q, degree)
-    partial_weights: np.ndarray  # (q, q): weights of [0, xi_q] (they sum to xi_q)
+    at_quadrature: PartialRule
+    at_contact: PartialRule
+    contact_weights: np.ndarray  # (degree,) of the degree-point rule
 
 
 @lru_cache(maxsize=8)
 def element_rule(degree: int) -> ElementRule:
-    points = degree + 2
-    gx, gw = np.polynomial.legendre.leggauss(points)
+    gx, gw = np.polynomial.legendre.leggauss(degree + 2)
     xi, weights = (gx + 1) / 2, gw / 2
     nodes = np.linspace(0.0, 1.0, degree + 1)
-    strain_nodes = (np.polynomial.legendre.leggauss(degree)[0] + 1) / 2
+    cx, cw = np.polynomial.legendre.leggauss(degree)
+    strain_nodes, contact_weights = (cx + 1) / 2, cw / 2
 
     def rotation_basis(at):
         return np.array([_lagrange(nodes, a)[0] for a in at]), np.array([_lagrange(nodes, a)[1] for a in at])
@@ -76,31 +91,34 @@ def element_rule(degree: int) -> ElementRule:
     def strain_basis(at):
         return np.array([_lagrange(strain_nodes, a)[0] for a in at])
 
+    def partial(at: np.ndarray) -> PartialRule:
+        return PartialRule(at, rotation_basis(at)[0], strain_basis(at), xi, np.array([rotation_basis(a * xi)[0] for a in at]),
+                           np.array([strain_basis(a * xi) for a in at]), np.outer(at, weights))
+
     rotation, slope = rotation_basis(xi)
-    partial_rotation = np.array([rotation_basis(xq * xi)[0] for xq in xi])
-    partial_strain = np.array([strain_basis(xq * xi) for xq in xi])
-    return ElementRule(degree, xi, weights, rotation, slope, strain_basis(xi), partial_rotation, partial_strain,
-                       np.outer(xi, weights))
+    return ElementRule(degree, xi, weights, rotation, slope, strain_basis(xi), partial(xi), partial(strain_nodes),
+                       contact_weights)
 
 
 @dataclass
-class QuadraturePoint:
+class LinkPoint:
     u: float
-    weight: float  # of the whole link's rule (du)
+    weight: float  # of the whole link's rule (du) the point belongs to
     psi: ca.SX
-    position: ca.SX  # (2,) centre line
+    position: ca.SX | None  # (2,) centre line (None where not needed)
     normal: ca.SX  # (2,) cross-section normal n(psi) (to the left of the tangent)
 
 
 @dataclass
 class LinkKinematics:
-    """A discretized link's state: nodes (u, psi, position) at element ends, and quadrature
-    points (where energy, weight and contact are evaluated)."""
+    """A discretized link's state: nodes (u, psi, position) at element ends, quadrature
+    points (energy; positions when the link weighs) and contact points."""
 
     node_u: list[float]
     node_psi: list[ca.SX]
     node_position: list[ca.SX]
-    points: list[QuadraturePoint]
+    points: list[LinkPoint]
+    contact_points: list[LinkPoint]
     strain_energy: ca.SX
 
 
@@ -111,7 +129,6 @@ class LinkElements:
     def __init__(self, props: LinkProperties, elements: int, degree: int):
         self.props, self.elements, self.degree = props, elements, degree
         self.rule = element_rule(degree)
-        self.shear, self.axial = props.kGA is not None, props.EA is not None
 
     @property
     def n_rotations(self) -> int:
@@ -122,47 +139,68 @@ class LinkElements:
         """Per strain field (shear, axial)."""
         return self.elements * self.degree
 
-    def kinematics(self, theta: ca.SX, gamma: ca.SX | None, eps: ca.SX | None, start: ca.SX) -> LinkKinematics:
+    def kinematics(self, theta: ca.SX, gamma: ca.SX | None, eps: ca.SX | None, start: ca.SX,
+                   positions_at_quadrature: bool = False) -> LinkKinematics:
         """theta: nodal rotations (n_rotations), gamma/eps: strain coefficients (n_strains, or
         None), start: position of u = 0."""
         P, rule, p = self.props, self.rule, self.degree
-        L, h = P.length, 1.0 / self.elements
+        h = 1.0 / self.elements
         energy = ca.SX(0)
         position = start
-        node_u, node_psi, node_position, points = [0.0], [P.eta(ca.SX(0)) + theta[0]], [start], []
+        node_u, node_psi, node_position, points, contact = [0.0], [P.eta(ca.SX(0)) + theta[0]], [start], [], []
         for e in range(self.elements):
-            u0 = e * h
-            th = theta[e * p:e * p + p + 1]
-            g = gamma[e * p:e * p + p] if gamma is not None else None
-            s = eps[e * p:e * p + p] if eps is not None else None
-
-            def tangent(xi_point, basis_row, strain_row):
-                u = ca.SX(u0 + h * xi_point)
-                psi = P.eta(u) + ca.dot(ca.DM(basis_row), th)
-                t, n = ca.vertcat(ca.cos(psi), ca.sin(psi)), ca.vertcat(-ca.sin(psi), ca.cos(psi))
-                stretch = 1 + (ca.dot(ca.DM(strain_row), s) if s is not None else 0)
-                shear = ca.dot(ca.DM(strain_row), g) if g is not None else 0
-                return psi, n, L * (stretch * t + shear * n)
-
+            element = _Element(P, e * h, h, theta[e * p:e * p + p + 1],
+                               gamma[e * p:e * p + p] if gamma is not None else None,
+                               eps[e * p:e * p + p] if eps is not None else None)
             increment = ca.SX.zeros(2)
             for q in range(len(rule.xi)):
-                u = ca.SX(u0 + h * rule.xi[q])
-                psi, n, r_u = tangent(rule.xi[q], rule.rotation[q], rule.strain[q])
+                psi, normal, r_u = element.tangent(rule.xi[q], rule.rotation[q], rule.strain[q])
                 increment = increment + h * rule.weights[q] * r_u
-                theta_u = ca.dot(ca.DM(rule.slope[q]), th) / h
-                density = P.EI(u) * theta_u**2 / (2 * L)
-                if g is not None:
-                    density = density + L * P.kGA(u) * ca.dot(ca.DM(rule.strain[q]), g) ** 2 / 2
-                if s is not None:
-                    density = density + L * P.EA(u) * ca.dot(ca.DM(rule.strain[q]), s) ** 2 / 2
-                energy = energy + h * rule.weights[q] * density
-                partial = ca.SX.zeros(2)
-                for k in range(len(rule.xi)):
-                    partial = partial + h * rule.partial_weights[q, k] * tangent(
-                        rule.xi[q] * rule.xi[k], rule.partial_rotation[q, k], rule.partial_strain[q, k])[2]
-                points.append(QuadraturePoint(u0 + h * rule.xi[q], h * rule.weights[q], psi, position + partial, n))
+                energy = energy + h * rule.weights[q] * element.energy_density(rule.xi[q], rule.slope[q], rule.strain[q])
+                where = element.position(position, rule.at_quadrature, q) if positions_at_quadrature else None
+                points.append(LinkPoint(e * h + h * rule.xi[q], h * rule.weights[q], psi, where, normal))
+            for j in range(len(rule.at_contact.xi)):
+                psi, normal, _ = element.tangent(rule.at_contact.xi[j], rule.at_contact.rotation[j], rule.at_contact.strain[j])
+                contact.append(LinkPoint(e * h + h * rule.at_contact.xi[j], h * rule.contact_weights[j], psi,
+                                         element.position(position, rule.at_contact, j), normal))
             position = position + increment
-            node_u.append(u0 + h)
-            node_psi.append(P.eta(ca.SX(u0 + h)) + th[-1])
+            node_u.append(e * h + h)
+            node_psi.append(P.eta(ca.SX(e * h + h)) + theta[e * p + p])
             node_position.append(position)
-        return LinkKinematics(node_u, node_psi, node_position, points, energy)
+        return LinkKinematics(node_u, node_psi, node_position, points, contact, energy)
+
+
+class _Element:
+    """One element's fields: rotation, strains, tangent, energy density, positions inside."""
+
+    def __init__(self, props: LinkProperties, u0: float, h: float, theta, gamma, eps):
+        self.props, self.u0, self.h, self.theta, self.gamma, self.eps = props, u0, h, theta, gamma, eps
+
+    def tangent(self, xi: float, rotation_row, strain_row):
+        """(psi, n(psi), dr/du) at xi."""
+        P = self.props
+        psi = P.eta(ca.SX(self.u0 + self.h * xi)) + ca.dot(ca.DM(rotation_row), self.theta)
+        t, n = ca.vertcat(ca.cos(psi), ca.sin(psi)), ca.vertcat(-ca.sin(psi), ca.cos(psi))
+        stretch = 1 + (ca.dot(ca.DM(strain_row), self.eps) if self.eps is not None else 0)
+        shear = ca.dot(ca.DM(strain_row), self.gamma) if self.gamma is not None else 0
+        return psi, n, P.length * (stretch * t + shear * n)
+
+    def energy_density(self, xi: float, slope_row, strain_row) -> ca.SX:
+        P, L = self.props, self.props.length
+        u = ca.SX(self.u0 + self.h * xi)
+        theta_u = ca.dot(ca.DM(slope_row), self.theta) / self.h
+        density = P.EI(u) * theta_u**2 / (2 * L)
+        if self.gamma is not None:
+            density = density + L * P.kGA(u) * ca.dot(ca.DM(strain_row), self.gamma) ** 2 / 2
+        if self.eps is not None:
+            density = density + L * P.EA(u) * ca.dot(ca.DM(strain_row), self.eps) ** 2 / 2
+        return density
+
+    def position(self, start: ca.SX, partial: PartialRule, j: int) -> ca.SX:
+        """The centre line at the partial rule's j-th point, from the element's start."""
+        out = start
+        for k in range(partial.partial_weights.shape[1]):
+            xi = partial.xi[j] * partial.quadrature_xi[k]
+            out = out + self.h * partial.partial_weights[j, k] * self.tangent(
+                xi, partial.partial_rotation[j, k], partial.partial_strain[j, k])[2]
+        return out

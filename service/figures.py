@@ -30,7 +30,7 @@ def field_label(pointer: str) -> str:
     /loads/actuation/force/1 -> "actuation force y", /sections/flexure/h -> "flexure h"."""
     parts = [p for p in pointer.split("/") if p]
     if len(parts) >= 2 and parts[-1] in ("0", "1") and parts[-2] in ("force", "position", "center",
-                                                                    "at", "offset"):
+                                                                    "centre", "at", "offset", "point"):
         parts[-1] = "xy"[int(parts[-1])]
     if len(parts) >= 3:
         parts = parts[1:]  # drop the collection: the name already says what it is

@@ -108,7 +108,27 @@ class ContactPair(StrictModel):
     friction: Number = Field(default=0.0, description="Coulomb's coefficient mu")
 
 
+class PathParameter(StrictModel):
+    """A numeric field along the path: its values, or start, stop and equal steps (document units)."""
+
+    path: str = Field(pattern=r"^/", max_length=256)
+    values: list[float] | None = Field(default=None, min_length=1)
+    start: float | None = None
+    stop: float | None = None
+    steps: int | None = Field(default=None, ge=1)
+
+
+class ContactPath(StrictModel):
+    """A quasi-static path: every listed field changes together, state after state, each
+    solved from the one before (`flexmech contact`, POST /v1/contacts)."""
+
+    parameters: list[PathParameter] = Field(min_length=1, max_length=8)
+    outputs: list[str] | None = Field(default=None, min_length=1, max_length=256,
+                                      description="outputs to keep per state (default: every pair's results)")
+
+
 class Contacts(StrictModel):
     objects: dict[str, ContactObject] = Field(default={}, max_length=64)
     sites: dict[str, ContactSite] = Field(default={}, max_length=64)
     pairs: dict[str, ContactPair] = Field(default={}, max_length=256)
+    path: ContactPath | None = None

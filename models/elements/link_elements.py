@@ -54,20 +54,21 @@ class LinkElementsFamily:
         arm_i = ctx.arm(i, ctx.body_axes(i, props.start_point), d)
         arm_j = ctx.arm(j, ctx.body_axes(j, undeformed.node_position[-1]), d)
         start = ctx.reference(i)[0] + d[i][:2] + arm_i
-        kin = disc.kinematics(theta, strains.get("gamma"), strains.get("eps"), start)
+        weighs = props.line_mass is not None and props.gravity is not None
+        kin = disc.kinematics(theta, strains.get("gamma"), strains.get("eps"), start, positions_at_quadrature=weighs)
         end_target = ctx.reference(j)[0] + d[j][:2] + arm_j
         equalities = [("end.x", kin.node_position[-1][0] - end_target[0]),
                       ("end.y", kin.node_position[-1][1] - end_target[1])]
         if t.end == "clamped":
             equalities.append(("end.rotation", kin.node_psi[-1] - undeformed.node_psi[-1] - d[j][2]))
         energy = kin.strain_energy
-        if props.line_mass is not None and props.gravity is not None:  # the link's own weight
+        if weighs:  # the link's own weight
             for point in kin.points:
                 energy = energy - point.weight * props.line_mass(ca.SX(point.u)) * ca.dot(props.gravity, point.position)
         half = props.half_thickness
         surface = [SurfacePoint(0.0, start, _normal(kin.node_psi[0]), half(ca.SX(0.0)) if half else None)]
         surface += [SurfacePoint(q.u, q.position, q.normal, half(ca.SX(q.u)) if half else None, q.weight)
-                    for q in kin.points]
+                    for q in kin.contact_points]
         surface.append(SurfacePoint(1.0, kin.node_position[-1], _normal(kin.node_psi[-1]),
                                     half(ca.SX(1.0)) if half else None))
         surfaces = ElementSurfaces({"start": (start, kin.node_psi[0]), "end": (kin.node_position[-1], kin.node_psi[-1])},
@@ -86,12 +87,12 @@ class LinkElementsFamily:
             stated["s"] = s = self._state(ctx, t, local)
             kin, und = s.kinematics, s.undeformed
             extras = [kin.node_position[-1], kin.node_psi[0], kin.node_psi[-1], *kin.node_position,
-                      *[q.position for q in kin.points], *s.arms]
+                      *[q.position for q in kin.contact_points], *s.arms]
             return s.terms, extras
 
         wrenches, rows, energy, extras = variational_parts((i, j), ctx.n_bodies, d, z, build)
         s = stated["s"]
-        n_nodes, n_points = len(s.kinematics.node_position), len(s.kinematics.points)
+        n_nodes, n_points = len(s.kinematics.node_position), len(s.kinematics.contact_points)
         end, psi_start, psi_end = extras[0], extras[1], extras[2]
         nodes = extras[3:3 + n_nodes]
         points = extras[3 + n_nodes:3 + n_nodes + n_points]
@@ -104,6 +105,7 @@ class LinkElementsFamily:
         outputs = [("h", "force", n_start[0]), ("v", "force", n_start[1]),
                    ("M_start", "moment", m_start), ("M_end", "moment", m_end),
                    ("x_end", "length", end[0]), ("y_end", "length", end[1]),
+                   ("x_start", "length", nodes[0][0]), ("y_start", "length", nodes[0][1]),
                    ("angle_start", "angle", psi_start), ("angle_end", "angle", psi_end),
                    ("rotation_start", "angle", psi_start - und.node_psi[0]),
                    ("rotation_end", "angle", psi_end - und.node_psi[-1]),
@@ -112,7 +114,7 @@ class LinkElementsFamily:
                    ("y_end_undeformed", "length", und.node_position[-1][1]),
                    ("energy", "energy", energy)]
         deformed = _ordered(nodes, points, s.kinematics)
-        undeformed = _ordered(und.node_position, [q.position for q in und.points], und)
+        undeformed = _ordered(und.node_position, [q.position for q in und.contact_points], und)
         half = link_properties(ctx, t).half_thickness
         thickness = [half(ca.SX(u)) for u in _ordered_u(s.kinematics)] if half is not None else None
         return Contribution({i: on_start, j: on_end}, rows, outputs, energy, CentreLine(deformed, undeformed, thickness))
@@ -143,12 +145,12 @@ def _normal(psi: ca.SX) -> ca.SX:
 
 
 def _ordered_u(kin: LinkKinematics) -> list[float]:
-    return sorted([*kin.node_u, *[q.u for q in kin.points]])
+    return sorted([*kin.node_u, *[q.u for q in kin.contact_points]])
 
 
 def _ordered(nodes: list[ca.SX], points: list[ca.SX], kin: LinkKinematics) -> list[ca.SX]:
     """Nodes and quadrature points in the order of u, for drawing."""
-    tagged = [(u, x) for u, x in zip(kin.node_u, nodes)] + [(q.u, x) for q, x in zip(kin.points, points)]
+    tagged = [(u, x) for u, x in zip(kin.node_u, nodes)] + [(q.u, x) for q, x in zip(kin.contact_points, points)]
     return [x for _, x in sorted(tagged, key=lambda pair: pair[0])]
 
 

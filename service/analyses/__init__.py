@@ -2,6 +2,7 @@
 registered here (one line per analysis). A new analysis is a new module and a line."""
 
 from service.analyses.base import Analyses, Analysis, AnalysisRequest
+from service.analyses.contact import CONTACT
 from service.analyses.energy import ENERGY
 from service.analyses.equilibrium import EQUILIBRIUM
 from service.analyses.inverse import INVERSE
@@ -12,6 +13,7 @@ ANALYSES = Analyses([
     LINEARIZATION,
     INVERSE,
     ENERGY,
+    CONTACT,
 ])
 
 __all__ = ["ANALYSES", "Analysis", "AnalysisRequest"]

@@ -5,6 +5,7 @@
     flexmech sweep examples/gripper.json --compare-models --plot sweep.png
     flexmech optimize examples/grasper_shape.json
     flexmech trace examples/snap_through_arch.json --path /loads/P/force/1 --stop -300 --step 20
+    flexmech contact examples/gripper_jaw_contact.json --plot force.png --shapes states.png
     flexmech examples
 
 Exit codes: 0 success; 1 the solver did not converge (status and diagnostics are printed,
@@ -23,5 +24,6 @@ from service.cli import sweep  # noqa: F401
 from service.cli import examples  # noqa: F401
 from service.cli import batch  # noqa: F401
 from service.cli import serve  # noqa: F401
+from service.cli import contact  # noqa: F401
 
 __all__ = ["app"]

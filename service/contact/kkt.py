@@ -12,6 +12,7 @@ import numpy as np
 from service.contact.problem import ContactProblem
 
 NEWTON_TOLERANCE = 1e-11  # on the nondimensional KKT residual
+ROUNDING_FLOOR = 1e-8  # below this, a residual that no longer falls has reached rounding (ill-conditioned KKT)
 CONSISTENCY = 1e-10  # how negative a multiplier or a gap may be (rounding)
 
 
@@ -67,14 +68,15 @@ def newton(problem: ContactProblem, v: np.ndarray, p: np.ndarray, mode: Mode, ma
         F, J = _kkt(problem, v, p, mode)
         norm = float(np.abs(F).max(initial=0.0))
         history.append(norm)
-        if norm <= NEWTON_TOLERANCE or not np.isfinite(norm):
+        stalled = len(history) > 3 and norm <= ROUNDING_FLOOR and norm > 0.5 * min(history[-4:-1])
+        if norm <= NEWTON_TOLERANCE or stalled or not np.isfinite(norm):
             return NewtonRun(bool(np.isfinite(norm)), v, norm, iteration, history)
         if iteration == max_iterations:
             break
         try:
             step = np.linalg.solve(J, -F)
-        except np.linalg.LinAlgError:
-            return NewtonRun(False, v, norm, iteration, history)
+        except np.linalg.LinAlgError:  # dependent active rows (a degenerate contact): the least-norm step
+            step = np.linalg.lstsq(J, -F, rcond=None)[0]
         v = v + step
     return NewtonRun(False, v, norm, max_iterations, history)
 

@@ -28,6 +28,7 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
+from models.assembly import graphs_for
 from models.contact.constraints import ContactGeometry, contact_constraints
 from models.errors import MechanismError
 from models.planar import rot
@@ -55,12 +56,20 @@ class ContactProblem:
     frames: ca.Function  # (w, p) -> origins (2 x objects), angles
     kkt: ca.Function  # (v = [w; lam_eq; lam_in; tau], p, mode...) -> F, dF/dv (see _kkt_functions)
     kkt_parameters: ca.Function  # the same inputs -> dF/dp
-    slides: ca.Function  # (w, p, points_old, origins_old, angles_old) -> per row, the site's tangential slide
+    slides: ca.Function  # (w, p, points_old, origins_old, angles_old) -> per row, the site's tangential slide,
+    #                      and its w- and p-Jacobians
     pair_results: ca.Function  # (v, p, phi, stick, weights) -> per pair: force on the site, normal and
     #                            tangential force, contact point, site parameter (pair_results())
     n_p: int
     n_pairs: int
     pair_objects: tuple[int, ...]
+    outputs: ca.Function  # (v, p, phi, stick, weights) -> y: every pair's results, then the structure's outputs
+    output_names: tuple[str, ...]
+    output_kinds: tuple[str, ...]
+    outputs_jacobian: ca.Function  # the same inputs -> dy/dv, dy/dp
+    drawing: ca.Function  # (w, p) -> jaw vertices (2 x all), link outlines (2 x 3 per point: centre, left, right)
+    drawn_links: tuple[tuple[str, int], ...]  # (link, points) in the drawing's outline columns
+    drawn_jaws: tuple[tuple[str, int, bool], ...]  # (site, vertices, closed)
 
     @property
     def n_w(self) -> int:
@@ -87,6 +96,8 @@ def contact_problem(structure: Structure) -> ContactProblem:
     constraints = contact_constraints(geometry)
     x, a, p = energy.x, constraints.axes, energy.ctx.p
     w = ca.vertcat(x, a)
+    # a row no unknown moves (a surface point at a clamp on a fixed body) cannot change: left out
+    constraints.rows = [row for row in constraints.rows if ca.depends_on(row.value, w)]
     n_rows = len(constraints.rows)
     shift = ca.SX.sym("shift", n_rows)
     g_eq = _stack([g for _, g in energy.equalities])
@@ -107,13 +118,16 @@ def contact_problem(structure: Structure) -> ContactProblem:
     kkt, kkt_p, slides = _kkt_functions(energy.potential, g_eq, ca.vertcat(h_el, h), constraints, x, a, p,
                                         n_pairs, n_objects)
     results = pair_results(constraints, w, p, g_eq.numel(), h_el.numel(), n_pairs)
+    outputs, names, kinds = _outputs(structure, results, w, p, g_eq.numel(), h_el.numel() + n_rows, n_pairs,
+                                     energy.x_in_state, energy.multipliers_in_state)
     problem = ContactProblem(structure, x.numel(), a.numel(), g_eq.numel(), h_el.numel() + n_rows, h_el.numel(),
                              tuple(row.pair for row in constraints.rows),
                              tuple(row.point is not None for row in constraints.rows), tuple(constraints.axis_pairs),
                              tuple(energy.x_in_state), tuple(energy.multipliers_in_state), nlp, axes_guess,
                              ca.Function("element_inequalities", [x, p], [h_el], ["x", "p"], ["h"]), rows,
                              frames, kkt, kkt_p, slides, results, p.numel(), n_pairs,
-                             tuple(pair.object for pair in structure.contacts.pairs))
+                             tuple(pair.object for pair in structure.contacts.pairs), outputs, names, kinds,
+                             _jacobians(outputs), *_drawing(energy, geometry, w, p))
     for fn in (rows, frames, axes_guess, kkt, slides, results):
         if fn.has_free():
             raise RuntimeError(f"graph {fn.name()} has free symbols {fn.get_free()}")
@@ -170,8 +184,10 @@ def _kkt_functions(V, g_eq, h_in, constraints, x, a, p, n_pairs: int, n_objects:
     names = ["v", "p", "active", "phi", "freeze", "ref", "stick", "weights", "points_old", "origins_old", "angles_old"]
     kkt = ca.Function("contact_kkt", inputs, [F, ca.jacobian(F, v)], names, ["F", "J"])
     kkt_p = ca.Function("contact_kkt_p", inputs, [ca.jacobian(F, p)], names, ["Fp"])
-    slide_fn = ca.Function("contact_slides", [w, p, points_old, origins_old, angles_old], [_stack(slides)],
-                           ["w", "p", "points_old", "origins_old", "angles_old"], ["slides"])
+    slide_values = _stack(slides)
+    slide_fn = ca.Function("contact_slides", [w, p, points_old, origins_old, angles_old],
+                           [slide_values, ca.jacobian(slide_values, w), ca.jacobian(slide_values, p)],
+                           ["w", "p", "points_old", "origins_old", "angles_old"], ["slides", "slides_w", "slides_p"])
     return kkt, kkt_p, slide_fn
 
 
@@ -180,7 +196,8 @@ def pair_results(constraints, w: ca.SX, p: ca.SX, n_eq: int, n_element: int, n_p
     """Per pair, from the state v = [w; lam_eq; lam_in; tau]: the force on the site (normal
     part lam dh/dP at each pushing row, plus friction), its normal and tangential components
     (the tangent turns the normal by +90 deg), the contact point and the site parameter
-    (normal-force weighted means over the pair's rows)."""
+    (normal-force weighted means over the pair's rows), and the unit normal (away from the
+    object)."""
     n_rows = len(constraints.rows)
     lam = ca.SX.sym("lam_in", n_element + n_rows)
     tau = ca.SX.sym("tau", n_pairs)
@@ -209,6 +226,60 @@ def pair_results(constraints, w: ca.SX, p: ca.SX, n_eq: int, n_element: int, n_p
     v = ca.vertcat(w, lam_eq, lam, tau)
     outputs = [ca.horzcat(*[n + f for n, f in zip(normal_sum, friction_sum)]), ca.vertcat(*normal_force),
                ca.vertcat(*tangential), ca.horzcat(*[q / (m + tiny) for q, m in zip(point, magnitude)]),
-               ca.vertcat(*[s / (m + tiny) for s, m in zip(along, magnitude)])]
+               ca.vertcat(*[s / (m + tiny) for s, m in zip(along, magnitude)]),
+               ca.horzcat(*[n / (ca.norm_2(n) + tiny) for n in normal_sum])]
     return ca.Function("pair_results", [v, p, phi, stick, weights], outputs, ["v", "p", "phi", "stick", "weights"],
-                       ["force", "normal_force", "tangential_force", "point", "along"])
+                       ["force", "normal_force", "tangential_force", "point", "along", "normal"])
+
+
+PAIR_OUTPUTS = (("force_x", "force"), ("force_y", "force"), ("normal_force", "force"), ("friction_force", "force"),
+                ("point_x", "length"), ("point_y", "length"), ("site_parameter", "length"))
+
+
+def _outputs(structure, results, w, p, n_eq, n_in, n_pairs, x_in_state, multipliers_in_state):
+    """y(v, p, mode): "contacts.<pair>.<quantity>" of every pair (PAIR_OUTPUTS), then the
+    structure's own outputs at the state (its residual-form z assembled from v)."""
+    names = [f"contacts.{pair.name}.{q}" for pair in structure.contacts.pairs for q, _ in PAIR_OUTPUTS]
+    kinds = [kind for _ in structure.contacts.pairs for _, kind in PAIR_OUTPUTS]
+    v = ca.SX.sym("v", w.numel() + n_eq + n_in + n_pairs)
+    phi, stick, weights = ca.SX.sym("phi", n_in), ca.SX.sym("stick", n_pairs), ca.SX.sym("weights", results.size1_in(4))
+    force, normal, tangential, point, along, _ = results(v, p, phi, stick, weights)
+    per_pair = [ca.vertcat(force[0, j], force[1, j], normal[j], tangential[j], point[0, j], point[1, j], along[j])
+                for j in range(n_pairs)]
+    z = ca.SX.zeros(len(x_in_state) + len(multipliers_in_state))
+    for k, slot in enumerate(x_in_state):
+        z[slot] = v[k]
+    for k, slot in enumerate(multipliers_in_state):
+        z[slot] = v[w.numel() + k]
+    graphs = graphs_for(structure)
+    y = ca.vertcat(*per_pair, graphs.outputs(z, p))
+    names += list(graphs.output_names)
+    kinds += list(graphs.output_kinds)
+    function = ca.Function("contact_outputs", [v, p, phi, stick, weights], [y], ["v", "p", "phi", "stick", "weights"], ["y"])
+    return function, tuple(names), tuple(kinds)
+
+
+def _jacobians(outputs: ca.Function) -> ca.Function:
+    args = [ca.SX.sym(outputs.name_in(i), outputs.sparsity_in(i)) for i in range(outputs.n_in())]
+    y = outputs(*args)
+    return ca.Function("contact_outputs_jacobian", args, [ca.jacobian(y, args[0]), ca.jacobian(y, args[1])],
+                       [outputs.name_in(i) for i in range(outputs.n_in())], ["y_v", "y_p"])
+
+
+def _drawing(energy, geometry, w, p):
+    """The sites drawn at a state: every jaw's vertices, every link's centre line and surfaces."""
+    jaws, vertices = [], []
+    for site in geometry.topology.sites:
+        if site.type == "jaw":
+            vertices += geometry.jaw_vertices(site)[0]
+            jaws.append((site.name, site.n_vertices, site.closed))
+    links, outline = [], []
+    for name, surfaces in energy.surfaces.items():
+        for point in surfaces.points:
+            half = point.half_thickness if point.half_thickness is not None else ca.SX(0)
+            outline += [point.centre, point.centre + half * point.normal, point.centre - half * point.normal]
+        links.append((name, len(surfaces.points)))
+    function = ca.Function("contact_drawing", [w, p], [ca.horzcat(*vertices) if vertices else ca.SX(2, 0),
+                                                       ca.horzcat(*outline) if outline else ca.SX(2, 0)],
+                           ["w", "p"], ["jaws", "links"])
+    return function, tuple(links), tuple(jaws)

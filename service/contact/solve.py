@@ -139,11 +139,16 @@ def frictionless(problem: ContactProblem, p: np.ndarray, previous: ContactState 
 
 
 def solve_state(problem: ContactProblem, p: np.ndarray, mu: np.ndarray, previous: ContactState | None = None,
-                options: ContactOptions = ContactOptions(), reference: ContactState | None = None) -> ContactState:
+                options: ContactOptions = ContactOptions(), motion: np.ndarray | None = None) -> ContactState:
     """The contact state at parameters p (nondimensional). `previous`: the state to start
-    from (a path's last); `reference`: the state friction slides from (default previous)."""
+    from, and the state friction slides from (a path's last). `motion`: instead, the rate of
+    p (a single state): friction opposes the slide this motion causes at the state."""
     started = time.perf_counter()
-    reference = previous if reference is None else reference
+    slides = None
+    if motion is not None:
+        slides = lambda v, mode, forces: _pair_slide_rates(problem, v, p, mode, forces, motion)  # noqa: E731
+    elif previous is not None:
+        slides = lambda v, mode, forces: _pair_slides(problem, v, p, mode, forces)  # noqa: E731
     run, approach_steps = frictionless(problem, p, previous, options)
     base = empty_mode(problem)
     states = ["open"] * problem.n_pairs
@@ -156,8 +161,12 @@ def solve_state(problem: ContactProblem, p: np.ndarray, mu: np.ndarray, previous
     newton_run, mode = consistent_active_set(problem, v, p, replace(base, active=active))
     iterations = run.iterations + newton_run.iterations
     sigma = np.zeros(problem.n_pairs)
-    if newton_run.converged and reference is not None and np.any(mu > 0):
-        newton_run, mode, sigma, rounds = _with_friction(problem, newton_run.v, p, mu, mode, reference)
+    if newton_run.converged and slides is not None and np.any(mu > 0):
+        if previous is not None and motion is None:
+            mode = _reference(problem, mode, previous)
+        newton_run, mode, sigma, rounds = _with_friction(problem, newton_run.v, p, mu, mode, slides,
+                                                         previous.sigma if previous is not None else None,
+                                                         can_stick=motion is None)
         iterations += rounds
     status = "converged" if newton_run.converged else "not_converged"
     message = "" if newton_run.converged else "the contact's KKT system did not converge (Newton, active set)"
@@ -180,24 +189,29 @@ def _pair_sums(problem: ContactProblem, per_row: np.ndarray) -> np.ndarray:
     return sums
 
 
-def _with_friction(problem, v, p, mu, mode, reference):
-    """Friction on every touching pair with mu > 0: slipping against the slide from the
-    reference state, or sticking where slipping would contradict itself."""
-    parts_ref = split(problem, reference.v)
-    points_old = np.asarray(problem.rows(parts_ref.w, reference.p)[2], dtype=float)
-    origins_old, angles_old = (np.asarray(a, dtype=float) for a in problem.frames(parts_ref.w, reference.p))
-    mode = replace(mode, points_old=points_old, origins_old=origins_old, angles_old=angles_old.ravel())
+def _reference(problem: ContactProblem, mode: Mode, reference: ContactState) -> Mode:
+    """The mode's reference state: where the sites' points and the objects were."""
+    w = split(problem, reference.v).w
+    points_old = np.asarray(problem.rows(w, reference.p)[2], dtype=float)
+    origins_old, angles_old = (np.asarray(a, dtype=float) for a in problem.frames(w, reference.p))
+    return replace(mode, points_old=points_old, origins_old=origins_old, angles_old=angles_old.ravel())
+
+
+def _with_friction(problem, v, p, mu, mode, slides, previous_sigma, can_stick: bool):
+    """Friction on every touching pair with mu > 0: slipping against its slide, or sticking
+    where slipping would contradict itself (on a path; a single state without history
+    reports such a pair as sticking with no friction force)."""
     row_pairs = np.asarray(problem.row_pairs, dtype=int)
     sigma, sticking = np.zeros(problem.n_pairs), np.zeros(problem.n_pairs)
     forces = _row_forces(problem, v, p)
-    slide = _pair_slides(problem, v, p, mode, forces)
+    slide = slides(v, mode, forces)
     for j in np.flatnonzero((_pair_sums(problem, forces) > 0) & (mu > 0)):
-        previous_sigma = reference.sigma[j] if j < len(reference.sigma) else 0.0
+        before = previous_sigma[j] if previous_sigma is not None else 0.0
         if abs(slide[j]) > 1e-13:
             sigma[j] = -np.sign(slide[j])
-        elif previous_sigma:
-            sigma[j] = previous_sigma
-        else:
+        elif before:
+            sigma[j] = before
+        elif can_stick:
             sticking[j] = 1.0
     run, rounds = None, 0
     for _ in range(FRICTION_ROUNDS):
@@ -215,7 +229,7 @@ def _with_friction(problem, v, p, mu, mode, reference):
         changed = False
         forces = _row_forces(problem, v, p)
         totals = _pair_sums(problem, forces)
-        slide = _pair_slides(problem, v, p, mode, forces)
+        slide = slides(v, mode, forces)
         tau = split(problem, v).tau
         for j in range(problem.n_pairs):
             if mu[j] <= 0 or totals[j] <= 0:
@@ -223,18 +237,36 @@ def _with_friction(problem, v, p, mu, mode, reference):
             if sticking[j] and abs(tau[j]) > mu[j] * totals[j] * (1 + 1e-9):
                 sticking[j], sigma[j], changed = 0.0, np.sign(tau[j]), True
             elif not sticking[j] and sigma[j] * slide[j] > CONSISTENCY:
-                sticking[j], changed = 1.0, True
-            elif not sticking[j] and not sigma[j]:
-                sigma[j], changed = -np.sign(slide[j]) or 1.0, True
+                if can_stick:
+                    sticking[j], changed = 1.0, True
+                else:  # neither direction holds at a single state: it sticks, by an unknown force
+                    sigma[j], changed = 0.0, True
+            elif not sticking[j] and not sigma[j] and abs(slide[j]) > 1e-13 and can_stick:
+                sigma[j], changed = -np.sign(slide[j]), True
         if not changed:
             break
     return run, mode, np.where(sticking > 0, 0.0, sigma), rounds
 
 
+def _pair_slide_rates(problem, v, p, mode, forces, motion) -> np.ndarray:
+    """Per pair, the normal-force weighted rate of slide at the state as p moves at `motion`
+    (the KKT system's sensitivity, the reference frozen at the state itself)."""
+    arguments = mode.arguments(v, p)
+    F_v = np.asarray(problem.kkt(**arguments)["J"], dtype=float)
+    F_p = np.asarray(problem.kkt_parameters(**arguments)["Fp"], dtype=float)
+    v_rate = -np.linalg.solve(F_v, F_p @ motion)
+    w = split(problem, v).w
+    here = _reference(problem, mode, ContactState("converged", p, v, mode, [], np.zeros(0), 0, 0.0))
+    out = problem.slides(w, p, here.points_old, here.origins_old, here.angles_old)
+    rates = np.asarray(out[1], dtype=float) @ v_rate[:problem.n_w] + np.asarray(out[2], dtype=float) @ motion
+    totals = _pair_sums(problem, forces)
+    return np.where(totals > 0, _pair_sums(problem, forces * rates) / np.maximum(totals, 1e-300), 0.0)
+
+
 def _pair_slides(problem, v, p, mode, forces) -> np.ndarray:
     """Per pair, the normal-force weighted slide of its rows from the reference state."""
     w = split(problem, v).w
-    slides = np.asarray(problem.slides(w, p, mode.points_old, mode.origins_old, mode.angles_old), dtype=float).ravel()
+    slides = np.asarray(problem.slides(w, p, mode.points_old, mode.origins_old, mode.angles_old)[0], dtype=float).ravel()
     totals = _pair_sums(problem, forces)
     weighted = _pair_sums(problem, forces * slides)
     return np.where(totals > 0, weighted / np.maximum(totals, 1e-300), 0.0)

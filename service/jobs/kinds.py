@@ -16,12 +16,14 @@ __all__ = ["JobKind", "Plan", "kind_named", "run_task"]
 
 @lru_cache(maxsize=1)
 def _kinds() -> dict[str, JobKind]:
+    from service.jobs.contact import CONTACT
     from service.jobs.optimize import OPTIMIZE
     from service.jobs.sweep import SWEEP
 
     return {kind.name: kind for kind in (
         SWEEP,
         OPTIMIZE,
+        CONTACT,
     )}
 
 

@@ -1,0 +1,81 @@
+"""The contact analysis of one state: the minimum of the total potential under
+non-penetration (service.contact), its contact forces from the multipliers, friction when
+the request says how the objects move (`motion`: the rates of the moving fields; a path job
+gives friction its direction from the path), sensitivities, and the thesis' recovery as a
+labelled comparison. A quasi-static path is the contact job (service.jobs.contact)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from models import Mechanism, MechanismError
+from service.analyses.base import Analysis, AnalysisRequest
+from service.contact.problem import contact_problem
+from service.contact.recovery import recovered_forces
+from service.contact.report import friction_coefficients, penetration_error, state_report
+from service.contact.sensitivity import contact_sensitivities
+from service.contact.solve import ContactOptions, PenetratingStart, solve_state
+from service.reports import plain
+from service.requests import under
+
+
+def problem_of(mech: Mechanism):
+    try:
+        return contact_problem(mech.structure)
+    except MechanismError as exc:
+        raise under("/document", exc) from None
+
+
+def motion_rates(mech: Mechanism, motion: dict, p: np.ndarray) -> np.ndarray:
+    """The nondimensional rate of p (document rates per field), scaled to a largest entry 1."""
+    rates = np.zeros_like(p)
+    for path, rate in motion.items():
+        try:
+            k = mech.parameter_index(path)
+        except MechanismError as exc:
+            raise MechanismError(f"/motion/{path.lstrip('/')}", f"'{path}' is {exc.problem}") from None
+        rates[k] = float(rate) * mech.nd_per_doc(mech.parameters[k].kind)
+    size = float(np.abs(rates).max(initial=0.0))
+    if size == 0:
+        raise MechanismError("/motion", "the motion moves nothing: give a nonzero rate")
+    return rates / size
+
+
+class ContactAnalysis(Analysis):
+    name = "contact"
+    summary = ("The minimum of the total potential under non-penetration by IPOPT: contact forces from the "
+               "multipliers, friction along a given motion, sensitivities")
+
+    def run(self, mech: Mechanism, request: AnalysisRequest) -> dict:
+        problem = problem_of(mech)
+        options = ContactOptions(request.get("penetrating_start", "approach"), request.options.time_limit)
+        p, mu = mech.p(), friction_coefficients(mech, problem)
+        motion = request.get("motion")
+        try:
+            rates = motion_rates(mech, motion, p) if motion else None
+            state = solve_state(problem, p, mu, options=options, motion=rates)
+        except PenetratingStart as error:
+            raise penetration_error(mech, error) from None
+        report = {"analysis": self.name, "name": mech.document.name, **state_report(mech, problem, state),
+                  "units": {"force": mech.doc_unit("force"), "length": mech.doc_unit("length"),
+                            "moment": mech.doc_unit("moment")}, "warnings": []}
+        if np.any(mu > 0) and not motion:
+            report["warnings"].append("friction needs the direction of sliding: give `motion` (the rates of the "
+                                      "moving fields) or run a contact path; this state is frictionless")
+        for name, pair in report["pairs"].items():
+            if pair["state"] == "sticking":
+                report["warnings"].append(f"pair '{name}' sticks along this motion: its friction force depends on "
+                                          "the path that led here (run a contact path); none is applied")
+        sensitivities = request.get("sensitivities")
+        if sensitivities is not None and state.converged:
+            found, notes = contact_sensitivities(mech, problem, state, sensitivities["parameters"],
+                                                 sensitivities["outputs"])
+            report["sensitivities"] = found.to_dict()
+            report["warnings"] += notes
+        if request.get("thesis_recovery", False) and state.converged:
+            plain_state = state if not np.any(mu > 0) else solve_state(problem, p, 0 * mu, previous=state, options=options)
+            report["thesis_recovery"] = recovered_forces(mech, state_report(mech, problem, plain_state), report)
+        return plain(report)
+
+
+CONTACT = ContactAnalysis()

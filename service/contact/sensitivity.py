@@ -1,0 +1,60 @@
+"""Sensitivities of a contact state: at a converged state, on its active set (and with its
+friction directions and sticking pairs held), the KKT system F(v, p) = 0 gives
+dv/dp = -F_v^-1 F_p, and every contact output (forces, contact points, site parameters, the
+structure's outputs) follows: dy/dp = y_v dv/dp + y_p. Rows whose multiplier is below
+WEAK of the largest are reported: there the derivative is one-sided."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from models import Mechanism, MechanismError
+from service.contact.kkt import split
+from service.contact.problem import ContactProblem
+from service.contact.solve import ContactState
+from service.sensitivity import Sensitivities
+
+WEAK = 1e-8
+
+
+def contact_sensitivities(mech: Mechanism, problem: ContactProblem, state: ContactState, parameters: list[str],
+                          outputs: list[str], pointer: str = "/sensitivities") -> tuple[Sensitivities, list[str]]:
+    """d(outputs)/d(parameters) in document units, and warnings."""
+    slots = []
+    for k, path in enumerate(parameters):
+        try:
+            slots.append(mech.parameter_index(path))
+        except MechanismError as exc:
+            raise MechanismError(f"{pointer}/parameters/{k}", f"'{path}' is {exc.problem}") from None
+    rows = []
+    for k, name in enumerate(outputs):
+        if name not in problem.output_names:
+            raise MechanismError(f"{pointer}/outputs/{k}", f"unknown output '{name}' (contact outputs are "
+                                 "contacts.<pair>.force_x, force_y, normal_force, friction_force, point_x, point_y, "
+                                 "site_parameter, and the mechanism's outputs)")
+        rows.append(problem.output_names.index(name))
+    mode = state.mode
+    arguments = mode.arguments(state.v, state.p)
+    F_v = np.asarray(problem.kkt(**arguments)["J"], dtype=float)
+    F_p = np.asarray(problem.kkt_parameters(**arguments)["Fp"], dtype=float)[:, slots]
+    dv = -np.linalg.solve(F_v, F_p)
+    jac = problem.outputs_jacobian(v=state.v, p=state.p, phi=mode.phi, stick=mode.stick, weights=mode.weights)
+    y_v, y_p = np.asarray(jac["y_v"], dtype=float)[rows], np.asarray(jac["y_p"], dtype=float)[rows][:, slots]
+    nd = y_v @ dv + y_p
+    out_kinds = [problem.output_kinds[r] for r in rows]
+    in_kinds = [mech.parameter_kind(path) for path in parameters]
+    factor = np.array([[mech.nd_per_doc(ki) / mech.nd_per_doc(ko) for ki in in_kinds] for ko in out_kinds])
+    units = [[f"{mech.doc_unit(ko)}/{mech.doc_unit(ki)}" for ki in in_kinds] for ko in out_kinds]
+    return Sensitivities(list(parameters), list(outputs), nd * factor, units), _weak_rows(problem, state)
+
+
+def _weak_rows(problem: ContactProblem, state: ContactState) -> list[str]:
+    lam = split(problem, state.v).lam_in
+    active = state.mode.active > 0.5
+    if not active.any():
+        return []
+    largest = float(np.abs(lam[active]).max(initial=0.0))
+    weak = active & (lam < WEAK * max(largest, 1e-300))
+    pairs = sorted({problem.structure.contacts.pairs[problem.row_pairs[k - problem.n_element_in]].name
+                    for k in np.flatnonzero(weak) if k >= problem.n_element_in})
+    return [f"pair '{name}' touches with a vanishing force: its derivatives are one-sided" for name in pairs]
