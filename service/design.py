@@ -17,6 +17,7 @@ import numpy as np
 from models import Mechanism, MechanismError
 from models.document import OptimizeSpec
 from models.structure import COORDINATES
+from service.contact.outputs import PAIR_OUTPUTS
 
 STIFFNESS_PREFIX = "stiffness."
 _STIFFNESS_KINDS = {"x": "stiffness", "y": "stiffness", "angle": "moment"}  # per unit length / per rad
@@ -159,6 +160,11 @@ def _output(mech: Mechanism, name: str, case: str | None, case_names: tuple[str,
         k = mech.free_coordinates.index(name[len(STIFFNESS_PREFIX):])
         coordinate = COORDINATES[mech.structure.free[k][1]]
         return OutputRef(name, c, "stiffness", k, _STIFFNESS_KINDS[coordinate])
+    if name.startswith("contacts.") and mech.structure.contacts is not None:
+        kinds = dict(PAIR_OUTPUTS)
+        pair, _, quantity = name[len("contacts."):].rpartition(".")
+        if pair in [p.name for p in mech.structure.contacts.pairs] and quantity in kinds:
+            return OutputRef(name, c, "contact", 0, kinds[quantity])
     if name.startswith("/"):
         try:
             k = mech.parameter_index(name)

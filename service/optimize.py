@@ -21,6 +21,7 @@ from typing import Callable
 import numpy as np
 
 from models import Mechanism
+from service.contact.design import run_contact_start, uses_contact
 from service.design import DesignProblem, OutputRef
 from service.design_nlp import DesignNlp, design_nlp, least_violation, solver_for
 from service.ipopt import solve
@@ -97,7 +98,7 @@ class Prepared:
     """What every start of a problem shares: the NLP, its parameters and the bounds."""
 
     problem: DesignProblem
-    nlp: DesignNlp
+    nlp: DesignNlp | None  # None: a problem over contact states
     P: np.ndarray
     objective_scale: float
     constraint_scales: np.ndarray
@@ -171,7 +172,10 @@ def _value(problem: DesignProblem, ref: OutputRef, z: np.ndarray, p: np.ndarray)
 
 
 def prepare(problem: DesignProblem) -> Prepared:
-    """Scales from the document's design (its equilibria), the NLP and the bounds."""
+    """Scales from the document's design (its equilibria), the NLP and the bounds. A problem
+    that names contact results is solved over its contact states instead (service.contact.design)."""
+    if uses_contact(problem):
+        return Prepared(problem, None, np.zeros(0), 1.0, np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0))
     nlp = design_nlp(problem)
     states = equilibria(problem, problem.start)
     ps = case_params(problem, problem.start)
@@ -213,6 +217,8 @@ def start_design(problem: DesignProblem, start: int) -> np.ndarray:
 def run_start(prepared: Prepared, start: int, stop: Callable[[], bool] | None = None) -> StartResult:
     """One IPOPT run from start `start`; stop() (asked every iteration) ends it early."""
     problem, nlp = prepared.problem, prepared.nlp
+    if nlp is None:
+        return StartResult(**run_contact_start(problem, start, start_design(problem, start)))
     spec = problem.spec
     started = time.perf_counter()
     design0 = start_design(problem, start)

@@ -34,6 +34,7 @@ from models.errors import MechanismError
 from models.planar import rot
 from models.forms import symbolic_energy
 from models.structure import Structure
+from service.contact.outputs import PAIR_OUTPUTS
 
 
 @dataclass(frozen=True)
@@ -230,10 +231,6 @@ def pair_results(constraints, w: ca.SX, p: ca.SX, n_eq: int, n_element: int, n_p
                ca.horzcat(*[n / (ca.norm_2(n) + tiny) for n in normal_sum])]
     return ca.Function("pair_results", [v, p, phi, stick, weights], outputs, ["v", "p", "phi", "stick", "weights"],
                        ["force", "normal_force", "tangential_force", "point", "along", "normal"])
-
-
-PAIR_OUTPUTS = (("force_x", "force"), ("force_y", "force"), ("normal_force", "force"), ("friction_force", "force"),
-                ("point_x", "length"), ("point_y", "length"), ("site_parameter", "length"))
 
 
 def _outputs(structure, results, w, p, n_eq, n_in, n_pairs, x_in_state, multipliers_in_state):
