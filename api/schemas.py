@@ -16,7 +16,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 # not import the core).
 Model = Literal["linear", "partial_nonlinear", "exact"]
 JobStatusName = Literal["queued", "running", "succeeded", "failed", "cancelled"]
-PointStatus = Literal["converged", "not_converged", "singular", "time_limit"]
+PointStatus = Literal["converged", "not_converged", "singular", "time_limit", "infeasible"]
 
 
 class _Request(BaseModel):

@@ -27,7 +27,7 @@ def check_value(pointer: str, si: float, check: str | None, unit: str = "", fact
     the document states it, for the message; `given` is the number as written, when it was one."""
     shown = f"{si:g} (SI)" if factor == 1.0 or not unit else f"{si / factor:g} {unit}"
     if isinstance(given, (int, float)) and not isinstance(given, bool):
-        shown = f"{given:g}" + (f" {unit}" if unit and factor != 1.0 else " (SI)" if factor == 1.0 else "")
+        shown = f"{given:g}" + (f" {unit}" if unit and factor != 1.0 else " (SI)" if factor == 1.0 and unit else "")
         if not math.isfinite(given) or not _in_range(float(given)):
             si = float("inf")
     if not math.isfinite(si) or not _in_range(si):

@@ -92,7 +92,8 @@ def _check(node: ast.AST, pointer: str, names: set[str]) -> int:
         if node.keywords or len(node.args) != ARITY[name]:
             raise MechanismError(pointer, f"{name}() takes {ARITY[name]} positional argument(s)")
         return 1 + max(_check(arg, pointer, names) for arg in node.args)
-    raise _not_allowed(pointer, f"a {type(node).__name__} expression", names)
+    kind = type(node).__name__
+    raise _not_allowed(pointer, f"{'an' if kind[0] in 'AEIOU' else 'a'} {kind} expression", names)
 
 
 def _build(node: ast.AST, env: dict):

@@ -151,7 +151,7 @@ def test_a_moment_on_a_pin_joint_is_refused():
     (lambda e: e.update(shape={"type": "expression", "expression": "__import__('os')"}),
      "/elements/L1/shape/expression", "unsafe or unsupported expression: a call of '__import__' is not allowed"),
     (lambda e: e.update(shape={"type": "expression", "expression": "u.__class__"}),
-     "/elements/L1/shape/expression", "unsafe or unsupported expression: a Attribute expression is not allowed"),
+     "/elements/L1/shape/expression", "unsafe or unsupported expression: an Attribute expression is not allowed"),
     (lambda e: e.update(shape={"type": "expression", "expression": "0.3 * sin(2 * pi * u"}),
      "/elements/L1/shape/expression", "cannot parse expression '0.3 * sin(2 * pi * u': '(' was never closed"),
     (lambda e: e.update(shape={"type": "expression", "expression": "x + 1"}),

@@ -38,6 +38,7 @@ class ContactRow:
     point: ca.SX | None = None  # (2,) the site's material point the row pushes (None: an object's row)
     normal: ca.SX | None = None  # (2,) dh/dP at that point
     site_parameter: ca.SX | None = None  # where along the site (nondimensional length)
+    axis: int = -1  # the separating axis the row belongs to (-1: a pointwise row)
 
 
 @dataclass
@@ -175,7 +176,8 @@ def contact_constraints(geometry: ContactGeometry) -> ContactConstraints:
                     axis = ca.SX.sym(f"axis_{pair.name}_{len(axes)}", 2)
                     axes.append(axis)
                     axis_pairs.append(k)
-                    rows += _axis_rows(geometry, k, obj, frame, axis, [(vertices[i], along[i]) for i in piece], object_piece)
+                    rows += _axis_rows(geometry, k, obj, frame, axis, [(vertices[i], along[i]) for i in piece], object_piece,
+                                       len(axes) - 1)
                     guesses.append(_axis_guess(geometry, obj, frame, [vertices[i] for i in piece], object_piece))
     return ContactConstraints(ca.vertcat(*axes) if axes else ca.SX(0, 1),
                               ca.vertcat(*guesses) if guesses else ca.SX(0, 1), axis_pairs, rows, frames,
@@ -190,10 +192,10 @@ def _pointwise_row(geometry, k, obj, frame, point, along) -> ContactRow:
     return ContactRow(k, value, point, normal, along)
 
 
-def _axis_rows(geometry, k, obj, frame, axis, vertices, object_piece) -> list[ContactRow]:
+def _axis_rows(geometry, k, obj, frame, axis, vertices, object_piece, index: int) -> list[ContactRow]:
     n = ca.vertcat(ca.cos(axis[0]), ca.sin(axis[0]))
-    rows = [ContactRow(k, axis[1] - ca.dot(n, v), v, -n, s) for v, s in vertices]
-    rows += [ContactRow(k, extent - axis[1]) for extent in geometry.support(obj, frame, n, object_piece)]
+    rows = [ContactRow(k, axis[1] - ca.dot(n, v), v, -n, s, index) for v, s in vertices]
+    rows += [ContactRow(k, extent - axis[1], axis=index) for extent in geometry.support(obj, frame, n, object_piece)]
     return rows
 
 

@@ -247,7 +247,8 @@ class LinkFamily:
 
     def energy_terms(self, ctx, t: LinkTopology, d):
         raise NoEnergyForm("the shooting unknowns of a link mix internal forces and displacements, so its "
-                           "balance is not the gradient of an energy in them")
+                           "balance is not the gradient of an energy in them; give the link \"discretization\": "
+                           "\"elements\" for minimum energy and contact")
 
     def kinetic_energy(self, ctx, t: LinkTopology, d, v) -> None:
         if t.weighs:

@@ -107,7 +107,12 @@ def _path(out, mech, problem, options, parameters, output, json_out, plot, shape
     from service.contact.path import default_outputs, follow, path_fields, state_record
 
     fields = path_fields(mech, parameters, "--path")
-    wanted = default_outputs(problem)
+    chosen = _chosen(at, fields.states)  # checked before the path is solved
+    spec = mech.document.contacts.path
+    wanted = list(spec.outputs) if spec is not None and spec.outputs else default_outputs(problem)
+    for name in wanted:
+        if name not in problem.output_names:
+            raise OptionError("contacts.path.outputs", f"unknown output '{name}'")
     y_name = output or wanted[0]
     if y_name not in problem.output_names:
         raise OptionError("--output", f"unknown output '{y_name}' (outputs: {', '.join(wanted)}, and the mechanism's)")
@@ -127,7 +132,7 @@ def _path(out, mech, problem, options, parameters, output, json_out, plot, shape
     if plot is not None:
         _plot_path(mech, problem, fields, records, y_name, plot)
     if shapes is not None:
-        _plot_shapes(mech, problem, states, fields, at, shapes)
+        _plot_shapes(mech, problem, states, fields, chosen, shapes)
     return all(r["status"] == "converged" for r in records)
 
 
@@ -169,19 +174,25 @@ def _plot_path(mech, problem, fields, records, y_name, plot) -> None:
         raise OptionError("--plot", f"cannot write {plot}: {exc.strerror}") from None
 
 
-def _plot_shapes(mech, problem, states, fields, at, shapes) -> None:
+def _chosen(at: str | None, states: int) -> list[int] | None:
+    """The --at state indices (None: chosen after the path)."""
+    if at is None:
+        return None
+    try:
+        chosen = [int(item) for item in at.split(",") if item.strip()]
+    except ValueError:
+        raise OptionError("--at", f"expected state indices like 0,10,20, got '{at}'") from None
+    bad = [i for i in chosen if not 0 <= i < states]
+    if bad or not chosen:
+        raise OptionError("--at", f"state {bad[0] if bad else at!r} is not on the path (0 to {states - 1})")
+    return chosen
+
+
+def _plot_shapes(mech, problem, states, fields, chosen, shapes) -> None:
     from service.contact.plots import plot_states
     from service.figures import field_label
 
-    if at is not None:
-        try:
-            chosen = [int(item) for item in at.split(",") if item.strip()]
-        except ValueError:
-            raise OptionError("--at", f"expected state indices like 0,10,20, got '{at}'") from None
-        bad = [i for i in chosen if not 0 <= i < len(states)]
-        if bad:
-            raise OptionError("--at", f"state {bad[0]} is not on the path (0 to {len(states) - 1})")
-    else:
+    if chosen is None:
         touching = [i for i, s in enumerate(states) if s.converged and any(t != "open" for t in s.pair_states)]
         pool = touching or list(range(len(states)))
         chosen = sorted({pool[int(k)] for k in np.linspace(0, len(pool) - 1, min(4, len(pool)))})

@@ -47,6 +47,7 @@ class ContactProblem:
     n_element_in: int
     row_pairs: tuple[int, ...]  # per contact row, its pair
     row_pushes: tuple[bool, ...]  # per contact row, whether it pushes a site point
+    row_axes: tuple[int, ...]  # per contact row, its separating axis (-1: pointwise)
     axis_pairs: tuple[int, ...]
     x_in_state: tuple[int, ...]
     multipliers_in_state: tuple[int, ...]
@@ -123,7 +124,8 @@ def contact_problem(structure: Structure) -> ContactProblem:
                                      energy.x_in_state, energy.multipliers_in_state)
     problem = ContactProblem(structure, x.numel(), a.numel(), g_eq.numel(), h_el.numel() + n_rows, h_el.numel(),
                              tuple(row.pair for row in constraints.rows),
-                             tuple(row.point is not None for row in constraints.rows), tuple(constraints.axis_pairs),
+                             tuple(row.point is not None for row in constraints.rows),
+                             tuple(row.axis for row in constraints.rows), tuple(constraints.axis_pairs),
                              tuple(energy.x_in_state), tuple(energy.multipliers_in_state), nlp, axes_guess,
                              ca.Function("element_inequalities", [x, p], [h_el], ["x", "p"], ["h"]), rows,
                              frames, kkt, kkt_p, slides, results, p.numel(), n_pairs,

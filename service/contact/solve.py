@@ -25,6 +25,7 @@ IPOPT_OPTIONS = {"tol": 1e-12, "constr_viol_tol": 1e-12, "acceptable_tol": 1e-9,
 WARM = {"warm_start_init_point": "yes", "warm_start_bound_push": 1e-9, "warm_start_mult_bound_push": 1e-9,
         "warm_start_slack_bound_push": 1e-9, "mu_init": 1e-6}
 APPROACH_STEP = 0.02  # largest fall of the relaxation per approach step (nondimensional length)
+SEPARATION_DIRECTIONS = 180  # directions tried for the line of least overlap before narrowing down
 FRICTION_ROUNDS = 8
 
 
@@ -69,13 +70,38 @@ def start_point(problem: ContactProblem, p: np.ndarray) -> np.ndarray:
     return np.concatenate([x, axes])
 
 
-def penetrations(problem: ContactProblem, w: np.ndarray, p: np.ndarray) -> np.ndarray:
-    """Per pair, how deep (nondimensional, >= 0) its rows are violated at w."""
+def separated(problem: ContactProblem, w: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(per pair, how deep an object penetrates its site (nondimensional, 0 if apart); w with
+    every separating line at its best: the direction of least overlap, the offset midway).
+    For convex pieces the least overlap over all directions is the penetration depth."""
+    w = w.copy()
     h = np.asarray(problem.rows(w, p)[0], dtype=float).ravel()
+    axes, pairs = np.asarray(problem.row_axes), np.asarray(problem.row_pairs)
+    pushes = np.asarray(problem.row_pushes)
     depth = np.zeros(problem.n_pairs)
-    for k, pair in enumerate(problem.row_pairs):
-        depth[pair] = max(depth[pair], -h[k])
-    return depth
+    for k in np.flatnonzero(axes < 0):
+        depth[pairs[k]] = max(depth[pairs[k]], -h[k])
+    for j in range(problem.n_axes // 2):
+        site, obj = (axes == j) & pushes, (axes == j) & ~pushes
+        slot = problem.n_x + 2 * j
+
+        def overlap(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            W = np.repeat(w[:, None], len(theta), axis=1)
+            W[slot] = theta
+            H = np.asarray(problem.rows.map(len(theta))(W, np.repeat(p[:, None], len(theta), axis=1))[0], dtype=float)
+            return -(H[site].min(axis=0) + H[obj].min(axis=0)), H
+
+        grid = np.linspace(-np.pi, np.pi, SEPARATION_DIRECTIONS, endpoint=False)
+        best = grid[int(np.argmin(overlap(grid)[0]))]
+        step = 2 * np.pi / SEPARATION_DIRECTIONS
+        for _ in range(30):  # narrow down around the best direction
+            trial = np.array([best - step, best, best + step])
+            best, step = trial[int(np.argmin(overlap(trial)[0]))], step / 2
+        least, H = overlap(np.array([best]))
+        w[slot] = best
+        w[slot + 1] += (H[obj].min() - H[site].min()) / 2
+        depth[problem.axis_pairs[j]] = max(depth[problem.axis_pairs[j]], float(least[0]))
+    return np.maximum(depth, 0.0), w
 
 
 def empty_mode(problem: ContactProblem) -> Mode:
@@ -118,16 +144,15 @@ def frictionless(problem: ContactProblem, p: np.ndarray, previous: ContactState 
     stop = ipopt.deadline(options.time_limit)
     if previous is not None:
         return _ipopt(problem, p, np.zeros(problem.n_in), split(problem, previous.v).w, previous.v, stop), 0
-    w0 = start_point(problem, p)
+    depth, w0 = separated(problem, start_point(problem, p), p)
     h0 = np.asarray(problem.rows(w0, p)[0], dtype=float).ravel()
-    depth = penetrations(problem, w0, p)
-    if depth.max(initial=0.0) <= 0:
+    if np.all(h0 >= 0):
         return _ipopt(problem, p, np.zeros(problem.n_in), w0, None, stop), 0
-    if options.penetrating_start == "refuse":
+    if options.penetrating_start == "refuse" and depth.max(initial=0.0) > 0:
         worst = int(np.argmax(depth))
         raise PenetratingStart(worst, float(depth[worst]))
     relaxation = np.concatenate([np.zeros(problem.n_element_in), np.maximum(-h0, 0.0) * (1 + 1e-6) + 1e-9])
-    steps = int(np.clip(np.ceil(depth.max() / APPROACH_STEP), 2, 200))
+    steps = int(np.clip(np.ceil(relaxation.max() / APPROACH_STEP), 2, 200))
     run, v = None, None
     for step in range(steps + 1):
         shift = relaxation * (1 - step / steps)
@@ -154,9 +179,15 @@ def solve_state(problem: ContactProblem, p: np.ndarray, mu: np.ndarray, previous
     states = ["open"] * problem.n_pairs
     if not run.succeeded:
         v = np.concatenate([run.x, np.zeros(problem.n_eq + problem.n_in + problem.n_pairs)])
+        message = f"IPOPT: {run.return_status}"
+        if run.status == "time_limit":
+            message = f"stopped by the time limit of {options.time_limit:g} s (IPOPT: {run.return_status})"
+        elif run.status == "infeasible":
+            message = ("no state keeps every site out of every object (IPOPT: Infeasible_Problem_Detected): "
+                       "the objects leave the sites no room")
         return ContactState(run.status if run.status != "optimal" else "not_converged", p, v, base, states,
                             np.zeros(problem.n_pairs), run.iterations, time.perf_counter() - started,
-                            f"IPOPT: {run.return_status}", approach_steps=approach_steps)
+                            message, approach_steps=approach_steps)
     v, active = _from_ipopt(problem, run)
     newton_run, mode = consistent_active_set(problem, v, p, replace(base, active=active))
     iterations = run.iterations + newton_run.iterations
