@@ -28,6 +28,7 @@ from api.schemas import (
     HealthResponse,
     JobResultResponse,
     JobStatusResponse,
+    ContactPathRequest,
     OptimizeRequest,
     SolveRequest,
     SolveResponse,
@@ -146,6 +147,11 @@ class Client:
         return _parse(self._http.post("/v1/optimize", json=_request_body(OptimizeRequest, request, fields)),
                       JobStatusResponse)
 
+    def contact_path(self, request: ContactPathRequest | None = None, **fields: Any) -> JobStatusResponse:
+        """Start a contact path job; fields as in ContactPathRequest. Returns the new job's status."""
+        return _parse(self._http.post("/v1/contacts", json=_request_body(ContactPathRequest, request, fields)),
+                      JobStatusResponse)
+
     def job(self, job_id: str) -> JobStatusResponse:
         return _parse(self._http.get(f"/v1/jobs/{job_id}"), JobStatusResponse)
 
@@ -203,6 +209,10 @@ class AsyncClient:
     async def optimize(self, request: OptimizeRequest | None = None, **fields: Any) -> JobStatusResponse:
         body = _request_body(OptimizeRequest, request, fields)
         return _parse(await self._http.post("/v1/optimize", json=body), JobStatusResponse)
+
+    async def contact_path(self, request: ContactPathRequest | None = None, **fields: Any) -> JobStatusResponse:
+        body = _request_body(ContactPathRequest, request, fields)
+        return _parse(await self._http.post("/v1/contacts", json=body), JobStatusResponse)
 
     async def job(self, job_id: str) -> JobStatusResponse:
         return _parse(await self._http.get(f"/v1/jobs/{job_id}"), JobStatusResponse)

@@ -240,6 +240,19 @@ class TargetOut(_Response):
     status: PointStatus
 
 
+class ContactPairOut(_Response):
+    """One contact pair at a state (document units): the force on the site and its parts."""
+
+    state: Literal["open", "frictionless", "slipping", "sticking"]
+    force: list[float | None] = Field(description="on the site, global axes")
+    normal_force: float | None
+    friction_force: float | None = Field(description="along the tangent (the normal turned by +90 deg)")
+    normal: list[float | None] | None = Field(description="unit, out of the object (None when open)")
+    point: list[float | None] | None = Field(description="the contact point (None when open)")
+    site_parameter: float | None = Field(description="arc length along the jaw or the link (None when open)")
+    gap: float | None
+
+
 class SolveResponse(_Response):
     analysis: str
     name: str
@@ -263,6 +276,11 @@ class SolveResponse(_Response):
     sensitivities: dict[str, Any] | None = None
     wrenches: dict[str, WrenchOut] | None = None
     wrench_units: dict[str, str] | None = None
+    pairs: dict[str, ContactPairOut] | None = Field(None, description="contact: every pair's state and forces")
+    units: dict[str, str] | None = Field(None, description="contact: the units of the pairs' numbers")
+    approach_steps: int | None = Field(None, description="contact: steps taken from a penetrating start")
+    kkt_residual: float | None = Field(None, description="contact: the largest residual of its KKT system (force unit)")
+    thesis_recovery: dict[str, Any] | None = Field(None, description="contact: the thesis' recovery, labelled")
 
 
 class JobLinks(BaseModel):
@@ -329,6 +347,25 @@ class SweepResult(BaseModel):
     points: list[SweepPoint]
 
 
+class ContactStateOut(_Response):
+    index: int
+    values: list[float]
+    status: PointStatus
+    message: str = ""
+    iterations: int
+    seconds: float
+    pairs: dict[str, ContactPairOut]
+    outputs: dict[str, float | None]
+
+
+class ContactPathResult(BaseModel):
+    parameters: list[SweepParameterOut]
+    output_units: dict[str, str]
+    force_unit: str
+    length_unit: str
+    points: list[ContactStateOut]
+
+
 class ResultPage(BaseModel):
     offset: int
     limit: int
@@ -342,7 +379,7 @@ class JobResultResponse(BaseModel):
     status: JobStatusName
     complete: bool = Field(description="every point is stored; otherwise the points so far")
     page: ResultPage | None = Field(None, description="for results that list points: which of them this is")
-    result: SweepResult | dict[str, Any]
+    result: SweepResult | ContactPathResult | dict[str, Any]
 
 
 class ExampleSummary(BaseModel):

@@ -456,3 +456,19 @@ def test_cli_bad_at_is_a_one_line_error(run, tmp_path):
     assert len(lines) == 1, result.stderr
     assert lines[0].startswith("error: --at") and "999" in lines[0], lines[0]
     assert not (tmp_path / "s.png").exists()
+
+
+def test_the_python_client_runs_a_contact_path_and_reads_it_typed(api_server):
+    """api.client: contact_path, wait, result parsed as a ContactPathResult (pairs typed)."""
+    from api.client import Client
+    from api.schemas import ContactPathResult
+
+    with Client(api_server.url) as client:
+        job = client.contact_path(example="gripper_jaw_contact",
+                                  path=[{"path": X_O, "start": 70, "stop": 66, "steps": 4}])
+        assert client.wait(job.id, timeout=120).status == "succeeded"
+        result = client.result(job.id).result
+    assert isinstance(result, ContactPathResult) and len(result.points) == 5
+    forces = [p.pairs["insertion"].force[0] for p in result.points]
+    assert all(p.pairs["insertion"].state == "frictionless" for p in result.points)
+    assert np.all(np.diff(forces) < 0)  # the fixture moving in pushes the finger harder

@@ -15,7 +15,7 @@ from service.contact.recovery import recovered_forces
 from service.contact.report import friction_coefficients, penetration_error, state_report
 from service.contact.sensitivity import contact_sensitivities
 from service.contact.solve import ContactOptions, PenetratingStart, solve_state
-from service.reports import plain
+from service.reports import output_units, plain
 from service.requests import under
 
 
@@ -58,7 +58,7 @@ class ContactAnalysis(Analysis):
             raise penetration_error(mech, error) from None
         report = {"analysis": self.name, "name": mech.document.name, **state_report(mech, problem, state),
                   "units": {"force": mech.doc_unit("force"), "length": mech.doc_unit("length"),
-                            "moment": mech.doc_unit("moment")}, "warnings": []}
+                            "moment": mech.doc_unit("moment")}, "output_units": output_units(mech), "warnings": []}
         if np.any(mu > 0) and not motion:
             report["warnings"].append("friction needs the direction of sliding: give `motion` (the rates of the "
                                       "moving fields) or run a contact path; this state is frictionless")
