@@ -21,19 +21,7 @@ from models import Mechanism, MechanismError
 from models.assembly import graphs_for
 from models.structure import Structure
 from service.optimize import ACTIVE_TOLERANCE, Prepared, StartResult
-
-
-@dataclass
-class Sensitivities:
-    parameters: list[str]
-    outputs: list[str]
-    matrix: np.ndarray  # (outputs, parameters), document units
-    units: list[list[str]]  # "output unit / parameter unit"
-
-    def to_dict(self) -> dict:
-        return {"parameters": self.parameters, "outputs": self.outputs,
-                "derivatives": {o: dict(zip(self.parameters, row.tolist())) for o, row in zip(self.outputs, self.matrix)},
-                "units": {o: dict(zip(self.parameters, row)) for o, row in zip(self.outputs, self.units)}}
+from service.sensitivity_table import Sensitivities  # noqa: F401 (re-exported)
 
 
 @lru_cache(maxsize=16)

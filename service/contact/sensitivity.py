@@ -6,30 +6,15 @@ WEAK of the largest are reported: there the derivative is one-sided."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from models import Mechanism, MechanismError
 from service.contact.kkt import split
 from service.contact.problem import ContactProblem
 from service.contact.solve import ContactState
+from service.sensitivity_table import Sensitivities
 
 WEAK = 1e-8
-
-
-@dataclass
-class Sensitivities:
-    parameters: list[str]
-    outputs: list[str]
-    matrix: np.ndarray  # (outputs, parameters), document units
-    units: list[list[str]]  # "output unit / parameter unit"
-
-    def to_dict(self) -> dict:
-        """The shape of the equilibrium analysis' sensitivities (service.sensitivity)."""
-        return {"parameters": self.parameters, "outputs": self.outputs,
-                "derivatives": {o: dict(zip(self.parameters, row.tolist())) for o, row in zip(self.outputs, self.matrix)},
-                "units": {o: dict(zip(self.parameters, row)) for o, row in zip(self.outputs, self.units)}}
 
 
 def contact_sensitivities(mech: Mechanism, problem: ContactProblem, state: ContactState, parameters: list[str],
