@@ -26,7 +26,6 @@ import statistics
 import time
 from pathlib import Path
 
-import numpy as np
 
 from benchmarks.thesis_slsqp import example_one_state
 from models import compile_mechanism, load_document

@@ -11,7 +11,6 @@ All derivatives are in document units: output unit per parameter unit.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from functools import lru_cache
 
 import casadi as ca

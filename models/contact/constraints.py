@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 
 import casadi as ca
 
-from models.contact.topology import ContactTopology, ObjectTopology, PairTopology, SiteTopology
+from models.contact.topology import ContactTopology, ObjectTopology, SiteTopology
 from models.expression import compile_expression
 from models.planar import rot
 

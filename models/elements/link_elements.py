@@ -85,7 +85,7 @@ class LinkElementsFamily:
 
         def build(local):
             stated["s"] = s = self._state(ctx, t, local)
-            kin, und = s.kinematics, s.undeformed
+            kin = s.kinematics
             extras = [kin.node_position[-1], kin.node_psi[0], kin.node_psi[-1], *kin.node_position,
                       *[q.position for q in kin.contact_points], *s.arms]
             return s.terms, extras

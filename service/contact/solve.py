@@ -18,7 +18,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from service import ipopt
-from service.contact.kkt import CONSISTENCY, Mode, consistent_active_set, inequality_values, split
+from service.contact.kkt import CONSISTENCY, Mode, consistent_active_set, split
 from service.contact.problem import ContactProblem
 
 IPOPT_OPTIONS = {"tol": 1e-12, "constr_viol_tol": 1e-12, "acceptable_tol": 1e-9, "max_iter": 500}
