@@ -26,16 +26,59 @@ class Limits:
     max_link_work: int = 8192  # intervals x order^2, summed over links (and exact curved beams)
     max_result_values: int = 1_000_000  # numbers a job stores: points x values per point
     job_time_limit: float | None = 3600.0
+    max_contact_rows: int = 2000  # non-penetration rows of a contact problem (an upper estimate)
+    max_contact_rotations: int = 128  # rotations of the links (intervals x degree, summed) of a contact problem
 
 
 def link_work(doc: MechanismDocument, model: str | None) -> list[tuple[str, int]]:
-    """(element, intervals x order^2) of every element solved by shooting."""
+    """(element, intervals x order^2) of every element solved by shooting; a link by elements:
+    intervals x (degree + 2)^2, its quadrature and contact points' work alike."""
     work = []
     for name, element in doc.elements.items():
         exact = element.type == "curved_beam" and (model or element.model) == "exact"
-        if element.type == "link" or exact:
+        if element.type == "link" and element.discretization == "elements":
+            work.append((name, element.intervals * (element.degree + 2) ** 2))
+        elif element.type == "link" or exact:
             work.append((name, element.intervals * element.order**2))
     return work
+
+
+def check_contact_rotations(doc: MechanismDocument, limits: Limits, prefix: str) -> None:
+    """A contact problem's exact KKT matrix is dense in the links' rotations (a contact point
+    moves with every rotation before it): building it grows with their square, about 4 s for
+    96 rotations here."""
+    total = 0
+    for name, element in doc.elements.items():
+        if element.type == "link" and element.discretization == "elements":
+            total += element.intervals * element.degree
+            if total > limits.max_contact_rotations:
+                raise MechanismError(f"{prefix}/elements/{name}/intervals", (
+                    f"a contact problem's links have at most {limits.max_contact_rotations} rotations "
+                    f"(intervals x degree, summed), these have more; use fewer elements (8 cubic ones "
+                    "reach 1e-9 on a finger) or a lower degree"))
+
+
+def contact_rows(doc: MechanismDocument) -> list[tuple[str, int]]:
+    """(pair, an upper estimate of its non-penetration rows): a surface's contact points, a
+    jaw's vertices (8 per edge against an implicit curve; times the object's vertices against
+    a polygon, whose convex pieces each need a separating line)."""
+    contacts = doc.contacts
+    if contacts is None:
+        return []
+    out = []
+    for name, pair in contacts.pairs.items():
+        site, obj = contacts.sites.get(pair.site), contacts.objects.get(pair.object)
+        if site is None or obj is None:
+            continue  # the compiler names the reference
+        if site.type == "surface":
+            link = doc.elements.get(site.link)
+            rows = getattr(link, "intervals", 1) * getattr(link, "degree", 1) + 2
+        else:
+            rows = len(site.vertices) * (8 if obj.type == "implicit" else 1)
+            if obj.type == "polygon":
+                rows *= 2 * len(obj.vertices)
+        out.append((name, rows))
+    return out
 
 
 def check_document_cost(doc: MechanismDocument, model: str | None, limits: Limits, prefix: str = "/document") -> None:
@@ -52,6 +95,15 @@ def check_document_cost(doc: MechanismDocument, model: str | None, limits: Limit
             raise MechanismError(f"{prefix}/elements/{name}/intervals", (
                 f"the links need {sum(w for _, w in link_work(doc, model))} units of graph work (intervals x "
                 f"order^2, summed): the limit is {limits.max_link_work}; use fewer intervals or a lower order"))
+    if doc.contacts is not None:
+        check_contact_rotations(doc, limits, prefix)
+    total = 0
+    for name, rows in contact_rows(doc):
+        total += rows
+        if total > limits.max_contact_rows:
+            raise MechanismError(f"{prefix}/contacts/pairs/{name}", (
+                f"the contact pairs need about {sum(r for _, r in contact_rows(doc))} non-penetration rows: the limit "
+                f"is {limits.max_contact_rows}; use fewer pairs, vertices or elements"))
 
 
 def check_grid_size(counts: list[int], limits: Limits, pointer: str = "/parameters") -> int:

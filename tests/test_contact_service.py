@@ -472,3 +472,31 @@ def test_the_python_client_runs_a_contact_path_and_reads_it_typed(api_server):
     forces = [p.pairs["insertion"].force[0] for p in result.points]
     assert all(p.pairs["insertion"].state == "frictionless" for p in result.points)
     assert np.all(np.diff(forces) < 0)  # the fixture moving in pushes the finger harder
+
+
+def test_a_contact_problem_too_large_to_build_is_refused_before_building(api_server):
+    """256 pairs of a 64-vertex jaw against a 64-vertex polygon would build millions of rows:
+    422 naming the pair where the estimate passes the limit, answered at once."""
+    doc = example()
+    square = [[0, 0], [1, 0], [1, 1], [0, 1]]
+    doc["contacts"]["objects"]["block"] = {"type": "polygon", "vertices": square * 16, "position": [200, 200]}
+    doc["contacts"]["sites"]["saw"] = {"type": "jaw", "body": "tip", "closed": False,
+                                       "vertices": [[k, (k % 2) * 0.5] for k in range(64)]}
+    doc["contacts"]["pairs"] = {f"p{k}": {"site": "saw", "object": "block"} for k in range(3)}
+    started = time.perf_counter()
+    r = httpx.post(api_server.url + "/v1/solve", json={"document": doc, "analysis": "contact"})
+    error = _error(r)
+    assert r.status_code == 422 and error["pointer"] == "/document/contacts/pairs/p0"
+    assert "non-penetration rows: the limit is 2000" in error["message"]
+    assert time.perf_counter() - started < 2.0
+
+
+def test_too_many_link_rotations_for_a_contact_problem_are_refused_at_once(api_server):
+    doc = example()
+    doc["elements"]["finger"].update(intervals=64, degree=3)
+    started = time.perf_counter()
+    r = httpx.post(api_server.url + "/v1/solve", json={"document": doc, "analysis": "contact"})
+    error = _error(r)
+    assert r.status_code == 422 and error["pointer"] == "/document/elements/finger/intervals"
+    assert "at most 128 rotations" in error["message"]
+    assert time.perf_counter() - started < 2.0

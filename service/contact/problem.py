@@ -159,7 +159,7 @@ def _kkt_functions(V, g_eq, h_in, constraints, x, a, p, n_pairs: int, n_objects:
     stationarity = ca.gradient(lagrangian, w)
     slides = []
     pair_slide = [ca.SX(0) for _ in range(n_pairs)]
-    friction = ca.SX.zeros(n_w)
+    points, forces = [], []  # the friction force at each pushing row's material point
     for k, row in enumerate(constraints.rows):
         if row.point is None:
             slides.append(ca.SX(0))
@@ -171,9 +171,12 @@ def _kkt_functions(V, g_eq, h_in, constraints, x, a, p, n_pairs: int, n_objects:
         slide = ca.dot(unit_tangent, carried - points_old[:, k])  # the site's slide relative to the object
         slides.append(slide)
         pair_slide[row.pair] = pair_slide[row.pair] + weights[k] * slide
-        force = (phi[n_element + k] * lam_in[n_element + k] * ca.norm_2(row.normal)
-                 + stick[row.pair] * weights[k] * tau[row.pair]) * unit_tangent
-        friction = friction + ca.mtimes(ca.jacobian(row.point, w).T, force)
+        points.append(row.point)
+        forces.append((phi[n_element + k] * lam_in[n_element + k] * ca.norm_2(row.normal)
+                       + stick[row.pair] * weights[k] * tau[row.pair]) * unit_tangent)
+    friction = ca.SX.zeros(n_w)
+    if points:  # one Jacobian of every point: its transpose takes the forces to the unknowns
+        friction = ca.mtimes(ca.jacobian(ca.vertcat(*points), w).T, ca.vertcat(*forces))
     stationarity = stationarity - friction
     if n_a:
         held = ca.vertcat(ca.SX.zeros(n_w - n_a), freeze)
