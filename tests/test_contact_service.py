@@ -500,3 +500,20 @@ def test_too_many_link_rotations_for_a_contact_problem_are_refused_at_once(api_s
     assert r.status_code == 422 and error["pointer"] == "/document/elements/finger/intervals"
     assert "at most 128 rotations" in error["message"]
     assert time.perf_counter() - started < 2.0
+
+
+def test_cli_compares_frictionless_and_frictional_runs(run, tmp_path):
+    """--friction 0 --friction 0.5: two runs of the path, both in the JSON and on the plot;
+    friction makes the insertion harder at every touching state of the face."""
+    out, plot = tmp_path / "runs.json", tmp_path / "runs.svg"
+    result = run("contact", EXAMPLE, "--path", X_O, "--start", 78, "--stop", 64, "--steps", 14,
+                 "--friction", 0, "--friction", 0.5, "--json", out, "--plot", plot)
+    assert result.exit_code == 0, result.output
+    assert "mu = 0:" in result.output and "mu = 0.5:" in result.output
+    runs = json.loads(out.read_text())["runs"]
+    assert [r["friction"] for r in runs] == [0.0, 0.5]
+    plain, rubbing = ([p["pairs"]["insertion"] for p in r["points"]] for r in runs)
+    touching = [(a, b) for a, b in zip(plain, rubbing) if a["state"] != "open"]
+    assert len(touching) > 10 and all(b["force"][0] < a["force"][0] < 0 for a, b in touching)
+    assert all(b["state"] == "slipping" for _, b in touching)
+    assert plot.read_text().count("<path") > 10 and "mu = 0.5" in plot.read_text()

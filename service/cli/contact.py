@@ -39,6 +39,9 @@ def contact(document: DocArg, sets: SetOpt = None,
             at: Annotated[str | None, typer.Option("--at", metavar="I,J,...", help="--shapes: state indices "
                                                    "(default: four spread over the contact).")] = None,
             penetrating_start: Annotated[str, typer.Option(help="approach | refuse.")] = "approach",
+            friction: Annotated[list[float] | None, typer.Option(
+                "--friction", metavar="MU", help="Run the path with every pair's friction coefficient MU; "
+                "repeat to compare runs (--plot draws one curve each).")] = None,
             json_out: JsonOpt = None, plot: PlotOpt = None) -> None:
     """Contact of fingers (links by elements) with rigid objects: forces from the multipliers."""
     out, err = consoles()
@@ -59,7 +62,7 @@ def contact(document: DocArg, sets: SetOpt = None,
         if single or parameters is None:
             ok = _single_state(out, mech, problem, options, json_out)
         else:
-            ok = _path(out, mech, problem, options, parameters, output, json_out, plot, shapes, at)
+            ok = _path(out, mech, problem, options, parameters, output, json_out, plot, shapes, at, friction)
     if not ok:
         raise typer.Exit(EXIT_NOT_CONVERGED)
 
@@ -103,8 +106,21 @@ def _single_state(out, mech, problem, options, json_out) -> bool:
     return report["status"] == "converged"
 
 
-def _path(out, mech, problem, options, parameters, output, json_out, plot, shapes, at) -> bool:
-    from service.contact.path import default_outputs, follow, path_fields, state_record
+def _runs(mech, friction: list[float] | None) -> list[tuple[str, object]]:
+    """(label, mechanism) of each run: the document's, or one per --friction value."""
+    if not friction:
+        return [("", mech)]
+    pairs = [pair.pointer for pair in mech.structure.contacts.pairs]
+    runs = []
+    for mu in friction:
+        if not np.isfinite(mu) or mu < 0:
+            raise OptionError("--friction", f"must be a number of at least 0, got {mu:g}")
+        runs.append((f"mu = {mu:g}", mech.with_values({f"{pointer}/friction": mu for pointer in pairs})))
+    return runs
+
+
+def _path(out, mech, problem, options, parameters, output, json_out, plot, shapes, at, friction) -> bool:
+    from service.contact.path import default_outputs, path_fields
 
     fields = path_fields(mech, parameters, "--path")
     chosen = _chosen(at, fields.states)  # checked before the path is solved
@@ -117,31 +133,45 @@ def _path(out, mech, problem, options, parameters, output, json_out, plot, shape
     if y_name not in problem.output_names:
         raise OptionError("--output", f"unknown output '{y_name}' (outputs: {', '.join(wanted)}, and the mechanism's)")
     wanted = wanted + ([y_name] if y_name not in wanted else [])
+    runs = []
+    for label, run_mech in _runs(mech, friction):
+        states, records = _follow(out, run_mech, problem, fields, options, wanted, label)
+        _print_path(out, run_mech, fields, records, y_name, problem, label)
+        runs.append((label, run_mech, states, records))
+    if json_out is not None:
+        points = [[{k: v for k, v in r.items() if k != "state"} for r in records] for *_, records in runs]
+        write_json(json_out, {"document": mech.document.name, "parameters": [{"path": p, "values": list(v)} for p, v in
+                                                                            zip(fields.pointers, fields.values)],
+                              **({"points": points[0]} if not friction else
+                                 {"runs": [{"friction": mu, "points": p} for mu, p in zip(friction, points)]})})
+    if plot is not None:
+        _plot_path(mech, problem, fields, [(label, records) for label, _, _, records in runs], y_name, plot)
+    if shapes is not None:
+        _, run_mech, states, _ = runs[-1]
+        _plot_shapes(run_mech, problem, states, fields, chosen, shapes)
+    return all(r["status"] == "converged" for *_, records in runs for r in records)
+
+
+def _follow(out, mech, problem, fields, options, wanted, label):
+    from service.contact.path import follow, state_record
+
     states, records = [], []
     with Progress(transient=True, console=out) as progress:
-        task = progress.add_task("contact path", total=fields.states)
+        task = progress.add_task(f"contact path {label}".strip(), total=fields.states)
         for index, state in follow(mech, problem, fields, list(range(fields.states)), None, options):
             states.append(state)
             records.append(state_record(mech, problem, state, fields.at(index), wanted))
             progress.advance(task)
-    _print_path(out, mech, fields, records, y_name, problem)
-    if json_out is not None:
-        write_json(json_out, {"document": mech.document.name, "parameters": [{"path": p, "values": list(v)} for p, v in
-                                                                            zip(fields.pointers, fields.values)],
-                              "points": [{k: v for k, v in r.items() if k != "state"} for r in records]})
-    if plot is not None:
-        _plot_path(mech, problem, fields, records, y_name, plot)
-    if shapes is not None:
-        _plot_shapes(mech, problem, states, fields, chosen, shapes)
-    return all(r["status"] == "converged" for r in records)
+    return states, records
 
 
-def _print_path(out, mech, fields, records, y_name, problem) -> None:
+def _print_path(out, mech, fields, records, y_name, problem, label: str) -> None:
     unit = mech.doc_unit(mech.parameter_kind(fields.pointers[0]))
     y_unit = mech.doc_unit(problem.output_kinds[problem.output_names.index(y_name)])
     converged = [r for r in records if r["status"] == "converged"]
     seconds = sum(r["seconds"] for r in records)
-    out.print(f"[bold]{escape(mech.document.name)}[/bold]: {len(converged)} of {len(records)} states converged, "
+    out.print(f"[bold]{escape(mech.document.name)}[/bold]{escape(', ' + label) if label else ''}: "
+              f"{len(converged)} of {len(records)} states converged, "
               f"{seconds:.3f} s ({1e3 * seconds / max(len(records), 1):.1f} ms per state)")
     table = table_of(None, escape(fields.pointers[0]), "pairs", escape(y_name), text=2)
     step = max(1, len(records) // SHOWN_STATES)
@@ -159,16 +189,19 @@ def _print_path(out, mech, fields, records, y_name, problem) -> None:
         out.print(f"[yellow]not converged[/yellow] at {number(r['values'][0], unit)}: {escape(r['message'])}")
 
 
-def _plot_path(mech, problem, fields, records, y_name, plot) -> None:
+def _plot_path(mech, problem, fields, runs, y_name, plot) -> None:
     from service.contact.plots import plot_path
     from service.figures import field_label
 
     unit = mech.doc_unit(mech.parameter_kind(fields.pointers[0]))
     y_unit = mech.doc_unit(problem.output_kinds[problem.output_names.index(y_name)])
-    x = np.array([r["values"][0] for r in records])
-    y = np.array([r["outputs"][y_name] if r["status"] == "converged" else np.nan for r in records])
+    curves = []
+    for label, records in runs:
+        x = np.array([r["values"][0] for r in records])
+        y = np.array([r["outputs"][y_name] if r["status"] == "converged" else np.nan for r in records])
+        curves.append((label or y_name, x, y))
     try:
-        plot_path([(y_name, x, y)], f"{field_label(fields.pointers[0])} [{unit}]", f"{y_name} [{y_unit}]",
+        plot_path(curves, f"{field_label(fields.pointers[0])} [{unit}]", f"{y_name} [{y_unit}]",
                   mech.document.name, plot)
     except OSError as exc:
         raise OptionError("--plot", f"cannot write {plot}: {exc.strerror}") from None
