@@ -64,12 +64,19 @@ class SymbolicEnergy:
     surfaces: dict[str, object]  # element name -> its ElementSurfaces (elements that have them)
     x_in_state: list[int]
     multipliers_in_state: list[int]
+    nudge: ca.SX | None = None  # (3 x bodies) added to every body's displacement, when asked for: zero it
 
 
-def symbolic_energy(structure: Structure) -> SymbolicEnergy:
+def symbolic_energy(structure: Structure, nudged: bool = False) -> SymbolicEnergy:
+    """The energy form's expressions. nudged: every body's displacement d_b gets a symbol
+    added (`nudge`, to be set to zero), so that d/d nudge_b of any term is its generalized
+    force on body b, prescribed coordinates included (the reactions of contact forces)."""
     ctx = AssemblyContext(structure)
     x_body = ca.SX.sym("x", len(structure.free))
     d = ctx.displacements(x_body)
+    nudge = ca.SX.sym("nudge", 3, len(d)) if nudged else None
+    if nudged:
+        d = [d_b + nudge[:, b] for b, d_b in enumerate(d)]
     V = load_potential(ctx, d)
     equalities, inequalities, variables, surfaces = [], [], [x_body], {}
     names = [structure.coordinate_name(b, c) for b, c in structure.free]
@@ -97,7 +104,7 @@ def symbolic_energy(structure: Structure) -> SymbolicEnergy:
         equalities += [(f"{t.name}.{name}", g) for name, g in terms.equalities]
         inequalities += [(f"{t.name}.{name}", h) for name, h in terms.inequalities]
     return SymbolicEnergy(ctx, ca.vertcat(*variables), d, names, V, equalities, inequalities, surfaces,
-                          x_in_state, multipliers_in_state)
+                          x_in_state, multipliers_in_state, nudge)
 
 
 def energy_form(structure: Structure) -> EnergyForm:

@@ -336,8 +336,6 @@ def test_the_grip_force_grows_monotonically_while_closing():
     assert forces[-1] == pytest.approx(8.958, rel=1e-3)
 
 
-@pytest.mark.xfail(strict=True, reason="flexmech bug: in the contact analysis, the reaction of a body that carries a "
-                   "link leaves out the contact forces on the link's surface (reactions.left_jaw.Fx and Fy are 0)")
 def test_the_jaws_reactions_balance_the_contact_forces():
     """Each jaw holds its finger against the cylinder: its reaction force is minus the
     contact force on the finger (the finger is otherwise unloaded)."""
@@ -347,3 +345,11 @@ def test_the_jaws_reactions_balance_the_contact_forces():
     force = np.array(last["pairs"]["left_grip"]["force"])
     reaction = np.array([outputs["reactions.left_jaw.Fx"], outputs["reactions.left_jaw.Fy"]])
     assert np.linalg.norm(reaction + force) <= 1e-8 * np.linalg.norm(force)
+    # the finger's start wrench carries the contact force: n(0) = F and M(0) = (P - start) x F
+    start = np.array([outputs["elements.left_finger.x_start"], outputs["elements.left_finger.y_start"]])
+    arm = np.array(last["pairs"]["left_grip"]["point"]) - start
+    internal = np.array([outputs["elements.left_finger.h"], outputs["elements.left_finger.v"]])
+    assert np.linalg.norm(internal - force) <= 1e-8 * np.linalg.norm(force)
+    moment = arm[0] * force[1] - arm[1] * force[0]
+    assert abs(outputs["elements.left_finger.M_start"] - moment) <= 1e-8 * abs(moment)
+    assert abs(outputs["reactions.left_jaw.M"] + moment) <= 1e-8 * abs(moment)

@@ -39,6 +39,7 @@ class ContactRow:
     normal: ca.SX | None = None  # (2,) dh/dP at that point
     site_parameter: ca.SX | None = None  # where along the site (nondimensional length)
     axis: int = -1  # the separating axis the row belongs to (-1: a pointwise row)
+    carrier: str | None = None  # the link whose points it pushes (a surface, a jaw on a link's end), or None
 
 
 @dataclass
@@ -151,6 +152,18 @@ class ContactGeometry:
         return out
 
 
+def substituted(constraints: ContactConstraints, old: ca.SX, new: ca.SX) -> ContactConstraints:
+    """The same constraints with `old` replaced by `new` in every expression."""
+    def fix(e):
+        return None if e is None else ca.substitute(e, old, new)
+
+    rows = [ContactRow(r.pair, fix(r.value), fix(r.point), fix(r.normal), fix(r.site_parameter), r.axis, r.carrier)
+            for r in constraints.rows]
+    frames = [ObjectFrame(fix(f.origin), fix(f.angle)) for f in constraints.object_frames]
+    return ContactConstraints(constraints.axes, fix(constraints.axes_guess), constraints.axis_pairs, rows, frames,
+                              constraints.pair_objects)
+
+
 def contact_constraints(geometry: ContactGeometry) -> ContactConstraints:
     topology = geometry.topology
     frames = [geometry.object_frame(obj) for obj in topology.objects]
@@ -158,9 +171,11 @@ def contact_constraints(geometry: ContactGeometry) -> ContactConstraints:
     for k, pair in enumerate(topology.pairs):
         site, obj = topology.sites[pair.site], topology.objects[pair.object]
         frame = frames[pair.object]
+        first = len(rows)
         if site.type == "surface":
             rows += [_pointwise_row(geometry, k, obj, frame, point, along)
                      for point, along in geometry.surface_points(site)]
+            _carried(rows, first, site.link)
             continue
         vertices, along = geometry.jaw_vertices(site)
         if obj.type == "half_plane":
@@ -179,9 +194,16 @@ def contact_constraints(geometry: ContactGeometry) -> ContactConstraints:
                     rows += _axis_rows(geometry, k, obj, frame, axis, [(vertices[i], along[i]) for i in piece], object_piece,
                                        len(axes) - 1)
                     guesses.append(_axis_guess(geometry, obj, frame, [vertices[i] for i in piece], object_piece))
+        _carried(rows, first, site.link)
     return ContactConstraints(ca.vertcat(*axes) if axes else ca.SX(0, 1),
                               ca.vertcat(*guesses) if guesses else ca.SX(0, 1), axis_pairs, rows, frames,
                               [pair.object for pair in topology.pairs])
+
+
+def _carried(rows: list[ContactRow], first: int, link: str | None) -> None:
+    for row in rows[first:]:
+        if row.point is not None:
+            row.carrier = link
 
 
 def _pointwise_row(geometry, k, obj, frame, point, along) -> ContactRow:

@@ -91,10 +91,15 @@ def state_record(mech: Mechanism, problem: ContactProblem, state: ContactState, 
     what a resumed path needs to go on from it."""
     mode = state.mode
     y = np.asarray(problem.outputs(state.v, state.p, mode.phi, mode.stick, mode.weights), dtype=float).ravel()
+    open_pairs = {pair.name for pair, state_of in zip(problem.structure.contacts.pairs, state.pair_states)
+                  if state_of == "open"}
     chosen = {}
     for name in outputs:
         k = problem.output_names.index(name)
         chosen[name] = y[k] / mech.nd_per_doc(problem.output_kinds[k])
+        pair = name.removeprefix("contacts.").rpartition(".")[0] if name.startswith("contacts.") else None
+        if pair in open_pairs:  # no contact: no force, no point (not rounding noise)
+            chosen[name] = 0.0 if problem.output_kinds[k] == "force" else None
     return {"values": values, "status": state.status, "message": state.message, "iterations": state.iterations,
             "seconds": state.seconds, "pairs": pairs_report(mech, problem, state), "outputs": chosen,
             "state": {"v": state.v.tolist(), "sigma": state.sigma.tolist()}}

@@ -29,12 +29,13 @@ import casadi as ca
 import numpy as np
 
 from models.assembly import graphs_for
-from models.contact.constraints import ContactGeometry, contact_constraints
+from models.contact.constraints import ContactGeometry, contact_constraints, substituted
 from models.errors import MechanismError
 from models.planar import rot
 from models.forms import symbolic_energy
 from models.structure import Structure
 from service.contact.outputs import PAIR_OUTPUTS
+from service.contact.wrenches import contact_wrenches, friction_force, with_contact_wrenches
 
 
 @dataclass(frozen=True)
@@ -93,19 +94,28 @@ class ContactProblem:
 def contact_problem(structure: Structure) -> ContactProblem:
     if structure.contacts is None or not structure.contacts.pairs:
         raise MechanismError("/contacts/pairs", "the contact analysis needs at least one contact pair")
-    energy = symbolic_energy(structure)
+    energy = symbolic_energy(structure, nudged=True)
+    nudge = ca.vec(energy.nudge)
     geometry = ContactGeometry(energy.ctx, energy.d, energy.surfaces, structure.contacts)
-    constraints = contact_constraints(geometry)
+    nudged = contact_constraints(geometry)  # every expression also of the bodies' nudges (for reactions)
+    constraints = substituted(nudged, nudge, ca.SX.zeros(nudge.shape))
     x, a, p = energy.x, constraints.axes, energy.ctx.p
     w = ca.vertcat(x, a)
     # a row no unknown moves (a surface point at a clamp on a fixed body) cannot change: left out
-    constraints.rows = [row for row in constraints.rows if ca.depends_on(row.value, w)]
+    kept = [k for k, row in enumerate(constraints.rows) if ca.depends_on(row.value, w)]
+    constraints.rows = [constraints.rows[k] for k in kept]
+    nudged.rows = [nudged.rows[k] for k in kept]
     n_rows = len(constraints.rows)
     shift = ca.SX.sym("shift", n_rows)
-    g_eq = _stack([g for _, g in energy.equalities])
-    h_el = _stack([h for _, h in energy.inequalities])
+
+    def unnudged(e):
+        return ca.substitute(e, nudge, ca.SX.zeros(nudge.shape))
+
+    g_eq = unnudged(_stack([g for _, g in energy.equalities]))
+    h_el = unnudged(_stack([h for _, h in energy.inequalities]))
+    potential = unnudged(energy.potential)
     h = _stack([row.value for row in constraints.rows])
-    nlp = {"x": w, "p": ca.vertcat(p, shift), "f": energy.potential, "g": ca.vertcat(g_eq, h_el, h + shift)}
+    nlp = {"x": w, "p": ca.vertcat(p, shift), "f": potential, "g": ca.vertcat(g_eq, h_el, h + shift)}
     zero2 = ca.SX.zeros(2)
     normals = ca.horzcat(*[row.normal if row.normal is not None else zero2 for row in constraints.rows])
     points = ca.horzcat(*[row.point if row.point is not None else zero2 for row in constraints.rows])
@@ -117,11 +127,12 @@ def contact_problem(structure: Structure) -> ContactProblem:
                          ["w", "p"], ["origins", "angles"])
     axes_guess = ca.Function("axes_guess", [x, p], [constraints.axes_guess], ["x", "p"], ["a"])
     n_pairs, n_objects = len(structure.contacts.pairs), len(structure.contacts.objects)
-    kkt, kkt_p, slides = _kkt_functions(energy.potential, g_eq, ca.vertcat(h_el, h), constraints, x, a, p,
+    kkt, kkt_p, slides = _kkt_functions(potential, g_eq, ca.vertcat(h_el, h), constraints, x, a, p,
                                         n_pairs, n_objects)
     results = pair_results(constraints, w, p, g_eq.numel(), h_el.numel(), n_pairs)
-    outputs, names, kinds = _outputs(structure, results, w, p, g_eq.numel(), h_el.numel() + n_rows, n_pairs,
-                                     energy.x_in_state, energy.multipliers_in_state)
+    corrections = contact_wrenches(structure, nudged, nudge, w, p, g_eq.numel(), h_el.numel(), n_pairs)
+    outputs, names, kinds = _outputs(structure, results, corrections, w, p, g_eq.numel(), h_el.numel() + n_rows,
+                                     n_pairs, energy.x_in_state, energy.multipliers_in_state)
     problem = ContactProblem(structure, x.numel(), a.numel(), g_eq.numel(), h_el.numel() + n_rows, h_el.numel(),
                              tuple(row.pair for row in constraints.rows),
                              tuple(row.point is not None for row in constraints.rows),
@@ -130,7 +141,7 @@ def contact_problem(structure: Structure) -> ContactProblem:
                              ca.Function("element_inequalities", [x, p], [h_el], ["x", "p"], ["h"]), rows,
                              frames, kkt, kkt_p, slides, results, p.numel(), n_pairs,
                              tuple(pair.object for pair in structure.contacts.pairs), outputs, names, kinds,
-                             _jacobians(outputs), *_drawing(energy, geometry, w, p))
+                             _jacobians(outputs), *_drawing(energy, geometry, w, p, unnudged))
     for fn in (rows, frames, axes_guess, kkt, slides, results):
         if fn.has_free():
             raise RuntimeError(f"graph {fn.name()} has free symbols {fn.get_free()}")
@@ -172,8 +183,8 @@ def _kkt_functions(V, g_eq, h_in, constraints, x, a, p, n_pairs: int, n_objects:
         slides.append(slide)
         pair_slide[row.pair] = pair_slide[row.pair] + weights[k] * slide
         points.append(row.point)
-        forces.append((phi[n_element + k] * lam_in[n_element + k] * ca.norm_2(row.normal)
-                       + stick[row.pair] * weights[k] * tau[row.pair]) * unit_tangent)
+        forces.append(friction_force(row, lam_in[n_element + k], phi[n_element + k], stick[row.pair], weights[k],
+                                     tau[row.pair]))
     friction = ca.SX.zeros(n_w)
     if points:  # one Jacobian of every point: its transpose takes the forces to the unknowns
         friction = ca.mtimes(ca.jacobian(ca.vertcat(*points), w).T, ca.vertcat(*forces))
@@ -218,11 +229,10 @@ def pair_results(constraints, w: ca.SX, p: ca.SX, n_eq: int, n_element: int, n_p
         if row.point is None:
             continue
         j = row.pair
-        size = ca.norm_2(row.normal)
-        unit_tangent = ca.vertcat(-row.normal[1], row.normal[0]) / size
-        pushing = lam[n_element + k] * size
+        pushing = lam[n_element + k] * ca.norm_2(row.normal)
         normal_sum[j] = normal_sum[j] + lam[n_element + k] * row.normal
-        friction_sum[j] = friction_sum[j] + (phi[n_element + k] * pushing + stick[j] * weights[k] * tau[j]) * unit_tangent
+        friction_sum[j] = friction_sum[j] + friction_force(row, lam[n_element + k], phi[n_element + k], stick[j],
+                                                           weights[k], tau[j])
         magnitude[j] = magnitude[j] + pushing
         point[j] = point[j] + pushing * row.point
         along[j] = along[j] + pushing * row.site_parameter
@@ -238,9 +248,10 @@ def pair_results(constraints, w: ca.SX, p: ca.SX, n_eq: int, n_element: int, n_p
                        ["force", "normal_force", "tangential_force", "point", "along", "normal"])
 
 
-def _outputs(structure, results, w, p, n_eq, n_in, n_pairs, x_in_state, multipliers_in_state):
+def _outputs(structure, results, corrections, w, p, n_eq, n_in, n_pairs, x_in_state, multipliers_in_state):
     """y(v, p, mode): "contacts.<pair>.<quantity>" of every pair (PAIR_OUTPUTS), then the
-    structure's own outputs at the state (its residual-form z assembled from v)."""
+    structure's own outputs at the state (its residual-form z assembled from v), its
+    reactions and its links' start wrenches with the contact forces they carry added."""
     names = [f"contacts.{pair.name}.{q}" for pair in structure.contacts.pairs for q, _ in PAIR_OUTPUTS]
     kinds = [kind for _ in structure.contacts.pairs for _, kind in PAIR_OUTPUTS]
     v = ca.SX.sym("v", w.numel() + n_eq + n_in + n_pairs)
@@ -254,7 +265,8 @@ def _outputs(structure, results, w, p, n_eq, n_in, n_pairs, x_in_state, multipli
     for k, slot in enumerate(multipliers_in_state):
         z[slot] = v[w.numel() + k]
     graphs = graphs_for(structure)
-    y = ca.vertcat(*per_pair, graphs.outputs(z, p))
+    y_structure = with_contact_wrenches(structure, graphs, graphs.outputs(z, p), corrections(v, p, phi, stick, weights))
+    y = ca.vertcat(*per_pair, y_structure)
     names += list(graphs.output_names)
     kinds += list(graphs.output_kinds)
     function = ca.Function("contact_outputs", [v, p, phi, stick, weights], [y], ["v", "p", "phi", "stick", "weights"], ["y"])
@@ -268,7 +280,7 @@ def _jacobians(outputs: ca.Function) -> ca.Function:
                        [outputs.name_in(i) for i in range(outputs.n_in())], ["y_v", "y_p"])
 
 
-def _drawing(energy, geometry, w, p):
+def _drawing(energy, geometry, w, p, unnudged):
     """The sites drawn at a state: every jaw's vertices, every link's centre line and surfaces."""
     jaws, vertices = [], []
     for site in geometry.topology.sites:
@@ -281,7 +293,7 @@ def _drawing(energy, geometry, w, p):
             half = point.half_thickness if point.half_thickness is not None else ca.SX(0)
             outline += [point.centre, point.centre + half * point.normal, point.centre - half * point.normal]
         links.append((name, len(surfaces.points)))
-    function = ca.Function("contact_drawing", [w, p], [ca.horzcat(*vertices) if vertices else ca.SX(2, 0),
-                                                       ca.horzcat(*outline) if outline else ca.SX(2, 0)],
+    function = ca.Function("contact_drawing", [w, p], [unnudged(ca.horzcat(*vertices)) if vertices else ca.SX(2, 0),
+                                                       unnudged(ca.horzcat(*outline)) if outline else ca.SX(2, 0)],
                            ["w", "p"], ["jaws", "links"])
     return function, tuple(links), tuple(jaws)

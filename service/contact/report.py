@@ -53,9 +53,12 @@ def pairs_report(mech: Mechanism, problem: ContactProblem, state: ContactState) 
 
 
 def structure_outputs(mech: Mechanism, problem: ContactProblem, state: ContactState) -> dict[str, float]:
-    parts = split(problem, state.v)
-    z = problem.to_state(parts.w, parts.lam_eq)
-    return outputs_in_doc_units(mech, mech.graphs.outputs(z, state.p))
+    """The mechanism's outputs at the state (document units), its reactions and link start
+    wrenches with the contact forces they carry (service.contact.wrenches)."""
+    mode = state.mode
+    y = np.asarray(problem.outputs(state.v, state.p, mode.phi, mode.stick, mode.weights), dtype=float).ravel()
+    first = len(problem.output_names) - len(mech.graphs.output_names)
+    return outputs_in_doc_units(mech, y[first:])
 
 
 def state_report(mech: Mechanism, problem: ContactProblem, state: ContactState) -> dict:
