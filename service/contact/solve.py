@@ -6,8 +6,9 @@ Friction, consistently: at a slipping pair the tangential force mu F_n acts on t
 opposing the site's slide relative to the object over the step from the reference (previous)
 state, and the shape is in equilibrium with it; a pair whose slide would run with its
 friction force sticks instead (its contact point moves with the object; the tangential
-force is whatever holds it, up to mu F_n). Without a reference state, friction cannot know
-its direction and the state is frictionless.
+force is whatever holds it, up to mu F_n). The slide comes from the previous state of a
+path, or, for a single state, from the rate at which a given motion of the parameters moves
+the contact (the state's own sensitivity); with neither, the state is frictionless.
 """
 
 from __future__ import annotations
