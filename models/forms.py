@@ -14,7 +14,7 @@ curved beams, the shooting links) have no energy form and say why.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
@@ -65,6 +65,7 @@ class SymbolicEnergy:
     x_in_state: list[int]
     multipliers_in_state: list[int]
     nudge: ca.SX | None = None  # (3 x bodies) added to every body's displacement, when asked for: zero it
+    inertia: list = field(default_factory=list)  # every element's InertiaPoints
 
 
 def symbolic_energy(structure: Structure, nudged: bool = False) -> SymbolicEnergy:
@@ -78,7 +79,7 @@ def symbolic_energy(structure: Structure, nudged: bool = False) -> SymbolicEnerg
     if nudged:
         d = [d_b + nudge[:, b] for b, d_b in enumerate(d)]
     V = load_potential(ctx, d)
-    equalities, inequalities, variables, surfaces = [], [], [x_body], {}
+    equalities, inequalities, variables, surfaces, inertia = [], [], [x_body], {}, []
     names = [structure.coordinate_name(b, c) for b, c in structure.free]
     x_in_state, multipliers_in_state = list(range(len(names))), []
     for t, offset in zip(structure.elements, structure.element_offsets):
@@ -100,11 +101,12 @@ def symbolic_energy(structure: Structure, nudged: bool = False) -> SymbolicEnerg
         multipliers_in_state += list(range(offset + n_own, offset + t.unknowns))
         if terms.surfaces is not None:
             surfaces[t.name] = terms.surfaces
+        inertia += terms.inertia
         V = V + terms.energy
         equalities += [(f"{t.name}.{name}", g) for name, g in terms.equalities]
         inequalities += [(f"{t.name}.{name}", h) for name, h in terms.inequalities]
     return SymbolicEnergy(ctx, ca.vertcat(*variables), d, names, V, equalities, inequalities, surfaces,
-                          x_in_state, multipliers_in_state, nudge)
+                          x_in_state, multipliers_in_state, nudge, inertia)
 
 
 def energy_form(structure: Structure) -> EnergyForm:

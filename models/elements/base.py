@@ -78,7 +78,20 @@ class EnergyTerms:
     equalities: list[tuple[str, ca.SX]] = field(default_factory=list)  # g(d, q) = 0
     inequalities: list[tuple[str, ca.SX]] = field(default_factory=list)  # g(d, q) >= 0
     variables: ca.SX | None = None  # q: the element's own symbols (zero: undeformed), or None
-    surfaces: Any = None  # where contact can touch it (models.contact.geometry.ElementSurfaces), or None
+    surfaces: Any = None  # where contact can touch it (models.elements.surfaces.ElementSurfaces), or None
+    inertia: list["InertiaPoint"] = field(default_factory=list)  # its mass, lumped where quadrature puts it
+
+
+@dataclass
+class InertiaPoint:
+    """A share of an element's mass: `mass` at the point `position` (2,), and the rotary
+    inertia `rotary` of a section turning with the angle `angle` (None: none). The kinetic
+    energy is the sum over points of m |dposition/dt|^2 / 2 + J (dangle/dt)^2 / 2."""
+
+    position: ca.SX
+    mass: ca.SX
+    angle: ca.SX | None = None
+    rotary: ca.SX | None = None
 
 
 class NoEnergyForm(Exception):

@@ -15,12 +15,13 @@ from dataclasses import dataclass
 import casadi as ca
 
 from models.context import AssemblyContext
-from models.elements.base import CentreLine, Contribution, EnergyTerms, NoMassForm, ScaleHint, SiValues
+from models.elements.base import CentreLine, Contribution, EnergyTerms, InertiaPoint, NoMassForm, ScaleHint, SiValues
 from models.elements.link import LINK, Link, LinkElementsTopology, link_properties
 from models.elements.surfaces import ElementSurfaces, SurfacePoint
 from models.elements.variational import variational_parts
 from models.link_fe import LinkElements, LinkKinematics
 from models.planar import cross
+from models.sections import section_properties
 
 
 @dataclass
@@ -55,7 +56,8 @@ class LinkElementsFamily:
         arm_j = ctx.arm(j, ctx.body_axes(j, undeformed.node_position[-1]), d)
         start = ctx.reference(i)[0] + d[i][:2] + arm_i
         weighs = props.line_mass is not None and props.gravity is not None
-        kin = disc.kinematics(theta, strains.get("gamma"), strains.get("eps"), start, positions_at_quadrature=weighs)
+        kin = disc.kinematics(theta, strains.get("gamma"), strains.get("eps"), start,
+                              positions_at_quadrature=props.line_mass is not None)
         end_target = ctx.reference(j)[0] + d[j][:2] + arm_j
         equalities = [("end.x", kin.node_position[-1][0] - end_target[0]),
                       ("end.y", kin.node_position[-1][1] - end_target[1])]
@@ -73,7 +75,12 @@ class LinkElementsFamily:
                                     half(ca.SX(1.0)) if half else None))
         surfaces = ElementSurfaces({"start": (start, kin.node_psi[0]), "end": (kin.node_position[-1], kin.node_psi[-1])},
                                    surface)
-        terms = EnergyTerms(energy, equalities, [], ca.vertcat(*parts), surfaces)
+        inertia = []
+        if props.line_mass is not None:  # its mass and the rotary inertia of its sections (rho I)
+            density, second_moment = _density_and_I(ctx, t)
+            inertia = [InertiaPoint(q.position, q.weight * props.line_mass(ca.SX(q.u)), q.psi,
+                                    q.weight * props.length * density * second_moment(ca.SX(q.u))) for q in kin.points]
+        terms = EnergyTerms(energy, equalities, [], ca.vertcat(*parts), surfaces, inertia)
         return _Stated(terms, kin, undeformed, (arm_i, arm_j))
 
     def energy_terms(self, ctx: AssemblyContext, t: LinkElementsTopology, d: list[ca.SX]) -> EnergyTerms:
@@ -132,12 +139,16 @@ class LinkElementsFamily:
 
     def kinetic_energy(self, ctx, t: LinkElementsTopology, d, v):
         if t.weighs:
-            raise NoMassForm("it has mass (its material's density); the mass of links by elements is not "
-                             "modelled yet")
+            raise NoMassForm("its mass moves with its own variables, which the residual form's mass matrix does not "
+                             "see: the dynamics form (models.dynamics) carries it")
         return None
 
     def scale_hint(self, t: LinkElementsTopology, values: SiValues) -> ScaleHint:
         return LINK.scale_hint(t, values)
+
+
+def _density_and_I(ctx: AssemblyContext, t: LinkElementsTopology):
+    return ctx.P[f"/materials/{t.material}/density"], section_properties(ctx.P, t.section).I
 
 
 def _normal(psi: ca.SX) -> ca.SX:

@@ -1,0 +1,42 @@
+"""Natural modes of small vibration about an equilibrium: the generalized eigenproblem of the
+stiffness (the Hessian of the Lagrangian) and the mass matrix on the constraints' null space."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import casadi as ca
+import numpy as np
+from scipy.linalg import eigh, null_space
+
+from models.structure import Structure
+from service.dynamics.integrate import form_of
+
+
+@dataclass
+class Modes:
+    omegas: np.ndarray  # rad/s, ascending
+    shapes: np.ndarray  # (unknowns, modes): in x, mass-normalized
+
+
+@lru_cache(maxsize=16)
+def _hessian(structure: Structure) -> ca.Function:
+    from models.forms import symbolic_energy
+
+    s = symbolic_energy(structure)
+    g = ca.vertcat(*[row for _, row in s.equalities]) if s.equalities else ca.SX(0, 1)
+    lam = ca.SX.sym("lam", g.numel())
+    K = ca.hessian(s.potential + ca.dot(lam, g), s.x)[0]
+    return ca.Function("stiffness", [s.x, lam, s.ctx.p], [K])
+
+
+def natural_modes(structure: Structure, p: np.ndarray, x: np.ndarray, lam: np.ndarray) -> Modes:
+    """The modes about the equilibrium (x, lam) at parameters p."""
+    form = form_of(structure)
+    K = np.asarray(_hessian(structure)(x, lam, p), dtype=float)
+    M = np.asarray(form.mass(x, p), dtype=float)
+    G = np.asarray(form.constraint_jacobian(x, p), dtype=float).reshape(form.n_equalities, len(x))
+    Z = null_space(G) if G.size else np.eye(len(x))
+    values, vectors = eigh(Z.T @ K @ Z, Z.T @ M @ Z)
+    return Modes(np.sqrt(np.maximum(values, 0.0)), Z @ vectors)
