@@ -112,6 +112,9 @@ class SolveRequest(DocumentRequest):
                                          "progress): friction opposes the sliding this motion causes")
     thesis_recovery: bool = Field(False, description="contact: also the thesis' recovery of the forces from the "
                                                      "frictionless shape (Lan 2005 Eqs. 6.6-6.10), labelled")
+    simulate: dict[str, Any] | None = Field(
+        None, description="simulate: fields of the document's `simulate` section (until, step, scheme, histories, "
+                          "...) that override it")
 
     @model_validator(mode="after")
     def _inverse_has_displacements(self):

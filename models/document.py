@@ -20,6 +20,7 @@ from pydantic import Field, ValidationError, model_validator
 from models.contact.document import OBJECT_TYPES, SITE_TYPES, Contacts
 from models.elements import FAMILIES
 from models.elements.link import SHAPE_TYPES
+from models.simulation_spec import SimulateSpec
 from models.errors import MechanismError, pointer_of
 from models.fields import MAX_QUANTITY_CHARS, Number, StrictModel, Vec2
 from models.reading import parse_json, parse_yaml
@@ -219,6 +220,7 @@ class MechanismDocument(StrictModel):
     sweep: SweepSpec | None = None
     inverse: InverseSpec | None = None
     optimize: OptimizeSpec | None = None
+    simulate: SimulateSpec | None = Field(default=None, description="a time simulation (the simulate analysis)")
 
     def to_json_dict(self) -> dict[str, Any]:
         return self.model_dump(mode="json", by_alias=True, exclude_none=True)

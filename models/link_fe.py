@@ -120,6 +120,7 @@ class LinkKinematics:
     points: list[LinkPoint]
     contact_points: list[LinkPoint]
     strain_energy: ca.SX
+    elongation: ca.SX  # the centre line's length less the link's: the integral of the axial strain
 
 
 class LinkElements:
@@ -145,7 +146,7 @@ class LinkElements:
         None), start: position of u = 0."""
         P, rule, p = self.props, self.rule, self.degree
         h = 1.0 / self.elements
-        energy = ca.SX(0)
+        energy, elongation = ca.SX(0), ca.SX(0)
         position = start
         node_u, node_psi, node_position, points, contact = [0.0], [P.eta(ca.SX(0)) + theta[0]], [start], [], []
         for e in range(self.elements):
@@ -157,6 +158,8 @@ class LinkElements:
                 psi, normal, r_u = element.tangent(rule.xi[q], rule.rotation[q], rule.strain[q])
                 increment = increment + h * rule.weights[q] * r_u
                 energy = energy + h * rule.weights[q] * element.energy_density(rule.xi[q], rule.slope[q], rule.strain[q])
+                if eps is not None:
+                    elongation = elongation + h * rule.weights[q] * P.length * element.axial_strain(rule.strain[q])
                 where = element.position(position, rule.at_quadrature, q) if positions_at_quadrature else None
                 points.append(LinkPoint(e * h + h * rule.xi[q], h * rule.weights[q], psi, where, normal))
             for j in range(len(rule.at_contact.xi)):
@@ -167,7 +170,7 @@ class LinkElements:
             node_u.append(e * h + h)
             node_psi.append(P.eta(ca.SX(e * h + h)) + theta[e * p + p])
             node_position.append(position)
-        return LinkKinematics(node_u, node_psi, node_position, points, contact, energy)
+        return LinkKinematics(node_u, node_psi, node_position, points, contact, energy, elongation)
 
 
 class _Element:
@@ -184,6 +187,9 @@ class _Element:
         stretch = 1 + (ca.dot(ca.DM(strain_row), self.eps) if self.eps is not None else 0)
         shear = ca.dot(ca.DM(strain_row), self.gamma) if self.gamma is not None else 0
         return psi, n, P.length * (stretch * t + shear * n)
+
+    def axial_strain(self, strain_row) -> ca.SX:
+        return ca.dot(ca.DM(strain_row), self.eps)
 
     def energy_density(self, xi: float, slope_row, strain_row) -> ca.SX:
         P, L = self.props, self.props.length

@@ -15,7 +15,7 @@ router = APIRouter(prefix="/v1", tags=["solve"])
 
 # The request fields an analysis may read (the rest say which mechanism and how to solve it).
 ANALYSIS_FIELDS = ("target", "stiffness", "sensitivities", "at", "displacements", "penetrating_start", "motion",
-                   "thesis_recovery")
+                   "thesis_recovery", "simulate")
 
 
 def _solve(request: SolveRequest, document: dict, limits: Limits) -> dict:

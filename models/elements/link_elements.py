@@ -94,7 +94,7 @@ class LinkElementsFamily:
             stated["s"] = s = self._state(ctx, t, local)
             kin = s.kinematics
             extras = [kin.node_position[-1], kin.node_psi[0], kin.node_psi[-1], *kin.node_position,
-                      *[q.position for q in kin.contact_points], *s.arms]
+                      *[q.position for q in kin.contact_points], kin.elongation, *s.arms]
             return s.terms, extras
 
         wrenches, rows, energy, extras = variational_parts((i, j), ctx.n_bodies, d, z, build)
@@ -103,7 +103,7 @@ class LinkElementsFamily:
         end, psi_start, psi_end = extras[0], extras[1], extras[2]
         nodes = extras[3:3 + n_nodes]
         points = extras[3 + n_nodes:3 + n_nodes + n_points]
-        arm_i, arm_j = extras[-2:]
+        elongation, arm_i, arm_j = extras[-3:]
         on_start, on_end = wrenches[i], wrenches[j]
         n_start = -on_start[:2]  # the internal force at u = 0 (what the part beyond exerts on the start)
         m_start = -(on_start[2] - cross(arm_i, on_start[:2]))
@@ -120,6 +120,8 @@ class LinkElementsFamily:
                    ("x_end_undeformed", "length", und.node_position[-1][0]),
                    ("y_end_undeformed", "length", und.node_position[-1][1]),
                    ("energy", "energy", energy)]
+        if t.axial:
+            outputs.append(("elongation", "length", elongation))
         deformed = _ordered(nodes, points, s.kinematics)
         undeformed = _ordered(und.node_position, [q.position for q in und.contact_points], und)
         half = link_properties(ctx, t).half_thickness

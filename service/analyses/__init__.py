@@ -7,6 +7,7 @@ from service.analyses.energy import ENERGY
 from service.analyses.equilibrium import EQUILIBRIUM
 from service.analyses.inverse import INVERSE
 from service.analyses.linearization import LINEARIZATION
+from service.analyses.simulate import SIMULATE
 
 ANALYSES = Analyses([
     EQUILIBRIUM,
@@ -14,6 +15,7 @@ ANALYSES = Analyses([
     INVERSE,
     ENERGY,
     CONTACT,
+    SIMULATE,
 ])
 
 __all__ = ["ANALYSES", "Analysis", "AnalysisRequest"]

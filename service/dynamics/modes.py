@@ -11,7 +11,7 @@ import numpy as np
 from scipy.linalg import eigh, null_space
 
 from models.structure import Structure
-from service.dynamics.integrate import form_of
+from service.dynamics.functions import form_of
 
 
 @dataclass

@@ -1,0 +1,40 @@
+"""The document's `simulate` section: how a time simulation runs (models.dynamics,
+service.dynamics). Times are in seconds; history values in the document unit of the field
+they drive."""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+from pydantic import Field, model_validator
+
+from models.fields import StrictModel
+
+
+class SimulateSpec(StrictModel):
+    until: float | None = Field(default=None, gt=0, allow_inf_nan=False, description="end time (s)")
+    step: float = Field(default=1e-3, gt=0, allow_inf_nan=False, description="time step (s)")
+    scheme: Literal["generalized_alpha", "newmark"] = Field(
+        default="generalized_alpha", description="generalized-alpha (second order, rho_inf), or Newmark (a1, a2)")
+    rho_inf: float = Field(default=0.9, ge=0, le=1, description="generalized-alpha: spectral radius at high "
+                           "frequency (1: no numerical dissipation)")
+    a1: float = Field(default=0.5, ge=0.5, le=1.5, description="Newmark gamma (Lan 2005 Eq. 3.15; 0.5 + sigma)")
+    a2: float = Field(default=0.5, ge=0.5, le=3.0, description="Newmark 2 beta (Lan 2005 Eq. 3.15; (1 + sigma)^2 / 2)")
+    damping: float = Field(default=0.0, ge=0, allow_inf_nan=False,
+                           description="mass-proportional damping coefficient alpha (1/s): forces -alpha M v")
+    start: Literal["rest", "equilibrium"] = Field(
+        default="rest", description="rest: undeformed and still; equilibrium: the static state under the "
+        "document's values, released at t = 0 into the histories")
+    histories: dict[str, Any] = Field(default={}, max_length=256, description="field pointer -> a number, an "
+                                      "expression in t, {table: [[t, value], ...]} or {pieces: [{until, value}, ...]}")
+    every: int = Field(default=1, ge=1, le=1_000_000, description="keep every n-th step")
+    outputs: list[str] | None = Field(default=None, max_length=512, description="outputs to record (default: all)")
+    compiled: bool = Field(default=False, description="compile the stepping with the system C compiler "
+                           "(a minute once per mechanism structure, cached; then several times faster)")
+
+    @model_validator(mode="after")
+    def _newmark_stable(self):
+        if self.scheme == "newmark" and self.a2 < 0.5 * (self.a1 + 0.5) ** 2 - 1e-12:
+            raise ValueError(f"Newmark a1 = {self.a1:g}, a2 = {self.a2:g} is not unconditionally stable: "
+                             "it needs a2 >= (a1 + 1/2)^2 / 2")
+        return self

@@ -1,0 +1,31 @@
+"""The simulate analysis: a time simulation of the mechanism (service.dynamics) by its
+document's `simulate` section, with the request's `simulate` fields over it. Answered in one
+response, so its steps are bounded (SYNC_STEPS)."""
+
+from __future__ import annotations
+
+import time
+
+from models import Mechanism
+from service.analyses.base import Analysis, AnalysisRequest
+from service.dynamics.run import run_simulation, simulation_spec
+from service.reports import plain
+
+SYNC_STEPS = 20_000
+
+
+class SimulateAnalysis(Analysis):
+    name = "simulate"
+    summary = ("Motion in time: Newmark or generalized-alpha steps of the links' and bodies' dynamics under loads "
+               "and prescribed motions in time; outputs, constraint forces and the energy balance per step")
+
+    def run(self, mech: Mechanism, request: AnalysisRequest) -> dict:
+        spec = simulation_spec(mech, request.get("simulate", {}))
+        limit = request.options.time_limit
+        deadline = time.perf_counter() + limit if limit else None
+        stop = (lambda: time.perf_counter() > deadline) if deadline else None
+        _, report = run_simulation(mech, spec, stop=stop, max_steps=SYNC_STEPS)
+        return plain(report)
+
+
+SIMULATE = SimulateAnalysis()

@@ -1,0 +1,130 @@
+"""A simulation of a document: its `simulate` section (with a request's fields over it)
+checked, the start state, the integration, and the report in document units: times,
+outputs, constraint forces, the reactions of prescribed motions, energies and the balance.
+
+Outputs that are static by construction (a link's start wrench h, v, M_start, M_end and the
+reactions, which leave out inertia) are not reported; the constraint forces are: each link
+end's multipliers are the force (and moment) its end body exerts on it, exact in motion."""
+
+from __future__ import annotations
+
+import numpy as np
+from pydantic import ValidationError
+
+from models import Mechanism, MechanismError
+from models.residual import unknown_names
+from models.simulation_spec import SimulateSpec
+from service.dynamics.histories import read_histories
+from service.dynamics.integrate import History, integrate
+from service.dynamics.schemes import Scheme, generalized_alpha, newmark
+from service.energy import minimize_energy
+
+MAX_STEPS = 2_000_000
+STATIC_OUTPUTS = (".h", ".v", ".M_start", ".M_end")
+
+
+def simulation_spec(mech: Mechanism, overrides: dict | None = None) -> SimulateSpec:
+    """The document's `simulate` section with `overrides` (a request's fields) over it."""
+    base = mech.document.simulate.model_dump() if mech.document.simulate is not None else {}
+    merged = {**base, **{k: v for k, v in (overrides or {}).items() if v is not None}}
+    try:
+        spec = SimulateSpec.model_validate(merged)
+    except ValidationError as exc:
+        error = exc.errors()[0]
+        where = "/".join(str(part) for part in error["loc"])
+        raise MechanismError(f"/simulate/{where}" if where else "/simulate", error["msg"]) from None
+    if spec.until is None:
+        raise MechanismError("/simulate/until", "give the end time `until` (s), in the document or the request")
+    return spec
+
+
+def scheme_of(spec: SimulateSpec) -> Scheme:
+    if spec.scheme == "newmark":
+        return newmark(spec.a1, spec.a2 / 2)
+    return generalized_alpha(spec.rho_inf)
+
+
+def check_masses(mech: Mechanism) -> None:
+    """Every link carries mass: a massless link has no dynamics of its own to integrate."""
+    for t in mech.structure.elements:
+        if t.family == "link":
+            raise MechanismError(f"/elements/{t.name}/discretization", f"link '{t.name}' is discretized by shooting: "
+                                 "a simulation needs \"discretization\": \"elements\"")
+        if t.family == "link_elements" and not t.weighs:
+            raise MechanismError(f"/materials/{t.material}/density", f"link '{t.name}' has no mass: give its material "
+                                 f"'{t.material}' a density")
+
+
+def run_simulation(mech: Mechanism, spec: SimulateSpec, stop=None, progress=None,
+                   max_steps: int = MAX_STEPS) -> tuple[History, dict]:
+    """(the raw history, the report)."""
+    check_masses(mech)
+    steps = int(round(spec.until / spec.step))
+    if steps < 1:
+        raise MechanismError("/simulate/step", f"the step {spec.step:g} s is longer than the run ({spec.until:g} s)")
+    if steps > max_steps:
+        raise MechanismError("/simulate/step", f"the run needs {steps} steps of {spec.step:g} s, over the limit of "
+                             f"{max_steps}: take a longer step or a shorter run")
+    histories = read_histories(mech, spec.histories, spec.until, "/simulate/histories")
+    form = mech.graphs.energy_form
+    n, p = len(form.unknowns), mech.p()
+    x0, start_note = np.zeros(n), "from rest, undeformed"
+    if spec.start == "equilibrium":
+        static = minimize_energy(mech)
+        if static.status != "converged":
+            raise MechanismError("/simulate/start", f"the static start did not converge ({static.status})")
+        x0, start_note = form.x_of_state(static.z), "from rest, in static equilibrium under the document's values"
+    history = integrate(mech.structure, p, x0, np.zeros(n), spec.until, spec.step, scheme_of(spec),
+                        damping=spec.damping, every=spec.every, stop=stop, histories=histories, progress=progress,
+                        compiled=spec.compiled)
+    return history, report(mech, spec, history, histories, start_note)
+
+
+def report(mech: Mechanism, spec: SimulateSpec, history: History, histories, start_note: str) -> dict:
+    form = mech.graphs.energy_form
+    names, kinds = mech.graphs.output_names, mech.graphs.output_kinds
+    wanted = spec.outputs if spec.outputs is not None else [name for name in names if not name.endswith(STATIC_OUTPUTS)
+                                                            and not name.startswith("reactions.")]
+    unknown = [name for name in wanted if name not in names]
+    if unknown:
+        raise MechanismError("/simulate/outputs", f"unknown output(s) {', '.join(unknown[:5])} (outputs: "
+                             f"{', '.join(names[:12])}, ...)")
+    if history.times:
+        states = np.column_stack([form.to_state(x, lam) for x, lam in zip(history.x, history.lam)])
+        values = np.asarray(mech.graphs.outputs.map(len(history.times))(states, np.column_stack(history.p)))
+    else:
+        values = np.zeros((len(names), 0))
+    outputs = {name: (values[names.index(name)] / mech.nd_per_doc(kinds[names.index(name)])).tolist()
+               for name in wanted}
+    state_names = unknown_names(mech.structure)
+    forces = {}
+    for j, index in enumerate(form.multipliers_in_state):
+        name, kind = state_names[index]
+        forces[name] = [float(lam[j]) / mech.nd_per_doc(kind) for lam in history.lam]
+    energy = 1 / mech.nd_per_doc("force") / mech.nd_per_doc("length")
+    motion_forces = {}
+    for k, index in enumerate(histories.moving):
+        pointer = mech.parameters[index].pointer
+        kind = "moment" if pointer.endswith("/rotation") else "force"
+        motion_forces[pointer] = [float(q[k]) / mech.nd_per_doc(kind) for q in history.motion_forces]
+    return {
+        "analysis": "simulate", "name": mech.document.name, "status": history.status, "message": history.message,
+        "time_reached": history.steps * spec.step, "steps": history.steps, "seconds": history.seconds,
+        "start": start_note, "scheme": _scheme_summary(spec), "step": spec.step, "damping": spec.damping,
+        "times": list(history.times), "outputs": outputs, "constraint_forces": forces, "motion_forces": motion_forces,
+        "energies": {"kinetic": [e * energy for e in history.kinetic],
+                     "potential": [e * energy for e in history.potential],
+                     "input_work": [e * energy for e in history.input_work],
+                     "damping_work": [e * energy for e in history.damping_work],
+                     "balance": (history.balance * energy).tolist() if history.times else []},
+        "energy_balance_error": history.balance_error() if history.times else None,
+        "units": {"time": "s", "force": mech.doc_unit("force"), "length": mech.doc_unit("length"),
+                  "moment": f"{mech.doc_unit('force')}*{mech.doc_unit('length')}",
+                  "energy": f"{mech.doc_unit('force')}*{mech.doc_unit('length')}", "angle": mech.doc_unit("angle")},
+    }
+
+
+def _scheme_summary(spec: SimulateSpec) -> dict:
+    if spec.scheme == "newmark":
+        return {"name": "newmark", "a1": spec.a1, "a2": spec.a2}
+    return {"name": "generalized_alpha", "rho_inf": spec.rho_inf}

@@ -1,0 +1,80 @@
+"""A window of steps in one call: each step's Newton solve inside CasADi (rootfinder
+'fast_newton', which can be code-generated), the steps chained by mapaccum, the whole window
+compiled with the system compiler and cached on disk like the equilibrium fast path. Python
+is called once per window, not once per Newton iteration.
+
+The state carried from step to step is s = [x; v; a; qdd; lam]. Per step the window also
+returns the monitor (T, V_held, input power, damping power, motion forces) and the step's
+residual (inf-norm, with the constraint rows scaled so that one tolerance serves both), by
+which the caller finds a step that did not converge.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from functools import lru_cache
+from pathlib import Path
+
+import casadi as ca
+
+from models.graph_cache import code_version
+from models.structure import Structure
+from service.dynamics.functions import form_of, monitor_function
+from service.dynamics.schemes import Scheme
+from service.fastpath import compile_function
+
+NEWTON_TOLERANCE = 1e-10  # nondimensional residual of a step's equations (forces)
+CONSTRAINT_TOLERANCE = 1e-13  # and of its constraints (lengths, angles)
+MAX_NEWTON = 25
+
+WINDOW = 50  # steps per call
+
+
+@lru_cache(maxsize=16)
+def window_function(structure: Structure, scheme: Scheme, moving: tuple[int, ...], steps: int = WINDOW,
+                    compiled: bool = True) -> ca.Function:
+    """(s0, h, P, PDOT, PDDOT, damping, mask) -> (S, MONITOR, RESIDUAL), a column per step."""
+    form = form_of(structure, moving)
+    n, m, n_p, k = len(form.unknowns), form.n_equalities, form.constraints.size1_in(1), len(moving)
+    u = ca.SX.sym("u", n + m)
+    state = ca.SX.sym("s", 4 * n + m)
+    x, v, a, qdd = (state[i * n:(i + 1) * n] for i in range(4))
+    h, damping = ca.SX.sym("h"), ca.SX.sym("damping")
+    p, mask = ca.SX.sym("p", n_p), ca.SX.sym("mask", n_p)
+    pdot, pddot = ca.SX.sym("pdot", k), ca.SX.sym("pddot", k)
+    s = scheme
+
+    def advance(unknowns):
+        a1 = ((1 - s.alpha_f) * unknowns[:n] + s.alpha_f * qdd - s.alpha_m * a) / (1 - s.alpha_m)
+        x1 = x + h * v + h**2 * ((0.5 - s.beta) * a + s.beta * a1)
+        v1 = v + h * ((1 - s.gamma) * a + s.gamma * a1)
+        return x1, v1, a1
+
+    x1, v1, _ = advance(u)
+    # the constraint rows scaled so that NEWTON_TOLERANCE on them is CONSTRAINT_TOLERANCE on g
+    F = ca.vertcat(form.equations(x1, v1, u[:n], u[n:], p, pdot, pddot, damping),
+                   form.constraints(x1, p) * (NEWTON_TOLERANCE / CONSTRAINT_TOLERANCE))
+    parameters = ca.vertcat(state, h, p, pdot, pddot, damping)
+    residual = ca.Function("step_residual", [u, parameters], [F])
+    newton = ca.rootfinder("step_newton", "fast_newton", residual, {
+        "abstol": NEWTON_TOLERANCE, "abstolStep": 1e-15, "max_iter": MAX_NEWTON, "error_on_fail": False})
+    solved = newton(ca.vertcat(qdd, state[4 * n:]), parameters)
+    x1, v1, a1 = advance(solved)
+    left = ca.norm_inf(residual(solved, parameters))
+    qdd1, lam1 = solved[:n], solved[n:]
+    T, V, power, dissipation, Q = monitor_function(structure, moving)(x1, v1, qdd1, lam1, p, pdot, pddot, mask, damping)
+    one = ca.Function("one_step", [state, h, p, pdot, pddot, damping, mask],
+                      [ca.vertcat(x1, v1, a1, qdd1, lam1), ca.vertcat(T, V, power, dissipation, Q), left])
+    window = one.mapaccum("dynamics_window", steps, [0], [0])
+    if not compiled:
+        return window
+    return compile_function(window, f"{structure.key}|{code_version()}|{_own_version()}|{scheme}|{moving}|{steps}")[0]
+
+
+@lru_cache(maxsize=1)
+def _own_version() -> str:
+    """A hash of this package's sources: a change here builds new libraries."""
+    digest = hashlib.sha256()
+    for path in sorted(Path(__file__).resolve().parent.glob("*.py")):
+        digest.update(path.read_bytes())
+    return digest.hexdigest()[:12]
