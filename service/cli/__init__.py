@@ -6,6 +6,7 @@
     flexmech optimize examples/grasper_shape.json
     flexmech trace examples/snap_through_arch.json --path /loads/P/force/1 --stop -300 --step 20
     flexmech contact examples/gripper_jaw_contact.json --plot force.png --shapes states.png
+    flexmech simulate examples/rod_free_vibration.json --until 1 --plot rod.png --animation rod.gif
     flexmech examples
 
 Exit codes: 0 success; 1 the solver did not converge (status and diagnostics are printed,
@@ -25,5 +26,6 @@ from service.cli import examples  # noqa: F401
 from service.cli import batch  # noqa: F401
 from service.cli import serve  # noqa: F401
 from service.cli import contact  # noqa: F401
+from service.cli import simulate  # noqa: F401
 
 __all__ = ["app"]

@@ -1,0 +1,84 @@
+"""`flexmech simulate`: motion in time by the document's `simulate` section, with --until,
+--step and the scheme from the command line over it. A progress bar follows simulated time;
+--plot draws outputs and energies against time, --animation the moving links (.gif, or .mp4
+when ffmpeg is installed)."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.markup import escape
+from rich.progress import Progress
+
+from service.cli.application import app
+from service.cli.common import (EXIT_NOT_CONVERGED, OptionError, check_plot_option, consoles, number, table_of,
+                                user_errors, write_json)
+from service.cli.options import DocArg, JsonOpt, PlotOpt, SetOpt, mechanism
+
+SHOWN_OUTPUTS = 6
+
+
+@app.command()
+def simulate(document: DocArg, sets: SetOpt = None,
+             until: Annotated[float | None, typer.Option(help="End time (s).")] = None,
+             step: Annotated[float | None, typer.Option(help="Time step (s).")] = None,
+             scheme: Annotated[str | None, typer.Option(help="generalized_alpha | newmark.")] = None,
+             damping: Annotated[float | None, typer.Option(help="Mass-proportional damping (1/s).")] = None,
+             compiled: Annotated[bool, typer.Option("--compiled", help="Compile the stepping with the system C "
+                                                    "compiler (once per mechanism structure, cached).")] = False,
+             animation: Annotated[Path | None, typer.Option("--animation", metavar="OUT.gif|mp4",
+                                                            help="Animate the links.")] = None,
+             json_out: JsonOpt = None, plot: PlotOpt = None) -> None:
+    """Motion in time: links, bodies and joints under loads and prescribed motions in time."""
+    out, err = consoles()
+    with user_errors(err):
+        check_plot_option(plot)
+        if animation is not None:
+            suffix = animation.suffix.lower()
+            if suffix not in (".gif", ".mp4"):
+                raise OptionError("--animation", f"cannot tell the format of '{animation}': use .gif or .mp4")
+            if suffix == ".mp4" and shutil.which("ffmpeg") is None:
+                raise OptionError("--animation", "an .mp4 needs ffmpeg, which is not installed: use .gif")
+        mech = mechanism(document, None, sets)
+        from service.dynamics.run import run_simulation, simulation_spec
+
+        spec = simulation_spec(mech, {"until": until, "step": step, "scheme": scheme, "damping": damping,
+                                      **({"compiled": True} if compiled else {})})
+        with Progress(console=err, transient=True) as progress:
+            task = progress.add_task("simulating", total=spec.until)
+            history, report = run_simulation(mech, spec, progress=lambda t: progress.update(task, completed=t))
+        _print(out, report)
+        if json_out is not None:
+            write_json(json_out, report)
+        if plot is not None:
+            from service.dynamics.figures import plot_history
+
+            _write(plot_history, report, [n for n in report["outputs"]][:SHOWN_OUTPUTS], plot, option="--plot")
+        if animation is not None:
+            from service.dynamics.figures import animate
+
+            _write(animate, mech, history, animation, option="--animation")
+    if report["status"] != "finished":
+        raise typer.Exit(EXIT_NOT_CONVERGED)
+
+
+def _write(draw, *args, option: str) -> None:
+    try:
+        draw(*args)
+    except OSError as exc:
+        raise OptionError(option, f"cannot write {args[-1]}: {exc.strerror}") from None
+
+
+def _print(out, report: dict) -> None:
+    out.print(f"[bold]{escape(report['name'])}[/bold]: {report['status']} at t = {report['time_reached']:g} s, "
+              f"{report['steps']} steps in {report['seconds']:.2f} s; energy balance error "
+              f"{report['energy_balance_error']:.2e}")
+    if report["message"]:
+        out.print(escape(report["message"]))
+    table = table_of(None, "output", "start", "end", "min", "max", text=1)
+    for name, values in list(report["outputs"].items())[:3 * SHOWN_OUTPUTS]:
+        table.add_row(escape(name), *(number(v, "") for v in (values[0], values[-1], min(values), max(values))))
+    out.print(table)

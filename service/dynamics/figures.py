@@ -1,0 +1,73 @@
+"""Figures of a simulation: outputs and energies against time, and an animation of the
+deformed links (GIF through Pillow, MP4 through ffmpeg when it is installed)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from models import Mechanism
+from service.dynamics.integrate import History
+
+
+def plot_history(report: dict, outputs: list[str], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    t = np.array(report["times"])
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
+    for name in outputs:
+        top.plot(t, report["outputs"][name], label=name)
+    top.set_ylabel("outputs (document units)")
+    top.legend(fontsize=8)
+    energies, unit = report["energies"], report["units"]["energy"]
+    for key, label in (("kinetic", "kinetic T"), ("potential", "strain and gravity V"),
+                       ("input_work", "work of inputs"), ("damping_work", "work of damping"), ("balance", "balance")):
+        if np.any(np.array(energies[key]) != 0):
+            bottom.plot(t, energies[key], label=label)
+    bottom.set_xlabel("t (s)")
+    bottom.set_ylabel(f"energy ({unit})")
+    bottom.legend(fontsize=8)
+    top.set_title(f"{report['name']}: {report['status']}, energy balance {report['energy_balance_error']:.2e}")
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def animate(mech: Mechanism, history: History, path: Path, frames: int = 100) -> None:
+    """The deformed links at up to `frames` kept states, 25 frames per second."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib import animation
+
+    form = mech.graphs.energy_form
+    chosen = np.unique(np.linspace(0, len(history.times) - 1, min(frames, len(history.times))).astype(int))
+    scale = mech.scales.length / mech.doc_factor("length")
+    shapes = [np.asarray(mech.graphs.shapes(form.to_state(history.x[k], history.lam[k]), history.p[k])[0]) * scale
+              for k in chosen]
+    every = np.hstack(shapes)
+    fig, ax = plt.subplots(figsize=(6, 6))
+    ax.set_aspect("equal")
+    margin = 0.05 * max(np.ptp(every[0]), np.ptp(every[1]), 1e-12)
+    ax.set_xlim(every[0].min() - margin, every[0].max() + margin)
+    ax.set_ylim(every[1].min() - margin, every[1].max() + margin)
+    ax.set_xlabel(f"x ({mech.doc_unit('length')})")
+    ax.set_ylabel(f"y ({mech.doc_unit('length')})")
+    lines = [ax.plot([], [], lw=2)[0] for _ in mech.graphs.shape_segments]
+    label = ax.set_title("")
+
+    def draw(i):
+        for line, (_, first, count, _, _) in zip(lines, mech.graphs.shape_segments):
+            line.set_data(shapes[i][0, first:first + count], shapes[i][1, first:first + count])
+        label.set_text(f"t = {history.times[chosen[i]]:.3f} s")
+        return [*lines, label]
+
+    movie = animation.FuncAnimation(fig, draw, frames=len(shapes), blit=False)
+    writer = animation.PillowWriter(fps=25) if path.suffix.lower() == ".gif" else animation.FFMpegWriter(fps=25)
+    movie.save(str(path), writer=writer)
+    plt.close(fig)
