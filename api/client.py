@@ -34,6 +34,7 @@ from api.schemas import (
     SolveResponse,
     SweepRequest,
 )
+from api.simulation_schemas import SimulationRequest
 
 T = TypeVar("T")
 Progress = Callable[[JobStatusResponse], None]
@@ -152,6 +153,11 @@ class Client:
         return _parse(self._http.post("/v1/contacts", json=_request_body(ContactPathRequest, request, fields)),
                       JobStatusResponse)
 
+    def simulation(self, request: SimulationRequest | None = None, **fields: Any) -> JobStatusResponse:
+        """Start a simulation job; fields as in SimulationRequest. Returns the new job's status."""
+        return _parse(self._http.post("/v1/simulations", json=_request_body(SimulationRequest, request, fields)),
+                      JobStatusResponse)
+
     def job(self, job_id: str) -> JobStatusResponse:
         return _parse(self._http.get(f"/v1/jobs/{job_id}"), JobStatusResponse)
 
@@ -213,6 +219,10 @@ class AsyncClient:
     async def contact_path(self, request: ContactPathRequest | None = None, **fields: Any) -> JobStatusResponse:
         body = _request_body(ContactPathRequest, request, fields)
         return _parse(await self._http.post("/v1/contacts", json=body), JobStatusResponse)
+
+    async def simulation(self, request: SimulationRequest | None = None, **fields: Any) -> JobStatusResponse:
+        body = _request_body(SimulationRequest, request, fields)
+        return _parse(await self._http.post("/v1/simulations", json=body), JobStatusResponse)
 
     async def job(self, job_id: str) -> JobStatusResponse:
         return _parse(await self._http.get(f"/v1/jobs/{job_id}"), JobStatusResponse)

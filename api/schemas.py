@@ -259,7 +259,7 @@ class ContactPairOut(_Response):
 class SolveResponse(_Response):
     analysis: str
     name: str
-    status: PointStatus
+    status: PointStatus | Literal["finished"] = Field(description="\"finished\": a simulation reached its end")
     message: str = ""
     iterations: int = 0
     residual_norm: float | None = Field(None, description="the largest unbalanced force (residual_unit)")
@@ -271,7 +271,8 @@ class SolveResponse(_Response):
     warnings: list[str] = Field(default_factory=list)
     displacements: dict[str, float | None] = Field(default_factory=dict)
     displacement_units: dict[str, str] = Field(default_factory=dict)
-    outputs: dict[str, float | None] = Field(default_factory=dict)
+    outputs: dict[str, float | None | list[float | None]] = Field(
+        default_factory=dict, description="per output its value (a simulation: its value at every kept time)")
     output_units: dict[str, str] = Field(default_factory=dict)
     history: list[float | None] = Field(default_factory=list)
     stiffness: StiffnessOut | None = None

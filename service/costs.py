@@ -28,6 +28,7 @@ class Limits:
     job_time_limit: float | None = 3600.0
     max_contact_rows: int = 2000  # non-penetration rows of a contact problem (an upper estimate)
     max_contact_rotations: int = 128  # rotations of the links (intervals x degree, summed) of a contact problem
+    max_simulation_steps: int = 1_000_000  # time steps of a simulation job
 
 
 def link_work(doc: MechanismDocument, model: str | None) -> list[tuple[str, int]]:

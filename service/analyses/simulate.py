@@ -25,6 +25,9 @@ class SimulateAnalysis(Analysis):
         deadline = time.perf_counter() + limit if limit else None
         stop = (lambda: time.perf_counter() > deadline) if deadline else None
         _, report = run_simulation(mech, spec, stop=stop, max_steps=SYNC_STEPS)
+        if report["status"] == "stopped":
+            report["status"] = "time_limit"
+            report["message"] += f" (the time limit of {limit:g} s; a simulation job has more time)"
         return plain(report)
 
 

@@ -41,9 +41,10 @@ class History:
     potential: list[float] = field(default_factory=list)  # strain and gravity: without the varying loads
     input_work: list[float] = field(default_factory=list)
     damping_work: list[float] = field(default_factory=list)
-    newton_iterations: int = 0
+    newton_iterations: int = 0  # steps retried by Newton in Python
     steps: int = 0
     seconds: float = 0.0
+    resume: "Resume | None" = None
 
     @property
     def balance(self) -> np.ndarray:
@@ -71,65 +72,114 @@ def consistent_acceleration(form: DynamicsForm, x, v, p, pdot, pddot, damping: f
     return solution[:n], solution[n:]
 
 
-def integrate(structure: Structure, p: np.ndarray, x0: np.ndarray, v0: np.ndarray, until: float, h: float,
-              scheme: Scheme, damping: float = 0.0, every: int = 1, stop=None, histories: Histories | None = None,
-              progress=None, compiled: bool = False) -> History:
-    """States from t = 0 to `until` in steps h (seconds), keeping every `every`-th.
-    Steps run in windows (service.dynamics.window; `compiled`: as a C library); a step the
-    window's Newton does not settle is retried by Newton in Python before the run stops.
-    `stop()` true ends the run early; `progress(t)` hears after every window."""
-    started = time.perf_counter()
-    histories = histories or no_histories()
+@dataclass
+class Resume:
+    """Where a run stands after step `step`: enough to go on exactly as if never stopped."""
+
+    step: int
+    state: np.ndarray  # [x; v; a; qdd; lam]
+    works: np.ndarray  # (inputs, damping)
+    monitor: np.ndarray  # the last step's monitor column
+
+    def to_json(self) -> dict:
+        return {"step": self.step, "state": self.state.tolist(), "works": self.works.tolist(),
+                "monitor": self.monitor.tolist()}
+
+    @classmethod
+    def from_json(cls, data: dict) -> "Resume":
+        return cls(int(data["step"]), *(np.array(data[k], dtype=float) for k in ("state", "works", "monitor")))
+
+
+def start_of(structure: Structure, p, x0, v0, histories: Histories, damping: float) -> Resume:
+    """The run's state at t = 0: (x0, v0) with consistent accelerations."""
     moving = histories.moving
     form = form_of(structure, moving)
-    window = window_function(structure, scheme, moving, WINDOW, compiled)
-    mask = histories.load_mask(len(p))
     n = len(form.unknowns)
     x, v = np.asarray(x0, dtype=float).copy(), np.asarray(v0, dtype=float).copy()
     p_now, pdot, pddot = histories.at(p, 0.0)
     qdd, lam = consistent_acceleration(form, x, v, p_now, pdot, pddot, damping)
     state = np.concatenate([x, v, qdd, qdd, lam])
+    monitor = _monitor_column(monitor_function(structure, moving), state, n, p_now, pdot, pddot,
+                              histories.load_mask(len(p)), damping)
+    return Resume(0, state, np.zeros(2), monitor)
+
+
+def integrate(structure: Structure, p: np.ndarray, x0: np.ndarray, v0: np.ndarray, until: float, h: float,
+              scheme: Scheme, damping: float = 0.0, every: int = 1, stop=None, histories: Histories | None = None,
+              progress=None, compiled: bool = False, resume: Resume | None = None) -> History:
+    """States from t = 0 (or from `resume`) to `until` in steps h (seconds), keeping every
+    `every`-th step (and the start, when not resumed). Steps run in windows
+    (service.dynamics.window; `compiled`: as a C library); a step the window's Newton does
+    not settle is retried by Newton in Python before the run stops. `stop()` true ends the
+    run early; `progress(t)` hears after every window. history.resume goes on from the end."""
+    started = time.perf_counter()
+    histories = histories or no_histories()
+    run = _Run(structure, p, h, scheme, damping, histories, compiled)
     history = History("finished", "")
-    measured = _measure(monitor_function(structure, moving), state, n, p_now, pdot, pddot, mask, damping)
-    works = np.zeros(2)
-    _keep(history, 0.0, state, n, p_now, measured, works)
-    steps, k = int(round(until / h)), 0
-    while k < steps:
+    if resume is None:
+        resume = start_of(structure, p, x0, v0, histories, damping)
+        run.keep(history, resume)
+    steps = int(round(until / h))
+    while resume.step < steps:
         if stop is not None and stop():
-            history.status, history.message = "stopped", f"stopped at t = {k * h:g} s"
+            history.status, history.message = "stopped", f"stopped at t = {resume.step * h:g} s"
             break
-        inputs = [histories.at(p, (k + j) * h) for j in range(1, WINDOW + 1)]
+        resume = run.window(history, resume, steps, every)
+        if history.status != "finished":
+            break
+        if progress is not None:
+            progress(resume.step * h)
+    history.steps, history.resume = resume.step, resume
+    history.seconds = time.perf_counter() - started
+    return history
+
+
+class _Run:
+    """The Functions and inputs of one run; window() advances by up to WINDOW steps."""
+
+    def __init__(self, structure, p, h, scheme, damping, histories: Histories, compiled: bool):
+        self.structure, self.p, self.h, self.scheme, self.damping, self.histories = (
+            structure, p, h, scheme, damping, histories)
+        self.moving = histories.moving
+        self.n = len(form_of(structure, self.moving).unknowns)
+        self.function = window_function(structure, scheme, self.moving, WINDOW, compiled)
+        self.mask = histories.load_mask(len(p))
+
+    def keep(self, history: History, at: Resume) -> None:
+        _keep(history, at.step * self.h, at.state, self.n, self.histories.at(self.p, at.step * self.h)[0],
+              _monitored(at.monitor), at.works)
+
+    def window(self, history: History, at: Resume, steps: int, every: int) -> Resume:
+        h, k = self.h, at.step
+        inputs = [self.histories.at(self.p, (k + j) * h) for j in range(1, WINDOW + 1)]
         P, PD, PDD = (np.column_stack([q[i] for q in inputs]) if len(inputs[0][i]) else np.zeros((0, WINDOW))
                       for i in range(3))
-        S, monitors, residuals = (np.asarray(q, dtype=float) for q in window(state, h, P, PD, PDD, damping, mask))
-        settled = np.flatnonzero(~(residuals.ravel() <= WINDOW_ACCEPTANCE))  # NaN too
-        good = min(settled[0] if len(settled) else WINDOW, steps - k)
+        S, monitors, residuals = (np.asarray(q, dtype=float)
+                                  for q in self.function(at.state, h, P, PD, PDD, self.damping, self.mask))
+        unsettled = np.flatnonzero(~(residuals.ravel() <= WINDOW_ACCEPTANCE))  # NaN too
+        good = min(unsettled[0] if len(unsettled) else WINDOW, steps - k)
         for j in range(good):
-            now = _monitored(monitors[:, j])
-            works += 0.5 * h * (np.array(now[2:4]) + np.array(measured[2:4]))
-            measured, k = now, k + 1
-            if k % every == 0 or k == steps:
-                _keep(history, k * h, S[:, j], n, P[:, j], measured, works)
-        if good:
-            state = S[:, good - 1].copy()
-        if k < steps and good < WINDOW:  # the window's Newton did not settle step k + 1: Newton in Python
-            state, F = _python_step(structure, scheme, moving, state, n, h, inputs[good], damping)
+            at = self._advance(history, at, S[:, j], monitors[:, j], steps, every)
+        if at.step < steps and good < WINDOW:  # the window's Newton did not settle this step: Newton in Python
+            state, residual = _python_step(self.structure, self.scheme, self.moving, at.state, self.n, h,
+                                           inputs[good], self.damping)
             history.newton_iterations += 1
             if state is None:
                 history.status = "not_converged"
-                history.message = (f"the step from t = {k * h:g} s to {(k + 1) * h:g} s did not converge in "
-                                   f"{MAX_NEWTON} Newton iterations (residual {F:.3g}): try a smaller step")
-                break
-            now = _measure(monitor_function(structure, moving), state, n, *inputs[good], mask, damping)
-            works += 0.5 * h * (np.array(now[2:4]) + np.array(measured[2:4]))
-            measured, k = now, k + 1
-            if k % every == 0 or k == steps:
-                _keep(history, k * h, state, n, inputs[good][0], measured, works)
-        history.steps = k
-        if progress is not None:
-            progress(k * h)
-    history.seconds = time.perf_counter() - started
-    return history
+                history.message = (f"the step from t = {at.step * h:g} s to {(at.step + 1) * h:g} s did not converge "
+                                   f"in {MAX_NEWTON} Newton iterations (residual {residual:.3g}): try a smaller step")
+                return at
+            monitor = _monitor_column(monitor_function(self.structure, self.moving), state, self.n, *inputs[good],
+                                      self.mask, self.damping)
+            at = self._advance(history, at, state, monitor, steps, every)
+        return at
+
+    def _advance(self, history, at: Resume, state, monitor, steps: int, every: int) -> Resume:
+        works = at.works + 0.5 * self.h * (monitor[2:4] + at.monitor[2:4])
+        now = Resume(at.step + 1, np.array(state), works, np.array(monitor))
+        if now.step % every == 0 or now.step == steps:
+            self.keep(history, now)
+        return now
 
 
 def _python_step(structure, scheme, moving, state, n, h, inputs, damping):
@@ -150,10 +200,10 @@ def _python_step(structure, scheme, moving, state, n, h, inputs, damping):
     return None, float(np.abs(F[:n]).max(initial=np.inf)) if np.all(np.isfinite(F)) else float("nan")
 
 
-def _measure(monitor, state, n, p, pdot, pddot, mask, damping) -> tuple:
+def _monitor_column(monitor, state, n, p, pdot, pddot, mask, damping) -> np.ndarray:
     x, v, qdd, lam = state[:n], state[n:2 * n], state[3 * n:4 * n], state[4 * n:]
-    return _monitored(np.concatenate([np.asarray(q, dtype=float).ravel()
-                                      for q in monitor(x, v, qdd, lam, p, pdot, pddot, mask, damping)]))
+    return np.concatenate([np.asarray(q, dtype=float).ravel()
+                           for q in monitor(x, v, qdd, lam, p, pdot, pddot, mask, damping)])
 
 
 def _monitored(column: np.ndarray) -> tuple:

@@ -18,6 +18,7 @@ from service.dynamics.histories import read_histories
 from service.dynamics.integrate import History, integrate
 from service.dynamics.schemes import Scheme, generalized_alpha, newmark
 from service.energy import minimize_energy
+from service.reports import output_units
 
 MAX_STEPS = 2_000_000
 STATIC_OUTPUTS = (".h", ".v", ".M_start", ".M_end")
@@ -55,40 +56,47 @@ def check_masses(mech: Mechanism) -> None:
                                  f"'{t.material}' a density")
 
 
-def run_simulation(mech: Mechanism, spec: SimulateSpec, stop=None, progress=None,
-                   max_steps: int = MAX_STEPS) -> tuple[History, dict]:
-    """(the raw history, the report)."""
-    check_masses(mech)
+def check_steps(spec: SimulateSpec, max_steps: int) -> int:
     steps = int(round(spec.until / spec.step))
     if steps < 1:
         raise MechanismError("/simulate/step", f"the step {spec.step:g} s is longer than the run ({spec.until:g} s)")
     if steps > max_steps:
         raise MechanismError("/simulate/step", f"the run needs {steps} steps of {spec.step:g} s, over the limit of "
                              f"{max_steps}: take a longer step or a shorter run")
-    histories = read_histories(mech, spec.histories, spec.until, "/simulate/histories")
+    return steps
+
+
+def start_shape(mech: Mechanism, spec: SimulateSpec) -> tuple[np.ndarray, str]:
+    """The energy form's x at t = 0, and how it was found."""
     form = mech.graphs.energy_form
-    n, p = len(form.unknowns), mech.p()
-    x0, start_note = np.zeros(n), "from rest, undeformed"
-    if spec.start == "equilibrium":
-        static = minimize_energy(mech)
-        if static.status != "converged":
-            raise MechanismError("/simulate/start", f"the static start did not converge ({static.status})")
-        x0, start_note = form.x_of_state(static.z), "from rest, in static equilibrium under the document's values"
+    if spec.start != "equilibrium":
+        return np.zeros(len(form.unknowns)), "from rest, undeformed"
+    static = minimize_energy(mech)
+    if static.status != "converged":
+        raise MechanismError("/simulate/start", f"the static start did not converge ({static.status})")
+    return form.x_of_state(static.z), "from rest, in static equilibrium under the document's values"
+
+
+def run_simulation(mech: Mechanism, spec: SimulateSpec, stop=None, progress=None,
+                   max_steps: int = MAX_STEPS) -> tuple[History, dict]:
+    """(the raw history, the report)."""
+    check_masses(mech)
+    check_steps(spec, max_steps)
+    histories = read_histories(mech, spec.histories, spec.until, "/simulate/histories")
+    x0, start_note = start_shape(mech, spec)
+    n, p = len(x0), mech.p()
     history = integrate(mech.structure, p, x0, np.zeros(n), spec.until, spec.step, scheme_of(spec),
                         damping=spec.damping, every=spec.every, stop=stop, histories=histories, progress=progress,
                         compiled=spec.compiled)
     return history, report(mech, spec, history, histories, start_note)
 
 
-def report(mech: Mechanism, spec: SimulateSpec, history: History, histories, start_note: str) -> dict:
+def records(mech: Mechanism, spec: SimulateSpec, history: History, histories) -> dict:
+    """The kept states of a history in document units: times, outputs, constraint forces,
+    the prescribed motions' reactions, and the energies and works (from t = 0)."""
     form = mech.graphs.energy_form
     names, kinds = mech.graphs.output_names, mech.graphs.output_kinds
-    wanted = spec.outputs if spec.outputs is not None else [name for name in names if not name.endswith(STATIC_OUTPUTS)
-                                                            and not name.startswith("reactions.")]
-    unknown = [name for name in wanted if name not in names]
-    if unknown:
-        raise MechanismError("/simulate/outputs", f"unknown output(s) {', '.join(unknown[:5])} (outputs: "
-                             f"{', '.join(names[:12])}, ...)")
+    wanted = wanted_outputs(mech, spec)
     if history.times:
         states = np.column_stack([form.to_state(x, lam) for x, lam in zip(history.x, history.lam)])
         values = np.asarray(mech.graphs.outputs.map(len(history.times))(states, np.column_stack(history.p)))
@@ -107,24 +115,55 @@ def report(mech: Mechanism, spec: SimulateSpec, history: History, histories, sta
         pointer = mech.parameters[index].pointer
         kind = "moment" if pointer.endswith("/rotation") else "force"
         motion_forces[pointer] = [float(q[k]) / mech.nd_per_doc(kind) for q in history.motion_forces]
-    return {
-        "analysis": "simulate", "name": mech.document.name, "status": history.status, "message": history.message,
-        "time_reached": history.steps * spec.step, "steps": history.steps, "seconds": history.seconds,
-        "start": start_note, "scheme": _scheme_summary(spec), "step": spec.step, "damping": spec.damping,
-        "times": list(history.times), "outputs": outputs, "constraint_forces": forces, "motion_forces": motion_forces,
-        "energies": {"kinetic": [e * energy for e in history.kinetic],
-                     "potential": [e * energy for e in history.potential],
-                     "input_work": [e * energy for e in history.input_work],
-                     "damping_work": [e * energy for e in history.damping_work],
-                     "balance": (history.balance * energy).tolist() if history.times else []},
-        "energy_balance_error": history.balance_error() if history.times else None,
-        "units": {"time": "s", "force": mech.doc_unit("force"), "length": mech.doc_unit("length"),
-                  "moment": f"{mech.doc_unit('force')}*{mech.doc_unit('length')}",
-                  "energy": f"{mech.doc_unit('force')}*{mech.doc_unit('length')}", "angle": mech.doc_unit("angle")},
-    }
+    return {"times": list(history.times), "outputs": outputs, "constraint_forces": forces,
+            "motion_forces": motion_forces,
+            "energies": {"kinetic": [e * energy for e in history.kinetic],
+                         "potential": [e * energy for e in history.potential],
+                         "input_work": [e * energy for e in history.input_work],
+                         "damping_work": [e * energy for e in history.damping_work]}}
 
 
-def _scheme_summary(spec: SimulateSpec) -> dict:
+def wanted_outputs(mech: Mechanism, spec: SimulateSpec) -> list[str]:
+    names = mech.graphs.output_names
+    if spec.outputs is None:
+        return [name for name in names if not name.endswith(STATIC_OUTPUTS) and not name.startswith("reactions.")]
+    for k, name in enumerate(spec.outputs):
+        if name not in names:
+            raise MechanismError(f"/simulate/outputs/{k}", f"unknown output '{name}' (outputs: "
+                                 f"{', '.join(names[:12])}, ...)")
+    return list(spec.outputs)
+
+
+def with_balance(energies: dict) -> tuple[dict, float | None]:
+    """The energies with their balance T + V - W_inputs + W_damping (less its start), and the
+    largest |balance| relative to the largest energy seen."""
+    T, V, W, D = (np.array(energies[k]) for k in ("kinetic", "potential", "input_work", "damping_work"))
+    if not len(T):
+        return {**energies, "balance": []}, None
+    balance = T + V - W + D
+    balance = balance - balance[0]
+    size = max(np.abs(T).max(), np.abs(V - V[0]).max(), np.abs(W).max(), 1e-300)
+    return {**energies, "balance": balance.tolist()}, float(np.abs(balance).max() / size)
+
+
+def units(mech: Mechanism) -> dict:
+    moment = f"{mech.doc_unit('force')}*{mech.doc_unit('length')}"
+    return {"time": "s", "force": mech.doc_unit("force"), "length": mech.doc_unit("length"), "moment": moment,
+            "energy": moment, "angle": mech.doc_unit("angle")}
+
+
+def report(mech: Mechanism, spec: SimulateSpec, history: History, histories, start_note: str) -> dict:
+    kept = records(mech, spec, history, histories)
+    energies, error = with_balance(kept.pop("energies"))
+    every = output_units(mech)
+    return {"analysis": "simulate", "name": mech.document.name, "status": history.status,
+            "message": history.message, "time_reached": history.steps * spec.step, "steps": history.steps,
+            "seconds": history.seconds, "start": start_note, "scheme": scheme_summary(spec), "step": spec.step,
+            "damping": spec.damping, **kept, "energies": energies, "energy_balance_error": error,
+            "units": units(mech), "output_units": {name: every[name] for name in kept["outputs"]}}
+
+
+def scheme_summary(spec: SimulateSpec) -> dict:
     if spec.scheme == "newmark":
         return {"name": "newmark", "a1": spec.a1, "a2": spec.a2}
     return {"name": "generalized_alpha", "rho_inf": spec.rho_inf}

@@ -18,12 +18,14 @@ __all__ = ["JobKind", "Plan", "kind_named", "run_task"]
 def _kinds() -> dict[str, JobKind]:
     from service.jobs.contact import CONTACT
     from service.jobs.optimize import OPTIMIZE
+    from service.jobs.simulation import SIMULATION
     from service.jobs.sweep import SWEEP
 
     return {kind.name: kind for kind in (
         SWEEP,
         OPTIMIZE,
         CONTACT,
+        SIMULATION,
     )}
 
 

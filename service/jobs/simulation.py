@@ -1,0 +1,127 @@
+"""The simulation job: a time simulation stored per time window as it finishes. A window is
+a point; it keeps its states (document units) and the exact state it ended in, so that a job
+resumed after a kill goes on from the last stored window as if never stopped.
+
+spec:
+  document    the mechanism document (its `simulate` section: until, step, scheme, histories)
+  simulate    optional fields over the document's section
+  model, overrides, options    as for /v1/solve
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+from models import MechanismError
+from models.simulation_spec import SimulateSpec
+from service.costs import Limits, check_result_size
+from service.dynamics.histories import read_histories
+from service.dynamics.integrate import Resume, integrate
+from service.dynamics.window import WINDOW
+from service.dynamics.run import (check_masses, check_steps, records, scheme_of, scheme_summary, simulation_spec,
+                                  start_shape, units, wanted_outputs, with_balance)
+from service.jobs.base import Plan
+from service.jobs.control import TaskControl
+from service.jobs.sweep import mechanism_of
+from service.requests import compile_request, under
+
+WINDOWS = 100  # a run is stored in about this many windows (points), each a whole number of step windows
+
+
+def _spec_of(mech, spec: dict) -> SimulateSpec:
+    try:
+        return simulation_spec(mech, spec.get("simulate"))
+    except MechanismError as exc:
+        raise exc from None
+
+
+class SimulationJob:
+    name = "simulation"
+    paged = True
+
+    def prepare(self, spec: dict, limits: Limits) -> Plan:
+        mech = compile_request(spec["document"], spec.get("model"), spec.get("overrides"), limits)
+        simulate = _spec_of(mech, spec)
+        try:
+            check_masses(mech)
+        except MechanismError as exc:
+            raise under("/document", exc) from None
+        steps = check_steps(simulate, limits.max_simulation_steps)
+        read_histories(mech, simulate.histories, simulate.until, "/simulate/histories")
+        outputs = wanted_outputs(mech, simulate)
+        kept = steps // simulate.every + 2
+        per_state = len(outputs) + len(mech.graphs.energy_form.equality_names) + 5
+        check_result_size(kept, per_state, limits, "/simulate/every")
+        window = WINDOW * max(1, math.ceil(steps / WINDOWS / WINDOW))  # the stepping's own windows fit
+        windows = math.ceil(steps / window)
+        meta = {"steps": steps, "window": window, "windows": windows, "step": simulate.step,
+                "until": simulate.until, "scheme": scheme_summary(simulate), "units": units(mech)}
+        return Plan(windows, meta)
+
+    def failed(self, point: dict) -> bool:
+        return point.get("status") != "finished"
+
+    def tasks(self, spec, plan, finished, chunk_size):
+        task = self._next(plan, finished, chunk_size)
+        return [task] if task is not None else []
+
+    def follow_up(self, spec, plan, task, finished, chunk_size):
+        return self.tasks(spec, plan, finished, chunk_size)
+
+    @staticmethod
+    def _next(plan: dict, finished: Mapping[int, dict], chunk_size: int) -> dict | None:
+        """The next windows, from the end of the last stored one; none after a failed one."""
+        position = next((i for i in range(plan["windows"]) if i not in finished), None)
+        if position is None or (position > 0 and finished[position - 1].get("status") != "finished"):
+            return None
+        resume = finished[position - 1]["resume"] if position > 0 else None
+        return {"indices": list(range(position, min(position + chunk_size, plan["windows"]))), "resume": resume,
+                "window": plan["window"]}
+
+    def run(self, spec, task):
+        mech = mechanism_of(spec)
+        simulate = _spec_of(mech, spec)
+        histories = read_histories(mech, simulate.histories, simulate.until, "/simulate/histories")
+        control = TaskControl(task)
+        p, scheme = mech.p(), scheme_of(simulate)
+        at = Resume.from_json(task["resume"]) if task.get("resume") is not None else None
+        x0 = start_shape(mech, simulate)[0] if at is None else None
+        steps, points = int(round(simulate.until / simulate.step)), []
+        for index in task["indices"]:
+            end = min((index + 1) * task["window"], steps)
+            started = 0.0 if at is None else at.step * simulate.step
+            history = integrate(mech.structure, p, x0, None if x0 is None else 0 * x0, end * simulate.step,
+                                simulate.step, scheme, damping=simulate.damping, every=simulate.every,
+                                stop=control.should_stop, histories=histories, compiled=simulate.compiled, resume=at)
+            points.append((index, {"status": history.status, "message": history.message, "t_start": started,
+                                   "t_end": history.steps * simulate.step,
+                                   **records(mech, simulate, history, histories), "resume": history.resume.to_json()}))
+            if history.status != "finished":
+                break
+            at, x0 = history.resume, None
+        return points
+
+    def result(self, spec, plan, finished):
+        windows = [finished[i] for i in sorted(finished)]
+        joined = {"times": [], "outputs": {}, "constraint_forces": {}, "motion_forces": {},
+                  "energies": {"kinetic": [], "potential": [], "input_work": [], "damping_work": []}}
+        for window in windows:
+            joined["times"] += window["times"]
+            for group in ("outputs", "constraint_forces", "motion_forces", "energies"):
+                for name, values in window[group].items():
+                    joined[group].setdefault(name, []).extend(values)
+        energies, error = with_balance(joined.pop("energies"))
+        last = windows[-1] if windows else None
+        if last is None:
+            status = "running"
+        elif last["status"] != "finished" or len(windows) == plan["windows"]:
+            status = last["status"]
+        else:
+            status = "running"
+        return {**plan, "status": status, "message": last["message"] if last else "",
+                "time_reached": last["t_end"] if last else 0.0, "windows_stored": len(windows), **joined,
+                "energies": energies, "energy_balance_error": error}
+
+
+SIMULATION = SimulationJob()

@@ -1,0 +1,91 @@
+"""The simulation job over real HTTP (uvicorn): POST /v1/simulations stores the run per time
+window; its result equals the same run answered by /v1/solve with analysis "simulate"; a
+server killed in the middle resumes from the last stored window, and the windows stored
+before the kill come back untouched; bad fields are 422 naming them."""
+
+from __future__ import annotations
+
+import time
+
+import httpx
+import numpy as np
+
+from api.client import Client
+
+
+def _wait_until(condition, timeout: float, what: str) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if condition():
+            return
+        time.sleep(0.02)
+    raise AssertionError(f"timed out waiting for {what}")
+
+
+def solved_in_one(server, example: str, simulate: dict) -> dict:
+    r = httpx.post(f"{server.url}/v1/solve", json={"example": example, "analysis": "simulate", "simulate": simulate},
+                   timeout=300)
+    assert r.status_code == 200, r.text
+    return r.json()
+
+
+def test_a_simulation_job_equals_the_simulate_analysis(api_server):
+    simulate = {"until": 3.0, "step": 0.01, "every": 2}
+    with Client(api_server.url) as client:
+        job = client.simulation(example="spinning_rod_case1", simulate=simulate)
+        assert job.kind == "simulation" and job.progress.total == 6  # 300 steps in windows of 50
+        final = client.wait(job.id, timeout=300)
+        assert final.status == "succeeded", final.error
+        result = client.result(job.id).result
+    one = solved_in_one(api_server, "spinning_rod_case1", simulate)
+    assert one["status"] == "finished" and result["status"] == "finished"
+    assert result["times"] == one["times"] and len(one["times"]) == 151
+    for name, values in one["outputs"].items():
+        np.testing.assert_allclose(result["outputs"][name], values, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(result["energies"]["input_work"], one["energies"]["input_work"], rtol=1e-10)
+    assert abs(result["energy_balance_error"] - one["energy_balance_error"]) < 1e-9
+    assert result["units"]["length"] == "m" and result["windows_stored"] == 6
+
+
+def test_bad_simulation_fields_are_422_naming_them(api_server):
+    for simulate, pointer, words in [
+        ({"step": -0.01}, "/simulate/step", "greater than 0"),
+        ({"until": 1.0, "histories": {"/loads/spin/rotation": "open('x')"}},
+         "/simulate/histories/loads~1spin~1rotation", "a call of 'open' is not allowed"),
+        ({"until": 1e9, "step": 1e-6}, "/simulate/step", "over the limit of 1000000"),
+    ]:
+        r = httpx.post(f"{api_server.url}/v1/simulations", json={"example": "spinning_rod_case1", "simulate": simulate})
+        assert r.status_code == 422, r.text
+        error = r.json()["error"]
+        assert error["pointer"] == pointer and words in error["message"], error
+
+
+def test_a_killed_server_resumes_the_simulation_from_its_last_window(deployment):
+    """SIGKILL mid-run (the four-bar, 0.6 s in 12 windows); a new server on the same store
+    finishes it. The windows stored before come back as they were, and the whole run equals
+    an uninterrupted one (to rounding: that one runs in another process)."""
+    simulate = {"until": 0.6, "step": 0.001, "every": 10}
+    server = deployment.start(FLEXMECH_CHUNK_SIZE="1")
+    with Client(server.url) as client:
+        job = client.simulation(example="four_bar_dynamics", simulate=simulate)
+        assert job.progress.total == 12
+        _wait_until(lambda: client.job(job.id).progress.done >= 3, 240, "three windows")
+        before = client.result(job.id)
+        server.kill()
+    assert not before.complete and 3 <= before.result["windows_stored"] < 12
+    server = deployment.start()
+    try:
+        with Client(server.url) as client:
+            final = client.wait(job.id, timeout=300)
+            after = client.result(job.id)
+            one = solved_in_one(server, "four_bar_dynamics", simulate)
+    finally:
+        server.stop()
+    assert final.status == "succeeded" and final.restarts == 1
+    kept = len(before.result["times"])
+    assert after.result["times"][:kept] == before.result["times"]
+    assert after.result["outputs"]["C.x"][:kept] == before.result["outputs"]["C.x"]
+    assert after.result["times"] == one["times"]
+    # the one-call run goes through the server's own process (its BLAS threads sum in another order)
+    np.testing.assert_allclose(after.result["outputs"]["C.y"], one["outputs"]["C.y"], rtol=1e-12)
+    np.testing.assert_allclose(after.result["energies"]["input_work"], one["energies"]["input_work"], rtol=1e-10)
