@@ -112,3 +112,49 @@ def test_a_step_that_does_not_converge_ends_the_run_with_its_results():
     assert "did not converge" in report["message"] and "try a smaller step" in report["message"]
     assert report["time_reached"] < 3.0
     assert len(report["times"]) == report["steps"] + 1
+
+
+def rigid_slider_crank(times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(crank angle, slider x) of the rigid slider-crank with Example II.1's masses (links as
+    uniform bars with rotary inertia rho I L, a massless slider) under the moment of Eq. 4.4:
+    J(theta) theta'' + J'(theta) theta'^2 / 2 = M(t), integrated by scipy's DOP853."""
+    import casadi as ca
+    from scipy.integrate import solve_ivp
+
+    L1, L2, rho, I, A = 0.152, 0.304, 2770.0, 4.909e-10, 7.854e-5
+    m1, m2 = rho * A * L1, rho * A * L2
+    theta = ca.SX.sym("theta")
+    phi = ca.asin(-L1 * ca.sin(theta) / L2)  # the rod's angle: the slider stays on the x axis
+    centre = L1 * ca.vertcat(ca.cos(theta), ca.sin(theta)) + L2 / 2 * ca.vertcat(ca.cos(phi), ca.sin(phi))
+    J = (m1 * L1**2 / 3 + rho * I * L1 + m2 * ca.sumsqr(ca.jacobian(centre, theta))
+         + (m2 * L2**2 / 12 + rho * I * L2) * ca.jacobian(phi, theta) ** 2)
+    terms = ca.Function("terms", [theta], [J, ca.jacobian(J, theta), L1 * ca.cos(theta) + L2 * ca.cos(phi)])
+
+    def moment(t):
+        return np.interp(t, [0, 0.5, 0.7, 1.2], [0, 0.01, 0.01, 0])
+
+    def rates(t, y):
+        J_value, J_slope, _ = (float(q) for q in terms(y[0]))
+        return [y[1], (moment(t) - 0.5 * J_slope * y[1] ** 2) / J_value]
+
+    solution = solve_ivp(rates, (0, times[-1]), [0.0, 0.0], t_eval=times, rtol=1e-11, atol=1e-13, method="DOP853",
+                         max_step=0.01)
+    return solution.y[0], np.array([float(terms(angle)[2]) for angle in solution.y[0]])
+
+
+def test_a_stiff_slider_crank_moves_like_the_rigid_one():
+    """Example II.1 with both moduli 1e4 times larger: the crank angle (it turns 455 deg in
+    2 s) and the slider's position follow the rigid mechanism's equation of motion."""
+    def stiffen(document):
+        for material in document["materials"].values():
+            material["E"] *= 1e4
+
+    report = simulate("slider_crank_dynamics.json", stiffen, step=0.0025, every=1)
+    assert report["status"] == "finished", report["message"]
+    times = np.arange(0, 2.0001, 0.01)
+    angle, slider = rigid_slider_crank(times)
+    assert np.degrees(angle[-1]) > 450
+    ours = {name: np.interp(times, report["times"], report["outputs"][name])
+            for name in ("bodies.pivot.angle", "bodies.slider.x")}
+    assert np.abs(ours["bodies.pivot.angle"] - np.degrees(angle)).max() < 0.04  # degrees
+    assert np.abs(ours["bodies.slider.x"] - slider).max() < 8e-5  # m
