@@ -13,10 +13,14 @@ from models.fields import StrictModel
 
 class SimulateSpec(StrictModel):
     until: float | None = Field(default=None, gt=0, allow_inf_nan=False, description="end time (s)")
-    step: float = Field(default=1e-3, gt=0, allow_inf_nan=False, description="time step (s)")
+    step: float = Field(default=1e-3, gt=0, allow_inf_nan=False, description="time step (s); adaptive: the first")
+    adaptive: bool = Field(default=False, description="steps that follow the local error estimate")
+    tolerance: float = Field(default=1e-6, gt=0, le=1e-1, description="adaptive: a step's local error, relative to "
+                             "the mechanism's length scale (rad for angles)")
+    max_step: float | None = Field(default=None, gt=0, allow_inf_nan=False, description="adaptive: the longest step (s)")
     scheme: Literal["generalized_alpha", "newmark"] = Field(
         default="generalized_alpha", description="generalized-alpha (second order, rho_inf), or Newmark (a1, a2)")
-    rho_inf: float = Field(default=0.9, ge=0, le=1, description="generalized-alpha: spectral radius at high "
+    rho_inf: float = Field(default=0.95, ge=0, le=1, description="generalized-alpha: spectral radius at high "
                            "frequency (1: no numerical dissipation)")
     a1: float = Field(default=0.5, ge=0.5, le=1.5, description="Newmark gamma (Lan 2005 Eq. 3.15; 0.5 + sigma)")
     a2: float = Field(default=0.5, ge=0.5, le=3.0, description="Newmark 2 beta (Lan 2005 Eq. 3.15; (1 + sigma)^2 / 2)")

@@ -46,19 +46,6 @@ class History:
     seconds: float = 0.0
     resume: "Resume | None" = None
 
-    @property
-    def balance(self) -> np.ndarray:
-        """T + V - W_inputs + W_damping, less its start."""
-        total = (np.array(self.kinetic) + np.array(self.potential) - np.array(self.input_work)
-                 + np.array(self.damping_work))
-        return total - total[0]
-
-    def balance_error(self) -> float:
-        """The largest |balance| relative to the largest energy the run saw."""
-        size = max(np.abs(self.kinetic).max(), np.abs(np.array(self.potential) - self.potential[0]).max(),
-                   np.abs(self.input_work).max(), 1e-300)
-        return float(np.abs(self.balance).max() / size)
-
 
 def consistent_acceleration(form: DynamicsForm, x, v, p, pdot, pddot, damping: float) -> tuple[np.ndarray, np.ndarray]:
     """(qdd, lam) that satisfy the equations and the constraints' second derivative at (x, v)."""
@@ -80,14 +67,17 @@ class Resume:
     state: np.ndarray  # [x; v; a; qdd; lam]
     works: np.ndarray  # (inputs, damping)
     monitor: np.ndarray  # the last step's monitor column
+    time: float = 0.0  # seconds
+    h: float | None = None  # adaptive steps: the next step to try
 
     def to_json(self) -> dict:
         return {"step": self.step, "state": self.state.tolist(), "works": self.works.tolist(),
-                "monitor": self.monitor.tolist()}
+                "monitor": self.monitor.tolist(), "time": self.time, "h": self.h}
 
     @classmethod
     def from_json(cls, data: dict) -> "Resume":
-        return cls(int(data["step"]), *(np.array(data[k], dtype=float) for k in ("state", "works", "monitor")))
+        return cls(int(data["step"]), *(np.array(data[k], dtype=float) for k in ("state", "works", "monitor")),
+                   float(data.get("time", 0.0)), data.get("h"))
 
 
 def start_of(structure: Structure, p, x0, v0, histories: Histories, damping: float) -> Resume:
@@ -106,80 +96,100 @@ def start_of(structure: Structure, p, x0, v0, histories: Histories, damping: flo
 
 def integrate(structure: Structure, p: np.ndarray, x0: np.ndarray, v0: np.ndarray, until: float, h: float,
               scheme: Scheme, damping: float = 0.0, every: int = 1, stop=None, histories: Histories | None = None,
-              progress=None, compiled: bool = False, resume: Resume | None = None) -> History:
+              progress=None, compiled: bool = False, resume: Resume | None = None, adaptive=None) -> History:
     """States from t = 0 (or from `resume`) to `until` in steps h (seconds), keeping every
     `every`-th step (and the start, when not resumed). Steps run in windows
     (service.dynamics.window; `compiled`: as a C library); a step the window's Newton does
-    not settle is retried by Newton in Python before the run stops. `stop()` true ends the
-    run early; `progress(t)` hears after every window. history.resume goes on from the end."""
+    not settle is retried by Newton in Python before the run stops. With `adaptive` (an
+    service.dynamics.adaptive.Tolerance), h is the first step and the step follows the local
+    error. `stop()` true ends the run early; `progress(t)` hears after every window.
+    history.resume goes on from the end."""
     started = time.perf_counter()
     histories = histories or no_histories()
-    run = _Run(structure, p, h, scheme, damping, histories, compiled)
+    if adaptive is None:
+        runner = StepRunner(structure, p, h, scheme, damping, histories, compiled, until, every)
+    else:
+        from service.dynamics.adaptive import AdaptiveRunner
+
+        runner = AdaptiveRunner(structure, p, h, scheme, damping, histories, compiled, until, every, tolerance=adaptive)
     history = History("finished", "")
     if resume is None:
         resume = start_of(structure, p, x0, v0, histories, damping)
-        run.keep(history, resume)
-    steps = int(round(until / h))
-    while resume.step < steps:
+        resume.h = h
+        runner.keep(history, resume)
+    while not runner.done(resume):
         if stop is not None and stop():
-            history.status, history.message = "stopped", f"stopped at t = {resume.step * h:g} s"
+            history.status, history.message = "stopped", f"stopped at t = {resume.time:g} s"
             break
-        resume = run.window(history, resume, steps, every)
+        resume = runner.window(history, resume)
         if history.status != "finished":
             break
         if progress is not None:
-            progress(resume.step * h)
+            progress(resume.time)
     history.steps, history.resume = resume.step, resume
     history.seconds = time.perf_counter() - started
     return history
 
 
-class _Run:
-    """The Functions and inputs of one run; window() advances by up to WINDOW steps."""
+class StepRunner:
+    """The Functions and inputs of one run in fixed steps; window() advances by up to WINDOW."""
 
-    def __init__(self, structure, p, h, scheme, damping, histories: Histories, compiled: bool):
+    def __init__(self, structure, p, h, scheme, damping, histories: Histories, compiled: bool, until: float,
+                 every: int):
         self.structure, self.p, self.h, self.scheme, self.damping, self.histories = (
             structure, p, h, scheme, damping, histories)
+        self.until, self.every, self.steps = until, every, int(round(until / h))
         self.moving = histories.moving
         self.n = len(form_of(structure, self.moving).unknowns)
         self.function = window_function(structure, scheme, self.moving, WINDOW, compiled)
         self.mask = histories.load_mask(len(p))
 
-    def keep(self, history: History, at: Resume) -> None:
-        _keep(history, at.step * self.h, at.state, self.n, self.histories.at(self.p, at.step * self.h)[0],
-              _monitored(at.monitor), at.works)
+    def done(self, at: Resume) -> bool:
+        return at.step >= self.steps
 
-    def window(self, history: History, at: Resume, steps: int, every: int) -> Resume:
-        h, k = self.h, at.step
-        inputs = [self.histories.at(self.p, (k + j) * h) for j in range(1, WINDOW + 1)]
+    def keep(self, history: History, at: Resume) -> None:
+        _keep(history, at.time, at.state, self.n, self.histories.at(self.p, at.time)[0], _monitored(at.monitor),
+              at.works)
+
+    def run_window(self, at: Resume, h: float):
+        """The window's inputs, states, monitors and residuals from `at` in steps h."""
+        inputs = [self.histories.at(self.p, at.time + j * h) for j in range(1, WINDOW + 1)]
         P, PD, PDD = (np.column_stack([q[i] for q in inputs]) if len(inputs[0][i]) else np.zeros((0, WINDOW))
                       for i in range(3))
         S, monitors, residuals = (np.asarray(q, dtype=float)
                                   for q in self.function(at.state, h, P, PD, PDD, self.damping, self.mask))
         unsettled = np.flatnonzero(~(residuals.ravel() <= WINDOW_ACCEPTANCE))  # NaN too
-        good = min(unsettled[0] if len(unsettled) else WINDOW, steps - k)
+        return inputs, S, monitors, unsettled[0] if len(unsettled) else WINDOW
+
+    def window(self, history: History, at: Resume) -> Resume:
+        inputs, S, monitors, settled = self.run_window(at, self.h)
+        good = min(settled, self.steps - at.step)
         for j in range(good):
-            at = self._advance(history, at, S[:, j], monitors[:, j], steps, every)
-        if at.step < steps and good < WINDOW:  # the window's Newton did not settle this step: Newton in Python
-            state, residual = _python_step(self.structure, self.scheme, self.moving, at.state, self.n, h,
+            at = self.advance(history, at, S[:, j], monitors[:, j], self.h)
+        if not self.done(at) and good < WINDOW:  # the window's Newton did not settle this step: Newton in Python
+            state, residual = _python_step(self.structure, self.scheme, self.moving, at.state, self.n, self.h,
                                            inputs[good], self.damping)
             history.newton_iterations += 1
             if state is None:
                 history.status = "not_converged"
-                history.message = (f"the step from t = {at.step * h:g} s to {(at.step + 1) * h:g} s did not converge "
+                history.message = (f"the step from t = {at.time:g} s to {at.time + self.h:g} s did not converge "
                                    f"in {MAX_NEWTON} Newton iterations (residual {residual:.3g}): try a smaller step")
                 return at
             monitor = _monitor_column(monitor_function(self.structure, self.moving), state, self.n, *inputs[good],
                                       self.mask, self.damping)
-            at = self._advance(history, at, state, monitor, steps, every)
+            at = self.advance(history, at, state, monitor, self.h)
         return at
 
-    def _advance(self, history, at: Resume, state, monitor, steps: int, every: int) -> Resume:
-        works = at.works + 0.5 * self.h * (monitor[2:4] + at.monitor[2:4])
-        now = Resume(at.step + 1, np.array(state), works, np.array(monitor))
-        if now.step % every == 0 or now.step == steps:
+    def advance(self, history, at: Resume, state, monitor, h: float, final: bool = False) -> Resume:
+        works = at.works + 0.5 * h * (monitor[2:4] + at.monitor[2:4])
+        step = at.step + 1
+        now = Resume(step, np.array(state), works, np.array(monitor), self.time_of(step, at, h), at.h)
+        if now.step % self.every == 0 or final or self.done(now):
             self.keep(history, now)
         return now
+
+    def time_of(self, step: int, at: Resume, h: float) -> float:
+        return step * self.h  # fixed steps: no sum of rounding errors
 
 
 def _python_step(structure, scheme, moving, state, n, h, inputs, damping):

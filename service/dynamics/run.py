@@ -56,6 +56,15 @@ def check_masses(mech: Mechanism) -> None:
                                  f"'{t.material}' a density")
 
 
+def tolerance_of(spec: SimulateSpec):
+    """The adaptive steps' tolerance, or None for fixed steps."""
+    if not spec.adaptive:
+        return None
+    from service.dynamics.adaptive import Tolerance
+
+    return Tolerance(spec.tolerance, spec.max_step if spec.max_step is not None else float("inf"))
+
+
 def check_steps(spec: SimulateSpec, max_steps: int) -> int:
     steps = int(round(spec.until / spec.step))
     if steps < 1:
@@ -87,7 +96,7 @@ def run_simulation(mech: Mechanism, spec: SimulateSpec, stop=None, progress=None
     n, p = len(x0), mech.p()
     history = integrate(mech.structure, p, x0, np.zeros(n), spec.until, spec.step, scheme_of(spec),
                         damping=spec.damping, every=spec.every, stop=stop, histories=histories, progress=progress,
-                        compiled=spec.compiled)
+                        compiled=spec.compiled, adaptive=tolerance_of(spec))
     return history, report(mech, spec, history, histories, start_note)
 
 
@@ -157,8 +166,10 @@ def report(mech: Mechanism, spec: SimulateSpec, history: History, histories, sta
     energies, error = with_balance(kept.pop("energies"))
     every = output_units(mech)
     return {"analysis": "simulate", "name": mech.document.name, "status": history.status,
-            "message": history.message, "time_reached": history.steps * spec.step, "steps": history.steps,
+            "message": history.message, "time_reached": history.resume.time if history.resume is not None else 0.0,
+            "steps": history.steps,
             "seconds": history.seconds, "start": start_note, "scheme": scheme_summary(spec), "step": spec.step,
+            "adaptive": {"tolerance": spec.tolerance, "max_step": spec.max_step} if spec.adaptive else None,
             "damping": spec.damping, **kept, "energies": energies, "energy_balance_error": error,
             "units": units(mech), "output_units": {name: every[name] for name in kept["outputs"]}}
 

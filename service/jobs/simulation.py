@@ -20,7 +20,7 @@ from service.dynamics.histories import read_histories
 from service.dynamics.integrate import Resume, integrate
 from service.dynamics.window import WINDOW
 from service.dynamics.run import (check_masses, check_steps, records, scheme_of, scheme_summary, simulation_spec,
-                                  start_shape, units, wanted_outputs, with_balance)
+                                  start_shape, tolerance_of, units, wanted_outputs, with_balance)
 from service.jobs.base import Plan
 from service.jobs.control import TaskControl
 from service.jobs.sweep import mechanism_of
@@ -47,16 +47,20 @@ class SimulationJob:
             check_masses(mech)
         except MechanismError as exc:
             raise under("/document", exc) from None
-        steps = check_steps(simulate, limits.max_simulation_steps)
+        steps = check_steps(simulate, limits.max_simulation_steps)  # adaptive: as many as the first step makes
         read_histories(mech, simulate.histories, simulate.until, "/simulate/histories")
         outputs = wanted_outputs(mech, simulate)
         kept = steps // simulate.every + 2
         per_state = len(outputs) + len(mech.graphs.energy_form.equality_names) + 5
         check_result_size(kept, per_state, limits, "/simulate/every")
-        window = WINDOW * max(1, math.ceil(steps / WINDOWS / WINDOW))  # the stepping's own windows fit
-        windows = math.ceil(steps / window)
-        meta = {"steps": steps, "window": window, "windows": windows, "step": simulate.step,
-                "until": simulate.until, "scheme": scheme_summary(simulate), "units": units(mech)}
+        if simulate.adaptive:
+            windows = WINDOWS
+            span = simulate.until / windows
+        else:
+            window = WINDOW * max(1, math.ceil(steps / WINDOWS / WINDOW))  # the stepping's own windows fit
+            windows, span = math.ceil(steps / window), window * simulate.step
+        meta = {"windows": windows, "span": span, "step": simulate.step, "until": simulate.until,
+                "scheme": scheme_summary(simulate), "units": units(mech)}
         return Plan(windows, meta)
 
     def failed(self, point: dict) -> bool:
@@ -77,7 +81,7 @@ class SimulationJob:
             return None
         resume = finished[position - 1]["resume"] if position > 0 else None
         return {"indices": list(range(position, min(position + chunk_size, plan["windows"]))), "resume": resume,
-                "window": plan["window"]}
+                "span": plan["span"]}
 
     def run(self, spec, task):
         mech = mechanism_of(spec)
@@ -87,15 +91,16 @@ class SimulationJob:
         p, scheme = mech.p(), scheme_of(simulate)
         at = Resume.from_json(task["resume"]) if task.get("resume") is not None else None
         x0 = start_shape(mech, simulate)[0] if at is None else None
-        steps, points = int(round(simulate.until / simulate.step)), []
+        points = []
         for index in task["indices"]:
-            end = min((index + 1) * task["window"], steps)
-            started = 0.0 if at is None else at.step * simulate.step
-            history = integrate(mech.structure, p, x0, None if x0 is None else 0 * x0, end * simulate.step,
-                                simulate.step, scheme, damping=simulate.damping, every=simulate.every,
-                                stop=control.should_stop, histories=histories, compiled=simulate.compiled, resume=at)
+            end = min((index + 1) * task["span"], simulate.until)
+            started = 0.0 if at is None else at.time
+            history = integrate(mech.structure, p, x0, None if x0 is None else 0 * x0, end, simulate.step, scheme,
+                                damping=simulate.damping, every=simulate.every, stop=control.should_stop,
+                                histories=histories, compiled=simulate.compiled, resume=at,
+                                adaptive=tolerance_of(simulate))
             points.append((index, {"status": history.status, "message": history.message, "t_start": started,
-                                   "t_end": history.steps * simulate.step,
+                                   "t_end": history.resume.time,
                                    **records(mech, simulate, history, histories), "resume": history.resume.to_json()}))
             if history.status != "finished":
                 break
