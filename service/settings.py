@@ -49,6 +49,7 @@ class Settings(BaseSettings):
     max_result_values: int = Field(1_000_000, ge=1, description="numbers a job stores")
     max_contact_rows: int = Field(2000, ge=1, description="non-penetration rows of a contact problem")
     max_contact_rotations: int = Field(128, ge=1, description="rotations of a contact problem's links")
+    max_simulation_steps: int = Field(1_000_000, ge=1, description="time steps of a simulation job")
     solve_time_limit: float = Field(10.0, gt=0, description="seconds of Newton per /v1/solve")
     job_time_limit: float = Field(3600.0, gt=0, description="seconds of wall time per job")
     chunk_size: int = Field(8, ge=1, le=10_000, description="points per task sent to a worker")
@@ -77,7 +78,8 @@ class Settings(BaseSettings):
                       solve_time_limit=self.solve_time_limit, max_bodies=self.max_bodies, max_loads=self.max_loads,
                       max_outputs=self.max_outputs, max_link_work=self.max_link_work,
                       max_result_values=self.max_result_values, job_time_limit=self.job_time_limit,
-                      max_contact_rows=self.max_contact_rows, max_contact_rotations=self.max_contact_rotations)
+                      max_contact_rows=self.max_contact_rows, max_contact_rotations=self.max_contact_rotations,
+                      max_simulation_steps=self.max_simulation_steps)
 
     def resolved_database_url(self) -> str:
         if self.database_url:

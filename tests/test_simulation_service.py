@@ -64,7 +64,7 @@ def test_a_killed_server_resumes_the_simulation_from_its_last_window(deployment)
     """SIGKILL mid-run (the four-bar, 0.6 s in 12 windows); a new server on the same store
     finishes it. The windows stored before come back as they were, and the whole run equals
     an uninterrupted one (to rounding: that one runs in another process)."""
-    simulate = {"until": 0.6, "step": 0.001, "every": 10}
+    simulate = {"until": 0.6, "step": 0.001, "every": 10, "adaptive": False}
     server = deployment.start(FLEXMECH_CHUNK_SIZE="1")
     with Client(server.url) as client:
         job = client.simulation(example="four_bar_dynamics", simulate=simulate)

@@ -16,10 +16,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from service.dynamics.integrate import History, Resume, StepRunner
+from service.dynamics.stepping import History, Resume, StepRunner
 from service.dynamics.window import WINDOW
 
 SAFETY = 0.9
+MAX_REJECTIONS = 12  # in a row: then the run ends, not_converged
 SHRINK_AT_MOST, GROW_AT_MOST = 0.2, 2.0
 
 
@@ -45,7 +46,7 @@ class AdaptiveRunner(StepRunner):
 
     def window(self, history: History, at: Resume) -> Resume:
         h, tol, n = min(at.h or self.h, self.tolerance.max_step), self.tolerance.local, self.n
-        while True:
+        for _ in range(MAX_REJECTIONS):
             remaining = self.until - at.time
             needed = math.ceil(remaining / h - 1e-9)
             count, h_use = (needed, remaining / needed) if needed <= WINDOW else (WINDOW, h)
@@ -54,7 +55,7 @@ class AdaptiveRunner(StepRunner):
                 history.message = (f"at t = {at.time:g} s the step fell below min_step = {self.tolerance.min_step:g} s "
                                    "(a loss of convergence or an impact-like event): loosen the tolerance")
                 return at
-            _, S, monitors, settled = self.run_window(at, h_use)
+            inputs, S, monitors, settled = self.run_window(at, h_use)
             accelerations = np.column_stack([at.state[3 * n:4 * n], S[3 * n:4 * n, :count]])
             errors = self.factor * h_use**2 * np.abs(np.diff(accelerations, axis=1)).max(axis=0, initial=0.0)
             bad = [j for j in range(count) if j >= settled or not errors[j] <= tol]
@@ -64,11 +65,15 @@ class AdaptiveRunner(StepRunner):
                 continue
             for j in range(first_bad):
                 final = first_bad == count == needed and j == count - 1
-                at = self.advance(history, at, S[:, j], monitors[:, j], h_use, final)
+                at = self.advance(history, at, S[:, j], monitors[:, j], h_use, final, p=inputs[0][:, j])
             worst = errors[first_bad] if first_bad < count else errors[:first_bad].max()
             grow = _shrink(tol, worst) if first_bad < count else min(GROW_AT_MOST, _ratio(tol, worst))
             at.h = min(h_use * grow, self.tolerance.max_step)
             return at
+        history.status = "not_converged"
+        history.message = (f"at t = {at.time:g} s the first step was rejected {MAX_REJECTIONS} times in a row, down to "
+                           f"{h:.3g} s: the motion cannot be followed from here (a loss of convergence)")
+        return at
 
 
 def _ratio(tol: float, error: float) -> float:

@@ -115,15 +115,17 @@ def records(mech: Mechanism, spec: SimulateSpec, history: History, histories) ->
                for name in wanted}
     state_names = unknown_names(mech.structure)
     forces = {}
+    multipliers = np.array(history.lam).reshape(len(history.lam), -1)
     for j, index in enumerate(form.multipliers_in_state):
         name, kind = state_names[index]
-        forces[name] = [float(lam[j]) / mech.nd_per_doc(kind) for lam in history.lam]
+        forces[name] = (multipliers[:, j] / mech.nd_per_doc(kind)).tolist()
     energy = 1 / mech.nd_per_doc("force") / mech.nd_per_doc("length")
     motion_forces = {}
     for k, index in enumerate(histories.moving):
         pointer = mech.parameters[index].pointer
         kind = "moment" if pointer.endswith("/rotation") else "force"
-        motion_forces[pointer] = [float(q[k]) / mech.nd_per_doc(kind) for q in history.motion_forces]
+        scale = mech.nd_per_doc(kind)
+        motion_forces[pointer] = [float(q[k]) / scale for q in history.motion_forces]
     return {"times": list(history.times), "outputs": outputs, "constraint_forces": forces,
             "motion_forces": motion_forces,
             "energies": {"kinetic": [e * energy for e in history.kinetic],
