@@ -33,6 +33,8 @@ class SimulateSpec(StrictModel):
                                       "expression in t, {table: [[t, value], ...]} or {pieces: [{until, value}, ...]}")
     every: int = Field(default=1, ge=1, le=1_000_000, description="keep every n-th step")
     outputs: list[str] | None = Field(default=None, max_length=512, description="outputs to record (default: all)")
+    shapes: bool = Field(default=False, description="also the links' deformed centre lines at every kept state "
+                         "(snapshots, animation)")
     compiled: bool = Field(default=False, description="compile the stepping with the system C compiler "
                            "(a minute once per mechanism structure, cached; then several times faster)")
 

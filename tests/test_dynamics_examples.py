@@ -182,3 +182,17 @@ def test_adaptive_steps_carry_the_falling_tip_mass_where_fixed_ones_fail():
     assert adaptive["energy_balance_error"] < 2e-5
     y = np.array(adaptive["outputs"]["bodies.tip.y"])
     assert -0.34 < y.min() < -0.33  # the tip swings down about a third of a metre and back up
+
+
+def test_shapes_are_the_deformed_centre_lines_of_the_kept_states():
+    """With `shapes`, every kept state carries each link's centre line: it starts at the hub,
+    ends at the rod's end output and is as long as the rod plus its elongation."""
+    report = simulate("spinning_rod_case2.json", until=4.0, step=0.01, every=50, shapes=True)
+    assert report["status"] == "finished" and len(report["shapes"]) == len(report["times"]) == 9
+    for k, shape in enumerate(report["shapes"]):
+        x, y = np.array(shape["rod"])
+        assert (x[0], y[0]) == (pytest.approx(0, abs=1e-12), pytest.approx(0, abs=1e-12))
+        assert x[-1] == pytest.approx(report["outputs"]["elements.rod.x_end"][k], rel=1e-12, abs=1e-12)
+        assert y[-1] == pytest.approx(report["outputs"]["elements.rod.y_end"][k], rel=1e-12, abs=1e-12)
+        length = np.hypot(np.diff(x), np.diff(y)).sum()  # a polygon through the samples: a little short
+        assert 0 < 10.0 + report["outputs"]["elements.rod.elongation"][k] - length < 1e-3

@@ -126,12 +126,27 @@ def records(mech: Mechanism, spec: SimulateSpec, history: History, histories) ->
         kind = "moment" if pointer.endswith("/rotation") else "force"
         scale = mech.nd_per_doc(kind)
         motion_forces[pointer] = [float(q[k]) / scale for q in history.motion_forces]
-    return {"times": list(history.times), "outputs": outputs, "constraint_forces": forces,
+    kept = {"times": list(history.times), "outputs": outputs, "constraint_forces": forces,
             "motion_forces": motion_forces,
             "energies": {"kinetic": [e * energy for e in history.kinetic],
                          "potential": [e * energy for e in history.potential],
                          "input_work": [e * energy for e in history.input_work],
                          "damping_work": [e * energy for e in history.damping_work]}}
+    if spec.shapes:
+        kept["shapes"] = shapes_of(mech, states, history.p) if history.times else []
+    return kept
+
+
+def shapes_of(mech: Mechanism, states: np.ndarray, parameters: list) -> list[dict]:
+    """Per kept state, every drawn element's deformed centre line [[x...], [y...]] (document
+    length unit)."""
+    scale = 1 / mech.nd_per_doc("length")
+    out = []
+    for k in range(states.shape[1]):
+        line = np.asarray(mech.graphs.shapes(states[:, k], parameters[k])[0]) * scale
+        out.append({name: line[:, first:first + count].tolist()
+                    for name, first, count, _, _ in mech.graphs.shape_segments})
+    return out
 
 
 def wanted_outputs(mech: Mechanism, spec: SimulateSpec) -> list[str]:

@@ -52,6 +52,8 @@ class SimulationJob:
         outputs = wanted_outputs(mech, simulate)
         kept = steps // simulate.every + 2
         per_state = len(outputs) + len(mech.graphs.energy_form.equality_names) + 5
+        if simulate.shapes:
+            per_state += 2 * sum(count for _, _, count, _, _ in mech.graphs.shape_segments)
         check_result_size(kept, per_state, limits, "/simulate/every")
         if simulate.adaptive:
             windows = WINDOWS
@@ -116,6 +118,8 @@ class SimulationJob:
             for group in ("outputs", "constraint_forces", "motion_forces", "energies"):
                 for name, values in window[group].items():
                     joined[group].setdefault(name, []).extend(values)
+            if "shapes" in window:
+                joined.setdefault("shapes", []).extend(window["shapes"])
         energies, error = with_balance(joined.pop("energies"))
         last = windows[-1] if windows else None
         if last is None:
