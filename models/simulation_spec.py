@@ -41,6 +41,8 @@ class SimulateSpec(StrictModel):
     @model_validator(mode="after")
     def _newmark_stable(self):
         if self.scheme == "newmark" and self.a2 < 0.5 * (self.a1 + 0.5) ** 2 - 1e-12:
-            raise ValueError(f"Newmark a1 = {self.a1:g}, a2 = {self.a2:g} is not unconditionally stable: "
-                             "it needs a2 >= (a1 + 1/2)^2 / 2")
+            bound = 0.5 * (self.a1 + 0.5) ** 2
+            raise ValueError(f"Newmark a1 = {self.a1:g}, a2 = {self.a2:g} is not unconditionally stable: it needs "
+                             f"a2 >= (a1 + 1/2)^2 / 2 = {bound:.8g} (Lan 2005's rounded (0.505, 0.505) is just "
+                             "below it; its sigma = 0.005 means a2 = 0.5050125)")
         return self
