@@ -100,6 +100,8 @@ def test_the_four_bars_energy_is_the_work_of_its_input_torque():
      "/simulate/histories/loads~1spin~1rotation/table", "a prescribed motion needs an acceleration"),
     (None, {"histories": {"/elements/rod/length": "1 + t"}}, "/simulate/histories/elements~1rod~1length",
      "cannot change in time"),
+    (lambda d: d["elements"]["rod"].update(end="pinned"), {}, "/bodies",
+     "the motion is undetermined: a coordinate that is free carries no mass (tip.angle)"),
 ])
 def test_bad_input_names_the_field(edit, fields, pointer, message):
     with pytest.raises(MechanismError) as error:

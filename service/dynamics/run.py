@@ -14,6 +14,7 @@ from pydantic import ValidationError
 from models import Mechanism, MechanismError
 from models.residual import unknown_names
 from models.simulation_spec import SimulateSpec
+from service.dynamics.adaptive import Tolerance
 from service.dynamics.histories import read_histories
 from service.dynamics.integrate import History, integrate
 from service.dynamics.schemes import Scheme, generalized_alpha, newmark
@@ -56,12 +57,10 @@ def check_masses(mech: Mechanism) -> None:
                                  f"'{t.material}' a density")
 
 
-def tolerance_of(spec: SimulateSpec):
+def tolerance_of(spec: SimulateSpec) -> Tolerance | None:
     """The adaptive steps' tolerance, or None for fixed steps."""
     if not spec.adaptive:
         return None
-    from service.dynamics.adaptive import Tolerance
-
     return Tolerance(spec.tolerance, spec.max_step if spec.max_step is not None else float("inf"))
 
 

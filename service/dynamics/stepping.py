@@ -14,7 +14,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.linalg import null_space
 
+from models import MechanismError
 from models.dynamics import DynamicsForm
 from models.structure import Structure
 from service.dynamics.functions import form_of, monitor_function, step_function
@@ -53,6 +55,13 @@ def consistent_acceleration(form: DynamicsForm, x, v, p, pdot, pddot, damping: f
     G = np.asarray(form.constraint_jacobian(x, p), dtype=float).reshape(m, n)
     drift = np.asarray(form.constraint_drift(x, v, p, pdot, pddot), dtype=float).ravel()
     K = np.block([[M, G.T], [G, np.zeros((m, m))]])
+    if np.linalg.cond(K) > 1e14:
+        loose = np.abs(null_space(K, rcond=1e-12)[:n]).max(axis=1, initial=0.0)  # what moves undetermined
+        massless = [form.unknowns[i] for i in range(n) if loose[i] > 0.1 * loose.max()]
+        raise MechanismError("/bodies", "the motion is undetermined: a coordinate that is free carries no mass"
+                             + (f" ({', '.join(massless[:6])})" if massless else "")
+                             + ": give the body a mass (and an inertia, for its angle), or tie the coordinate by a "
+                             "joint or a link")
     solution = np.linalg.solve(K, np.concatenate([-rest, -drift]))
     return solution[:n], solution[n:]
 
