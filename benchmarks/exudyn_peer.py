@@ -88,7 +88,8 @@ class _Link:
         """Kinetic and strain energy histories of the link (see module docstring)."""
         L = self.length_e
         vt = v[:, :, :2]
-        T = self.rhoA * L / 6 * np.sum(np.sum(vt[:, :-1] ** 2 + vt[:, :-1] * vt[:, 1:] + vt[:, 1:] ** 2, axis=2), axis=1)
+        pairs = vt[:, :-1] ** 2 + vt[:, :-1] * vt[:, 1:] + vt[:, 1:] ** 2
+        T = self.rhoA * L / 6 * np.sum(np.sum(pairs, axis=2), axis=1)
         w = v[:, :, 2]
         T += self.rhoJ * L / 6 * np.sum(w[:, :-1] ** 2 + w[:, :-1] * w[:, 1:] + w[:, 1:] ** 2, axis=1)
         pos = self.ref[None, :, :2] + q[:, :, :2]

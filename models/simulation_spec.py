@@ -17,7 +17,8 @@ class SimulateSpec(StrictModel):
     adaptive: bool = Field(default=False, description="steps that follow the local error estimate")
     tolerance: float = Field(default=1e-6, gt=0, le=1e-1, description="adaptive: a step's local error, relative to "
                              "the mechanism's length scale (rad for angles)")
-    max_step: float | None = Field(default=None, gt=0, allow_inf_nan=False, description="adaptive: the longest step (s)")
+    max_step: float | None = Field(default=None, gt=0, allow_inf_nan=False,
+                                   description="adaptive: the longest step (s)")
     scheme: Literal["generalized_alpha", "newmark"] = Field(
         default="generalized_alpha", description="generalized-alpha (second order, rho_inf), or Newmark (a1, a2)")
     rho_inf: float = Field(default=0.95, ge=0, le=1, description="generalized-alpha: spectral radius at high "

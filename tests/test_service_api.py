@@ -160,8 +160,8 @@ def test_unknown_route_and_example_have_the_same_shape(api_server):
 def test_openapi_operation_ids_are_stable(api_server):
     spec = httpx.get(api_server.url + "/openapi.json").json()
     ids = {op["operationId"] for path in spec["paths"].values() for op in path.values()}
-    assert ids == {"solve", "create_sweep", "create_optimization", "create_contact_path", "create_simulation", "get_job", "get_job_result",
-                   "cancel_job", "list_examples", "get_example", "health"}
+    assert ids == {"solve", "create_sweep", "create_optimization", "create_contact_path", "create_simulation",
+                   "get_job", "get_job_result", "cancel_job", "list_examples", "get_example", "health"}
 
 
 # --- API keys -------------------------------------------------------------------------------

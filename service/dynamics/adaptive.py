@@ -63,9 +63,7 @@ class AdaptiveRunner(StepRunner):
             if first_bad == 0:
                 h = h_use * (0.5 if settled == 0 or not np.isfinite(errors[0]) else _shrink(tol, errors[0]))
                 continue
-            for j in range(first_bad):
-                final = first_bad == count == needed and j == count - 1
-                at = self.advance(history, at, S[:, j], monitors[:, j], h_use, final, p=inputs[0][:, j])
+            at = self.accept(history, at, S, monitors, inputs[0], first_bad, h_use, first_bad == count == needed)
             worst = errors[first_bad] if first_bad < count else errors[:first_bad].max()
             grow = _shrink(tol, worst) if first_bad < count else min(GROW_AT_MOST, _ratio(tol, worst))
             at.h = min(h_use * grow, self.tolerance.max_step)

@@ -171,12 +171,13 @@ def _table(rows, where: str) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _finite(expression: ca.SX, t: ca.SX, until: float, where: str) -> None:
-    f = ca.Function("history", [t], [expression, ca.jacobian(expression, t)])
-    for time in np.linspace(0.0, until, 1001):
-        value, rate = (float(q) for q in f(time))
-        if not (np.isfinite(value) and np.isfinite(rate)):
-            raise MechanismError(where, f"the history is not a finite number at t = {time:g} s (a division by zero, "
-                                 "an overflow, or a root or logarithm of a negative number)")
+    times = np.linspace(0.0, until, 1001)
+    f = ca.Function("history", [t], [expression, ca.jacobian(expression, t)]).map(len(times))
+    values, rates = (np.asarray(q, dtype=float).ravel() for q in f(times))
+    bad = np.flatnonzero(~(np.isfinite(values) & np.isfinite(rates)))
+    if len(bad):
+        raise MechanismError(where, f"the history is not a finite number at t = {times[bad[0]]:g} s (a division by "
+                             "zero, an overflow, or a root or logarithm of a negative number)")
 
 
 def _joins_meet(history, expression: ca.SX, t: ca.SX, where: str) -> None:

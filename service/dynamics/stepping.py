@@ -132,8 +132,7 @@ class StepRunner:
     def window(self, history: History, at: Resume) -> Resume:
         inputs, S, monitors, settled = self.run_window(at, self.h)
         good = min(settled, self.steps - at.step)
-        for j in range(good):
-            at = self.advance(history, at, S[:, j], monitors[:, j], self.h, p=inputs[0][:, j])
+        at = self.accept(history, at, S, monitors, inputs[0], good, self.h)
         if not self.done(at) and good < WINDOW:  # the window's Newton did not settle this step: Newton in Python
             step_inputs = tuple(q[:, good] for q in inputs)
             state, residual = _python_step(self.structure, self.scheme, self.moving, at.state, self.n, self.h,
@@ -147,6 +146,23 @@ class StepRunner:
             monitor = _monitor_column(monitor_function(self.structure, self.moving), state, self.n, *step_inputs,
                                       self.mask, self.damping)
             at = self.advance(history, at, state, monitor, self.h, p=step_inputs[0])
+        return at
+
+    def accept(self, history, at: Resume, S, monitors, P, count: int, h: float, final: bool = False) -> Resume:
+        """The window's first `count` steps (in steps h): works summed, every `every`-th kept."""
+        if count == 0:
+            return at
+        previous = np.column_stack([at.monitor, monitors[:, :count - 1]])
+        works = at.works[:, None] + np.cumsum(0.5 * h * (monitors[2:4, :count] + previous[2:4]), axis=1)
+        start = at
+        for j in range(count):
+            step, last = start.step + j + 1, j == count - 1
+            now = self.time_of(step, start, h * (j + 1))
+            kept = step % self.every == 0 or (last and final) or now >= self.until * (1 - 1e-12)
+            if kept or last:
+                at = Resume(step, S[:, j].copy(), works[:, j], monitors[:, j].copy(), now, start.h)
+            if kept:
+                self.keep(history, at, P[:, j])
         return at
 
     def advance(self, history, at: Resume, state, monitor, h: float, final: bool = False, p=None) -> Resume:

@@ -1,5 +1,6 @@
-"""A window of steps in one call: each step's Newton solve inside CasADi (rootfinder
-'fast_newton', which can be code-generated), the steps chained by mapaccum, the whole window
+"""A window of steps in one call: each step's Newton solve inside CasADi (small systems: the
+chord method on a symbolic inverse; larger ones: rootfinder 'fast_newton'; both can be
+code-generated), the steps chained by mapaccum, the whole window
 compiled with the system compiler and cached on disk like the equilibrium fast path. Python
 is called once per window, not once per Newton iteration.
 
@@ -26,6 +27,8 @@ from service.fastpath import compile_function
 NEWTON_TOLERANCE = 1e-10  # nondimensional residual of a step's equations (forces)
 CONSTRAINT_TOLERANCE = 1e-13  # and of its constraints (lengths, angles)
 MAX_NEWTON = 25
+CHORD_ITERATIONS = 4  # residual-only iterations after the first Newton step of a window step
+CHORD_SIZE = 40  # unknowns up to which the chord method's symbolic inverse is cheaper than Newton's Jacobians
 
 WINDOW = 50  # steps per call
 
@@ -56,9 +59,14 @@ def window_function(structure: Structure, scheme: Scheme, moving: tuple[int, ...
                    form.constraints(x1, p) * (NEWTON_TOLERANCE / CONSTRAINT_TOLERANCE))
     parameters = ca.vertcat(state, h, p, pdot, pddot, damping)
     residual = ca.Function("step_residual", [u, parameters], [F])
-    newton = ca.rootfinder("step_newton", "fast_newton", residual, {
-        "abstol": NEWTON_TOLERANCE, "abstolStep": 1e-15, "max_iter": MAX_NEWTON, "error_on_fail": False})
-    solved = newton(ca.vertcat(qdd, state[4 * n:]), parameters)
+    guess = ca.vertcat(qdd, state[4 * n:])
+    if n + m <= CHORD_SIZE:
+        solved = _chord_newton(residual, ca.Function("step_jacobian", [u, parameters], [F, ca.jacobian(F, u)]),
+                               guess, parameters)
+    else:
+        newton = ca.rootfinder("step_newton", "fast_newton", residual, {
+            "abstol": NEWTON_TOLERANCE, "abstolStep": 1e-15, "max_iter": MAX_NEWTON, "error_on_fail": False})
+        solved = newton(guess, parameters)
     x1, v1, a1 = advance(solved)
     left = ca.norm_inf(residual(solved, parameters))
     qdd1, lam1 = solved[:n], solved[n:]
@@ -69,6 +77,20 @@ def window_function(structure: Structure, scheme: Scheme, moving: tuple[int, ...
     if not compiled:
         return window
     return compile_function(window, f"{structure.key}|{code_version()}|{_own_version()}|{scheme}|{moving}|{steps}")[0]
+
+
+def _chord_newton(residual: ca.Function, jacobian: ca.Function, u0, parameters) -> ca.SX:
+    """Newton with the Jacobian of the first iterate kept (the chord method): one Jacobian and
+    CHORD_ITERATIONS + 1 residuals per step instead of a Jacobian per iteration. The step's
+    first guess, the last accelerations, is close: the iteration contracts by orders of
+    magnitude each time. A step it does not settle is cut from the window and solved by full
+    Newton (service.dynamics.stepping)."""
+    F0, J0 = jacobian(u0, parameters)
+    inverse = ca.solve(J0, ca.SX.eye(J0.shape[0]))
+    u = u0 - ca.mtimes(inverse, F0)
+    for _ in range(CHORD_ITERATIONS):
+        u = u - ca.mtimes(inverse, residual(u, parameters))
+    return u
 
 
 @lru_cache(maxsize=1)
