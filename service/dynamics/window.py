@@ -28,7 +28,7 @@ NEWTON_TOLERANCE = 1e-10  # nondimensional residual of a step's equations (force
 CONSTRAINT_TOLERANCE = 1e-13  # and of its constraints (lengths, angles)
 MAX_NEWTON = 25
 CHORD_ITERATIONS = 4  # residual-only iterations after the first Newton step of a window step
-CHORD_SIZE = 40  # unknowns up to which the chord method's symbolic inverse is cheaper than Newton's Jacobians
+CHORD_SIZE = 20  # unknowns up to which the chord method on a symbolic inverse beats Newton (measured)
 
 WINDOW = 50  # steps per call
 
@@ -60,23 +60,29 @@ def window_function(structure: Structure, scheme: Scheme, moving: tuple[int, ...
     parameters = ca.vertcat(state, h, p, pdot, pddot, damping)
     residual = ca.Function("step_residual", [u, parameters], [F])
     guess = ca.vertcat(qdd, state[4 * n:])
-    if n + m <= CHORD_SIZE:
-        solved = _chord_newton(residual, ca.Function("step_jacobian", [u, parameters], [F, ca.jacobian(F, u)]),
-                               guess, parameters)
-    else:
-        newton = ca.rootfinder("step_newton", "fast_newton", residual, {
-            "abstol": NEWTON_TOLERANCE, "abstolStep": 1e-15, "max_iter": MAX_NEWTON, "error_on_fail": False})
-        solved = newton(guess, parameters)
-    x1, v1, a1 = advance(solved)
-    left = ca.norm_inf(residual(solved, parameters))
-    qdd1, lam1 = solved[:n], solved[n:]
+    jacobian = ca.Function("step_jacobian", [u, parameters], [F, ca.jacobian(F, u)])
+    solution = ca.SX.sym("solution", n + m)
+    x1, v1, a1 = advance(solution)
+    left = ca.norm_inf(residual(solution, parameters))
+    qdd1, lam1 = solution[:n], solution[n:]
     T, V, power, dissipation, Q = monitor_function(structure, moving)(x1, v1, qdd1, lam1, p, pdot, pddot, mask, damping)
-    one = ca.Function("one_step", [state, h, p, pdot, pddot, damping, mask],
-                      [ca.vertcat(x1, v1, a1, qdd1, lam1), ca.vertcat(T, V, power, dissipation, Q), left])
+    inputs = [state, h, p, pdot, pddot, damping, mask]
+    finish = ca.Function("step_finish", [solution, *inputs],
+                         [ca.vertcat(x1, v1, a1, qdd1, lam1), ca.vertcat(T, V, power, dissipation, Q), left])
+    if n + m <= CHORD_SIZE:  # all in SX: the symbolic inverse is small
+        one = ca.Function("one_step", inputs, finish(_chord_newton(residual, jacobian, guess, parameters), *inputs))
+    else:  # the chord method with a numeric factorization per iteration (MX)
+        start = ca.Function("step_start", inputs, [guess, parameters])
+        symbols = [ca.MX.sym(name, q.shape) for name, q in zip(("s", "h", "p", "pdot", "pddot", "damping", "mask"),
+                                                              inputs)]
+        first, known = start(*symbols)
+        one = ca.Function("one_step", symbols, finish(_chord_newton_numeric(residual, jacobian, first, known), *symbols))
     window = one.mapaccum("dynamics_window", steps, [0], [0])
     if not compiled:
         return window
-    return compile_function(window, f"{structure.key}|{code_version()}|{_own_version()}|{scheme}|{moving}|{steps}")[0]
+    method = "chord" if n + m <= CHORD_SIZE else "chord_qr"
+    key = f"{structure.key}|{code_version()}|{_own_version()}|{scheme}|{moving}|{steps}|{method}"
+    return compile_function(window, key)[0]
 
 
 def _chord_newton(residual: ca.Function, jacobian: ca.Function, u0, parameters) -> ca.SX:
@@ -90,6 +96,18 @@ def _chord_newton(residual: ca.Function, jacobian: ca.Function, u0, parameters) 
     u = u0 - ca.mtimes(inverse, F0)
     for _ in range(CHORD_ITERATIONS):
         u = u - ca.mtimes(inverse, residual(u, parameters))
+    return u
+
+
+def _chord_newton_numeric(residual: ca.Function, jacobian: ca.Function, u0: ca.MX, parameters: ca.MX) -> ca.MX:
+    """Newton twice, then the chord method on the second Jacobian, for larger systems: each
+    solve factors numerically (QR), a few thousand flops against a Jacobian's million."""
+    F0, J0 = jacobian(u0, parameters)
+    u = u0 - ca.solve(J0, F0, "qr")
+    F1, J1 = jacobian(u, parameters)  # a second Newton step: stiff links move the Jacobian in one step
+    u = u - ca.solve(J1, F1, "qr")
+    for _ in range(CHORD_ITERATIONS - 1):
+        u = u - ca.solve(J1, residual(u, parameters), "qr")
     return u
 
 
