@@ -102,9 +102,9 @@ def four_bar() -> None:
     peer = peer_four_bar(elements=(8, 16, 16), step=1e-3, until=BAR_UNTIL, rho_inf=0.95)
     print(f"\nExample II.2, {BAR_UNTIL:g} s")
     print(f"  {'run':30s} {'balance':>9s} {'work J':>8s} {'steps':>6s} {'wall s per s':>13s}")
-    print(f"  {'flexmech 1/4/2 cubic, h = 3 ms':30s} {report['energy_balance_error']:9.1e} "
+    print(f"  {'flexmech 1/4/2 cubic, h = 3 ms':30s} {report['energy_balance_error']:9.2e} "
           f"{report['energies']['input_work'][-1]:8.2f} {report['steps']:6d} {wall / BAR_UNTIL:13.3f}")
-    print(f"  {'Exudyn 8/16/16 linear, h = 1 ms':30s} {peer['balance_error']:9.1e} {peer['input_work'][-1]:8.2f} "
+    print(f"  {'Exudyn 8/16/16 linear, h = 1 ms':30s} {peer['balance_error']:9.2e} {peer['input_work'][-1]:8.2f} "
           f"{len(peer['times']) - 1:6d} {peer['wall_seconds'] / BAR_UNTIL:13.3f}")
     print(f"  flexmech's build and compile (once per structure, cached): {built:.1f} s")
     print(f"  Exudyn takes {peer['wall_seconds'] / wall:.1f}x flexmech's time "
