@@ -1,6 +1,6 @@
 """A window of steps in one call: each step's Newton solve inside CasADi (small systems: the
-chord method on a symbolic inverse; larger ones: rootfinder 'fast_newton'; both can be
-code-generated), the steps chained by mapaccum, the whole window
+chord method on a symbolic inverse; larger ones: Newton twice, then the chord method with
+numeric QR solves; both can be code-generated), the steps chained by mapaccum, the whole window
 compiled with the system compiler and cached on disk like the equilibrium fast path. Python
 is called once per window, not once per Newton iteration.
 
