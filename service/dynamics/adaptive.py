@@ -56,6 +56,9 @@ class AdaptiveRunner(StepRunner):
                                    "(a loss of convergence or an impact-like event): loosen the tolerance")
                 return at
             inputs, S, monitors, settled = self.run_window(at, h_use)
+            if S is None:
+                h = 0.5 * h_use
+                continue
             accelerations = np.column_stack([at.state[3 * n:4 * n], S[3 * n:4 * n, :count]])
             errors = self.factor * h_use**2 * np.abs(np.diff(accelerations, axis=1)).max(axis=0, initial=0.0)
             bad = [j for j in range(count) if j >= settled or not errors[j] <= tol]

@@ -124,8 +124,11 @@ class StepRunner:
     def run_window(self, at: Resume, h: float):
         """The window's inputs (columns P, PD, PDD), states, monitors and how many steps settled."""
         P, PD, PDD = self.histories.at_times(self.p, at.time + h * np.arange(1, WINDOW + 1))
-        S, monitors, residuals = (np.asarray(q, dtype=float)
-                                  for q in self.function(at.state, h, P, PD, PDD, self.damping, self.mask))
+        try:
+            S, monitors, residuals = (np.asarray(q, dtype=float)
+                                      for q in self.function(at.state, h, P, PD, PDD, self.damping, self.mask))
+        except RuntimeError:  # a factorization met a singular or non-finite Jacobian: no step of it counts
+            return (P, PD, PDD), None, None, 0
         unsettled = np.flatnonzero(~(residuals.ravel() <= WINDOW_ACCEPTANCE))  # NaN too
         return (P, PD, PDD), S, monitors, unsettled[0] if len(unsettled) else WINDOW
 
