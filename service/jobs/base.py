@@ -45,3 +45,16 @@ class JobKind(Protocol):
     def failed(self, point: dict) -> bool: ...
 
     def result(self, spec: dict, plan: dict, finished: Mapping[int, dict]) -> dict: ...
+
+
+class InOrder:
+    """A kind whose points run in order, a chunk at a time, each chunk from the last stored
+    point (a path, a simulation): one task at a time, the next once its points are stored.
+    Subclasses say next_chunk(plan, finished, chunk_size) -> task or None."""
+
+    def tasks(self, spec, plan, finished, chunk_size):
+        task = self.next_chunk(plan, finished, chunk_size)
+        return [task] if task is not None else []
+
+    def follow_up(self, spec, plan, task, finished, chunk_size):
+        return self.tasks(spec, plan, finished, chunk_size)

@@ -20,7 +20,7 @@ from service.contact.problem import contact_problem
 from service.contact.report import penetration_error
 from service.contact.solve import ContactOptions, PenetratingStart
 from service.costs import Limits, check_grid_size, check_result_size
-from service.jobs.base import Plan
+from service.jobs.base import InOrder, Plan
 from service.jobs.control import TaskControl
 from service.jobs.sweep import mechanism_of
 from service.requests import compile_request, newton_options, under
@@ -45,7 +45,7 @@ def wanted_outputs(spec: dict, problem) -> list[str]:
     return list(wanted)
 
 
-class ContactJob:
+class ContactJob(InOrder):
     name = "contact"
     paged = True
 
@@ -68,15 +68,8 @@ class ContactJob:
     def failed(self, point: dict) -> bool:
         return point.get("status") != "converged"
 
-    def tasks(self, spec, plan, finished, chunk_size):
-        task = self._next(plan, finished, chunk_size)
-        return [task] if task is not None else []
-
-    def follow_up(self, spec, plan, task, finished, chunk_size):
-        return self.tasks(spec, plan, finished, chunk_size)
-
     @staticmethod
-    def _next(plan: dict, finished: Mapping[int, dict], chunk_size: int) -> dict | None:
+    def next_chunk(plan: dict, finished: Mapping[int, dict], chunk_size: int) -> dict | None:
         """The next chunk: from the first unfinished state, after the last converged one."""
         total = len(plan["parameters"][0]["values"])
         position = next((i for i in range(total) if i not in finished), None)

@@ -21,7 +21,7 @@ from service.dynamics.integrate import Resume, integrate
 from service.dynamics.window import WINDOW
 from service.dynamics.run import (check_masses, check_steps, records, scheme_of, scheme_summary, simulation_spec,
                                   start_shape, tolerance_of, units, wanted_outputs, with_balance)
-from service.jobs.base import Plan
+from service.jobs.base import InOrder, Plan
 from service.jobs.control import TaskControl
 from service.jobs.sweep import mechanism_of
 from service.requests import compile_request, under
@@ -36,7 +36,7 @@ def _spec_of(mech, spec: dict) -> SimulateSpec:
         raise exc from None
 
 
-class SimulationJob:
+class SimulationJob(InOrder):
     name = "simulation"
     paged = True
 
@@ -68,15 +68,8 @@ class SimulationJob:
     def failed(self, point: dict) -> bool:
         return point.get("status") != "finished"
 
-    def tasks(self, spec, plan, finished, chunk_size):
-        task = self._next(plan, finished, chunk_size)
-        return [task] if task is not None else []
-
-    def follow_up(self, spec, plan, task, finished, chunk_size):
-        return self.tasks(spec, plan, finished, chunk_size)
-
     @staticmethod
-    def _next(plan: dict, finished: Mapping[int, dict], chunk_size: int) -> dict | None:
+    def next_chunk(plan: dict, finished: Mapping[int, dict], chunk_size: int) -> dict | None:
         """The next windows, from the end of the last stored one; none after a failed one."""
         position = next((i for i in range(plan["windows"]) if i not in finished), None)
         if position is None or (position > 0 and finished[position - 1].get("status") != "finished"):
