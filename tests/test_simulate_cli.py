@@ -19,7 +19,8 @@ SPIN = str(EXAMPLES / "spinning_rod_case2.json")
 def test_simulate_prints_writes_and_draws(tmp_path):
     out = tmp_path / "run.json"
     result = CliRunner().invoke(app, ["simulate", SPIN, "--until", "2", "--step", "0.01", "--json", str(out),
-                                      "--plot", str(tmp_path / "run.png"), "--animation", str(tmp_path / "run.gif")],
+                                      "--plot", str(tmp_path / "run.png"), "--animation", str(tmp_path / "run.gif"),
+                                      "--snapshots", str(tmp_path / "shapes.svg")],
                                 env=ENV)
     assert result.exit_code == 0, result.output
     assert "finished at t = 2 s, 200 steps" in result.output and "elements.rod.elongation" in result.output
@@ -30,6 +31,8 @@ def test_simulate_prints_writes_and_draws(tmp_path):
     expected = 6 / 15 * (t**2 / 2 + (15 / (2 * np.pi)) ** 2 * (np.cos(2 * np.pi * t / 15) - 1))
     np.testing.assert_allclose(report["outputs"]["bodies.hub.angle"], expected, rtol=1e-9, atol=1e-12)
     assert Image.open(tmp_path / "run.png").size[0] > 400
+    drawing = (tmp_path / "shapes.svg").read_text()
+    assert drawing.count("t = ") == 6 and "t = 2.000 s" in drawing  # six times in the legend, the last one 2 s
     with Image.open(tmp_path / "run.gif") as movie:
         assert movie.n_frames == len(report["times"]) == 21  # every kept state (the document keeps every 10th)
 
@@ -37,6 +40,7 @@ def test_simulate_prints_writes_and_draws(tmp_path):
 def test_simulate_refuses_bad_options_naming_them(tmp_path):
     for arguments, words in [
         (["--animation", str(tmp_path / "a.avi")], "--animation: cannot tell the format of"),
+        (["--snapshots", str(tmp_path / "a.txt")], "--snapshots: cannot tell the figure format of"),
         (["--step", "-1"], "/simulate/step: Input should be greater than 0"),
         (["--until", "0"], "/simulate/until: Input should be greater than 0"),
         (["--scheme", "euler"], "/simulate/scheme: Input should be 'generalized_alpha' or 'newmark'"),

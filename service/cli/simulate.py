@@ -1,7 +1,7 @@
 """`flexmech simulate`: motion in time by the document's `simulate` section, with --until,
 --step and the scheme from the command line over it. A progress bar follows simulated time;
---plot draws outputs and energies against time, --animation the moving links (.gif, or .mp4
-when ffmpeg is installed)."""
+--plot draws outputs and energies against time, --snapshots the links at six times,
+--animation the moving links (.gif, or .mp4 when ffmpeg is installed)."""
 
 from __future__ import annotations
 
@@ -31,11 +31,15 @@ def simulate(document: DocArg, sets: SetOpt = None,
                                                     "compiler (once per mechanism structure, cached).")] = False,
              animation: Annotated[Path | None, typer.Option("--animation", metavar="OUT.gif|mp4",
                                                             help="Animate the links.")] = None,
+             snapshots: Annotated[Path | None, typer.Option("--snapshots", metavar="OUT.png|svg",
+                                                            help="Draw the links at six times.")] = None,
              json_out: JsonOpt = None, plot: PlotOpt = None) -> None:
     """Motion in time: links, bodies and joints under loads and prescribed motions in time."""
     out, err = consoles()
     with user_errors(err):
         check_plot_option(plot)
+        if snapshots is not None and snapshots.suffix.lower() not in (".png", ".svg", ".pdf"):
+            raise OptionError("--snapshots", f"cannot tell the figure format of '{snapshots}': use .png, .svg or .pdf")
         if animation is not None:
             suffix = animation.suffix.lower()
             if suffix not in (".gif", ".mp4"):
@@ -57,6 +61,10 @@ def simulate(document: DocArg, sets: SetOpt = None,
             from service.dynamics.figures import plot_history
 
             _write(plot_history, report, [n for n in report["outputs"]][:SHOWN_OUTPUTS], plot, option="--plot")
+        if snapshots is not None:
+            from service.dynamics.figures import draw_snapshots
+
+            _write(draw_snapshots, mech, history, snapshots, option="--snapshots")
         if animation is not None:
             from service.dynamics.figures import animate
 

@@ -1,5 +1,5 @@
-"""Figures of a simulation: outputs and energies against time, and an animation of the
-deformed links (GIF through Pillow, MP4 through ffmpeg when it is installed)."""
+"""Figures of a simulation: outputs and energies against time, snapshots of the deformed
+links, and an animation of them (GIF through Pillow, MP4 through ffmpeg when installed)."""
 
 from __future__ import annotations
 
@@ -37,6 +37,36 @@ def plot_history(report: dict, outputs: list[str], path: Path) -> None:
     plt.close(fig)
 
 
+def _centre_lines(mech: Mechanism, history: History, chosen) -> list[np.ndarray]:
+    form = mech.graphs.energy_form
+    scale = mech.scales.length / mech.doc_factor("length")
+    return [np.asarray(mech.graphs.shapes(form.to_state(history.x[k], history.lam[k]), history.p[k])[0]) * scale
+            for k in chosen]
+
+
+def draw_snapshots(mech: Mechanism, history: History, path: Path, count: int = 6) -> None:
+    """The links at `count` kept states spread over the run, overlaid, lighter when earlier."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    chosen = np.unique(np.linspace(0, len(history.times) - 1, min(count, len(history.times))).astype(int))
+    fig, ax = plt.subplots(figsize=(6, 6))
+    for shade, (k, line) in enumerate(zip(chosen, _centre_lines(mech, history, chosen))):
+        colour = plt.cm.viridis(shade / max(len(chosen) - 1, 1))
+        for index, (_, first, columns, _, _) in enumerate(mech.graphs.shape_segments):
+            ax.plot(line[0, first:first + columns], line[1, first:first + columns], color=colour, lw=2,
+                    label=f"t = {history.times[k]:.3f} s" if index == 0 else None)
+    ax.set_aspect("equal")
+    ax.set_xlabel(f"x ({mech.doc_unit('length')})")
+    ax.set_ylabel(f"y ({mech.doc_unit('length')})")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
 def animate(mech: Mechanism, history: History, path: Path, frames: int = 100) -> None:
     """The deformed links at up to `frames` kept states, 25 frames per second."""
     import matplotlib
@@ -45,11 +75,8 @@ def animate(mech: Mechanism, history: History, path: Path, frames: int = 100) ->
     import matplotlib.pyplot as plt
     from matplotlib import animation
 
-    form = mech.graphs.energy_form
     chosen = np.unique(np.linspace(0, len(history.times) - 1, min(frames, len(history.times))).astype(int))
-    scale = mech.scales.length / mech.doc_factor("length")
-    shapes = [np.asarray(mech.graphs.shapes(form.to_state(history.x[k], history.lam[k]), history.p[k])[0]) * scale
-              for k in chosen]
+    shapes = _centre_lines(mech, history, chosen)
     every = np.hstack(shapes)
     fig, ax = plt.subplots(figsize=(6, 6))
     ax.set_aspect("equal")
