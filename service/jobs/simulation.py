@@ -14,7 +14,6 @@ import math
 from collections.abc import Mapping
 
 from models import MechanismError
-from models.simulation_spec import SimulateSpec
 from service.costs import Limits, check_result_size
 from service.dynamics.histories import read_histories
 from service.dynamics.integrate import Resume, integrate
@@ -29,20 +28,13 @@ from service.requests import compile_request, under
 WINDOWS = 100  # a run is stored in about this many windows (points), each a whole number of step windows
 
 
-def _spec_of(mech, spec: dict) -> SimulateSpec:
-    try:
-        return simulation_spec(mech, spec.get("simulate"))
-    except MechanismError as exc:
-        raise exc from None
-
-
 class SimulationJob(InOrder):
     name = "simulation"
     paged = True
 
     def prepare(self, spec: dict, limits: Limits) -> Plan:
         mech = compile_request(spec["document"], spec.get("model"), spec.get("overrides"), limits)
-        simulate = _spec_of(mech, spec)
+        simulate = simulation_spec(mech, spec.get("simulate"))
         try:
             check_masses(mech)
         except MechanismError as exc:
@@ -80,7 +72,7 @@ class SimulationJob(InOrder):
 
     def run(self, spec, task):
         mech = mechanism_of(spec)
-        simulate = _spec_of(mech, spec)
+        simulate = simulation_spec(mech, spec.get("simulate"))
         histories = read_histories(mech, simulate.histories, simulate.until, "/simulate/histories")
         control = TaskControl(task)
         p, scheme = mech.p(), scheme_of(simulate)
