@@ -154,11 +154,17 @@ def _reduce_pinned_joints(c: Collector, prescribed) -> None:
 
 
 def _check_grounded(c: Collector, prescribed) -> None:
-    """Every body must reach a fixed one through elements, or nothing holds it."""
+    """Every body must reach a fixed one through elements or impact pairs (a body in a
+    clearance is held by the surface it rests on), or nothing holds it."""
     neighbours: dict[str, set[str]] = {name: set() for name in c.bodies}
-    for el in c.doc.elements.values():
-        neighbours[el.from_].add(el.to)
-        neighbours[el.to].add(el.from_)
+    links = [(el.from_, el.to) for el in c.doc.elements.values()]
+    if c.doc.impacts is not None:
+        surfaces = c.doc.impacts.surfaces
+        links += [(surfaces[a].body, surfaces[b].body) for a, b in (pair.surfaces for pair in c.doc.impacts.pairs.values())
+                  if a in surfaces and b in surfaces and surfaces[a].body in neighbours and surfaces[b].body in neighbours]
+    for a, b in links:
+        neighbours[a].add(b)
+        neighbours[b].add(a)
     grounded = [name for b, name in enumerate(c.bodies) if all(v is not None for v in prescribed[b])]
     seen, stack = set(grounded), list(grounded)
     while stack:
@@ -170,7 +176,7 @@ def _check_grounded(c: Collector, prescribed) -> None:
         if name not in seen:
             what = "joint" if c.doc.bodies[name].joint else "body"
             raise MechanismError(f"/bodies/{name}", f"floating {what} '{name}' has no path to a fixed body "
-                                 "through elements: connect it to ground by a link or a flexure, or fix it")
+                                 "through elements or impact pairs: connect it to ground by a link or a flexure, or fix it")
 
 
 def _collect_loads(c: Collector) -> list[LoadTopology]:

@@ -20,6 +20,7 @@ from pydantic import Field, ValidationError, model_validator
 from models.contact.document import OBJECT_TYPES, SITE_TYPES, Contacts
 from models.elements import FAMILIES
 from models.elements.link import SHAPE_TYPES
+from models.impacts.document import Impacts
 from models.simulation_spec import SimulateSpec
 from models.errors import MechanismError, pointer_of
 from models.fields import MAX_QUANTITY_CHARS, Number, StrictModel, Vec2
@@ -217,6 +218,8 @@ class MechanismDocument(StrictModel):
     outputs: dict[str, Output] = {}
     contacts: Contacts | None = Field(default=None, description="rigid objects, contact sites and pairs (the "
                                       "contact analysis)")
+    impacts: Impacts | None = Field(default=None, description="body surfaces that may touch in a simulation, with "
+                                    "impact and friction laws (seed 004)")
     sweep: SweepSpec | None = None
     inverse: InverseSpec | None = None
     optimize: OptimizeSpec | None = None

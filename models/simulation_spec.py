@@ -11,6 +11,14 @@ from pydantic import Field, model_validator
 from models.fields import StrictModel
 
 
+class BodyStart(StrictModel):
+    """A free body's start (impact simulations): its mass centre's displacement from the drawn
+    pose and rotation (document length and angle units), and its velocity (per second)."""
+
+    displacement: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+
 class SimulateSpec(StrictModel):
     until: float | None = Field(default=None, gt=0, allow_inf_nan=False, description="end time (s)")
     step: float = Field(default=1e-3, gt=0, allow_inf_nan=False, description="time step (s); adaptive: the first")
@@ -19,8 +27,10 @@ class SimulateSpec(StrictModel):
                              "the mechanism's length scale (rad for angles)")
     max_step: float | None = Field(default=None, gt=0, allow_inf_nan=False,
                                    description="adaptive: the longest step (s)")
-    scheme: Literal["generalized_alpha", "newmark"] = Field(
-        default="generalized_alpha", description="generalized-alpha (second order, rho_inf), or Newmark (a1, a2)")
+    scheme: Literal["generalized_alpha", "newmark", "event_driven", "moreau"] = Field(
+        default="generalized_alpha", description="generalized-alpha (second order, rho_inf), or Newmark (a1, a2); "
+        "for rigid bodies with impacts: event_driven (adaptive Dormand-Prince with located contact events) or "
+        "moreau (Moreau-Jean midpoint time stepping, `step`)")
     rho_inf: float = Field(default=0.95, ge=0, le=1, description="generalized-alpha: spectral radius at high "
                            "frequency (1: no numerical dissipation)")
     a1: float = Field(default=0.5, ge=0.5, le=1.5, description="Newmark gamma (Lan 2005 Eq. 3.15; 0.5 + sigma)")
@@ -32,6 +42,8 @@ class SimulateSpec(StrictModel):
         "document's values, released at t = 0 into the histories")
     histories: dict[str, Any] = Field(default={}, max_length=256, description="field pointer -> a number, an "
                                       "expression in t, {table: [[t, value], ...]} or {pieces: [{until, value}, ...]}")
+    initial: dict[str, BodyStart] = Field(default={}, max_length=64, description="impact simulations: body name "
+                                          "-> its start displacement and velocity")
     every: int = Field(default=1, ge=1, le=1_000_000, description="keep every n-th step")
     outputs: list[str] | None = Field(default=None, max_length=512, description="outputs to record (default: all)")
     shapes: bool = Field(default=False, description="also the links' deformed centre lines at every kept state "

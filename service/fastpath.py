@@ -44,9 +44,17 @@ def compiler() -> str | None:
 def compile_function(fn: ca.Function, key: str) -> tuple[ca.Function, bool]:
     """(compiled copy of fn, True), cached at <cache_dir>/<name>_<hash>.so; (fn, False) when
     no compiler is available or compilation fails."""
+    target = compiled_library(fn, key)
+    if target is None:
+        return fn, False
+    return ca.external(fn.name(), str(target)), True
+
+
+def compiled_library(fn: ca.Function, key: str) -> Path | None:
+    """The shared library of fn generated to C and compiled (cached), or None."""
     cc = compiler()
     if cc is None:
-        return fn, False
+        return None
     digest = hashlib.sha256(f"{key}|{ca.__version__}|{_VERSION}|{cc}".encode()).hexdigest()[:16]
     target = cache_dir() / f"{fn.name()}_{digest}.so"
     if not target.exists():
@@ -59,12 +67,12 @@ def compile_function(fn: ca.Function, key: str) -> tuple[ca.Function, bool]:
             done = subprocess.run([cc, "-O2", "-fPIC", "-shared", source, "-o", str(partial), "-lm"],
                                   capture_output=True, text=True)
             if done.returncode != 0:
-                return fn, False
+                return None
             # rename is atomic: concurrent processes never load a half-written library
             staged = target.with_suffix(f".{os.getpid()}.tmp")
             shutil.copyfile(partial, staged)
             os.replace(staged, target)
-    return ca.external(fn.name(), str(target)), True
+    return target
 
 
 class FastPath:

@@ -9,22 +9,28 @@ import time
 from models import Mechanism
 from service.analyses.base import Analysis, AnalysisRequest
 from service.dynamics.run import run_simulation, simulation_spec
+from service.impacts.run import IMPACT_SCHEMES, run_impacts
 from service.reports import plain
 
 SYNC_STEPS = 20_000
+SYNC_IMPACT_STEPS = 2_000_000  # a microsecond each: a few seconds of a compiled impact model
 
 
 class SimulateAnalysis(Analysis):
     name = "simulate"
     summary = ("Motion in time: Newmark or generalized-alpha steps of the links' and bodies' dynamics under loads "
-               "and prescribed motions in time; outputs, constraint forces and the energy balance per step")
+               "and prescribed motions in time; outputs, constraint forces and the energy balance per step; rigid bodies with "
+               "contact impacts and friction (event-driven or Moreau-Jean)")
 
     def run(self, mech: Mechanism, request: AnalysisRequest) -> dict:
         spec = simulation_spec(mech, request.get("simulate", {}))
         limit = request.options.time_limit
         deadline = time.perf_counter() + limit if limit else None
         stop = (lambda: time.perf_counter() > deadline) if deadline else None
-        _, report = run_simulation(mech, spec, stop=stop, max_steps=SYNC_STEPS)
+        if spec.scheme in IMPACT_SCHEMES:
+            _, report = run_impacts(mech.document, spec, stop=stop, max_steps=SYNC_IMPACT_STEPS)
+        else:
+            _, report = run_simulation(mech, spec, stop=stop, max_steps=SYNC_STEPS)
         if report["status"] == "stopped":
             report["status"] = "time_limit"
             report["message"] += f" (the time limit of {limit:g} s; a simulation job has more time)"

@@ -17,6 +17,7 @@ from service.cli.application import app
 from service.cli.common import (EXIT_NOT_CONVERGED, OptionError, check_plot_option, consoles, number, table_of,
                                 user_errors, write_json)
 from service.cli.options import DocArg, JsonOpt, PlotOpt, SetOpt, mechanism
+from service.impacts.run import IMPACT_SCHEMES
 
 SHOWN_OUTPUTS = 6
 
@@ -25,7 +26,7 @@ SHOWN_OUTPUTS = 6
 def simulate(document: DocArg, sets: SetOpt = None,
              until: Annotated[float | None, typer.Option(help="End time (s).")] = None,
              step: Annotated[float | None, typer.Option(help="Time step (s).")] = None,
-             scheme: Annotated[str | None, typer.Option(help="generalized_alpha | newmark.")] = None,
+             scheme: Annotated[str | None, typer.Option(help="generalized_alpha | newmark | event_driven | moreau.")] = None,
              damping: Annotated[float | None, typer.Option(help="Mass-proportional damping (1/s).")] = None,
              compiled: Annotated[bool, typer.Option("--compiled", help="Compile the stepping with the system C "
                                                     "compiler (once per mechanism structure, cached).")] = False,
@@ -51,6 +52,9 @@ def simulate(document: DocArg, sets: SetOpt = None,
 
         spec = simulation_spec(mech, {"until": until, "step": step, "scheme": scheme, "damping": damping,
                                       **({"compiled": True} if compiled else {})})
+        if spec.scheme in IMPACT_SCHEMES:
+            _impacts(mech, spec, out, err, json_out, plot, snapshots, animation)
+            return
         with Progress(console=err, transient=True) as progress:
             task = progress.add_task("simulating", total=spec.until)
             history, report = run_simulation(mech, spec, progress=lambda t: progress.update(task, completed=t))
@@ -69,6 +73,34 @@ def simulate(document: DocArg, sets: SetOpt = None,
             from service.dynamics.figures import animate
 
             _write(animate, mech, history, animation, option="--animation")
+    if report["status"] != "finished":
+        raise typer.Exit(EXIT_NOT_CONVERGED)
+
+
+def _impacts(mech, spec, out, err, json_out, plot, snapshots, animation) -> None:
+    """Rigid bodies with impacts: the path of each body's mass centre and the contact forces."""
+    from service.impacts.run import run_impacts
+
+    for option, value in (("--snapshots", snapshots), ("--animation", animation)):
+        if value is not None:
+            raise OptionError(option, f"{option} draws links; for impacts --plot draws the motion and contact forces")
+    with Progress(console=err, transient=True) as progress:
+        task = progress.add_task("simulating", total=spec.until)
+        _, report = run_impacts(mech.document, spec, progress=lambda t: progress.update(task, completed=t))
+    out.print(f"[bold]{escape(report['name'])}[/bold]: {report['status']} at t = {report['time_reached']:g} s, "
+              f"{report['steps']} steps ({spec.scheme}) in {report['seconds']:.3f} s; energy balance error "
+              f"{report['energy_balance_error']:.2e}")
+    table = table_of(None, "impact", "pair", "time (s)", "impact speed", "exit speed", "ratio", text=2)
+    for k, hit in enumerate(report["impacts"][:SHOWN_OUTPUTS]):
+        table.add_row(str(k + 1), escape(hit["pair"]), f"{hit['time']:.7f}",
+                      *(number(hit[key], "") for key in ("impact_speed", "exit_speed", "rebound_ratio")))
+    out.print(table)
+    if json_out is not None:
+        write_json(json_out, report)
+    if plot is not None:
+        from service.impacts.figures import plot_impacts
+
+        _write(plot_impacts, report, plot, option="--plot")
     if report["status"] != "finished":
         raise typer.Exit(EXIT_NOT_CONVERGED)
 

@@ -1,0 +1,75 @@
+"""The numbers of an impact model: every value the graphs use is a named parameter (SI),
+so one built (and compiled) model serves every variation of masses, radii, stiffnesses and
+coefficients, as the parametric study needs."""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from models.document import MechanismDocument
+from models.errors import MechanismError
+from models.units import document_unit, quantity_to_si
+
+
+class ParameterBook:
+    def __init__(self, document: MechanismDocument):
+        self.document = document
+        self.pointers: list[str] = []
+        self.values: list[float] = []
+        self._symbols: list[ca.SX] = []
+        self._derived: list[tuple[ca.SX, ca.SX]] = []  # (symbol, expression of the numbers)
+
+    def si(self, value, kind: str, pointer: str) -> float:
+        """A document number (or quantity string) of `kind` in SI."""
+        return quantity_to_si(value, kind, document_unit(self.document.units, kind), pointer)
+
+    def add(self, pointer: str, value: float, check: str | None = None) -> ca.SX:
+        """Register an SI value under its document pointer; its symbol."""
+        if not np.isfinite(value):
+            raise MechanismError(pointer, "must be a finite number")
+        if check == "positive" and value <= 0:
+            raise MechanismError(pointer, f"must be positive, got {value:g}")
+        if check == "nonnegative" and value < 0:
+            raise MechanismError(pointer, f"must not be negative, got {value:g}")
+        if pointer in self.pointers:
+            return self._symbols[self.pointers.index(pointer)]
+        symbol = ca.SX.sym(pointer)
+        self.pointers.append(pointer)
+        self.values.append(float(value))
+        self._symbols.append(symbol)
+        return symbol
+
+    def number(self, pointer: str, value, kind: str, check: str | None = None) -> ca.SX:
+        return self.add(pointer, self.si(value, kind, pointer), check)
+
+    def vector(self, pointer: str, value, kind: str) -> ca.SX:
+        return ca.vertcat(*[self.number(f"{pointer}/{k}", v, kind) for k, v in enumerate(value)])
+
+    def hoist(self, expression: ca.SX) -> ca.SX:
+        """A stand-in for an expression of the numbers alone (a stiffness matrix, a drawn point
+        in body axes): computed once per run, not at every step."""
+        if self._derived:  # in the numbers alone, so that p evaluates in one pass
+            expression = ca.substitute(expression, ca.vertcat(*[ca.vec(s) for s, _ in self._derived]),
+                                       ca.vertcat(*[ca.vec(e) for _, e in self._derived]))
+        symbol = ca.SX.sym(f"derived{len(self._derived)}", expression.shape)
+        self._derived.append((symbol, expression))
+        return symbol
+
+    def value(self, pointer: str) -> float:
+        return self.values[self.pointers.index(pointer)]
+
+    @property
+    def symbols(self) -> ca.SX:
+        """The numbers, then the hoisted expressions: the graphs' parameter vector p."""
+        base = list(self._symbols) + [ca.vec(symbol) for symbol, _ in self._derived]
+        return ca.vertcat(*base) if base else ca.SX(0, 1)
+
+    def parameter_vector(self, values=None) -> np.ndarray:
+        """p for the numbers `values` (default: the document's), hoisted expressions evaluated."""
+        values = np.asarray(self.values if values is None else values, dtype=float)
+        if not self._derived:
+            return values
+        numbers = ca.vertcat(*self._symbols)
+        derived = ca.Function("derived", [numbers], [ca.vertcat(*[ca.vec(e) for _, e in self._derived])])
+        return np.concatenate([values, np.asarray(derived(values)).ravel()])

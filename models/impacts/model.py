@@ -1,0 +1,89 @@
+"""An impact model of a document: the rigid bodies' coordinates and constant diagonal mass,
+the smooth generalized force, the energies, and the contact pairs, as CasADi expressions of
+q, v and the parameter vector p (every number, SI; models.impacts.book).
+
+Energies: kinetic T, elastic (the flexures' 1/2 psi.K.psi and the springs), gravity and
+loads V_g. The smooth force is -grad(elastic + V_g) + Q_extra, where Q_extra is what the
+flexure whose stiffness turns with the body adds (zero with the constant stiffness), so
+T + elastic + V_g - (work of contact, friction, Q_extra and damping) is constant (WORKS)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+
+from models.document import MechanismDocument
+from models.errors import MechanismError
+from models.impacts.bodies import RigidBodies
+from models.impacts.book import ParameterBook
+from models.impacts.forces import flexure_energy, smooth_forces, spring_energy
+from models.impacts.pairs import PairModel, pair_model
+
+
+DAMPING = "/simulate/damping"  # mass-proportional, as the link dynamics'; a parameter of the graphs
+WORKS = ("contact_work", "friction_work", "flexure_work", "damping_work")  # integrated with the motion
+
+
+@dataclass
+class ImpactModel:
+    book: ParameterBook
+    bodies: RigidBodies
+    pairs: list[PairModel]
+    mass: ca.SX  # diagonal (n)
+    force: ca.SX  # smooth generalized force (n), damping included
+    extra: ca.SX  # Q_extra (n)
+    damping: ca.SX  # -alpha M v (n)
+    kinetic: ca.SX
+    elastic: ca.SX
+    gravity: ca.SX
+    turning: bool
+
+    @property
+    def q(self) -> ca.SX:
+        return self.bodies.q
+
+    @property
+    def v(self) -> ca.SX:
+        return self.bodies.v
+
+    @property
+    def p(self) -> ca.SX:
+        return self.book.symbols
+
+    def coordinate_names(self) -> list[str]:
+        return [f"{b.name}.{c}" for b in self.bodies.bodies.values() if b.first is not None for c in ("x", "y", "theta")]
+
+    def structure_key(self) -> str:
+        """What decides the graphs (not the numbers)."""
+        doc = self.book.document
+        parts = [doc.impacts.model_dump_json(include={"flexure_stiffness"}), ",".join(self.book.pointers),
+                 str(self.book.symbols.numel())]
+        parts += [f"{b.name}:{b.first}" for b in self.bodies.bodies.values()]
+        parts += [f"{e.type}:{getattr(e, 'kind', '')}:{getattr(e, 'direction', '')}" for e in doc.elements.values()]
+        parts += [f"{k}:{getattr(v, 'type', '')}:{getattr(v, 'offset', None) is None}:{getattr(v, 'at', None) is None}"
+                  for k, v in doc.loads.items()]
+        parts += [f"{p.name}:{p.law}:{p.friction}:{p.esdu is None}" for p in self.pairs]
+        parts += [f"{k}:{s.type}:{s.body}" for k, s in doc.impacts.surfaces.items()]
+        return "|".join(parts)
+
+
+def impact_model(document: MechanismDocument) -> ImpactModel:
+    if document.impacts is None or not document.impacts.pairs:
+        raise MechanismError("/impacts/pairs", "an impact simulation needs contact pairs: give the `impacts` section "
+                             "its surfaces and pairs")
+    book = ParameterBook(document)
+    rb = RigidBodies(book)
+    turning = document.impacts.flexure_stiffness == "turning"
+    V_smooth, Q_nc = smooth_forces(rb, turning)  # V_smooth holds the flexures only when they are constant
+    flexures, springs = flexure_energy(rb), spring_energy(rb)
+    elastic = flexures + springs
+    gravity = V_smooth - springs - (0 if turning else flexures)
+    pairs = [pair_model(rb, name, pair) for name, pair in document.impacts.pairs.items()]
+    q, v = rb.q, rb.v
+    extra = Q_nc + ca.gradient(flexures, q) if turning else ca.SX.zeros(rb.size)
+    mass = rb.mass_diagonal()
+    alpha = document.simulate.damping if document.simulate is not None else 0.0
+    damping = -book.add(DAMPING, alpha, "nonnegative") * mass * v
+    return ImpactModel(book, rb, pairs, mass, -ca.gradient(elastic + gravity, q) + extra + damping, extra, damping,
+                       0.5 * ca.dot(mass * v, v), elastic, gravity, turning)

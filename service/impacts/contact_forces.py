@@ -1,0 +1,32 @@
+"""The contact quantities of an impact model in its own symbols (q, v, p): per pair the
+indentation, its rate, the slip speed v_T and the generalized directions of unit normal and
+tangent forces; and the regularized contact forces the event-driven models apply."""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from models.impacts.laws import ambrosio_friction, normal_force
+from models.impacts.model import ImpactModel
+
+
+def kinematics(model: ImpactModel) -> list[tuple]:
+    """(indentation, rate, v_T, Dn, Dt) per pair."""
+    v = model.v
+    return [(pair.indentation, -ca.dot(pair.normal_direction, v), ca.dot(pair.tangent_direction, v),
+             pair.normal_direction, pair.tangent_direction) for pair in model.pairs]
+
+
+def regularized_forces(model: ImpactModel, geometry, contact, beyond_v0, beyond_v1, impact_speed) -> list[tuple]:
+    """(F_N, F_T) per pair for the event-driven models, zero out of contact."""
+    forces = []
+    for k, (pair, (pen, rate, v_T, _, _)) in enumerate(zip(model.pairs, geometry)):
+        speed = ca.fmax(impact_speed[k], 1e-300)  # out of contact it is 0: keep 0 * F finite
+        F_N = ca.if_else(contact[k], normal_force(pair.law, pair.K, pair.exponent, pair.restitution, pen, rate,
+                                                  speed, pair.esdu), 0)
+        if pair.friction == "ambrosio":
+            F_T = ca.if_else(contact[k], 1, 0) * ambrosio_friction(v_T, F_N, pair.sliding, pair.v0, pair.v1, beyond_v0[k], beyond_v1[k])
+        else:
+            F_T = ca.SX(0)
+        forces.append((F_N, F_T))
+    return forces

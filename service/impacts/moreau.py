@@ -1,0 +1,83 @@
+"""Moreau-Jean time stepping (seed 004 Eqs. 31-39), midpoint rule: the forces at the midpoint
+q_M = q + h/2 v, contacts active where the indentation at q_M is >= 0, and per active contact
+the impulses (Lambda_N, Lambda_T) of Newton's impact law with Coulomb friction, solved
+exactly: no impulse if the free motion already separates fast enough; else sticking
+(U_T+ = 0, e_T = 0) if |Lambda_T| <= f_a Lambda_N; else sliding against the stick impulse's
+direction with Lambda_T = f_d Lambda_N. Several contacts couple through the Delassus matrix
+and are solved by Gauss-Seidel sweeps of these exact local solves. The normal velocity is
+U_N = Dn.v (positive separating), and the impact law asks U_N+ >= -e_N U_N-."""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from models.impacts.model import WORKS, ImpactModel
+from service.impacts.contact_forces import kinematics
+
+GAUSS_SEIDEL_SWEEPS = 30  # several pairs only: one pair's local solve is exact
+
+
+def local_solve(W, U_free, target, f_a, f_d):
+    """(Lambda_N, Lambda_T) of one contact: W the 2x2 Delassus block, U_free its free normal and
+    tangent velocities, target = -e_N U_N- the least post-impact normal velocity."""
+    need = target - U_free[0]
+    det = W[0, 0] * W[1, 1] - W[0, 1] * W[1, 0]
+    stick_N = (W[1, 1] * need + W[0, 1] * U_free[1]) / det
+    stick_T = (-W[1, 0] * need - W[0, 0] * U_free[1]) / det
+    sticks = ca.logic_and(stick_N >= 0, ca.fabs(stick_T) <= f_a * stick_N)
+    direction = -ca.sign(stick_T)  # the slip the sticking impulse could not hold
+    slide_N = need / (W[0, 0] - direction * f_d * W[0, 1])
+    slide_T = -direction * f_d * slide_N
+    impacting = need > 0
+    lam_N = ca.if_else(impacting, ca.if_else(sticks, stick_N, ca.fmax(slide_N, 0)), 0)
+    lam_T = ca.if_else(impacting, ca.if_else(sticks, stick_T, ca.if_else(slide_N > 0, slide_T, 0)), 0)
+    return lam_N, lam_T
+
+
+def moreau_step(model: ImpactModel) -> ca.Function:
+    """(S = [t, q, v, works (WORKS)], p, h) -> (S', per pair [Lambda_N; Lambda_T;
+    U_N before; U_N after] (4P), active (P))."""
+    n, P = model.bodies.size, len(model.pairs)
+    q, v, p = model.q, model.v, model.p
+    geometry = kinematics(model)
+    at = ca.Function("at", [q, v, p], [model.force, model.extra, model.damping, ca.vertcat(*[g[0] for g in geometry]),
+                                       ca.horzcat(*[g[3] for g in geometry]), ca.horzcat(*[g[4] for g in geometry])])
+    S, h = ca.SX.sym("S", 1 + 2 * n + len(WORKS)), ca.SX.sym("h")
+    t, q0, v0, works = S[0], S[1:1 + n], S[1 + n:1 + 2 * n], S[1 + 2 * n:]
+    q_mid = q0 + h / 2 * v0
+    force, extra, damping, pen, Dn, Dt = at(q_mid, v0, p)
+    inverse_mass = 1 / model.mass
+    v_free = v0 + h * inverse_mass * force
+    active = [pen[k] >= 0 for k in range(P)]
+    lam_N, lam_T = [ca.SX(0)] * P, [ca.SX(0)] * P
+
+    def impulse_velocity(skip: int | None):
+        dv = ca.SX.zeros(n)
+        for j in range(P):
+            if j != skip:
+                dv += inverse_mass * (Dn[:, j] * lam_N[j] + Dt[:, j] * lam_T[j])
+        return dv
+
+    for _ in range(1 if P == 1 else GAUSS_SEIDEL_SWEEPS):
+        for k, pair in enumerate(model.pairs):
+            d_n, d_t = Dn[:, k], Dt[:, k]
+            base = v_free + impulse_velocity(k)
+            W = ca.vertcat(ca.horzcat(ca.dot(d_n, inverse_mass * d_n), ca.dot(d_n, inverse_mass * d_t)),
+                           ca.horzcat(ca.dot(d_t, inverse_mass * d_n), ca.dot(d_t, inverse_mass * d_t)))
+            U_free = ca.vertcat(ca.dot(d_n, base), ca.dot(d_t, base))
+            target = -pair.restitution * ca.dot(d_n, v0)
+            f_a, f_d = (pair.adherence, pair.sliding) if pair.friction != "none" else (0, 0)
+            N_k, T_k = local_solve(W, U_free, target, f_a, f_d)
+            lam_N[k] = ca.if_else(active[k], N_k, 0)
+            lam_T[k] = ca.if_else(active[k], T_k, 0)
+    v1 = v_free + impulse_velocity(None)
+    q1 = q_mid + h / 2 * v1
+    W_N = sum(lam_N[k] * ca.dot(Dn[:, k], v0 + v1) / 2 for k in range(P))
+    W_T = sum(lam_T[k] * ca.dot(Dt[:, k], v0 + v1) / 2 for k in range(P))
+    W_extra = h * ca.dot(extra, v0 + v1) / 2
+    W_damping = h * ca.dot(damping, v0 + v1) / 2
+    S1 = ca.vertcat(t + h, q1, v1, works + ca.vertcat(W_N, W_T, W_extra, W_damping))
+    before = [ca.dot(Dn[:, k], v0) for k in range(P)]
+    after = [ca.dot(Dn[:, k], v1) for k in range(P)]
+    return ca.Function("moreau_step", [S, p, h], [S1, ca.vertcat(*lam_N, *lam_T, *before, *after), ca.vertcat(*active)],
+                       ["S", "p", "h"], ["S1", "impulses", "active"])

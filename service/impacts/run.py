@@ -1,0 +1,183 @@
+"""An impact simulation of a document (scheme event_driven or moreau): the start state
+checked, the integration, and the report in document units: coordinates and velocities,
+per pair the contact forces (and moreau's impulses), the events (contact onsets and
+separations, stick/slip transitions) and impacts with their speeds, and the energies with
+what contact and friction dissipated and the balance."""
+
+from __future__ import annotations
+
+import time
+
+import casadi as ca
+import numpy as np
+
+from models import MechanismError
+from models.document import MechanismDocument
+from models.impacts.model import DAMPING, WORKS, ImpactModel, impact_model
+from models.simulation_spec import SimulateSpec
+from service.impacts.event_driven import EventLayout, rhs_function
+from service.impacts.stepping import Trace, run_events, run_moreau
+
+IMPACT_SCHEMES = ("event_driven", "moreau")
+TRIALS_PER_STEP = 4  # event-driven: trial steps allowed per allowed step (rejections, event location)
+
+
+def start_state(model: ImpactModel, spec: SimulateSpec, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(q0, v0) in SI from `simulate/initial`, refusing a start that penetrates a surface."""
+    book, n = model.book, model.bodies.size
+    q0, v0 = np.zeros(n), np.zeros(n)
+    kinds = ("length", "length", "angle")
+    for name, start in spec.initial.items():
+        pointer = f"/simulate/initial/{name}"
+        body = model.bodies.body(name, pointer)
+        if body.first is None:
+            raise MechanismError(pointer, f"body '{name}' is fixed: it has no start state")
+        for k, kind in enumerate(kinds):
+            q0[body.first + k] = book.si(start.displacement[k], kind, f"{pointer}/displacement/{k}")
+            v0[body.first + k] = book.si(start.velocity[k], kind, f"{pointer}/velocity/{k}")
+    depth = ca.Function("depth", [model.q, model.p], [ca.vertcat(*[pair.indentation for pair in model.pairs])])
+    pens = np.asarray(depth(q0, p)).ravel()
+    for pair, pen in zip(model.pairs, pens):
+        if pen > 0:
+            where = next((f"/simulate/initial/{name}" for name in spec.initial), "/simulate/initial")
+            raise MechanismError(where, f"the start state penetrates: pair '{pair.name}' overlaps by "
+                                 f"{pen / book.si(1.0, 'length', where):.6g} {book.document.units.length}; "
+                                 "start the bodies apart")
+    return q0, v0
+
+
+def run_impacts(document: MechanismDocument, spec: SimulateSpec, stop=None, max_steps: int = 2_000_000,
+                parameters: dict[str, float] | None = None, progress=None) -> tuple[Trace, dict]:
+    """(the raw trace, the report). `parameters` replaces numbers (SI) by their pointers."""
+    model = impact_model(document)
+    values = np.array(model.book.values)
+    values[model.book.pointers.index(DAMPING)] = spec.damping
+    for pointer, value in (parameters or {}).items():
+        values[model.book.pointers.index(pointer)] = value
+    p = model.book.parameter_vector(values)
+    q0, v0 = start_state(model, spec, p)
+    began = time.perf_counter()
+    if spec.scheme == "moreau":
+        steps = round(spec.until / spec.step)
+        if steps > max_steps:
+            raise MechanismError("/simulate/step", f"the run needs {steps} steps of {spec.step:g} s, over the limit "
+                                 f"of {max_steps}: take a longer step or a shorter run")
+        trace = run_moreau(model, p, q0, v0, spec.until, spec.step, spec.compiled, stop, progress)
+    else:
+        max_step = spec.max_step if spec.max_step is not None else spec.until / 20
+        trace = run_events(model, p, q0, v0, spec.until, spec.tolerance, spec.step, max_step, spec.compiled,
+                           max_steps * TRIALS_PER_STEP, stop, progress)
+    trace.seconds = time.perf_counter() - began
+    return trace, report(model, spec, trace, p)
+
+
+def report(model: ImpactModel, spec: SimulateSpec, trace: Trace, p: np.ndarray) -> dict:
+    states = np.vstack(trace.states)
+    n, _P = model.bodies.size, len(model.pairs)
+    book = model.book
+    per = {kind: 1 / book.si(1.0, kind, "/units") for kind in ("length", "angle", "force", "energy")}
+    q, v = states[:, 1:1 + n], states[:, 1 + n:1 + 2 * n]
+    works = states[:, 1 + 2 * n:1 + 2 * n + len(WORKS)]
+    energy = ca.Function("energy", [model.q, model.v, model.p], [model.kinetic, model.elastic, model.gravity])
+    T, elastic, gravity = (np.asarray(x).ravel() for x in energy.map(len(states))(q.T, v.T, p))
+    coordinates, velocities = {}, {}
+    for k, name in enumerate(model.coordinate_names()):
+        scale = per["angle"] if name.endswith(".theta") else per["length"]
+        coordinates[name], velocities[name] = q[:, k] * scale, v[:, k] * scale
+    if spec.scheme == "moreau":
+        pairs, events, impacts = _moreau_pairs(model, spec, np.vstack(trace.extras), states, per)
+    else:
+        pairs, events, impacts = _event_pairs(model, states, p, per)
+    balance = T + elastic + gravity - works.sum(axis=1)
+    balance = balance - balance[0]
+    size = max(float(np.abs(T).max()), float(np.ptp(elastic + gravity)), float(np.abs(works).max()), 1e-300)
+    keep = slice(None, None, spec.every)
+    energies = {"kinetic": T, "elastic": elastic, "gravity": gravity, **{name: works[:, k] for k, name in
+                                                                          enumerate(WORKS)}, "balance": balance}
+    return {
+        "analysis": "simulate", "name": book.document.name, "scheme": {"name": spec.scheme},
+        "status": trace.status, "message": trace.message or f"reached t = {states[-1, 0]:g} s",
+        "time_reached": float(states[-1, 0]), "steps": len(states) - 1, "trial_steps": trace.calls,
+        "seconds": trace.seconds, "step": spec.step, "tolerance": spec.tolerance if spec.scheme != "moreau" else None,
+        "times": states[keep, 0].tolist(),
+        "coordinates": {k: c[keep].tolist() for k, c in coordinates.items()},
+        "velocities": {k: c[keep].tolist() for k, c in velocities.items()},
+        "pairs": {name: {k: np.asarray(x)[keep].tolist() for k, x in values.items()} for name, values in pairs.items()},
+        "events": events, "impacts": impacts,
+        "energies": {k: (np.asarray(x)[keep] * per["energy"]).tolist() for k, x in energies.items()},
+        "energy_balance_error": float(np.abs(balance).max() / size),
+        "flexure_stiffness": book.document.impacts.flexure_stiffness,
+        "clearance": _clearance(model) * per["length"],
+        "units": {"time": "s", "length": book.document.units.length, "angle": book.document.units.angle,
+                  "force": book.document.units.force, "energy": f"{book.document.units.force}*{book.document.units.length}",
+                  "impulse": f"{book.document.units.force}*s"},
+    }
+
+
+def _clearance(model: ImpactModel) -> float | None:
+    """The radial clearance of the first pin-in-hole pair (SI), for drawing the paths."""
+    doc = model.book.document
+    for pair in doc.impacts.pairs.values():
+        pin, other = (doc.impacts.surfaces[s] for s in pair.surfaces)
+        if other.type == "hole":
+            return model.book.si(other.radius, "length", "") - model.book.si(pin.radius, "length", "")
+    return 0.0
+
+
+def _event_pairs(model: ImpactModel, states: np.ndarray, p: np.ndarray, per: dict):
+    n, P = model.bodies.size, len(model.pairs)
+    L = EventLayout(n, P)
+    rhs = rhs_function(model).map(len(states))
+    cols = [states[:, L.at(k)].T for k in ("contact", "beyond_v0", "beyond_v1", "speed")]
+    _, _, F_N, F_T, rate, v_T = (np.asarray(x) for x in rhs(states[:, 1:1 + n].T, states[:, 1 + n:1 + 2 * n].T,
+                                                           *cols, p))
+    depth = ca.Function("depth", [model.q, model.p], [ca.vertcat(*[pair.indentation for pair in model.pairs])])
+    pen = np.asarray(depth.map(len(states))(states[:, 1:1 + n].T, p))
+    pairs, events, impacts = {}, [], []
+    for k, pair in enumerate(model.pairs):
+        pairs[pair.name] = {"normal_force": F_N[k] * per["force"], "friction_force": F_T[k] * per["force"],
+                            "indentation": pen[k] * per["length"], "slip_speed": v_T[k] * per["length"],
+                            "in_contact": states[:, L.at("contact")][:, k]}
+    flags = np.column_stack([states[:, L.at(key)] for key in ("contact", "beyond_v0", "beyond_v1")])
+    onset = None
+    for row in np.nonzero(states[:, L.at("event")] > 0.5)[0]:
+        changed = np.nonzero(flags[row] != flags[row - 1])[0] if row else []
+        for index in changed:
+            kind, k = divmod(index, P)
+            name, t = model.pairs[k].name, float(states[row, 0])
+            if kind == 0 and flags[row, index] > 0.5:
+                onset = (t, float(rate[k, row]))
+                events.append({"time": t, "pair": name, "kind": "contact", "impact_speed": onset[1] * per["length"]})
+            elif kind == 0:
+                exit_speed = float(-rate[k, row])
+                events.append({"time": t, "pair": name, "kind": "separation", "exit_speed": exit_speed * per["length"]})
+                if onset is not None:
+                    impacts.append({"pair": name, "time": onset[0], "impact_speed": onset[1] * per["length"],
+                                    "exit_speed": exit_speed * per["length"], "duration": t - onset[0],
+                                    "rebound_ratio": exit_speed / onset[1]})
+            else:
+                level = "v0" if kind == 1 else "v1"
+                rising = flags[row, index] > 0.5
+                events.append({"time": t, "pair": name, "kind": f"slip {'above' if rising else 'below'} {level}"})
+    return pairs, events, impacts
+
+
+def _moreau_pairs(model: ImpactModel, spec: SimulateSpec, extras: np.ndarray, states: np.ndarray, per: dict):
+    P, h = len(model.pairs), spec.step
+    pairs, impacts = {}, []
+    for k, pair in enumerate(model.pairs):
+        lam_N, lam_T = extras[:, k], extras[:, P + k]
+        before, after, active = extras[:, 2 * P + k], extras[:, 3 * P + k], extras[:, 4 * P + k]
+        impulse = per["force"]  # N s per document force s
+        pairs[pair.name] = {"normal_impulse": lam_N * impulse, "friction_impulse": lam_T * impulse,
+                            "normal_force": lam_N / h * per["force"], "friction_force": lam_T / h * per["force"],
+                            "active": active}
+        hits = np.nonzero((lam_N > 0) & (before < 0))[0]
+        for row in hits:  # an impact: an impulse on an approaching contact
+            if row and lam_N[row - 1] > 0 and before[row - 1] < 0:
+                continue  # the same impact, spread over consecutive steps
+            impacts.append({"pair": pair.name, "time": float(states[row - 1, 0]) if row else 0.0,
+                            "impact_speed": float(-before[row]) * per["length"],
+                            "exit_speed": float(after[row]) * per["length"],
+                            "impulse": float(lam_N[row]) * impulse, "rebound_ratio": float(-after[row] / before[row])})
+    return pairs, [], impacts

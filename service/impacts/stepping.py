@@ -1,0 +1,154 @@
+"""Chunks of steps of an impact model in one CasADi call: `event_step` or `moreau_step`
+chained by mapaccum, compiled with the system C compiler when asked (cached by the model's
+structure), and the Python loops that run them to the end time."""
+
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass, field
+
+import casadi as ca
+import numpy as np
+
+from models.impacts.model import WORKS, ImpactModel
+from service.fastpath import compiled_library
+from service.impacts.event_driven import EventLayout, event_step
+from service.impacts.moreau import moreau_step
+from service.impacts.native import NativeFunction
+
+EVENT_CHUNK = 2000  # trial steps per call
+MOREAU_CHUNK = 5000
+_CODE = "impacts-1"
+
+
+@dataclass
+class Trace:
+    """Accepted states, rows of the state vector (event-driven: EventLayout; moreau: [t, q, v,
+    works]), and moreau's impulses and active flags per step."""
+
+    states: list[np.ndarray] = field(default_factory=list)
+    extras: list[np.ndarray] = field(default_factory=list)
+    status: str = "finished"
+    message: str = ""
+    calls: int = 0
+    seconds: float = 0.0
+
+
+class Chunk:
+    """Chunks of steps with fixed parameters: run(S) -> outputs as arrays of shape
+    (steps, rows). Compiled (through ctypes, no copies) or on CasADi's virtual machine."""
+
+    def __init__(self, fn: ca.Function, library, columns: list[np.ndarray]):
+        shapes_in = [(fn.size1_in(k), fn.size2_in(k)) for k in range(fn.n_in())]
+        shapes_out = [(fn.size1_out(k), fn.size2_out(k)) for k in range(fn.n_out())]
+        self.native = NativeFunction(library, fn.name(), shapes_in, shapes_out) if library is not None else None
+        self.fn = fn
+        self.fixed = [] if library is not None else [tiled(c, shapes_in[k + 1][1]) for k, c in enumerate(columns)]
+        if self.native is not None:
+            for k, c in enumerate(columns):
+                self.native.inputs[k + 1][:] = np.asarray(c, dtype=float).ravel()
+
+    def run(self, S: np.ndarray) -> list[np.ndarray]:
+        if self.native is not None:
+            self.native.inputs[0][0] = S
+            self.native()
+            return [out.copy() for out in self.native.outputs]
+        return [np.asarray(out).T for out in self.fn(S, *self.fixed)]
+
+
+_FUNCTIONS: dict[tuple, tuple] = {}
+
+
+def chunk(model: ImpactModel, kind: str, compiled: bool, columns: list[np.ndarray]) -> Chunk:
+    """The chunk of a model's structure with these fixed inputs (parameters, settings)."""
+    key = (kind, model.structure_key(), compiled, threading.get_ident())
+    if key not in _FUNCTIONS:
+        if kind == "event":
+            fn = event_step(model).mapaccum("event_chunk", EVENT_CHUNK)
+        else:
+            fn = moreau_step(model).mapaccum("moreau_chunk", MOREAU_CHUNK, ["S"], ["S1"])
+        library = compiled_library(fn, f"{_CODE}|{kind}|{key[1]}") if compiled else None
+        _FUNCTIONS[key] = (fn, library)
+    fn, library = _FUNCTIONS[key]
+    return Chunk(fn, library, columns)
+
+
+def tiled(column: np.ndarray, count: int) -> ca.DM:
+    """A mapaccum's per-step input, repeated once per run: passing one column makes CasADi
+    repeat it at every call, which costs several times the steps themselves."""
+    return ca.DM(np.tile(np.asarray(column, dtype=float).reshape(-1, 1), (1, count)))
+
+
+def event_settings(model: ImpactModel, until: float, tolerance: float, max_step: float) -> np.ndarray:
+    """[until, rtol, h_max, atol per q and v]: lengths to `tolerance` of the smallest pair scale,
+    angles to that over the largest lever, velocities per millisecond of those."""
+    length = min(pair.length_scale for pair in model.pairs)
+    atol_q = []
+    for name in model.coordinate_names():
+        atol_q.append(tolerance * (length if not name.endswith(".theta") else length / max(1.0, 10 * length)))
+    atol = np.array(atol_q + [a * 1e3 for a in atol_q])
+    return np.concatenate([[until, tolerance, max_step], atol])
+
+
+def run_events(model: ImpactModel, p: np.ndarray, q0, v0, until: float, tolerance: float, first_step: float,
+               max_step: float, compiled: bool, max_calls: int, stop=None, progress=None) -> Trace:
+    n, P = model.bodies.size, len(model.pairs)
+    L = EventLayout(n, P)
+    S = np.zeros(L.size)
+    S[L.y] = np.concatenate([q0, v0, np.zeros(len(WORKS))])
+    S[L.at("h")] = first_step
+    settings = event_settings(model, until, tolerance, max_step)
+    steps = chunk(model, "event", compiled, [p, settings])
+    trace = Trace()
+    trace.states.append(S.reshape(1, -1).copy())
+    while S[0] < until * (1 - 1e-15):
+        out = steps.run(S)[0]
+        trace.calls += EVENT_CHUNK
+        kept = out[out[:, L.at("accepted")] > 0.5]
+        if len(kept):
+            trace.states.append(kept)
+        S = out[-1]
+        if progress is not None:
+            progress(float(S[0]))
+        if not np.all(np.isfinite(S)):
+            trace.status, trace.message = "not_converged", f"the state stopped being finite near t = {trace_time(trace):g} s"
+            break
+        if trace.calls >= max_calls:
+            trace.status, trace.message = "step_limit", f"{max_calls} trial steps reached at t = {S[0]:g} s"
+            break
+        if stop is not None and stop():
+            trace.status, trace.message = "stopped", f"stopped at t = {S[0]:g} s"
+            break
+    return trace
+
+
+def trace_time(trace: Trace) -> float:
+    return float(trace.states[-1][-1, 0])
+
+
+def run_moreau(model: ImpactModel, p: np.ndarray, q0, v0, until: float, h: float, compiled: bool,
+               stop=None, progress=None) -> Trace:
+    S = np.concatenate([[0.0], q0, v0, np.zeros(len(WORKS))])
+    count = round(until / h)
+    steps = chunk(model, "moreau", compiled, [p, np.array([h])])
+    trace = Trace()
+    trace.states.append(S.reshape(1, -1).copy())
+    trace.extras.append(np.zeros((1, 5 * len(model.pairs))))
+    done = 0
+    while done < count:
+        states, impulses, active = steps.run(S)
+        take = min(MOREAU_CHUNK, count - done)
+        trace.states.append(states[:take])
+        trace.extras.append(np.hstack([impulses, active])[:take])
+        S = states[take - 1]
+        done += take
+        trace.calls += take
+        if progress is not None:
+            progress(float(S[0]))
+        if not np.all(np.isfinite(S)):
+            trace.status, trace.message = "not_converged", f"the state stopped being finite near t = {S[0]:g} s"
+            break
+        if stop is not None and stop():
+            trace.status, trace.message = "stopped", f"stopped at t = {S[0]:g} s"
+            break
+    return trace

@@ -1,0 +1,148 @@
+"""Rigid bodies with clearance impacts (seed 004): located events, the laws' exact
+restitution, Moreau's impact law, energy, and the flexure against an independent
+implementation of the paper's Eqs. 5-9."""
+
+from __future__ import annotations
+
+import math
+
+import casadi as ca
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from models.impacts.laws import damping_factor, effective_restitution
+from models.impacts.model import impact_model
+from service.impacts.run import run_impacts
+from tests.impact_cases import csfh, parsed, with_pair
+
+G = 9.81
+FALL = 0.03  # from y = 0.01 to the surface at y = -0.02
+
+
+def run(doc: dict):
+    document, spec = parsed(doc)
+    return run_impacts(document, spec)[1]
+
+
+def test_the_central_impact_is_located_at_the_free_fall_time_and_speed():
+    report = run(csfh("6.1", until=0.1))
+    first = report["impacts"][0]
+    assert first["time"] == pytest.approx(math.sqrt(2 * FALL / G), rel=1e-9)  # 0.0782062 s
+    assert first["impact_speed"] == pytest.approx(math.sqrt(2 * G * FALL), rel=1e-9)  # 0.767203 m/s
+    assert report["events"][0]["kind"] == "contact"
+
+
+def test_moreau_rebounds_with_exactly_its_restitution_at_every_impact():
+    report = run(csfh("6.1", scheme="moreau", step=1e-5, until=1.0))
+    impacts = report["impacts"]
+    assert len(impacts) >= 5
+    for hit in impacts:
+        assert hit["rebound_ratio"] == pytest.approx(0.9, abs=1e-9)
+    assert impacts[0]["time"] == pytest.approx(math.sqrt(2 * FALL / G), abs=1e-5)  # within a step
+
+
+def _one_dof_rebound(d: float) -> float:
+    """An independent quadrature: x'' = -x^1.5 (1 + d x' / 1) from x = 0, x' = 1, to x = 0."""
+    def rhs(t, y):
+        return [y[1], -max(y[0], 0.0) ** 1.5 * (1 + d * y[1])]
+
+    def out(t, y):
+        return y[0]
+
+    out.terminal, out.direction = True, -1
+    sol = solve_ivp(rhs, (0, 50), [0.0, 1.0], events=out, rtol=1e-12, atol=1e-14, method="DOP853",
+                    first_step=1e-6)
+    return -sol.y_events[0][-1][1]
+
+
+@pytest.mark.parametrize("law", ["lankarani_nikravesh", "hunt_crossley", "flores"])
+def test_each_law_rebounds_with_its_exact_effective_restitution(law):
+    """A body thrown at the hole's wall without gravity: its rebound ratio is the law's
+    closed-form effective restitution (0.9132 for Lankarani-Nikravesh with c_r = 0.9), which
+    an independent quadrature of the one-degree-of-freedom impact confirms."""
+    exact = effective_restitution(damping_factor(law, 0.9))
+    assert exact == pytest.approx(_one_dof_rebound(damping_factor(law, 0.9)), abs=1e-8)
+    doc = with_pair(csfh("6.1", until=0.1), law=law)
+    doc["gravity"] = [0, 0]
+    doc["simulate"]["initial"]["hinge"] = {"displacement": [0, 0, 0], "velocity": [0, -0.5, 0]}
+    report = run(doc)
+    assert report["impacts"][0]["rebound_ratio"] == pytest.approx(exact, abs=1e-6)
+    if law == "lankarani_nikravesh":
+        assert exact == pytest.approx(0.91318, abs=1e-5)
+
+
+def test_energy_is_conserved_between_impacts_and_the_balance_closes():
+    report = run(csfh("6.3", until=0.5))
+    energies = {k: np.array(v) for k, v in report["energies"].items()}
+    total = energies["kinetic"] + energies["elastic"] + energies["gravity"]
+    free = np.array(report["pairs"]["conjugate"]["in_contact"]) < 0.5
+    scale = np.abs(total).max()
+    drift, segments, start = 0.0, 0, None
+    for k in range(len(total)):
+        if free[k] and start is None:
+            start = k
+        if (not free[k] or k == len(total) - 1) and start is not None:
+            stop = k if free[k] else k - 1
+            segment = total[start:stop + 1]
+            drift = max(drift, float(np.ptp(segment)) / scale)
+            assert np.all(np.diff(segment) <= 1e-9 * scale)  # never increases
+            segments += 1
+            start = None
+    assert segments >= 3
+    assert drift < 1e-8
+    assert report["energy_balance_error"] < 1e-6
+    assert energies["contact_work"][-1] < 0 and energies["friction_work"][-1] < 0
+
+
+def test_moreau_never_gains_energy_in_free_flight():
+    report = run(csfh("6.1", scheme="moreau", step=1e-5, until=0.5))
+    e = report["energies"]
+    total = np.array(e["kinetic"]) + np.array(e["gravity"])
+    active = np.array(report["pairs"]["conjugate"]["normal_impulse"]) > 0
+    rises = np.diff(total)[~active[1:]]
+    assert np.all(rises <= 1e-12 * np.abs(total).max())
+    assert report["energy_balance_error"] < 1e-9
+
+
+def _paper_flexure_force(q: np.ndarray, turning: bool) -> np.ndarray:
+    """Seed 004 Eqs. 5-9 with the note's conventions, written independently: Delta = [dr +
+    (A - 1) s; theta], K = A3 R3 K_hat R3^T A3^T (A3 = 1 when constant), Q_e = -T_e K Delta;
+    K_hat the inverse of seed 000's Eq. 2 with r = 0.144, theta_f = 300 deg."""
+    r, t = 0.144, math.radians(300)
+    EI = 100e9 * 0.025 * 0.005**3 / 12
+    c, s = math.cos(t), math.sin(t)
+    C = np.array([[r**3 / 4 * (6 * t + math.sin(2 * t) - 8 * s), r**3 / 2 * (c * c - 2 * c + 1), r * r * (t - s)],
+                  [0, r**3 / 4 * (2 * t - math.sin(2 * t)), r * r * (1 - c)], [0, 0, r * t]]) / EI
+    C = np.triu(C) + np.triu(C, 1).T
+    K_hat = np.linalg.inv(C)
+
+    def R(a):
+        return np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
+
+    R3 = np.eye(3)
+    R3[:2, :2] = R(math.radians(30))
+    A = R(q[2])
+    s_bar = np.array([0.22, 0.1]) + r * np.array([math.cos(t), math.sin(t)])  # Table 1: [0.2920, -0.02471]
+    delta = np.concatenate([q[:2] + (A - np.eye(2)) @ s_bar, [q[2]]])
+    A3 = np.eye(3)
+    if turning:
+        A3[:2, :2] = A
+    K = A3 @ R3 @ K_hat @ R3.T @ A3.T
+    T_e = np.eye(3)
+    arm = A @ s_bar
+    T_e[2, :2] = [-arm[1], arm[0]]
+    return -T_e @ K @ delta
+
+
+@pytest.mark.parametrize("turning", [False, True])
+def test_the_flexure_force_is_the_papers_eqs_5_to_9(turning):
+    doc = csfh("6.3")
+    doc["gravity"] = [0, 0]
+    doc["impacts"]["flexure_stiffness"] = "turning" if turning else "constant"
+    model = impact_model(parsed(doc)[0])
+    force = ca.Function("f", [model.q, model.v, model.p], [model.force])
+    p = model.book.parameter_vector()
+    for q in ([0.003, -0.002, 0.0], [0.004, 0.007, 0.05], [-0.01, 0.002, -0.1]):
+        ours = np.asarray(force(q, [0, 0, 0], p)).ravel()
+        assert ours == pytest.approx(_paper_flexure_force(np.array(q), turning), rel=1e-7, abs=1e-9)
