@@ -76,7 +76,7 @@ def test_energy_is_conserved_between_impacts_and_the_balance_closes():
     report = run(csfh("6.3", until=0.5))
     energies = {k: np.array(v) for k, v in report["energies"].items()}
     total = energies["kinetic"] + energies["elastic"] + energies["gravity"]
-    free = np.array(report["pairs"]["conjugate"]["in_contact"]) < 0.5
+    free = np.array(report["contacts"]["conjugate"]["in_contact"]) < 0.5
     scale = np.abs(total).max()
     drift, segments, start = 0.0, 0, None
     for k in range(len(total)):
@@ -99,7 +99,7 @@ def test_moreau_never_gains_energy_in_free_flight():
     report = run(csfh("6.1", scheme="moreau", step=1e-5, until=0.5))
     e = report["energies"]
     total = np.array(e["kinetic"]) + np.array(e["gravity"])
-    active = np.array(report["pairs"]["conjugate"]["normal_impulse"]) > 0
+    active = np.array(report["contacts"]["conjugate"]["normal_impulse"]) > 0
     rises = np.diff(total)[~active[1:]]
     assert np.all(rises <= 1e-12 * np.abs(total).max())
     assert report["energy_balance_error"] < 1e-9

@@ -17,7 +17,7 @@ def plot_impacts(reports: dict | list[dict], path, labels: list[str] | None = No
     labels = labels or [r["scheme"]["name"] for r in reports]
     first = reports[0]
     coordinates = list(first["coordinates"])
-    pair = next(iter(first["pairs"]))
+    pair = next(iter(first["contacts"]))
     rows = coordinates + [f"{pair}: F_N", f"{pair}: F_T"]
     fig = plt.figure(figsize=(12, 2.0 * len(rows)))
     grid = fig.add_gridspec(len(rows), 2, width_ratios=(2.2, 1))
@@ -31,7 +31,7 @@ def plot_impacts(reports: dict | list[dict], path, labels: list[str] | None = No
                 unit = units["angle"] if name.endswith(".theta") else units["length"]
             else:
                 key = "normal_force" if name.endswith("F_N") else "friction_force"
-                values, unit = report["pairs"][pair][key], units["force"]
+                values, unit = report["contacts"][pair][key], units["force"]
             ax.plot(t, values, lw=0.8, label=label)
         ax.set_ylabel(f"{name} ({unit})", fontsize=8)
         ax.grid(alpha=0.3)

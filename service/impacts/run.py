@@ -22,6 +22,16 @@ IMPACT_SCHEMES = ("event_driven", "moreau")
 TRIALS_PER_STEP = 4  # event-driven: trial steps allowed per allowed step (rejections, event location)
 
 
+def check_laws(model: ImpactModel, spec: SimulateSpec) -> None:
+    """Coulomb's friction is set-valued: only Moreau-Jean's impulses take it."""
+    if spec.scheme != "event_driven":
+        return
+    for pair in model.pairs:
+        if pair.friction == "coulomb":
+            raise MechanismError(f"/impacts/pairs/{pair.name}/friction/law", "Coulomb's friction is set-valued: the "
+                                 "event_driven scheme takes ambrosio's regularized law (moreau takes coulomb)")
+
+
 def start_state(model: ImpactModel, spec: SimulateSpec, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(q0, v0) in SI from `simulate/initial`, refusing a start that penetrates a surface."""
     book, n = model.book, model.bodies.size
@@ -55,6 +65,7 @@ def run_impacts(document: MechanismDocument, spec: SimulateSpec, stop=None, max_
     for pointer, value in (parameters or {}).items():
         values[model.book.pointers.index(pointer)] = value
     p = model.book.parameter_vector(values)
+    check_laws(model, spec)
     q0, v0 = start_state(model, spec, p)
     began = time.perf_counter()
     if spec.scheme == "moreau":
@@ -102,7 +113,7 @@ def report(model: ImpactModel, spec: SimulateSpec, trace: Trace, p: np.ndarray) 
         "times": states[keep, 0].tolist(),
         "coordinates": {k: c[keep].tolist() for k, c in coordinates.items()},
         "velocities": {k: c[keep].tolist() for k, c in velocities.items()},
-        "pairs": {name: {k: np.asarray(x)[keep].tolist() for k, x in values.items()} for name, values in pairs.items()},
+        "contacts": {name: {k: np.asarray(x)[keep].tolist() for k, x in values.items()} for name, values in pairs.items()},
         "events": events, "impacts": impacts,
         "energies": {k: (np.asarray(x)[keep] * per["energy"]).tolist() for k, x in energies.items()},
         "energy_balance_error": float(np.abs(balance).max() / size),

@@ -20,6 +20,7 @@ from service.dynamics.integrate import Resume, integrate
 from service.dynamics.window import WINDOW
 from service.dynamics.run import (check_masses, check_steps, records, scheme_of, scheme_summary, simulation_spec,
                                   start_shape, tolerance_of, units, wanted_outputs, with_balance)
+from service.impacts.run import IMPACT_SCHEMES
 from service.jobs.base import InOrder, Plan
 from service.jobs.control import TaskControl
 from service.jobs.sweep import mechanism_of
@@ -35,6 +36,10 @@ class SimulationJob(InOrder):
     def prepare(self, spec: dict, limits: Limits) -> Plan:
         mech = compile_request(spec["document"], spec.get("model"), spec.get("overrides"), limits)
         simulate = simulation_spec(mech, spec.get("simulate"))
+        if simulate.scheme in IMPACT_SCHEMES:
+            raise MechanismError("/simulate/scheme", f"an {simulate.scheme} impact simulation runs in one call of "
+                                 "/v1/solve (analysis simulate: a second of motion takes milliseconds); the impact "
+                                 "study job (/v1/impact-studies) runs many")
         try:
             check_masses(mech)
         except MechanismError as exc:

@@ -1,0 +1,88 @@
+"""Impact simulations: bad input names the field (Python, HTTP 422, CLI), and the simulate
+analysis answers over real HTTP."""
+
+from __future__ import annotations
+
+import copy
+import json
+import math
+
+import httpx
+import pytest
+from typer.testing import CliRunner
+
+from models import MechanismError
+from service.cli import app
+from service.impacts.run import run_impacts
+from tests.impact_cases import csfh, parsed
+
+
+def _broken(change) -> dict:
+    doc = copy.deepcopy(csfh("6.3", until=0.05))
+    change(doc)
+    return doc
+
+
+def _pair(doc):
+    return doc["impacts"]["pairs"]["conjugate"]
+
+
+BAD = [
+    (lambda d: d["bodies"]["hinge"].pop("mass"), "/bodies/hinge/mass", "moves and has no mass"),
+    (lambda d: d["simulate"]["initial"].update(hinge={"displacement": [0, -0.03, 0]}), "/simulate/initial/hinge",
+     "the start state penetrates: pair 'conjugate' overlaps by 0.01 m"),
+    (lambda d: _pair(d)["normal"].update(restitution=1.2), "/impacts/pairs/conjugate/normal/restitution",
+     "must be in (0, 1], got 1.2"),
+    (lambda d: _pair(d)["normal"].update(restitution=0.0), "/impacts/pairs/conjugate/normal/restitution",
+     "must be in (0, 1], got 0"),
+    (lambda d: _pair(d)["friction"].update(sliding=-0.05), "/impacts/pairs/conjugate/friction/sliding",
+     "a friction coefficient must not be negative, got -0.05"),
+    (lambda d: _pair(d).update(surfaces=["pin", "hol"]), "/impacts/pairs/conjugate/surfaces/1",
+     "unknown surface 'hol' (surfaces: pin, hole)"),
+    (lambda d: d["impacts"]["surfaces"]["hole"].update(radius=0.18), "/impacts/surfaces/hole/radius",
+     "the clearance of pair 'conjugate' (hole radius 0.18 m minus pin radius 0.18 m) must be positive, got 0 m"),
+    (lambda d: _pair(d)["friction"].update(law="coulomb"), "/impacts/pairs/conjugate/friction/law",
+     "the event_driven scheme takes ambrosio"),
+    (lambda d: d["simulate"]["initial"].update(frame={"displacement": [0, 0.001, 0]}), "/simulate/initial/frame",
+     "body 'frame' is fixed"),
+]
+
+
+@pytest.mark.parametrize("change,pointer,words", BAD)
+def test_bad_impact_input_names_the_field(change, pointer, words):
+    document, spec = parsed(_broken(change))
+    with pytest.raises(MechanismError) as caught:
+        run_impacts(document, spec)
+    assert caught.value.pointer == pointer
+    assert words in caught.value.problem
+
+
+def test_the_simulate_analysis_answers_impacts_over_http_and_refuses_bad_fields_with_422(api_server):
+    r = httpx.post(f"{api_server.url}/v1/solve", json={"document": csfh("6.1", until=0.1), "analysis": "simulate"},
+                   timeout=120)
+    assert r.status_code == 200, r.text
+    first = r.json()["impacts"][0]
+    assert first["time"] == pytest.approx(math.sqrt(2 * 0.03 / 9.81), rel=1e-9)
+    for change, pointer, words in BAD[1:3]:
+        r = httpx.post(f"{api_server.url}/v1/solve", json={"document": _broken(change), "analysis": "simulate"},
+                       timeout=120)
+        assert r.status_code == 422, r.text
+        error = r.json()["error"]
+        assert error["pointer"] == pointer and words in error["message"], error
+
+
+def test_the_cli_runs_an_impact_example_and_names_bad_fields(tmp_path):
+    runner = CliRunner()
+    doc = tmp_path / "csfh.json"
+    doc.write_text(json.dumps(csfh("6.1", until=0.1)))
+    out = tmp_path / "r.json"
+    result = runner.invoke(app, ["simulate", str(doc), "--json", str(out), "--plot", str(tmp_path / "r.png")])
+    assert result.exit_code == 0, result.output
+    assert "0.0782062" in result.output
+    assert (tmp_path / "r.png").stat().st_size > 10_000
+    assert json.loads(out.read_text())["impacts"][0]["impact_speed"] == pytest.approx(math.sqrt(2 * 9.81 * 0.03))
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(_broken(BAD[6][0])))
+    result = runner.invoke(app, ["simulate", str(bad)])
+    assert result.exit_code != 0
+    assert "/impacts/surfaces/hole/radius" in result.output and "must be positive" in result.output
