@@ -34,6 +34,7 @@ from api.schemas import (
     SolveResponse,
     SweepRequest,
 )
+from api.impact_study_schemas import ImpactStudyRequest
 from api.simulation_schemas import SimulationRequest
 
 T = TypeVar("T")
@@ -158,6 +159,11 @@ class Client:
         return _parse(self._http.post("/v1/simulations", json=_request_body(SimulationRequest, request, fields)),
                       JobStatusResponse)
 
+    def impact_study(self, request: ImpactStudyRequest | None = None, **fields: Any) -> JobStatusResponse:
+        """Start a parametric study of an impact simulation; fields as in ImpactStudyRequest."""
+        return _parse(self._http.post("/v1/impact-studies", json=_request_body(ImpactStudyRequest, request, fields)),
+                      JobStatusResponse)
+
     def job(self, job_id: str) -> JobStatusResponse:
         return _parse(self._http.get(f"/v1/jobs/{job_id}"), JobStatusResponse)
 
@@ -223,6 +229,10 @@ class AsyncClient:
     async def simulation(self, request: SimulationRequest | None = None, **fields: Any) -> JobStatusResponse:
         body = _request_body(SimulationRequest, request, fields)
         return _parse(await self._http.post("/v1/simulations", json=body), JobStatusResponse)
+
+    async def impact_study(self, request: ImpactStudyRequest | None = None, **fields: Any) -> JobStatusResponse:
+        body = _request_body(ImpactStudyRequest, request, fields)
+        return _parse(await self._http.post("/v1/impact-studies", json=body), JobStatusResponse)
 
     async def job(self, job_id: str) -> JobStatusResponse:
         return _parse(await self._http.get(f"/v1/jobs/{job_id}"), JobStatusResponse)

@@ -86,3 +86,27 @@ def test_the_cli_runs_an_impact_example_and_names_bad_fields(tmp_path):
     result = runner.invoke(app, ["simulate", str(bad)])
     assert result.exit_code != 0
     assert "/impacts/surfaces/hole/radius" in result.output and "must be positive" in result.output
+
+
+def test_the_impact_study_ranks_the_clearance_above_the_inertia(api_server):
+    """Seed 004 Table 4 in numbers: the pin radius (the clearance) changes the motion from the
+    first impact; a 0.001 kg m^2 inertia change barely does. Run as a job on the pool."""
+    from api.client import Client
+
+    with Client(api_server.url) as client:
+        job = client.impact_study(example="csfh", simulate={"until": 0.3}, study={"fields": [
+            {"path": "/impacts/surfaces/pin/radius", "step": 0.001}, {"path": "/bodies/hinge/inertia", "step": 0.001}]})
+        assert job.progress.total == 5
+        final = client.wait(job.id, timeout=300)
+        assert final.status == "succeeded", final
+        result = client.result(job.id).result
+    radius = result["fields"]["/impacts/surfaces/pin/radius"]
+    inertia = result["fields"]["/bodies/hinge/inertia"]
+    assert result["ranking"][0]["path"] == "/impacts/surfaces/pin/radius"
+    # a 1 mm smaller pin falls 1 mm further: the first impact, and the departure, come later
+    early = radius["+"]["influence"]["hinge.y"]["departure"]
+    assert early is not None and early < 0.08
+    assert inertia["+"]["influence"]["hinge.y"]["rms"] < radius["+"]["influence"]["hinge.y"]["rms"] / 10
+    bad = httpx.post(f"{api_server.url}/v1/impact-studies", json={"example": "csfh", "study": {"fields": [
+        {"path": "/impacts/surfaces/pin/colour", "step": 1}]}})
+    assert bad.status_code == 422 and bad.json()["error"]["pointer"] == "/study/fields/0/path", bad.text

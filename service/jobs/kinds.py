@@ -17,6 +17,7 @@ __all__ = ["JobKind", "Plan", "kind_named", "run_task"]
 @lru_cache(maxsize=1)
 def _kinds() -> dict[str, JobKind]:
     from service.jobs.contact import CONTACT
+    from service.jobs.impact_study import IMPACT_STUDY
     from service.jobs.optimize import OPTIMIZE
     from service.jobs.simulation import SIMULATION
     from service.jobs.sweep import SWEEP
@@ -26,6 +27,7 @@ def _kinds() -> dict[str, JobKind]:
         OPTIMIZE,
         CONTACT,
         SIMULATION,
+        IMPACT_STUDY,
     )}
 
 
