@@ -14,7 +14,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 # The models of a curved beam: models.MODELS, which a test pins this list to (the client does
 # not import the core).
-Model = Literal["linear", "partial_nonlinear", "exact"]
+Model = Literal["linear", "partial_nonlinear", "exact", "conservative"]
 JobStatusName = Literal["queued", "running", "succeeded", "failed", "cancelled"]
 PointStatus = Literal["converged", "not_converged", "singular", "time_limit", "infeasible"]
 

@@ -74,6 +74,8 @@ def contact_rows(doc: MechanismDocument) -> list[tuple[str, int]]:
         if site.type == "surface":
             link = doc.elements.get(site.link)
             rows = getattr(link, "intervals", 1) * getattr(link, "degree", 1) + 2
+        elif site.type == "circle":
+            rows = 1
         else:
             rows = len(site.vertices) * (8 if obj.type == "implicit" else 1)
             if obj.type == "polygon":

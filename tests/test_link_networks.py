@@ -119,8 +119,8 @@ def test_a_floating_joint_with_no_path_to_ground_is_named():
     links = {"L1": {"from": "A", "to": "J", "length": 1.0}, "L2": {"from": "K", "to": "M", "length": 1.0}}
     with pytest.raises(MechanismError) as info:
         models.compile_mechanism(models.load_document(network(bodies, links, {})))
-    assert str(info.value) == ("/bodies/K: floating joint 'K' has no path to a fixed body through elements: "
-                               "connect it to ground by a link or a flexure, or fix it")
+    assert str(info.value) == ("/bodies/K: floating joint 'K' has no path to a fixed body through elements or "
+                               "impact pairs: connect it to ground by a link or a flexure, or fix it")
 
 
 def test_a_body_held_only_by_pins_must_be_a_joint():

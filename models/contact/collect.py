@@ -33,6 +33,9 @@ def collect_contacts(c, contacts: Contacts | None, elements: list[ElementTopolog
             raise MechanismError(f"{base}/object", f"unknown object '{pair.object}' "
                                  f"(objects: {', '.join(object_names) or 'none'})")
         site, obj = sites[site_names.index(pair.site)], objects[object_names.index(pair.object)]
+        if site.type == "circle" and obj.type not in ("circle", "hole", "half_plane"):
+            raise MechanismError(f"{base}/object", f"a circle site touches circles, holes and half-planes, not the "
+                                 f"{obj.type} '{obj.name}'")
         if site.type == "surface" and obj.type == "polygon":
             raise MechanismError(f"{base}/object", f"a link surface cannot touch the polygon '{obj.name}': polygons "
                                  "touch jaws (give the link a jaw, or describe the object as an implicit curve)")
@@ -57,10 +60,10 @@ def _body(c, pointer: str, name: str | None) -> int | None:
 def _collect_object(c, name: str, obj) -> ObjectTopology:
     base = f"/contacts/objects/{name}"
     body = _body(c, f"{base}/body", obj.body)
-    if obj.type == "circle":
+    if obj.type in ("circle", "hole"):
         c.add_vec(f"{base}/centre", obj.centre, "length")
         c.add(f"{base}/radius", obj.radius, "length", "positive")
-        return ObjectTopology(name, "circle", body)
+        return ObjectTopology(name, obj.type, body)
     if obj.type == "ellipse":
         c.add_vec(f"{base}/centre", obj.centre, "length")
         for k, value in enumerate(obj.semi_axes):
@@ -107,6 +110,11 @@ def _collect_site(c, name: str, site, links: dict[str, ElementTopology]) -> Site
                                  f"'{link.section.name}' gives no c): a surface needs one; use side 'centre_line' "
                                  "or give the section c")
         return SiteTopology(name, "surface", link=site.link, side=site.side)
+    if site.type == "circle":
+        body = _body(c, f"{base}/body", site.body)
+        c.add_vec(f"{base}/centre", site.centre, "length")
+        c.add(f"{base}/radius", site.radius, "length", "positive")
+        return SiteTopology(name, "circle", body=body)
     return _collect_jaw(c, base, name, site, links)
 
 

@@ -68,7 +68,8 @@ class ContactGeometry:
     # objects -----------------------------------------------------------------------------------
     def object_frame(self, obj: ObjectTopology) -> ObjectFrame:
         base, P = obj.pointer, self.P
-        origin_field = {"circle": "centre", "ellipse": "centre", "half_plane": "point"}.get(obj.type, "position")
+        origin_field = {"circle": "centre", "hole": "centre", "ellipse": "centre", "half_plane": "point"}.get(
+            obj.type, "position")
         local = P.vec(f"{base}/{origin_field}")
         own_angle = P[f"{base}/angle"] if obj.type in ("ellipse", "polygon", "implicit") else ca.SX(0)
         if obj.body is None:
@@ -90,6 +91,8 @@ class ContactGeometry:
         base, P = obj.pointer, self.P
         if obj.type == "circle":
             return ca.norm_2(point - frame.origin) - P[f"{base}/radius"]
+        if obj.type == "hole":  # smooth where a pin sits centred (no normal there, and no contact)
+            return P[f"{base}/radius"] - ca.sqrt(ca.sumsqr(point - frame.origin) + 1e-24)
         if obj.type == "half_plane":
             return ca.dot(self._half_plane_normal(obj, frame), point - frame.origin)
         local = rot(frame.angle).T @ (point - frame.origin)
@@ -177,6 +180,9 @@ def contact_constraints(geometry: ContactGeometry) -> ContactConstraints:
                      for point, along in geometry.surface_points(site)]
             _carried(rows, first, site.link)
             continue
+        if site.type == "circle":
+            rows.append(_circle_row(geometry, k, site, obj, frame))
+            continue
         vertices, along = geometry.jaw_vertices(site)
         if obj.type == "half_plane":
             rows += [_pointwise_row(geometry, k, obj, frame, v, s) for v, s in zip(vertices, along)]
@@ -212,6 +218,20 @@ def _pointwise_row(geometry, k, obj, frame, point, along) -> ContactRow:
     normal = ca.gradient(value, probe)
     value, normal = ca.substitute([value, normal], [probe], [point])
     return ContactRow(k, value, point, normal, along)
+
+
+def _circle_row(geometry, k, site, obj, frame) -> ContactRow:
+    """A circle site against a circle (from outside), a hole (from inside) or a half-plane:
+    the distance between the surfaces, exact, pushing the circle's material point that
+    touches (its centre offset by the radius against the normal)."""
+    origin, angle = geometry.site_frame(site)
+    centre = origin + rot(angle) @ geometry.P.vec(f"{site.pointer}/centre")
+    radius = geometry.P[f"{site.pointer}/radius"]
+    probe = ca.SX.sym("centre", 2)
+    value = geometry.pointwise(obj, frame, probe) - radius  # the centre's distance, less the radius
+    normal = ca.gradient(value, probe)
+    value, normal = ca.substitute([value, normal], [probe], [centre])
+    return ContactRow(k, value, centre - radius * normal, normal, ca.SX(0))
 
 
 def _axis_rows(geometry, k, obj, frame, axis, vertices, object_piece, index: int) -> list[ContactRow]:

@@ -36,6 +36,14 @@ class CircleObject(_OnBody):
     radius: Number
 
 
+class HoleObject(_OnBody):
+    """A circular hole: the solid is outside the circle (a clearance a pin sits in)."""
+
+    type: Literal["hole"]
+    centre: Vec2
+    radius: Number
+
+
 class EllipseObject(_OnBody):
     type: Literal["ellipse"]
     centre: Vec2
@@ -71,9 +79,9 @@ class ImplicitObject(_OnBody):
     angle: Number = 0.0
 
 
-ContactObject = Annotated[Union[CircleObject, EllipseObject, PolygonObject, HalfPlaneObject, ImplicitObject],
-                          Field(discriminator="type")]
-OBJECT_TYPES = ("circle", "ellipse", "polygon", "half_plane", "implicit")
+ContactObject = Annotated[Union[CircleObject, HoleObject, EllipseObject, PolygonObject, HalfPlaneObject,
+                                ImplicitObject], Field(discriminator="type")]
+OBJECT_TYPES = ("circle", "hole", "ellipse", "polygon", "half_plane", "implicit")
 
 
 class JawSite(StrictModel):
@@ -98,8 +106,18 @@ class SurfaceSite(StrictModel):
     side: Literal["left", "right", "centre_line"]
 
 
-ContactSite = Annotated[Union[JawSite, SurfaceSite], Field(discriminator="type")]
-SITE_TYPES = ("jaw", "surface")
+class CircleSite(StrictModel):
+    """A circle carried by a body (a pin, a roller), centre in the body's axes from its
+    reference point: it touches circles from outside, holes from inside and half-planes."""
+
+    type: Literal["circle"]
+    body: str
+    centre: Vec2 = (0.0, 0.0)
+    radius: Number
+
+
+ContactSite = Annotated[Union[JawSite, SurfaceSite, CircleSite], Field(discriminator="type")]
+SITE_TYPES = ("jaw", "surface", "circle")
 
 
 class ContactPair(StrictModel):

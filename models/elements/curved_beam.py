@@ -2,8 +2,10 @@
 
 Models: `linear` (balance of the beam in its undeformed state, Eq. 15) and
 `partial_nonlinear` (in its deformed state, Eq. 17), both with the closed-form constant
-stiffness of Eq. 2; `exact` is the geometrically exact elastica of the same arc, solved by
-shooting: that element is a link built from the arc (models.elements.link).
+stiffness of Eq. 2; `conservative`, the gradient of the energy 1/2 psi.K.psi of that
+stiffness (the constant-stiffness flexure of seed 004's impact models); `exact` is the
+geometrically exact elastica of the same arc, solved by shooting: that element is a link
+built from the arc (models.elements.link).
 
 Neither constant-stiffness model is the gradient of an energy: their tangent stiffness is
 unsymmetric once deformed (the wrench turns with the bodies while K_f stays in the undeformed
@@ -21,14 +23,15 @@ from pydantic import Field
 
 from models import curved_beam as kernel
 from models.context import AssemblyContext
-from models.elements.base import CentreLine, Contribution, NoEnergyForm, ScaleHint, SiValues, TwoBodyElement
+from models.elements.base import (CentreLine, Contribution, EnergyTerms, NoEnergyForm, ScaleHint, SiValues,
+                                  TwoBodyElement)
 from models.errors import MechanismError
 from models.fields import Number, Vec2
 from models.planar import cross, rot
 from models.sections import RectangularSection, SectionTopology, nominal_EI
 from models.structure import ElementTopology
 
-MODELS = ("linear", "partial_nonlinear", "exact")
+MODELS = ("linear", "partial_nonlinear", "exact", "conservative")
 
 # Samples along each arc for the maximum bending stress and for drawing.
 ARC_SAMPLES = 33
@@ -46,7 +49,7 @@ class CurvedBeam(TwoBodyElement):
     direction: Literal["ccw", "cw"] = "ccw"
     material: str
     section: str
-    model: Literal["linear", "partial_nonlinear", "exact"] = "partial_nonlinear"
+    model: Literal["linear", "partial_nonlinear", "exact", "conservative"] = "partial_nonlinear"
     intervals: int = Field(default=8, ge=1, le=64, description="shooting intervals (exact model)")
     order: int = Field(default=8, ge=2, le=12, description="integration order, even (exact model)")
 
@@ -106,7 +109,10 @@ class CurvedBeamFamily:
         return FlexureTopology(name, self.type, start, end, reversed_, model, el.material, el.section)
 
     def contribute(self, ctx: AssemblyContext, t: FlexureTopology, d, z) -> Contribution:
-        on_i, on_j, state = flexure_wrenches(ctx, t, d, d, d)
+        if t.model == "conservative":
+            on_i, on_j, state = conservative_wrenches(ctx, t, d)
+        else:
+            on_i, on_j, state = flexure_wrenches(ctx, t, d, d, d)
         return Contribution({t.start_body: on_i, t.end_body: on_j}, outputs=_outputs(state),
                             energy=state["energy"], centre_line=_centre_line(ctx, t, state, d))
 
@@ -114,6 +120,8 @@ class CurvedBeamFamily:
         return []
 
     def energy_terms(self, ctx, t: FlexureTopology, d):
+        if t.model == "conservative":
+            return EnergyTerms(flexure_wrenches(ctx, t, d, d, d)[2]["energy"])
         raise NoEnergyForm(f"the {t.model} curved-beam model balances a constant stiffness in frames that "
                            "do not turn with the bodies: its tangent stiffness is unsymmetric once deformed, "
                            "so it is not the gradient of an energy (the exact model is a link)")
@@ -167,6 +175,22 @@ def flexure_wrenches(ctx: AssemblyContext, f: FlexureTopology, d_psi, d_N, d_T):
     on_j = on_body(j, s_j, arc.end_frame_angle, thj_hat, w)
     state = dict(psi=psi, w=w, w_start=w_start, r=r, theta_f=theta_f, b=b_w, h=h, arc=arc,
                  energy=0.5 * ca.dot(psi, K @ psi))
+    return on_i, on_j, state
+
+
+def conservative_wrenches(ctx: AssemblyContext, f: FlexureTopology, d):
+    """The `conservative` model: the wrenches of the energy 1/2 psi.K.psi (psi of Eqs. 5-8, K
+    of Eq. 2), exact derivatives, so its tangent stiffness is symmetric and it has an energy
+    form (contact, dynamics). To first order it is the linear model."""
+    i, j = f.start_body, f.end_body
+    d_i, d_j = ca.SX.sym("d_i", 3), ca.SX.sym("d_j", 3)
+    local = list(d)
+    local[i], local[j] = d_i, d_j
+    _, _, state = flexure_wrenches(ctx, f, local, local, local)
+    energy = state["energy"]
+    here, there = ca.vertcat(d_i, d_j), ca.vertcat(d[i], d[j])
+    on_i, on_j = (ca.substitute(ca.gradient(energy, s), here, there) for s in (d_i, d_j))
+    state = {k: ca.substitute(v, here, there) if isinstance(v, ca.SX) else v for k, v in state.items()}
     return on_i, on_j, state
 
 

@@ -90,6 +90,8 @@ def _draw_objects(ax, mech, problem, w, p, color: str, centre: np.ndarray, span:
 
         if obj.type == "circle":
             ax.add_patch(Circle(origin, value("radius"), **style))
+        elif obj.type == "hole":
+            ax.add_patch(Circle(origin, value("radius"), fill=False, edgecolor=color, linewidth=1.0))
         elif obj.type == "ellipse":
             ax.add_patch(Ellipse(origin, 2 * value("semi_axes/0"), 2 * value("semi_axes/1"),
                                  angle=np.degrees(angles[k]), **style))

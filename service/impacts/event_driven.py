@@ -157,7 +157,7 @@ def event_step(model: ImpactModel) -> ca.Function:
     # free steps
     reject = ca.logic_and(1 - locating, err > 1)
     start = ca.logic_and(ca.logic_and(1 - locating, err <= 1), crossed)
-    accept = ca.logic_and(ca.logic_and(1 - locating, err <= 1), 1 - crossed)
+    accept = ca.logic_and(ca.logic_and(ca.logic_and(1 - locating, err <= 1), 1 - crossed), dt > 0)  # 0: at the end
     # locating: the Illinois method on the step size
     new_hi = ca.if_else(crossed, dt, h_hi)
     new_lo = ca.if_else(crossed, h_lo, dt)

@@ -18,7 +18,23 @@ from service.impacts.native import NativeFunction
 
 EVENT_CHUNK = 2000  # trial steps per call
 MOREAU_CHUNK = 5000
-_CODE = "impacts-1"
+def _code_version() -> str:
+    """A digest of the sources the step graphs come from: a cached library built from older
+    code is never loaded."""
+    import hashlib
+    from pathlib import Path
+
+    import models.impacts as built
+    import service.impacts as stepping
+
+    digest = hashlib.sha256()
+    for package in (built, stepping):
+        for source in sorted(Path(package.__file__).parent.glob("*.py")):
+            digest.update(source.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+_CODE = _code_version()
 
 
 @dataclass
