@@ -29,7 +29,6 @@ import json
 import math
 import shutil
 import subprocess
-import time
 from pathlib import Path
 
 import numpy as np

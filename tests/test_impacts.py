@@ -146,3 +146,37 @@ def test_the_flexure_force_is_the_papers_eqs_5_to_9(turning):
     for q in ([0.003, -0.002, 0.0], [0.004, 0.007, 0.05], [-0.01, 0.002, -0.1]):
         ours = np.asarray(force(q, [0, 0, 0], p)).ravel()
         assert ours == pytest.approx(_paper_flexure_force(np.array(q), turning), rel=1e-7, abs=1e-9)
+
+
+@pytest.mark.parametrize("scheme", ["event_driven", "moreau"])
+def test_a_load_that_grows_in_time_drives_the_body_to_the_surface(scheme):
+    """No gravity, F_y = -c t on the free body: y = y0 - c t^3 / (6 m) until it meets the
+    surface 0.03 m lower, at t = (6 m 0.03 / c)^(1/3) with speed c t^2 / (2 m); the work of the
+    load closes the energy balance."""
+    c, m = 1000.0, 10.0
+    doc = csfh("6.1", until=0.2, scheme=scheme, step=1e-5 if scheme == "moreau" else 1e-4,
+               histories={"/loads/push/force/1": f"-{c}*t"})
+    doc["gravity"] = [0, 0]
+    doc["loads"] = {"push": {"type": "force", "body": "hinge", "force": [0, 0]}}
+    report = run(doc)
+    t_hit = (6 * m * FALL / c) ** (1 / 3)
+    first = report["impacts"][0]
+    if scheme == "event_driven":
+        assert first["time"] == pytest.approx(t_hit, rel=1e-9)
+        assert first["impact_speed"] == pytest.approx(c * t_hit**2 / (2 * m), rel=1e-9)
+        assert report["energy_balance_error"] < 1e-6
+    else:
+        assert first["time"] == pytest.approx(t_hit, abs=2e-5)
+        assert first["impact_speed"] == pytest.approx(c * t_hit**2 / (2 * m), rel=1e-4)
+        assert report["energy_balance_error"] < 1e-3
+    assert report["energies"]["load_work"][-1] > 0
+
+
+def test_only_loads_and_gravity_follow_histories():
+    from models import MechanismError
+
+    doc = csfh("6.1", until=0.1, histories={"/bodies/hinge/mass": "10 + t"})
+    with pytest.raises(MechanismError) as caught:
+        run(doc)
+    assert caught.value.pointer == "/simulate/histories/bodies~1hinge~1mass"
+    assert "cannot change in time in an impact simulation" in caught.value.problem

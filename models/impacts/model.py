@@ -22,7 +22,8 @@ from models.impacts.pairs import PairModel, pair_model
 
 
 DAMPING = "/simulate/damping"  # mass-proportional, as the link dynamics'; a parameter of the graphs
-WORKS = ("contact_work", "friction_work", "flexure_work", "damping_work")  # integrated with the motion
+WORKS = ("contact_work", "friction_work", "flexure_work", "damping_work", "load_work")  # integrated with the motion
+TIMED = ("/loads/", "/gravity/")  # the fields that may follow a history in time
 
 
 @dataclass
@@ -31,13 +32,15 @@ class ImpactModel:
     bodies: RigidBodies
     pairs: list[PairModel]
     mass: ca.SX  # diagonal (n)
-    force: ca.SX  # smooth generalized force (n), damping included
+    force: ca.SX  # smooth generalized force (n), damping included, at time t
     extra: ca.SX  # Q_extra (n)
     damping: ca.SX  # -alpha M v (n)
+    load_power: ca.SX  # of the loads that follow histories (their work is an input)
     kinetic: ca.SX
     elastic: ca.SX
-    gravity: ca.SX
+    gravity: ca.SX  # gravity and the constant loads
     turning: bool
+    t: ca.SX
 
     @property
     def q(self) -> ca.SX:
@@ -68,7 +71,9 @@ class ImpactModel:
         return "|".join(parts)
 
 
-def impact_model(document: MechanismDocument) -> ImpactModel:
+def impact_model(document: MechanismDocument, histories: list[tuple[str, str, object]] = ()) -> ImpactModel:
+    """`histories`: (field pointer, where the history is given, t -> SI value as an SX) for
+    the loads and gravity that change in time."""
     if document.impacts is None or not document.impacts.pairs:
         raise MechanismError("/impacts/pairs", "an impact simulation needs contact pairs: give the `impacts` section "
                              "its surfaces and pairs")
@@ -80,10 +85,20 @@ def impact_model(document: MechanismDocument) -> ImpactModel:
     elastic = flexures + springs
     gravity = V_smooth - springs - (0 if turning else flexures)
     pairs = [pair_model(rb, name, pair) for name, pair in document.impacts.pairs.items()]
-    q, v = rb.q, rb.v
+    q, v, t = rb.q, rb.v, ca.SX.sym("t")
     extra = Q_nc + ca.gradient(flexures, q) if turning else ca.SX.zeros(rb.size)
     mass = rb.mass_diagonal()
     alpha = document.simulate.damping if document.simulate is not None else 0.0
     damping = -book.add(DAMPING, alpha, "nonnegative") * mass * v
-    return ImpactModel(book, rb, pairs, mass, -ca.gradient(elastic + gravity, q) + extra + damping, extra, damping,
-                       0.5 * ca.dot(mass * v, v), elastic, gravity, turning)
+    symbols, values = [], []
+    for pointer, where, history in histories:
+        if not pointer.startswith(TIMED) or pointer not in book.pointers:
+            raise MechanismError(where, f"{pointer} cannot change in time in an impact simulation: histories take "
+                                 "the loads' force and moment components and gravity")
+        symbols.append(book.add(pointer, 0.0))
+        values.append(history(t))
+    timed = ca.vertcat(*symbols) if symbols else ca.SX(0, 1)
+    held = ca.substitute(gravity, timed, ca.SX.zeros(timed.shape))  # V is linear in loads and gravity
+    moving = ca.substitute(gravity - held, timed, ca.vertcat(*values)) if symbols else ca.SX(0)
+    return ImpactModel(book, rb, pairs, mass, -ca.gradient(elastic + held + moving, q) + extra + damping, extra, damping,
+                       -ca.dot(ca.gradient(moving, q), v), 0.5 * ca.dot(mass * v, v), elastic, held, turning, t)

@@ -24,6 +24,7 @@ from models import Mechanism, MechanismError
 from models.expression import compile_expression
 
 MAX_TABLE = 100_000
+MAX_INLINE_TABLE = 200  # a table inside a step graph (impact simulations)
 VARYING = ("force", "moment", "dx", "dy", "rotation")
 
 
@@ -132,6 +133,25 @@ def _check_unloaded(mech: Mechanism, path: str, coordinate: tuple[int, int], whe
             coordinate_name = ("x", "y", "angle")[c]
             raise MechanismError(where, f"{body}.{coordinate_name} is prescribed in time by '{path}' and also loaded by "
                                  f"/loads/{load.name}: remove the load or the motion")
+
+
+def history_expression(history, t: ca.SX, where: str, until: float) -> ca.SX:
+    """A history as an expression of t (a table, linear between its rows, with at most
+    MAX_INLINE_TABLE rows), checked finite over [0, until]; in the field's document unit."""
+    if isinstance(history, dict) and "table" in history:
+        times, values = _table(history["table"], f"{where}/table")
+        if len(times) > MAX_INLINE_TABLE:
+            raise MechanismError(f"{where}/table", f"at most {MAX_INLINE_TABLE} rows here: give an expression or "
+                                 "pieces")
+        expression = ca.SX(float(values[-1]))
+        for k in range(len(times) - 2, -1, -1):
+            slope = (values[k + 1] - values[k]) / (times[k + 1] - times[k])
+            expression = ca.if_else(t < times[k + 1], values[k] + slope * (t - times[k]), expression)
+        expression = ca.if_else(t < times[0], float(values[0]), expression)
+    else:
+        expression = _smooth(history, t, where)
+    _finite(expression, t, until, where)
+    return expression
 
 
 def _smooth(history, t: ca.SX, where: str) -> ca.SX:

@@ -63,14 +63,14 @@ class EventLayout:
 
 
 def rhs_function(model: ImpactModel) -> ca.Function:
-    """(q, v, contact, beyond_v0, beyond_v1, speed, p) -> (ydot, switching (3P), F_N, F_T, rate, v_T)."""
+    """(q, v, t, contact, beyond_v0, beyond_v1, speed, p) -> (ydot, switching (3P), F_N, F_T, rate, v_T)."""
     P = len(model.pairs)
     q, v, p = model.q, model.v, model.p
     contact, b0, b1, speed = (ca.SX.sym(name, P) for name in ("contact", "beyond_v0", "beyond_v1", "speed"))
     geometry = kinematics(model)
     forces = regularized_forces(model, geometry, contact, b0, b1, speed)
     Q = model.force
-    works = [ca.SX(0), ca.SX(0), ca.dot(model.extra, v), ca.dot(model.damping, v)]
+    works = [ca.SX(0), ca.SX(0), ca.dot(model.extra, v), ca.dot(model.damping, v), model.load_power]
     switching = []
     for pair, (pen, rate, v_T, Dn, Dt), (F_N, F_T) in zip(model.pairs, geometry, forces):
         Q = Q + F_N * Dn + F_T * Dt
@@ -80,10 +80,10 @@ def rhs_function(model: ImpactModel) -> ca.Function:
         switching += [pen / pair.length_scale, (slip - pair.v0) / pair.v0, (slip - pair.v1) / pair.v1]
     ydot = ca.vertcat(v, Q / model.mass, *works)
     column = [ca.vertcat(*items) for items in zip(*forces)]
-    return ca.Function("rhs", [q, v, contact, b0, b1, speed, p],
+    return ca.Function("rhs", [q, v, model.t, contact, b0, b1, speed, p],
                        [ydot, ca.vertcat(*switching), column[0], column[1],
                         ca.vertcat(*[g[1] for g in geometry]), ca.vertcat(*[g[2] for g in geometry])],
-                       ["q", "v", "contact", "beyond_v0", "beyond_v1", "speed", "p"],
+                       ["q", "v", "t", "contact", "beyond_v0", "beyond_v1", "speed", "p"],
                        ["ydot", "switching", "F_N", "F_T", "rate", "v_T"])
 
 
@@ -100,11 +100,11 @@ def violations(model: ImpactModel, switching, contact, b0, b1) -> ca.SX:
     return ca.vertcat(*out)
 
 
-def dormand_prince(f, y, dt, k1):
-    """(y1, the embedded error estimate) of one step from y, k1 = f(y)'s derivative."""
+def dormand_prince(f, y, t, dt, k1):
+    """(y1, the embedded error estimate) of one step from y at t, k1 = f(y, t)'s derivative."""
     stages = [k1]
     for i in range(1, 7):
-        stages.append(f(y + dt * sum(a * k for a, k in zip(A[i], stages) if a))[0])
+        stages.append(f(y + dt * sum(a * k for a, k in zip(A[i], stages) if a), t + C[i] * dt)[0])
     y1 = y + dt * sum(b * k for b, k in zip(B, stages) if b)
     return y1, dt * sum((b - e) * k for b, e, k in zip(B, B_EMBEDDED, stages) if b != e)
 
@@ -138,19 +138,19 @@ def event_step(model: ImpactModel) -> ca.Function:
     locating = S[L.at("locating")]
     h_lo, G_lo, h_hi, G_hi, side = (S[L.at(k)] for k in ("h_lo", "G_lo", "h_hi", "G_hi", "side"))
 
-    def f(state):
-        return rhs(state[:n], state[n:2 * n], contact, b0, b1, speed, p)
+    def f(state, time):
+        return rhs(state[:n], state[n:2 * n], time, contact, b0, b1, speed, p)
 
     eps_t = 8 * 2.2e-16 * (ca.fabs(t) + h_hi)
     regula_falsi = h_lo - G_lo * (h_hi - h_lo) / (G_hi - G_lo)
     trial_locate = ca.if_else(h_hi - h_lo <= eps_t, h_hi, ca.fmin(ca.fmax(regula_falsi, h_lo), h_hi))
     dt = ca.if_else(locating, trial_locate, ca.fmin(h, until - t))
-    first = f(y)
-    y1, error = dormand_prince(f, y, dt, first[0])
+    first = f(y, t)
+    y1, error = dormand_prince(f, y, t, dt, first[0])
     m = 2 * n
     scale = atol + rtol * ca.fmax(ca.fabs(y[:m]), ca.fabs(y1[:m]))
     err = ca.mmax(ca.fabs(error[:m]) / scale)
-    end = f(y1)
+    end = f(y1, t + dt)
     viol0, viol1 = (violations(model, sw, contact, b0, b1) for sw in (first[1], end[1]))
     G0, G1 = ca.mmax(viol0), ca.mmax(viol1)
     crossed = G1 >= 0

@@ -33,6 +33,8 @@ def plot_impacts(reports: dict | list[dict], path, labels: list[str] | None = No
                 key = "normal_force" if name.endswith("F_N") else "friction_force"
                 values, unit = report["contacts"][pair][key], units["force"]
             ax.plot(t, values, lw=0.8, label=label)
+        if name not in first["coordinates"] and len(reports) > 1:  # impulses / h dwarf the regularized forces
+            ax.set_yscale("symlog", linthresh=10.0)
         ax.set_ylabel(f"{name} ({unit})", fontsize=8)
         ax.grid(alpha=0.3)
         if k == 0 and len(reports) > 1:

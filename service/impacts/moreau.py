@@ -40,12 +40,13 @@ def moreau_step(model: ImpactModel) -> ca.Function:
     n, P = model.bodies.size, len(model.pairs)
     q, v, p = model.q, model.v, model.p
     geometry = kinematics(model)
-    at = ca.Function("at", [q, v, p], [model.force, model.extra, model.damping, ca.vertcat(*[g[0] for g in geometry]),
+    at = ca.Function("at", [q, v, model.t, p], [model.force, model.extra, model.damping, model.load_power, ca.vertcat(*[g[0] for g in geometry]),
                                        ca.horzcat(*[g[3] for g in geometry]), ca.horzcat(*[g[4] for g in geometry])])
     S, h = ca.SX.sym("S", 1 + 2 * n + len(WORKS)), ca.SX.sym("h")
     t, q0, v0, works = S[0], S[1:1 + n], S[1 + n:1 + 2 * n], S[1 + 2 * n:]
     q_mid = q0 + h / 2 * v0
-    force, extra, damping, pen, Dn, Dt = at(q_mid, v0, p)
+    force, extra, damping, _, pen, Dn, Dt = at(q_mid, v0, t + h / 2, p)
+    load_force = ca.gradient(at(q_mid, v0, t + h / 2, p)[3], v0)  # the power is linear in v: its gradient
     inverse_mass = 1 / model.mass
     v_free = v0 + h * inverse_mass * force
     active = [pen[k] >= 0 for k in range(P)]
@@ -76,7 +77,8 @@ def moreau_step(model: ImpactModel) -> ca.Function:
     W_T = sum(lam_T[k] * ca.dot(Dt[:, k], v0 + v1) / 2 for k in range(P))
     W_extra = h * ca.dot(extra, v0 + v1) / 2
     W_damping = h * ca.dot(damping, v0 + v1) / 2
-    S1 = ca.vertcat(t + h, q1, v1, works + ca.vertcat(W_N, W_T, W_extra, W_damping))
+    W_load = h * ca.dot(load_force, v0 + v1) / 2
+    S1 = ca.vertcat(t + h, q1, v1, works + ca.vertcat(W_N, W_T, W_extra, W_damping, W_load))
     before = [ca.dot(Dn[:, k], v0) for k in range(P)]
     after = [ca.dot(Dn[:, k], v1) for k in range(P)]
     return ca.Function("moreau_step", [S, p, h], [S1, ca.vertcat(*lam_N, *lam_T, *before, *after), ca.vertcat(*active)],

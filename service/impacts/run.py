@@ -6,8 +6,6 @@ what contact and friction dissipated and the balance."""
 
 from __future__ import annotations
 
-import time
-
 import casadi as ca
 import numpy as np
 
@@ -15,11 +13,29 @@ from models import MechanismError
 from models.document import MechanismDocument
 from models.impacts.model import DAMPING, WORKS, ImpactModel, impact_model
 from models.simulation_spec import SimulateSpec
+from models.units import document_unit, quantity_to_si
+from service.dynamics.histories import history_expression
 from service.impacts.event_driven import EventLayout, rhs_function
 from service.impacts.stepping import Trace, run_events, run_moreau
 
 IMPACT_SCHEMES = ("event_driven", "moreau")
 TRIALS_PER_STEP = 4  # event-driven: trial steps allowed per allowed step (rejections, event location)
+
+
+def timed_fields(document: MechanismDocument, spec: SimulateSpec) -> list[tuple[str, str, object]]:
+    """(pointer, where, t -> SI value) per history of `simulate/histories` (loads, gravity)."""
+    out = []
+    for path, history in spec.histories.items():
+        pointer = path if path.startswith("/") else f"/{path}"
+        where = f"/simulate/histories/{pointer.lstrip('/').replace('~', '~0').replace('/', '~1')}"
+        kind = "acceleration" if pointer.startswith("/gravity/") else "moment" if pointer.endswith("/moment") else "force"
+        factor = quantity_to_si(1.0, kind, document_unit(document.units, kind), where)
+
+        def value(t, history=history, where=where, factor=factor):
+            return history_expression(history, t, where, spec.until) * factor
+
+        out.append((pointer, where, value))
+    return out
 
 
 def check_laws(model: ImpactModel, spec: SimulateSpec) -> None:
@@ -59,7 +75,7 @@ def start_state(model: ImpactModel, spec: SimulateSpec, p: np.ndarray) -> tuple[
 def run_impacts(document: MechanismDocument, spec: SimulateSpec, stop=None, max_steps: int = 2_000_000,
                 parameters: dict[str, float] | None = None, progress=None) -> tuple[Trace, dict]:
     """(the raw trace, the report). `parameters` replaces numbers (SI) by their pointers."""
-    model = impact_model(document)
+    model = impact_model(document, timed_fields(document, spec))
     values = np.array(model.book.values)
     values[model.book.pointers.index(DAMPING)] = spec.damping
     for pointer, value in (parameters or {}).items():
@@ -67,7 +83,6 @@ def run_impacts(document: MechanismDocument, spec: SimulateSpec, stop=None, max_
     p = model.book.parameter_vector(values)
     check_laws(model, spec)
     q0, v0 = start_state(model, spec, p)
-    began = time.perf_counter()
     if spec.scheme == "moreau":
         steps = round(spec.until / spec.step)
         if steps > max_steps:
@@ -78,8 +93,7 @@ def run_impacts(document: MechanismDocument, spec: SimulateSpec, stop=None, max_
         max_step = spec.max_step if spec.max_step is not None else spec.until / 20
         trace = run_events(model, p, q0, v0, spec.until, spec.tolerance, spec.step, max_step, spec.compiled,
                            max_steps * TRIALS_PER_STEP, stop, progress)
-    trace.seconds = time.perf_counter() - began
-    return trace, report(model, spec, trace, p)
+    return trace, report(model, spec, trace, p)  # trace.seconds: the stepping alone
 
 
 def report(model: ImpactModel, spec: SimulateSpec, trace: Trace, p: np.ndarray) -> dict:
@@ -141,7 +155,7 @@ def _event_pairs(model: ImpactModel, states: np.ndarray, p: np.ndarray, per: dic
     rhs = rhs_function(model).map(len(states))
     cols = [states[:, L.at(k)].T for k in ("contact", "beyond_v0", "beyond_v1", "speed")]
     _, _, F_N, F_T, rate, v_T = (np.asarray(x) for x in rhs(states[:, 1:1 + n].T, states[:, 1 + n:1 + 2 * n].T,
-                                                           *cols, p))
+                                                           states[:, 0], *cols, p))
     depth = ca.Function("depth", [model.q, model.p], [ca.vertcat(*[pair.indentation for pair in model.pairs])])
     pen = np.asarray(depth.map(len(states))(states[:, 1:1 + n].T, p))
     pairs, events, impacts = {}, [], []

@@ -5,6 +5,7 @@ structure), and the Python loops that run them to the end time."""
 from __future__ import annotations
 
 import threading
+import time
 from dataclasses import dataclass, field
 
 import casadi as ca
@@ -117,6 +118,7 @@ def run_events(model: ImpactModel, p: np.ndarray, q0, v0, until: float, toleranc
     steps = chunk(model, "event", compiled, [p, settings])
     trace = Trace()
     trace.states.append(S.reshape(1, -1).copy())
+    began = time.perf_counter()
     while S[0] < until * (1 - 1e-15):
         out = steps.run(S)[0]
         trace.calls += EVENT_CHUNK
@@ -135,6 +137,7 @@ def run_events(model: ImpactModel, p: np.ndarray, q0, v0, until: float, toleranc
         if stop is not None and stop():
             trace.status, trace.message = "stopped", f"stopped at t = {S[0]:g} s"
             break
+    trace.seconds = time.perf_counter() - began
     return trace
 
 
@@ -151,6 +154,7 @@ def run_moreau(model: ImpactModel, p: np.ndarray, q0, v0, until: float, h: float
     trace.states.append(S.reshape(1, -1).copy())
     trace.extras.append(np.zeros((1, 5 * len(model.pairs))))
     done = 0
+    began = time.perf_counter()
     while done < count:
         states, impulses, active = steps.run(S)
         take = min(MOREAU_CHUNK, count - done)
@@ -167,4 +171,5 @@ def run_moreau(model: ImpactModel, p: np.ndarray, q0, v0, until: float, h: float
         if stop is not None and stop():
             trace.status, trace.message = "stopped", f"stopped at t = {S[0]:g} s"
             break
+    trace.seconds = time.perf_counter() - began
     return trace
