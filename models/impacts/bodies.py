@@ -22,6 +22,7 @@ class RigidBody:
     centre_offset: ca.SX  # mass centre from the reference point, body axes
     mass: ca.SX | None = None
     inertia: ca.SX | None = None  # about the mass centre
+    drive: ca.SX | None = None  # a driven body's displacement [dx, dy, rotation] (a prescribed motion)
 
 
 class RigidBodies:
@@ -29,6 +30,7 @@ class RigidBodies:
         self.book = book
         self.bodies: dict[str, RigidBody] = {}
         doc = book.document
+        driven = _drives(book)
         n = 0
         for name, body in doc.bodies.items():
             base = f"/bodies/{name}"
@@ -36,8 +38,9 @@ class RigidBodies:
             angle = book.number(f"{base}/angle", body.angle, "angle")
             offset = (book.vector(f"{base}/center_of_mass", body.center_of_mass, "length")
                       if body.center_of_mass is not None else ca.SX.zeros(2))
-            rigid = RigidBody(name, None if body.fixed else n, position, angle, offset)
-            if not body.fixed:
+            moving = name not in driven and not body.fixed
+            rigid = RigidBody(name, n if moving else None, position, angle, offset, drive=driven.get(name))
+            if moving:
                 if body.mass is None:
                     raise MechanismError(f"{base}/mass", f"body '{name}' moves and has no mass: an impact simulation "
                                          "needs every free body's mass and inertia")
@@ -61,19 +64,23 @@ class RigidBodies:
         return self.bodies[name]
 
     def centre(self, b: RigidBody) -> ca.SX:
-        """Mass centre, global."""
+        """Mass centre, global (a driven body turns about its reference point)."""
+        if b.drive is not None:
+            return b.position + b.drive[:2] + rot(b.angle + b.drive[2]) @ b.centre_offset
         drawn = b.position + rot(b.angle) @ b.centre_offset
         return drawn if b.first is None else drawn + self.q[b.first:b.first + 2]
 
     def turn(self, b: RigidBody) -> ca.SX:
-        return b.angle if b.first is None else b.angle + self.q[b.first + 2]
+        return b.angle + self.rotation(b)
 
     def rotation(self, b: RigidBody) -> ca.SX:
+        if b.drive is not None:
+            return b.drive[2]
         return ca.SX(0) if b.first is None else self.q[b.first + 2]
 
     def point(self, b: RigidBody, offset: ca.SX) -> ca.SX:
         """A point given in the body's axes from its reference point, global."""
-        if b.first is None:
+        if b.first is None and b.drive is None:
             return self.book.hoist(b.position + rot(b.angle) @ offset)
         return self.centre(b) + rot(self.turn(b)) @ (offset - b.centre_offset)
 
@@ -107,3 +114,21 @@ class RigidBodies:
             if b.first is not None:
                 V -= b.mass * ca.dot(gravity, self.centre(b))
         return V
+
+
+def _drives(book: ParameterBook) -> dict[str, ca.SX]:
+    """Per body with a prescribed displacement (a `displacement` load), its [dx, dy, rotation]
+    as numbers of the book; a component left out is held at 0 (the body is driven, not free)."""
+    out = {}
+    for name, load in book.document.loads.items():
+        if load.type != "displacement":
+            continue
+        base = f"/loads/{name}"
+        if load.body in out:
+            raise MechanismError(f"{base}/body", f"body '{load.body}' has two prescribed displacements")
+        parts = []
+        for field, kind in (("dx", "length"), ("dy", "length"), ("rotation", "angle")):
+            value = getattr(load, field)
+            parts.append(book.number(f"{base}/{field}", value if value is not None else 0.0, kind))
+        out[load.body] = ca.vertcat(*parts)
+    return out

@@ -30,9 +30,7 @@ def smooth_forces(rb: RigidBodies, turning: bool) -> tuple[ca.SX, ca.SX]:
             V -= ca.dot(book.vector(f"{base}/force", load.force, "force"), at)
         elif load.type == "moment":
             V -= book.number(f"{base}/moment", load.moment, "moment") * rb.rotation(b)
-        else:
-            raise MechanismError(f"{base}/type", "prescribed displacements are not part of impact simulations yet: "
-                                 "fix the body instead")
+        # a displacement drives its body (models.impacts.bodies): no force
     for name, element in doc.elements.items():
         base = f"/elements/{name}"
         if element.type == "curved_beam":

@@ -19,10 +19,11 @@ from models.impacts.bodies import RigidBodies
 from models.impacts.book import ParameterBook
 from models.impacts.forces import flexure_energy, smooth_forces, spring_energy
 from models.impacts.pairs import PairModel, pair_model
+from models.planar import rot
 
 
 DAMPING = "/simulate/damping"  # mass-proportional, as the link dynamics'; a parameter of the graphs
-WORKS = ("contact_work", "friction_work", "flexure_work", "damping_work", "load_work")  # integrated with the motion
+WORKS = ("contact_work", "friction_work", "flexure_work", "damping_work", "input_work")  # integrated with the motion
 TIMED = ("/loads/", "/gravity/")  # the fields that may follow a history in time
 
 
@@ -35,12 +36,13 @@ class ImpactModel:
     force: ca.SX  # smooth generalized force (n), damping included, at time t
     extra: ca.SX  # Q_extra (n)
     damping: ca.SX  # -alpha M v (n)
-    load_power: ca.SX  # of the loads that follow histories (their work is an input)
+    load_power: ca.SX  # of the loads that follow histories and of moving supports (the input)
     kinetic: ca.SX
     elastic: ca.SX
     gravity: ca.SX  # gravity and the constant loads
     turning: bool
     t: ca.SX
+    history_key: str = ""
 
     @property
     def q(self) -> ca.SX:
@@ -68,12 +70,14 @@ class ImpactModel:
                   for k, v in doc.loads.items()]
         parts += [f"{p.name}:{p.law}:{p.friction}:{p.esdu is None}" for p in self.pairs]
         parts += [f"{k}:{s.type}:{s.body}" for k, s in doc.impacts.surfaces.items()]
-        return "|".join(parts)
+        return "|".join(parts + [self.history_key])
 
 
-def impact_model(document: MechanismDocument, histories: list[tuple[str, str, object]] = ()) -> ImpactModel:
+def impact_model(document: MechanismDocument, histories: list[tuple[str, str, object]] = (),
+                 history_key: str = "") -> ImpactModel:
     """`histories`: (field pointer, where the history is given, t -> SI value as an SX) for
-    the loads and gravity that change in time."""
+    the loads, gravity and prescribed displacements that change in time; `history_key` says
+    what they are (they shape the graphs)."""
     if document.impacts is None or not document.impacts.pairs:
         raise MechanismError("/impacts/pairs", "an impact simulation needs contact pairs: give the `impacts` section "
                              "its surfaces and pairs")
@@ -90,15 +94,50 @@ def impact_model(document: MechanismDocument, histories: list[tuple[str, str, ob
     mass = rb.mass_diagonal()
     alpha = document.simulate.damping if document.simulate is not None else 0.0
     damping = -book.add(DAMPING, alpha, "nonnegative") * mass * v
-    symbols, values = [], []
+    loads, motions = _split(book, rb, histories, t)
+    moving_symbols = ca.vertcat(*[symbol for symbol, _ in motions]) if motions else ca.SX(0, 1)
+    moving_values = ca.vertcat(*[value for _, value in motions]) if motions else ca.SX(0, 1)
+
+    def driven(expr):  # the prescribed motions, in time
+        return ca.substitute(expr, moving_symbols, moving_values) if motions else expr
+
+    elastic, gravity, extra = driven(elastic), driven(gravity), driven(extra)
+    for pair in pairs:
+        _drive_pair(rb, pair, driven, t)
+    timed = ca.vertcat(*[symbol for symbol, _ in loads]) if loads else ca.SX(0, 1)
+    held = ca.substitute(gravity, timed, ca.SX.zeros(timed.shape))  # V is linear in loads and gravity
+    acting = ca.substitute(gravity - held, timed, ca.vertcat(*[value for _, value in loads])) if loads else ca.SX(0)
+    V = elastic + held
+    power = -ca.dot(ca.gradient(acting, q), v) + ca.jacobian(V, t)  # timed loads; moving supports
+    return ImpactModel(book, rb, pairs, mass, -ca.gradient(V + acting, q) + extra + damping, extra, damping,
+                       power, 0.5 * ca.dot(mass * v, v), elastic, held, turning, t, history_key)
+
+
+def _split(book: ParameterBook, rb: RigidBodies, histories, t) -> tuple[list, list]:
+    """The histories' (symbol, value in t) pairs: loads and gravity, and prescribed motions."""
+    motions = {f"/loads/{name}/{part}" for name, load in book.document.loads.items() if load.type == "displacement"
+               for part in ("dx", "dy", "rotation")}
+    loads, moving = [], []
     for pointer, where, history in histories:
         if not pointer.startswith(TIMED) or pointer not in book.pointers:
             raise MechanismError(where, f"{pointer} cannot change in time in an impact simulation: histories take "
-                                 "the loads' force and moment components and gravity")
-        symbols.append(book.add(pointer, 0.0))
-        values.append(history(t))
-    timed = ca.vertcat(*symbols) if symbols else ca.SX(0, 1)
-    held = ca.substitute(gravity, timed, ca.SX.zeros(timed.shape))  # V is linear in loads and gravity
-    moving = ca.substitute(gravity - held, timed, ca.vertcat(*values)) if symbols else ca.SX(0)
-    return ImpactModel(book, rb, pairs, mass, -ca.gradient(elastic + held + moving, q) + extra + damping, extra, damping,
-                       -ca.dot(ca.gradient(moving, q), v), 0.5 * ca.dot(mass * v, v), elastic, held, turning, t)
+                                 "the loads' force and moment components, gravity and prescribed displacements")
+        (moving if pointer in motions else loads).append((book.add(pointer, 0.0), history(t)))
+    return loads, moving
+
+
+def _drive_pair(rb: RigidBodies, pair: PairModel, driven, t) -> None:
+    """The pair's expressions in time, and the velocity at C that driven bodies add: each
+    body's material point at C moves at J v plus its explicit rate in time."""
+    for name in ("indentation", "normal_direction", "tangent_direction", "K", "point", "normal"):
+        setattr(pair, name, driven(getattr(pair, name)))
+    drift = ca.SX.zeros(2)
+    for sign, body in zip((1, -1), pair.bodies):
+        if body.drive is None:
+            continue
+        local = ca.SX.sym("local", 2)
+        material = driven(rb.point(body, local))
+        offset = rot(rb.turn(body)).T @ (pair.point - rb.centre(body)) + body.centre_offset
+        drift += sign * ca.substitute(ca.jacobian(material, t), local, driven(offset))
+    tangent = ca.vertcat(-pair.normal[1], pair.normal[0])
+    pair.normal_drift, pair.tangent_drift = ca.dot(pair.normal, drift), ca.dot(tangent, drift)

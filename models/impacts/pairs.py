@@ -7,7 +7,7 @@ and 38 drop, so friction turns the circle by -R1 F_T."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import casadi as ca
 
@@ -35,6 +35,11 @@ class PairModel:
     v1: ca.SX
     esdu: tuple | None  # (sigma1 + sigma2, L, clearance) for lna_esdu
     length_scale: float  # SI: the clearance, or the pin radius
+    normal_drift: ca.SX = field(default_factory=lambda: ca.SX(0))  # n_c.(v_1 - v_2) at C from driven bodies
+    tangent_drift: ca.SX = field(default_factory=lambda: ca.SX(0))  # t_c.(v_1 - v_2) likewise
+    point: ca.SX | None = None  # the contact point C
+    bodies: tuple = ()  # (the circle's body, the other)
+    normal: ca.SX | None = None  # n_c
 
 
 def pair_model(rb: RigidBodies, name: str, pair: ImpactPair) -> PairModel:
@@ -75,14 +80,14 @@ def pair_model(rb: RigidBodies, name: str, pair: ImpactPair) -> PairModel:
         book.add(f"{base}/normal/exponent", law.exponent, "positive"), c_r,
         book.add(f"{base}/friction/sliding", friction.sliding), book.add(f"{base}/friction/adherence", adherence),
         book.add(f"{base}/friction/v0", friction.v0, "positive"), book.add(f"{base}/friction/v1", friction.v1, "positive"),
-        esdu, scale)
+        esdu, scale, point=C, bodies=(body1, body2), normal=n_c)
 
 
 def _check_friction(base: str, friction) -> None:
-    for field in ("sliding", "adherence"):
-        value = getattr(friction, field)
+    for name in ("sliding", "adherence"):
+        value = getattr(friction, name)
         if value is not None and value < 0:
-            raise MechanismError(f"{base}/friction/{field}", f"a friction coefficient must not be negative, got {value:g}")
+            raise MechanismError(f"{base}/friction/{name}", f"a friction coefficient must not be negative, got {value:g}")
     if friction.law == "ambrosio" and friction.v1 <= friction.v0:
         raise MechanismError(f"{base}/friction/v1", f"v1 ({friction.v1:g}) must exceed v0 ({friction.v0:g})")
 

@@ -40,13 +40,16 @@ def moreau_step(model: ImpactModel) -> ca.Function:
     n, P = model.bodies.size, len(model.pairs)
     q, v, p = model.q, model.v, model.p
     geometry = kinematics(model)
-    at = ca.Function("at", [q, v, model.t, p], [model.force, model.extra, model.damping, model.load_power, ca.vertcat(*[g[0] for g in geometry]),
-                                       ca.horzcat(*[g[3] for g in geometry]), ca.horzcat(*[g[4] for g in geometry])])
+    drift = ca.vertcat(*[ca.vertcat(pair.normal_drift, pair.tangent_drift) for pair in model.pairs])
+    at = ca.Function("at", [q, v, model.t, p], [model.force, model.extra, model.damping, model.load_power,
+                                                ca.vertcat(*[g[0] for g in geometry]), ca.horzcat(*[g[3] for g in geometry]),
+                                                ca.horzcat(*[g[4] for g in geometry]), drift])
     S, h = ca.SX.sym("S", 1 + 2 * n + len(WORKS)), ca.SX.sym("h")
     t, q0, v0, works = S[0], S[1:1 + n], S[1 + n:1 + 2 * n], S[1 + 2 * n:]
     q_mid = q0 + h / 2 * v0
-    force, extra, damping, _, pen, Dn, Dt = at(q_mid, v0, t + h / 2, p)
-    load_force = ca.gradient(at(q_mid, v0, t + h / 2, p)[3], v0)  # the power is linear in v: its gradient
+    force, extra, damping, power, pen, Dn, Dt, drift = at(q_mid, v0, t + h / 2, p)
+    load_force = ca.gradient(power, v0)  # the inputs' power: linear in v, plus the supports' rate
+    support_rate = ca.substitute(power, v0, ca.SX.zeros(n))
     inverse_mass = 1 / model.mass
     v_free = v0 + h * inverse_mass * force
     active = [pen[k] >= 0 for k in range(P)]
@@ -65,21 +68,21 @@ def moreau_step(model: ImpactModel) -> ca.Function:
             base = v_free + impulse_velocity(k)
             W = ca.vertcat(ca.horzcat(ca.dot(d_n, inverse_mass * d_n), ca.dot(d_n, inverse_mass * d_t)),
                            ca.horzcat(ca.dot(d_t, inverse_mass * d_n), ca.dot(d_t, inverse_mass * d_t)))
-            U_free = ca.vertcat(ca.dot(d_n, base), ca.dot(d_t, base))
-            target = -pair.restitution * ca.dot(d_n, v0)
+            U_free = ca.vertcat(ca.dot(d_n, base), ca.dot(d_t, base)) + drift[2 * k:2 * k + 2]
+            target = -pair.restitution * (ca.dot(d_n, v0) + drift[2 * k])
             f_a, f_d = (pair.adherence, pair.sliding) if pair.friction != "none" else (0, 0)
             N_k, T_k = local_solve(W, U_free, target, f_a, f_d)
             lam_N[k] = ca.if_else(active[k], N_k, 0)
             lam_T[k] = ca.if_else(active[k], T_k, 0)
     v1 = v_free + impulse_velocity(None)
     q1 = q_mid + h / 2 * v1
-    W_N = sum(lam_N[k] * ca.dot(Dn[:, k], v0 + v1) / 2 for k in range(P))
+    W_N = sum(lam_N[k] * ca.dot(Dn[:, k], v0 + v1) / 2 for k in range(P))  # on the free bodies
     W_T = sum(lam_T[k] * ca.dot(Dt[:, k], v0 + v1) / 2 for k in range(P))
     W_extra = h * ca.dot(extra, v0 + v1) / 2
     W_damping = h * ca.dot(damping, v0 + v1) / 2
-    W_load = h * ca.dot(load_force, v0 + v1) / 2
+    W_load = h * (ca.dot(load_force, v0 + v1) / 2 + support_rate)
     S1 = ca.vertcat(t + h, q1, v1, works + ca.vertcat(W_N, W_T, W_extra, W_damping, W_load))
-    before = [ca.dot(Dn[:, k], v0) for k in range(P)]
-    after = [ca.dot(Dn[:, k], v1) for k in range(P)]
+    before = [ca.dot(Dn[:, k], v0) + drift[2 * k] for k in range(P)]
+    after = [ca.dot(Dn[:, k], v1) + drift[2 * k] for k in range(P)]
     return ca.Function("moreau_step", [S, p, h], [S1, ca.vertcat(*lam_N, *lam_T, *before, *after), ca.vertcat(*active)],
                        ["S", "p", "h"], ["S1", "impulses", "active"])

@@ -6,6 +6,8 @@ what contact and friction dissipated and the balance."""
 
 from __future__ import annotations
 
+import json
+
 import casadi as ca
 import numpy as np
 
@@ -61,8 +63,8 @@ def start_state(model: ImpactModel, spec: SimulateSpec, p: np.ndarray) -> tuple[
         for k, kind in enumerate(kinds):
             q0[body.first + k] = book.si(start.displacement[k], kind, f"{pointer}/displacement/{k}")
             v0[body.first + k] = book.si(start.velocity[k], kind, f"{pointer}/velocity/{k}")
-    depth = ca.Function("depth", [model.q, model.p], [ca.vertcat(*[pair.indentation for pair in model.pairs])])
-    pens = np.asarray(depth(q0, p)).ravel()
+    depth = ca.Function("depth", [model.q, model.t, model.p], [ca.vertcat(*[pair.indentation for pair in model.pairs])])
+    pens = np.asarray(depth(q0, 0.0, p)).ravel()
     for pair, pen in zip(model.pairs, pens):
         if pen > 0:
             where = next((f"/simulate/initial/{name}" for name in spec.initial), "/simulate/initial")
@@ -75,7 +77,7 @@ def start_state(model: ImpactModel, spec: SimulateSpec, p: np.ndarray) -> tuple[
 def run_impacts(document: MechanismDocument, spec: SimulateSpec, stop=None, max_steps: int = 2_000_000,
                 parameters: dict[str, float] | None = None, progress=None) -> tuple[Trace, dict]:
     """(the raw trace, the report). `parameters` replaces numbers (SI) by their pointers."""
-    model = impact_model(document, timed_fields(document, spec))
+    model = impact_model(document, timed_fields(document, spec), json.dumps(spec.histories, sort_keys=True))
     values = np.array(model.book.values)
     values[model.book.pointers.index(DAMPING)] = spec.damping
     for pointer, value in (parameters or {}).items():
@@ -103,8 +105,8 @@ def report(model: ImpactModel, spec: SimulateSpec, trace: Trace, p: np.ndarray) 
     per = {kind: 1 / book.si(1.0, kind, "/units") for kind in ("length", "angle", "force", "energy")}
     q, v = states[:, 1:1 + n], states[:, 1 + n:1 + 2 * n]
     works = states[:, 1 + 2 * n:1 + 2 * n + len(WORKS)]
-    energy = ca.Function("energy", [model.q, model.v, model.p], [model.kinetic, model.elastic, model.gravity])
-    T, elastic, gravity = (np.asarray(x).ravel() for x in energy.map(len(states))(q.T, v.T, p))
+    energy = ca.Function("energy", [model.q, model.v, model.t, model.p], [model.kinetic, model.elastic, model.gravity])
+    T, elastic, gravity = (np.asarray(x).ravel() for x in energy.map(len(states))(q.T, v.T, states[:, 0], p))
     coordinates, velocities = {}, {}
     for k, name in enumerate(model.coordinate_names()):
         scale = per["angle"] if name.endswith(".theta") else per["length"]
@@ -156,8 +158,8 @@ def _event_pairs(model: ImpactModel, states: np.ndarray, p: np.ndarray, per: dic
     cols = [states[:, L.at(k)].T for k in ("contact", "beyond_v0", "beyond_v1", "speed")]
     _, _, F_N, F_T, rate, v_T = (np.asarray(x) for x in rhs(states[:, 1:1 + n].T, states[:, 1 + n:1 + 2 * n].T,
                                                            states[:, 0], *cols, p))
-    depth = ca.Function("depth", [model.q, model.p], [ca.vertcat(*[pair.indentation for pair in model.pairs])])
-    pen = np.asarray(depth.map(len(states))(states[:, 1:1 + n].T, p))
+    depth = ca.Function("depth", [model.q, model.t, model.p], [ca.vertcat(*[pair.indentation for pair in model.pairs])])
+    pen = np.asarray(depth.map(len(states))(states[:, 1:1 + n].T, states[:, 0], p))
     pairs, events, impacts = {}, [], []
     for k, pair in enumerate(model.pairs):
         pairs[pair.name] = {"normal_force": F_N[k] * per["force"], "friction_force": F_T[k] * per["force"],
