@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from models import MODELS, compile_mechanism, load_document
+from models import COMPARED_MODELS, compile_mechanism, load_document
 from service import solve_for_target, sweep
 
 HERE = Path(__file__).resolve().parent
@@ -45,7 +45,7 @@ def material_curves(material: str, path: Path, steps: int, opening: float) -> li
     """Each model's closing force and movement from `opening` (document force unit) to
     closing, in steps; prints the closing forces and how far each is from the exact one."""
     curves = []
-    for model in MODELS:
+    for model in COMPARED_MODELS:
         mech = compile_mechanism(load_document(path), model=model)
         target = solve_for_target(mech, ACTUATION, "end_effector.x", 0.0)
         if target.status != "converged":

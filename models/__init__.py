@@ -8,7 +8,7 @@ Public surface:
 
 from models.errors import MechanismError
 from models.document import MechanismDocument, load_document
-from models.elements import MODELS
+from models.elements import COMPARED_MODELS, MODELS
 from models.mechanism import Mechanism, compile_mechanism
 
 __all__ = [
@@ -17,5 +17,6 @@ __all__ = [
     "load_document",
     "Mechanism",
     "compile_mechanism",
+    "COMPARED_MODELS",
     "MODELS",
 ]

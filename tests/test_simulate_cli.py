@@ -43,7 +43,7 @@ def test_simulate_refuses_bad_options_naming_them(tmp_path):
         (["--snapshots", str(tmp_path / "a.txt")], "--snapshots: cannot tell the figure format of"),
         (["--step", "-1"], "/simulate/step: Input should be greater than 0"),
         (["--until", "0"], "/simulate/until: Input should be greater than 0"),
-        (["--scheme", "euler"], "/simulate/scheme: Input should be 'generalized_alpha' or 'newmark'"),
+        (["--scheme", "euler"], "/simulate/scheme: Input should be 'generalized_alpha', 'newmark', 'event_driven' or 'moreau'"),
     ]:
         result = CliRunner().invoke(app, ["simulate", SPIN, *arguments], env=ENV)
         assert result.exit_code == 2, result.output

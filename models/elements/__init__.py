@@ -6,7 +6,7 @@ assembly ask this registry; none of them names an element type.
 """
 
 from models.elements.base import Families
-from models.elements.curved_beam import CURVED_BEAM, MODELS
+from models.elements.curved_beam import COMPARED_MODELS, CURVED_BEAM, MODELS
 from models.elements.link import LINK
 from models.elements.link_elements import LINK_ELEMENTS
 from models.elements.pin import PIN
@@ -22,4 +22,4 @@ FAMILIES = Families([
     SLIDER,
 ])
 
-__all__ = ["FAMILIES", "MODELS"]
+__all__ = ["COMPARED_MODELS", "FAMILIES", "MODELS"]

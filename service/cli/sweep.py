@@ -12,7 +12,7 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-from models import MODELS, Mechanism, MechanismError
+from models import COMPARED_MODELS, Mechanism, MechanismError
 from models.document import SweepSpec, SweepUntil
 from models.units import quantity_to_si
 from service.cli.application import app
@@ -285,7 +285,7 @@ def sweep(
     steps: Annotated[int | None, typer.Option("--steps", help="Number of steps (points = steps + 1); default 100.")] = None,
     until: Annotated[str | None, typer.Option("--until", metavar="OUTPUT=VALUE", help="End where OUTPUT reaches VALUE, instead of --stop.")] = None,
     model: ModelOpt = None,
-    compare_models: Annotated[bool, typer.Option("--compare-models", help=f"Sweep with each model ({', '.join(MODELS)}).")] = False,
+    compare_models: Annotated[bool, typer.Option("--compare-models", help=f"Sweep with each model ({', '.join(COMPARED_MODELS)}).")] = False,
     restart: Annotated[str, typer.Option("--restart", help=f"Newton start at each point: {' | '.join(RESTARTS)}.")] = "previous",
     sets: SetOpt = None,
     jacobian: JacobianOpt = "full",
@@ -305,7 +305,7 @@ def sweep(
             raise OptionError("--compare-models", "runs every model; leave out --model")
         check_path_options(path, start, stop, steps, until)
         options = newton_options(jacobian, line_search, max_iterations)
-        models = list(MODELS) if compare_models else [model]
+        models = list(COMPARED_MODELS) if compare_models else [model]
         mechs = [mechanism(document, m, sets) for m in models]
         first = mechs[0]
         swept = swept_field(first, path)
