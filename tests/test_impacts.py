@@ -205,3 +205,73 @@ def test_a_shaken_frame_meets_the_resting_pin_at_the_kinematic_time_and_speed(sc
         assert first["impact_speed"] == pytest.approx(A * w * math.cos(w * t_hit), rel=1e-3)
         assert first["rebound_ratio"] == pytest.approx(0.9, abs=1e-9)
     assert report["coordinates"]["hinge.y"][-1] > 0.005  # knocked upwards
+
+
+def test_table_2_stiffnesses_follow_from_e_210_gpa_and_the_external_radius():
+    """Seed 004 Table 2 (47.35 and 2.27 "GPa") reproduces with E = 210 GPa, R1 R2 / (R1 + R2)
+    in Eq. 14 and L = b in Eq. 16 (../shared/notes/seed-004-csfh.md); Table 1's 100 GPa with
+    the conformal radius R1 R2 / (R2 - R1) of a pin in a hole gives twice Table 2's spheres."""
+    from models.impacts.laws import hertz_stiffness
+
+    assert hertz_stiffness("spheres", 210e9, 0.3, 210e9, 0.3, 0.18, 0.20, "external", None) == pytest.approx(
+        47.353e9, rel=1e-4)
+    assert hertz_stiffness("cylinders", 210e9, 0.3, 210e9, 0.3, 0.18, 0.20, "external", 0.025) == pytest.approx(
+        2.2656e9, rel=1e-4)
+    sigma = 2 * (1 - 0.3**2) / 100e9
+    conformal = 4 / (3 * sigma) * math.sqrt(0.18 * 0.20 / 0.02)
+    assert hertz_stiffness("spheres", 100e9, 0.3, 100e9, 0.3, 0.18, 0.20, "conformal", None) == pytest.approx(conformal)
+
+
+def test_the_esdu_law_is_solved_exactly():
+    """Eq. 18 inverted: F = b exp(1 + W_-1(-q / (a b e))) with scipy's Lambert W, and the
+    tangent stiffness against a finite difference."""
+    from scipy.special import lambertw
+
+    from models.impacts.laws import esdu_force
+
+    sigma, length, clearance = 2 * (1 - 0.09) / 100e9, 0.025, 0.02
+    a, b = sigma / length, 4 * length * clearance / sigma
+    q = ca.SX.sym("q")
+    force, tangent = esdu_force(q, sigma, length, clearance)
+    f = ca.Function("f", [q], [force, tangent])
+    for depth in (1e-10, 1e-8, 1e-6, 1e-4, 1e-2):
+        exact = b * np.exp(1 + lambertw(-depth / (a * b) / np.e, -1).real)
+        value, slope = (float(x) for x in f(depth))
+        assert value == pytest.approx(exact, rel=1e-12)
+        step = depth * 1e-6
+        assert slope == pytest.approx((float(f(depth + step)[0]) - float(f(depth - step)[0])) / (2 * step), rel=1e-6)
+
+
+def _ball(surface: dict, until: float, scheme: str, friction: dict, velocity=(0.0, 0.0, 0.0), drop=0.0) -> dict:
+    """A disk (m = 1 kg, R = 0.1 m, I = m R^2 / 2) centred at the origin, `drop` above the
+    surface `surface` of the fixed ground."""
+    return {"units": {"length": "m", "force": "N", "angle": "rad", "mass": "kg"}, "gravity": [0, -9.81],
+            "bodies": {"ground": {"fixed": True, "position": [0, 0]},
+                       "ball": {"position": [0, 0], "mass": 1.0, "inertia": 0.005}},
+            "impacts": {"surfaces": {"rim": {"type": "circle", "body": "ball", "radius": 0.1}, "other": surface},
+                        "pairs": {"touch": {"surfaces": ["rim", "other"], "friction": friction,
+                                            "normal": {"law": "lankarani_nikravesh", "restitution": 0.9,
+                                                       "stiffness": 1e9, "exponent": 1.5}}}},
+            "simulate": {"scheme": scheme, "until": until, "step": 1e-4, "tolerance": 1e-10,
+                         "initial": {"ball": {"displacement": [0, drop, 0], "velocity": list(velocity)}}}}
+
+
+@pytest.mark.parametrize("surface", [{"type": "line", "body": "ground", "point": [0, -0.1], "normal": [0, 1]},
+                                     {"type": "circle", "body": "ground", "centre": [0, -0.35], "radius": 0.25}])
+def test_a_disk_dropped_on_a_line_or_a_circle_lands_at_the_free_fall_time(surface):
+    report = run(_ball(surface, 0.2, "event_driven", {"law": "none"}, drop=0.05))
+    assert report["impacts"][0]["time"] == pytest.approx(math.sqrt(2 * 0.05 / G), rel=1e-9)
+    assert report["impacts"][0]["impact_speed"] == pytest.approx(math.sqrt(2 * G * 0.05), rel=1e-9)
+
+
+def test_friction_at_the_contact_point_spins_a_sliding_disk_up_to_rolling():
+    """The friction force acts at C = O - R n_c (the lever the paper's Eqs. 30 and 38 drop):
+    a disk launched sliding at 1 m/s without spin ends rolling at m R^2 / (I + m R^2) = 2/3
+    of it, with omega = -v / R (angular momentum about the contact point is conserved)."""
+    floor = {"type": "line", "body": "ground", "point": [0, -0.1], "normal": [0, 1]}
+    report = run(_ball(floor, 0.3, "moreau", {"law": "coulomb", "adherence": 0.3, "sliding": 0.3},
+                       velocity=(1.0, 0.0, 0.0)))
+    v, w = report["velocities"]["ball.x"][-1], report["velocities"]["ball.theta"][-1]
+    assert v == pytest.approx(2 / 3, rel=1e-9)
+    assert w == pytest.approx(-v / 0.1, rel=1e-9)
+    assert report["energies"]["friction_work"][-1] == pytest.approx(-(0.5 * 1.0 - 0.5 * (1 + 0.5) * v**2), rel=1e-6)

@@ -70,7 +70,7 @@ class Chunk:
             self.native.inputs[0][0] = S
             self.native()
             return [out.copy() for out in self.native.outputs]
-        return [np.asarray(out).T for out in self.fn(S, *self.fixed)]
+        return [np.asarray(out).T for out in self.fn.call([ca.DM(S), *self.fixed])]
 
 
 _FUNCTIONS: dict[tuple, tuple] = {}
