@@ -80,7 +80,7 @@ def hertz_stiffness(kind: str, E1: float, nu1: float, E2: float, nu2: float, R_p
 def ambrosio_friction(v_T, F_N, sliding, v0, v1, beyond_v0, beyond_v1):
     """F_T of Eq. 26 along t_c; the regime (|v_T| beyond v0, beyond v1) is given by flags
     that the integrator switches at located events, so the force is smooth within a step."""
-    ramp = (ca.fabs(v_T) - v0) / (v1 - v0)
+    ramp = ca.fmin(ca.fmax((ca.fabs(v_T) - v0) / (v1 - v0), 0.0), 1.0)  # flags switch with a hysteresis
     scale = ca.if_else(beyond_v1, 1.0, ca.if_else(beyond_v0, ramp, 0.0))
     return -scale * sliding * F_N * ca.sign(v_T)
 

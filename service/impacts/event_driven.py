@@ -31,6 +31,7 @@ B = (35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84, 0)
 B_EMBEDDED = (5179 / 57600, 0, 7571 / 16695, 393 / 640, -92097 / 339200, 187 / 2100, 1 / 40)
 SWITCH_TOLERANCE = 1e-13  # of each switching function's scale
 MIN_IMPACT_SPEED = 1e-9  # m/s: the frozen qdot_minus of a grazing onset, so the laws stay finite
+HYSTERESIS = 1e-8  # of each switching function's scale
 MASKED = -10.0  # a switching value that cannot trigger (friction out of contact)
 
 
@@ -72,12 +73,16 @@ def rhs_function(model: ImpactModel) -> ca.Function:
     Q = model.force
     works = [ca.SX(0), ca.SX(0), ca.dot(model.extra, v), ca.dot(model.damping, v), model.load_power]
     switching = []
-    for pair, (pen, rate, v_T, Dn, Dt), (F_N, F_T) in zip(model.pairs, geometry, forces):
+    for k, (pair, (pen, rate, v_T, Dn, Dt), (F_N, F_T)) in enumerate(zip(model.pairs, geometry, forces)):
         Q = Q + F_N * Dn + F_T * Dt
         works[0] += F_N * ca.dot(Dn, v)
         works[1] += F_T * ca.dot(Dt, v)
         slip = ca.fabs(v_T)
-        switching += [pen / pair.length_scale, (slip - pair.v0) / pair.v0, (slip - pair.v1) / pair.v1]
+        # a flag that is on switches off a hair beyond where it switched on (HYSTERESIS): a
+        # body grazing the surface, or slipping at v0, would otherwise toggle in zero time
+        switching += [(pen + HYSTERESIS * pair.length_scale * contact[k]) / pair.length_scale,
+                      (slip - pair.v0 * (1 - HYSTERESIS * b0[k])) / pair.v0,
+                      (slip - pair.v1 * (1 - HYSTERESIS * b1[k])) / pair.v1]
     ydot = ca.vertcat(v, Q / model.mass, *works)
     column = [ca.vertcat(*items) for items in zip(*forces)]
     return ca.Function("rhs", [q, v, model.t, contact, b0, b1, speed, p],
