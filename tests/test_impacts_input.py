@@ -110,3 +110,17 @@ def test_the_impact_study_ranks_the_clearance_above_the_inertia(api_server):
     bad = httpx.post(f"{api_server.url}/v1/impact-studies", json={"example": "csfh", "study": {"fields": [
         {"path": "/impacts/surfaces/pin/colour", "step": 1}]}})
     assert bad.status_code == 422 and bad.json()["error"]["pointer"] == "/study/fields/0/path", bad.text
+
+
+def test_one_response_bounds_the_states_it_keeps():
+    from service.impacts.run import run_impacts as run_bounded
+
+    document, spec = parsed(csfh("6.1", scheme="moreau", step=1e-5, until=0.1))
+    with pytest.raises(MechanismError) as caught:
+        run_bounded(document, spec, max_kept=1000)
+    assert caught.value.pointer == "/simulate/every"
+    assert "keep every 10th step or more" in caught.value.problem
+    document, spec = parsed(csfh("6.1", until=0.5))
+    _, report = run_bounded(document, spec, max_kept=50)
+    assert len(report["times"]) <= 51 and report["times"][-1] == pytest.approx(0.5)
+    assert "kept every" in report["message"]

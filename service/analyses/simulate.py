@@ -14,6 +14,7 @@ from service.reports import plain
 
 SYNC_STEPS = 20_000
 SYNC_IMPACT_STEPS = 2_000_000  # a microsecond each: a few seconds of a compiled impact model
+SYNC_KEPT = 100_000  # states in one response (about 25 numbers each)
 
 
 class SimulateAnalysis(Analysis):
@@ -28,7 +29,7 @@ class SimulateAnalysis(Analysis):
         deadline = time.perf_counter() + limit if limit else None
         stop = (lambda: time.perf_counter() > deadline) if deadline else None
         if spec.scheme in IMPACT_SCHEMES:
-            _, report = run_impacts(mech.document, spec, stop=stop, max_steps=SYNC_IMPACT_STEPS)
+            _, report = run_impacts(mech.document, spec, stop=stop, max_steps=SYNC_IMPACT_STEPS, max_kept=SYNC_KEPT)
         else:
             _, report = run_simulation(mech, spec, stop=stop, max_steps=SYNC_STEPS)
         if report["status"] == "stopped":

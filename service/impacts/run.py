@@ -7,6 +7,7 @@ what contact and friction dissipated and the balance."""
 from __future__ import annotations
 
 import json
+import math
 
 import casadi as ca
 import numpy as np
@@ -75,8 +76,11 @@ def start_state(model: ImpactModel, spec: SimulateSpec, p: np.ndarray) -> tuple[
 
 
 def run_impacts(document: MechanismDocument, spec: SimulateSpec, stop=None, max_steps: int = 2_000_000,
-                parameters: dict[str, float] | None = None, progress=None) -> tuple[Trace, dict]:
-    """(the raw trace, the report). `parameters` replaces numbers (SI) by their pointers."""
+                parameters: dict[str, float] | None = None, progress=None,
+                max_kept: int | None = None) -> tuple[Trace, dict]:
+    """(the raw trace, the report). `parameters` replaces numbers (SI) by their pointers;
+    `max_kept` bounds the states a report keeps (one response): Moreau's fixed steps are
+    checked before the run, the event-driven ones thinned after it, saying so."""
     model = impact_model(document, timed_fields(document, spec), json.dumps(spec.histories, sort_keys=True))
     values = np.array(model.book.values)
     values[model.book.pointers.index(DAMPING)] = spec.damping
@@ -90,16 +94,26 @@ def run_impacts(document: MechanismDocument, spec: SimulateSpec, stop=None, max_
         if steps > max_steps:
             raise MechanismError("/simulate/step", f"the run needs {steps} steps of {spec.step:g} s, over the limit "
                                  f"of {max_steps}: take a longer step or a shorter run")
+        if max_kept is not None and steps // spec.every + 1 > max_kept:
+            raise MechanismError("/simulate/every", f"{steps} steps would keep {steps // spec.every + 1} states, over "
+                                 f"the {max_kept} one response holds: keep every {math.ceil(steps / max_kept)}th "
+                                 "step or more (`every`)")
         trace = run_moreau(model, p, q0, v0, spec.until, spec.step, spec.compiled, stop, progress)
     else:
         max_step = spec.max_step if spec.max_step is not None else spec.until / 20
         trace = run_events(model, p, q0, v0, spec.until, spec.tolerance, spec.step, max_step, spec.compiled,
                            max_steps * TRIALS_PER_STEP, stop, progress)
-    return trace, report(model, spec, trace, p)  # trace.seconds: the stepping alone
+    return trace, report(model, spec, trace, p, max_kept)  # trace.seconds: the stepping alone
 
 
-def report(model: ImpactModel, spec: SimulateSpec, trace: Trace, p: np.ndarray) -> dict:
+def report(model: ImpactModel, spec: SimulateSpec, trace: Trace, p: np.ndarray, max_kept: int | None = None) -> dict:
     states = np.vstack(trace.states)
+    every = spec.every
+    if max_kept is not None and len(states) > max_kept * every:
+        every = math.ceil(len(states) / max_kept)
+        trace.message = (trace.message + "; " if trace.message else "") + (
+            f"kept every {every}th of {len(states) - 1} steps (one response holds {max_kept} states)")
+    keep = np.unique(np.r_[np.arange(0, len(states), every), len(states) - 1])  # the last state too
     n, _P = model.bodies.size, len(model.pairs)
     book = model.book
     per = {kind: 1 / book.si(1.0, kind, "/units") for kind in ("length", "angle", "force", "energy")}
@@ -118,7 +132,6 @@ def report(model: ImpactModel, spec: SimulateSpec, trace: Trace, p: np.ndarray) 
     balance = T + elastic + gravity - works.sum(axis=1)
     balance = balance - balance[0]
     size = max(float(np.abs(T).max()), float(np.ptp(elastic + gravity)), float(np.abs(works).max()), 1e-300)
-    keep = slice(None, None, spec.every)
     energies = {"kinetic": T, "elastic": elastic, "gravity": gravity, **{name: works[:, k] for k, name in
                                                                           enumerate(WORKS)}, "balance": balance}
     return {
