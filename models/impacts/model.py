@@ -5,7 +5,10 @@ q, v and the parameter vector p (every number, SI; models.impacts.book).
 Energies: kinetic T, elastic (the flexures' 1/2 psi.K.psi and the springs), gravity and
 loads V_g. The smooth force is -grad(elastic + V_g) + Q_extra, where Q_extra is what the
 flexure whose stiffness turns with the body adds (zero with the constant stiffness), so
-T + elastic + V_g - (work of contact, friction, Q_extra and damping) is constant (WORKS)."""
+T + elastic + V_g - (the WORKS: of contact and friction on the free bodies, of Q_extra, of
+damping, and the inputs: loads that follow histories and the potential's explicit rate
+under prescribed displacements) is constant. A prescribed displacement drives its body;
+the histories enter as expressions of the time symbol t."""
 
 from __future__ import annotations
 

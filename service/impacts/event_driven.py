@@ -9,7 +9,9 @@ flag starts locating, and the following calls bracket the event time by the Illi
 method on the step size (each a full Dormand-Prince step from the same start) until the
 bracket is a few ulps of t or the switching value is below 1e-13 of its scale; the step
 then ends just past the event, the flag flips, and a contact onset freezes the impact speed
-(the qdot_minus of the laws). Chunks of calls run in one CasADi call (mapaccum).
+(the qdot_minus of the laws). A flag that is on switches off HYSTERESIS of its scale beyond
+where it switched on, so no event repeats in zero time (a body grazing its surface). Chunks
+of calls run in one CasADi call (mapaccum).
 """
 
 from __future__ import annotations

@@ -19,6 +19,7 @@ from service.impacts.native import NativeFunction
 
 EVENT_CHUNK = 2000  # trial steps per call
 MOREAU_CHUNK = 5000
+MAX_CACHED = 32  # chunk Functions kept in memory
 def _code_version() -> str:
     """A digest of the sources the step graphs come from: a cached library built from older
     code is never loaded."""
@@ -85,6 +86,8 @@ def chunk(model: ImpactModel, kind: str, compiled: bool, columns: list[np.ndarra
         else:
             fn = moreau_step(model).mapaccum("moreau_chunk", MOREAU_CHUNK, ["S"], ["S1"])
         library = compiled_library(fn, f"{_CODE}|{kind}|{key[1]}") if compiled else None
+        if len(_FUNCTIONS) >= MAX_CACHED:  # the oldest goes (a study or a service sees many)
+            _FUNCTIONS.pop(next(iter(_FUNCTIONS)))
         _FUNCTIONS[key] = (fn, library)
     fn, library = _FUNCTIONS[key]
     return Chunk(fn, library, columns)
