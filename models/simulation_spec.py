@@ -23,10 +23,11 @@ class SimulateSpec(StrictModel):
     until: float | None = Field(default=None, gt=0, allow_inf_nan=False, description="end time (s)")
     step: float = Field(default=1e-3, gt=0, allow_inf_nan=False, description="time step (s); adaptive: the first")
     adaptive: bool = Field(default=False, description="steps that follow the local error estimate")
-    tolerance: float = Field(default=1e-6, gt=0, le=1e-1, description="adaptive: a step's local error, relative to "
-                             "the mechanism's length scale (rad for angles)")
+    tolerance: float = Field(default=1e-6, gt=0, le=1e-1, description="adaptive and event_driven: a step's local "
+                             "error, relative to the mechanism's length scale (event_driven: the smallest clearance)")
     max_step: float | None = Field(default=None, gt=0, allow_inf_nan=False,
-                                   description="adaptive: the longest step (s)")
+                                   description="adaptive and event_driven: the longest step (s; event_driven's "
+                                   "default: until / 500)")
     scheme: Literal["generalized_alpha", "newmark", "event_driven", "moreau"] = Field(
         default="generalized_alpha", description="generalized-alpha (second order, rho_inf), or Newmark (a1, a2); "
         "for rigid bodies with impacts: event_driven (adaptive Dormand-Prince with located contact events) or "

@@ -23,6 +23,7 @@ from service.impacts.stepping import Trace, run_events, run_moreau
 
 IMPACT_SCHEMES = ("event_driven", "moreau")
 TRIALS_PER_STEP = 4  # event-driven: trial steps allowed per allowed step (rejections, event location)
+MAX_STEP_PARTS = 500  # event-driven: the default longest step, a part of the run (smooth histories to draw)
 
 
 def timed_fields(document: MechanismDocument, spec: SimulateSpec) -> list[tuple[str, str, object]]:
@@ -100,7 +101,7 @@ def run_impacts(document: MechanismDocument, spec: SimulateSpec, stop=None, max_
                                  "step or more (`every`)")
         trace = run_moreau(model, p, q0, v0, spec.until, spec.step, spec.compiled, stop, progress)
     else:
-        max_step = spec.max_step if spec.max_step is not None else spec.until / 20
+        max_step = spec.max_step if spec.max_step is not None else spec.until / MAX_STEP_PARTS
         trace = run_events(model, p, q0, v0, spec.until, spec.tolerance, spec.step, max_step, spec.compiled,
                            max_steps * TRIALS_PER_STEP, stop, progress)
     return trace, report(model, spec, trace, p, max_kept)  # trace.seconds: the stepping alone
