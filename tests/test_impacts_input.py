@@ -124,3 +124,11 @@ def test_one_response_bounds_the_states_it_keeps():
     _, report = run_bounded(document, spec, max_kept=50)
     assert len(report["times"]) <= 51 and report["times"][-1] == pytest.approx(0.5)
     assert "kept every" in report["message"]
+
+
+def test_an_impact_study_is_costed_before_it_runs(api_server):
+    fields = [{"path": "/bodies/hinge/mass", "step": 0.001 * (k + 1)} for k in range(8)]
+    r = httpx.post(f"{api_server.url}/v1/impact-studies", json={
+        "example": "csfh", "simulate": {"scheme": "moreau", "step": 1e-9, "until": 10.0}, "study": {"fields": fields}})
+    assert r.status_code == 422, r.text
+    assert r.json()["error"]["pointer"] == "/simulate/step" and "over the limit" in r.json()["error"]["message"]

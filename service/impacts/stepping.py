@@ -129,19 +129,27 @@ def run_events(model: ImpactModel, p: np.ndarray, q0, v0, until: float, toleranc
         if len(kept):
             trace.states.append(kept)
         S = out[-1]
-        if progress is not None:
-            progress(float(S[0]))
-        if not np.all(np.isfinite(S)):
-            trace.status, trace.message = "not_converged", f"the state stopped being finite near t = {trace_time(trace):g} s"
+        if _ended(trace, S, stop, progress, trace_time(trace)):
             break
         if trace.calls >= max_calls:
             trace.status, trace.message = "step_limit", f"{max_calls} trial steps reached at t = {S[0]:g} s"
             break
-        if stop is not None and stop():
-            trace.status, trace.message = "stopped", f"stopped at t = {S[0]:g} s"
-            break
     trace.seconds = time.perf_counter() - began
     return trace
+
+
+def _ended(trace: Trace, S: np.ndarray, stop, progress, reached: float) -> bool:
+    """After a chunk: report progress; end the run (saying why) on a state that is no longer
+    finite, or when asked to stop."""
+    if progress is not None:
+        progress(float(S[0]))
+    if not np.all(np.isfinite(S)):
+        trace.status, trace.message = "not_converged", f"the state stopped being finite near t = {reached:g} s"
+        return True
+    if stop is not None and stop():
+        trace.status, trace.message = "stopped", f"stopped at t = {S[0]:g} s"
+        return True
+    return False
 
 
 def trace_time(trace: Trace) -> float:
@@ -166,13 +174,7 @@ def run_moreau(model: ImpactModel, p: np.ndarray, q0, v0, until: float, h: float
         S = states[take - 1]
         done += take
         trace.calls += take
-        if progress is not None:
-            progress(float(S[0]))
-        if not np.all(np.isfinite(S)):
-            trace.status, trace.message = "not_converged", f"the state stopped being finite near t = {S[0]:g} s"
-            break
-        if stop is not None and stop():
-            trace.status, trace.message = "stopped", f"stopped at t = {S[0]:g} s"
+        if _ended(trace, S, stop, progress, float(S[0])):
             break
     trace.seconds = time.perf_counter() - began
     return trace

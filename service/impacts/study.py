@@ -82,19 +82,19 @@ def variant(document: dict, pointer: str | None, change: float) -> dict:
     return doc
 
 
-def sampled_run(document: dict, simulate: dict | None) -> dict:
+def sampled_run(document: dict, simulate: dict | None, stop=None, max_steps: int = 2_000_000) -> dict:
     """One run's compared quantities on the common grid (document units)."""
     doc = MechanismDocument.model_validate(document)
     base = doc.simulate.model_dump() if doc.simulate is not None else {}
     spec = SimulateSpec.model_validate({**base, **{k: v for k, v in (simulate or {}).items() if v is not None}})
-    _, report = run_impacts(doc, spec)
+    _, report = run_impacts(doc, spec, stop=stop, max_steps=max_steps)
     grid = np.linspace(0.0, spec.until, SAMPLES)
     times = np.asarray(report["times"])
     series = dict(report["coordinates"])
     for name, contact in report["contacts"].items():
         series[f"{name}.F_N"] = contact["normal_force"]
         series[f"{name}.F_T"] = contact["friction_force"]
-    return {"status": report["status"], "time_reached": report["time_reached"], "seconds": report["seconds"],
+    return {"status": report["status"], "message": report["message"], "time_reached": report["time_reached"], "seconds": report["seconds"],
             "impacts": len(report["impacts"]),
             "series": {name: np.interp(grid, times, values).tolist() for name, values in series.items()}}
 

@@ -13,10 +13,12 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from models import MechanismError
-from service.costs import Limits
+from service.costs import Limits, check_grid_size
+from service.dynamics.run import check_steps, simulation_spec
 from service.impacts.run import IMPACT_SCHEMES
 from service.impacts.study import influence, sampled_run, study_fields, variant, with_overrides
 from service.jobs.base import Plan
+from service.jobs.control import TaskControl
 from service.requests import compile_request
 
 DEFAULT_TOLERANCE = 0.05
@@ -40,8 +42,6 @@ class ImpactStudyJob:
 
     def prepare(self, spec: dict, limits: Limits) -> Plan:
         mech = compile_request(spec["document"], spec.get("model"), spec.get("overrides"), limits)
-        from service.dynamics.run import simulation_spec
-
         simulate = simulation_spec(mech, spec.get("simulate"))
         if simulate.scheme not in IMPACT_SCHEMES:
             raise MechanismError("/simulate/scheme", f"an impact study runs an impact scheme ({', '.join(IMPACT_SCHEMES)})"
@@ -51,23 +51,33 @@ class ImpactStudyJob:
             raise MechanismError("/study/tolerance", "give the departure tolerance as a fraction in (0, 1) of each "
                                  "quantity's nominal range")
         runs = _runs(spec)
+        check_grid_size([len(runs)], limits, "/study/fields")
+        if simulate.scheme == "moreau":
+            check_steps(simulate, limits.max_simulation_steps)
         return Plan(len(runs), {"runs": [{"path": p, "change": c} for p, c in runs], "until": simulate.until,
-                                "tolerance": tolerance, "scheme": simulate.scheme})
+                                "tolerance": tolerance, "scheme": simulate.scheme,
+                                "max_steps": limits.max_simulation_steps})
 
     def tasks(self, spec, plan, finished, chunk_size):
         todo = [k for k in range(len(plan["runs"])) if k not in finished]
-        return [{"indices": todo[i:i + chunk_size]} for i in range(0, len(todo), chunk_size)]
+        return [{"indices": todo[i:i + chunk_size], "max_steps": plan.get("max_steps")}
+                for i in range(0, len(todo), chunk_size)]
 
     def follow_up(self, spec, plan, task, finished, chunk_size):
         return []
 
     def run(self, spec, task):
-        runs = _runs(spec)
+        runs, control = _runs(spec), TaskControl(task)
         points = []
         for index in task["indices"]:
+            if control.should_stop():
+                break
             pointer, change = runs[index]
-            points.append((index, {"path": pointer, "change": change,
-                                   **sampled_run(variant(_document(spec), pointer, change), spec.get("simulate"))}))
+            run = sampled_run(variant(_document(spec), pointer, change), spec.get("simulate"), control.should_stop,
+                              task.get("max_steps", 2_000_000))
+            if run["status"] == "stopped":  # cancelled or out of time: not stored, so a restart runs it again
+                break
+            points.append((index, {"path": pointer, "change": change, **run}))
         return points
 
     def failed(self, point: dict) -> bool:
