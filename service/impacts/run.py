@@ -115,7 +115,7 @@ def report(model: ImpactModel, spec: SimulateSpec, trace: Trace, p: np.ndarray, 
         trace.message = (trace.message + "; " if trace.message else "") + (
             f"kept every {every}th of {len(states) - 1} steps (one response holds {max_kept} states)")
     keep = np.unique(np.r_[np.arange(0, len(states), every), len(states) - 1])  # the last state too
-    n, _P = model.bodies.size, len(model.pairs)
+    n = model.bodies.size
     book = model.book
     per = {kind: 1 / book.si(1.0, kind, "/units") for kind in ("length", "angle", "force", "energy")}
     q, v = states[:, 1:1 + n], states[:, 1 + n:1 + 2 * n]
@@ -155,8 +155,8 @@ def report(model: ImpactModel, spec: SimulateSpec, trace: Trace, p: np.ndarray, 
     }
 
 
-def _clearance(model: ImpactModel) -> float | None:
-    """The radial clearance of the first pin-in-hole pair (SI), for drawing the paths."""
+def _clearance(model: ImpactModel) -> float:
+    """The radial clearance of the first pin-in-hole pair (SI; 0 without one), for drawing."""
     doc = model.book.document
     for pair in doc.impacts.pairs.values():
         pin, other = (doc.impacts.surfaces[s] for s in pair.surfaces)
@@ -180,22 +180,23 @@ def _event_pairs(model: ImpactModel, states: np.ndarray, p: np.ndarray, per: dic
                             "indentation": pen[k] * per["length"], "slip_speed": v_T[k] * per["length"],
                             "in_contact": states[:, L.at("contact")][:, k]}
     flags = np.column_stack([states[:, L.at(key)] for key in ("contact", "beyond_v0", "beyond_v1")])
-    onset = None
+    onsets: dict[str, tuple[float, float]] = {}  # per pair, its contact's start and impact speed
     for row in np.nonzero(states[:, L.at("event")] > 0.5)[0]:
         changed = np.nonzero(flags[row] != flags[row - 1])[0] if row else []
         for index in changed:
             kind, k = divmod(index, P)
             name, t = model.pairs[k].name, float(states[row, 0])
             if kind == 0 and flags[row, index] > 0.5:
-                onset = (t, float(rate[k, row]))
-                events.append({"time": t, "pair": name, "kind": "contact", "impact_speed": onset[1] * per["length"]})
+                onsets[name] = (t, float(rate[k, row]))
+                events.append({"time": t, "pair": name, "kind": "contact", "impact_speed": onsets[name][1] * per["length"]})
             elif kind == 0:
                 exit_speed = float(-rate[k, row])
                 events.append({"time": t, "pair": name, "kind": "separation", "exit_speed": exit_speed * per["length"]})
-                if onset is not None:
-                    impacts.append({"pair": name, "time": onset[0], "impact_speed": onset[1] * per["length"],
-                                    "exit_speed": exit_speed * per["length"], "duration": t - onset[0],
-                                    "rebound_ratio": exit_speed / onset[1]})
+                if name in onsets:
+                    start, speed = onsets.pop(name)
+                    impacts.append({"pair": name, "time": start, "impact_speed": speed * per["length"],
+                                    "exit_speed": exit_speed * per["length"], "duration": t - start,
+                                    "rebound_ratio": exit_speed / speed})
             else:
                 level = "v0" if kind == 1 else "v1"
                 rising = flags[row, index] > 0.5
