@@ -10,6 +10,7 @@ import casadi as ca
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
+from scipy.special import ellipk
 
 from models.impacts.laws import damping_factor, effective_restitution
 from models.impacts.model import impact_model
@@ -288,3 +289,51 @@ def test_the_csfh_comes_to_rest_on_its_surface_without_chattering():
     assert min(b - a for a, b in zip(times, times[1:])) > 1e-6
     assert report["contacts"]["conjugate"]["in_contact"][-1] == 1.0
     assert report["energy_balance_error"] < 1e-6
+
+
+def _pendulum(scheme: str, phi0: float) -> tuple[dict, float, float, float]:
+    """A bob (m = 1 kg, I_G = 0.01 kg m^2) pinned 0.5 m above its mass centre, released at phi0
+    left of the vertical; a disk of radius 0.05 m at its centre meets a wall when it hangs."""
+    m, I_G, l, r = 1.0, 0.01, 0.5, 0.05
+    doc = {"units": {"length": "m", "force": "N", "angle": "rad", "mass": "kg"}, "gravity": [0, -9.81],
+           "bodies": {"ground": {"fixed": True, "position": [0, 0]},
+                      "bob": {"position": [0, -l], "mass": m, "inertia": I_G}},
+           "elements": {"hinge": {"type": "pin", "from": "ground", "to": "bob", "at": [0, 0]}},
+           "impacts": {"surfaces": {"disk": {"type": "circle", "body": "bob", "radius": r},
+                                    "wall": {"type": "line", "body": "ground", "point": [r, 0], "normal": [-1, 0]}},
+                       "pairs": {"stop": {"surfaces": ["disk", "wall"],
+                                          "normal": {"law": "lankarani_nikravesh", "restitution": 0.9,
+                                                     "stiffness": 1e10, "exponent": 1.5}}}},
+           "simulate": {"scheme": scheme, "until": 0.6, "step": 1e-5 if scheme == "moreau" else 1e-4,
+                        "tolerance": 1e-10, "initial": {"bob": {"displacement": [
+                            l * math.sin(phi0), l * (1 - math.cos(phi0)), phi0]}}}}
+    I_O = I_G + m * l * l
+    quarter = math.sqrt(I_O / (m * G * l)) * ellipk(math.sin(abs(phi0) / 2) ** 2)  # from phi0 to the vertical
+    omega = math.sqrt(2 * m * G * l * (1 - math.cos(phi0)) / I_O)
+    return doc, quarter, omega, l
+
+
+@pytest.mark.parametrize("scheme", ["event_driven", "moreau"])
+def test_a_pinned_pendulum_strikes_its_stop_after_the_elliptic_quarter_period(scheme):
+    """A pin (a constraint held by Lagrange multipliers): released from 0.5 rad the pendulum
+    reaches the vertical after sqrt(I_O / (m g l)) K(sin^2(phi0 / 2)) (scipy's ellipk) with
+    omega from the energy; just before the stop the pin pulls m (g + l omega^2) upwards."""
+    doc, quarter, omega, l = _pendulum(scheme, -0.5)
+    report = run(doc)
+    first = report["impacts"][0]
+    if scheme == "event_driven":
+        assert first["time"] == pytest.approx(quarter, rel=1e-8)
+        assert first["impact_speed"] == pytest.approx(omega * l, rel=1e-8)
+        k = int(np.searchsorted(report["times"], first["time"]))  # the onset: no contact force yet
+        assert report["times"][k] == first["time"]
+        assert report["joints"]["hinge"]["Fy"][k] == pytest.approx(1.0 * (G + l * omega**2), rel=1e-4)
+        assert abs(report["joints"]["hinge"]["Fx"][k]) < 1e-3
+        assert report["energy_balance_error"] < 1e-6
+    else:
+        assert first["time"] == pytest.approx(quarter, abs=2e-5)
+        assert first["rebound_ratio"] == pytest.approx(0.9, abs=1e-9)
+    x, y = (np.array(report["coordinates"][f"bob.{c}"]) for c in ("x", "y"))
+    theta = np.array(report["coordinates"]["bob.theta"])
+    pin_x = x - l * np.sin(theta)  # the bob's point at the pin stays at the origin
+    pin_y = -l + y + l * np.cos(theta)
+    assert np.abs(pin_x).max() < 1e-7 and np.abs(pin_y).max() < 1e-7

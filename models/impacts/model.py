@@ -21,6 +21,7 @@ from models.errors import MechanismError
 from models.impacts.bodies import RigidBodies
 from models.impacts.book import ParameterBook
 from models.impacts.forces import flexure_energy, smooth_forces, spring_energy
+from models.impacts.joints import pin_constraints
 from models.impacts.pairs import PairModel, pair_model
 from models.planar import rot
 
@@ -46,6 +47,8 @@ class ImpactModel:
     turning: bool
     t: ca.SX
     history_key: str = ""
+    constraints: ca.SX = None  # g(q, t) = 0 of the pins (2 per pin)
+    joint_names: tuple[str, ...] = ()
 
     @property
     def q(self) -> ca.SX:
@@ -59,6 +62,15 @@ class ImpactModel:
     def p(self) -> ca.SX:
         return self.book.symbols
 
+    def constraint_rates(self) -> tuple[ca.SX, ca.SX, ca.SX]:
+        """(G = dg/dq, the rate g_t at v = 0, gamma: d2g/dt2 less G a) of the pins."""
+        g, q, v, t = self.constraints, self.q, self.v, self.t
+        G = ca.jacobian(g, q)
+        g_t = ca.jacobian(g, t)
+        rate = ca.mtimes(G, v) + g_t
+        gamma = ca.jtimes(rate, q, v) + ca.jacobian(rate, t)
+        return G, g_t, gamma
+
     def coordinate_names(self) -> list[str]:
         return [f"{b.name}.{c}" for b in self.bodies.bodies.values() if b.first is not None for c in ("x", "y", "theta")]
 
@@ -68,7 +80,8 @@ class ImpactModel:
         parts = [doc.impacts.model_dump_json(include={"flexure_stiffness"}), ",".join(self.book.pointers),
                  str(self.book.symbols.numel())]
         parts += [f"{b.name}:{b.first}" for b in self.bodies.bodies.values()]
-        parts += [f"{e.type}:{getattr(e, 'kind', '')}:{getattr(e, 'direction', '')}" for e in doc.elements.values()]
+        parts += [f"{e.type}:{getattr(e, 'kind', '')}:{getattr(e, 'direction', '')}:{getattr(e, 'at', 0) is None}"
+                  for e in doc.elements.values()]
         parts += [f"{k}:{getattr(v, 'type', '')}:{getattr(v, 'offset', None) is None}:{getattr(v, 'at', None) is None}"
                   for k, v in doc.loads.items()]
         parts += [f"{p.name}:{p.law}:{p.friction}:{p.esdu is None}" for p in self.pairs]
@@ -112,8 +125,9 @@ def impact_model(document: MechanismDocument, histories: list[tuple[str, str, ob
     acting = ca.substitute(gravity - held, timed, ca.vertcat(*[value for _, value in loads])) if loads else ca.SX(0)
     V = elastic + held
     power = -ca.dot(ca.gradient(acting, q), v) + ca.jacobian(V, t)  # timed loads; moving supports
+    g, joints = pin_constraints(rb)
     return ImpactModel(book, rb, pairs, mass, -ca.gradient(V + acting, q) + extra + damping, extra, damping,
-                       power, 0.5 * ca.dot(mass * v, v), elastic, held, turning, t, history_key)
+                       power, 0.5 * ca.dot(mass * v, v), elastic, held, turning, t, history_key, driven(g), tuple(joints))
 
 
 def _split(book: ParameterBook, rb: RigidBodies, histories, t) -> tuple[list, list]:

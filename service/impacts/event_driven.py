@@ -34,7 +34,8 @@ B_EMBEDDED = (5179 / 57600, 0, 7571 / 16695, 393 / 640, -92097 / 339200, 187 / 2
 SWITCH_TOLERANCE = 1e-13  # of each switching function's scale
 MIN_IMPACT_SPEED = 1e-9  # m/s: the frozen qdot_minus of a grazing onset, so the laws stay finite
 HYSTERESIS = 1e-8  # of each switching function's scale
-MASKED = -10.0  # a switching value that cannot trigger (friction out of contact)
+MASKED = -10.0
+BAUMGARTE = 50.0  # 1/s: the rate at which the pins' drift (integration error) is pulled back  # a switching value that cannot trigger (friction out of contact)
 
 
 @dataclass(frozen=True)
@@ -85,13 +86,29 @@ def rhs_function(model: ImpactModel) -> ca.Function:
         switching += [(pen + HYSTERESIS * pair.length_scale * contact[k]) / pair.length_scale,
                       (slip - pair.v0 * (1 - HYSTERESIS * b0[k])) / pair.v0,
                       (slip - pair.v1 * (1 - HYSTERESIS * b1[k])) / pair.v1]
-    ydot = ca.vertcat(v, Q / model.mass, *works)
+    accelerations, reaction = pinned_accelerations(model, Q)
+    works[4] += ca.dot(reaction, ca.mtimes(ca.jacobian(model.constraints, q), v))  # pins on moving supports
+    ydot = ca.vertcat(v, accelerations, *works)
     column = [ca.vertcat(*items) for items in zip(*forces)]
     return ca.Function("rhs", [q, v, model.t, contact, b0, b1, speed, p],
                        [ydot, ca.vertcat(*switching), column[0], column[1],
-                        ca.vertcat(*[g[1] for g in geometry]), ca.vertcat(*[g[2] for g in geometry])],
+                        ca.vertcat(*[g[1] for g in geometry]), ca.vertcat(*[g[2] for g in geometry]), reaction],
                        ["q", "v", "t", "contact", "beyond_v0", "beyond_v1", "speed", "p"],
-                       ["ydot", "switching", "F_N", "F_T", "rate", "v_T"])
+                       ["ydot", "switching", "F_N", "F_T", "rate", "v_T", "pins"])
+
+
+def pinned_accelerations(model: ImpactModel, Q: ca.SX) -> tuple[ca.SX, ca.SX]:
+    """(a, the pins' forces lambda) of M a = Q + G^T lambda with G a = -gamma - 2 w gdot - w^2 g:
+    the pins held at acceleration level, their drift damped critically (Baumgarte, w)."""
+    inverse_mass = 1 / model.mass
+    if not model.constraints.numel():
+        return inverse_mass * Q, ca.SX(0, 1)
+    G, g_t, gamma = model.constraint_rates()
+    rate = ca.mtimes(G, model.v) + g_t
+    S = ca.mtimes(G * ca.repmat(inverse_mass.T, G.size1(), 1), G.T)
+    wanted = -gamma - 2 * BAUMGARTE * rate - BAUMGARTE**2 * model.constraints
+    reaction = ca.solve(S, wanted - ca.mtimes(G, inverse_mass * Q))
+    return inverse_mass * (Q + ca.mtimes(G.T, reaction)), reaction
 
 
 def violations(model: ImpactModel, switching, contact, b0, b1) -> ca.SX:

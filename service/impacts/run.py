@@ -127,9 +127,9 @@ def report(model: ImpactModel, spec: SimulateSpec, trace: Trace, p: np.ndarray, 
         scale = per["angle"] if name.endswith(".theta") else per["length"]
         coordinates[name], velocities[name] = q[:, k] * scale, v[:, k] * scale
     if spec.scheme == "moreau":
-        pairs, events, impacts = _moreau_pairs(model, spec, np.vstack(trace.extras), states, per)
+        pairs, events, impacts, joints = _moreau_pairs(model, spec, np.vstack(trace.extras), states, per)
     else:
-        pairs, events, impacts = _event_pairs(model, states, p, per)
+        pairs, events, impacts, joints = _event_pairs(model, states, p, per)
     balance = T + elastic + gravity - works.sum(axis=1)
     balance = balance - balance[0]
     size = max(float(np.abs(T).max()), float(np.ptp(elastic + gravity)), float(np.abs(works).max()), 1e-300)
@@ -144,6 +144,7 @@ def report(model: ImpactModel, spec: SimulateSpec, trace: Trace, p: np.ndarray, 
         "coordinates": {k: c[keep].tolist() for k, c in coordinates.items()},
         "velocities": {k: c[keep].tolist() for k, c in velocities.items()},
         "contacts": {name: {k: np.asarray(x)[keep].tolist() for k, x in values.items()} for name, values in pairs.items()},
+        "joints": {name: {k: x[keep].tolist() for k, x in values.items()} for name, values in joints.items()},
         "events": events, "impacts": impacts,
         "energies": {k: (np.asarray(x)[keep] * per["energy"]).tolist() for k, x in energies.items()},
         "energy_balance_error": float(np.abs(balance).max() / size),
@@ -170,8 +171,8 @@ def _event_pairs(model: ImpactModel, states: np.ndarray, p: np.ndarray, per: dic
     L = EventLayout(n, P)
     rhs = rhs_function(model).map(len(states))
     cols = [states[:, L.at(k)].T for k in ("contact", "beyond_v0", "beyond_v1", "speed")]
-    _, _, F_N, F_T, rate, v_T = (np.asarray(x) for x in rhs(states[:, 1:1 + n].T, states[:, 1 + n:1 + 2 * n].T,
-                                                           states[:, 0], *cols, p))
+    _, _, F_N, F_T, rate, v_T, pins = (np.asarray(x) for x in rhs(states[:, 1:1 + n].T, states[:, 1 + n:1 + 2 * n].T,
+                                                                 states[:, 0], *cols, p))
     depth = ca.Function("depth", [model.q, model.t, model.p], [ca.vertcat(*[pair.indentation for pair in model.pairs])])
     pen = np.asarray(depth.map(len(states))(states[:, 1:1 + n].T, states[:, 0], p))
     pairs, events, impacts = {}, [], []
@@ -179,6 +180,7 @@ def _event_pairs(model: ImpactModel, states: np.ndarray, p: np.ndarray, per: dic
         pairs[pair.name] = {"normal_force": F_N[k] * per["force"], "friction_force": F_T[k] * per["force"],
                             "indentation": pen[k] * per["length"], "slip_speed": v_T[k] * per["length"],
                             "in_contact": states[:, L.at("contact")][:, k]}
+    joints = _joints(model, pins.reshape(-1, len(states)).T * per["force"])
     flags = np.column_stack([states[:, L.at(key)] for key in ("contact", "beyond_v0", "beyond_v1")])
     onsets: dict[str, tuple[float, float]] = {}  # per pair, its contact's start and impact speed
     for row in np.nonzero(states[:, L.at("event")] > 0.5)[0]:
@@ -201,7 +203,12 @@ def _event_pairs(model: ImpactModel, states: np.ndarray, p: np.ndarray, per: dic
                 level = "v0" if kind == 1 else "v1"
                 rising = flags[row, index] > 0.5
                 events.append({"time": t, "pair": name, "kind": f"slip {'above' if rising else 'below'} {level}"})
-    return pairs, events, impacts
+    return pairs, events, impacts, joints
+
+
+def _joints(model: ImpactModel, forces: np.ndarray) -> dict:
+    """Per pin, the force it applies to its `to` body (rows: states)."""
+    return {name: {"Fx": forces[:, 2 * k], "Fy": forces[:, 2 * k + 1]} for k, name in enumerate(model.joint_names)}
 
 
 def _moreau_pairs(model: ImpactModel, spec: SimulateSpec, extras: np.ndarray, states: np.ndarray, per: dict):
@@ -222,4 +229,4 @@ def _moreau_pairs(model: ImpactModel, spec: SimulateSpec, extras: np.ndarray, st
                             "impact_speed": float(-before[row]) * per["length"],
                             "exit_speed": float(after[row]) * per["length"],
                             "impulse": float(lam_N[row]) * impulse, "rebound_ratio": float(-after[row] / before[row])})
-    return pairs, [], impacts
+    return pairs, [], impacts, _joints(model, extras[:, 5 * P:] / h * per["force"])

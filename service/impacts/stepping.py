@@ -163,14 +163,14 @@ def run_moreau(model: ImpactModel, p: np.ndarray, q0, v0, until: float, h: float
     steps = chunk(model, "moreau", compiled, [p, np.array([h])])
     trace = Trace()
     trace.states.append(S.reshape(1, -1).copy())
-    trace.extras.append(np.zeros((1, 5 * len(model.pairs))))
+    trace.extras.append(np.zeros((1, 5 * len(model.pairs) + model.constraints.numel())))
     done = 0
     began = time.perf_counter()
     while done < count:
-        states, impulses, active = steps.run(S)
+        states, impulses, active, pins = steps.run(S)
         take = min(MOREAU_CHUNK, count - done)
         trace.states.append(states[:take])
-        trace.extras.append(np.hstack([impulses, active])[:take])
+        trace.extras.append(np.hstack([impulses, active, pins])[:take])
         S = states[take - 1]
         done += take
         trace.calls += take
