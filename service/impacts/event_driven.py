@@ -67,7 +67,8 @@ class EventLayout:
 
 
 def rhs_function(model: ImpactModel) -> ca.Function:
-    """(q, v, t, contact, beyond_v0, beyond_v1, speed, p) -> (ydot, switching (3P), F_N, F_T, rate, v_T)."""
+    """(q, v, t, contact, beyond_v0, beyond_v1, speed, p) -> (ydot, switching (3P), F_N, F_T, rate,
+    v_T, the pins' forces)."""
     P = len(model.pairs)
     q, v, p = model.q, model.v, model.p
     contact, b0, b1, speed = (ca.SX.sym(name, P) for name in ("contact", "beyond_v0", "beyond_v1", "speed"))
@@ -87,7 +88,8 @@ def rhs_function(model: ImpactModel) -> ca.Function:
                       (slip - pair.v0 * (1 - HYSTERESIS * b0[k])) / pair.v0,
                       (slip - pair.v1 * (1 - HYSTERESIS * b1[k])) / pair.v1]
     accelerations, reaction = pinned_accelerations(model, Q)
-    works[4] += ca.dot(reaction, ca.mtimes(ca.jacobian(model.constraints, q), v))  # pins on moving supports
+    pins_power = ca.dot(reaction, ca.mtimes(ca.jacobian(model.constraints, q), v))  # pins on moving supports
+    works[WORKS.index("input_work")] += pins_power
     ydot = ca.vertcat(v, accelerations, *works)
     column = [ca.vertcat(*items) for items in zip(*forces)]
     return ca.Function("rhs", [q, v, model.t, contact, b0, b1, speed, p],
