@@ -15,7 +15,9 @@ from fastapi_offline import FastAPIOffline
 
 from api.errors import install_error_handlers
 from api.limits import BodySizeLimit
-from api.routers import contacts, examples, health, impact_studies, jobs, optimize, simulations, solve, sweeps
+from api.routers import (contacts, drawings, examples, health, impact_studies, jobs, optimize, simulations, solve,
+                         sweeps)
+from api.routers.workbench import mount_workbench
 from api.state import Services, SolverThread
 from service.analyses import ANALYSES
 from service.threads import single_threaded_blas
@@ -68,8 +70,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     # The /docs page's scripts come from the package (fastapi-offline), not a CDN: it works offline.
     app = FastAPIOffline(title="flexmech", version="1", description=DESCRIPTION, lifespan=lifespan, redoc_url=None)
     install_error_handlers(app)
-    for module in (solve, sweeps, optimize, contacts, simulations, impact_studies, jobs, examples, health):
+    for module in (solve, sweeps, optimize, contacts, simulations, impact_studies, jobs, examples, drawings, health):
         app.include_router(module.router)
+    mount_workbench(app)
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_request_bytes, read_timeout=settings.request_read_timeout)
     _list_analyses_in_schema(app)
     return app

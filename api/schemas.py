@@ -1,9 +1,7 @@
 """Request and response schemas of the HTTP API, shared by the server and the Python client.
 
-Only pydantic here: the client imports this module without CasADi or FastAPI. Numbers in
-requests and responses are in the units the mechanism document declares (its `units`), and
-each response says which unit goes with which number.
-"""
+Only pydantic here: the client imports this module without CasADi or FastAPI. Numbers in requests and responses are
+in the units the mechanism document declares (its `units`), and each response says which unit goes with which number."""
 
 from __future__ import annotations
 
@@ -12,8 +10,9 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-# The models of a curved beam: models.MODELS, which a test pins this list to (the client does
-# not import the core).
+from api.trace_schemas import TraceIn
+
+# The models of a curved beam: models.MODELS, which a test pins this list to (the client does not import the core).
 Model = Literal["linear", "partial_nonlinear", "exact", "conservative"]
 JobStatusName = Literal["queued", "running", "succeeded", "failed", "cancelled"]
 PointStatus = Literal["converged", "not_converged", "singular", "time_limit", "infeasible"]
@@ -112,6 +111,7 @@ class SolveRequest(DocumentRequest):
                                          "progress): friction opposes the sliding this motion causes")
     thesis_recovery: bool = Field(False, description="contact: also the thesis' recovery of the forces from the "
                                                      "frictionless shape (Lan 2005 Eqs. 6.6-6.10), labelled")
+    trace: TraceIn | None = Field(None, description="trace: the path followed (default: the document's sweep section)")
     simulate: dict[str, Any] | None = Field(
         None, description="simulate: fields of the document's `simulate` section (until, step, scheme, histories, "
                           "...) that override it")

@@ -14,6 +14,7 @@ system), else its eigenvalues' real parts are positive.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import lru_cache
 
@@ -151,12 +152,14 @@ def _trace(mech: Mechanism, path: str, stop: float, step: float) -> _Trace:
 
 
 def trace_path(mech: Mechanism, path: str, stop: float, step: float, max_points: int = 400,
-               options: NewtonOptions = NewtonOptions(), max_step: float | None = None) -> PathResult:
+               options: NewtonOptions = NewtonOptions(), max_step: float | None = None,
+               should_stop: Callable[[], bool] | None = None) -> PathResult:
     """Follow the equilibrium path from the document's value of `path` until the field passes
     `stop` (document units), through any limit points. `step`: first arc-length step, in
     document units of the field (the arc length also counts the nondimensional state, so
     steps near limit points move the state rather than the load); max_step caps it (default
-    10 x step)."""
+    10 x step). should_stop() is asked before each point: True ends the path as "stopped"
+    (a time limit, a cancel) with the points so far."""
     started = time.perf_counter()
     t = _trace(mech, path, stop, step)
     slot, factor, unit, p, path_fn, direction = t.slot, t.factor, t.unit, t.p, t.path_fn, t.direction
@@ -171,6 +174,9 @@ def trace_path(mech: Mechanism, path: str, stop: float, step: float, max_points:
     points = [_point(mech, path_fn, z, lam, p, slot, tangent, factor)]
     limits: list[LimitPoint] = []
     while len(points) < max_points:
+        if should_stop is not None and should_stop():
+            return PathResult("stopped", f"stopped after {len(points)} points at {lam / factor:.6g} {unit}", path, unit,
+                              points, limits, time.perf_counter() - started)
         x = np.append(z, lam)
         ok, x_new, iterations = _correct(path_fn, x + ds * tangent, tangent, p, options)
         if not ok:

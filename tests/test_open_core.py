@@ -115,10 +115,10 @@ def test_an_unknown_analysis_names_the_field_and_the_choices(api_server):
     error = r.json()["error"]
     assert error["pointer"] == "/analysis"
     assert error["message"] == ("/analysis: unknown analysis 'simulation' (analyses: equilibrium, linearization, "
-                                "inverse, energy, contact, simulate)")
+                                "trace, inverse, energy, contact, simulate)")
     schema = httpx.get(api_server.url + "/openapi.json").json()["components"]["schemas"]
-    assert schema["SolveRequest"]["properties"]["analysis"]["enum"] == ["equilibrium", "linearization", "inverse", "energy",
-                                                                       "contact", "simulate"]
+    assert schema["SolveRequest"]["properties"]["analysis"]["enum"] == ["equilibrium", "linearization", "trace",
+                                                                       "inverse", "energy", "contact", "simulate"]
     assert schema["SweepRequest"]["properties"]["analysis"]["enum"] == ["equilibrium", "energy"]
 
 

@@ -15,7 +15,7 @@ router = APIRouter(prefix="/v1", tags=["solve"])
 
 # The request fields an analysis may read (the rest say which mechanism and how to solve it).
 ANALYSIS_FIELDS = ("target", "stiffness", "sensitivities", "at", "displacements", "penetrating_start", "motion",
-                   "thesis_recovery", "simulate")
+                   "thesis_recovery", "simulate", "trace")
 
 
 def _solve(request: SolveRequest, document: dict, limits: Limits) -> dict:
@@ -26,7 +26,7 @@ def _solve(request: SolveRequest, document: dict, limits: Limits) -> dict:
 
 
 @router.post("/solve", operation_id="solve", response_model=SolveResponse, responses=ERRORS,
-             summary="Solve one mechanism: equilibrium, linearization, inverse, energy, contact")
+             summary="Solve one mechanism: equilibrium, linearization, trace, inverse, energy, contact, simulate")
 async def solve(request: SolveRequest, services: ServicesDep, _owner: OwnerDep) -> dict:
     """Runs in the server process. Non-convergence is a 200 with `status` and diagnostics; a
     document that cannot be modelled is a 422 naming the field."""

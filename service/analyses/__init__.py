@@ -8,10 +8,12 @@ from service.analyses.equilibrium import EQUILIBRIUM
 from service.analyses.inverse import INVERSE
 from service.analyses.linearization import LINEARIZATION
 from service.analyses.simulate import SIMULATE
+from service.analyses.trace import TRACE
 
 ANALYSES = Analyses([
     EQUILIBRIUM,
     LINEARIZATION,
+    TRACE,
     INVERSE,
     ENERGY,
     CONTACT,

@@ -21,7 +21,9 @@ def solution_report(mech: Mechanism, result: EquilibriumResult, analysis: str) -
             "output_units": output_units(mech), "displacement_units": coordinate_units(mech)}
 
 
-def _solve(mech: Mechanism, options: NewtonOptions, target: dict | None) -> tuple[EquilibriumResult, TargetResult | None]:
+def solve_state(mech: Mechanism, options: NewtonOptions, target: dict | None) -> tuple[EquilibriumResult, TargetResult | None]:
+    """The equilibrium under the document's loads, or for a target {path, output, equals};
+    errors name the request's field (/target/... or /document/...)."""
     try:
         if target is None:
             return solve_equilibrium(mech, options), None
@@ -46,7 +48,7 @@ def equilibrium_report(mech: Mechanism, options: NewtonOptions, stiffness: bool 
     actuation force that closes a gripper; reported under "target".
     sensitivities = {parameters, outputs}: d(outputs)/d(parameters) at the solution (the
     target's field following), reported under "sensitivities"."""
-    result, found = _solve(mech, options, target)
+    result, found = solve_state(mech, options, target)
     mech = result.mechanism
     report = solution_report(mech, result, "equilibrium")
     if found is not None:

@@ -16,7 +16,7 @@ from service.analyses import ANALYSES, Analysis, AnalysisRequest
 from service.analyses.equilibrium import solution_report
 from service.cli.application import app
 from service.cli.common import (EXIT_NOT_CONVERGED, OptionError, check_plot_option, consoles, number, save_plot,
-                                user_errors, write_json)
+                                table_of, user_errors, write_json)
 from service.cli.options import (DocArg, JacobianOpt, JsonOpt, LineSearchOpt, MaxIterOpt, ModelOpt, PlotOpt, SetOpt,
                                  mechanism, newton_options, overrides)
 from service.cli.report_tables import print_solution, print_stiffness, print_status, print_wrenches
@@ -70,12 +70,28 @@ def print_report(out: Console, mech: Mechanism, report: dict, stiffness: bool) -
                 out.print(f"[yellow]warning:[/yellow] {escape(note)}")
         else:
             out.print("[yellow]no equilibrium found: the last iterate is not reported as a solution[/yellow]")
+    if "limit_points" in report:
+        print_path_summary(out, report)
     if "wrenches" in report:
         print_wrenches(out, report)
     if "stiffness" in report:
         print_stiffness(out, report["stiffness"])
     elif stiffness and report["status"] == "converged":
         out.print(f"[yellow]warning:[/yellow] --stiffness: the {report['analysis']} analysis reports no stiffness")
+
+
+def print_path_summary(out: Console, report: dict) -> None:
+    """A trace's extent and its limit points (`flexmech trace` tables the path; the --json file
+    has every point)."""
+    values, unit, limits = report["values"], report["unit"], report["limit_points"]
+    if values:
+        out.print(f"path of {escape(report['path'])} (from the {report['source']}): {len(values)} points from "
+                  f"{number(values[0], unit)} to {number(values[-1], unit)}, {len(limits)} limit points")
+    if limits:
+        table = table_of("limit points", "kind", f"{report['path']} [{unit}]", "after point")
+        for lp in limits:
+            table.add_row(lp["kind"], number(lp["value"]), str(lp["after_point"]))
+        out.print(table)
 
 
 def check_solve_options(analysis: Analysis, plot: Path | None) -> None:

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from models import Mechanism, MechanismError
+from service.contact.drawing import state_drawing
 from service.contact.problem import ContactProblem
 from service.contact.report import friction_coefficients, pairs_report
 from service.contact.solve import ContactOptions, ContactState, empty_mode, solve_state
@@ -87,8 +88,8 @@ def resumed_state(problem: ContactProblem, p: np.ndarray, stored: dict) -> Conta
 
 def state_record(mech: Mechanism, problem: ContactProblem, state: ContactState, values: list[float],
                  outputs: list[str]) -> dict:
-    """A state as stored: its values, status, pairs, chosen outputs (document units), and
-    what a resumed path needs to go on from it."""
+    """A state as stored: its values, status, pairs, chosen outputs and its drawing (document
+    units), and what a resumed path needs to go on from it."""
     mode = state.mode
     y = np.asarray(problem.outputs(state.v, state.p, mode.phi, mode.stick, mode.weights), dtype=float).ravel()
     open_pairs = {pair.name for pair, state_of in zip(problem.structure.contacts.pairs, state.pair_states)
@@ -102,6 +103,7 @@ def state_record(mech: Mechanism, problem: ContactProblem, state: ContactState, 
             chosen[name] = 0.0 if problem.output_kinds[k] == "force" else None
     return {"values": values, "status": state.status, "message": state.message, "iterations": state.iterations,
             "seconds": state.seconds, "pairs": pairs_report(mech, problem, state), "outputs": chosen,
+            "drawing": state_drawing(mech, problem, state),
             "state": {"v": state.v.tolist(), "sigma": state.sigma.tolist()}}
 
 

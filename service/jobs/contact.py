@@ -57,7 +57,9 @@ class ContactJob(InOrder):
         problem = contact_problem_of(mech)
         fields = path_fields(mech, parameters)
         outputs = wanted_outputs(spec, problem)
-        check_result_size(total, len(outputs) + problem.n_w + problem.n_eq + problem.n_in + 2 * problem.n_pairs, limits)
+        drawn = 3 * sum(count for _, count in problem.drawn_links) + sum(count for _, count, _ in problem.drawn_jaws)
+        per_state = len(outputs) + problem.n_w + problem.n_eq + problem.n_in + 2 * problem.n_pairs
+        check_result_size(total, per_state + 2 * (drawn + 73 * problem.n_pairs), limits)
         units = [mech.doc_unit(mech.parameter_kind(p)) for p in fields.pointers]
         meta = {"parameters": [{"path": p, "unit": u, "values": list(v)} for p, u, v in zip(fields.pointers, units, fields.values)],
                 "output_units": {n: mech.doc_unit(problem.output_kinds[problem.output_names.index(n)]) for n in outputs},

@@ -1,0 +1,60 @@
+"""POST /v1/drawings: a mechanism drawn to scale; POST /v1/documents/parse: document text
+(JSON or YAML) read into a document. The workbench page draws and edits with them."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from fastapi import APIRouter
+from fastapi.concurrency import run_in_threadpool
+
+from api.deps import OwnerDep, ServicesDep
+from api.documents import request_document
+from api.drawing_schemas import DocumentText, DrawingRequest
+from api.responses import ERRORS
+from models import MechanismError
+from models.reading import parse_json, parse_yaml
+from service.analyses.equilibrium import solve_state
+from service.drawing import mechanism_drawing
+from service.reports import plain
+from service.requests import Limits, compile_request, newton_options
+
+router = APIRouter(prefix="/v1", tags=["workbench"])
+
+
+def _drawing(request: DrawingRequest, document: dict, limits: Limits) -> dict:
+    mech = compile_request(document, request.model, request.overrides, limits)
+    if request.state == "undeformed":
+        return plain({"status": "undeformed", **mechanism_drawing(mech)})
+    options = newton_options(request.options.given() if request.options else None, limits.solve_time_limit)
+    result, _ = solve_state(mech, options, None)
+    drawing = mechanism_drawing(result.mechanism, result.z, result.outputs())
+    return plain({"status": result.status, **drawing})
+
+
+@router.post("/drawings", operation_id="draw", response_model=dict[str, Any], responses=ERRORS,
+             summary="The mechanism drawn to scale: centre lines, bodies, joints, objects, loads (document units)")
+async def draw(request: DrawingRequest, services: ServicesDep, _owner: OwnerDep) -> dict:
+    """Outlines a body carries are drawn undeformed with its name; a pose [dx, dy, rotation
+    (rad)] about the body's reference point moves them. With state "equilibrium", `deformed`
+    holds the deformed centre lines and every body's pose, and `status` the solve's."""
+    document = request_document(request, services)
+    return await services.solver.call(_drawing, request, document, services.limits)
+
+
+def _parsed(request: DocumentText) -> dict:
+    text = request.text
+    as_json = request.format == "json" or (request.format == "auto" and text.lstrip().startswith("{"))
+    document = parse_json(text) if as_json else parse_yaml(text)
+    if not isinstance(document, dict):
+        raise MechanismError("/text", f"a document is a mapping of sections, not {type(document).__name__}")
+    return {"document": document, "format": "json" if as_json else "yaml"}
+
+
+@router.post("/documents/parse", operation_id="parse_document", response_model=dict[str, Any], responses=ERRORS,
+             summary="Document text (JSON or YAML) read into a document")
+async def parse_document(request: DocumentText, _owner: OwnerDep) -> dict:
+    try:
+        return await run_in_threadpool(_parsed, request)
+    except MechanismError as exc:
+        raise MechanismError("/text", exc.problem) from None

@@ -1,0 +1,63 @@
+// The animation of a result's frames (simulation states, contact path states): a slider
+// (keyboard: arrows, Home, End), Play/Pause, and the frame's label (time or field value).
+
+import { drawScene, sceneBounds } from "./scene.js";
+
+const $ = (id) => document.getElementById(id);
+const PLAY_SECONDS = 8; // a whole animation, whatever its number of frames
+const BOUND_SAMPLES = 200; // frames looked at for the drawing's fixed extent
+
+let current = { drawing: null, frames: [], bounds: null, playing: false };
+
+export function showFrame(index) {
+  const { drawing, frames, bounds } = current;
+  if (!drawing || !frames.length) return;
+  const k = Math.max(0, Math.min(frames.length - 1, index));
+  $("frame").value = String(k);
+  drawScene($("drawing"), drawing, frames[k], bounds);
+  $("frame-label").textContent = `${k + 1} / ${frames.length}: ${frames[k].label || ""}`;
+}
+
+function stop() {
+  current.playing = false;
+  $("play").textContent = "Play";
+  $("play").setAttribute("aria-pressed", "false");
+}
+
+function play() {
+  const { frames } = current;
+  if (frames.length < 2) return;
+  current.playing = true;
+  $("play").textContent = "Pause";
+  $("play").setAttribute("aria-pressed", "true");
+  let start = null;
+  const first = Number($("frame").value) >= frames.length - 1 ? 0 : Number($("frame").value);
+  const tick = (now) => {
+    if (!current.playing) return;
+    if (start === null) start = now;
+    const k = first + Math.floor(((now - start) / 1000 / PLAY_SECONDS) * frames.length);
+    showFrame(k);
+    if (k >= frames.length - 1) { stop(); return; }
+    requestAnimationFrame(tick);
+  };
+  requestAnimationFrame(tick);
+}
+
+export function setFrames(drawing, frames) {
+  stop();
+  const every = Math.max(1, Math.floor(frames.length / BOUND_SAMPLES));
+  const sampled = frames.filter((_, i) => i % every === 0 || i === frames.length - 1);
+  current = { drawing, frames, bounds: frames.length ? sceneBounds(drawing, [null, ...sampled]) : null, playing: false };
+  $("animation").hidden = frames.length < 2;
+  $("frame").max = String(Math.max(0, frames.length - 1));
+  if (frames.length) showFrame(frames.length - 1);
+}
+
+export function clearFrames() {
+  setFrames(null, []);
+}
+
+export function wireAnimation() {
+  $("frame").addEventListener("input", () => { stop(); showFrame(Number($("frame").value)); });
+  $("play").addEventListener("click", () => (current.playing ? stop() : play()));
+}

@@ -1,0 +1,52 @@
+// The /v1 API as the page uses it: JSON in and out, the API key in X-API-Key (kept in the
+// browser's local storage), and errors as ApiProblem carrying the pointer the server names.
+
+const KEY_STORE = "flexmech.apiKey";
+
+export class ApiProblem extends Error {
+  constructor(status, message, pointer) {
+    super(message);
+    this.status = status;
+    this.pointer = pointer || null;
+  }
+}
+
+export function apiKey() {
+  return localStorage.getItem(KEY_STORE) || "";
+}
+
+export function setApiKey(key) {
+  if (key) localStorage.setItem(KEY_STORE, key);
+  else localStorage.removeItem(KEY_STORE);
+}
+
+async function call(method, path, body) {
+  const headers = { Accept: "application/json" };
+  if (apiKey()) headers["X-API-Key"] = apiKey();
+  if (body !== undefined) headers["Content-Type"] = "application/json";
+  let response;
+  try {
+    response = await fetch(path, { method, headers, body: body === undefined ? undefined : JSON.stringify(body) });
+  } catch (error) {
+    throw new ApiProblem(0, `the service did not answer (${error.message})`, null);
+  }
+  const text = await response.text();
+  let data = null;
+  try { data = text ? JSON.parse(text) : null; } catch { data = null; }
+  if (!response.ok) {
+    const problem = (data && data.error) || {};
+    throw new ApiProblem(response.status, problem.message || `${response.status} ${response.statusText}`, problem.pointer);
+  }
+  return data;
+}
+
+export const get = (path) => call("GET", path);
+export const post = (path, body) => call("POST", path, body);
+export const remove = (path) => call("DELETE", path);
+
+// A pointer of the request body into the document: /document/elements/c/to -> /elements/c/to.
+export function documentPointer(pointer) {
+  if (!pointer) return null;
+  if (pointer === "/document") return "";
+  return pointer.startsWith("/document/") ? pointer.slice("/document".length) : null;
+}

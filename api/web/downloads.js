@@ -1,0 +1,39 @@
+// Downloads of what the page shows: the result as JSON, its series or table as CSV, and the
+// visible figure (drawing, curve or energies) as SVG or PNG. Files are made in the browser.
+
+import { svgMarkup, svgToPngBlob } from "./plot.js";
+
+function save(blob, name) {
+  const link = document.createElement("a");
+  link.href = URL.createObjectURL(blob);
+  link.download = name;
+  document.body.append(link);
+  link.click();
+  link.remove();
+  setTimeout(() => URL.revokeObjectURL(link.href), 10_000);
+}
+
+const slug = (text) => (text || "flexmech").toLowerCase().replace(/[^a-z0-9]+/g, "-").replace(/^-|-$/g, "").slice(0, 60);
+
+// The figure of the open tab: the curve or the energies, else the mechanism.
+function visibleFigure() {
+  const tab = document.querySelector('[role=tab][aria-selected=true]');
+  const panel = tab && document.getElementById(tab.getAttribute("aria-controls"));
+  return (panel && panel.querySelector("svg")) || document.querySelector("#drawing svg");
+}
+
+export function wireDownloads(state) {
+  const name = () => slug(state.name);
+  document.getElementById("download-json").addEventListener("click", () =>
+    save(new Blob([JSON.stringify(state.result, null, 2)], { type: "application/json" }), `${name()}.json`));
+  document.getElementById("download-csv").addEventListener("click", () =>
+    save(new Blob([state.csv()], { type: "text/csv" }), `${name()}.csv`));
+  document.getElementById("download-svg").addEventListener("click", () => {
+    const svg = visibleFigure();
+    if (svg) save(new Blob([svgMarkup(svg)], { type: "image/svg+xml" }), `${name()}.svg`);
+  });
+  document.getElementById("download-png").addEventListener("click", async () => {
+    const svg = visibleFigure();
+    if (svg) save(await svgToPngBlob(svg), `${name()}.png`);
+  });
+}

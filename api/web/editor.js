@@ -1,0 +1,153 @@
+// The document editor: its text (JSON or YAML) read into a document, and problems shown at
+// the field they name (the JSON pointer), with the text of that field selected on request.
+
+import { ApiProblem, post } from "./api.js";
+
+const editor = () => document.getElementById("editor");
+
+export function setText(text) {
+  editor().value = text;
+}
+
+export function text() {
+  return editor().value;
+}
+
+// The document in the editor; JSON is read here, YAML by the service (the page has no YAML reader).
+export async function readDocument() {
+  const source = text();
+  if (source.trim().startsWith("{")) {
+    try {
+      return JSON.parse(source);
+    } catch (error) {
+      throw new ApiProblem(422, `the document is not valid JSON: ${error.message}`, "");
+    }
+  }
+  const parsed = await post("/v1/documents/parse", { text: source, format: "yaml" });
+  return parsed.document;
+}
+
+function unescapePointerToken(token) {
+  return token.replace(/~1/g, "/").replace(/~0/g, "~");
+}
+
+// Where the value at `pointer` starts in JSON text: [start, end) or null. A small scanner
+// that follows keys and array indices; strings are skipped whole.
+export function locateInJson(source, pointer) {
+  const tokens = pointer.split("/").slice(1).map(unescapePointerToken);
+  let at = 0;
+  const skipSpace = () => { while (at < source.length && /\s/.test(source[at])) at++; };
+  const readString = () => { const start = at++; while (at < source.length && source[at] !== '"') at += source[at] === "\\" ? 2 : 1; at++; return JSON.parse(source.slice(start, at)); };
+  const skipValue = () => {
+    skipSpace();
+    if (source[at] === '"') { readString(); return; }
+    if (source[at] === "{" || source[at] === "[") {
+      let depth = 0;
+      do {
+        if (source[at] === '"') { readString(); continue; }
+        if (source[at] === "{" || source[at] === "[") depth++;
+        if (source[at] === "}" || source[at] === "]") depth--;
+        at++;
+      } while (depth > 0 && at < source.length);
+      return;
+    }
+    while (at < source.length && !/[,}\]\s]/.test(source[at])) at++;
+  };
+  for (const token of tokens) {
+    skipSpace();
+    const open = source[at];
+    if (open !== "{" && open !== "[") return null;
+    at++;
+    let found = false;
+    for (let index = 0; !found; index++) {
+      skipSpace();
+      if (source[at] === "}" || source[at] === "]" || at >= source.length) return null;
+      if (open === "{") {
+        const key = readString();
+        skipSpace(); at++; // the colon
+        if (key === token) { found = true; break; }
+      } else if (String(index) === token) { found = true; break; }
+      skipValue(); skipSpace();
+      if (source[at] === ",") at++;
+    }
+  }
+  skipSpace();
+  const start = at;
+  skipValue();
+  return [start, at];
+}
+
+// Where `pointer` is in YAML text (block style): each token a key, or the n-th "- " item,
+// indented deeper than the one before.
+export function locateInYaml(source, pointer) {
+  const tokens = pointer.split("/").slice(1).map(unescapePointerToken);
+  const lines = source.split("\n");
+  const starts = [];
+  let total = 0;
+  for (const text of lines) { starts.push(total); total += text.length + 1; }
+  let line = -1, indent = -1;
+  for (const token of tokens) {
+    let hit = -1, items = -1;
+    for (let i = line + 1; i < lines.length; i++) {
+      const current = lines[i].search(/\S/);
+      if (current < 0 || lines[i].trim().startsWith("#")) continue;
+      if (current <= indent) break;
+      const body = lines[i].slice(current);
+      if (/^\d+$/.test(token) && body.startsWith("- ")) {
+        items++;
+        if (String(items) === token) { hit = i; break; }
+        continue;
+      }
+      const key = body.replace(/^- /, "");
+      if ([`${token}:`, `"${token}":`, `'${token}':`].some((k) => key.startsWith(k))) { hit = i; break; }
+    }
+    if (hit < 0) return null;
+    line = hit;
+    indent = lines[hit].search(/\S/);
+  }
+  return line < 0 ? null : [starts[line] + indent, starts[line] + lines[line].length];
+}
+
+export function locate(pointer) {
+  if (pointer === null || pointer === undefined) return null;
+  const source = text();
+  if (pointer === "") return [0, 0];
+  return source.trim().startsWith("{") ? locateInJson(source, pointer) : locateInYaml(source, pointer);
+}
+
+export function select(pointer) {
+  const range = locate(pointer);
+  if (!range) return false;
+  const area = editor();
+  area.focus();
+  area.setSelectionRange(range[0], range[1]);
+  const lineHeight = parseFloat(getComputedStyle(area).lineHeight) || 16;
+  area.scrollTop = Math.max(0, (area.value.slice(0, range[0]).split("\n").length - 4) * lineHeight);
+  return true;
+}
+
+// Problems listed under the editor; each names its field and can select it in the text.
+export function showProblems(problems) {
+  const list = document.getElementById("problems");
+  list.replaceChildren();
+  for (const { pointer, message } of problems) {
+    const item = document.createElement("li");
+    item.className = "problem";
+    if (pointer !== null && pointer !== undefined) item.dataset.pointer = pointer;
+    const where = document.createElement("code");
+    where.textContent = pointer ? pointer : pointer === "" ? "(the document)" : "(the request)";
+    const text = document.createElement("span");
+    text.className = "problem-message";
+    text.textContent = ` ${message.replace(/^\/document[^:]*: /, "").replace(/^\/[^:\s]*: /, "")}`;
+    item.append(where, text);
+    if (pointer && locate(pointer)) {
+      const show = document.createElement("button");
+      show.type = "button";
+      show.textContent = "show";
+      show.setAttribute("aria-label", `show ${pointer} in the document`);
+      show.addEventListener("click", () => select(pointer));
+      item.append(show);
+    }
+    list.append(item);
+  }
+}

@@ -1,0 +1,65 @@
+// Following a job: its progress polled from /v1/jobs/{id} until it finishes, its result read
+// a page at a time, and Cancel (DELETE). The document a job was started with is kept in the
+// browser's session storage, so the job's own page (/jobs/{id}) can draw the mechanism.
+
+import { get, remove } from "./api.js";
+
+const $ = (id) => document.getElementById(id);
+const POLL_MS = 250;
+const FINAL = ["succeeded", "failed", "cancelled"];
+
+export function rememberDocument(id, doc, model) {
+  try { sessionStorage.setItem(`flexmech.job.${id}`, JSON.stringify({ doc, model })); } catch { /* storage full: the page still works */ }
+}
+
+export function rememberedDocument(id) {
+  try { return JSON.parse(sessionStorage.getItem(`flexmech.job.${id}`) || "null"); } catch { return null; }
+}
+
+export function showProgress(status) {
+  const { done, total, fraction, failed_points: failed } = status.progress;
+  const percent = Math.round(fraction * 100);
+  $("job").hidden = false;
+  $("progress").value = percent;
+  $("progress-text").textContent = `${status.kind} ${status.status}: ${percent} % (${done} of ${total}${failed ? `, ${failed} not converged` : ""})`;
+  $("job-link").href = `/jobs/${status.id}`;
+  $("job-link").textContent = `job ${status.id.slice(0, 8)}`;
+  $("cancel").disabled = FINAL.includes(status.status);
+}
+
+// Every page of the result (a sweep's points come in pages).
+export async function fullResult(id) {
+  const first = await get(`/v1/jobs/${id}/result`);
+  const points = first.result && first.result.points;
+  let page = first.page;
+  while (page && points && page.returned > 0 && page.returned === page.limit) {
+    const next = await get(`/v1/jobs/${id}/result?offset=${points.length}`);
+    points.push(...next.result.points);
+    page = next.page;
+  }
+  return first;
+}
+
+// Poll until the job is final; resolves its last status. `onTick(status)` runs at each poll.
+export function follow(id, onTick) {
+  return new Promise((resolve, reject) => {
+    const poll = async () => {
+      try {
+        const status = await get(`/v1/jobs/${id}`);
+        showProgress(status);
+        onTick && onTick(status);
+        if (FINAL.includes(status.status)) resolve(status);
+        else setTimeout(poll, POLL_MS);
+      } catch (error) {
+        reject(error);
+      }
+    };
+    poll();
+  });
+}
+
+export async function cancel(id) {
+  const status = await remove(`/v1/jobs/${id}`);
+  showProgress(status);
+  return status;
+}

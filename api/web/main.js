@@ -1,0 +1,201 @@
+// The workbench page: open an example or your own document, see it drawn to scale, run any
+// analysis or job the service offers, and look at the result (tables, curves, energies,
+// animation, downloads). On /jobs/{id} it follows that job.
+
+import { ApiProblem, apiKey, documentPointer, get, post, setApiKey } from "./api.js";
+import { clearFrames, setFrames, wireAnimation } from "./animation.js";
+import { readDocument, setText, showProblems } from "./editor.js";
+import { buildRequest, choices, renderForm } from "./forms.js";
+import { jobView } from "./jobviews.js";
+import { cancel, fullResult, follow, rememberDocument, rememberedDocument, showProgress } from "./jobs.js";
+import { csvOf, fillCurveChoices, renderCurve, renderEnergies, renderTables } from "./render.js";
+import { resultView } from "./results.js";
+import { drawScene } from "./scene.js";
+import { wireDownloads } from "./downloads.js";
+import { wireTabs } from "./tabs.js";
+
+const $ = (id) => document.getElementById(id);
+const DEFAULT_EXAMPLE = "gripper";
+const REDRAW_AFTER_MS = 700;
+// Analyses whose answer is one state of the document's mechanism: drawn deformed after them.
+const DEFORMING = ["equilibrium", "linearization", "energy"];
+
+const state = { loaded: false, doc: null, drawing: null, view: null, result: null, name: "", choices: [], jobId: null, busy: false,
+                csv: () => (state.view ? csvOf(state.view) : "") };
+
+function say(id, text, failed = false) {
+  $(id).textContent = text;
+  $(id).classList.toggle("failed", failed);
+}
+
+// A problem from the service or the page, shown at the field it names.
+function report(error, where = "run-state") {
+  if (!(error instanceof ApiProblem)) { say(where, String(error.message || error), true); return; }
+  const inDocument = documentPointer(error.pointer);
+  showProblems([{ pointer: inDocument ?? error.pointer, message: error.message }]);
+  say(where, inDocument !== null ? "The document has a problem (listed under it)." : error.message, true);
+}
+
+async function draw(deformed = null) {
+  const doc = await readDocument();
+  state.doc = doc;
+  const model = $("model").value || undefined;
+  const body = { document: doc, model, ...(deformed ? { state: "equilibrium", overrides: deformed.overrides || {} } : {}) };
+  state.drawing = await post("/v1/drawings", body);
+  state.name = doc.name || "mechanism";
+  $("mechanism-name").textContent = state.name;
+  const frame = deformed && state.drawing.deformed ? { ...state.drawing.deformed, about: "reference" } : null;
+  drawScene($("drawing"), state.drawing, frame);
+  $("drawing-caption").textContent = frame ? `Deformed (solid) over undeformed (dashed); ${state.drawing.status}.` : "Undeformed, to scale.";
+  showProblems([]);
+  say("document-state", "");
+  performance.mark("flexmech-drawn");
+}
+
+async function redraw() {
+  try { clearFrames(); await draw(); } catch (error) { report(error, "document-state"); }
+}
+
+async function openExample(name) {
+  const doc = await get(`/v1/examples/${encodeURIComponent(name)}`);
+  setText(JSON.stringify(doc, null, 2));
+  $("example-select").value = name;
+  state.result = null; state.view = null;
+  await redraw();
+  renderForm($("options"), currentChoice(), state.doc);
+}
+
+function currentChoice() {
+  return state.choices.find((c) => c.id === $("analysis").value) || state.choices[0];
+}
+
+function showView(view, result) {
+  state.view = view; state.result = result;
+  renderTables(view);
+  fillCurveChoices(view);
+  renderCurve(view);
+  renderEnergies(view);
+  $("raw").textContent = JSON.stringify(result, null, 2).slice(0, 200_000);
+  $("download-json").disabled = false;
+  $("download-csv").disabled = false;
+  if (view.frames.length && state.drawing) setFrames(state.drawing, view.frames);
+}
+
+async function runSolve(choice, request) {
+  const report = await post("/v1/solve", request);
+  showView(resultView("solve", report, state.drawing), report);
+  say("run-state", `${choice.analysis}: ${report.status}${report.seconds ? ` in ${report.seconds.toPrecision(3)} s` : ""}`,
+      !["converged", "finished"].includes(report.status));
+  if (DEFORMING.includes(choice.analysis)) {
+    const overrides = { ...(request.overrides || {}) };
+    if (report.target && report.target.value !== null) overrides[report.target.path] = report.target.value;
+    await draw({ overrides });
+  }
+}
+
+async function showJobResult(id, status) {
+  const answer = await fullResult(id);
+  showView(jobView(status.kind, answer.result, state.drawing), answer.result);
+  say("run-state", `job ${status.status}${status.error ? `: ${status.error}` : ""}`, status.status !== "succeeded");
+}
+
+async function runJob(choice, request) {
+  const status = await post(choice.endpoint, request);
+  state.jobId = status.id;
+  rememberDocument(status.id, request.document, request.model);
+  showProgress(status);
+  say("run-state", `${choice.label} running`);
+  const last = await follow(status.id);
+  await showJobResult(status.id, last);
+}
+
+async function run() {
+  if (state.busy) return;
+  state.busy = true; $("run").disabled = true;
+  try {
+    let extra;
+    try { extra = JSON.parse($("extra").value || "{}"); } catch (error) { throw new ApiProblem(422, `/extra: not JSON (${error.message})`, "/extra"); }
+    await draw();
+    clearFrames();
+    const choice = currentChoice();
+    const request = buildRequest(choice, $("options"), state.doc, $("model").value, extra);
+    say("run-state", `${choice.label}: running…`);
+    if (choice.kind === "solve") await runSolve(choice, request);
+    else await runJob(choice, request);
+  } catch (error) {
+    report(error);
+  } finally {
+    state.busy = false; $("run").disabled = false;
+  }
+}
+
+async function cancelJob() {
+  if (!state.jobId) return;
+  try { await cancel(state.jobId); say("run-state", "cancelling…"); } catch (error) { report(error); }
+}
+
+async function analysesOffered() {
+  try {
+    const schema = await get("/openapi.json");
+    return schema.components.schemas.SolveRequest.properties.analysis.enum;
+  } catch {
+    return ["equilibrium", "linearization", "inverse", "energy", "contact", "simulate"];
+  }
+}
+
+async function examples() {
+  const list = await get("/v1/examples");
+  $("example-select").replaceChildren(...list.map((e) => { const o = new Option(e.name, e.name); o.title = e.title; return o; }));
+  return list;
+}
+
+async function followJobPage(id) {
+  const kept = rememberedDocument(id);
+  if (kept) { setText(JSON.stringify(kept.doc, null, 2)); if (kept.model) $("model").value = kept.model; await redraw(); }
+  state.jobId = id;
+  const last = await follow(id);
+  await showJobResult(id, last);
+}
+
+function wire() {
+  $("api-key").value = apiKey();
+  $("api-key").addEventListener("change", () => {
+    setApiKey($("api-key").value.trim());
+    if (!state.loaded) start(); // the first load needed the key
+  });
+  $("open-example").addEventListener("click", () => openExample($("example-select").value).catch(report));
+  $("draw").addEventListener("click", redraw);
+  $("run").addEventListener("click", run);
+  $("cancel").addEventListener("click", cancelJob);
+  $("analysis").addEventListener("change", () => { renderForm($("options"), currentChoice(), state.doc); });
+  $("upload").addEventListener("change", async () => {
+    const file = $("upload").files[0];
+    if (file) { setText(await file.text()); await redraw(); renderForm($("options"), currentChoice(), state.doc); }
+  });
+  let timer = null;
+  $("editor").addEventListener("input", () => { clearTimeout(timer); timer = setTimeout(redraw, REDRAW_AFTER_MS); });
+  for (const id of ["curve-x", "curve-y"]) $(id).addEventListener("change", () => renderCurve(state.view));
+  wireAnimation();
+  wireDownloads(state);
+  wireTabs(() => { renderCurve(state.view); renderEnergies(state.view); });
+}
+
+// Examples, analyses, then the example asked for (?example=) or the job of the address.
+async function load() {
+  const [offered] = await Promise.all([analysesOffered(), examples()]);
+  state.choices = choices(offered);
+  $("analysis").replaceChildren(...state.choices.map((c) => new Option(c.label, c.id)));
+  const job = location.pathname.match(/^\/jobs\/([0-9a-f]{32})$/);
+  const wanted = new URLSearchParams(location.search).get("example") || DEFAULT_EXAMPLE;
+  state.loaded = true;
+  if (job) await followJobPage(job[1]);
+  else await openExample(wanted);
+}
+
+async function start() {
+  try { await load(); } catch (error) { report(error); }
+  document.body.dataset.ready = "true";
+}
+
+wire();
+start();

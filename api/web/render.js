@@ -1,0 +1,107 @@
+// A view (results.js) into the page: the summary and tables of the Outputs tab, curves of any
+// series against any other, energies against time, and CSV of what is shown.
+
+import { formatNumber, linePlot } from "./plot.js";
+
+const $ = (id) => document.getElementById(id);
+
+function cell(row, value, header = false) {
+  const element = document.createElement(header ? "th" : "td");
+  if (typeof value === "number") { element.textContent = formatNumber(value); element.className = "number"; element.title = String(value); }
+  else element.textContent = value === null || value === undefined ? "–" : String(value);
+  row.append(element);
+}
+
+function tableOf({ caption, columns, rows }) {
+  const table = document.createElement("table");
+  table.createCaption().textContent = caption;
+  const head = table.createTHead().insertRow();
+  for (const column of columns) { cell(head, column, true); head.lastChild.scope = "col"; }
+  const body = table.createTBody();
+  for (const values of rows) {
+    const row = body.insertRow();
+    values.forEach((value, i) => cell(row, value, i === 0 && columns[0] !== "point"));
+    if (typeof values[0] === "string") row.dataset.name = values[0];
+  }
+  return table;
+}
+
+function summaryOf(v) {
+  const list = document.createElement("dl");
+  list.className = "summary";
+  for (const [term, detail] of v.summary) {
+    const dt = document.createElement("dt"), dd = document.createElement("dd");
+    dt.textContent = term;
+    dd.textContent = typeof detail === "number" ? formatNumber(detail) : String(detail);
+    if (term === "status") dd.className = ["converged", "finished", "succeeded"].includes(detail) ? "status-ok" : "status-bad";
+    list.append(dt, dd);
+  }
+  return list;
+}
+
+function targetOf(target) {
+  const box = document.createElement("p");
+  box.className = "target";
+  box.id = "target";
+  const value = document.createElement("strong");
+  value.id = "target-value";
+  value.textContent = target.value === null ? "–" : target.value.toFixed(Math.max(0, 4 - Math.floor(Math.log10(Math.abs(target.value) || 1))));
+  box.append(`Target reached at ${target.path} = `, value, ` ${target.unit} (${target.status})`);
+  return box;
+}
+
+export function renderTables(v) {
+  const panel = $("panel-table");
+  panel.replaceChildren(summaryOf(v));
+  if (v.target) panel.append(targetOf(v.target));
+  for (const table of v.tables) if (table && table.rows.length) panel.append(tableOf(table));
+}
+
+function label(v, name) {
+  return v.units[name] ? `${name} [${v.units[name]}]` : name;
+}
+
+export function fillCurveChoices(v) {
+  const names = Object.keys(v.series);
+  for (const [select, index] of [[$("curve-x"), 0], [$("curve-y"), 1]]) {
+    select.replaceChildren(...names.map((name) => new Option(label(v, name), name)));
+    const chosen = v.defaultCurve ? v.defaultCurve[index] : names[index] ?? names[0];
+    if (chosen !== undefined) select.value = chosen;
+  }
+  $("tab-curves").disabled = names.length < 2;
+}
+
+export function renderCurve(v) {
+  const x = $("curve-x").value, y = $("curve-y").value;
+  const box = $("curve");
+  if (!v || !v.series[x] || !v.series[y]) { box.replaceChildren(); return null; }
+  const svg = linePlot({ series: [{ name: y, x: v.series[x], y: v.series[y] }], xLabel: label(v, x), yLabel: label(v, y),
+                         title: `${y} against ${x}`, points: v.series[x].length <= 60 });
+  box.replaceChildren(svg);
+  return svg;
+}
+
+export function renderEnergies(v) {
+  const box = $("energy-plot");
+  $("tab-energies").disabled = !v || !v.energies;
+  if (!v || !v.energies) { box.replaceChildren(); return null; }
+  const { time, series, unit } = v.energies;
+  const svg = linePlot({ series: Object.entries(series).map(([name, values]) => ({ name, x: time, y: values })),
+                         xLabel: "time [s]", yLabel: `energy [${unit}]`, title: "Energies and works" });
+  box.replaceChildren(svg);
+  return svg;
+}
+
+const quote = (value) => (typeof value === "string" && /[",\n]/.test(value) ? `"${value.replace(/"/g, '""')}"` : value ?? "");
+
+// The series as columns (one row per state), else the first table.
+export function csvOf(v) {
+  const names = Object.keys(v.series);
+  if (names.length) {
+    const rows = v.series[names[0]].map((_, i) => names.map((n) => quote(v.series[n][i])).join(","));
+    return [names.map((n) => quote(label(v, n))).join(","), ...rows].join("\n") + "\n";
+  }
+  const table = v.tables.find((t) => t && t.rows.length);
+  if (!table) return "";
+  return [table.columns.map(quote).join(","), ...table.rows.map((r) => r.map(quote).join(","))].join("\n") + "\n";
+}

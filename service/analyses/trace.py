@@ -1,0 +1,149 @@
+"""The trace analysis: the equilibrium path of a numeric field (usually a load) through limit
+points, by pseudo-arc-length continuation (service.continuation.trace_path), as `flexmech
+trace` follows it.
+
+The request's `trace` = {path, stop, step, max_points} (document units of the field) follows
+`path` from its value in the document (overrides applied) until it passes `stop`. Without
+it, the document's sweep section: `path` from sweep.start to sweep.stop, the first step one
+of its steps, |stop - start| / steps.
+
+The report (document units) has the path's points (the field's `value`, `outputs`, `stable`,
+`rising`, the body stiffness' `eigenvalues`), its `limit_points`, and for plotting the same
+numbers as columns: `values` (the field per point) and `outputs` ({output: [value per point]}).
+The work is bounded by max_points (at most MAX_POINTS) and by the time limit of the options:
+a path stopped by it is status "time_limit" with its points so far.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from typing import Any
+
+from models import Mechanism, MechanismError
+from models.units import quantity_to_si
+from service.analyses.base import Analysis, AnalysisRequest
+from service.continuation import trace_path
+from service.newton import NewtonOptions
+from service.reports import output_units, plain
+from service.requests import under
+
+DEFAULT_POINTS = 400
+MAX_POINTS = 100_000
+
+# trace_path's statuses as the statuses of a solve response: the path reached its stop, or it
+# did not (no start, a corrector that failed, or max_points first), or the time limit stopped
+# it. The original is the report's path_status.
+STATUSES = {"completed": "converged", "not_converged": "not_converged", "max_points": "not_converged",
+            "stopped": "time_limit"}
+
+ASK = "give trace {path, stop, step} (on the command line: flexmech trace DOC --path --stop --step)"
+
+
+@dataclass(frozen=True)
+class TraceSpec:
+    path: str
+    stop: float  # document units of the field
+    step: float  # first arc-length step, document units of the field
+    max_points: int
+    start: float | None = None  # from the sweep section: the field's first value; None: the document's
+    source: str = "request"  # request | sweep
+
+
+def _number(given: dict, name: str) -> float:
+    if name not in given or given[name] is None:
+        raise MechanismError(f"/trace/{name}", f"missing: {ASK}")
+    value = given[name]
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise MechanismError(f"/trace/{name}", f"expected a finite number, got {value!r}")
+    return float(value)
+
+
+def _field_checked(mech: Mechanism, path: Any, pointer: str) -> str:
+    if not isinstance(path, str) or not path.startswith("/"):
+        raise MechanismError(pointer, f"expected a JSON pointer of a numeric field, got {path!r}")
+    try:
+        mech.parameter_index(path)
+    except MechanismError as exc:
+        raise MechanismError(pointer, exc.problem) from None
+    return path
+
+
+def requested_spec(mech: Mechanism, given: dict) -> TraceSpec:
+    """The request's trace {path, stop, step, max_points}, each field checked by name."""
+    if not isinstance(given, dict):
+        raise MechanismError("/trace", f"expected an object: {ASK}")
+    unknown = sorted(set(given) - {"path", "stop", "step", "max_points"})
+    if unknown:
+        raise MechanismError(f"/trace/{unknown[0]}", "unknown field (fields: path, stop, step, max_points)")
+    if given.get("path") is None:
+        raise MechanismError("/trace/path", f"missing: {ASK}")
+    path = _field_checked(mech, given["path"], "/trace/path")
+    stop, step = _number(given, "stop"), _number(given, "step")
+    if not step > 0:
+        raise MechanismError("/trace/step", f"must be positive, got {step:g}")
+    points = given.get("max_points", DEFAULT_POINTS)
+    points = DEFAULT_POINTS if points is None else points
+    if isinstance(points, bool) or not isinstance(points, int) or not 2 <= points <= MAX_POINTS:
+        raise MechanismError("/trace/max_points", f"expected a whole number from 2 to {MAX_POINTS}, got {points!r}")
+    return TraceSpec(path, stop, step, points)
+
+
+def sweep_spec(mech: Mechanism) -> TraceSpec:
+    """The document's sweep section as a trace: its path from start to stop, steps long."""
+    sweep = mech.document.sweep
+    if sweep is None or sweep.stop is None:
+        why = "no sweep section" if sweep is None else "a sweep section without a stop"
+        raise MechanismError("/trace", f"the document has {why} to trace by default: {ASK}")
+    path = _field_checked(mech, sweep.path, "/document/sweep/path")
+    kind = mech.parameter_kind(path)
+    unit = mech.doc_unit(kind)
+    start, stop = (quantity_to_si(getattr(sweep, name), kind, unit, f"/document/sweep/{name}") / mech.doc_factor(kind)
+                   for name in ("start", "stop"))
+    if start == stop:
+        raise MechanismError("/trace", f"the document's sweep starts and stops at {start:g} {unit}: {ASK}")
+    return TraceSpec(path, stop, abs(stop - start) / sweep.steps, DEFAULT_POINTS, start, "sweep")
+
+
+def trace_report(mech: Mechanism, options: NewtonOptions, given: dict | None = None) -> dict:
+    """Follow the path (the request's trace, else the document's sweep section) and report it;
+    errors name the request's field (/trace/..., /document/...)."""
+    spec = sweep_spec(mech) if given is None else requested_spec(mech, given)
+    if spec.start is not None:
+        try:
+            mech = mech.with_values({spec.path: spec.start})
+        except MechanismError as exc:
+            raise MechanismError("/document/sweep/start", exc.problem) from None
+    try:
+        deadline = time.perf_counter() + options.time_limit if options.time_limit else None
+        result = trace_path(mech, spec.path, spec.stop, spec.step, spec.max_points, options,
+                            should_stop=(lambda: time.perf_counter() > deadline) if deadline else None)
+    except MechanismError as exc:
+        if exc.pointer in ("/step", "/stop"):
+            where = "/trace" if spec.source == "request" else "/document/sweep"
+            raise MechanismError(where + exc.pointer, exc.problem) from None
+        raise under("/document", exc) from None
+    units = output_units(mech)
+    body = result.to_dict()
+    return plain({
+        "analysis": "trace", "name": mech.document.name, "status": STATUSES.get(result.status, "not_converged"),
+        "path_status": result.status, "message": result.message, "seconds": result.seconds,
+        "path": result.path, "unit": result.unit, "source": spec.source, "start": mech.value(spec.path),
+        "stop": spec.stop, "step": spec.step, "max_points": spec.max_points,
+        "points": body["points"], "limit_points": body["limit_points"],
+        "values": [p.value for p in result.points],
+        "outputs": {name: [p.outputs.get(name) for p in result.points] for name in units},
+        "output_units": units})
+
+
+class TraceAnalysis(Analysis):
+    name = "trace"
+    summary = ("The equilibrium path of a load (any numeric field) through limit points by arc-length continuation, "
+               "with each point's stability and the limit loads located exactly")
+
+    def run(self, mech: Mechanism, request: AnalysisRequest) -> dict:
+        return trace_report(mech, request.options, request.get("trace"))
+
+
+TRACE = TraceAnalysis()

@@ -1,0 +1,95 @@
+"""The drawing the workbench shows (service.drawing over POST /v1/drawings), the document
+text reader (POST /v1/documents/parse), and the page's files as the service serves them."""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+
+import httpx
+import numpy as np
+import pytest
+
+from conftest import EXAMPLES
+from models import compile_mechanism, load_document
+from service import solve_equilibrium
+from service.drawing import mechanism_drawing
+
+WEB = EXAMPLES.parent / "api" / "web"
+
+
+def placed(drawing: dict, pose: list[float], body: str, point) -> np.ndarray:
+    """The page's transformation (scene.js placed()): a body's point moved by its pose."""
+    about = np.asarray(drawing["bodies"][body]["reference"])
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    u = np.asarray(point) - about
+    return about + np.asarray(pose[:2]) + np.array([c * u[0] - s * u[1], s * u[0] + c * u[1]])
+
+
+def test_the_gripper_flexures_are_drawn_on_their_arcs_and_their_ends_move_with_their_bodies(gripper_dict):
+    mech = compile_mechanism(load_document(gripper_dict))
+    result = solve_equilibrium(mech)
+    drawing = mechanism_drawing(result.mechanism, result.z, result.outputs())
+    for element in drawing["elements"]:
+        spec = gripper_dict["elements"][element["name"]]
+        points = np.asarray(element["points"])
+        radii = np.hypot(*(points - spec["center"]).T)
+        assert radii == pytest.approx(spec["radius"], rel=1e-9)  # the undeformed arc
+        a, b = (math.radians(spec["start_angle"] + t) for t in (0.0, spec["arc_angle"]))
+        ends = {tuple(np.round(p, 9)) for p in points[[0, -1]]}
+        arc_ends = {tuple(np.round(np.add(spec["center"], spec["radius"] * np.array([math.cos(t), math.sin(t)])), 9))
+                    for t in (a, b)}
+        assert ends == arc_ends
+        deformed = np.asarray(drawing["deformed"]["elements"][element["name"]])
+        poses = drawing["deformed"]["poses"]
+        for body, undeformed_end, deformed_end in ((element["from"], points[0], deformed[0]),
+                                                   (element["to"], points[-1], deformed[-1])):
+            # a flexure is clamped to its bodies: its ends move rigidly with them
+            assert placed(drawing, poses[body], body, undeformed_end) == pytest.approx(deformed_end, abs=1e-9)
+    outputs = result.outputs()
+    assert drawing["deformed"]["poses"]["input"][1] == pytest.approx(outputs["bodies.input.y"] - 0.2, abs=1e-12)
+    assert drawing["units"]["length"] == "mm" and drawing["loads"][0]["vector"] == [0.0, 50.0]
+
+
+def test_objects_and_impact_surfaces_are_drawn_at_their_size():
+    jaw = mechanism_drawing(compile_mechanism(load_document(EXAMPLES / "gripper_jaw_contact.json")))
+    (fixture,) = jaw["outlines"]
+    assert np.hypot(*(np.asarray(fixture["points"]) - [80, 10.5]).T) == pytest.approx(8.9, rel=1e-12)
+    csfh = mechanism_drawing(compile_mechanism(load_document(EXAMPLES / "csfh.json")))
+    radii = {o["name"]: np.hypot(*np.asarray(o["points"]).T) for o in csfh["outlines"]}
+    assert radii["pin"] == pytest.approx(0.18) and radii["hole"] == pytest.approx(0.20)
+    assert {o["name"]: o["solid"] for o in csfh["outlines"]} == {"pin": True, "hole": False}
+
+
+def test_drawings_and_document_text_over_http(api_server, gripper_dict):
+    url = api_server.url
+    answer = httpx.post(f"{url}/v1/drawings", json={"example": "gripper", "state": "equilibrium"}, timeout=60).json()
+    assert answer["status"] == "converged" and set(answer["deformed"]["poses"]) == {"frame", "input", "coupler", "follower"}
+    broken = json.loads(json.dumps(gripper_dict))
+    broken["elements"]["c"]["to"] = "folower"
+    error = httpx.post(f"{url}/v1/drawings", json={"document": broken}, timeout=60).json()["error"]
+    assert error["pointer"] == "/document/elements/c/to" and "unknown body 'folower'" in error["message"]
+    yaml_text = "name: two bodies\nbodies:\n  ground: {fixed: true, position: [0, 0]}\n"
+    parsed = httpx.post(f"{url}/v1/documents/parse", json={"text": yaml_text}, timeout=30).json()
+    assert parsed == {"document": {"name": "two bodies", "bodies": {"ground": {"fixed": True, "position": [0, 0]}}},
+                      "format": "yaml"}
+    error = httpx.post(f"{url}/v1/documents/parse", json={"text": "bodies: [1, 2\n"}, timeout=30).json()["error"]
+    assert error["status"] == 422 and error["pointer"] == "/text" and "not valid YAML" in error["message"]
+    assert "line 2" in error["message"]
+
+
+def test_the_page_and_its_modules_are_served_from_the_package(api_server):
+    url = api_server.url
+    for path in ("/", "/jobs/0123456789abcdef0123456789abcdef"):
+        page = httpx.get(url + path, timeout=30)
+        assert page.status_code == 200 and page.headers["content-type"].startswith("text/html")
+        assert "default-src 'self'" in page.headers["content-security-policy"]
+        assert '<script type="module" src="/workbench/main.js">' in page.text
+    modules = sorted(WEB.glob("*.js"))
+    for module in modules:
+        served = httpx.get(f"{url}/workbench/{module.name}", timeout=30)
+        assert served.status_code == 200 and served.text == module.read_text()
+        for imported in re.findall(r'from "\./([a-z_]+\.js)"', module.read_text()):
+            assert (WEB / imported).exists(), f"{module.name} imports {imported}, which is not in the package"
+        assert not re.search(r"https?://(?!www\.w3\.org/)", module.read_text()), f"{module.name} names another host"

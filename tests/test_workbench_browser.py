@@ -1,0 +1,274 @@
+"""The workbench page end to end: Debian's Chromium, driven by Playwright, against a live
+uvicorn with API keys on. Each test writes screenshots of its states to out/workbench/; no
+request of the page may leave the machine, and no page may log an error or a warning."""
+
+from __future__ import annotations
+
+import json
+import re
+from urllib.parse import urlsplit
+
+import pytest
+
+from browser import CHROMIUM_FLAGS, PageLog, chromium_path, screenshot
+from conftest import EXAMPLES, Deployment
+
+KEY = "workbench-test-key"
+GRIPPER_CLOSING_FORCE = 77.0346  # uN: the partial non-linear closing force (README, test_sweeps)
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("workbench")
+    env = {"FLEXMECH_DATA_DIR": str(tmp / "data"), "FLEXMECH_WORKERS": "2", "FLEXMECH_CHUNK_SIZE": "2",
+           "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES), "FLEXMECH_API_KEYS": KEY}
+    server = Deployment("sqlite", env, tmp).start()
+    yield server
+    server.stop()
+
+
+@pytest.fixture(scope="module")
+def browser():
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as playwright:
+        chromium = playwright.chromium.launch(executable_path=chromium_path(), headless=True, args=CHROMIUM_FLAGS)
+        yield chromium
+        chromium.close()
+
+
+@pytest.fixture
+def log():
+    return PageLog()
+
+
+@pytest.fixture
+def page(browser, server, log):
+    """A page of the workbench with the API key given (as a user types it once)."""
+    context = browser.new_context(viewport={"width": 1280, "height": 800})
+    context.add_init_script(f"localStorage.setItem('flexmech.apiKey', {json.dumps(KEY)})")
+    page = context.new_page()
+    log.watch(page)
+    page.goto(server.url + "/")
+    page.wait_for_selector("body[data-ready=true]", state="attached", timeout=60_000)
+    yield page
+    assert_local_and_quiet(log, server)
+    context.close()
+
+
+def assert_local_and_quiet(log: PageLog, server) -> None:
+    """Every request went to the server on loopback (blob: and data: URLs are made in the
+    page), and the page logged no error or warning."""
+    origin = urlsplit(server.url).netloc
+    away = [url for url in log.requests if not url.startswith(("blob:", "data:")) and urlsplit(url).netloc != origin]
+    assert log.requests and not away, f"requests that left the machine: {away}"
+    assert not log.problems(log.answered), log.problems(log.answered)
+
+
+def choose(page, analysis: str) -> None:
+    page.select_option("#analysis", analysis)
+
+
+def run_and_wait(page, text: str, timeout: float = 120_000) -> None:
+    page.click("#run")
+    page.wait_for_function("t => document.getElementById('run-state').textContent.includes(t)", arg=text,
+                           timeout=timeout)
+
+
+def element_path(page, name: str) -> str:
+    return page.get_attribute(f'#drawing [data-element="{name}"]', "d")
+
+
+def test_the_page_asks_for_the_key_then_paints_the_gripper_within_a_second(browser, server, log):
+    log.answered = (401,)  # the first visit, without the key
+    context = browser.new_context(viewport={"width": 1280, "height": 800})
+    page = context.new_page()
+    log.watch(page)
+    page.goto(server.url + "/")
+    page.wait_for_selector("body[data-ready=true]", state="attached", timeout=60_000)
+    assert "missing API key" in page.text_content("#run-state")
+    screenshot(page, "01-api-key-asked")
+    page.fill("#api-key", KEY)
+    page.press("#api-key", "Enter")
+    page.wait_for_selector('#drawing [data-element="d"]', timeout=60_000)
+    first = page.evaluate("performance.getEntriesByName('flexmech-drawn')[0].startTime")
+    page.reload()  # the key is kept; the server has the gripper's graphs now
+    page.wait_for_selector('#drawing [data-element="d"]', timeout=60_000)
+    paint = page.evaluate("performance.getEntriesByName('first-contentful-paint')[0].startTime")
+    drawn = page.evaluate("performance.getEntriesByName('flexmech-drawn')[0].startTime")
+    print(f"\nworkbench on loopback: first contentful paint {paint:.0f} ms, gripper drawn {drawn:.0f} ms "
+          f"(first visit, graphs built on the server: {first:.0f} ms)")
+    assert paint < 1000 and drawn < 1000
+    assert page.get_attribute("#drawing svg", "aria-label").endswith("drawn to scale in mm")
+    assert {"x [mm]", "y [mm]"} <= set(page.locator("#drawing .axis-label").all_text_contents())
+    assert page.locator("#drawing [data-body]").count() == 4 and page.locator("#drawing .arrow").count() == 1
+    screenshot(page, "02-gripper-drawn")
+    assert_local_and_quiet(log, server)
+    context.close()
+
+
+def test_the_gripper_closing_force_is_read_from_the_page(page):
+    choose(page, "solve:equilibrium")
+    assert page.is_checked("#option-target")  # from the document's sweep: until end_effector.x = 0
+    assert page.input_value("#option-target_path") == "/loads/actuation/force/1"
+    run_and_wait(page, "equilibrium: converged")
+    shown = page.text_content("#target-value")
+    assert shown.startswith("77.03") and abs(float(shown) - GRIPPER_CLOSING_FORCE) < 1e-3
+    assert "uN" in page.text_content("#target")
+    page.wait_for_function("() => document.getElementById('drawing-caption').textContent.startsWith('Deformed')")
+    undeformed = json.loads(page.evaluate("JSON.stringify(document.querySelector('#drawing [data-element=a]').getAttribute('d'))"))
+    assert undeformed  # the deformed centre line is drawn over the dashed undeformed one
+    row = page.locator('#panel-table tr[data-name="end_effector.x"] td').all_text_contents()
+    assert abs(float(row[0])) < 1e-6 and row[1] == "mm"  # closed: the end effector at x = 0
+    screenshot(page, "03-gripper-closing-force")
+
+
+def test_a_sweep_shows_its_progress_up_to_100_percent_and_its_curve_with_hover(page):
+    choose(page, "job:sweep")
+    page.fill("#option-start", "0")
+    page.fill("#option-stop", "80")
+    page.fill("#option-steps", "40")
+    page.fill("#option-outputs", "end_effector.x, end_effector.y")
+    page.click("#run")
+    page.wait_for_selector("#job:not([hidden])")
+    screenshot(page, "04-sweep-running")
+    page.wait_for_function("() => document.getElementById('progress-text').textContent.includes('succeeded: 100 %')",
+                           timeout=120_000)
+    assert "(41 of 41)" in page.text_content("#progress-text")
+    assert page.get_attribute("#progress", "value") == "100"
+    page.wait_for_function("() => document.getElementById('run-state').textContent.includes('job succeeded')")
+    page.click("#tab-curves")
+    assert page.input_value("#curve-x") == "/loads/actuation/force/1"
+    plot = page.locator("#curve svg")
+    plot.scroll_into_view_if_needed()
+    box = plot.bounding_box()
+    page.mouse.move(box["x"] + box["width"] * 0.55, box["y"] + box["height"] * 0.5)
+    tooltip = page.locator("#curve .plot-tooltip").all_text_contents()
+    assert any(re.search(r"x = [0-9]", text) for text in tooltip), tooltip
+    screenshot(page, "05-sweep-curve-hover")
+
+
+def test_an_unknown_body_is_shown_at_its_pointer(page, log):
+    log.answered = (422,)
+    document = json.loads((EXAMPLES / "gripper.json").read_text())
+    document["elements"]["c"]["to"] = "folower"
+    page.fill("#editor", json.dumps(document, indent=2))
+    page.click("#draw")
+    problem = page.locator('#problems li[data-pointer="/elements/c/to"]')
+    problem.wait_for(timeout=30_000)
+    assert "unknown body 'folower'" in problem.text_content()
+    problem.locator("button").click()  # selects the field in the text
+    selected = page.evaluate("(() => { const e = document.getElementById('editor'); "
+                             "return e.value.slice(e.selectionStart, e.selectionEnd); })()")
+    assert selected == '"folower"'
+    screenshot(page, "06-unknown-body")
+
+
+def test_a_contact_path_runs_as_a_job_and_its_animation_steps(page):
+    page.select_option("#example-select", "gripper_jaw_contact")
+    page.click("#open-example")
+    page.wait_for_function("() => document.getElementById('mechanism-name').textContent.includes('jaw')")
+    choose(page, "job:contact_path")
+    assert page.input_value("#option-path") == "/contacts/objects/fixture/centre/0"
+    page.fill("#option-start", "80")
+    page.fill("#option-stop", "60")
+    page.fill("#option-steps", "8")
+    run_and_wait(page, "job succeeded", timeout=180_000)
+    assert page.get_attribute("#frame", "max") == "8"
+    slider = page.locator("#frame")
+    slider.focus()
+    page.keyboard.press("Home")
+    first = page.text_content("#frame-label")
+    fixture_first = page.get_attribute("#drawing svg g path[fill='#f6e3cc']", "d")
+    screenshot(page, "07-contact-path-first-state")
+    for _ in range(5):
+        page.keyboard.press("ArrowRight")
+    assert page.text_content("#frame-label").startswith("6 / 9") and page.text_content("#frame-label") != first
+    assert "= 67.5 mm" in page.text_content("#frame-label")  # 80 - 5 x 2.5 mm
+    assert page.get_attribute("#drawing svg g path[fill='#f6e3cc']", "d") != fixture_first  # the fixture moved
+    assert page.locator("#drawing .arrow").count() >= 1  # the contact force
+    screenshot(page, "08-contact-path-state-6")
+
+
+def test_a_simulation_animates_the_links_and_plots_its_energies(page):
+    page.select_option("#example-select", "slider_crank_dynamics")
+    page.click("#open-example")
+    page.wait_for_function("() => document.getElementById('mechanism-name').textContent.includes('slider-crank')")
+    choose(page, "solve:simulate")
+    page.fill("#option-until", "0.6")
+    run_and_wait(page, "simulate: finished", timeout=180_000)
+    frames = int(page.get_attribute("#frame", "max")) + 1
+    assert frames > 10
+    page.locator("#frame").focus()
+    page.keyboard.press("Home")
+    assert "t = 0 s" in page.text_content("#frame-label")
+    rod_at_start = element_path(page, "rod")
+    page.keyboard.press("End")
+    assert "t = 0.6 s" in page.text_content("#frame-label")
+    assert element_path(page, "rod") != rod_at_start  # the crank has turned the rod
+    screenshot(page, "09-simulation-last-frame")
+    page.click("#play")
+    page.wait_for_function("() => document.getElementById('play').textContent === 'Play'", timeout=30_000)
+    page.click("#tab-energies")
+    legend = page.locator("#energy-plot svg text").all_text_contents()
+    assert {"kinetic", "input_work"} <= set(legend)
+    screenshot(page, "10-simulation-energies")
+
+
+def test_an_impact_simulation_moves_the_body_inside_its_clearance(page):
+    page.select_option("#example-select", "csfh_central_impact")
+    page.click("#open-example")
+    page.wait_for_function("() => document.getElementById('mechanism-name').textContent.includes('central impact')")
+    choose(page, "solve:simulate")
+    page.fill("#option-until", "0.2")
+    run_and_wait(page, "simulate: finished", timeout=180_000)
+    pin = "#drawing [data-outline=pin]"
+    page.locator("#frame").focus()
+    page.keyboard.press("Home")
+    start = page.get_attribute(pin, "d")
+    page.keyboard.press("PageUp")  # a tenth of the way on
+    page.keyboard.press("PageUp")
+    assert page.get_attribute(pin, "d") != start  # the pin falls
+    page.click("#tab-curves")
+    page.select_option("#curve-y", "hinge.y")
+    assert page.locator("#curve svg path").count() > 0
+    screenshot(page, "11-impact-simulation")
+
+
+def test_a_running_job_is_cancelled_from_the_page(page):
+    page.select_option("#example-select", "four_bar_dynamics")
+    page.click("#open-example")
+    page.wait_for_function("() => document.getElementById('mechanism-name').textContent.includes('four-bar')")
+    choose(page, "job:simulation")
+    page.fill("#option-until", "30")  # minutes of work
+    page.uncheck("#option-shapes")
+    page.click("#run")
+    page.wait_for_function("() => document.getElementById('progress-text').textContent.includes('running')", timeout=60_000)
+    screenshot(page, "12-job-running")
+    page.click("#cancel")
+    page.wait_for_function("() => document.getElementById('progress-text').textContent.includes('cancelled')", timeout=60_000)
+    assert page.is_disabled("#cancel")
+    page.wait_for_function("() => document.getElementById('run-state').textContent.includes('job cancelled')")
+    job_page = page.get_attribute("#job-link", "href")
+    assert re.fullmatch(r"/jobs/[0-9a-f]{32}", job_page)
+    screenshot(page, "13-job-cancelled")
+    page.goto(page.url.rstrip("/") + job_page)  # the job's own page, for a design tool to link to
+    page.wait_for_function("() => document.getElementById('progress-text').textContent.includes('cancelled')", timeout=60_000)
+    assert "four-bar" in page.text_content("#mechanism-name")
+    screenshot(page, "14-job-page")
+
+
+def test_the_page_fits_a_narrow_window_and_is_reached_by_keyboard(page):
+    page.set_viewport_size({"width": 390, "height": 800})
+    assert page.evaluate("document.scrollingElement.scrollWidth <= window.innerWidth + 1")
+    page.focus("#api-key")
+    reached = []
+    for _ in range(40):
+        page.keyboard.press("Tab")
+        reached.append(page.evaluate("document.activeElement.id"))
+        if reached[-1] == "run":
+            break
+    assert "example-select" in reached and "editor" in reached and reached[-1] == "run"
+    page.keyboard.press("Enter")  # runs the equilibrium from the keyboard
+    page.wait_for_function("() => document.getElementById('run-state').textContent.includes('converged')", timeout=60_000)
+    screenshot(page, "15-narrow-window")
