@@ -11,10 +11,19 @@ from urllib.parse import urlsplit
 import pytest
 
 from browser import CHROMIUM_FLAGS, PageLog, chromium_path, screenshot
-from conftest import EXAMPLES, Deployment
+from conftest import ACTUATION, EXAMPLES, Deployment
+from models import compile_mechanism, load_document
+from service import solve_for_target
+from service.continuation import trace_path
 
 KEY = "workbench-test-key"
-GRIPPER_CLOSING_FORCE = 77.0346  # uN: the partial non-linear closing force (README, test_sweeps)
+
+
+@pytest.fixture(scope="module")
+def closing_force() -> float:
+    """The gripper's closing force by the core, for the page to show (77.03 uN)."""
+    mech = compile_mechanism(load_document(EXAMPLES / "gripper.json"))
+    return solve_for_target(mech, ACTUATION, "end_effector.x", 0.0).value
 
 
 @pytest.fixture(scope="module")
@@ -107,13 +116,13 @@ def test_the_page_asks_for_the_key_then_paints_the_gripper_within_a_second(brows
     context.close()
 
 
-def test_the_gripper_closing_force_is_read_from_the_page(page):
+def test_the_gripper_closing_force_is_read_from_the_page(page, closing_force):
     choose(page, "solve:equilibrium")
     assert page.is_checked("#option-target")  # from the document's sweep: until end_effector.x = 0
     assert page.input_value("#option-target_path") == "/loads/actuation/force/1"
     run_and_wait(page, "equilibrium: converged")
     shown = page.text_content("#target-value")
-    assert shown.startswith("77.03") and abs(float(shown) - GRIPPER_CLOSING_FORCE) < 1e-3
+    assert shown.startswith("77.03") and float(shown) == pytest.approx(closing_force, abs=1e-3)
     assert "uN" in page.text_content("#target")
     page.wait_for_function("() => document.getElementById('drawing-caption').textContent.startsWith('Deformed')")
     undeformed = json.loads(page.evaluate("JSON.stringify(document.querySelector('#drawing [data-element=a]').getAttribute('d'))"))
@@ -272,3 +281,61 @@ def test_the_page_fits_a_narrow_window_and_is_reached_by_keyboard(page):
     page.keyboard.press("Enter")  # runs the equilibrium from the keyboard
     page.wait_for_function("() => document.getElementById('run-state').textContent.includes('converged')", timeout=60_000)
     screenshot(page, "15-narrow-window")
+
+
+def test_a_trace_passes_the_arch_limit_points(page):
+    page.select_option("#example-select", "snap_through_arch")
+    page.click("#open-example")
+    page.wait_for_function("() => document.getElementById('mechanism-name').textContent.toLowerCase().includes('arch')")
+    choose(page, "solve:trace")
+    page.fill("#option-path", "/loads/P/force/1")
+    page.fill("#option-stop", "-300")
+    page.fill("#option-step", "5")
+    run_and_wait(page, "trace: converged", timeout=120_000)
+    rows = page.locator("#panel-table table:has(caption:text('Limit points')) tbody tr")
+    assert rows.count() == 2
+    kinds = [rows.nth(k).locator("th").text_content() for k in range(2)]
+    loads = [float(rows.nth(k).locator("td").first.get_attribute("title")) for k in range(2)]
+    core = trace_path(compile_mechanism(load_document(EXAMPLES / "snap_through_arch.json")), "/loads/P/force/1", -300, 5)
+    assert kinds == [lp.kind for lp in core.limit_points]
+    assert loads == pytest.approx([lp.value for lp in core.limit_points], rel=1e-9)
+    page.click("#tab-curves")
+    assert page.input_value("#curve-y") == "/loads/P/force/1"
+    screenshot(page, "16-trace-arch")
+
+
+def test_an_optimization_shows_its_design_and_draws_the_optimum(page):
+    page.select_option("#example-select", "gripper_sections")
+    page.click("#open-example")
+    page.wait_for_function("() => document.getElementById('mechanism-name').textContent.includes('cross-section')")
+    choose(page, "job:optimize")
+    run_and_wait(page, "job succeeded", timeout=180_000)
+    row = page.locator('#panel-table tr[data-name="/sections/flexure/h"] td')
+    start, optimum = (float(row.nth(k).get_attribute("title")) for k in (0, 1))
+    assert start == pytest.approx(0.005) and optimum > start  # thicker flexures than the start
+    page.wait_for_function("() => document.getElementById('drawing-caption').textContent.startsWith('Deformed')")
+    screenshot(page, "17-optimization")
+
+
+def test_a_yaml_upload_is_drawn_and_downloads_are_made(page, tmp_path, closing_force):
+    import yaml
+
+    document = json.loads((EXAMPLES / "gripper.json").read_text())
+    path = tmp_path / "my_gripper.yaml"
+    document["name"] = "uploaded gripper"
+    path.write_text(yaml.safe_dump(document, sort_keys=False))
+    page.set_input_files("#upload", str(path))
+    page.wait_for_function("() => document.getElementById('mechanism-name').textContent === 'uploaded gripper'")
+    assert page.input_value("#editor").startswith("schema_version: 1")
+    run_and_wait(page, "equilibrium: converged")
+    downloads = {}
+    for kind in ("json", "csv", "svg", "png"):
+        with page.expect_download() as info:
+            page.click(f"#download-{kind}")
+        downloads[kind] = info.value.path().read_bytes()
+    answer = json.loads(downloads["json"])
+    assert answer["target"]["value"] == pytest.approx(closing_force, rel=1e-9)
+    assert downloads["csv"].startswith(b"output,value,unit\n")
+    assert b"<svg" in downloads["svg"] and b"x [mm]" in downloads["svg"]
+    assert downloads["png"].startswith(b"\x89PNG")
+    screenshot(page, "18-yaml-upload")

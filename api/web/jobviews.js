@@ -2,7 +2,7 @@
 // series per point, contact paths also as frames; simulations as the simulate analysis;
 // anything else as a table of its numbers.
 
-import { simulationView } from "./results.js";
+import { posesAtElementEnds, simulationView } from "./results.js";
 
 const CONTACT_COLOURS = { link: "#0b62a4", jaw: "#1d2430", object: "#c46a00" };
 const MAX_TABLE_ROWS = 500;
@@ -36,7 +36,8 @@ function sweepView(result) {
   const v = emptyView();
   const points = result.points || [];
   const failed = points.filter((p) => p.status !== "converged").length;
-  v.summary.push(["points", points.length], ["not converged", failed], ["analysis", result.analysis]);
+  v.summary.push(["points", points.length], ["not converged", failed]);
+  if (result.analysis) v.summary.push(["analysis", result.analysis]);
   pointSeries(v, result, points);
   v.tables.push(pointsTable("Points", v, points));
   return v;
@@ -44,7 +45,7 @@ function sweepView(result) {
 
 // A contact state's frame: the link's surfaces, jaws and objects where the state puts them,
 // each pair's force as an arrow ending at its contact point.
-function contactFrame(point, label) {
+function contactFrame(point, label, base) {
   const drawing = point.drawing || { links: [], jaws: [], objects: [] };
   const lines = [];
   for (const link of drawing.links) {
@@ -55,10 +56,12 @@ function contactFrame(point, label) {
   for (const object of drawing.objects) lines.push({ points: object.points, closed: object.closed, color: CONTACT_COLOURS.object, fill: object.type === "hole" ? "none" : "#f6e3cc", bounded: object.closed });
   const forces = Object.entries(point.pairs || {}).filter(([, p]) => p.point && p.state !== "open")
     .map(([name, p]) => ({ point: p.point, vector: p.force, label: `${name} ${Math.hypot(...p.force).toPrecision(4)}` }));
-  return { elements: {}, hideElements: true, overlay: { lines, forces, replaces: drawing.objects.map((o) => o.name) }, label };
+  const centres = Object.fromEntries(drawing.links.map((link) => [link.name, link.centre]));
+  return { elements: centres, poses: base ? posesAtElementEnds(base, centres) : {}, about: "reference", hideElements: true,
+           overlay: { lines, forces, replaces: drawing.objects.map((o) => o.name) }, label };
 }
 
-function contactView(result) {
+function contactView(result, base) {
   const v = sweepView(result);
   const points = result.points || [];
   for (const pair of new Set(points.flatMap((p) => Object.keys(p.pairs || {})))) {
@@ -68,7 +71,7 @@ function contactView(result) {
   const field = (result.parameters || [])[0] || { path: "", unit: "" };
   const largest = Math.max(0, ...points.flatMap((p) => Object.values(p.pairs || {}).map((q) => Math.hypot(...(q.force || [0, 0])))));
   v.frames = points.map((p, i) => {
-    const frame = contactFrame(p, `${field.path} = ${+(+p.values[0]).toPrecision(6)} ${field.unit}`);
+    const frame = contactFrame(p, `${field.path} = ${+(+p.values[0]).toPrecision(6)} ${field.unit}`, base);
     frame.overlay.largestForce = largest;
     return frame;
   });
@@ -87,9 +90,27 @@ function numbersTable(caption, data) {
   return { caption, columns: ["field", "value"], rows };
 }
 
+// An optimization: the design at its start and its optimum, and the iterations as curves.
+function optimizeView(result) {
+  const v = emptyView();
+  v.summary.push(["status", result.status], ["IPOPT", result.ipopt_status || ""], ["iterations", result.iterations ?? "–"],
+                 ["objective", result.objective]);
+  if (result.message) v.summary.push(["message", result.message]);
+  const units = result.units || {};
+  v.tables.push({ caption: "Design", columns: ["field", "start", "optimum", "unit"],
+                  rows: Object.entries(result.design || {}).map(([path, value]) => [path, (result.design_start || {})[path], value, units[path] || ""]) });
+  const history = result.history || [];
+  for (const name of ["iteration", "objective", "constraint_violation", "dual_infeasibility"]) v.series[name] = history.map((h) => h[name] ?? null);
+  v.units.objective = units.objective || "";
+  v.defaultCurve = history.length ? ["iteration", "objective"] : null;
+  v.design = result.design || null;
+  return v;
+}
+
 export function jobView(kind, result, drawing) {
+  if (kind === "optimize" && result && result.design) return optimizeView(result);
   if (kind === "sweep") return sweepView(result);
-  if (kind === "contact") return contactView(result);
+  if (kind === "contact") return contactView(result, drawing);
   if (kind === "simulation") return simulationView(result, drawing);
   const v = emptyView();
   if (result && result.status) v.summary.push(["status", result.status]);

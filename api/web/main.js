@@ -34,6 +34,7 @@ function report(error, where = "run-state") {
   const inDocument = documentPointer(error.pointer);
   showProblems([{ pointer: inDocument ?? error.pointer, message: error.message }]);
   say(where, inDocument !== null ? "The document has a problem (listed under it)." : error.message, true);
+  if (inDocument !== null && state.drawing) $("drawing-caption").textContent = "The last drawing of a document that worked.";
 }
 
 async function draw(deformed = null) {
@@ -78,7 +79,10 @@ function showView(view, result) {
   $("raw").textContent = JSON.stringify(result, null, 2).slice(0, 200_000);
   $("download-json").disabled = false;
   $("download-csv").disabled = false;
-  if (view.frames.length && state.drawing) setFrames(state.drawing, view.frames);
+  if (view.frames.length && state.drawing) {
+    setFrames(state.drawing, view.frames);
+    $("drawing-caption").textContent = `${view.frames.length} states of the result, to scale over the undeformed mechanism (dashed): slide or play.`;
+  }
 }
 
 async function runSolve(choice, request) {
@@ -95,7 +99,9 @@ async function runSolve(choice, request) {
 
 async function showJobResult(id, status) {
   const answer = await fullResult(id);
-  showView(jobView(status.kind, answer.result, state.drawing), answer.result);
+  const view = jobView(status.kind, answer.result, state.drawing);
+  showView(view, answer.result);
+  if (view.design && state.doc) await draw({ overrides: view.design }); // the optimum, deformed
   say("run-state", `job ${status.status}${status.error ? `: ${status.error}` : ""}`, status.status !== "succeeded");
 }
 

@@ -86,7 +86,7 @@ function simulationFrames(report, drawing) {
   return [];
 }
 
-function posesAtElementEnds(drawing, elements) {
+export function posesAtElementEnds(drawing, elements) {
   const poses = {};
   for (const element of drawing.elements) {
     const now = elements[element.name];
@@ -107,7 +107,10 @@ function traceView(report) {
   const field = report.path || "field";
   v.series[field] = report.values || []; v.units[field] = report.unit || "";
   for (const [name, values] of Object.entries(report.outputs || {})) if (isNumberList(values)) { v.series[name] = values; v.units[name] = (report.output_units || {})[name] || ""; }
-  const first = Object.keys(v.series).find((n) => n !== field);
+  // against a point's displacement where there is one (as `flexmech trace` shows it), else
+  // against the first output that moves
+  const moving = Object.keys(v.series).filter((n) => n !== field && new Set(v.series[n]).size > 1);
+  const first = moving.find((n) => n.endsWith(".dy")) || moving[0];
   v.defaultCurve = first ? [first, field] : null;
   if (report.limit_points && report.limit_points.length) {
     v.tables.push({ caption: "Limit points", columns: ["kind", field, "after point"], rows: report.limit_points.map((lp) => [lp.kind, lp.value, lp.after_point]) });
