@@ -98,6 +98,15 @@ def test_a_path_cut_short_is_a_status_not_an_error(api_server):
     assert answer["message"].startswith("stopped after 5 points at ") and len(answer["values"]) == 5
 
 
+def test_the_time_limit_stops_a_path_with_its_points_so_far(api_server):
+    r = post(api_server, {"example": "snap_through_arch", "analysis": "trace", "options": {"time_limit": 0.5},
+                          "trace": {"path": LOAD, "stop": STOP, "step": 1e-4, "max_points": 100_000}})
+    answer = r.json()
+    assert r.status_code == 200 and answer["status"] == "time_limit" and answer["path_status"] == "stopped"
+    assert answer["message"].startswith("stopped after ") and 1 <= len(answer["values"]) < 100_000
+    assert answer["values"][-1] > -1.0  # 1e-4 N steps: nowhere near the stop in half a second
+
+
 def test_without_trace_the_sweep_section_is_followed(api_server, answers):
     doc = json.loads(ARCH.read_text())
     r = post(api_server, {"document": doc, "analysis": "trace"})

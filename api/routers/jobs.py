@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from datetime import datetime, timezone
+from typing import Any
 
 from fastapi import APIRouter, Path, Query
 from fastapi.concurrency import run_in_threadpool
@@ -69,6 +70,15 @@ async def get_job_result(services: ServicesDep, owner: OwnerDep, job_id: str = J
     limit while page.returned == limit); an optimization's result is whole."""
     job = await run_in_threadpool(_owned, services, job_id, owner)
     return await run_in_threadpool(_result, services, job, offset, limit)
+
+
+@router.get("/{job_id}/request", operation_id="get_job_request", response_model=dict[str, Any],
+            responses=errors(401, 404), summary="What the job was asked: its document and the fields it runs with")
+async def get_job_request(services: ServicesDep, owner: OwnerDep, job_id: str = JobId) -> dict[str, Any]:
+    """The job's stored specification (the document, model, overrides and the kind's own
+    fields), so a page or a tool can show the mechanism of a job it did not start."""
+    job = await run_in_threadpool(_owned, services, job_id, owner)
+    return {"id": job.id, "kind": job.kind, **job.spec}
 
 
 @router.delete("/{job_id}", operation_id="cancel_job", response_model=JobStatusResponse,

@@ -1,6 +1,6 @@
 // Following a job: its progress polled from /v1/jobs/{id} until it finishes, its result read
-// a page at a time, and Cancel (DELETE). The document a job was started with is kept in the
-// browser's session storage, so the job's own page (/jobs/{id}) can draw the mechanism.
+// a page at a time, and Cancel (DELETE); its request (/request) draws its mechanism on its
+// own page (/jobs/{id}).
 
 import { get, remove } from "./api.js";
 
@@ -8,12 +8,9 @@ const $ = (id) => document.getElementById(id);
 const POLL_MS = 250;
 const FINAL = ["succeeded", "failed", "cancelled"];
 
-export function rememberDocument(id, doc, model) {
-  try { sessionStorage.setItem(`flexmech.job.${id}`, JSON.stringify({ doc, model })); } catch { /* storage full: the page still works */ }
-}
-
-export function rememberedDocument(id) {
-  try { return JSON.parse(sessionStorage.getItem(`flexmech.job.${id}`) || "null"); } catch { return null; }
+// What the job was asked (its document and model), for its page to draw the mechanism.
+export function jobRequest(id) {
+  return get(`/v1/jobs/${id}/request`);
 }
 
 export function showProgress(status) {

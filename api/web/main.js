@@ -7,7 +7,7 @@ import { clearFrames, setFrames, wireAnimation } from "./animation.js";
 import { readDocument, setText, showProblems } from "./editor.js";
 import { buildRequest, choices, renderForm } from "./forms.js";
 import { jobView } from "./jobviews.js";
-import { cancel, fullResult, follow, rememberDocument, rememberedDocument, showProgress } from "./jobs.js";
+import { cancel, fullResult, follow, jobRequest, showProgress } from "./jobs.js";
 import { csvOf, fillCurveChoices, renderCurve, renderEnergies, renderTables } from "./render.js";
 import { resultView } from "./results.js";
 import { drawScene } from "./scene.js";
@@ -108,7 +108,6 @@ async function showJobResult(id, status) {
 async function runJob(choice, request) {
   const status = await post(choice.endpoint, request);
   state.jobId = status.id;
-  rememberDocument(status.id, request.document, request.model);
   showProgress(status);
   say("run-state", `${choice.label} running`);
   const last = await follow(status.id);
@@ -156,8 +155,10 @@ async function examples() {
 }
 
 async function followJobPage(id) {
-  const kept = rememberedDocument(id);
-  if (kept) { setText(JSON.stringify(kept.doc, null, 2)); if (kept.model) $("model").value = kept.model; await redraw(); }
+  const asked = await jobRequest(id);
+  setText(JSON.stringify(asked.document, null, 2));
+  if (asked.model) $("model").value = asked.model;
+  await redraw();
   state.jobId = id;
   const last = await follow(id);
   await showJobResult(id, last);
