@@ -5,19 +5,37 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from api.schemas import DocumentRequest
 
 MAX_DOCUMENT_TEXT = 2_000_000  # characters; the request body limit applies as well
 
 
-class DrawingRequest(DocumentRequest):
-    """The mechanism drawn to scale (document units): undeformed, or also deformed at the
-    equilibrium under its loads (the overrides applied)."""
+class DrawnPath(BaseModel):
+    """A numeric field taking its values in order (a load path): one drawn state per value."""
 
-    state: Literal["undeformed", "equilibrium"] = Field(
-        "undeformed", description="equilibrium: also the deformed centre lines and every body's pose")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+    path: str = Field(pattern=r"^/", max_length=256, description="JSON pointer of a numeric field")
+    values: list[float] = Field(min_length=1, max_length=400, description="document units, in path order")
+
+
+class DrawingRequest(DocumentRequest):
+    """The mechanism drawn to scale (document units): undeformed; or also deformed at the
+    equilibrium under its loads (the overrides applied); or along a load path, a state per
+    value, each solved from the one before."""
+
+    state: Literal["undeformed", "equilibrium", "path"] = Field(
+        "undeformed", description="equilibrium: also the deformed centre lines and every body's pose; "
+                                  "path: `frames`, one such state per value of `path`")
+    path: DrawnPath | None = Field(None, description="state path: the field and its values")
+
+    @model_validator(mode="after")
+    def _path_given(self):
+        if (self.state == "path") != (self.path is not None):
+            raise ValueError("give path with state 'path' (and only then)")
+        return self
 
 
 class DocumentText(BaseModel):

@@ -23,7 +23,7 @@ def mechanism_drawing(mech: Mechanism, z: np.ndarray | None = None, outputs: dic
     deformed centre lines and every body's pose."""
     to_doc = 1.0 / mech.nd_per_doc("length")
     state = np.zeros(mech.structure.n_unknowns) if z is None else np.asarray(z, dtype=float)
-    deformed, undeformed = (np.asarray(a, dtype=float) * to_doc for a in mech.graphs.shapes(state, mech.p()))
+    undeformed = np.asarray(mech.graphs.shapes(state, mech.p())[1], dtype=float) * to_doc
     bodies = _bodies(mech)
     elements = []
     for name, first, count, start, end in mech.graphs.shape_segments:
@@ -44,10 +44,17 @@ def mechanism_drawing(mech: Mechanism, z: np.ndarray | None = None, outputs: dic
     span = drawing_span(drawing)
     drawing["outlines"] = contact_objects(mech, bodies, span) + impact_surfaces(mech, bodies, span)
     if z is not None:
-        drawing["deformed"] = {"elements": {name: deformed[:, first:first + count].T.tolist()
-                                            for name, first, count, _, _ in mech.graphs.shape_segments},
-                               "poses": poses_from_outputs(mech, outputs or {})}
+        drawing["deformed"] = state_frame(mech, state, mech.p(), outputs or {})
     return drawing
+
+
+def state_frame(mech: Mechanism, z: np.ndarray, p: np.ndarray, outputs: dict) -> dict:
+    """A state of the mechanism as the page animates it: every element's deformed centre
+    line and every body's pose (document units; outputs of the state in document units)."""
+    deformed = np.asarray(mech.graphs.shapes(z, p)[0], dtype=float) / mech.nd_per_doc("length")
+    return {"elements": {name: deformed[:, first:first + count].T.tolist()
+                         for name, first, count, _, _ in mech.graphs.shape_segments},
+            "poses": poses_from_outputs(mech, outputs)}
 
 
 def poses_from_outputs(mech: Mechanism, outputs: dict) -> dict[str, list[float]]:

@@ -93,3 +93,20 @@ def test_the_page_and_its_modules_are_served_from_the_package(api_server):
         for imported in re.findall(r'from "\./([a-z_]+\.js)"', module.read_text()):
             assert (WEB / imported).exists(), f"{module.name} imports {imported}, which is not in the package"
         assert not re.search(r"https?://(?!www\.w3\.org/)", module.read_text()), f"{module.name} names another host"
+
+
+def test_a_load_path_is_drawn_state_by_state(api_server, gripper_dict):
+    body = {"example": "gripper", "state": "path", "path": {"path": "/loads/actuation/force/1", "values": [0, 40, 80]}}
+    answer = httpx.post(f"{api_server.url}/v1/drawings", json=body, timeout=60).json()
+    assert [f["value"] for f in answer["frames"]] == [0, 40, 80] and answer["unit"] == "uN"
+    assert all(f["status"] == "converged" for f in answer["frames"])
+    assert answer["frames"][0]["poses"]["input"] == pytest.approx([0, 0, 0], abs=1e-12)  # no load: undeformed
+    mech = compile_mechanism(load_document(gripper_dict)).with_values({"/loads/actuation/force/1": 80})
+    alone = mechanism_drawing(mech, (result := solve_equilibrium(mech)).z, result.outputs())["deformed"]
+    for body_name, pose in alone["poses"].items():
+        assert answer["frames"][2]["poses"][body_name] == pytest.approx(pose, abs=1e-9)
+    too_many = {**body, "path": {"path": "/loads/actuation/force/1", "values": list(range(401))}}
+    error = httpx.post(f"{api_server.url}/v1/drawings", json=too_many, timeout=60).json()["error"]
+    assert error["status"] == 422 and error["pointer"] == "/path/values"
+    error = httpx.post(f"{api_server.url}/v1/drawings", json={"example": "gripper", "state": "path"}, timeout=60).json()
+    assert "give path with state 'path'" in error["error"]["message"]

@@ -155,6 +155,15 @@ def test_a_sweep_shows_its_progress_up_to_100_percent_and_its_curve_with_hover(p
     seen = page.evaluate("window.progressSeen")
     assert seen == sorted(seen) and seen[-1] == 100 and any(0 < value < 100 for value in seen), seen
     page.wait_for_function("() => document.getElementById('run-state').textContent.includes('job succeeded')")
+    page.wait_for_selector("#animation:not([hidden])")  # the load path's states, drawn by the service
+    page.locator("#frame").focus()
+    page.keyboard.press("Home")
+    body = '#drawing [data-body="input"]'
+    at_rest = float(page.get_attribute(body, "cy"))
+    assert "= 0 uN" in page.text_content("#frame-label")
+    page.keyboard.press("End")
+    assert "= 80 uN" in page.text_content("#frame-label")
+    assert float(page.get_attribute(body, "cy")) < at_rest - 5  # pushed up by 80 uN (SVG y runs down)
     page.click("#tab-curves")
     assert page.input_value("#curve-x") == "/loads/actuation/force/1"
     plot = page.locator("#curve svg")
@@ -310,6 +319,13 @@ def test_a_trace_passes_the_arch_limit_points(page):
     assert loads == pytest.approx([lp.value for lp in core.limit_points], rel=1e-9)
     page.click("#tab-curves")
     assert page.input_value("#curve-y") == "/loads/P/force/1"
+    page.locator("#frame").focus()
+    page.keyboard.press("Home")
+    crown = '#drawing [data-body="crown"]'
+    at_rest = float(page.get_attribute(crown, "cy"))
+    page.keyboard.press("End")  # past both limit points: the arch has snapped through
+    assert "= -300 N" in page.text_content("#frame-label")
+    assert float(page.get_attribute(crown, "cy")) > at_rest + 20  # the crown is drawn lower (SVG y runs down)
     screenshot(page, "16-trace-arch")
 
 

@@ -16,6 +16,7 @@ from models import MechanismError
 from models.reading import parse_json, parse_yaml
 from service.analyses.equilibrium import solve_state
 from service.drawing import mechanism_drawing
+from service.drawing_path import path_frames
 from service.reports import plain
 from service.requests import Limits, compile_request, newton_options
 
@@ -27,6 +28,11 @@ def _drawing(request: DrawingRequest, document: dict, limits: Limits) -> dict:
     if request.state == "undeformed":
         return plain({"status": "undeformed", **mechanism_drawing(mech)})
     options = newton_options(request.options.given() if request.options else None, limits.solve_time_limit)
+    if request.state == "path":
+        frames = path_frames(mech, request.path.path, request.path.values, options)
+        unit = mech.doc_unit(mech.parameter_kind(request.path.path))
+        return plain({"status": "path", **mechanism_drawing(mech), "path": request.path.path, "unit": unit,
+                      "frames": frames})
     result, _ = solve_state(mech, options, None)
     drawing = mechanism_drawing(result.mechanism, result.z, result.outputs())
     return plain({"status": result.status, **drawing})

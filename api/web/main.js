@@ -17,10 +17,11 @@ import { wireTabs } from "./tabs.js";
 const $ = (id) => document.getElementById(id);
 const DEFAULT_EXAMPLE = "gripper";
 const REDRAW_AFTER_MS = 700;
+const MAX_PATH_FRAMES = 200; // states of a sweep drawn for its animation
 // Analyses whose answer is one state of the document's mechanism: drawn deformed after them.
 const DEFORMING = ["equilibrium", "linearization", "energy"];
 
-const state = { loaded: false, doc: null, drawing: null, view: null, result: null, name: "", choices: [], jobId: null, busy: false,
+const state = { loaded: false, overrides: {}, doc: null, drawing: null, view: null, result: null, name: "", choices: [], jobId: null, busy: false,
                 csv: () => (state.view ? csvOf(state.view) : "") };
 
 function say(id, text, failed = false) {
@@ -97,11 +98,28 @@ async function runSolve(choice, request) {
   }
 }
 
+// A one-field sweep's states, drawn by the service along the field's values (evenly chosen).
+async function sweepFrames(result) {
+  const [field] = result.parameters || [];
+  if (!state.doc || !field || result.parameters.length !== 1 || !result.points.length) return;
+  const values = result.points.map((p) => p.values[0]);
+  const every = Math.ceil(values.length / MAX_PATH_FRAMES);
+  const chosen = values.filter((_, i) => i % every === 0 || i === values.length - 1);
+  const answer = await post("/v1/drawings", { document: state.doc, model: $("model").value || undefined, overrides: state.overrides,
+                                              state: "path", path: { path: field.path, values: chosen } });
+  const frames = answer.frames.map((f) => ({ elements: f.elements, poses: f.poses, about: "reference",
+                                             label: `${field.path} = ${+(+f.value).toPrecision(5)} ${answer.unit}${f.status === "converged" ? "" : ` (${f.status})`}` }));
+  state.drawing = answer;
+  setFrames(answer, frames);
+  $("drawing-caption").textContent = `${frames.length} states of the sweep, each solved from the one before, over the undeformed mechanism (dashed).`;
+}
+
 async function showJobResult(id, status) {
   const answer = await fullResult(id);
   const view = jobView(status.kind, answer.result, state.drawing);
   showView(view, answer.result);
   if (view.design && state.doc) await draw({ overrides: view.design }); // the optimum, deformed
+  if (status.kind === "sweep") await sweepFrames(answer.result);
   say("run-state", `job ${status.status}${status.error ? `: ${status.error}` : ""}`, status.status !== "succeeded");
 }
 
@@ -124,6 +142,7 @@ async function run() {
     clearFrames();
     const choice = currentChoice();
     const request = buildRequest(choice, $("options"), state.doc, $("model").value, extra);
+    state.overrides = request.overrides || {};
     say("run-state", `${choice.label}: running…`);
     if (choice.kind === "solve") await runSolve(choice, request);
     else await runJob(choice, request);
@@ -156,6 +175,7 @@ async function examples() {
 
 async function followJobPage(id) {
   const asked = await jobRequest(id);
+  state.overrides = asked.overrides || {};
   setText(JSON.stringify(asked.document, null, 2));
   if (asked.model) $("model").value = asked.model;
   await redraw();

@@ -9,7 +9,8 @@ of its steps, |stop - start| / steps.
 
 The report (document units) has the path's points (the field's `value`, `outputs`, `stable`,
 `rising`, the body stiffness' `eigenvalues`), its `limit_points`, and for plotting the same
-numbers as columns: `values` (the field per point) and `outputs` ({output: [value per point]}).
+numbers as columns: `values` (the field per point) and `outputs` ({output: [value per point]}),
+and `frames`: the deformed states to animate (at most MAX_FRAMES, evenly spread).
 The work is bounded by max_points (at most MAX_POINTS) and by the time limit of the options:
 a path stopped by it is status "time_limit" with its points so far.
 """
@@ -21,15 +22,19 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from models import Mechanism, MechanismError
 from models.units import quantity_to_si
 from service.analyses.base import Analysis, AnalysisRequest
 from service.continuation import trace_path
+from service.drawing import state_frame
 from service.newton import NewtonOptions
 from service.reports import output_units, plain
 from service.requests import under
 
 DEFAULT_POINTS = 400
+MAX_FRAMES = 400  # states of the path drawn for the animation
 MAX_POINTS = 100_000
 
 # trace_path's statuses as the statuses of a solve response: the path reached its stop, or it
@@ -134,7 +139,20 @@ def trace_report(mech: Mechanism, options: NewtonOptions, given: dict | None = N
         "points": body["points"], "limit_points": body["limit_points"],
         "values": [p.value for p in result.points],
         "outputs": {name: [p.outputs.get(name) for p in result.points] for name in units},
-        "output_units": units})
+        "output_units": units, "frames": path_frames(mech, result)})
+
+
+def path_frames(mech: Mechanism, result) -> list[dict]:
+    """The path's states to animate (service.drawing.state_frame), at most MAX_FRAMES of them
+    evenly spread; each with its index among the points and the field's value."""
+    points = result.points
+    chosen = sorted(set(np.linspace(0, len(points) - 1, min(len(points), MAX_FRAMES)).round().astype(int).tolist()))
+    frames = []
+    for index in chosen:
+        at = mech.with_values({result.path: points[index].value})
+        frames.append({"point": index, "value": points[index].value,
+                       **state_frame(at, points[index].z, at.p(), points[index].outputs)})
+    return frames
 
 
 class TraceAnalysis(Analysis):

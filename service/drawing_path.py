@@ -1,0 +1,36 @@
+"""A quasi-static path drawn state by state, for the workbench's animation of a sweep: the
+field takes its values in order, each equilibrium solved by Newton from the one before (as
+a continuation sweep solves them), and each state becomes a frame (service.drawing)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from models import Mechanism, MechanismError
+from service.drawing import state_frame
+from service.equilibrium import newton
+from service.newton import NewtonOptions
+
+MAX_FRAMES = 400
+
+
+def path_frames(mech: Mechanism, pointer: str, values: list[float], options: NewtonOptions) -> list[dict]:
+    """One frame per value: {value, status, elements, poses}. A state that does not converge
+    is a frame with its status (and the last iterate), and the next starts from the last
+    converged state."""
+    if len(values) > MAX_FRAMES:
+        raise MechanismError("/path/values", f"{len(values)} states: at most {MAX_FRAMES} are drawn")
+    try:
+        mech.parameter_index(pointer)
+    except MechanismError as exc:
+        raise MechanismError("/path/path", exc.problem) from None
+    guess = np.zeros(mech.structure.n_unknowns)
+    frames = []
+    for value in values:
+        at = mech.with_values({pointer: value})
+        result = newton(at, at.p(), guess, options)
+        if result.converged:
+            guess = result.z
+        frames.append({"value": value, "status": result.status,
+                       **state_frame(at, result.z, at.p(), result.outputs())})
+    return frames
