@@ -34,6 +34,7 @@ from api.schemas import (
     SolveResponse,
     SweepRequest,
 )
+from api.drawing_schemas import DrawingRequest
 from api.impact_study_schemas import ImpactStudyRequest
 from api.simulation_schemas import SimulationRequest
 
@@ -164,8 +165,17 @@ class Client:
         return _parse(self._http.post("/v1/impact-studies", json=_request_body(ImpactStudyRequest, request, fields)),
                       JobStatusResponse)
 
+    def drawing(self, request: DrawingRequest | None = None, **fields: Any) -> dict:
+        """The mechanism drawn to scale as data; fields as in DrawingRequest (state
+        undeformed, equilibrium or path)."""
+        return _parse(self._http.post("/v1/drawings", json=_request_body(DrawingRequest, request, fields)), dict)
+
     def job(self, job_id: str) -> JobStatusResponse:
         return _parse(self._http.get(f"/v1/jobs/{job_id}"), JobStatusResponse)
+
+    def job_request(self, job_id: str) -> dict:
+        """What the job was asked: its document and fields."""
+        return _parse(self._http.get(f"/v1/jobs/{job_id}/request"), dict)
 
     def result(self, job_id: str, offset: int = 0, limit: int | None = None) -> JobResultResponse:
         """The job's result; a sweep's points a page at a time (offset, limit: at most 10,000)."""
@@ -234,8 +244,14 @@ class AsyncClient:
         body = _request_body(ImpactStudyRequest, request, fields)
         return _parse(await self._http.post("/v1/impact-studies", json=body), JobStatusResponse)
 
+    async def drawing(self, request: DrawingRequest | None = None, **fields: Any) -> dict:
+        return _parse(await self._http.post("/v1/drawings", json=_request_body(DrawingRequest, request, fields)), dict)
+
     async def job(self, job_id: str) -> JobStatusResponse:
         return _parse(await self._http.get(f"/v1/jobs/{job_id}"), JobStatusResponse)
+
+    async def job_request(self, job_id: str) -> dict:
+        return _parse(await self._http.get(f"/v1/jobs/{job_id}/request"), dict)
 
     async def result(self, job_id: str, offset: int = 0, limit: int | None = None) -> JobResultResponse:
         return _parse(await self._http.get(f"/v1/jobs/{job_id}/result", params=_page(offset, limit)),

@@ -110,3 +110,20 @@ def test_a_load_path_is_drawn_state_by_state(api_server, gripper_dict):
     assert error["status"] == 422 and error["pointer"] == "/path/values"
     error = httpx.post(f"{api_server.url}/v1/drawings", json={"example": "gripper", "state": "path"}, timeout=60).json()
     assert "give path with state 'path'" in error["error"]["message"]
+
+
+def test_the_client_draws_and_reads_a_jobs_request(api_server):
+    from pydantic import ValidationError
+
+    from api.client import Client
+
+    with Client(api_server.url) as flexmech:
+        drawing = flexmech.drawing(example="gripper_jaw_contact")
+        assert drawing["status"] == "undeformed" and drawing["outlines"][0]["name"] == "fixture"
+        job = flexmech.sweep(example="gripper", parameters=[{"path": "/loads/actuation/force/1", "values": [10, 20]}])
+        asked = flexmech.job_request(job.id)
+        assert asked["kind"] == "sweep" and asked["document"]["name"].startswith("MEMS gripper")
+        assert asked["parameters"] == [{"path": "/loads/actuation/force/1", "values": [10.0, 20.0]}]
+        with pytest.raises(ValidationError) as refused:
+            flexmech.drawing(example="gripper", state="path")  # refused before it is sent
+        assert "give path with state 'path'" in str(refused.value)
