@@ -298,6 +298,11 @@ def test_the_page_fits_a_narrow_window_and_is_reached_by_keyboard(page):
     assert "example-select" in reached and "editor" in reached and reached[-1] == "run"
     page.keyboard.press("Enter")  # runs the equilibrium from the keyboard
     page.wait_for_function("() => document.getElementById('run-state').textContent.includes('converged')", timeout=60_000)
+    unnamed = page.evaluate("""() => [...document.querySelectorAll('button, input, select, textarea, [tabindex]')]
+        .filter((e) => !(e.labels && e.labels.length) && !e.getAttribute('aria-label') && !e.textContent.trim()
+                       && !e.closest('label') && !e.hasAttribute('hidden'))
+        .map((e) => e.outerHTML.slice(0, 80))""")
+    assert not unnamed, unnamed  # every control has a name a screen reader can say
     screenshot(page, "15-narrow-window")
 
 
