@@ -4,6 +4,9 @@ a continuation sweep solves them), and each state becomes a frame (service.drawi
 
 from __future__ import annotations
 
+import math
+import time
+
 import numpy as np
 
 from models import Mechanism, MechanismError
@@ -17,7 +20,8 @@ MAX_FRAMES = 400
 def path_frames(mech: Mechanism, pointer: str, values: list[float], options: NewtonOptions) -> list[dict]:
     """One frame per value: {value, status, elements, poses}. A state that does not converge
     is a frame with its status (and the last iterate), and the next starts from the last
-    converged state."""
+    converged state. The options' time limit bounds the whole path: the frames drawn by then
+    (at least the first) are returned."""
     if len(values) > MAX_FRAMES:
         raise MechanismError("/path/values", f"{len(values)} states: at most {MAX_FRAMES} are drawn")
     try:
@@ -25,8 +29,11 @@ def path_frames(mech: Mechanism, pointer: str, values: list[float], options: New
     except MechanismError as exc:
         raise MechanismError("/path/path", exc.problem) from None
     guess = np.zeros(mech.structure.n_unknowns)
+    deadline = time.perf_counter() + options.time_limit if options.time_limit else math.inf
     frames = []
     for value in values:
+        if frames and time.perf_counter() > deadline:
+            break
         at = mech.with_values({pointer: value})
         result = newton(at, at.p(), guess, options)
         if result.converged:

@@ -105,6 +105,11 @@ def test_a_load_path_is_drawn_state_by_state(api_server, gripper_dict):
     alone = mechanism_drawing(mech, (result := solve_equilibrium(mech)).z, result.outputs())["deformed"]
     for body_name, pose in alone["poses"].items():
         assert answer["frames"][2]["poses"][body_name] == pytest.approx(pose, abs=1e-9)
+    hurried = {**body, "options": {"time_limit": 1e-6}, "path": {"path": "/loads/actuation/force/1",
+                                                                  "values": list(range(300))}}
+    answer = httpx.post(f"{api_server.url}/v1/drawings", json=hurried, timeout=60).json()
+    assert answer["status"] == "time_limit" and 1 <= len(answer["frames"]) < 300
+    assert answer["message"] == f"{len(answer['frames'])} of 300 states drawn in the time limit"
     too_many = {**body, "path": {"path": "/loads/actuation/force/1", "values": list(range(401))}}
     error = httpx.post(f"{api_server.url}/v1/drawings", json=too_many, timeout=60).json()["error"]
     assert error["status"] == 422 and error["pointer"] == "/path/values"

@@ -31,8 +31,10 @@ def _drawing(request: DrawingRequest, document: dict, limits: Limits) -> dict:
     if request.state == "path":
         frames = path_frames(mech, request.path.path, request.path.values, options)
         unit = mech.doc_unit(mech.parameter_kind(request.path.path))
-        return plain({"status": "path", **mechanism_drawing(mech), "path": request.path.path, "unit": unit,
-                      "frames": frames})
+        cut = len(frames) < len(request.path.values)
+        return plain({"status": "time_limit" if cut else "path", **mechanism_drawing(mech), "path": request.path.path,
+                      "unit": unit, "frames": frames,
+                      "message": f"{len(frames)} of {len(request.path.values)} states drawn in the time limit" if cut else ""})
     result, _ = solve_state(mech, options, None)
     drawing = mechanism_drawing(result.mechanism, result.z, result.outputs())
     return plain({"status": result.status, **drawing})
