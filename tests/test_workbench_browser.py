@@ -369,3 +369,18 @@ def test_a_yaml_upload_is_drawn_and_downloads_are_made(page, tmp_path, closing_f
     assert b"<svg" in downloads["svg"] and b"x [mm]" in downloads["svg"]
     assert downloads["png"].startswith(b"\x89PNG")
     screenshot(page, "18-yaml-upload")
+
+
+def test_a_contact_solve_draws_the_state_and_tables_the_pair(page):
+    page.select_option("#example-select", "gripper_jaw_contact")
+    page.click("#open-example")
+    page.wait_for_function("() => document.getElementById('mechanism-name').textContent.includes('jaw')")
+    choose(page, "solve:contact")
+    page.click("#run-panel details summary")  # more request fields: the fixture moved in
+    page.fill("#extra", json.dumps({"overrides": {"/contacts/objects/fixture/centre/0": 67.81}}))
+    run_and_wait(page, "contact: converged", timeout=120_000)
+    cells = page.locator('#panel-table tr[data-name="insertion"] td').all_text_contents()
+    assert cells[0] in ("frictionless", "slipping", "sticking") and float(cells[1]) > 0  # touching, pressed
+    assert page.locator("#drawing .arrow").count() == 1  # the contact force at its point
+    assert page.text_content("#drawing-caption").startswith("The state found")
+    screenshot(page, "19-contact-solve")

@@ -2,9 +2,9 @@
 // series per point, contact paths also as frames; simulations as the simulate analysis;
 // anything else as a table of its numbers.
 
-import { posesAtElementEnds, simulationView } from "./results.js";
+import { contactFrame } from "./contactframes.js";
+import { simulationView } from "./results.js";
 
-const CONTACT_COLOURS = { link: "#0b62a4", jaw: "#1d2430", object: "#c46a00" };
 const MAX_TABLE_ROWS = 500;
 
 function emptyView() {
@@ -43,24 +43,6 @@ function sweepView(result) {
   return v;
 }
 
-// A contact state's frame: the link's surfaces, jaws and objects where the state puts them,
-// each pair's force as an arrow ending at its contact point.
-function contactFrame(point, label, base) {
-  const drawing = point.drawing || { links: [], jaws: [], objects: [] };
-  const lines = [];
-  for (const link of drawing.links) {
-    lines.push({ points: link.left, color: CONTACT_COLOURS.link }, { points: link.right, color: CONTACT_COLOURS.link },
-               { points: link.centre, color: CONTACT_COLOURS.link, dashed: true, width: "0.8" });
-  }
-  for (const jaw of drawing.jaws) lines.push({ points: jaw.points, closed: jaw.closed, color: CONTACT_COLOURS.jaw, width: "2" });
-  for (const object of drawing.objects) lines.push({ points: object.points, closed: object.closed, color: CONTACT_COLOURS.object, fill: object.type === "hole" ? "none" : "#f6e3cc", bounded: object.closed });
-  const forces = Object.entries(point.pairs || {}).filter(([, p]) => p.point && p.state !== "open")
-    .map(([name, p]) => ({ point: p.point, vector: p.force, label: `${name} ${Math.hypot(...p.force).toPrecision(4)}` }));
-  const centres = Object.fromEntries(drawing.links.map((link) => [link.name, link.centre]));
-  return { elements: centres, poses: base ? posesAtElementEnds(base, centres) : {}, about: "reference", hideElements: true,
-           overlay: { lines, forces, replaces: drawing.objects.map((o) => o.name) }, label };
-}
-
 function contactView(result, base) {
   const v = sweepView(result);
   const points = result.points || [];
@@ -71,7 +53,7 @@ function contactView(result, base) {
   const field = (result.parameters || [])[0] || { path: "", unit: "" };
   const largest = Math.max(0, ...points.flatMap((p) => Object.values(p.pairs || {}).map((q) => Math.hypot(...(q.force || [0, 0])))));
   v.frames = points.map((p, i) => {
-    const frame = contactFrame(p, `${field.path} = ${+(+p.values[0]).toPrecision(6)} ${field.unit}`, base);
+    const frame = contactFrame(p, `${field.path} = ${+(+p.values[0]).toPrecision(6)} ${field.unit}`, base, result.force_unit);
     frame.overlay.largestForce = largest;
     return frame;
   });

@@ -82,7 +82,8 @@ function showView(view, result) {
   $("download-csv").disabled = false;
   if (view.frames.length && state.drawing) {
     setFrames(state.drawing, view.frames);
-    $("drawing-caption").textContent = `${view.frames.length} states of the result, to scale over the undeformed mechanism (dashed): slide or play.`;
+    $("drawing-caption").textContent = view.frames.length === 1 ? "The state found, to scale over the undeformed mechanism (dashed)."
+      : `${view.frames.length} states of the result, to scale over the undeformed mechanism (dashed): slide or play.`;
   }
 }
 

@@ -2,6 +2,9 @@
 // equal length (curves of any one against any other), energies against time, and frames for
 // the animation (element centre lines and body poses per state, see scene.js).
 
+import { contactFrame } from "./contactframes.js";
+import { posesAtElementEnds } from "./scene.js";
+
 const isNumberList = (value) => Array.isArray(value) && value.length > 0 && value.every((v) => v === null || typeof v === "number");
 
 function view() {
@@ -25,6 +28,11 @@ function solveView(report) {
   if (report.pairs) {
     v.tables.push({ caption: `Contact pairs (${(report.units || {}).force || ""})`, columns: ["pair", "state", "normal force", "friction force", "point", "gap"],
                     rows: Object.entries(report.pairs).map(([name, p]) => [name, p.state, p.normal_force, p.friction_force, p.point ? p.point.map((x) => +x.toPrecision(6)).join(", ") : "–", p.gap]) });
+  }
+  if (report.wrenches) {
+    const units = report.wrench_units || {};
+    v.tables.push({ caption: "Wrenches", columns: ["on", `Fx [${units.Fx || ""}]`, `Fy [${units.Fy || ""}]`, `M [${units.M || ""}]`],
+                    rows: Object.entries(report.wrenches).map(([name, w]) => [name, w.Fx, w.Fy, w.M]) });
   }
   if (report.stiffness) {
     const k = report.stiffness;
@@ -86,21 +94,6 @@ function simulationFrames(report, drawing) {
   return [];
 }
 
-export function posesAtElementEnds(drawing, elements) {
-  const poses = {};
-  for (const element of drawing.elements) {
-    const now = elements[element.name];
-    if (!now) continue;
-    for (const [body, undeformed, deformed] of [[element.from, element.points[0], now[0]], [element.to, element.points.at(-1), now.at(-1)]]) {
-      if (drawing.bodies[body] && !drawing.bodies[body].fixed && !poses[body]) {
-        const ref = drawing.bodies[body].reference;
-        if (Math.hypot(undeformed[0] - ref[0], undeformed[1] - ref[1]) < 1e-9 * (1 + Math.hypot(...ref))) poses[body] = [deformed[0] - ref[0], deformed[1] - ref[1], 0];
-      }
-    }
-  }
-  return poses;
-}
-
 function traceView(report) {
   const v = view();
   v.summary.push(["status", report.status], ["message", report.message || ""]);
@@ -122,10 +115,10 @@ function traceView(report) {
 }
 
 export function resultView(kind, result, drawing) {
-  if (kind === "solve") {
-    if (result.analysis === "simulate") return simulationView(result, drawing);
-    if (result.analysis === "trace") return traceView(result);
-    return solveView(result);
-  }
-  return null;
+  if (kind !== "solve") return null;
+  if (result.analysis === "simulate") return simulationView(result, drawing);
+  if (result.analysis === "trace") return traceView(result);
+  const v = solveView(result);
+  if (result.drawing && drawing) v.frames = [contactFrame(result, `contact: ${result.status}`, drawing, (result.units || {}).force)]; // the contact state
+  return v;
 }

@@ -28,6 +28,23 @@ export function placed(drawing, frame, body, point) {
   return [about[0] + dx + c * u - s * v, about[1] + dy + s * u + c * v];
 }
 
+// Poses of the free bodies where the elements' given centre lines end (translations: the
+// bodies of a link network are its joints), for states given by centre lines alone.
+export function posesAtElementEnds(drawing, elements) {
+  const poses = {};
+  for (const element of drawing.elements) {
+    const now = elements[element.name];
+    if (!now) continue;
+    for (const [body, undeformed, deformed] of [[element.from, element.points[0], now[0]], [element.to, element.points.at(-1), now.at(-1)]]) {
+      if (drawing.bodies[body] && !drawing.bodies[body].fixed && !poses[body]) {
+        const ref = drawing.bodies[body].reference;
+        if (Math.hypot(undeformed[0] - ref[0], undeformed[1] - ref[1]) < 1e-9 * (1 + Math.hypot(...ref))) poses[body] = [deformed[0] - ref[0], deformed[1] - ref[1], 0];
+      }
+    }
+  }
+  return poses;
+}
+
 // [xmin, ymin, xmax, ymax] of everything drawn in the frames (undeformed included).
 export function sceneBounds(drawing, frames = [null]) {
   const box = [Infinity, Infinity, -Infinity, -Infinity];

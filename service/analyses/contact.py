@@ -10,6 +10,7 @@ import numpy as np
 
 from models import Mechanism, MechanismError
 from service.analyses.base import Analysis, AnalysisRequest
+from service.contact.drawing import state_drawing
 from service.contact.problem import contact_problem
 from service.contact.recovery import recovered_forces
 from service.contact.report import friction_coefficients, penetration_error, state_report
@@ -58,7 +59,8 @@ class ContactAnalysis(Analysis):
             raise penetration_error(mech, error) from None
         report = {"analysis": self.name, "name": mech.document.name, **state_report(mech, problem, state),
                   "units": {"force": mech.doc_unit("force"), "length": mech.doc_unit("length"),
-                            "moment": mech.doc_unit("moment")}, "output_units": output_units(mech), "warnings": []}
+                            "moment": mech.doc_unit("moment")}, "output_units": output_units(mech), "warnings": [],
+                  "drawing": state_drawing(mech, problem, state)}
         if np.any(mu > 0) and not motion:
             report["warnings"].append("friction needs the direction of sliding: give `motion` (the rates of the "
                                       "moving fields) or run a contact path; this state is frictionless")
