@@ -384,3 +384,16 @@ def test_a_contact_solve_draws_the_state_and_tables_the_pair(page):
     assert page.locator("#drawing .arrow").count() == 1  # the contact force at its point
     assert page.text_content("#drawing-caption").startswith("The state found")
     screenshot(page, "19-contact-solve")
+
+
+def test_a_bad_option_is_marked_at_its_field(page, log):
+    log.answered = (422,)
+    choose(page, "job:sweep")
+    page.fill("#option-path", "/loads/actuation/force/7")
+    page.click("#run")
+    problem = page.locator('#problems li[data-pointer="/parameters/0/path"]')
+    problem.wait_for(timeout=30_000)
+    assert "not a numeric field of this mechanism" in problem.text_content()
+    assert page.get_attribute("#option-path", "aria-invalid") == "true"
+    assert page.evaluate("document.activeElement.id") == "option-path"
+    screenshot(page, "20-bad-option")

@@ -29,10 +29,21 @@ function say(id, text, failed = false) {
   $(id).classList.toggle("failed", failed);
 }
 
+// The option of the form a request pointer names (/target/output -> target_output, then
+// /parameters/0/path -> path): marked invalid and focused.
+function markOption(pointer) {
+  for (const input of document.querySelectorAll("#options [aria-invalid]")) input.removeAttribute("aria-invalid");
+  if (!pointer) return;
+  const tokens = pointer.split("/").filter(Boolean);
+  const input = $(`option-${tokens.slice(-2).join("_")}`) || $(`option-${tokens.at(-1)}`);
+  if (input) { input.setAttribute("aria-invalid", "true"); input.focus(); }
+}
+
 // A problem from the service or the page, shown at the field it names.
 function report(error, where = "run-state") {
   if (!(error instanceof ApiProblem)) { say(where, String(error.message || error), true); return; }
   const inDocument = documentPointer(error.pointer);
+  markOption(inDocument === null ? error.pointer : null);
   showProblems([{ pointer: inDocument ?? error.pointer, message: error.message }]);
   say(where, inDocument !== null ? "The document has a problem (listed under it)." : error.message, true);
   if (inDocument !== null && state.drawing) $("drawing-caption").textContent = "The last drawing of a document that worked.";
