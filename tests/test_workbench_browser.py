@@ -84,6 +84,24 @@ def run_and_wait(page, text: str, timeout: float = 120_000) -> None:
                            timeout=timeout)
 
 
+def open_example(page, name: str) -> None:
+    """Open an example from the menu; wait until it is drawn under its own name."""
+    title = json.loads((EXAMPLES / f"{name}.json").read_text())["name"]
+    page.select_option("#example-select", name)
+    page.click("#open-example")
+    page.wait_for_function("t => document.getElementById('mechanism-name').textContent === t", arg=title)
+
+
+def simulate_to_the_first_frame(page, example: str, until: float) -> None:
+    """Run the simulate analysis of an example until `until` s; the slider at its first frame."""
+    open_example(page, example)
+    choose(page, "solve:simulate")
+    page.fill("#option-until", str(until))
+    run_and_wait(page, "simulate: finished", timeout=180_000)
+    page.locator("#frame").focus()
+    page.keyboard.press("Home")
+
+
 def element_path(page, name: str) -> str:
     return page.get_attribute(f'#drawing [data-element="{name}"]', "d")
 
@@ -192,9 +210,7 @@ def test_an_unknown_body_is_shown_at_its_pointer(page, log):
 
 
 def test_a_contact_path_runs_as_a_job_and_its_animation_steps(page):
-    page.select_option("#example-select", "gripper_jaw_contact")
-    page.click("#open-example")
-    page.wait_for_function("() => document.getElementById('mechanism-name').textContent.includes('jaw')")
+    open_example(page, "gripper_jaw_contact")
     choose(page, "job:contact_path")
     assert page.input_value("#option-path") == "/contacts/objects/fixture/centre/0"
     page.fill("#option-start", "80")
@@ -218,16 +234,8 @@ def test_a_contact_path_runs_as_a_job_and_its_animation_steps(page):
 
 
 def test_a_simulation_animates_the_links_and_plots_its_energies(page):
-    page.select_option("#example-select", "slider_crank_dynamics")
-    page.click("#open-example")
-    page.wait_for_function("() => document.getElementById('mechanism-name').textContent.includes('slider-crank')")
-    choose(page, "solve:simulate")
-    page.fill("#option-until", "0.6")
-    run_and_wait(page, "simulate: finished", timeout=180_000)
-    frames = int(page.get_attribute("#frame", "max")) + 1
-    assert frames > 10
-    page.locator("#frame").focus()
-    page.keyboard.press("Home")
+    simulate_to_the_first_frame(page, "slider_crank_dynamics", 0.6)
+    assert int(page.get_attribute("#frame", "max")) + 1 > 10
     assert "t = 0 s" in page.text_content("#frame-label")
     rod_at_start = element_path(page, "rod")
     page.keyboard.press("End")
@@ -243,15 +251,8 @@ def test_a_simulation_animates_the_links_and_plots_its_energies(page):
 
 
 def test_an_impact_simulation_moves_the_body_inside_its_clearance(page):
-    page.select_option("#example-select", "csfh_central_impact")
-    page.click("#open-example")
-    page.wait_for_function("() => document.getElementById('mechanism-name').textContent.includes('central impact')")
-    choose(page, "solve:simulate")
-    page.fill("#option-until", "0.2")
-    run_and_wait(page, "simulate: finished", timeout=180_000)
+    simulate_to_the_first_frame(page, "csfh_central_impact", 0.2)
     pin = "#drawing [data-outline=pin]"
-    page.locator("#frame").focus()
-    page.keyboard.press("Home")
     start = page.get_attribute(pin, "d")
     page.keyboard.press("PageUp")  # a tenth of the way on
     page.keyboard.press("PageUp")
@@ -263,9 +264,7 @@ def test_an_impact_simulation_moves_the_body_inside_its_clearance(page):
 
 
 def test_a_running_job_is_cancelled_from_the_page(page):
-    page.select_option("#example-select", "four_bar_dynamics")
-    page.click("#open-example")
-    page.wait_for_function("() => document.getElementById('mechanism-name').textContent.includes('four-bar')")
+    open_example(page, "four_bar_dynamics")
     choose(page, "job:simulation")
     page.fill("#option-until", "30")  # minutes of work
     page.uncheck("#option-shapes")
@@ -307,9 +306,7 @@ def test_the_page_fits_a_narrow_window_and_is_reached_by_keyboard(page):
 
 
 def test_a_trace_passes_the_arch_limit_points(page):
-    page.select_option("#example-select", "snap_through_arch")
-    page.click("#open-example")
-    page.wait_for_function("() => document.getElementById('mechanism-name').textContent.toLowerCase().includes('arch')")
+    open_example(page, "snap_through_arch")
     choose(page, "solve:trace")
     page.fill("#option-path", "/loads/P/force/1")
     page.fill("#option-stop", "-300")
@@ -335,9 +332,7 @@ def test_a_trace_passes_the_arch_limit_points(page):
 
 
 def test_an_optimization_shows_its_design_and_draws_the_optimum(page):
-    page.select_option("#example-select", "gripper_sections")
-    page.click("#open-example")
-    page.wait_for_function("() => document.getElementById('mechanism-name').textContent.includes('cross-section')")
+    open_example(page, "gripper_sections")
     choose(page, "job:optimize")
     run_and_wait(page, "job succeeded", timeout=180_000)
     row = page.locator('#panel-table tr[data-name="/sections/flexure/h"] td')
@@ -372,9 +367,7 @@ def test_a_yaml_upload_is_drawn_and_downloads_are_made(page, tmp_path, closing_f
 
 
 def test_a_contact_solve_draws_the_state_and_tables_the_pair(page):
-    page.select_option("#example-select", "gripper_jaw_contact")
-    page.click("#open-example")
-    page.wait_for_function("() => document.getElementById('mechanism-name').textContent.includes('jaw')")
+    open_example(page, "gripper_jaw_contact")
     choose(page, "solve:contact")
     page.click("#run-panel details summary")  # more request fields: the fixture moved in
     page.fill("#extra", json.dumps({"overrides": {"/contacts/objects/fixture/centre/0": 67.81}}))
