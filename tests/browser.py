@@ -5,6 +5,7 @@ and screenshots go to out/workbench/."""
 from __future__ import annotations
 
 import shutil
+import subprocess
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -16,13 +17,24 @@ CHROMIUM_FLAGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first
                   "--metrics-recording-only", "--no-default-browser-check"]
 
 
-def chromium_path() -> str:
+def _installed_chromium() -> str | None:
     for name in ("chromium", "chromium-browser", "google-chrome"):
         found = shutil.which(name)
         if found:
             return found
-    raise RuntimeError("Chromium not found: install the Debian package 'chromium' (.ci/run does: "
-                       "scripts/chromium-for-tests)")
+    return None
+
+
+def chromium_path() -> str:
+    """Debian's Chromium, installed first by scripts/chromium-for-tests (apt-get) if missing."""
+    found = _installed_chromium()
+    if found is None:
+        done = subprocess.run([str(REPO / "scripts" / "chromium-for-tests")], capture_output=True, text=True)
+        found = _installed_chromium()
+        if found is None:
+            raise RuntimeError("Chromium not found, and scripts/chromium-for-tests could not install the Debian "
+                               f"package 'chromium' (exit {done.returncode}): {done.stderr[-2000:]}")
+    return found
 
 
 @dataclass
