@@ -87,12 +87,26 @@ class _StrictLoader(yaml.SafeLoader):
         return super().construct_mapping(node, deep=deep)
 
 
-def parse_yaml(text: str | bytes, what: str = "the document") -> Any:
-    """YAML text to Python values (safe tags only); MechanismError for anything malformed."""
+class _NoAliasLoader(_StrictLoader):
+    """Refuses aliases: text from a network could make a few lines of them expand into a
+    document too large to walk or answer (the "billion laughs")."""
+
+    def compose_node(self, parent, index):
+        if self.check_event(yaml.AliasEvent):
+            mark = self.peek_event().start_mark
+            raise yaml.composer.ComposerError(None, None, "aliases (*name) are not accepted here: write the value "
+                                              "out", mark)
+        return super().compose_node(parent, index)
+
+
+def parse_yaml(text: str | bytes, what: str = "the document", aliases: bool = True) -> Any:
+    """YAML text to Python values (safe tags only; with aliases=False, no aliases either);
+    MechanismError for anything malformed."""
+    loader = _StrictLoader if aliases else _NoAliasLoader
     try:
         if isinstance(text, bytes):
             text = text.decode("utf-8")
-        return _check_depth(yaml.load(text, Loader=_StrictLoader), what)  # noqa: S506 (a SafeLoader)
+        return _check_depth(yaml.load(text, Loader=loader), what)  # noqa: S506 (a SafeLoader)
     except DuplicateKey as exc:
         raise MechanismError("", f"{what} is not valid YAML: {exc}") from None
     except UnicodeDecodeError as exc:

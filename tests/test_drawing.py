@@ -77,6 +77,10 @@ def test_drawings_and_document_text_over_http(api_server, gripper_dict):
     error = httpx.post(f"{url}/v1/documents/parse", json={"text": "bodies: [1, 2\n"}, timeout=30).json()["error"]
     assert error["status"] == 422 and error["pointer"] == "/text" and "not valid YAML" in error["message"]
     assert "line 2" in error["message"]
+    laughs = "a: &a [1, 1, 1, 1, 1, 1, 1, 1, 1]\n" + "".join(
+        f"{b}: &{b} [{', '.join(['*' + a] * 9)}]\n" for a, b in zip("abcdefgh", "bcdefghi"))  # 9^9 ones
+    error = httpx.post(f"{url}/v1/documents/parse", json={"text": laughs}, timeout=30).json()["error"]
+    assert error["pointer"] == "/text" and "aliases (*name) are not accepted here" in error["message"]
 
 
 def test_the_page_and_its_modules_are_served_from_the_package(api_server):

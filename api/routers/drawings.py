@@ -53,7 +53,7 @@ async def draw(request: DrawingRequest, services: ServicesDep, _owner: OwnerDep)
 def _parsed(request: DocumentText) -> dict:
     text = request.text
     as_json = request.format == "json" or (request.format == "auto" and text.lstrip().startswith("{"))
-    document = parse_json(text) if as_json else parse_yaml(text)
+    document = parse_json(text) if as_json else parse_yaml(text, aliases=False)
     if not isinstance(document, dict):
         raise MechanismError("/text", f"a document is a mapping of sections, not {type(document).__name__}")
     return {"document": document, "format": "json" if as_json else "yaml"}
