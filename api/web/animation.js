@@ -9,7 +9,7 @@ const BOUND_SAMPLES = 200; // frames looked at for the drawing's fixed extent
 
 let current = { drawing: null, frames: [], bounds: null, playing: false };
 
-export function showFrame(index) {
+function showFrame(index) {
   const { drawing, frames, bounds } = current;
   if (!drawing || !frames.length) return;
   const k = Math.max(0, Math.min(frames.length - 1, index));

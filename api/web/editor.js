@@ -33,7 +33,7 @@ function unescapePointerToken(token) {
 
 // Where the value at `pointer` starts in JSON text: [start, end) or null. A small scanner
 // that follows keys and array indices; strings are skipped whole.
-export function locateInJson(source, pointer) {
+function locateInJson(source, pointer) {
   const tokens = pointer.split("/").slice(1).map(unescapePointerToken);
   let at = 0;
   const skipSpace = () => { while (at < source.length && /\s/.test(source[at])) at++; };
@@ -79,7 +79,7 @@ export function locateInJson(source, pointer) {
 
 // Where `pointer` is in YAML text (block style): each token a key, or the n-th "- " item,
 // indented deeper than the one before.
-export function locateInYaml(source, pointer) {
+function locateInYaml(source, pointer) {
   const tokens = pointer.split("/").slice(1).map(unescapePointerToken);
   const lines = source.split("\n");
   const starts = [];
@@ -108,7 +108,7 @@ export function locateInYaml(source, pointer) {
   return line < 0 ? null : [starts[line] + indent, starts[line] + lines[line].length];
 }
 
-export function locate(pointer) {
+function locate(pointer) {
   if (pointer === null || pointer === undefined) return null;
   const source = text();
   if (pointer === "") return [0, 0];
