@@ -159,8 +159,13 @@ def test_a_sweep_shows_its_progress_up_to_100_percent_and_its_curve_with_hover(p
     page.fill("#option-outputs", "end_effector.x, end_effector.y")
     page.evaluate("""() => {
         window.progressSeen = [];
-        new MutationObserver(() => window.progressSeen.push(document.getElementById('progress').value))
-            .observe(document.getElementById('progress-text'), {childList: true, characterData: true, subtree: true});
+        window.pointsWhileRunning = 0;  // rows of the points table shown before the job ended
+        new MutationObserver(() => {
+            const value = document.getElementById('progress').value;
+            window.progressSeen.push(value);
+            if (value < 100) window.pointsWhileRunning = Math.max(window.pointsWhileRunning,
+                document.querySelectorAll('#panel-table tbody tr').length);
+        }).observe(document.getElementById('progress-text'), {childList: true, characterData: true, subtree: true});
     }""")
     page.click("#run")
     page.wait_for_function("() => document.getElementById('progress-text').textContent.includes('running')",
@@ -172,6 +177,8 @@ def test_a_sweep_shows_its_progress_up_to_100_percent_and_its_curve_with_hover(p
     assert page.get_attribute("#progress", "value") == "100"
     seen = page.evaluate("window.progressSeen")
     assert seen == sorted(seen) and seen[-1] == 100 and any(0 < value < 100 for value in seen), seen
+    assert 0 < page.evaluate("window.pointsWhileRunning") < 601  # points shown as they came
+    assert page.locator("#panel-table tbody tr").count() == 500  # the table shows the first 500
     page.wait_for_function("() => document.getElementById('run-state').textContent.includes('job succeeded')")
     page.wait_for_selector("#animation:not([hidden])")  # the load path's states, drawn by the service
     page.locator("#frame").focus()

@@ -18,10 +18,11 @@ const $ = (id) => document.getElementById(id);
 const DEFAULT_EXAMPLE = "gripper";
 const REDRAW_AFTER_MS = 700;
 const MAX_PATH_FRAMES = 200; // states of a sweep drawn for its animation
+const PARTIAL_EVERY_MS = 1000;
 // Analyses whose answer is one state of the document's mechanism: drawn deformed after them.
 const DEFORMING = ["equilibrium", "linearization", "energy"];
 
-const state = { loaded: false, overrides: {}, doc: null, drawing: null, view: null, result: null, name: "", choices: [], jobId: null, busy: false,
+const state = { loaded: false, finishedJob: null, overrides: {}, doc: null, drawing: null, view: null, result: null, name: "", choices: [], jobId: null, busy: false,
                 csv: () => (state.view ? csvOf(state.view) : "") };
 
 function say(id, text, failed = false) {
@@ -127,6 +128,7 @@ async function sweepFrames(result) {
 }
 
 async function showJobResult(id, status) {
+  state.finishedJob = id; // a partial read still under way is not shown after this
   const answer = await fullResult(id);
   const view = jobView(status.kind, answer.result, state.drawing);
   showView(view, answer.result);
@@ -135,12 +137,30 @@ async function showJobResult(id, status) {
   say("run-state", `job ${status.status}${status.error ? `: ${status.error}` : ""}`, status.status !== "succeeded");
 }
 
+// While a job runs, its points so far (tables and curves), read again at most every
+// PARTIAL_EVERY_MS when more are done.
+function partialResults(id) {
+  let shownDone = 0, last = 0, reading = false;
+  return async (status) => {
+    const now = performance.now();
+    if (reading || status.status !== "running" || status.progress.done <= shownDone || now - last < PARTIAL_EVERY_MS) return;
+    reading = true; last = now;
+    try {
+      const answer = await fullResult(id);
+      if (state.jobId !== id || state.finishedJob === id || answer.status !== "running") return;
+      shownDone = status.progress.done;
+      const view = jobView(status.kind, answer.result, state.drawing);
+      showView({ ...view, frames: [] }, answer.result); // the animation comes with the whole result
+    } catch { /* the final result follows; a missed partial read changes nothing */ } finally { reading = false; }
+  };
+}
+
 async function runJob(choice, request) {
   const status = await post(choice.endpoint, request);
   state.jobId = status.id;
   showProgress(status);
   say("run-state", `${choice.label} running`);
-  const last = await follow(status.id);
+  const last = await follow(status.id, partialResults(status.id));
   await showJobResult(status.id, last);
 }
 
@@ -192,7 +212,7 @@ async function followJobPage(id) {
   if (asked.model) $("model").value = asked.model;
   await redraw();
   state.jobId = id;
-  const last = await follow(id);
+  const last = await follow(id, partialResults(id));
   await showJobResult(id, last);
 }
 
