@@ -2,7 +2,8 @@
 
 Building the graphs of a link structure takes seconds (the shooting integrator unrolled into
 SX); loading them serialized takes milliseconds. So the Functions of a structure are saved
-under <cache dir>/graphs/<structure key>-<code version>/ when first built, and a new process
+under <cache dir>/graphs/<structure key>-<code version>/ (models.disk_cache: bounded in size,
+least recently used evicted) when first built, and a new process
 (a CLI run, a pool worker, a restarted server) loads the ones it needs. The code version
 hashes the sources of the models package and the CasADi version: any change to how graphs
 are built makes a new folder. Files are written to a temporary name and renamed, so a
@@ -21,15 +22,10 @@ from typing import Callable
 
 import casadi as ca
 
+from models.disk_cache import bound, cache_dir, touch
 from models.structure import Structure
 
 log = logging.getLogger("flexmech.graphs")
-
-
-def cache_dir() -> Path:
-    """FLEXMECH_CACHE_DIR, else ~/.cache/flexmech: compiled libraries and saved graphs."""
-    root = os.environ.get("FLEXMECH_CACHE_DIR")
-    return Path(root) if root else Path.home() / ".cache" / "flexmech"
 
 
 @lru_cache(maxsize=1)
@@ -81,9 +77,11 @@ class GraphStore:
 
     def _load_meta(self) -> dict | None:
         try:
-            return json.loads((self.folder / "meta.json").read_text())
+            meta = json.loads((self.folder / "meta.json").read_text())
         except (OSError, ValueError):
             return None
+        touch(self.folder)  # used now: the cache's bound evicts the least recently used
+        return meta
 
     def _load(self, name: str) -> ca.Function | None:
         path = self.folder / f"{name}.casadi"
@@ -107,5 +105,6 @@ class GraphStore:
             for name, fn in functions.items():
                 write_atomically(self.folder / f"{name}.casadi", lambda path, fn=fn: fn.save(str(path)))
             write_atomically(self.folder / "meta.json", lambda path: path.write_text(json.dumps(meta)))
+            bound()
         except OSError as exc:  # a read-only home: graphs are rebuilt per process, nothing breaks
             log.warning("cannot save graphs in %s: %s", self.folder, exc)

@@ -20,7 +20,7 @@ from functools import lru_cache
 import pint
 
 from models.errors import MechanismError
-from models.graph_cache import cache_dir
+from models.disk_cache import cache_dir
 
 # The kinds of quantity a document holds, with the SI unit each converts to.
 SI_UNITS: dict[str, str] = {

@@ -24,7 +24,7 @@ import casadi as ca
 import numpy as np
 
 from models import Mechanism, MechanismError
-from models.graph_cache import cache_dir
+from models.disk_cache import cache_dir
 
 _VERSION = "1"  # bump when the generated Functions change shape
 
