@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from typing import Any, Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field
 
 from models.fields import StrictModel
 
@@ -35,7 +35,9 @@ class SimulateSpec(StrictModel):
     rho_inf: float = Field(default=0.95, ge=0, le=1, description="generalized-alpha: spectral radius at high "
                            "frequency (1: no numerical dissipation)")
     a1: float = Field(default=0.5, ge=0.5, le=1.5, description="Newmark gamma (Lan 2005 Eq. 3.15; 0.5 + sigma)")
-    a2: float = Field(default=0.5, ge=0.5, le=3.0, description="Newmark 2 beta (Lan 2005 Eq. 3.15; (1 + sigma)^2 / 2)")
+    a2: float = Field(default=0.5, ge=0.5, le=3.0, description="Newmark 2 beta (Lan 2005 Eq. 3.15; (1 + sigma)^2 / 2); "
+                      "unconditionally stable for a2 >= a1; a conditionally stable pair is refused with its "
+                      "critical step")
     damping: float = Field(default=0.0, ge=0, allow_inf_nan=False,
                            description="mass-proportional damping coefficient alpha (1/s): forces -alpha M v")
     start: Literal["rest", "equilibrium"] = Field(
@@ -49,14 +51,15 @@ class SimulateSpec(StrictModel):
     outputs: list[str] | None = Field(default=None, max_length=512, description="outputs to record (default: all)")
     shapes: bool = Field(default=False, description="also the links' deformed centre lines at every kept state "
                          "(snapshots, animation)")
-    compiled: bool = Field(default=False, description="compile the stepping with the system C compiler "
-                           "(a minute once per mechanism structure, cached; then several times faster)")
+    min_step: float = Field(default=1e-9, gt=0, allow_inf_nan=False, description="adaptive: the shortest step "
+                            "(s); a step that must be shorter ends the run with status min_step")
+    max_steps: int | None = Field(default=None, ge=1, description="the most time steps (adaptive: accepted steps, "
+                                  "then the run ends with status step_limit); default and cap: the server's limit")
+    compiled: bool | None = Field(default=None, description="deprecated and ignored: the server compiles element "
+                                  "kernels in its build queue and runs them compiled once built")
 
-    @model_validator(mode="after")
-    def _newmark_stable(self):
-        if self.scheme == "newmark" and self.a2 < 0.5 * (self.a1 + 0.5) ** 2 - 1e-12:
-            bound = 0.5 * (self.a1 + 0.5) ** 2
-            raise ValueError(f"Newmark a1 = {self.a1:g}, a2 = {self.a2:g} is not unconditionally stable: it needs "
-                             f"a2 >= (a1 + 1/2)^2 / 2 = {bound:.8g} (Lan 2005's rounded (0.505, 0.505) is just "
-                             "below it; its sigma = 0.005 means a2 = 0.5050125)")
-        return self
+
+def critical_step_factor(gamma: float, beta: float) -> float:
+    """Omega_crit = omega_max h_crit of a conditionally stable Newmark pair, undamped (Hughes
+    2000, Eq. 9.1.36: (gamma / 2 - beta)^(-1/2))."""
+    return (gamma / 2 - beta) ** -0.5

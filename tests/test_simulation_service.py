@@ -11,6 +11,7 @@ import httpx
 import numpy as np
 
 from api.client import Client
+from service.dynamics.stepping import WINDOW
 
 
 def _wait_until(condition, timeout: float, what: str) -> None:
@@ -33,7 +34,8 @@ def test_a_simulation_job_equals_the_simulate_analysis(api_server):
     simulate = {"until": 3.0, "step": 0.01, "every": 2}
     with Client(api_server.url) as client:
         job = client.simulation(example="spinning_rod_case1", simulate=simulate)
-        assert job.kind == "simulation" and job.progress.total == 6  # 300 steps in windows of 50
+        windows = -(-300 // WINDOW)  # 300 steps, stored per stepping window
+        assert job.kind == "simulation" and job.progress.total == windows
         final = client.wait(job.id, timeout=300)
         assert final.status == "succeeded", final.error
         result = client.result(job.id).result
@@ -44,7 +46,7 @@ def test_a_simulation_job_equals_the_simulate_analysis(api_server):
         np.testing.assert_allclose(result["outputs"][name], values, rtol=1e-12, atol=1e-15)
     np.testing.assert_allclose(result["energies"]["input_work"], one["energies"]["input_work"], rtol=1e-10)
     assert abs(result["energy_balance_error"] - one["energy_balance_error"]) < 1e-9
-    assert result["units"]["length"] == "m" and result["windows_stored"] == 6
+    assert result["units"]["length"] == "m" and result["windows_stored"] == windows
 
 
 def test_bad_simulation_fields_are_422_naming_them(api_server):
@@ -61,18 +63,18 @@ def test_bad_simulation_fields_are_422_naming_them(api_server):
 
 
 def test_a_killed_server_resumes_the_simulation_from_its_last_window(deployment):
-    """SIGKILL mid-run (the four-bar, 0.6 s in 12 windows); a new server on the same store
-    finishes it. The windows stored before come back as they were, and the whole run equals
-    an uninterrupted one (to rounding: that one runs in another process)."""
-    simulate = {"until": 0.6, "step": 0.001, "every": 10, "adaptive": False}
+    """SIGKILL mid-run (the four-bar, 0.2 s in 1000 steps, stored in 50 windows of 20); a new
+    server on the same store finishes it. The windows stored before come back as they were, and
+    the whole run equals an uninterrupted one (to rounding: that one runs in another process)."""
+    simulate = {"until": 0.2, "step": 0.0002, "every": 20, "adaptive": False}
     server = deployment.start(FLEXMECH_CHUNK_SIZE="1")
     with Client(server.url) as client:
         job = client.simulation(example="four_bar_dynamics", simulate=simulate)
-        assert job.progress.total == 12
+        assert job.progress.total == 50
         _wait_until(lambda: client.job(job.id).progress.done >= 3, 240, "three windows")
         before = client.result(job.id)
         server.kill()
-    assert not before.complete and 3 <= before.result["windows_stored"] < 12
+    assert not before.complete and 3 <= before.result["windows_stored"] < 50
     server = deployment.start()
     try:
         with Client(server.url) as client:

@@ -17,9 +17,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from service.dynamics.stepping import History, Resume, StepRunner
-from service.dynamics.window import WINDOW
 
 SAFETY = 0.9
+ADAPTIVE_WINDOW = 50  # steps per window of one step size: the step controller adapts once per window
 MAX_REJECTIONS = 12  # in a row: then the run ends, not_converged
 SHRINK_AT_MOST, GROW_AT_MOST = 0.2, 2.0
 
@@ -28,10 +28,13 @@ SHRINK_AT_MOST, GROW_AT_MOST = 0.2, 2.0
 class Tolerance:
     local: float = 1e-6  # a step's local error (nondimensional)
     max_step: float = math.inf  # seconds
-    min_step: float = 1e-9
+    min_step: float = 1e-9  # seconds: a step that must be shorter ends the run (status min_step)
+    max_steps: int = 1_000_000  # accepted steps: more ends the run (status step_limit)
 
 
 class AdaptiveRunner(StepRunner):
+    window_steps = ADAPTIVE_WINDOW
+
     def __init__(self, *args, tolerance: Tolerance):
         super().__init__(*args)
         self.tolerance = tolerance
@@ -46,29 +49,44 @@ class AdaptiveRunner(StepRunner):
 
     def window(self, history: History, at: Resume) -> Resume:
         h, tol, n = min(at.h or self.h, self.tolerance.max_step), self.tolerance.local, self.n
+        left = self.tolerance.max_steps - at.step
+        if left <= 0:
+            history.status = "step_limit"
+            history.message = (f"stopped at t = {at.time:g} s of {self.until:g} s: the run took its limit of "
+                               f"{self.tolerance.max_steps} adaptive steps (last step {h:.3g} s); loosen the "
+                               "tolerance or shorten the run")
+            return at
         for _ in range(MAX_REJECTIONS):
             remaining = self.until - at.time
             needed = math.ceil(remaining / h - 1e-9)
-            count, h_use = (needed, remaining / needed) if needed <= WINDOW else (WINDOW, h)
+            count, h_use = (needed, remaining / needed) if needed <= ADAPTIVE_WINDOW else (ADAPTIVE_WINDOW, h)
+            count = min(count, left)
             if h_use < self.tolerance.min_step:
-                history.status = "not_converged"
-                history.message = (f"at t = {at.time:g} s the step fell below min_step = {self.tolerance.min_step:g} s "
-                                   "(a loss of convergence or an impact-like event): loosen the tolerance")
+                history.status = "min_step"
+                history.message = (f"stopped at t = {at.time:g} s of {self.until:g} s: the step fell below "
+                                   f"min_step = {self.tolerance.min_step:g} s (a loss of convergence or an "
+                                   "impact-like event); loosen the tolerance")
                 return at
-            inputs, S, monitors, settled = self.run_window(at, h_use)
+            inputs, S, monitors, iterations, settled = self.run_window(at, h_use, count)
             if S is None:
                 h = 0.5 * h_use
                 continue
             accelerations = np.column_stack([at.state[3 * n:4 * n], S[3 * n:4 * n, :count]])
             errors = self.factor * h_use**2 * np.abs(np.diff(accelerations, axis=1)).max(axis=0, initial=0.0)
-            bad = [j for j in range(count) if j >= settled or not errors[j] <= tol]
-            first_bad = bad[0] if bad else count
+            too_large = [j for j in range(settled) if not errors[j] <= tol]
+            first_bad = too_large[0] if too_large else settled
             if first_bad == 0:
-                h = h_use * (0.5 if settled == 0 or not np.isfinite(errors[0]) else _shrink(tol, errors[0]))
+                # not settled on the window's first factors (made at this very step), or too large
+                h = h_use * (0.5 if not too_large or not np.isfinite(errors[0]) else _shrink(tol, errors[0]))
                 continue
+            history.iterations += int(iterations[:first_bad].sum())
             at = self.accept(history, at, S, monitors, inputs[0], first_bad, h_use, first_bad == count == needed)
-            worst = errors[first_bad] if first_bad < count else errors[:first_bad].max()
-            grow = _shrink(tol, worst) if first_bad < count else min(GROW_AT_MOST, _ratio(tol, worst))
+            if too_large:
+                grow = _shrink(tol, errors[first_bad])
+            elif settled < count:  # the window's factors aged: the next window makes new ones, same step
+                grow = 1.0
+            else:
+                grow = min(GROW_AT_MOST, _ratio(tol, errors[:count].max()))
             at.h = min(h_use * grow, self.tolerance.max_step)
             return at
         history.status = "not_converged"

@@ -18,23 +18,23 @@ __all__ = ["History", "Resume", "Tolerance", "integrate", "start_of"]
 
 def integrate(structure: Structure, p: np.ndarray, x0: np.ndarray, v0: np.ndarray, until: float, h: float,
               scheme: Scheme, damping: float = 0.0, every: int = 1, stop=None, histories: Histories | None = None,
-              progress=None, compiled: bool = False, resume: Resume | None = None, adaptive=None) -> History:
+              progress=None, resume: Resume | None = None, adaptive=None) -> History:
     """States from t = 0 (or from `resume`) to `until` in steps h (seconds), keeping every
-    `every`-th step (and the start, when not resumed). Steps run in windows
-    (service.dynamics.window; `compiled`: as a C library); a step the window's Newton does
-    not settle is retried by Newton in Python before the run stops. With `adaptive` (an
+    `every`-th step (and the start, when not resumed). Steps run in windows of one Function
+    call each (service.dynamics.engine, on the element kernels the cache has compiled); a step
+    the window's modified Newton does not settle is retried by full Newton before the run stops. With `adaptive` (an
     service.dynamics.adaptive.Tolerance), h is the first step and the step follows the local
-    error. `stop()` true ends the run early; `progress(t)` hears after every window.
+    error. `stop()` true ends the run early; `progress(t, steps)` hears after every window.
     history.resume goes on from the end."""
     started = time.perf_counter()
     histories = histories or no_histories()
     if adaptive is None:
-        runner = StepRunner(structure, p, h, scheme, damping, histories, compiled, until, every)
+        runner = StepRunner(structure, p, h, scheme, damping, histories, until, every)
     else:
-        runner = AdaptiveRunner(structure, p, h, scheme, damping, histories, compiled, until, every, tolerance=adaptive)
+        runner = AdaptiveRunner(structure, p, h, scheme, damping, histories, until, every, tolerance=adaptive)
     history = History("finished", "")
     if resume is None:
-        resume = start_of(structure, p, x0, v0, histories, damping)
+        resume = start_of(structure, p, x0, v0, histories, damping, scheme)
         resume.h = h
         runner.keep(history, resume)
     while not runner.done(resume):
@@ -45,7 +45,7 @@ def integrate(structure: Structure, p: np.ndarray, x0: np.ndarray, v0: np.ndarra
         if history.status != "finished":
             break
         if progress is not None:
-            progress(resume.time)
+            progress(resume.time, resume.step)
     history.steps, history.resume = resume.step, resume
     history.seconds = time.perf_counter() - started
     return history

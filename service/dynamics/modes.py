@@ -10,8 +10,15 @@ import casadi as ca
 import numpy as np
 from scipy.linalg import eigh, null_space
 
+from models.dynamics import DynamicsForm, dynamics_form
 from models.structure import Structure
-from service.dynamics.functions import form_of
+
+
+@lru_cache(maxsize=16)
+def form_of(structure: Structure, moving: tuple[int, ...] = ()) -> DynamicsForm:
+    """The dense dynamics form (models.dynamics): small eigenproblems and reference checks; time
+    stepping runs on element kernels (service.dynamics.engine)."""
+    return dynamics_form(structure, moving)
 
 
 @dataclass
@@ -40,3 +47,10 @@ def natural_modes(structure: Structure, p: np.ndarray, x: np.ndarray, lam: np.nd
     Z = null_space(G) if G.size else np.eye(len(x))
     values, vectors = eigh(Z.T @ K @ Z, Z.T @ M @ Z)
     return Modes(np.sqrt(np.maximum(values, 0.0)), Z @ vectors)
+
+
+def highest_frequency(structure: Structure, p: np.ndarray, x: np.ndarray) -> float:
+    """The highest natural frequency (rad/s) of the discretized mechanism about x, its
+    constraints' forces taken as zero (the start of a run)."""
+    form = form_of(structure)
+    return float(natural_modes(structure, p, x, np.zeros(form.n_equalities)).omegas.max(initial=0.0))

@@ -13,7 +13,8 @@ from pydantic import ValidationError
 
 from models import Mechanism, MechanismError
 from models.residual import unknown_names
-from models.simulation_spec import SimulateSpec
+from models.simulation_spec import SimulateSpec, critical_step_factor
+from service.costs import Limits
 from service.dynamics.adaptive import Tolerance
 from service.dynamics.histories import read_histories
 from service.dynamics.integrate import History, integrate
@@ -21,7 +22,7 @@ from service.dynamics.schemes import Scheme, generalized_alpha, newmark
 from service.energy import minimize_energy
 from service.reports import output_units
 
-MAX_STEPS = 2_000_000
+MAX_STEPS = Limits().max_simulation_steps  # the service's limit: the CLI and Python apply the same
 STATIC_OUTPUTS = (".h", ".v", ".M_start", ".M_end")
 
 
@@ -57,21 +58,44 @@ def check_masses(mech: Mechanism) -> None:
                                  f"'{t.material}' a density")
 
 
-def tolerance_of(spec: SimulateSpec) -> Tolerance | None:
-    """The adaptive steps' tolerance, or None for fixed steps."""
+def tolerance_of(spec: SimulateSpec, max_steps: int = MAX_STEPS) -> Tolerance | None:
+    """The adaptive steps' tolerance and limits, or None for fixed steps."""
     if not spec.adaptive:
         return None
-    return Tolerance(spec.tolerance, spec.max_step if spec.max_step is not None else float("inf"))
+    return Tolerance(spec.tolerance, spec.max_step if spec.max_step is not None else float("inf"), spec.min_step,
+                     step_limit(spec, max_steps))
+
+
+def step_limit(spec: SimulateSpec, max_steps: int) -> int:
+    """The run's step limit: the request's, capped by the service's."""
+    return min(spec.max_steps, max_steps) if spec.max_steps is not None else max_steps
 
 
 def check_steps(spec: SimulateSpec, max_steps: int) -> int:
     steps = int(round(spec.until / spec.step))
+    limit = step_limit(spec, max_steps)
     if steps < 1:
         raise MechanismError("/simulate/step", f"the step {spec.step:g} s is longer than the run ({spec.until:g} s)")
-    if steps > max_steps:
+    if steps > limit and not spec.adaptive:
         raise MechanismError("/simulate/step", f"the run needs {steps} steps of {spec.step:g} s, over the limit of "
-                             f"{max_steps}: take a longer step or a shorter run")
+                             f"{limit}: take a longer step or a shorter run")
     return steps
+
+
+def check_scheme(mech: Mechanism, spec: SimulateSpec, x0: np.ndarray) -> None:
+    """A conditionally stable Newmark pair (a2 < a1) is refused with its critical step, from the
+    mechanism's highest natural frequency at the start."""
+    if spec.scheme != "newmark" or spec.a2 >= spec.a1 - 1e-12:
+        return
+    from service.dynamics.modes import highest_frequency
+
+    factor = critical_step_factor(spec.a1, spec.a2 / 2)
+    omega = highest_frequency(mech.structure, mech.p(), x0)
+    critical = f"{factor / omega:.3g} s" if omega > 0 else "unbounded (no stiffness at the start)"
+    raise MechanismError("/simulate/a2", f"Newmark a1 = {spec.a1:g}, a2 = {spec.a2:g} is only conditionally stable "
+                         f"(unconditional stability needs a2 >= a1): its critical step is {factor:.4g} / omega_max "
+                         f"= {critical} for this mechanism (omega_max = {omega:.4g} rad/s); raise a2 to at least "
+                         f"{spec.a1:g}")
 
 
 def start_shape(mech: Mechanism, spec: SimulateSpec) -> tuple[np.ndarray, str]:
@@ -92,10 +116,11 @@ def run_simulation(mech: Mechanism, spec: SimulateSpec, stop=None, progress=None
     check_steps(spec, max_steps)
     histories = read_histories(mech, spec.histories, spec.until, "/simulate/histories")
     x0, start_note = start_shape(mech, spec)
+    check_scheme(mech, spec, x0)
     n, p = len(x0), mech.p()
     history = integrate(mech.structure, p, x0, np.zeros(n), spec.until, spec.step, scheme_of(spec),
                         damping=spec.damping, every=spec.every, stop=stop, histories=histories, progress=progress,
-                        compiled=spec.compiled, adaptive=tolerance_of(spec))
+                        adaptive=tolerance_of(spec, max_steps))
     return history, report(mech, spec, history, histories, start_note)
 
 

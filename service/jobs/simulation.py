@@ -13,13 +13,16 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 
+import numpy as np
+
 from models import MechanismError
 from service.costs import Limits, check_result_size
 from service.dynamics.histories import read_histories
 from service.dynamics.integrate import Resume, integrate
-from service.dynamics.window import WINDOW
-from service.dynamics.run import (check_masses, check_steps, records, scheme_of, scheme_summary, simulation_spec,
-                                  start_shape, tolerance_of, units, wanted_outputs, with_balance)
+from service.dynamics.stepping import WINDOW
+from service.dynamics.run import (MAX_STEPS, check_masses, check_scheme, check_steps, records, scheme_of, scheme_summary,
+                                  simulation_spec, start_shape, step_limit, tolerance_of, units, wanted_outputs,
+                                  with_balance)
 from service.impacts.run import IMPACT_SCHEMES
 from service.jobs.base import InOrder, Plan
 from service.jobs.control import TaskControl
@@ -45,6 +48,7 @@ class SimulationJob(InOrder):
         except MechanismError as exc:
             raise under("/document", exc) from None
         steps = check_steps(simulate, limits.max_simulation_steps)  # adaptive: as many as the first step makes
+        check_scheme(mech, simulate, np.zeros(len(mech.graphs.energy_form.unknowns)))
         read_histories(mech, simulate.histories, simulate.until, "/simulate/histories")
         outputs = wanted_outputs(mech, simulate)
         kept = steps // simulate.every + 2
@@ -59,6 +63,7 @@ class SimulationJob(InOrder):
             window = WINDOW * max(1, math.ceil(steps / WINDOWS / WINDOW))  # the stepping's own windows fit
             windows, span = math.ceil(steps / window), window * simulate.step
         meta = {"windows": windows, "span": span, "step": simulate.step, "until": simulate.until,
+                "max_steps": step_limit(simulate, limits.max_simulation_steps),
                 "scheme": scheme_summary(simulate), "units": units(mech)}
         return Plan(windows, meta)
 
@@ -72,8 +77,10 @@ class SimulationJob(InOrder):
         if position is None or (position > 0 and finished[position - 1].get("status") != "finished"):
             return None
         resume = finished[position - 1]["resume"] if position > 0 else None
-        return {"indices": list(range(position, min(position + chunk_size, plan["windows"]))), "resume": resume,
-                "span": plan["span"]}
+        size = 1 if position == 0 else chunk_size  # the first window alone: progress shows from it
+        return {"indices": list(range(position, min(position + size, plan["windows"]))), "resume": resume,
+                "span": plan["span"],
+                "max_steps": plan.get("max_steps")}
 
     def run(self, spec, task):
         mech = mechanism_of(spec)
@@ -89,8 +96,8 @@ class SimulationJob(InOrder):
             started = 0.0 if at is None else at.time
             history = integrate(mech.structure, p, x0, None if x0 is None else 0 * x0, end, simulate.step, scheme,
                                 damping=simulate.damping, every=simulate.every, stop=control.should_stop,
-                                histories=histories, compiled=simulate.compiled, resume=at,
-                                adaptive=tolerance_of(simulate))
+                                histories=histories, resume=at,
+                                adaptive=tolerance_of(simulate, task.get("max_steps") or MAX_STEPS))
             points.append((index, {"status": history.status, "message": history.message, "t_start": started,
                                    "t_end": history.resume.time,
                                    **records(mech, simulate, history, histories), "resume": history.resume.to_json()}))

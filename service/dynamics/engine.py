@@ -1,0 +1,162 @@
+"""The kernel time stepping of one structure, scheme and set of moving parameters: the Functions
+a run calls (windows of steps, the consistent start, a rescue step by full Newton) and the
+elements' data, built in milliseconds from the chain signatures' chunks (compiled ones where
+the kernel cache has them, service.kernels; interpreted otherwise).
+
+Python calls one Function per window of steps; a window factors the Newton system at its first
+step (service.dynamics.kernel_window)."""
+
+from __future__ import annotations
+
+import threading
+from collections import OrderedDict
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import casadi as ca
+import numpy as np
+
+from models.context import AssemblyContext
+from models.kernels.link_data import link_data
+from models.structure import Structure
+from service.dynamics.kernel_system import NEWTON_TOLERANCE, Factors, StepSystem, padded
+from service.dynamics.kernel_window import Stepper
+from service.dynamics.schemes import Scheme
+
+WINDOW_ACCEPTANCE = 10 * NEWTON_TOLERANCE  # a window's step whose residual is below this counts
+RESCUE_ITERATIONS = 16  # full Newton, for a step that the window's factors do not settle
+ENGINES = 8  # kept in memory per process
+
+
+@dataclass
+class Engine:
+    structure: Structure
+    scheme: Scheme
+    moving: tuple[int, ...]
+    compiled: dict = field(default_factory=dict)  # ChainSignature -> compiled Chunks
+
+    def __post_init__(self):
+        self.system = StepSystem(self.structure, self.moving, compiled=self.compiled)
+        self.stepper = Stepper(self.system, self.scheme)
+        self._windows: dict[int, ca.Function] = {}
+
+    @property
+    def n_x(self) -> int:
+        return self.system.layout.n_x
+
+    @property
+    def n_lam(self) -> int:
+        return self.system.layout.n_lam
+
+    # ---- data -------------------------------------------------------------------------------------
+    @cached_property
+    def _data_function(self) -> ca.Function:
+        ctx = AssemblyContext(self.structure)
+        columns = []
+        for g in self.system.layout.groups:
+            block = ca.horzcat(*[link_data(ctx, c.topology, g.signature) for c in g.chains])
+            columns.append(ca.horzcat(block, ca.SX.zeros(block.shape[0], padded(block.shape[1]) - block.shape[1])))
+        return ca.Function("element_data", [ctx.p], columns)
+
+    def data(self, p: np.ndarray) -> list[np.ndarray]:
+        """Per chain group, every element's data (padded to whole chunks) at parameters p."""
+        out = self._data_function(p)
+        out = out if isinstance(out, (list, tuple)) else [out]
+        return [np.asarray(q, dtype=float) for q in out]
+
+    # ---- Functions ----------------------------------------------------------------------------------
+    def window(self, steps: int) -> ca.Function:
+        """(s0, h, P, PDOT, PDDOT, damping, mask, count, data...) -> (S, MONITOR, NORMS,
+        ITERATIONS): up to `steps` steps, a column each, of which the first `count` run; a step
+        after one that did not settle computes nothing (its norm is infinite). One Function per
+        window length serves every count: the adaptive steps' last windows build nothing new."""
+        if steps not in self._windows:
+            st = self.stepper
+            state, h, p, pdot, pddot, damping, mask, data = st._symbols()
+            P, PD, PDD = (ca.MX.sym(name, q.numel(), steps) for name, q in (("P", p), ("PDOT", pdot), ("PDDOT", pddot)))
+            count = ca.MX.sym("count")
+            first = st.first_step_function(state, h, P[:, 0], PD[:, 0], PDD[:, 0], damping, mask, *data)
+            s, monitor, norm, used = first[:4]
+            factors = first[4:]
+            columns = [[s], [monitor], [norm], [used]]
+            for j in range(1, steps):
+                alive = (norm <= WINDOW_ACCEPTANCE) * (count > j)
+                s, monitor, norm, used = st.step_function(*factors, alive, s, h, P[:, j], PD[:, j], PDD[:, j], damping,
+                                                          mask, *data)
+                for column, value in zip(columns, (s, monitor, norm, used)):
+                    column.append(value)
+            self._windows[steps] = ca.Function(
+                f"kernel_window_{steps}", [state, h, P, PD, PDD, damping, mask, count, *data],
+                [ca.horzcat(*column) for column in columns],
+                ["s0", "h", "P", "PDOT", "PDDOT", "damping", "mask", "count",
+                 *[f"data{i}" for i in range(len(data))]],
+                ["S", "MONITOR", "NORMS", "ITERATIONS"])
+        return self._windows[steps]
+
+    @cached_property
+    def rescue(self) -> ca.Function:
+        """(s0, h, p, pdot, pddot, damping, mask, data...) -> (state, monitor, norm): one step by
+        Newton, its factors made at every iteration (a step the window's factors do not settle)."""
+        st, sys = self.stepper, self.system
+        state, h, p, pdot, pddot, damping, mask, data = st._symbols()
+        fa, k = st.coefficients(h)
+        affine, c_a1 = st._affine(state, h)
+        _, _, _, qdd, lam = st.state.split(state)
+        si = sys.step_inputs(affine, k, p, pdot, pddot, damping, mask, data)
+        Z = ca.vertcat(qdd, lam)
+        one = ca.MX(1)
+        for _ in range(RESCUE_ITERATIONS):
+            factors = sys.factorize(Z, si)
+            ev = sys.evaluate(Z, one, si, factors.kept_reverse)
+            Z = ca.if_else(ev.norm > NEWTON_TOLERANCE, Z - sys.solve(ev, one, factors), Z)
+        factors = sys.factorize(Z, si)
+        ev = sys.evaluate(Z, one, si, factors.kept_reverse)
+        u = Z[:self.n_x]
+        cX, cV, _ = affine
+        new_state = ca.vertcat(cX + k[0] * u, cV + k[1] * u, c_a1 + fa * u, u, Z[self.n_x:])
+        return ca.Function("kernel_rescue", [state, h, p, pdot, pddot, damping, mask, *data],
+                           [new_state, st.monitor(ev, si), ev.norm])
+
+    @cached_property
+    def start(self) -> ca.Function:
+        """(x, v, p, pdot, pddot, damping, mask, data...) -> (qdd, lam, norm, monitor): the
+        accelerations and multipliers consistent with (x, v): the equations with the
+        constraints' second derivatives, linear in them (one exact Newton step, and one more for
+        round-off), and the monitor there."""
+        system = StepSystem(self.structure, self.moving, level="acceleration", compiled=self.compiled)
+        st = Stepper(system, self.scheme)
+        _, _, p, pdot, pddot, damping, mask, data = st._symbols()
+        x, v = ca.MX.sym("x", self.n_x), ca.MX.sym("v", self.n_x)
+        k = ca.MX(ca.DM([0, 0, 1, 1]))
+        si = system.step_inputs((x, v, ca.MX.zeros(self.n_x)), k, p, pdot, pddot, damping, mask, data)
+        Z, one = ca.MX.zeros(system.n_z), ca.MX(1)
+        factors = system.factorize(Z, si)
+        for _ in range(2):
+            ev = system.evaluate(Z, one, si, factors.kept_reverse)
+            Z = Z - system.solve(ev, one, factors)
+        ev = system.evaluate(Z, one, si, factors.kept_reverse)
+        return ca.Function("kernel_start", [x, v, p, pdot, pddot, damping, mask, *data],
+                           [Z[:self.n_x], Z[self.n_x:], ev.norm, st.monitor(ev, si)])
+
+
+_engines: "OrderedDict[tuple, Engine]" = OrderedDict()
+_lock = threading.Lock()
+
+
+def engine_for(structure: Structure, scheme: Scheme, moving: tuple[int, ...], compiled: dict | None = None) -> Engine:
+    """The engine of a structure, scheme and moving parameters, kept (a few) per process; a new
+    one when compiled kernels have arrived since."""
+    compiled = compiled or {}
+    key = (structure, scheme, moving, tuple(sorted(str(s) for s in compiled)))
+    with _lock:
+        engine = _engines.get(key)
+        if engine is None:
+            engine = Engine(structure, scheme, moving, compiled)
+            _engines[key] = engine
+            while len(_engines) > ENGINES:
+                _engines.popitem(last=False)
+        _engines.move_to_end(key)
+        return engine
+
+
+__all__ = ["Engine", "Factors", "engine_for"]

@@ -1,0 +1,468 @@
+"""A structure's time step assembled from element kernels (models.kernels).
+
+Newton's unknowns Z = [u; lam]: every coordinate's acceleration (the energy form's x,
+models.kernels.layout) and every multiplier. The links' node quantities are not unknowns:
+each evaluation computes them exactly, in two sweeps along every chain of link elements,
+
+    forward  (start to end)  node positions, velocities and accelerations (from the start
+                             body), and each element's rows, mass force and lever;
+    backward (end to start)  the node forces F_j = F_{j+1} + f_j (F_N the end multiplier),
+                             the rows completed with them, and block elimination on the way
+                             (models.kernels.chain_solver),
+
+so Newton runs on Lagrange's equations of models.dynamics while its linear systems are solved
+in the sparse lifted form: the backward sweep, one forward substitution sweep, and the few
+global unknowns (bodies, multipliers) by the condensed system's inverse.
+
+Kernels run in chunks of CHUNK items (models.kernels.chunks), compiled once per chain
+signature (service.kernels) or interpreted until then; this module only gathers their inputs
+and scatters their outputs, in a few MX operations per sweep. A structure's chains of one
+signature run one after another in one sweep (padded to whole chunks with absent items).
+Everything here is built in milliseconds for any number of elements.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from models.kernels.chain_solver import BORDER
+from models.kernels.chunks import CHUNK, Chunks, chunks
+from models.kernels.global_part import global_part, start_nodes
+from models.kernels.layout import layout_of
+from models.kernels.link_chain import packed_size
+from models.structure import Structure
+
+NEWTON_TOLERANCE = 1e-10  # nondimensional forces
+CONSTRAINT_TOLERANCE = 1e-13  # and lengths, angles
+POSITION_WEIGHT = NEWTON_TOLERANCE / CONSTRAINT_TOLERANCE  # so that one tolerance serves both
+
+
+def _gated(fn: ca.Function) -> ca.Function:
+    """(go, inputs...) -> fn's outputs where go is 1, zeros where 0 (nothing computed)."""
+    inputs = [ca.SX.sym(fn.name_in(i), fn.sparsity_in(i)) for i in range(fn.n_in())]
+    idle = ca.Function(f"{fn.name()}_idle", inputs, [ca.SX.zeros(fn.sparsity_out(o)) for o in range(fn.n_out())])
+    return ca.Function.if_else(f"{fn.name()}_gated", fn, idle)
+
+
+def padded(n: int) -> int:
+    return max(1, -(-n // CHUNK)) * CHUNK
+
+
+@dataclass
+class Evaluation:
+    """The residual at Z, eliminated along the chains, and what comes with it."""
+
+    y: list[ca.MX]  # per group (block size x padded blocks, reverse order): the eliminated blocks
+    rhs: ca.MX  # the global rows' right-hand side, condensed (n_global)
+    all_rows: ca.MX  # rows of every body coordinate (prescribed too), own variable and multiplier
+    routed: ca.MX  # (clamped chains,): each clamped start's theta_0 row (its start body's angle row)
+    energies: ca.MX  # (6,): the links' kinetic and strain energy, first moment and momentum of their mass
+    global_energies: ca.MX  # (4,): the global part's (models.kernels.global_part)
+    norm: ca.MX
+
+    def parts(self) -> list[ca.MX]:
+        return [*self.y, self.rhs, self.all_rows, self.routed, self.energies, self.global_energies, self.norm]
+
+    @classmethod
+    def of(cls, parts: list, groups: int) -> "Evaluation":
+        return cls(list(parts[:groups]), *parts[groups:groups + 6])
+
+
+@dataclass
+class Factors:
+    kept_reverse: list[ca.MX]  # per group (factor size x padded blocks), blocks in reverse order
+    kept_forward: list[ca.MX]  # per group, in order (substitution)
+    inverse: ca.MX  # of the condensed global system
+
+    def parts(self) -> list[ca.MX]:
+        return [*self.kept_reverse, *self.kept_forward, self.inverse]
+
+    @classmethod
+    def of(cls, parts: list, groups: int) -> "Factors":
+        return cls(list(parts[:groups]), list(parts[groups:2 * groups]), parts[2 * groups])
+
+
+@dataclass
+class StepInputs:
+    """What a step's iterations share (everything that does not depend on Z)."""
+
+    affine: tuple  # (cX, cV, cA) of every coordinate
+    k: ca.MX  # (kx, kv, ka, k_rho)
+    p: ca.MX
+    pdot: ca.MX
+    pddot: ca.MX
+    damping: ca.MX
+    mask: ca.MX
+    element_affine: list  # per group (3 n_c x padded elements)
+    element_constants: list  # per group: (k, damping, gravity rows)
+    data: list  # per group (n_data x padded elements)
+    affine_global: ca.MX  # (global coordinates x 3)
+
+
+@dataclass
+class _Group:
+    """Constant index arrays of one chain group, padded to whole chunks."""
+
+    elements: int  # padded
+    blocks: int  # padded
+    gather_u: list[int]  # (n_c x elements) flat, column-major, into [Z; 0]
+    gather_affine: list[int]  # (n_c x elements) into [extended affine; 0]
+    present: np.ndarray  # (1, elements)
+    start: np.ndarray  # (1, elements): 1 at a chain's first element
+    start_chain: list[int]  # per element: its chain among all chains (padding: 0)
+    this: list[int]  # per block (reverse order): its element j's column in [packed | zero]
+    prev: list[int]  # its element j-1's
+    this_flags: np.ndarray  # (3, blocks): present, clamped start, last of the elements j
+    prev_flags: np.ndarray  # (3, blocks): those of the elements j-1
+    block_present: np.ndarray  # (1, blocks) reverse order
+    flags: np.ndarray  # (2, blocks) reverse order: first, last
+    end: list[int]  # (3 x blocks) flat into [Z; 0]: lambda_x, lambda_y, lambda_rot at a chain's last block
+    forward: list[int]  # per block in order (padded): its reverse position
+    chains: list[int]  # the chains' indices among all chains
+    b0: list[int]  # per chain: the reverse position of its B_0
+    last_element: list[int]  # per chain: its last element
+    node_columns: list[int]  # per block in order: its node's column in [starts (chains), next (elements)]
+    force_sum: np.ndarray  # (padded elements, padded blocks in order): F_j = lam_end + forces beyond j
+    end_of_block: list[int]  # per block in order: lambda_x's index in [Z; 0] (padding: the zero)
+    element_node: list[int]  # per element: its node e's block (in order)
+
+
+class StepSystem:
+    """The Newton system of a structure's step (level "position") or of its consistent
+    accelerations at a start (level "acceleration"), on the chunks of its chain signatures."""
+
+    def __init__(self, structure: Structure, moving: tuple[int, ...], level: str = "position",
+                 compiled: dict | None = None, rule: str = "interpolated"):
+        self.layout = layout_of(structure, rule)
+        self.structure, self.moving, self.level = structure, moving, level
+        self.chunks: list[Chunks] = [(compiled or {}).get(g.signature) or chunks(g.signature)
+                                     for g in self.layout.groups]
+        self.global_part = _gated(global_part(self.layout, moving, level))
+        self.start_nodes = _gated(start_nodes(self.layout, moving))
+        self.prescribed_angles: list[tuple[int | None, int | None]] = []  # (p index, moving k) of clamped starts
+        self.groups = [self._group(g) for g in self.layout.groups]
+        self._global_indices()
+
+    @property
+    def n_z(self) -> int:
+        return self.layout.n_x + self.layout.n_lam
+
+    # ---- constant index arrays ------------------------------------------------------------------
+    def _group(self, g) -> _Group:
+        L, sig = self.layout, g.signature
+        zero, n_x = self.n_z, L.n_x
+        n_el, n_b = g.n_elements, g.n_blocks
+        E, B = padded(n_el), padded(n_b)
+        zero_affine = n_x + 10_000  # replaced below, once the prescribed angles are known
+        gu, gaff, present, start, start_chain, eflags = [], [], [], [], [], []
+        chain_ids = [L.chains.index(c) for c in g.chains]
+        for c, cid in zip(g.chains, chain_ids):
+            for e in range(c.n_elements):
+                for i in range(sig.n_c):
+                    x = c.coordinate_x(e, i)
+                    if x is None:  # a clamped start's theta_0: its start body's angle
+                        angle = L.start_body_angle_x(c)
+                        gu.append(angle if angle is not None else zero)
+                        gaff.append(angle if angle is not None else n_x + self._prescribed_angle(c))
+                    else:
+                        gu.append(x)
+                        gaff.append(x)
+                present.append(1.0)
+                start.append(float(e == 0))
+                start_chain.append(cid)
+                eflags.append([1.0, float(e == 0 and c.topology.start == "clamped"), float(e == c.n_elements - 1)])
+        for _ in range(E - n_el):
+            gu += [zero] * sig.n_c
+            gaff += [zero_affine] * sig.n_c
+            present.append(0.0)
+            start.append(0.0)
+            start_chain.append(0)
+        eflags += [[0.0, 0.0, 0.0]] * (E - n_el + 1)  # the padding, then the "no element" column
+        eflags = np.array(eflags).T
+        blocks, e0 = [], 0  # (chain, j, its chain's first element) in order
+        for c in g.chains:
+            blocks += [(c, j, e0) for j in range(c.n_blocks)]
+            e0 += c.n_elements
+        none = E  # the zero column after the padded elements
+        this, prev, flags, end = [], [], [], []
+        for c, j, first in reversed(blocks):
+            this.append(first + j if j < c.n_elements else none)
+            prev.append(first + j - 1 if j > 0 else none)
+            flags.append([float(j == 0), float(j == c.n_elements)])
+            m = n_x + c.multiplier_offset
+            if j == c.n_elements:
+                end += [m, m + 1, m + 2 if c.topology.end == "clamped" else zero]
+            else:
+                end += [zero] * 3
+        pad = B - n_b
+        this += [none] * pad
+        prev += [none] * pad
+        flags += [[0.0, 0.0]] * pad
+        end += [zero] * (3 * pad)
+        block_present = np.array([[1.0] * n_b + [0.0] * pad])
+        forward = [n_b - 1 - k for k in range(n_b)] + list(range(n_b, B))
+        b0 = [n_b - 1 - c.first_block for c in g.chains]
+        last_element = [c.first_block - ci + c.n_elements - 1 for ci, c in enumerate(g.chains)]
+        n_chains = len(g.chains)
+        node_columns, force_sum, end_of_block = [], np.zeros((E, B)), []
+        for k, (c, j, first) in enumerate(blocks):
+            node_columns.append(g.chains.index(c) if j == 0 else n_chains + first + j - 1)
+            force_sum[first + j:first + c.n_elements, k] = 1.0
+            end_of_block.append(n_x + c.multiplier_offset)
+        node_columns += [0] * pad
+        end_of_block += [zero] * pad
+        element_node = [c.first_block + e for c in g.chains for e in range(c.n_elements)]
+        return _Group(E, B, gu, gaff, np.array([present]), np.array([start]), start_chain, this, prev,
+                      eflags[:, this], eflags[:, prev], block_present, np.array(flags).T, end, forward, chain_ids, b0,
+                      last_element, node_columns, force_sum, end_of_block, element_node)
+
+    def _prescribed_angle(self, chain) -> int:
+        s = self.structure
+        pointer = s.prescribed[chain.topology.start_body][2]
+        index = s.index[pointer] if pointer else None
+        key = (index, self.moving.index(index) if index in self.moving else None)
+        if key not in self.prescribed_angles:
+            self.prescribed_angles.append(key)
+        return self.prescribed_angles.index(key)
+
+    def _global_indices(self) -> None:
+        L, s = self.layout, self.structure
+        zero_affine = L.n_x + len(self.prescribed_angles)  # the zero appended to the extended affine
+        for gr in self.groups:
+            gr.gather_affine = [zero_affine if i >= L.n_x + 10_000 else i for i in gr.gather_affine]
+        self.z_global = list(L.x_global) + [L.n_x + j for j in range(L.n_lam)]
+        n_b = len(s.bodies)
+        self.newton_rows = [3 * b + c for b, c in s.free] + list(range(3 * n_b, 3 * n_b + L.n_global - len(s.free)))
+        row_of = {row: k for k, row in enumerate(self.newton_rows)}
+        self.border_rows = [[row_of.get(r, -1) for r in L.border_rows(c)] for c in L.chains]
+        self.border_cols = [[col - L.n_block_unknowns if col >= 0 else -1 for col in L.border_columns(c)]
+                            for c in L.chains]
+        clamped = [c for g in L.groups for c in g.chains if c.topology.start == "clamped"]
+        self.routed_bodies = [c.topology.start_body for c in clamped]
+        self.routed_rows = [row_of.get(3 * b + 2, -1) for b in self.routed_bodies]
+        self.gravity = [s.index["/gravity/0"], s.index["/gravity/1"]] if s.gravity else None
+        # the condensed right-hand side: newton rows + routed rows + the chains' border rows
+        n_g, n_ch = L.n_global, len(L.chains)
+        T = np.zeros((n_g, len(clamped) + BORDER * n_ch))
+        for r, row in enumerate(self.routed_rows):
+            if row >= 0:
+                T[row, r] = 1.0
+        for cid, rows in enumerate(self.border_rows):
+            for i, row in enumerate(rows):
+                if row >= 0:
+                    T[row, len(clamped) + BORDER * cid + i] = 1.0
+        self.rhs_scatter = ca.DM(ca.sparsify(ca.DM(T)))
+        self.routed_into_newton = ca.DM(ca.sparsify(ca.DM(T[:, :len(clamped)])))
+        # from the lifted solution [blocks in order, per group, unpadded; global unknowns] to dZ
+        self.lift_to_z = list(L.x_unknown) + [L.lam_index(j) for j in range(L.n_lam)]
+
+    def extra_D(self, gi: int) -> np.ndarray:
+        """(size, size x padded blocks, reverse order): identity on the dummy slots and on node
+        0's definitions (their rows' derivative in themselves)."""
+        g, gr = self.layout.groups[gi], self.groups[gi]
+        bl, n = g.blocks, g.blocks.size
+        blocks = []
+        for c in g.chains:
+            for j in range(c.n_blocks):
+                D = np.zeros((n, n))
+                if j == 0:
+                    diag = list(range(bl.n_interior)) + [bl.aux(q) for q in range(6)]
+                    if c.topology.start == "clamped":
+                        diag.append(bl.theta)
+                    D[diag, diag] = 1.0
+                if j == c.n_elements:
+                    D[[bl.aux(6), bl.aux(7)], [bl.aux(6), bl.aux(7)]] = 1.0
+                blocks.append(D)
+        blocks = blocks[::-1] + [np.zeros((n, n))] * (gr.blocks - g.n_blocks)
+        return np.hstack(blocks)
+
+    # ---- per step ---------------------------------------------------------------------------------
+    def step_inputs(self, affine, k, p, pdot, pddot, damping, mask, data: list) -> StepInputs:
+        """The iterations' shared inputs; data per group (n_data x padded elements)."""
+        extra = [[], [], []]
+        for index, m in self.prescribed_angles:
+            extra[0].append(p[index] if index is not None else ca.MX(0))
+            extra[1].append(pdot[m] if m is not None else ca.MX(0))
+            extra[2].append(pddot[m] if m is not None else ca.MX(0))
+        extended = [ca.vertcat(base, *more, 0) for base, more in zip(affine, extra)]
+        gravity = p[self.gravity] if self.gravity else ca.MX.zeros(2)
+        element_affine, constants = [], []
+        for gr, g in zip(self.groups, self.layout.groups):
+            n_c = g.signature.n_c
+            element_affine.append(ca.vertcat(*[ca.reshape(v[gr.gather_affine], n_c, gr.elements) for v in extended]))
+            constants.append((ca.repmat(k, 1, gr.elements), ca.repmat(damping, 1, gr.elements),
+                              ca.repmat(gravity, 1, gr.elements)))
+        xg = list(self.layout.x_global)
+        cX, cV, cA = affine
+        affine_global = ca.horzcat(cX[xg], cV[xg], cA[xg]) if xg else ca.MX(0, 3)
+        return StepInputs(affine, k, p, pdot, pddot, damping, mask, element_affine, constants, data, affine_global)
+
+    # ---- pieces, as MX ------------------------------------------------------------------------------
+    def _forward(self, Z, go, si: StepInputs):
+        """The forward sweeps: per group (next (6 x elements), packed, energies), and every
+        chain's node 0 (6 x chains)."""
+        Zext = ca.vertcat(Z, 0)
+        starts = self.start_nodes(go, Z[self.z_global], si.affine_global, si.k, si.p, si.pdot, si.pddot)
+        out = []
+        for gr, g, ch, aff, (kk, damping, gravity), dat in zip(self.groups, self.layout.groups, self.chunks,
+                                                              si.element_affine, si.element_constants, si.data):
+            u = ca.reshape(Zext[gr.gather_u], g.signature.n_c, gr.elements)
+            sweep = ch.sweep.mapaccum("sweeps", gr.elements // CHUNK, [1], [0])
+            out.append(sweep(go * ca.DM(gr.present), ca.DM.zeros(6), u, aff, kk, damping, gravity, dat,
+                             ca.DM(gr.start), starts[:, gr.start_chain])[1:])
+        return out, starts
+
+    def evaluate(self, Z, go, si: StepInputs, kept_reverse: list) -> Evaluation:
+        """The residual at Z, eliminated with kept_reverse; go = 0: nothing is computed (the
+        kernels are gated off; the caller keeps its last evaluation)."""
+        L = self.layout
+        sweeps, starts = self._forward(Z, go, si)
+        Zext = ca.vertcat(Z, 0)
+        n_ch = len(L.chains)
+        ys, sizes, energies = [], [], ca.MX.zeros(6)
+        node0_F, ends, border, routed = [None] * n_ch, [None] * n_ch, [None] * n_ch, []
+        for gr, g, ch, kept, (nxt, packed, en) in zip(self.groups, L.groups, self.chunks, kept_reverse, sweeps):
+            energies = energies + ca.sum2(en)
+            columns = ca.horzcat(packed, ca.DM.zeros(packed_size(g.signature), 1))
+            end = ca.reshape(Zext[gr.end], 3, gr.blocks)
+            backward = ch.backward.mapaccum("backward_sweeps", gr.blocks // CHUNK, [1], [0])
+            _, carries, y, node = backward(go * ca.DM(gr.block_present), ca.DM.zeros(2 + g.blocks.size + BORDER),
+                                           kept, columns[:, gr.this], ca.DM(gr.this_flags), columns[:, gr.prev],
+                                           ca.DM(gr.prev_flags), end, ca.DM(gr.flags))
+            ys.append(y)
+            sizes.append(ca.mmax(node[3, :]))
+            for c, cid, b0, last in zip(g.chains, gr.chains, gr.b0, gr.last_element):
+                border[cid] = carries[2 + g.blocks.size:, b0]
+                node0_F[cid] = node[0:2, b0]
+                if c.topology.start == "clamped":
+                    routed.append(node[2, b0])
+                x = c.coordinate_x(c.n_elements - 1, g.signature.degree)
+                cX, _, cA = si.affine
+                ends[cid] = ca.vertcat(nxt[0:2, last], nxt[4:6, last], cX[x] + si.k[0] * Z[x], cA[x] + si.k[2] * Z[x])
+        starts8 = ca.vertcat(starts, ca.horzcat(*node0_F)) if n_ch else ca.MX(8, 0)
+        ends6 = ca.horzcat(*ends) if n_ch else ca.MX(6, 0)
+        all_rows = self.global_part(go, Z[self.z_global], si.affine_global, si.k, starts8, ends6, si.p, si.pdot,
+                                    si.pddot, si.damping, si.mask)
+        all_rows, global_energies = all_rows[0], all_rows[6]
+        routed_v = ca.vertcat(*routed) if routed else ca.MX(0, 1)
+        newton = all_rows[self.newton_rows] + ca.mtimes(self.routed_into_newton, routed_v)
+        n_xg = len(L.x_global)
+        norms = sizes[:]
+        if n_xg:
+            norms.append(ca.mmax(ca.fabs(newton[:n_xg])))
+        if L.n_lam:
+            scale = POSITION_WEIGHT * si.k[0] if self.level == "position" else 1.0
+            norms.append(scale * ca.mmax(ca.fabs(newton[n_xg:])))
+        border_v = ca.vertcat(*border) if n_ch else ca.MX(0, 1)
+        rhs = all_rows[self.newton_rows] + ca.mtimes(self.rhs_scatter, ca.vertcat(routed_v, border_v))
+        norm = ca.mmax(ca.vertcat(*norms)) if norms else ca.MX(0)
+        return Evaluation(ys, rhs, all_rows, routed_v, energies, global_energies, norm)
+
+    def factorize(self, Z, si: StepInputs) -> Factors:
+        """The factors of the Newton system at Z."""
+        L = self.layout
+        one = ca.MX(1)
+        sweeps, starts = self._forward(Z, one, si)
+        Zext = ca.vertcat(Z, 0)
+        n_ch = len(L.chains)
+        node0_F, ends, locals_ = [None] * n_ch, [None] * n_ch, []
+        for gr, g, (nxt, packed, en) in zip(self.groups, L.groups, sweeps):
+            n_c = g.signature.n_c
+            kinematics = ca.horzcat(starts[:, gr.chains], nxt)[:, gr.node_columns]  # (6, blocks) in order
+            lam_end = ca.horzcat(Zext[gr.end_of_block], Zext[[i + 1 if i < self.n_z else i for i in gr.end_of_block]]).T
+            F = ca.mtimes(packed[n_c:n_c + 2, :], ca.DM(gr.force_sum)) + lam_end
+            nodes = ca.vertcat(kinematics, F)  # (8, padded blocks) in order
+            at = gr.element_node + [0] * (gr.elements - g.n_elements)
+            after = [q + 1 for q in gr.element_node] + [0] * (gr.elements - g.n_elements)
+            u = ca.reshape(Zext[gr.gather_u], n_c, gr.elements)
+            locals_.append(ca.vertcat(u, nodes[:, at], nodes[:, after]))
+            for c, cid in zip(g.chains, gr.chains):
+                last = c.first_block + c.n_elements
+                node0_F[cid] = F[:, c.first_block]
+                x = c.coordinate_x(c.n_elements - 1, g.signature.degree)
+                cX, _, cA = si.affine
+                ends[cid] = ca.vertcat(kinematics[0:2, last], kinematics[4:6, last], cX[x] + si.k[0] * Z[x],
+                                       cA[x] + si.k[2] * Z[x])
+        starts8 = ca.vertcat(starts, ca.horzcat(*node0_F)) if n_ch else ca.MX(8, 0)
+        ends6 = ca.horzcat(*ends) if n_ch else ca.MX(6, 0)
+        out = self.global_part(one, Z[self.z_global], si.affine_global, si.k, starts8, ends6, si.p, si.pdot,
+                               si.pddot, si.damping, si.mask)
+        J_global, start_C, start_W = out[1], out[3], out[4]
+        A = ca.densify(J_global)
+        kept_reverse, kept_forward = [], []
+        for gi, (gr, g, ch, local, aff, (kk, damping, gravity), dat) in enumerate(zip(
+                self.groups, L.groups, self.chunks, locals_, si.element_affine, si.element_constants, si.data)):
+            sig, n = g.signature, g.blocks.size
+            jacobian = ch.jacobian.map(gr.elements // CHUNK)
+            _, J = jacobian(ca.DM(gr.present), local, aff, kk, damping, gravity, dat)
+            J_cols = ca.horzcat(ca.reshape(ca.densify(J), sig.n_rows * sig.n_local, gr.elements),
+                                ca.DM.zeros(sig.n_rows * sig.n_local, 1))
+
+            def per_block(index):
+                return ca.reshape(J_cols[:, index], sig.n_rows, sig.n_local * gr.blocks)
+
+            extra_C, extra_W = self._extra_C_W(gr, g, start_C, start_W)
+            carry0 = ca.DM.zeros(n * n + 2 * n * BORDER + BORDER * BORDER)
+            factor = ch.factor.mapaccum("factor_sweeps", gr.blocks // CHUNK, [1], [0])
+            _, carries, kept = factor(ca.DM(gr.block_present), carry0, per_block(gr.this), ca.DM(gr.this_flags),
+                                      per_block(gr.prev), ca.DM(gr.prev_flags), ca.DM(self.extra_D(gi)), extra_C,
+                                      extra_W, ca.DM(gr.flags))
+            kept_reverse.append(kept)
+            kept_forward.append(kept[:, gr.forward])
+            for cid, b0 in zip(gr.chains, gr.b0):
+                S = ca.reshape(carries[-BORDER * BORDER:, b0], BORDER, BORDER)
+                A = self._add_border(A, S, cid)
+        inverse = ca.inv(A) if L.n_global else ca.MX(0, 0)
+        return Factors(kept_reverse, kept_forward, inverse)
+
+    def _add_border(self, A: ca.MX, S: ca.MX, chain: int) -> ca.MX:
+        rows, cols = self.border_rows[chain], self.border_cols[chain]
+        r_keep = [i for i, r in enumerate(rows) if r >= 0]
+        c_keep = [j for j, c in enumerate(cols) if c >= 0]
+        if r_keep and c_keep:
+            rr, cc = [rows[i] for i in r_keep], [cols[j] for j in c_keep]
+            A[rr, cc] = A[rr, cc] + S[r_keep, c_keep]
+        return A
+
+    def _extra_C_W(self, gr: _Group, g, start_C: ca.MX, start_W: ca.MX):
+        """(size x BORDER blocks, BORDER x size blocks), reverse order: node 0's definitions
+        against the start body's unknowns, the start body's rows against F_0; the end
+        conditions' rows against node N (rho, or a at a start) and theta_N, lam_rot in theta_N's row."""
+        bl, n = g.blocks, g.blocks.size
+        C = ca.MX.zeros(n, BORDER * gr.blocks)
+        W = ca.MX.zeros(BORDER, n * gr.blocks)
+        for c, cid, b0 in zip(g.chains, gr.chains, gr.b0):
+            bN = b0 - c.n_elements  # reverse order: B_N comes n_elements before B_0
+            C[[bl.aux(q) for q in range(6)], list(range(b0 * BORDER, b0 * BORDER + 3))] = \
+                start_C[:, 3 * cid:3 * cid + 3]
+            W[[0, 1, 2], [b0 * n + bl.aux(6), b0 * n + bl.aux(7)]] = start_W[:, 2 * cid:2 * cid + 2]
+            node = (bl.aux(0), bl.aux(1)) if self.level == "position" else (bl.aux(4), bl.aux(5))
+            W[3, bN * n + node[0]] = 1
+            W[4, bN * n + node[1]] = 1
+            if c.topology.end == "clamped":
+                W[5, bN * n + bl.theta] = 1
+                C[bl.theta, bN * BORDER + 5] = 1
+        return C, W
+
+    def solve(self, ev: Evaluation, go, factors: Factors) -> ca.MX:
+        """dZ such that the Newton step is Z - dZ (zeros where go = 0)."""
+        L = self.layout
+        x_global = ca.mtimes(factors.inverse, ev.rhs) if L.n_global else ca.MX(0, 1)
+        x_ext = ca.vertcat(x_global, 0)
+        parts = []
+        for gr, g, ch, kept, y in zip(self.groups, L.groups, self.chunks, factors.kept_forward, ev.y):
+            border = []
+            for c, cid in zip(g.chains, gr.chains):
+                cols = [col if col >= 0 else L.n_global for col in self.border_cols[cid]]
+                border += cols * c.n_blocks
+            border += [L.n_global] * (BORDER * (gr.blocks - g.n_blocks))
+            x_border = ca.reshape(x_ext[border], BORDER, gr.blocks)
+            present = ca.DM(gr.block_present[:, gr.forward])
+            substitute = ch.substitute.mapaccum("substitute_sweeps", gr.blocks // CHUNK, [1], [0])
+            _, _, x = substitute(go * present, ca.DM.zeros(g.blocks.size), kept, y[:, gr.forward], x_border,
+                                 ca.DM(gr.flags[:, gr.forward]))
+            parts.append(ca.vec(x[:, :g.n_blocks]))
+        return ca.vertcat(*parts, x_global)[self.lift_to_z]

@@ -1,0 +1,183 @@
+"""A window of time steps in one Function, on the kernel system (service.dynamics.kernel_system).
+
+The window factors the Newton system once, at its first step's predictor, and every step of
+the window iterates on those factors (modified Newton): the residual is exact at every
+iteration, so the factors' age changes the rate of convergence only. Each iteration is
+accelerated by Anderson's mixing with the one before (a secant step): it recovers much of
+what old factors lose on the stiff shear and axial modes, whose accelerations change sign
+from step to step. Iterations run while the residual is above the tolerance, up to
+MAX_ITERATIONS: once it is below, the kernels of the remaining iterations are gated off
+(models.kernels.chunks) and their results keep the last ones. A step left above the
+tolerance is reported by its residual: the caller cuts the window there and starts the next
+one, with fresh factors, from the last good step.
+
+The state carried from step to step is [x; v; a; qdd; lam] (the energy form's coordinates,
+rates, the scheme's acceleration-like variable, accelerations, multipliers). Per step the
+window also returns the monitor (kinetic energy, the potential without the varying loads, the
+input power, the damping power, the prescribed motions' forces), the residual's norm and the
+iterations it took.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import casadi as ca
+
+from service.dynamics.kernel_system import NEWTON_TOLERANCE, Evaluation, Factors, StepInputs, StepSystem, padded
+from service.dynamics.schemes import Scheme
+
+MAX_ITERATIONS = 8
+
+
+@dataclass(frozen=True)
+class StateLayout:
+    n_x: int
+    n_lam: int
+
+    @property
+    def size(self) -> int:
+        return 4 * self.n_x + self.n_lam
+
+    def split(self, s):
+        n = self.n_x
+        return s[:n], s[n:2 * n], s[2 * n:3 * n], s[3 * n:4 * n], s[4 * n:]
+
+
+class Stepper:
+    """The Functions of the kernel time stepping of one structure, scheme and set of moving
+    parameters: one step on given factors, a window's first step (which makes them), windows."""
+
+    def __init__(self, system: StepSystem, scheme: Scheme):
+        self.system, self.scheme = system, scheme
+        L = system.layout
+        self.state = StateLayout(L.n_x, L.n_lam)
+        self.n_p = len(system.structure.parameters)
+        self.n_moving = len(system.moving)
+        self.n_groups = len(L.groups)
+        self._windows: dict[int, ca.Function] = {}
+
+    def data_shapes(self) -> list[tuple[int, int]]:
+        """Per chain group: the shape of its element data (padded to whole chunks)."""
+        return [(g.signature.n_data, padded(g.n_elements)) for g in self.system.layout.groups]
+
+    # ---- symbols ----------------------------------------------------------------------------------
+    def _symbols(self):
+        data = [ca.MX.sym(f"data{i}", *shape) for i, shape in enumerate(self.data_shapes())]
+        return (ca.MX.sym("state", self.state.size), ca.MX.sym("h"), ca.MX.sym("p", self.n_p),
+                ca.MX.sym("pdot", self.n_moving), ca.MX.sym("pddot", self.n_moving), ca.MX.sym("damping"),
+                ca.MX.sym("mask", self.n_p), data)
+
+    def _factor_symbols(self) -> Factors:
+        sys = self.system
+        shapes = [(ch.factor_size, gr.blocks) for ch, gr in zip(sys.chunks, sys.groups)]
+        return Factors([ca.MX.sym(f"kept_rev{i}", *b) for i, b in enumerate(shapes)],
+                       [ca.MX.sym(f"kept_fwd{i}", *b) for i, b in enumerate(shapes)],
+                       ca.MX.sym("inverse", sys.layout.n_global, sys.layout.n_global))
+
+    def coefficients(self, h):
+        """(d a / d u, k = (kx, kv, ka, k_rho)) of the scheme for the step h."""
+        s = self.scheme
+        fa = (1 - s.alpha_f) / (1 - s.alpha_m)
+        kx, kv = h**2 * s.beta * fa, h * s.gamma * fa
+        return fa, ca.vertcat(kx, kv, 1, kx)
+
+    def _affine(self, state, h):
+        sc = self.scheme
+        x, v, a, qdd, _ = self.state.split(state)
+        c_a1 = (sc.alpha_f * qdd - sc.alpha_m * a) / (1 - sc.alpha_m)
+        cX = x + h * v + h**2 * ((0.5 - sc.beta) * a + sc.beta * c_a1)
+        cV = v + h * ((1 - sc.gamma) * a + sc.gamma * c_a1)
+        return (cX, cV, ca.MX.zeros(self.state.n_x)), c_a1
+
+    # ---- the Functions ----------------------------------------------------------------------------
+    @cached_property
+    def step_function(self) -> ca.Function:
+        """(factors..., alive, state, h, p, pdot, pddot, damping, mask, data...) -> (state,
+        monitor, norm, iterations): one step on given factors; alive = 0 (a step before it in
+        the window did not settle) computes nothing and reports an infinite norm."""
+        f = self._factor_symbols()
+        alive = ca.MX.sym("alive")
+        state, h, p, pdot, pddot, damping, mask, data = self._symbols()
+        out = self._step(f, state, h, p, pdot, pddot, damping, mask, data, alive)
+        return ca.Function("kernel_step", [*f.parts(), alive, state, h, p, pdot, pddot, damping, mask, *data],
+                           list(out[:4]))
+
+    @cached_property
+    def first_step_function(self) -> ca.Function:
+        """(state, h, p, pdot, pddot, damping, mask, data...) -> (state, monitor, norm,
+        iterations, factors...): a step that makes the factors at its predictor."""
+        state, h, p, pdot, pddot, damping, mask, data = self._symbols()
+        out = self._step(None, state, h, p, pdot, pddot, damping, mask, data)
+        return ca.Function("kernel_first_step", [state, h, p, pdot, pddot, damping, mask, *data],
+                           [*out[:4], *out[4].parts()])
+
+    def _step(self, factors: Factors | None, state, h, p, pdot, pddot, damping, mask, data, alive=None):
+        sys = self.system
+        fa, k = self.coefficients(h)
+        affine, c_a1 = self._affine(state, h)
+        _, _, _, qdd, lam = self.state.split(state)
+        si = sys.step_inputs(affine, k, p, pdot, pddot, damping, mask, data)
+        Z = ca.vertcat(qdd, lam)  # the predictor: the last accelerations and multipliers
+        if factors is None:
+            factors = sys.factorize(Z, si)
+        alive = ca.MX(1) if alive is None else alive
+        ev = sys.evaluate(Z, alive, si, factors.kept_reverse)
+        previous, g_previous, have = ca.MX.zeros(sys.n_z), ca.MX.zeros(sys.n_z), ca.MX(0)
+        used = ca.MX(0)
+        for _ in range(MAX_ITERATIONS):
+            go = alive * (ev.norm > NEWTON_TOLERANCE)
+            g = -sys.solve(ev, go, factors)  # the chord step
+            # Anderson's mixing with the last iteration (a secant step)
+            dZ, dg = Z - previous, g - g_previous
+            gamma = have * ca.dot(dg, g) / (ca.dot(dg, dg) + 1e-300)
+            Z_next = Z + g - gamma * (dZ + dg)
+            ev_next = sys.evaluate(Z_next, go, si, factors.kept_reverse)
+            previous, g_previous = ca.if_else(go, Z, previous), ca.if_else(go, g, g_previous)
+            have = ca.if_else(go, 1, have)
+            Z = ca.if_else(go, Z_next, Z)
+            # a gated evaluation computes nothing: keep what the monitor and the test need from the
+            # last one that ran (the eliminated blocks and right-hand side only feed a solve, gated too)
+            ev = Evaluation(ev_next.y, ev_next.rhs, *[ca.if_else(go, new, old) for new, old in zip(
+                [ev_next.all_rows, ev_next.routed, ev_next.energies, ev_next.global_energies, ev_next.norm],
+                [ev.all_rows, ev.routed, ev.energies, ev.global_energies, ev.norm])])
+            used = used + go
+        n_x = self.state.n_x
+        u = Z[:n_x]
+        cX, cV, _ = affine
+        new_state = ca.vertcat(cX + k[0] * u, cV + k[1] * u, c_a1 + fa * u, u, Z[n_x:])
+        norm = ca.if_else(alive, ev.norm, ca.inf)
+        return new_state, self.monitor(ev, si), norm, used, factors
+
+    def monitor(self, ev: Evaluation, si: StepInputs) -> ca.MX:
+        """(kinetic, held potential, input power, damping power, motion forces...)."""
+        sys = self.system
+        kinetic = ev.global_energies[0] + ev.energies[0]
+        held, power = ev.global_energies[2] + ev.energies[1], ev.global_energies[3]
+        if sys.gravity is not None:  # the links' weight: -g . first moment; its power, g . momentum
+            g, varying = si.p[sys.gravity], si.mask[sys.gravity]
+            held = held - ca.dot((1 - varying) * g, ev.energies[2:4])
+            power = power + ca.dot(varying * g, ev.energies[4:6])
+        Q = []
+        for row, body in self._motion_rows:
+            value = ev.all_rows[row]
+            for r, start in enumerate(sys.routed_bodies):
+                if body is not None and start == body:
+                    value = value + ev.routed[r]
+            Q.append(value)
+        Q = ca.vertcat(*Q) if Q else ca.MX(0, 1)
+        if self.n_moving:
+            power = power + ca.dot(Q, si.pdot)
+        return ca.vertcat(kinetic, held, power, 2 * si.damping * kinetic, Q)
+
+    @cached_property
+    def _motion_rows(self) -> list[tuple[int, int | None]]:
+        """Per moving parameter: its coordinate's row among all rows, and its body when the
+        coordinate is an angle (the clamped starts on that body add their theta_0 rows)."""
+        s, out = self.system.structure, []
+        for index in self.system.moving:
+            pointer = s.parameters[index].pointer
+            b, c = next((b, c) for b, row in enumerate(s.prescribed) for c in range(3) if row[c] == pointer)
+            out.append((3 * b + c, b if c == 2 else None))
+        return out
