@@ -8,6 +8,7 @@ jobs a previous process left running), and closes them again at shutdown.
 from __future__ import annotations
 
 import logging
+import os
 from contextlib import asynccontextmanager
 
 from fastapi import FastAPI
@@ -25,6 +26,8 @@ from service.examples import ExampleLibrary, examples_directory
 from service.jobs.executors import make_executor
 from service.jobs.runner import JobRunner
 from service.jobs.store import JobStore
+from service.kernels.cache import compiler
+from service.kernels.queue import BuilderProcess
 from service.settings import Settings
 
 log = logging.getLogger("flexmech.api")
@@ -48,13 +51,28 @@ def _services(settings: Settings) -> Services:
     return Services(settings, limits, store, executor, runner, SolverThread(), library)
 
 
+def _builder(settings: Settings) -> BuilderProcess | None:
+    """The build queue's process (service.kernels.queue), when kernels are built here."""
+    if not settings.build_kernels or compiler() is None:
+        return None
+    builder = BuilderProcess({"FLEXMECH_BUILD_SECONDS": str(settings.build_seconds),
+                              "FLEXMECH_BUILD_MEMORY_BYTES": str(int(settings.build_memory_mb * 2**20))})
+    builder.start()
+    log.info("kernel builder started (pid %d)", builder.pid)
+    return builder
+
+
 def create_app(settings: Settings | None = None) -> FastAPI:
     settings = settings or Settings()
 
     @asynccontextmanager
     async def lifespan(app: FastAPI):
         single_threaded_blas()  # the solver thread shares the cores with the pool's workers
+        if settings.cache_max_bytes is not None:
+            os.environ["FLEXMECH_CACHE_MAX_BYTES"] = str(settings.cache_max_bytes)  # workers and builder too
+        builder = _builder(settings)  # before the executor: its workers inherit the queue's setting
         services = _services(settings)
+        services.builder = builder
         app.state.services = services
         services.runner.start()
         log.info("flexmech serving: store %s, %s", services.store.engine.url.render_as_string(hide_password=True),
@@ -63,6 +81,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             yield
         finally:
             services.runner.stop()
+            if builder is not None:
+                builder.stop()
             services.solver.close()
             services.executor.close()
             services.store.close()

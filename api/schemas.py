@@ -398,3 +398,11 @@ class HealthResponse(BaseModel):
     database: str = Field(description="sqlite or postgresql")
     executor: str
     active_jobs: int
+    builder: "BuilderStatus | None" = Field(None, description="the kernel build queue (none: kernels are not built "
+                                           "by this server)")
+
+
+class BuilderStatus(BaseModel):
+    pid: int = Field(description="the builder's process, leader of its own process group")
+    running: bool
+    queued: int = Field(description="kernel builds waiting")

@@ -12,6 +12,7 @@ from service.requests import Limits
 from service.examples import ExampleLibrary
 from service.jobs.executors import TaskExecutor
 from service.jobs.runner import JobRunner
+from service.kernels.queue import BuilderProcess
 from service.jobs.store import JobStore
 from service.settings import Settings
 
@@ -40,6 +41,7 @@ class Services:
     runner: JobRunner
     solver: SolverThread
     examples: ExampleLibrary
+    builder: BuilderProcess | None = None
 
     def owner_of(self, api_key: str | None) -> str:
         """Who owns the jobs a key makes: a digest of the key (the key itself is never stored);

@@ -53,6 +53,12 @@ class Settings(BaseSettings):
     solve_time_limit: float = Field(10.0, gt=0, description="seconds of Newton per /v1/solve")
     job_time_limit: float = Field(3600.0, gt=0, description="seconds of wall time per job")
     chunk_size: int = Field(8, ge=1, le=10_000, description="points per task sent to a worker")
+    build_kernels: bool = Field(True, description="compile kernels in a build queue beside the server (runs go "
+                                "on interpreted until a kernel is built)")
+    build_seconds: float = Field(60.0, gt=0, description="time limit of one kernel compile")
+    build_memory_mb: float = Field(1024.0, gt=64, description="memory limit (MiB) of one kernel compile")
+    cache_max_bytes: int | None = Field(None, ge=1_000_000, description="bound of the disk cache of graphs and "
+                                        "kernels (least recently used evicted); default 2 GiB")
     log_level: Literal["debug", "info", "warning", "error"] = "info"
 
     @field_validator("api_keys", mode="before")

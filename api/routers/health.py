@@ -9,7 +9,7 @@ from fastapi.concurrency import run_in_threadpool
 from sqlalchemy.engine import make_url
 
 from api.deps import ServicesDep
-from api.schemas import HealthResponse
+from api.schemas import BuilderStatus, HealthResponse
 
 router = APIRouter(prefix="/v1", tags=["health"])
 
@@ -24,6 +24,8 @@ def _version() -> str:
 @router.get("/health", operation_id="health", response_model=HealthResponse, summary="Is the service up")
 async def health(services: ServicesDep) -> HealthResponse:
     active = await run_in_threadpool(services.store.active)
+    b = services.builder
+    builder = BuilderStatus(pid=b.pid, running=b.running(), queued=b.queued()) if b is not None else None
     return HealthResponse(status="ok", version=_version(),
                           database=make_url(services.store.url).get_backend_name(),
-                          executor=services.executor.description, active_jobs=len(active))
+                          executor=services.executor.description, active_jobs=len(active), builder=builder)

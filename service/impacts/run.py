@@ -99,10 +99,10 @@ def run_impacts(document: MechanismDocument, spec: SimulateSpec, stop=None, max_
             raise MechanismError("/simulate/every", f"{steps} steps would keep {steps // spec.every + 1} states, over "
                                  f"the {max_kept} one response holds: keep every {math.ceil(steps / max_kept)}th "
                                  "step or more (`every`)")
-        trace = run_moreau(model, p, q0, v0, spec.until, spec.step, spec.compiled, stop, progress)
+        trace = run_moreau(model, p, q0, v0, spec.until, spec.step, stop, progress)
     else:
         max_step = spec.max_step if spec.max_step is not None else spec.until / MAX_STEP_PARTS
-        trace = run_events(model, p, q0, v0, spec.until, spec.tolerance, spec.step, max_step, spec.compiled,
+        trace = run_events(model, p, q0, v0, spec.until, spec.tolerance, spec.step, max_step,
                            max_steps * TRIALS_PER_STEP, stop, progress)
     return trace, report(model, spec, trace, p, max_kept)  # trace.seconds: the stepping alone
 

@@ -1,6 +1,7 @@
 """Chunks of steps of an impact model in one CasADi call: `event_step` or `moreau_step`
-chained by mapaccum, compiled with the system C compiler when asked (cached by the model's
-structure), and the Python loops that run them to the end time."""
+chained by mapaccum, run compiled when the kernel cache has the chunk's library (built by the
+build queue, service.kernels.queue, or `flexmech build`; keyed by the model's structure) and
+on CasADi's virtual machine until then, and the Python loops that run them to the end time."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ import casadi as ca
 import numpy as np
 
 from models.impacts.model import WORKS, ImpactModel
-from service.fastpath import compiled_library
+from service.kernels.queue import function_library, request_function
 from service.impacts.event_driven import EventLayout, event_step
 from service.impacts.moreau import moreau_step
 from service.impacts.native import NativeFunction
@@ -77,20 +78,31 @@ class Chunk:
 _FUNCTIONS: dict[tuple, tuple] = {}
 
 
-def chunk(model: ImpactModel, kind: str, compiled: bool, columns: list[np.ndarray]) -> Chunk:
-    """The chunk of a model's structure with these fixed inputs (parameters, settings)."""
-    key = (kind, model.structure_key(), compiled, threading.get_ident())
-    if key not in _FUNCTIONS:
-        if kind == "event":
-            fn = event_step(model).mapaccum("event_chunk", EVENT_CHUNK)
-        else:
-            fn = moreau_step(model).mapaccum("moreau_chunk", MOREAU_CHUNK, ["S"], ["S1"])
-        library = compiled_library(fn, f"{_CODE}|{kind}|{key[1]}") if compiled else None
+def chunk_function(model: ImpactModel, kind: str) -> tuple[ca.Function, str]:
+    """The chunk Function of a model's structure and its key in the kernel cache."""
+    if kind == "event":
+        fn = event_step(model).mapaccum("event_chunk", EVENT_CHUNK)
+    else:
+        fn = moreau_step(model).mapaccum("moreau_chunk", MOREAU_CHUNK, ["S"], ["S1"])
+    return fn, f"{_CODE}|{kind}|{model.structure_key()}"
+
+
+def chunk(model: ImpactModel, kind: str, columns: list[np.ndarray]) -> Chunk:
+    """The chunk of a model's structure with these fixed inputs (parameters, settings):
+    compiled when the cache has its library; else interpreted, and the build queue asked."""
+    key = (kind, model.structure_key(), threading.get_ident())
+    fn, library = _FUNCTIONS.get(key, (None, None))
+    if fn is None:
+        fn, cache_key = chunk_function(model, kind)
         if len(_FUNCTIONS) >= MAX_CACHED:  # the oldest goes (a study or a service sees many)
             _FUNCTIONS.pop(next(iter(_FUNCTIONS)))
-        _FUNCTIONS[key] = (fn, library)
-    fn, library = _FUNCTIONS[key]
-    return Chunk(fn, library, columns)
+        _FUNCTIONS[key] = (fn, cache_key)
+        library = cache_key
+    target = function_library(fn, library)
+    if not target.exists():
+        request_function(fn, library)
+        target = None
+    return Chunk(fn, target, columns)
 
 
 def tiled(column: np.ndarray, count: int) -> ca.DM:
@@ -111,14 +123,14 @@ def event_settings(model: ImpactModel, until: float, tolerance: float, max_step:
 
 
 def run_events(model: ImpactModel, p: np.ndarray, q0, v0, until: float, tolerance: float, first_step: float,
-               max_step: float, compiled: bool, max_calls: int, stop=None, progress=None) -> Trace:
+               max_step: float, max_calls: int, stop=None, progress=None) -> Trace:
     n, P = model.bodies.size, len(model.pairs)
     L = EventLayout(n, P)
     S = np.zeros(L.size)
     S[L.y] = np.concatenate([q0, v0, np.zeros(len(WORKS))])
     S[L.at("h")] = first_step
     settings = event_settings(model, until, tolerance, max_step)
-    steps = chunk(model, "event", compiled, [p, settings])
+    steps = chunk(model, "event", [p, settings])
     trace = Trace()
     trace.states.append(S.reshape(1, -1).copy())
     began = time.perf_counter()
@@ -156,11 +168,11 @@ def trace_time(trace: Trace) -> float:
     return float(trace.states[-1][-1, 0])
 
 
-def run_moreau(model: ImpactModel, p: np.ndarray, q0, v0, until: float, h: float, compiled: bool,
-               stop=None, progress=None) -> Trace:
+def run_moreau(model: ImpactModel, p: np.ndarray, q0, v0, until: float, h: float, stop=None,
+               progress=None) -> Trace:
     S = np.concatenate([[0.0], q0, v0, np.zeros(len(WORKS))])
     count = round(until / h)
-    steps = chunk(model, "moreau", compiled, [p, np.array([h])])
+    steps = chunk(model, "moreau", [p, np.array([h])])
     trace = Trace()
     trace.states.append(S.reshape(1, -1).copy())
     trace.extras.append(np.zeros((1, 5 * len(model.pairs) + model.constraints.numel())))

@@ -1,0 +1,56 @@
+"""Which compiled kernels a document runs on: the chain signatures of its discretized links
+(link dynamics), and for a rigid-body impact simulation its chunk of steps. Each is a Build:
+a name, what it compiles (Functions and their libraries), and whether it is there already."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import casadi as ca
+
+from models import Mechanism
+from models.elements.link import LinkElementsTopology
+from models.kernels.chunks import chunks
+from models.kernels.layout import layout_of
+from models.kernels.link_chain import ChainSignature
+from service.kernels.cache import abandoned, library
+from service.kernels.queue import BUILD_ORDER, function_library
+
+
+@dataclass
+class Build:
+    name: str
+    functions: list[tuple[str, ca.Function, Path]]  # (part, Function, library)
+    note: Path  # where an abandoned build is noted
+
+    @property
+    def built(self) -> bool:
+        return all(target.exists() for _, _, target in self.functions)
+
+
+def chain_build(signature: ChainSignature) -> Build:
+    functions = chunks(signature).functions()
+    return Build(signature.key, [(kind, functions[kind], library(signature, kind)) for kind in BUILD_ORDER],
+                 abandoned(signature))
+
+
+def builds_of(mech: Mechanism) -> list[Build]:
+    """The kernels a document's analyses run on (none for documents without dynamics)."""
+    out = []
+    if any(isinstance(t, LinkElementsTopology) for t in mech.structure.elements):
+        out += [chain_build(g.signature) for g in layout_of(mech.structure).groups]
+    simulate = mech.document.simulate
+    if simulate is not None and simulate.scheme in ("event_driven", "moreau"):
+        from service.impacts.run import impact_model, timed_fields
+        from service.impacts.stepping import chunk_function
+
+        import json
+
+        model = impact_model(mech.document, timed_fields(mech.document, simulate),
+                             json.dumps(simulate.histories, sort_keys=True))
+        kind = "event" if simulate.scheme == "event_driven" else "moreau"
+        fn, key = chunk_function(model, kind)
+        target = function_library(fn, key)
+        out.append(Build(f"impact_{kind}_{target.stem}", [(kind, fn, target)], target.with_suffix(".abandoned.json")))
+    return out
