@@ -7,6 +7,7 @@
     flexmech trace examples/snap_through_arch.json --path /loads/P/force/1 --stop -300 --step 20
     flexmech contact examples/gripper_jaw_contact.json --plot force.png --shapes states.png
     flexmech simulate examples/rod_free_vibration.json --until 1 --plot rod.png --animation rod.gif
+    flexmech build examples/rod_free_vibration.json   (or --examples: compile the kernels they run on)
     flexmech examples
 
 Exit codes: 0 success; 1 the solver did not converge (status and diagnostics are printed,
@@ -27,5 +28,6 @@ from service.cli import batch  # noqa: F401
 from service.cli import serve  # noqa: F401
 from service.cli import contact  # noqa: F401
 from service.cli import simulate  # noqa: F401
+from service.cli import build  # noqa: F401
 
 __all__ = ["app"]

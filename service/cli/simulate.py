@@ -11,12 +11,12 @@ from typing import Annotated
 
 import typer
 from rich.markup import escape
-from rich.progress import Progress
 
 from service.cli.application import app
 from service.cli.common import (EXIT_NOT_CONVERGED, OptionError, check_plot_option, consoles, number, table_of,
                                 user_errors, write_json)
 from service.cli.options import DocArg, JsonOpt, PlotOpt, SetOpt, mechanism
+from service.cli.progress import SimulationProgress
 from service.impacts.run import IMPACT_SCHEMES
 
 SHOWN_OUTPUTS = 6
@@ -28,8 +28,11 @@ def simulate(document: DocArg, sets: SetOpt = None,
              step: Annotated[float | None, typer.Option(help="Time step (s).")] = None,
              scheme: Annotated[str | None, typer.Option(help="generalized_alpha | newmark | event_driven | moreau.")] = None,
              damping: Annotated[float | None, typer.Option(help="Mass-proportional damping (1/s).")] = None,
-             compiled: Annotated[bool, typer.Option("--compiled", help="Compile the stepping with the system C "
-                                                    "compiler (once per mechanism structure, cached).")] = False,
+             max_steps: Annotated[int | None, typer.Option("--max-steps", help="The most time steps (adaptive: "
+                                                           "accepted steps); capped by the service's limit.")] = None,
+             compiled: Annotated[bool, typer.Option("--compiled", hidden=True,
+                                                    help="Deprecated and ignored: kernels compile in the build "
+                                                    "queue (flexmech build).")] = False,
              animation: Annotated[Path | None, typer.Option("--animation", metavar="OUT.gif|mp4",
                                                             help="Animate the links.")] = None,
              snapshots: Annotated[Path | None, typer.Option("--snapshots", metavar="OUT.png|svg",
@@ -50,14 +53,16 @@ def simulate(document: DocArg, sets: SetOpt = None,
         mech = mechanism(document, None, sets)
         from service.dynamics.run import run_simulation, simulation_spec
 
+        if compiled:
+            err.print("--compiled is deprecated and ignored: element kernels are compiled by `flexmech build` (or "
+                      "the server's build queue) and used once built")
         spec = simulation_spec(mech, {"until": until, "step": step, "scheme": scheme, "damping": damping,
-                                      **({"compiled": True} if compiled else {})})
+                                      "max_steps": max_steps})
         if spec.scheme in IMPACT_SCHEMES:
             _impacts(mech, spec, out, err, json_out, plot, snapshots, animation)
             return
-        with Progress(console=err, transient=True) as progress:
-            task = progress.add_task("simulating", total=spec.until)
-            history, report = run_simulation(mech, spec, progress=lambda t: progress.update(task, completed=t))
+        with SimulationProgress(err, spec.until) as progress:
+            history, report = run_simulation(mech, spec, progress=progress)
         _print(out, report)
         if json_out is not None:
             write_json(json_out, report)
@@ -84,9 +89,8 @@ def _impacts(mech, spec, out, err, json_out, plot, snapshots, animation) -> None
     for option, value in (("--snapshots", snapshots), ("--animation", animation)):
         if value is not None:
             raise OptionError(option, f"{option} draws links; for impacts --plot draws the motion and contact forces")
-    with Progress(console=err, transient=True) as progress:
-        task = progress.add_task("simulating", total=spec.until)
-        _, report = run_impacts(mech.document, spec, progress=lambda t: progress.update(task, completed=t))
+    with SimulationProgress(err, spec.until) as progress:
+        _, report = run_impacts(mech.document, spec, progress=progress)
     out.print(f"[bold]{escape(report['name'])}[/bold]: {report['status']} at t = {report['time_reached']:g} s, "
               f"{report['steps']} steps ({spec.scheme}) in {report['seconds']:.3f} s; energy balance error "
               f"{report['energy_balance_error']:.2e}")
