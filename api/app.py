@@ -24,6 +24,7 @@ from service.analyses import ANALYSES
 from service.threads import single_threaded_blas
 from service.examples import ExampleLibrary, examples_directory
 from service.jobs.executors import make_executor
+from service.jobs.kinds import job_kinds
 from service.jobs.runner import JobRunner
 from service.jobs.store import JobStore
 from service.kernels.cache import compiler
@@ -71,6 +72,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         if settings.cache_max_bytes is not None:
             os.environ["FLEXMECH_CACHE_MAX_BYTES"] = str(settings.cache_max_bytes)  # workers and builder too
         builder = _builder(settings)  # before the executor: its workers inherit the queue's setting
+        job_kinds()  # their imports (the solvers, scipy) at startup: no request waits for them
         services = _services(settings)
         services.builder = builder
         app.state.services = services

@@ -11,11 +11,11 @@ from functools import lru_cache
 from service.jobs.base import JobKind, Plan
 from service.threads import single_threaded_blas
 
-__all__ = ["JobKind", "Plan", "kind_named", "run_task"]
+__all__ = ["JobKind", "Plan", "job_kinds", "kind_named", "run_task"]
 
 
 @lru_cache(maxsize=1)
-def _kinds() -> dict[str, JobKind]:
+def job_kinds() -> dict[str, JobKind]:
     from service.jobs.contact import CONTACT
     from service.jobs.impact_study import IMPACT_STUDY
     from service.jobs.optimize import OPTIMIZE
@@ -32,7 +32,7 @@ def _kinds() -> dict[str, JobKind]:
 
 
 def kind_named(name: str) -> JobKind:
-    kinds = _kinds()
+    kinds = job_kinds()
     try:
         return kinds[name]
     except KeyError:
