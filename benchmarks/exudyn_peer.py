@@ -253,7 +253,7 @@ def four_bar(elements=(8, 16, 16), step: float = 1e-3, until: float = 1.5, rho_i
         T, U = link.energies(q, v)
         kinetic, potential = kinetic + T, potential + U
         if link is crank:
-            omega_A = v[:, 0, 2]
+            omega_A, crank_angle = v[:, 0, 2], q[:, 0, 2]
         if link is coupler:
             C = coupler.ref[None, -1, :2] + q[:, -1, :2]
     power = drive_moment(times) * omega_A
@@ -261,7 +261,7 @@ def four_bar(elements=(8, 16, 16), step: float = 1e-3, until: float = 1.5, rho_i
     balance = float(np.max(np.abs(kinetic + potential - work)) / np.max(work))
     return {'times': times, 'kinetic': kinetic, 'potential': potential, 'input_work': work,
             'balance_error': balance, 'wall_seconds': wall, 'setup_seconds': setup, 'C': C,
-            'omega_A': omega_A}
+            'omega_A': omega_A, 'crank_angle': crank_angle}
 
 
 if __name__ == "__main__":

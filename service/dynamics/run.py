@@ -208,7 +208,7 @@ def report(mech: Mechanism, spec: SimulateSpec, history: History, histories, sta
     every = output_units(mech)
     return {"analysis": "simulate", "name": mech.document.name, "status": history.status,
             "message": history.message, "time_reached": history.resume.time if history.resume is not None else 0.0,
-            "steps": history.steps,
+            "steps": history.steps, "iterations": history.iterations, "rescued_steps": history.newton_iterations,
             "seconds": history.seconds, "start": start_note, "scheme": scheme_summary(spec), "step": spec.step,
             "adaptive": {"tolerance": spec.tolerance, "max_step": spec.max_step} if spec.adaptive else None,
             "damping": spec.damping, **kept, "energies": energies, "energy_balance_error": error,

@@ -2,7 +2,7 @@
 
 A chain signature's five chunks (models.kernels.chunks) are compiled to five shared libraries
 in <cache dir>/kernels/<version>/<signature key>/, keyed by the kernels' own sources, the
-CasADi version, the compiler and its flags, never by a structure: every structure with links
+CasADi version and the compiler flags, never by a structure: every structure with links
 of that signature uses them. A signature counts as compiled when all five are there (the
 builder installs them atomically, the last one last). A run loads what is there and runs the
 rest interpreted; loading touches the folder, which the cache's size bound reads as use
@@ -36,8 +36,9 @@ def compiler() -> str | None:
 
 @lru_cache(maxsize=1)
 def version() -> str:
-    """A hash of what the kernels' code comes from: their sources, CasADi, the compiler, CHUNK."""
-    digest = hashlib.sha256(f"{ca.__version__}|{compiler()}|{' '.join(FLAGS)}|{CHUNK}".encode())
+    """A hash of what the kernels' code comes from: their sources, CasADi, the flags, CHUNK (not
+    the compiler: an image built with gcc may serve without one, and the C is plain C99)."""
+    digest = hashlib.sha256(f"{ca.__version__}|{' '.join(FLAGS)}|{CHUNK}".encode())
     root = Path(__file__).resolve().parents[2] / "models"
     for name in ("kernels/chunks.py", "kernels/link_chain.py", "kernels/chain_solver.py", "kernels/rules.py",
                  "link_fe.py"):
