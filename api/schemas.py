@@ -141,8 +141,7 @@ class SweepParameter(_Request):
 
 
 class SweepRequest(DocumentRequest):
-    """A job: numeric fields varied over a grid, each point an equilibrium (or the analysis
-    named, when it is sweepable)."""
+    """A job: numeric fields varied over a grid, each point an equilibrium (or a sweepable analysis)."""
 
     model_config = ConfigDict(json_schema_extra={"examples": [
         {"example": "gripper", "continuation": "/loads/actuation/force/1", "outputs": ["end_effector.x"],
@@ -398,11 +397,4 @@ class HealthResponse(BaseModel):
     database: str = Field(description="sqlite or postgresql")
     executor: str
     active_jobs: int
-    builder: "BuilderStatus | None" = Field(None, description="the kernel build queue (none: kernels are not built "
-                                           "by this server)")
-
-
-class BuilderStatus(BaseModel):
-    pid: int = Field(description="the builder's process, leader of its own process group")
-    running: bool
-    queued: int = Field(description="kernel builds waiting")
+    builder: dict[str, int | bool] | None = Field(None, description="its kernel build queue: pid, running, queued")

@@ -9,7 +9,7 @@ from fastapi.concurrency import run_in_threadpool
 from sqlalchemy.engine import make_url
 
 from api.deps import ServicesDep
-from api.schemas import BuilderStatus, HealthResponse
+from api.schemas import HealthResponse
 
 router = APIRouter(prefix="/v1", tags=["health"])
 
@@ -25,7 +25,7 @@ def _version() -> str:
 async def health(services: ServicesDep) -> HealthResponse:
     active = await run_in_threadpool(services.store.active)
     b = services.builder
-    builder = BuilderStatus(pid=b.pid, running=b.running(), queued=b.queued()) if b is not None else None
+    builder = {"pid": b.pid, "running": b.running(), "queued": b.queued()} if b is not None else None
     return HealthResponse(status="ok", version=_version(),
                           database=make_url(services.store.url).get_backend_name(),
                           executor=services.executor.description, active_jobs=len(active), builder=builder)

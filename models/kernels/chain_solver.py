@@ -222,13 +222,24 @@ def _unpack(k: ca.SX, sizes: list[tuple[int, int]]) -> list[ca.SX]:
 
 def solver_functions(signature: ChainSignature) -> SolverFunctions:
     layout = BlockLayout(signature)
-    n, nb, n_rows, n_local, n_c = layout.size, BORDER, signature.n_rows, signature.n_local, signature.n_c
+    factor, kept_size = _factor_function(signature, layout)
+    return SolverFunctions(factor, _backward_function(signature, layout, kept_size),
+                           _substitute_function(signature, layout, kept_size), kept_size)
+
+
+def _kept(layout: BlockLayout, k: ca.SX) -> list[ca.SX]:
+    """A block's kept factors: LU of D, D^-1 L, D^-1 C, W D^-1, U."""
+    n, nb = layout.size, BORDER
+    return _unpack(k, [(n, n), (n, len(layout.node)), (n, nb), (nb, n), (len(layout.coupling_rows), n)])
+
+
+def _factor_function(signature: ChainSignature, layout: BlockLayout) -> tuple[ca.Function, int]:
+    """Blocks in reverse: (carry, J, element, J_prev, element_prev, extra_D, extra_C, extra_W,
+    flags) -> (next carry, kept factors)."""
+    n, nb, n_rows, n_local = layout.size, BORDER, signature.n_rows, signature.n_local
     node, coupling = layout.node, layout.coupling_rows
     flags = ca.SX.sym("flags", len(FLAGS))
-    first, last_block = flags[0], flags[1]
-    keep = 1 - last_block  # the carry from the next block (none at a chain's last block)
-
-    # --- factor (blocks in reverse) -------------------------------------------------------------
+    keep = 1 - flags[1]  # the carry from the next block (none at a chain's last block)
     J_this, J_prev = ca.SX.sym("J", n_rows, n_local), ca.SX.sym("J_prev", n_rows, n_local)
     f_this, f_prev = ca.SX.sym("element", len(ELEMENT_FLAGS)), ca.SX.sym("element_prev", len(ELEMENT_FLAGS))
     extra_D, extra_C, extra_W = ca.SX.sym("extra_D", n, n), ca.SX.sym("extra_C", n, nb), ca.SX.sym("extra_W", nb, n)
@@ -263,11 +274,19 @@ def solver_functions(signature: ChainSignature) -> SolverFunctions:
         [ca.vertcat(ca.vec(next_D), ca.vec(next_C), ca.vec(next_W), ca.vec(next_S)), kept],
         ["carry", "J", "element", "J_prev", "element_prev", "extra_D", "extra_C", "extra_W", "flags"],
         ["next", "kept"], {"cse": True})
+    return factor, kept.numel()
 
-    k = ca.SX.sym("kept", kept.numel())
-    LU_k, Y_L_k, Y_C_k, WY_k, U_k = _unpack(k, [(n, n), (n, len(node)), (n, nb), (nb, n), (len(coupling), n)])
 
-    # --- backward (blocks in reverse): complete the rows, eliminate ---------------------------
+def _backward_function(signature: ChainSignature, layout: BlockLayout, kept_size: int) -> ca.Function:
+    """Blocks in reverse: complete the rows with the node forces, eliminate. (carry, kept,
+    packed, element, packed_prev, element_prev, end, flags) -> (next carry, y, node)."""
+    n, nb, n_c, coupling = layout.size, BORDER, signature.n_c, layout.coupling_rows
+    flags = ca.SX.sym("flags", len(FLAGS))
+    last_block = flags[1]
+    keep = 1 - last_block
+    f_this, f_prev = ca.SX.sym("element", len(ELEMENT_FLAGS)), ca.SX.sym("element_prev", len(ELEMENT_FLAGS))
+    k = ca.SX.sym("kept", kept_size)
+    LU_k, _, _, WY_k, U_k = _kept(layout, k)
     # element outputs of the forward sweep, packed: gen rows without the end force, f, lever dDelta/dc
     packed_this, packed_prev = ca.SX.sym("packed", 3 * n_c + 2), ca.SX.sym("packed_prev", 3 * n_c + 2)
     gen_this, force_this = packed_this[:n_c], packed_this[n_c:n_c + 2]
@@ -275,17 +294,14 @@ def solver_functions(signature: ChainSignature) -> SolverFunctions:
     gen_prev, lever_prev = packed_prev[:n_c], ca.reshape(packed_prev[n_c + 2:], 2, n_c)
     # lambda_end (x, y) and lambda_rot at a chain's last block (zeros elsewhere)
     end = ca.SX.sym("end", 3)
-    end_force = end[0:2]
     extra_b = ca.SX.zeros(n)
     extra_b[layout.theta] = end[2]
     carry_F, carry_b, carry_border = ca.SX.sym("carry_F", 2), ca.SX.sym("carry_b", n), ca.SX.sym("carry_border", nb)
     # node forces: F_{j+1} from the carry (at B_N: none); F_j = F_{j+1} + f_j, and F_N = lambda_end
     F_next = keep * carry_F
-    F_j = last_block * end_force + keep * (F_next + force_this)
+    F_j = last_block * end[0:2] + keep * (F_next + force_this)
     rows_this = f_this[0] * (gen_this + ca.mtimes(lever_this.T, F_next))  # element j's gen rows
     rows_prev = f_prev[0] * (gen_prev + ca.mtimes(lever_prev.T, F_j))  # element j-1's
-    theta_this = np.zeros(n)
-    theta_this[layout.theta] = 1.0
     sel0 = layout.selection(0, "rows")[:, :n_c]
     sel1 = layout.selection(1, "rows")[:, :n_c]
     # B_j's rows: element j-1's in B_j (its interior, theta_j), element j's theta_j (unless it is
@@ -297,16 +313,21 @@ def solver_functions(signature: ChainSignature) -> SolverFunctions:
     next_b = ca.SX.zeros(n)
     next_b[coupling] = -ca.mtimes(U_k, y)
     border_rows = keep * carry_border - ca.mtimes(WY_k, b_tilde)
-    backward = ca.Function(
+    return ca.Function(
         f"{signature.key}_backward",
         [ca.vertcat(carry_F, carry_b, carry_border), k, packed_this, f_this, packed_prev, f_prev, end, flags],
         [ca.vertcat(F_j, next_b, border_rows), y, ca.vertcat(F_j, routed, ca.mmax(ca.fabs(b)))],
         ["carry", "kept", "packed", "element", "packed_prev", "element_prev", "end", "flags"],
         ["next", "y", "node"], {"cse": True})
 
-    # --- substitute (blocks in order) ------------------------------------------------------------
+
+def _substitute_function(signature: ChainSignature, layout: BlockLayout, kept_size: int) -> ca.Function:
+    """Blocks in order: (x_prev, kept, y, x_border, flags) -> (x, x)."""
+    n, nb, node = layout.size, BORDER, layout.node
+    flags = ca.SX.sym("flags", len(FLAGS))
+    k = ca.SX.sym("kept", kept_size)
+    _, Y_L_k, Y_C_k, _, _ = _kept(layout, k)
     x_prev, x_border, y_in = ca.SX.sym("x_prev", n), ca.SX.sym("x_border", nb), ca.SX.sym("y", n)
-    x = y_in - ca.mtimes(Y_L_k, (1 - first) * x_prev[node]) - ca.mtimes(Y_C_k, x_border)
-    substitute = ca.Function(f"{signature.key}_substitute", [x_prev, k, y_in, x_border, flags], [x, x],
-                             ["carry", "kept", "y", "x_border", "flags"], ["next", "x"], {"cse": True})
-    return SolverFunctions(factor, backward, substitute, kept.numel())
+    x = y_in - ca.mtimes(Y_L_k, (1 - flags[0]) * x_prev[node]) - ca.mtimes(Y_C_k, x_border)
+    return ca.Function(f"{signature.key}_substitute", [x_prev, k, y_in, x_border, flags], [x, x],
+                       ["carry", "kept", "y", "x_border", "flags"], ["next", "x"], {"cse": True})

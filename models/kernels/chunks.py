@@ -21,7 +21,8 @@ from functools import lru_cache
 import casadi as ca
 
 from models.kernels.chain_solver import solver_functions
-from models.kernels.link_chain import ChainSignature, jacobian_function, sweep_function
+from models.kernels.chain_sweep import sweep_function
+from models.kernels.link_chain import ChainSignature, jacobian_function
 
 CHUNK = 8
 

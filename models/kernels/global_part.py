@@ -54,7 +54,7 @@ def global_part(layout: KernelLayout, moving: tuple[int, ...], level: str = "pos
     starts, ends = ca.SX.sym("starts", 8, n_ch), ca.SX.sym("ends", 6, n_ch)
     pdot, pddot = ca.SX.sym("pdot", len(moving)), ca.SX.sym("pddot", len(moving))
     damping, mask, p = ca.SX.sym("damping"), ca.SX.sym("mask", ctx.p.numel()), ctx.p
-    kx, kv, ka, k_rho = k[0], k[1], k[2], k[3]
+    kx, kv, ka = k[0], k[1], k[2]
     u_x, lam = uG[:n_xg], uG[n_xg:]
     X, V, A = affine[:, 0] + kx * u_x, affine[:, 1] + kv * u_x, affine[:, 2] + ka * u_x
     # every body coordinate (and other element's own variable) as a symbol, then replaced by its
@@ -64,6 +64,43 @@ def global_part(layout: KernelLayout, moving: tuple[int, ...], level: str = "pos
     D, Dd = Q[:3 * n_b], Qd[:3 * n_b]
     d = [D[3 * b:3 * b + 3] for b in range(n_b)]
     potential, lagrangian, own_rows, equalities = _elements(ctx, layout, d, Q[3 * n_b:], lam)
+    caps, start_rows, end_theta = _chain_ends(ctx, layout, d, lam, starts, ends, (Q, Qd, Qdd), k, level, equalities)
+    equality_rows = [_held(row, level, kx, Q, Qd, Qdd) for row in equalities]
+    kinetic = kinetic_energy(ctx, d, [Dd[3 * b:3 * b + 3] for b in range(n_b)])
+    momentum = ca.gradient(kinetic, Qd)
+    mass = ca.jacobian(momentum, Qd)
+    inertia = ca.mtimes(mass, Qdd) + ca.jtimes(momentum, Q, Qd) - ca.gradient(kinetic, Q)
+    q_rows = inertia + damping * ca.mtimes(mass, Qd) + ca.gradient(lagrangian + caps, Q)
+    # the varying loads: V enters linearly in them; their power through the free coordinates
+    free = np.zeros(3 * n_b + n_own)
+    free[[3 * b + c for b, c in s.free]] = 1.0
+    held = potential - ca.dot(ca.gradient(potential, p), mask * p)
+    power = -ca.dot(ca.jtimes(ca.gradient(potential, Q), p, mask * p), ca.DM(free) * Qd)
+    rows = ca.vertcat(q_rows, ca.vertcat(*equality_rows) if equality_rows else ca.SX(0, 1))
+    values, rates, accelerations = _body_values(ctx, moving, X, V, A, pdot, pddot)
+    old = ca.vertcat(Q, Qd, Qdd)
+    new = ca.vertcat(values, X[len(s.free):], rates, V[len(s.free):], accelerations, A[len(s.free):])
+    starts_rows = ca.vertcat(*start_rows) if start_rows else ca.SX(0, 1)
+    rows, starts_rows, kinetic, potential, held, power = ca.substitute(
+        [rows, starts_rows, kinetic, potential, held, power], [old], [new])
+    newton_rows = ca.vertcat(*[rows[3 * b + c] for b, c in s.free], rows[3 * n_b:])
+    start_C, start_W = _start_blocks(layout, uG, rows, starts_rows, starts)
+    inputs = [uG, affine, k, starts, ends, p, pdot, pddot, damping, mask]
+    outputs = [rows, ca.jacobian(newton_rows, uG), starts_rows, ca.horzcat(*start_C) if start_C else ca.SX(6, 0),
+               ca.horzcat(*start_W) if start_W else ca.SX(3, 0), ca.vertcat(*end_theta) if end_theta else ca.SX(0, 1),
+               ca.vertcat(kinetic, potential, held, power)]
+    fn = ca.Function(f"global_part_{level}", inputs, outputs, list(INPUTS), list(OUTPUTS), {"cse": True})
+    if fn.has_free():
+        raise RuntimeError(f"global part has free symbols {fn.get_free()}")
+    return fn
+
+
+def _chain_ends(ctx, layout: KernelLayout, d, lam, starts, ends, Qs, k, level: str, equalities: list):
+    """Per chain: its start node's definitions (rows) and the cap terms that tie its node 0 and
+    node N to the bodies; its end conditions replace their entries of `equalities` (as
+    ("done", row)). Returns (caps, start rows, end_theta: lam_rot of a clamped end)."""
+    Q, Qd, Qdd = Qs
+    kx, k_rho = k[0], k[3]
     caps, start_rows, end_theta = ca.SX(0), [], []
     for c, chain in enumerate(layout.chains):
         t = chain.topology
@@ -84,32 +121,23 @@ def global_part(layout: KernelLayout, moving: tuple[int, ...], level: str = "pos
             end_rows = [values[j] - _second_derivative(end_rows[j], Q, Qd, Qdd) for j in range(len(end_rows))]
         equalities[m:m + len(end_rows)] = [("done", row) for row in end_rows]
         end_theta.append(lam[m + 2] if t.end == "clamped" else ca.SX(0))
-    equality_rows = []
-    for row in equalities:
-        if isinstance(row, tuple):
-            equality_rows.append(row[1])
-        elif level == "position":
-            equality_rows.append(row / kx)
-        else:
-            equality_rows.append(_second_derivative(row, Q, Qd, Qdd))
-    kinetic = kinetic_energy(ctx, d, [Dd[3 * b:3 * b + 3] for b in range(n_b)])
-    momentum = ca.gradient(kinetic, Qd)
-    mass = ca.jacobian(momentum, Qd)
-    inertia = ca.mtimes(mass, Qdd) + ca.jtimes(momentum, Q, Qd) - ca.gradient(kinetic, Q)
-    q_rows = inertia + damping * ca.mtimes(mass, Qd) + ca.gradient(lagrangian + caps, Q)
-    # the varying loads: V enters linearly in them; their power through the free coordinates
-    free = np.zeros(3 * n_b + n_own)
-    free[[3 * b + c for b, c in s.free]] = 1.0
-    held = potential - ca.dot(ca.gradient(potential, p), mask * p)
-    power = -ca.dot(ca.jtimes(ca.gradient(potential, Q), p, mask * p), ca.DM(free) * Qd)
-    rows = ca.vertcat(q_rows, ca.vertcat(*equality_rows) if equality_rows else ca.SX(0, 1))
-    values, rates, accelerations = _body_values(ctx, moving, X, V, A, pdot, pddot)
-    old = ca.vertcat(Q, Qd, Qdd)
-    new = ca.vertcat(values, X[len(s.free):], rates, V[len(s.free):], accelerations, A[len(s.free):])
-    starts_rows = ca.vertcat(*start_rows) if start_rows else ca.SX(0, 1)
-    rows, starts_rows, kinetic, potential, held, power = ca.substitute(
-        [rows, starts_rows, kinetic, potential, held, power], [old], [new])
-    newton_rows = ca.vertcat(*[rows[3 * b + c] for b, c in s.free], rows[3 * n_b:])
+    return caps, start_rows, end_theta
+
+
+def _held(row, level: str, kx, Q, Qd, Qdd) -> ca.SX:
+    """An equality's Newton row: g / kx at position level, its second derivative at acceleration
+    level; ("done", row) is one already written (a chain's end)."""
+    if isinstance(row, tuple):
+        return row[1]
+    if level == "position":
+        return row / kx
+    return _second_derivative(row, Q, Qd, Qdd)
+
+
+def _start_blocks(layout: KernelLayout, uG, rows, starts_rows, starts) -> tuple[list, list]:
+    """Per chain: its start rows' derivative in the start body's unknowns (6 x 3), and the
+    start body's rows' derivative in the chain's F_0 (3 x 2)."""
+    s = layout.structure
     start_C, start_W = [], []
     for c, chain in enumerate(layout.chains):
         b = chain.topology.start_body
@@ -117,14 +145,7 @@ def global_part(layout: KernelLayout, moving: tuple[int, ...], level: str = "pos
         start_C.append(ca.horzcat(*[ca.jacobian(block, uG[layout.x_global.index(s.free.index((b, q)))])
                                     if (b, q) in s.free else ca.SX.zeros(6, 1) for q in range(3)]))
         start_W.append(ca.jacobian(rows[3 * b:3 * b + 3], starts[6:8, c]))
-    inputs = [uG, affine, k, starts, ends, p, pdot, pddot, damping, mask]
-    outputs = [rows, ca.jacobian(newton_rows, uG), starts_rows, ca.horzcat(*start_C) if start_C else ca.SX(6, 0),
-               ca.horzcat(*start_W) if start_W else ca.SX(3, 0), ca.vertcat(*end_theta) if end_theta else ca.SX(0, 1),
-               ca.vertcat(kinetic, potential, held, power)]
-    fn = ca.Function(f"global_part_{level}", inputs, outputs, list(INPUTS), list(OUTPUTS), {"cse": True})
-    if fn.has_free():
-        raise RuntimeError(f"global part has free symbols {fn.get_free()}")
-    return fn
+    return start_C, start_W
 
 
 def _second_derivative(expr: ca.SX, Q: ca.SX, Qd: ca.SX, Qdd: ca.SX) -> ca.SX:

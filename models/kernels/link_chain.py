@@ -248,9 +248,28 @@ class ElementEquations:
                 gen_gamma = gen_gamma + ca.dot(h[s], shear) * ca.DM(pts.strain[s])
             if sig.axial:
                 gen_eps = gen_eps + ca.dot(h[s], axial) * ca.DM(pts.strain[s])
+        gen_theta, gen_gamma, gen_eps, self.energies = self._sections(
+            d, X, V, A, v, k_rho * rho[0], P, Pd, (gen_theta, gen_gamma, gen_eps))
+        self.lever = du * _lever_matrix(sig, pts.increment, tan.levers)  # dDelta/dc (2 x n_c)
+        self.gen_inner = ca.vertcat(*[q for q in (gen_theta, gen_gamma, gen_eps) if q is not None])
+        self.gen = self.gen_inner + ca.mtimes(self.lever.T, F[1])
+        self.force = sum(f, ca.SX.zeros(2))
+        self.increments = ca.vertcat(self.delta / k_rho, delta_d, delta_dd)
+        self.rows = ca.vertcat(self.gen, F[0] - F[1] - self.force, rho[1] - rho[0] - self.delta / k_rho,
+                               v[1] - v[0] - delta_d, a[1] - a[0] - delta_dd)
+        self._jacobian_parts = (tan, du, m, rotary, d, kx, kv, ka, alpha, k_rho,
+                                [h[s] + du * float(pts.increment[s]) * F[1] for s in range(len(pts.xi))])
+        self._length = L
+
+    def _sections(self, d, X, V, A, v, r0, P, Pd, gen):
+        """The sections' share at the quadrature points: rotary inertia and strain energy in the
+        generalized forces gen = (theta, gamma, eps); and the element's energies
+        [kinetic, strain, first moment, momentum] (the weight's potential is -g . first moment)."""
+        sig, pts, alpha, du, L = self.signature, self.signature.points, self.sym.damping, d["du"], d["length"]
+        gen_theta, gen_gamma, gen_eps = gen
+        m, rotary, nq = d["mass"], d["rotary"], len(pts.quad_xi)
         strain, kinetic = ca.SX(0), ca.SX(0)
         momentum, first_moment = ca.SX.zeros(2), ca.SX.zeros(2)
-        r0 = k_rho * rho[0]
         for q in range(nq):
             R, slope, S = ca.DM(pts.quad_rotation[q]), ca.DM(pts.quad_slope[q]), ca.DM(pts.quad_strain[q])
             weight = du * float(pts.quad_weights[q])
@@ -274,17 +293,7 @@ class ElementEquations:
             kinetic = kinetic + m[q] * ca.dot(speed, speed) / 2 + rotary[q] * rate**2 / 2
             momentum = momentum + m[q] * speed
             first_moment = first_moment + m[q] * (r0 + P[q])
-        self.lever = du * _lever_matrix(sig, pts.increment, tan.levers)  # dDelta/dc (2 x n_c)
-        self.gen_inner = ca.vertcat(*[q for q in (gen_theta, gen_gamma, gen_eps) if q is not None])
-        self.gen = self.gen_inner + ca.mtimes(self.lever.T, F[1])
-        self.force = sum(f, ca.SX.zeros(2))
-        self.increments = ca.vertcat(self.delta / k_rho, delta_d, delta_dd)
-        self.rows = ca.vertcat(self.gen, F[0] - F[1] - self.force, rho[1] - rho[0] - self.delta / k_rho,
-                               v[1] - v[0] - delta_d, a[1] - a[0] - delta_dd)
-        self.energies = ca.vertcat(kinetic, strain, first_moment, momentum)  # weight's potential: -g . first_moment
-        self._jacobian_parts = (tan, du, m, rotary, d, kx, kv, ka, alpha, k_rho,
-                                [h[s] + du * float(pts.increment[s]) * F[1] for s in range(len(pts.xi))])
-        self._length = L
+        return gen_theta, gen_gamma, gen_eps, ca.vertcat(kinetic, strain, first_moment, momentum)
 
     @property
     def jacobian(self) -> ca.SX:
@@ -387,30 +396,3 @@ def jacobian_function(signature: ChainSignature) -> ca.Function:
     eq = ElementEquations(signature, sym)
     return ca.Function(f"{signature.key}_jacobian", sym.inputs(), [eq.rows, eq.jacobian], INPUT_NAMES,
                        ["rows", "J"], {"cse": True})
-
-
-SWEEP_INPUTS = ["node", "u", "affine", "k", "damping", "gravity", "data", "start", "start_node"]
-SWEEP_OUTPUTS = ["next", "packed", "energies"]
-
-
-def packed_size(signature: ChainSignature) -> int:
-    """An element's sweep output for the backward sweep: gen rows (n_c), force (2), lever (2 n_c)."""
-    return 3 * signature.n_c + 2
-
-
-def sweep_function(signature: ChainSignature) -> ca.Function:
-    """One element in the forward sweep along a chain: (node (rho, v, a of node e: the carry),
-    u, affine, k, damping, gravity, data, start, start_node) -> (next (node e+1's rho, v, a),
-    packed = [gen (its coordinates' rows without its end force); force (f: F_e = F_{e+1} + f);
-    vec(lever) (dDelta/dc: the end force's share of the rows is lever^T F_{e+1})], energies).
-    At a chain's first element (start = 1) the node is start_node, from the start body."""
-    sym = element_symbols(signature)
-    carry, start, start_node = ca.SX.sym("node", 6), ca.SX.sym("start"), ca.SX.sym("start_node", 6)
-    node = (1 - start) * carry + start * start_node
-    n_c = signature.n_c
-    aux = ca.vertcat(node[0:2], node[2:4], node[4:6], ca.SX.zeros(2), ca.SX.zeros(NODE))
-    u = ca.vertcat(sym.u[:n_c], aux)
-    eq = ElementEquations(signature, ElementSymbols(u, sym.affine, sym.k, sym.damping, sym.gravity, sym.data))
-    inputs = [carry, sym.u[:n_c], sym.affine, sym.k, sym.damping, sym.gravity, sym.data, start, start_node]
-    outputs = [node + eq.increments, ca.vertcat(eq.gen_inner, eq.force, ca.vec(eq.lever)), eq.energies]
-    return ca.Function(f"{signature.key}_sweep", inputs, outputs, SWEEP_INPUTS, SWEEP_OUTPUTS, {"cse": True})

@@ -26,7 +26,7 @@ def build(documents: Annotated[list[Path] | None, typer.Argument(help="Mechanism
     from service.examples import examples_directory
     from service.kernels.build import BuildLimits, Compiler
     from service.kernels.needs import builds_of
-    from service.kernels.queue import _note
+    from service.kernels.queue import note_abandoned
 
     out, err = consoles()
     with user_errors(err):
@@ -57,7 +57,7 @@ def build(documents: Annotated[list[Path] | None, typer.Argument(help="Mechanism
                     outcome = compiler.build(fn, target, limits)
                     if not outcome.ok:
                         failed += 1
-                        _note(b.note, outcome)
+                        note_abandoned(b.note, outcome)
                     rows.append({"document": path.name, "kernel": b.name, "part": part,
                                  "status": "built" if outcome.ok else "abandoned", **outcome.to_json()})
         table = table_of("kernels", "document", "kernel", "part", "status", "C (kB)", "compile (s)", "peak (MiB)",

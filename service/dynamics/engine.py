@@ -19,7 +19,8 @@ import numpy as np
 from models.context import AssemblyContext
 from models.kernels.link_data import link_data
 from models.structure import Structure
-from service.dynamics.kernel_system import NEWTON_TOLERANCE, Factors, StepSystem, padded
+from service.dynamics.kernel_groups import padded
+from service.dynamics.kernel_system import NEWTON_TOLERANCE, Factors, StepSystem
 from service.dynamics.kernel_window import Stepper
 from service.dynamics.schemes import Scheme
 

@@ -32,8 +32,9 @@ from models.kernels.chain_solver import BORDER
 from models.kernels.chunks import CHUNK, Chunks, chunks
 from models.kernels.global_part import global_part, start_nodes
 from models.kernels.layout import layout_of
-from models.kernels.link_chain import packed_size
+from models.kernels.chain_sweep import packed_size
 from models.structure import Structure
+from service.dynamics.kernel_groups import UNSET_AFFINE, GroupIndex, group_index
 
 NEWTON_TOLERANCE = 1e-10  # nondimensional forces
 CONSTRAINT_TOLERANCE = 1e-13  # and lengths, angles
@@ -45,10 +46,6 @@ def _gated(fn: ca.Function) -> ca.Function:
     inputs = [ca.SX.sym(fn.name_in(i), fn.sparsity_in(i)) for i in range(fn.n_in())]
     idle = ca.Function(f"{fn.name()}_idle", inputs, [ca.SX.zeros(fn.sparsity_out(o)) for o in range(fn.n_out())])
     return ca.Function.if_else(f"{fn.name()}_gated", fn, idle)
-
-
-def padded(n: int) -> int:
-    return max(1, -(-n // CHUNK)) * CHUNK
 
 
 @dataclass
@@ -102,34 +99,6 @@ class StepInputs:
     affine_global: ca.MX  # (global coordinates x 3)
 
 
-@dataclass
-class _Group:
-    """Constant index arrays of one chain group, padded to whole chunks."""
-
-    elements: int  # padded
-    blocks: int  # padded
-    gather_u: list[int]  # (n_c x elements) flat, column-major, into [Z; 0]
-    gather_affine: list[int]  # (n_c x elements) into [extended affine; 0]
-    present: np.ndarray  # (1, elements)
-    start: np.ndarray  # (1, elements): 1 at a chain's first element
-    start_chain: list[int]  # per element: its chain among all chains (padding: 0)
-    this: list[int]  # per block (reverse order): its element j's column in [packed | zero]
-    prev: list[int]  # its element j-1's
-    this_flags: np.ndarray  # (3, blocks): present, clamped start, last of the elements j
-    prev_flags: np.ndarray  # (3, blocks): those of the elements j-1
-    block_present: np.ndarray  # (1, blocks) reverse order
-    flags: np.ndarray  # (2, blocks) reverse order: first, last
-    end: list[int]  # (3 x blocks) flat into [Z; 0]: lambda_x, lambda_y, lambda_rot at a chain's last block
-    forward: list[int]  # per block in order (padded): its reverse position
-    chains: list[int]  # the chains' indices among all chains
-    b0: list[int]  # per chain: the reverse position of its B_0
-    last_element: list[int]  # per chain: its last element
-    node_columns: list[int]  # per block in order: its node's column in [starts (chains), next (elements)]
-    force_sum: np.ndarray  # (padded elements, padded blocks in order): F_j = lam_end + forces beyond j
-    end_of_block: list[int]  # per block in order: lambda_x's index in [Z; 0] (padding: the zero)
-    element_node: list[int]  # per element: its node e's block (in order)
-
-
 class StepSystem:
     """The Newton system of a structure's step (level "position") or of its consistent
     accelerations at a start (level "acceleration"), on the chunks of its chain signatures."""
@@ -143,7 +112,7 @@ class StepSystem:
         self.global_part = _gated(global_part(self.layout, moving, level))
         self.start_nodes = _gated(start_nodes(self.layout, moving))
         self.prescribed_angles: list[tuple[int | None, int | None]] = []  # (p index, moving k) of clamped starts
-        self.groups = [self._group(g) for g in self.layout.groups]
+        self.groups = [group_index(self.layout, g, self.n_z, self._prescribed_angle) for g in self.layout.groups]
         self._global_indices()
 
     @property
@@ -151,74 +120,6 @@ class StepSystem:
         return self.layout.n_x + self.layout.n_lam
 
     # ---- constant index arrays ------------------------------------------------------------------
-    def _group(self, g) -> _Group:
-        L, sig = self.layout, g.signature
-        zero, n_x = self.n_z, L.n_x
-        n_el, n_b = g.n_elements, g.n_blocks
-        E, B = padded(n_el), padded(n_b)
-        zero_affine = n_x + 10_000  # replaced below, once the prescribed angles are known
-        gu, gaff, present, start, start_chain, eflags = [], [], [], [], [], []
-        chain_ids = [L.chains.index(c) for c in g.chains]
-        for c, cid in zip(g.chains, chain_ids):
-            for e in range(c.n_elements):
-                for i in range(sig.n_c):
-                    x = c.coordinate_x(e, i)
-                    if x is None:  # a clamped start's theta_0: its start body's angle
-                        angle = L.start_body_angle_x(c)
-                        gu.append(angle if angle is not None else zero)
-                        gaff.append(angle if angle is not None else n_x + self._prescribed_angle(c))
-                    else:
-                        gu.append(x)
-                        gaff.append(x)
-                present.append(1.0)
-                start.append(float(e == 0))
-                start_chain.append(cid)
-                eflags.append([1.0, float(e == 0 and c.topology.start == "clamped"), float(e == c.n_elements - 1)])
-        for _ in range(E - n_el):
-            gu += [zero] * sig.n_c
-            gaff += [zero_affine] * sig.n_c
-            present.append(0.0)
-            start.append(0.0)
-            start_chain.append(0)
-        eflags += [[0.0, 0.0, 0.0]] * (E - n_el + 1)  # the padding, then the "no element" column
-        eflags = np.array(eflags).T
-        blocks, e0 = [], 0  # (chain, j, its chain's first element) in order
-        for c in g.chains:
-            blocks += [(c, j, e0) for j in range(c.n_blocks)]
-            e0 += c.n_elements
-        none = E  # the zero column after the padded elements
-        this, prev, flags, end = [], [], [], []
-        for c, j, first in reversed(blocks):
-            this.append(first + j if j < c.n_elements else none)
-            prev.append(first + j - 1 if j > 0 else none)
-            flags.append([float(j == 0), float(j == c.n_elements)])
-            m = n_x + c.multiplier_offset
-            if j == c.n_elements:
-                end += [m, m + 1, m + 2 if c.topology.end == "clamped" else zero]
-            else:
-                end += [zero] * 3
-        pad = B - n_b
-        this += [none] * pad
-        prev += [none] * pad
-        flags += [[0.0, 0.0]] * pad
-        end += [zero] * (3 * pad)
-        block_present = np.array([[1.0] * n_b + [0.0] * pad])
-        forward = [n_b - 1 - k for k in range(n_b)] + list(range(n_b, B))
-        b0 = [n_b - 1 - c.first_block for c in g.chains]
-        last_element = [c.first_block - ci + c.n_elements - 1 for ci, c in enumerate(g.chains)]
-        n_chains = len(g.chains)
-        node_columns, force_sum, end_of_block = [], np.zeros((E, B)), []
-        for k, (c, j, first) in enumerate(blocks):
-            node_columns.append(g.chains.index(c) if j == 0 else n_chains + first + j - 1)
-            force_sum[first + j:first + c.n_elements, k] = 1.0
-            end_of_block.append(n_x + c.multiplier_offset)
-        node_columns += [0] * pad
-        end_of_block += [zero] * pad
-        element_node = [c.first_block + e for c in g.chains for e in range(c.n_elements)]
-        return _Group(E, B, gu, gaff, np.array([present]), np.array([start]), start_chain, this, prev,
-                      eflags[:, this], eflags[:, prev], block_present, np.array(flags).T, end, forward, chain_ids, b0,
-                      last_element, node_columns, force_sum, end_of_block, element_node)
-
     def _prescribed_angle(self, chain) -> int:
         s = self.structure
         pointer = s.prescribed[chain.topology.start_body][2]
@@ -232,7 +133,7 @@ class StepSystem:
         L, s = self.layout, self.structure
         zero_affine = L.n_x + len(self.prescribed_angles)  # the zero appended to the extended affine
         for gr in self.groups:
-            gr.gather_affine = [zero_affine if i >= L.n_x + 10_000 else i for i in gr.gather_affine]
+            gr.gather_affine = [zero_affine if i >= L.n_x + UNSET_AFFINE else i for i in gr.gather_affine]
         self.z_global = list(L.x_global) + [L.n_x + j for j in range(L.n_lam)]
         n_b = len(s.bodies)
         self.newton_rows = [3 * b + c for b, c in s.free] + list(range(3 * n_b, 3 * n_b + L.n_global - len(s.free)))
@@ -427,7 +328,7 @@ class StepSystem:
             A[rr, cc] = A[rr, cc] + S[r_keep, c_keep]
         return A
 
-    def _extra_C_W(self, gr: _Group, g, start_C: ca.MX, start_W: ca.MX):
+    def _extra_C_W(self, gr: GroupIndex, g, start_C: ca.MX, start_W: ca.MX):
         """(size x BORDER blocks, BORDER x size blocks), reverse order: node 0's definitions
         against the start body's unknowns, the start body's rows against F_0; the end
         conditions' rows against node N (rho, or a at a start) and theta_N, lam_rot in theta_N's row."""

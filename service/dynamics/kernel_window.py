@@ -25,7 +25,8 @@ from functools import cached_property
 
 import casadi as ca
 
-from service.dynamics.kernel_system import NEWTON_TOLERANCE, Evaluation, Factors, StepInputs, StepSystem, padded
+from service.dynamics.kernel_groups import padded
+from service.dynamics.kernel_system import NEWTON_TOLERANCE, Evaluation, Factors, StepInputs, StepSystem
 from service.dynamics.schemes import Scheme
 
 MAX_ITERATIONS = 8

@@ -40,9 +40,8 @@ def version() -> str:
     the compiler: an image built with gcc may serve without one, and the C is plain C99)."""
     digest = hashlib.sha256(f"{ca.__version__}|{' '.join(FLAGS)}|{CHUNK}".encode())
     root = Path(__file__).resolve().parents[2] / "models"
-    for name in ("kernels/chunks.py", "kernels/link_chain.py", "kernels/chain_solver.py", "kernels/rules.py",
-                 "link_fe.py"):
-        digest.update((root / name).read_bytes())
+    for path in [*sorted((root / "kernels").glob("*.py")), root / "link_fe.py"]:
+        digest.update(path.read_bytes())
     return digest.hexdigest()[:12]
 
 

@@ -135,7 +135,7 @@ class Builder:
             fn = ca.Function.load(item["serialized"])
             outcome = self.compiler.build(fn, target, self.limits)
             if not outcome.ok:
-                _note(_note_of(target), outcome)
+                note_abandoned(_note_of(target), outcome)
             Path(item["serialized"]).unlink(missing_ok=True)
         log.info("build %s: %s", request.stem, outcome.message)
         request.unlink(missing_ok=True)
@@ -167,13 +167,14 @@ def build_chain(signature: ChainSignature, compiler: Compiler, limits: BuildLimi
         total.peak_bytes = max(total.peak_bytes, outcome.peak_bytes)
         if not outcome.ok:
             outcome.message = f"{signature.key} {kind}: {outcome.message}"
-            _note(abandoned(signature), outcome)
+            note_abandoned(abandoned(signature), outcome)
             return outcome
     assert set(KINDS) == set(BUILD_ORDER)
     return total
 
 
-def _note(path: Path, outcome: Outcome) -> None:
+def note_abandoned(path: Path, outcome: Outcome) -> None:
+    """Note beside a library that its build failed or exceeded its limits: not tried again."""
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps({**outcome.to_json(), "when": time.time()}))
 
