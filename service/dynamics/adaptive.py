@@ -4,10 +4,13 @@ family's (Zienkiewicz and Xie 1991)
     e = |beta - 1/6| h^2 |qdd_{n+1} - qdd_n|_inf,
 
 the difference between the scheme's displacement and a third-order one (nondimensional:
-lengths per the mechanism's length scale, angles in rad). A window is run in one step size;
-its steps are accepted up to the first whose error exceeds the tolerance or whose Newton did
-not settle, and the next step is h (tol / e)^(1/3) with a safety factor, at most twice the
-last and at most max_step. The last window ends on `until` exactly."""
+lengths per the mechanism's length scale, angles in rad). A window of up to ADAPTIVE_WINDOW
+steps is run in one step size; its steps are accepted up to the first whose error exceeds the
+tolerance, and the next step is h (tol / e)^(1/3) with a safety factor, at most twice the last
+and at most max_step. A step that the window's factors did not settle (they were made at the
+window's first step) is no error: the next window starts there with the same step and new
+factors. The last window ends on `until` exactly. A run stops with status step_limit after
+max_steps accepted steps, min_step when the step would fall below min_step."""
 
 from __future__ import annotations
 

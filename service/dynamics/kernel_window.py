@@ -1,4 +1,5 @@
-"""A window of time steps in one Function, on the kernel system (service.dynamics.kernel_system).
+"""The time step on the kernel system (service.dynamics.kernel_system), as Functions that a
+window of steps (service.dynamics.engine) chains.
 
 The window factors the Newton system once, at its first step's predictor, and every step of
 the window iterates on those factors (modified Newton): the residual is exact at every
@@ -48,7 +49,8 @@ class StateLayout:
 
 class Stepper:
     """The Functions of the kernel time stepping of one structure, scheme and set of moving
-    parameters: one step on given factors, a window's first step (which makes them), windows."""
+    parameters: one step on given factors, and a window's first step (which makes them); the
+    engine (service.dynamics.engine) chains them into windows."""
 
     def __init__(self, system: StepSystem, scheme: Scheme):
         self.system, self.scheme = system, scheme
@@ -57,7 +59,6 @@ class Stepper:
         self.n_p = len(system.structure.parameters)
         self.n_moving = len(system.moving)
         self.n_groups = len(L.groups)
-        self._windows: dict[int, ca.Function] = {}
 
     def data_shapes(self) -> list[tuple[int, int]]:
         """Per chain group: the shape of its element data (padded to whole chunks)."""

@@ -121,12 +121,12 @@ def massless_coordinates(structure: Structure, x: np.ndarray, p: np.ndarray) -> 
 class StepRunner:
     """The Functions and inputs of one run in fixed steps; window() advances by up to WINDOW."""
 
-    def __init__(self, structure, p, h, scheme, damping, histories: Histories, until: float, every: int,
-                 max_steps: int | None = None):
+    window_steps = WINDOW  # the length of the window Function
+
+    def __init__(self, structure, p, h, scheme, damping, histories: Histories, until: float, every: int):
         self.structure, self.p, self.h, self.scheme, self.damping, self.histories = (
             structure, p, h, scheme, damping, histories)
         self.until, self.every, self.steps = until, every, int(round(until / h))
-        self.max_steps = max_steps
         self.engine = engine_of(structure, scheme, histories)
         self.n = self.engine.n_x
         self.mask = histories.load_mask(len(p))
@@ -138,8 +138,6 @@ class StepRunner:
     def keep(self, history: History, at: Resume, p: np.ndarray | None = None) -> None:
         p = self.histories.at(self.p, at.time)[0] if p is None else p
         _keep(history, at.time, at.state, self.n, p, at.monitor, at.works)
-
-    window_steps = WINDOW  # the length of the window Function
 
     def run_window(self, at: Resume, h: float, steps: int = WINDOW):
         """The window's inputs (columns P, PD, PDD), states, monitors, iterations and how many
