@@ -100,11 +100,15 @@ class Stepper:
         monitor, norm, iterations): one step on given factors; alive = 0 (a step before it in
         the window did not settle) computes nothing and reports an infinite norm."""
         f = self._factor_symbols()
-        alive = ca.MX.sym("alive")
         state, h, p, pdot, pddot, damping, mask, data = self._symbols()
-        out = self._step(f, state, h, p, pdot, pddot, damping, mask, data, alive)
-        return ca.Function("kernel_step", [*f.parts(), alive, state, h, p, pdot, pddot, damping, mask, *data],
-                           list(out[:4]))
+        inputs = [*f.parts(), state, h, p, pdot, pddot, damping, mask, *data]
+        new_state, monitor, norm, used, _ = self._step(f, state, h, p, pdot, pddot, damping, mask, data)
+        live = ca.Function("kernel_step_live", inputs, [new_state, monitor, norm, used])
+        # a dead step is a branch: inlined, its gated kernels would still cost the VM most of a step
+        dead = ca.Function("kernel_step_dead", inputs, [state, ca.MX.zeros(monitor.shape), ca.MX(ca.inf), ca.MX(0)])
+        branch = ca.Function.if_else("kernel_step_branch", live, dead)
+        alive = ca.MX.sym("alive")
+        return ca.Function("kernel_step", [*f.parts(), alive, *inputs[len(f.parts()):]], branch(alive, *inputs))
 
     @cached_property
     def first_step_function(self) -> ca.Function:
@@ -115,7 +119,7 @@ class Stepper:
         return ca.Function("kernel_first_step", [state, h, p, pdot, pddot, damping, mask, *data],
                            [*out[:4], *out[4].parts()])
 
-    def _step(self, factors: Factors | None, state, h, p, pdot, pddot, damping, mask, data, alive=None):
+    def _step(self, factors: Factors | None, state, h, p, pdot, pddot, damping, mask, data):
         sys = self.system
         fa, k = self.coefficients(h)
         affine, c_a1 = self._affine(state, h)
@@ -124,12 +128,11 @@ class Stepper:
         Z = ca.vertcat(qdd, lam)  # the predictor: the last accelerations and multipliers
         if factors is None:
             factors = sys.factorize(Z, si)
-        alive = ca.MX(1) if alive is None else alive
-        ev = sys.evaluate(Z, alive, si, factors.kept_reverse)
+        ev = sys.evaluate(Z, ca.MX(1), si, factors.kept_reverse)
         previous, g_previous, have = ca.MX.zeros(sys.n_z), ca.MX.zeros(sys.n_z), ca.MX(0)
         used = ca.MX(0)
         for _ in range(MAX_ITERATIONS):
-            go = alive * (ev.norm > NEWTON_TOLERANCE)
+            go = ev.norm > NEWTON_TOLERANCE
             g = -sys.solve(ev, go, factors)  # the chord step
             # Anderson's mixing with the last iteration (a secant step)
             dZ, dg = Z - previous, g - g_previous
@@ -149,8 +152,7 @@ class Stepper:
         u = Z[:n_x]
         cX, cV, _ = affine
         new_state = ca.vertcat(cX + k[0] * u, cV + k[1] * u, c_a1 + fa * u, u, Z[n_x:])
-        norm = ca.if_else(alive, ev.norm, ca.inf)
-        return new_state, self.monitor(ev, si), norm, used, factors
+        return new_state, self.monitor(ev, si), ev.norm, used, factors
 
     def monitor(self, ev: Evaluation, si: StepInputs) -> ca.MX:
         """(kinetic, held potential, input power, damping power, motion forces...)."""
