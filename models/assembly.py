@@ -6,13 +6,15 @@ Residual per free body coordinate (generalized force on x, y, angle):
 then every element's own rows. Rows of prescribed coordinates are support reactions.
 Unknowns z: the free body displacements, then each element's own unknowns, in document order.
 
-Graphs are built once per structure (numbers are parameters) and kept in memory and on disk
+Graphs are built once per structure (numbers are parameters), for the structure without its
+names (models.naming: a renamed mechanism shares them), and kept in memory and on disk
 (models.graph_cache); the seed-000 split of K_T (models.tangent_split) and the energy and
 mass forms (models.forms) are built on demand.
 """
 
 from __future__ import annotations
 
+import logging
 from functools import cached_property, lru_cache
 
 import casadi as ca
@@ -21,9 +23,12 @@ from models.context import AssemblyContext
 from models.elements import FAMILIES
 from models.graph_cache import GraphStore
 from models.loads import applied_wrenches
+from models.naming import anonymous, named
 from models.outputs import output_graph, shape_graph
 from models.residual import contributions, held_wrenches, residual_of
 from models.structure import Structure
+
+log = logging.getLogger("flexmech.graphs")
 
 # The Functions of the residual form, by name; each is (z, p) -> ... unless noted.
 FUNCTIONS = ("residual", "residual_and_tangent", "body_wrenches", "displacements", "outputs", "shapes")
@@ -69,14 +74,29 @@ def _body_wrenches(ctx: AssemblyContext) -> ca.Function:
 class Graphs:
     """CasADi Functions of one structure. Inputs: z (free displacements and element unknowns,
     nondimensional), p (parameters, nondimensional). Each Function is loaded or built when
-    first asked for."""
+    first asked for, shared with every structure that differs only in its names."""
 
     def __init__(self, structure: Structure):
         self.structure = structure
-        self._store = GraphStore(structure, build_functions)
+        self._names = anonymous(structure)[1]
+        self._store = _store_of(structure.unnamed)
 
     def _get(self, name: str) -> ca.Function:
-        return self._store.function(name)
+        try:
+            return self._store.function(name)
+        except Exception:
+            if not self._names:
+                raise
+            # Build with the mechanism's own names: an error then names its own parts, and a
+            # structure the renaming got wrong still gets its graphs (noted: it is a bug).
+            self._store, self._names = GraphStore(self.structure, build_functions), ()
+            function = self._store.function(name)
+            log.warning("the graphs of structure %s built only with its own names", self.structure.key)
+            return function
+
+    def _meta(self, key: str):
+        self._get("residual")  # builds (or loads) the store, falling back as _get does
+        return named(self._store.meta[key], self._names)
 
     residual = property(lambda self: self._get("residual"))  # (z, p) -> R
     residual_and_tangent = property(lambda self: self._get("residual_and_tangent"))  # (z, p) -> (R, K)
@@ -85,18 +105,18 @@ class Graphs:
     outputs = property(lambda self: self._get("outputs"))  # (z, p) -> y
     shapes = property(lambda self: self._get("shapes"))  # (z, p) -> (deformed, undeformed): 2 x samples
 
-    @property
+    @cached_property
     def output_names(self) -> tuple[str, ...]:
-        return tuple(self._store.meta["output_names"])
+        return tuple(self._meta("output_names"))
 
-    @property
+    @cached_property
     def output_kinds(self) -> tuple[str, ...]:
-        return tuple(self._store.meta["output_kinds"])
+        return tuple(self._meta("output_kinds"))
 
-    @property
+    @cached_property
     def shape_segments(self) -> tuple[tuple[str, int, int, int, int], ...]:
         """Per element drawn: (name, first column in shapes, columns, start body, end body)."""
-        return tuple(tuple(s) for s in self._store.meta["shape_segments"])
+        return tuple(tuple(s) for s in self._meta("shape_segments"))
 
     @cached_property
     def energy_form(self):
@@ -126,3 +146,9 @@ def graphs_for(structure: Structure) -> Graphs:
     """Graphs of a structure, built once per process and reused for every parameter value.
     Few are kept in memory: a structure seen before loads from disk in milliseconds."""
     return Graphs(structure)
+
+
+@lru_cache(maxsize=16)
+def _store_of(unnamed: Structure) -> GraphStore:
+    """The Functions of a structure without names (models.naming), shared by its renamings."""
+    return GraphStore(unnamed, build_functions)

@@ -85,6 +85,14 @@ class Structure:
         return hashlib.sha256(payload.encode()).hexdigest()[:16]
 
     @cached_property
+    def unnamed(self) -> Structure:
+        """This structure with its names replaced by tokens (models.naming): it keys what
+        every renaming of the structure shares (graphs and the solvers built on them)."""
+        from models.naming import anonymous
+
+        return anonymous(self)[0]
+
+    @cached_property
     def free(self) -> tuple[tuple[int, int], ...]:
         return tuple((b, c) for b, row in enumerate(self.prescribed) for c in range(3) if row[c] is None)
 

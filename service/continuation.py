@@ -148,7 +148,7 @@ def _trace(mech: Mechanism, path: str, stop: float, step: float) -> _Trace:
     if target == float(p[slot]):
         raise MechanismError("/stop", f"the path starts at {stop:g} {unit}: give another stop value")
     return _Trace(slot, factor, unit, p, target, 1.0 if target > p[slot] else -1.0,
-                  _path_graphs(mech.structure, slot)[0])
+                  _path_graphs(mech.structure.unnamed, slot)[0])
 
 
 def trace_path(mech: Mechanism, path: str, stop: float, step: float, max_points: int = 400,
@@ -257,7 +257,7 @@ def _limit(mech, x0, x1, tangent0, index, p, slot, factor, options: NewtonOption
     """The limit point between two path points: Newton on the extended system from the
     point whose tangent is nearer to vertical, with phi its stiffness' null direction."""
     n = mech.n_free
-    path_fn, fold = _path_graphs(mech.structure, slot)
+    path_fn, fold = _path_graphs(mech.structure.unnamed, slot)
     x = (x0 + x1) / 2
     _, K, _ = path_fn(x[:n], x[n], p)
     _, _, vt = np.linalg.svd(np.asarray(K))

@@ -135,7 +135,7 @@ def newton(mech: Mechanism, p: np.ndarray, z0: np.ndarray, options: NewtonOption
         return np.asarray(g.residual(z, p)).ravel()
 
     if options.jacobian == "full" and mech.n_free:
-        direction = sparse_direction(_newton_step(mech.structure), p)
+        direction = sparse_direction(_newton_step(mech.structure.unnamed), p)
     elif options.jacobian == "first_term":
         def direction(z, R):
             return dense_solve(np.asarray(g.tangent_terms(z, p)[0]), R)

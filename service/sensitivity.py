@@ -68,7 +68,7 @@ def equilibrium_sensitivities(mech: Mechanism, z: np.ndarray, parameters: list[s
     wanted = [o for o in outputs if not (target is not None and o == target[0])]
     rows = _rows(mech, wanted, "/outputs")
     p = mech.p()
-    K, R_p, y_z, y_p = (np.asarray(a) for a in _derivatives(mech.structure)(z, p))
+    K, R_p, y_z, y_p = (np.asarray(a) for a in _derivatives(mech.structure.unnamed)(z, p))
     n = K.shape[0]
     if target is None:
         A, B = K, R_p[:, slots]
