@@ -39,7 +39,7 @@ def main() -> None:
                     builder = client.get("/v1/health").json()["builder"]
                     if first_progress is None and status["progress"]["done"] > 0:
                         first_progress = time.perf_counter() - started
-                    busy = builder is not None and (builder["running"] or builder["queued"] > 0)
+                    busy = builder is not None and builder["queued"] > 0  # a request stays queued while it builds
                     seen_busy = seen_busy or busy
                     if built is None and seen_busy and not busy:
                         built = time.perf_counter() - started
@@ -54,9 +54,11 @@ def main() -> None:
     p99 = statistics.quantiles(times, n=100)[98]
     print(f"small /v1/solve during a four-bar simulation job and its kernels' build: {len(times)} requests, "
           f"p50 {statistics.median(times) * 1e3:.1f} ms, p99 {p99 * 1e3:.1f} ms, max {times[-1] * 1e3:.1f} ms")
+    if first_progress is None:
+        raise SystemExit(f"the job showed no progress in {wall:.0f} s: {status}")
     print(f"  job: first progress after {first_progress:.2f} s, {status['status']} "
           f"({status['progress']['done']}/{status['progress']['total']} windows) after {wall:.1f} s; "
-          f"builder idle after {built:.1f} s")
+          + (f"builder idle after {built:.1f} s" if built is not None else f"the builder still busy after 60 s: {builder}"))
 
 
 if __name__ == "__main__":
