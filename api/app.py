@@ -15,6 +15,7 @@ from fastapi import FastAPI
 from fastapi_offline import FastAPIOffline
 
 from api.errors import install_error_handlers
+from api.headers import SecurityHeaders
 from api.limits import BodySizeLimit
 from api.routers import (contacts, drawings, examples, health, impact_studies, jobs, optimize, simulations, solve,
                          sweeps)
@@ -96,6 +97,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         app.include_router(module.router)
     mount_workbench(app)
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_request_bytes, read_timeout=settings.request_read_timeout)
+    app.add_middleware(SecurityHeaders)  # outermost: even the body guard's answers carry them
     _list_analyses_in_schema(app)
     return app
 

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import difflib
 import logging
+import re
 from functools import lru_cache
 
 from fastapi import FastAPI, Request
@@ -46,9 +47,22 @@ class ApiError(Exception):
 def not_found(what: str) -> ApiError:
     return ApiError(404, "not_found", what)
 
+# An error names what the caller sent (a name, a path, a value) but never echoes a long one
+# whole: a run of more than LONG_WORD characters without a blank is cut to its start, and
+# the whole message to MAX_MESSAGE characters.
+LONG_WORD, KEPT, MAX_MESSAGE = 120, 100, 2000
+_LONG_WORD = re.compile(rf"\S{{{LONG_WORD + 1},}}")
+
+
+def excerpt(text: str) -> str:
+    text = _LONG_WORD.sub(lambda m: f"{m.group()[:KEPT]}...({len(m.group())} characters)", text)
+    return text if len(text) <= MAX_MESSAGE else text[:MAX_MESSAGE] + f"...({len(text)} characters)"
+
+
 def error_response(status: int, code: str, message: str, pointer: str | None = None,
                    headers: dict | None = None) -> JSONResponse:
-    body = {"error": {"status": status, "code": code, "message": message, "pointer": pointer}}
+    pointer = None if pointer is None else excerpt(pointer)
+    body = {"error": {"status": status, "code": code, "message": excerpt(message), "pointer": pointer}}
     return JSONResponse(body, status_code=status, headers=headers)
 
 def _validation_pointer(loc: tuple) -> str:

@@ -21,6 +21,15 @@ from models.reading import parse_json
 _WITH_BODY = {"POST", "PUT", "PATCH"}
 
 
+def is_json(content_type: bytes | None) -> bool:
+    """Whether a body is read as JSON: no media type, application/json or any +json type, in
+    any letter case and with any parameters (as the app's own body reader takes them)."""
+    if content_type is None:
+        return True
+    media = content_type.split(b";", 1)[0].strip().lower()
+    return media == b"application/json" or media.endswith(b"+json")
+
+
 class BodySizeLimit:
     def __init__(self, app, max_bytes: int, read_timeout: float = 10.0):
         self.app = app
@@ -62,7 +71,7 @@ class BodySizeLimit:
         body = await self._read(scope, receive, send)
         if body is None:
             return
-        if body.strip() and scope.get("method") in _WITH_BODY and b"json" in headers.get(b"content-type", b"json"):
+        if body.strip() and scope.get("method") in _WITH_BODY and is_json(headers.get(b"content-type")):
             try:
                 parse_json(body, "the body")
             except MechanismError as exc:

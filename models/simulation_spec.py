@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from typing import Any, Literal
 
-from pydantic import Field
+from pydantic import Field, ValidationInfo, field_validator
 
 from models.fields import StrictModel
 
@@ -17,6 +17,11 @@ class BodyStart(StrictModel):
 
     displacement: tuple[float, float, float] = (0.0, 0.0, 0.0)
     velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+
+# More steps than any limit of the server or the command line, and few enough that a step
+# count is an exact integer (until / step of 1e300 / 1e-300 would be infinite).
+MAX_STEP_COUNT = 1e12
 
 
 class SimulateSpec(StrictModel):
@@ -57,6 +62,14 @@ class SimulateSpec(StrictModel):
                                   "then the run ends with status step_limit); default and cap: the server's limit")
     compiled: bool | None = Field(default=None, description="deprecated and ignored: the server compiles element "
                                   "kernels in its build queue and runs them compiled once built")
+
+    @field_validator("step")
+    @classmethod
+    def _countable(cls, step: float, info: ValidationInfo) -> float:
+        until = info.data.get("until")
+        if until is not None and not until / step <= MAX_STEP_COUNT:
+            raise ValueError(f"{until:g} s in steps of {step:g} s would be more than {MAX_STEP_COUNT:g} steps")
+        return step
 
 
 def critical_step_factor(gamma: float, beta: float) -> float:

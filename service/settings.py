@@ -66,8 +66,8 @@ class Settings(BaseSettings):
     def _split_keys(cls, value):
         if isinstance(value, str):
             keys = [k.strip() for k in value.split(",") if k.strip()]
-            if value.strip() and not keys:  # " , ," would run the server open by accident
-                raise ValueError("lists no key (leave it empty to run without keys)")
+            if value and not keys:  # " " or " , ," would run the server open by accident
+                raise ValueError("lists no key, only blanks or commas (leave it empty to run without keys)")
             return keys
         return value
 

@@ -115,12 +115,74 @@ def test_nan_bounds_are_refused_at_post(server):
 
 
 # --- 7. security and transport -------------------------------------------------------------
-def test_api_keys_that_list_no_key_refuse_to_start():
+@pytest.mark.parametrize("keys", [" , ,", " ", "\t", ","])
+def test_api_keys_that_list_no_key_refuse_to_start(keys):
     from service.cli import app
 
-    result = CliRunner().invoke(app, ["serve"], env={"FLEXMECH_API_KEYS": " , ,", "NO_COLOR": "1"})
+    result = CliRunner().invoke(app, ["serve"], env={"FLEXMECH_API_KEYS": keys, "NO_COLOR": "1"})
     assert result.exit_code == 2
-    assert "error: FLEXMECH_API_KEYS: Value error, lists no key (leave it empty to run without keys)" in result.stderr
+    assert ("error: FLEXMECH_API_KEYS: Value error, lists no key, only blanks or commas (leave it empty to run "
+            "without keys)") in result.stderr
+
+
+def test_an_empty_key_list_runs_without_keys():
+    from service.settings import Settings
+
+    assert Settings(api_keys="").api_keys == []
+
+
+@pytest.mark.parametrize("media", ["Application/JSON", "APPLICATION/json; charset=utf-8", "application/vnd.api+JSON"])
+def test_a_duplicate_key_is_refused_whatever_the_letter_case_of_the_media_type(server, media):
+    body = b'{"example": "gripper", "overrides": {"/loads/actuation/force/1": 10}, "example": "gripper_nylon"}'
+    r = httpx.post(server.url + "/v1/solve", content=body, headers={"Content-Type": media})
+    assert r.status_code == 400 and error(r)["code"] == "malformed_json"
+    assert "duplicate key 'example'" in error(r)["message"]
+
+
+def test_a_body_of_another_media_type_is_not_read_as_json():
+    from api.limits import is_json
+
+    assert is_json(None) and is_json(b"application/json") and is_json(b" Application/Problem+JSON ;q=1")
+    assert not is_json(b"text/plain") and not is_json(b"application/jsonp") and not is_json(b"multipart/form-data")
+
+
+@pytest.mark.parametrize("path", ["/", "/jobs/0123", "/workbench/index.html", "/workbench/main.js"])
+def test_the_page_and_its_files_carry_the_content_security_policy(server, path):
+    r = httpx.get(server.url + path)
+    assert r.status_code == 200, path
+    assert "script-src 'self'" in r.headers["content-security-policy"]
+    assert r.headers["x-content-type-options"] == "nosniff"
+
+
+@pytest.mark.parametrize("method, path, body", [("GET", "/v1/health", None), ("GET", "/v1/examples", None),
+                                                ("POST", "/v1/solve", b"{"), ("GET", "/v1/jobs/none", None),
+                                                ("POST", "/v1/solve", b'{"example": "gripper"}')])
+def test_every_answer_carries_nosniff(server, method, path, body):
+    r = httpx.request(method, server.url + path, content=body, headers={"Content-Type": "application/json"})
+    assert r.headers["x-content-type-options"] == "nosniff", (path, r.status_code)
+    assert "content-security-policy" not in r.headers or path == "/"
+
+
+def test_an_error_echoes_only_an_excerpt_of_a_long_name(server):
+    name = "n" * 100_000
+    r = httpx.post(server.url + "/v1/solve", json={"example": "gripper", "overrides": {f"/elements/{name}/radius": 1}})
+    assert r.status_code == 422
+    assert len(r.content) < 2_000, len(r.content)
+    assert re.search(r"nnnn\.\.\.\(1000\d\d characters\) not a numeric field", error(r)["message"])
+    assert "n" * 101 not in r.text
+
+
+@pytest.mark.parametrize("route, body", [
+    ("/v1/solve", {"example": "rod_free_vibration", "analysis": "simulate"}),
+    ("/v1/simulations", {"example": "rod_free_vibration"}),
+    ("/v1/solve", {"example": "csfh", "analysis": "simulate", "simulate": {"scheme": "moreau"}}),
+    ("/v1/simulations", {"example": "csfh", "simulate": {"scheme": "event_driven"}})])
+def test_a_run_of_uncountably_many_steps_is_refused(server, route, body):
+    body = {**body, "simulate": {**body.get("simulate", {}), "until": 1e300, "step": 1e-300}}
+    r = httpx.post(server.url + route, json=body)
+    assert r.status_code == 422, r.text
+    assert error(r)["pointer"].endswith("/simulate/step")
+    assert "would be more than 1e+12 steps" in error(r)["message"]
 
 
 def test_docs_are_served_from_the_package(server):

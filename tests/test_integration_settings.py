@@ -67,6 +67,15 @@ def test_the_command_line_applies_the_services_step_limit():
     assert result.exit_code == 2 and "100 steps of 0.001 s, over the limit of 50" in result.output
 
 
+def test_a_run_of_uncountably_many_steps_is_refused_on_the_command_line():
+    for document, scheme in ((ROD, None), (EXAMPLES / "csfh.json", "moreau"), (EXAMPLES / "csfh.json", "event_driven")):
+        args = ["simulate", str(document), "--until", "1e300", "--step", "1e-300"]
+        result = CliRunner().invoke(app, args + (["--scheme", scheme] if scheme else []),
+                                    env={"COLUMNS": "200", "NO_COLOR": "1"})
+        assert result.exit_code == 2, (document, scheme, result.output)
+        assert "1e+300 s in steps of 1e-300 s would be more than 1e+12 steps" in result.output
+
+
 def test_progress_lines_when_not_a_terminal(capsys):
     """In a log: a line for the first window at once, then one every few seconds, and the last."""
     from rich.console import Console

@@ -61,7 +61,7 @@ class AdaptiveRunner(StepRunner):
             return at
         for _ in range(MAX_REJECTIONS):
             remaining = self.until - at.time
-            needed = math.ceil(remaining / h - 1e-9)
+            needed = math.ceil(min(remaining / h, 1e15) - 1e-9)  # never an infinite count
             count, h_use = (needed, remaining / needed) if needed <= ADAPTIVE_WINDOW else (ADAPTIVE_WINDOW, h)
             count = min(count, left)
             if h_use < self.tolerance.min_step:
