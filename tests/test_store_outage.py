@@ -52,7 +52,12 @@ def test_a_store_locked_for_40_s_loses_no_point(tmp_path):
             lock = sqlite3.connect(database, timeout=60, isolation_level=None)
             lock.execute("BEGIN EXCLUSIVE")  # every writer waits, then fails: for 40 s
             locked_at = client.job(job.id).progress.done
-            time.sleep(40)
+            started = time.monotonic()
+            # a new job is refused at once (the lock wait is 1.5 s; it was 30 s, past this timeout)
+            refused = httpx.post(server.url + "/v1/sweeps", json=sweep_of(10, "gripper", None), timeout=10)
+            assert refused.status_code == 503 and refused.json()["error"]["code"] == "store_unavailable"
+            assert int(refused.headers["retry-after"]) > 0
+            time.sleep(max(40 - (time.monotonic() - started), 0))
             assert client.job(job.id).progress.done == locked_at  # nothing could be written
             lock.execute("COMMIT")
             lock.close()

@@ -90,6 +90,12 @@ def _job(row: JobRow) -> Job:
                row.error, _aware(row.created_at), _aware(row.started_at), _aware(row.finished_at), row.restarts)
 
 
+# How long a write waits for another writer's lock on an SQLite file before it fails: a
+# request then answers 503 with Retry-After at once instead of holding its client, and the
+# runner retries its points with backoff (service.jobs.store_guard), so nothing is lost.
+SQLITE_BUSY_SECONDS = 1.5
+
+
 def make_engine(url: str) -> Engine:
     """An engine for `url`. SQLite: the file's folder is created, WAL journal so readers do not
     block the runner's writes, and the engine may be used from several threads."""
@@ -97,7 +103,7 @@ def make_engine(url: str) -> Engine:
     if parsed.get_backend_name() == "sqlite":
         if parsed.database and parsed.database != ":memory:":
             Path(parsed.database).parent.mkdir(parents=True, exist_ok=True)
-        engine = create_engine(url, connect_args={"check_same_thread": False, "timeout": 30})
+        engine = create_engine(url, connect_args={"check_same_thread": False, "timeout": SQLITE_BUSY_SECONDS})
 
         @event.listens_for(engine, "connect")
         def _pragmas(conn, _record):
