@@ -89,8 +89,11 @@ def _impacts(mech, spec, out, err, json_out, plot, snapshots, animation) -> None
     for option, value in (("--snapshots", snapshots), ("--animation", animation)):
         if value is not None:
             raise OptionError(option, f"{option} draws links; for impacts --plot draws the motion and contact forces")
-    with SimulationProgress(err, spec.until) as progress:
-        _, report = run_impacts(mech.document, spec, progress=progress)
+    from service.dynamics.run import MAX_STEPS
+
+    with SimulationProgress(err, spec.until) as progress:  # the service's step limit, as for links
+        _, report = run_impacts(mech.document, spec, progress=progress, max_steps=min(spec.max_steps or MAX_STEPS,
+                                                                                     MAX_STEPS))
     out.print(f"[bold]{escape(report['name'])}[/bold]: {report['status']} at t = {report['time_reached']:g} s, "
               f"{report['steps']} steps ({spec.scheme}) in {report['seconds']:.3f} s; energy balance error "
               f"{report['energy_balance_error']:.2e}")

@@ -15,12 +15,14 @@ import numpy as np
 from models.impacts.model import WORKS, ImpactModel
 from service.kernels.queue import function_library, request_function
 from service.impacts.event_driven import EventLayout, event_step
+from service.impacts.kept_rows import KeptRows
 from service.impacts.moreau import moreau_step
 from service.impacts.native import NativeFunction
 
 EVENT_CHUNK = 2000  # trial steps per call
 MOREAU_CHUNK = 5000
 MAX_CACHED = 32  # chunk Functions kept in memory
+KEPT_EVENT_ROWS = 100_000  # states an event-driven run holds (service.impacts.kept_rows)
 def _code_version() -> str:
     """A digest of the sources the step graphs come from: a cached library built from older
     code is never loaded."""
@@ -51,6 +53,7 @@ class Trace:
     message: str = ""
     calls: int = 0
     seconds: float = 0.0
+    steps: int | None = None  # accepted steps, when `states` holds only some of them
 
 
 class Chunk:
@@ -132,21 +135,28 @@ def run_events(model: ImpactModel, p: np.ndarray, q0, v0, until: float, toleranc
     settings = event_settings(model, until, tolerance, max_step)
     steps = chunk(model, "event", [p, settings])
     trace = Trace()
-    trace.states.append(S.reshape(1, -1).copy())
+    rows = KeptRows(KEPT_EVENT_ROWS, L.at("event"))
+    rows.add(S.reshape(1, -1).copy())
+    reached = float(S[0])
     began = time.perf_counter()
     while S[0] < until * (1 - 1e-15):
         out = steps.run(S)[0]
         trace.calls += EVENT_CHUNK
-        kept = out[out[:, L.at("accepted")] > 0.5]
-        if len(kept):
-            trace.states.append(kept)
+        accepted = out[out[:, L.at("accepted")] > 0.5]
+        if len(accepted):
+            rows.add(accepted)
+            reached = float(accepted[-1, 0])
         S = out[-1]
-        if _ended(trace, S, stop, progress, trace_time(trace)):
+        if _ended(trace, S, stop, progress, reached):
             break
         if trace.calls >= max_calls:
             trace.status, trace.message = "step_limit", f"{max_calls} trial steps reached at t = {S[0]:g} s"
             break
     trace.seconds = time.perf_counter() - began
+    trace.states, trace.steps = [rows.rows()], rows.seen - 1
+    if rows.stride > 1:
+        trace.message = (trace.message + "; " if trace.message else "") + (
+            f"held {len(rows)} of {rows.seen - 1} steps (every contact event among them)")
     return trace
 
 
@@ -162,10 +172,6 @@ def _ended(trace: Trace, S: np.ndarray, stop, progress, reached: float) -> bool:
         trace.status, trace.message = "stopped", f"stopped at t = {S[0]:g} s"
         return True
     return False
-
-
-def trace_time(trace: Trace) -> float:
-    return float(trace.states[-1][-1, 0])
 
 
 def run_moreau(model: ImpactModel, p: np.ndarray, q0, v0, until: float, h: float, stop=None,
