@@ -46,3 +46,13 @@ def test_a_capped_run_reports_the_same_impacts_and_steps(monkeypatch):
     assert "held" in capped["message"] and f"of {full['steps']} steps" in capped["message"]
     assert capped["time_reached"] == full["time_reached"]
     assert capped["energy_balance_error"] == pytest.approx(full["energy_balance_error"], rel=0.5)
+
+
+def test_a_thinned_report_evaluates_the_energies_of_its_own_states():
+    document, spec = parsed(csfh("6.3", until=0.05, scheme="moreau", step=1e-5))
+    every = run_impacts(document, spec)[1]
+    thinned = run_impacts(document, spec.model_copy(update={"every": 50}))[1]
+    assert len(thinned["times"]) == len(thinned["energies"]["kinetic"]) == 5000 // 50 + 1
+    index = [every["times"].index(t) for t in thinned["times"]]
+    for name, values in thinned["energies"].items():
+        np.testing.assert_allclose(values, np.array(every["energies"][name])[index], rtol=1e-12, atol=1e-15)

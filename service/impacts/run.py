@@ -120,8 +120,11 @@ def report(model: ImpactModel, spec: SimulateSpec, trace: Trace, p: np.ndarray, 
     per = {kind: 1 / book.si(1.0, kind, "/units") for kind in ("length", "angle", "force", "energy")}
     q, v = states[:, 1:1 + n], states[:, 1 + n:1 + 2 * n]
     works = states[:, 1 + 2 * n:1 + 2 * n + len(WORKS)]
+    # energies of the reported states only: evaluating every step's cost as much as the stepping
     energy = ca.Function("energy", [model.q, model.v, model.t, model.p], [model.kinetic, model.elastic, model.gravity])
-    T, elastic, gravity = (np.asarray(x).ravel() for x in energy.map(len(states))(q.T, v.T, states[:, 0], p))
+    T, elastic, gravity = (np.asarray(x).ravel() for x in energy.map(len(keep))(q[keep].T, v[keep].T,
+                                                                                 states[keep, 0], p))
+    works = works[keep]
     coordinates, velocities = {}, {}
     for k, name in enumerate(model.coordinate_names()):
         scale = per["angle"] if name.endswith(".theta") else per["length"]
@@ -147,7 +150,7 @@ def report(model: ImpactModel, spec: SimulateSpec, trace: Trace, p: np.ndarray, 
         "contacts": {name: {k: np.asarray(x)[keep].tolist() for k, x in values.items()} for name, values in pairs.items()},
         "joints": {name: {k: x[keep].tolist() for k, x in values.items()} for name, values in joints.items()},
         "events": events, "impacts": impacts,
-        "energies": {k: (np.asarray(x)[keep] * per["energy"]).tolist() for k, x in energies.items()},
+        "energies": {k: (np.asarray(x) * per["energy"]).tolist() for k, x in energies.items()},
         "energy_balance_error": float(np.abs(balance).max() / size),
         "flexure_stiffness": book.document.impacts.flexure_stiffness,
         "clearance": _clearance(model) * per["length"],
