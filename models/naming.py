@@ -21,8 +21,9 @@ NAME_FIELDS = frozenset({"name", "material", "section", "element", "link", "bodi
 POINTER_FIELDS = frozenset({"pointer", "prescribed"})
 NAMED_SECTIONS = frozenset({"bodies", "elements", "loads", "outputs", "materials", "sections"})
 TOKEN = re.compile(r"⟨(\d+)⟩")
-UNSAFE = re.compile(r"[/~⟨⟩]")  # a name with these could be taken for a token ('/' and '~' are refused
-# by models.collect, and would split a pointer)
+# A name with these could be taken for a token ('/' and '~', which would split a pointer, are
+# refused by models.collect anyway): such a structure keeps its own names and graphs.
+UNSAFE = re.compile(r"[/~⟨⟩]")
 
 
 class _Renamer:
@@ -74,7 +75,7 @@ def _role(field: str) -> str | None:
 
 def anonymous(structure):
     """(the structure with its names replaced by tokens, the names in token order); the
-    structure itself and no names when a name could be taken for a pointer's part."""
+    structure itself and no names when a name could be taken for a token."""
     renamer = _Renamer()
     try:
         return renamer.value(structure, None), tuple(renamer.names)
