@@ -240,7 +240,7 @@ def _raise_first(exc: ValidationError) -> None:
     first = next((e for e in errors if e["type"] == "extra_forbidden"), errors[0])
     location = _field_location(first["loc"])
     here = [e for e in errors if _field_location(e["loc"]) == location]
-    message = first["msg"]
+    message = first["msg"].removeprefix("Value error, ")  # pydantic's prefix to our validators' words
     if first["type"] == "missing":
         message = "required field is missing"
     elif first["type"] == "extra_forbidden":

@@ -35,7 +35,8 @@ def simulation_spec(mech: Mechanism, overrides: dict | None = None) -> SimulateS
     except ValidationError as exc:
         error = exc.errors()[0]
         where = "/".join(str(part) for part in error["loc"])
-        raise MechanismError(f"/simulate/{where}" if where else "/simulate", error["msg"]) from None
+        raise MechanismError(f"/simulate/{where}" if where else "/simulate",
+                             error["msg"].removeprefix("Value error, ")) from None
     if spec.until is None:
         raise MechanismError("/simulate/until", "give the end time `until` (s), in the document or the request")
     return spec
