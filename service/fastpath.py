@@ -25,6 +25,7 @@ import numpy as np
 
 from models import Mechanism, MechanismError
 from models.disk_cache import cache_dir
+from service.kernels.cache import compiler
 
 _VERSION = "1"  # bump when the generated Functions change shape
 
@@ -33,12 +34,6 @@ _VERSION = "1"  # bump when the generated Functions change shape
 class FastOptions:
     tol_residual: float = 1e-12  # nondimensional |R|_inf
     max_iterations: int = 30
-
-
-def compiler() -> str | None:
-    """Path of the C compiler (FLEXMECH_CC, else CC, else gcc), or None."""
-    name = os.environ.get("FLEXMECH_CC") or os.environ.get("CC") or "gcc"
-    return shutil.which(name)
 
 
 def compile_function(fn: ca.Function, key: str) -> tuple[ca.Function, bool]:
