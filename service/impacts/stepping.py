@@ -94,16 +94,15 @@ def chunk(model: ImpactModel, kind: str, columns: list[np.ndarray]) -> Chunk:
     """The chunk of a model's structure with these fixed inputs (parameters, settings):
     compiled when the cache has its library; else interpreted, and the build queue asked."""
     key = (kind, model.structure_key(), threading.get_ident())
-    fn, library = _FUNCTIONS.get(key, (None, None))
+    fn, cache_key = _FUNCTIONS.get(key, (None, None))
     if fn is None:
         fn, cache_key = chunk_function(model, kind)
         if len(_FUNCTIONS) >= MAX_CACHED:  # the oldest goes (a study or a service sees many)
             _FUNCTIONS.pop(next(iter(_FUNCTIONS)))
         _FUNCTIONS[key] = (fn, cache_key)
-        library = cache_key
-    target = function_library(fn, library)
+    target = function_library(fn, cache_key)
     if not target.exists():
-        request_function(fn, library)
+        request_function(fn, cache_key)
         target = None
     return Chunk(fn, target, columns)
 
