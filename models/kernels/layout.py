@@ -21,7 +21,7 @@ import numpy as np
 
 from models.elements import FAMILIES
 from models.elements.link import LinkElementsTopology
-from models.kernels.chain_solver import BORDER, FLAGS, BlockLayout
+from models.kernels.chain_solver import BORDER, BlockLayout
 from models.kernels.link_chain import NODE, ChainSignature
 from models.kernels.link_data import signature_of
 from models.structure import Structure
@@ -87,17 +87,6 @@ class ChainGroup:
     @property
     def n_elements(self) -> int:
         return sum(c.n_elements for c in self.chains)
-
-    def flags(self) -> np.ndarray:
-        """(len(FLAGS), n_blocks): start, clamped, last, element."""
-        out = np.zeros((len(FLAGS), self.n_blocks))
-        for c in self.chains:
-            k0 = c.first_block
-            out[0, k0] = 1.0
-            out[1, k0] = 1.0 if c.topology.start == "clamped" else 0.0
-            out[2, k0 + c.n_elements - 1] = 1.0
-            out[3, k0:k0 + c.n_elements] = 1.0
-        return out
 
 
 class KernelLayout:
@@ -185,21 +174,6 @@ class KernelLayout:
         assert (out >= 0).all(), "every coordinate has a Newton unknown"
         return out
 
-    @cached_property
-    def aux_unknown(self) -> np.ndarray:
-        """(n_aux,) Newton unknown index of every node quantity (-1: F of a chain's last node,
-        which is the end multiplier)."""
-        out = np.full(self.n_aux, -1, dtype=int)
-        for g, offset in zip(self.groups, self.group_offsets):
-            bl = g.blocks
-            for c in g.chains:
-                for node in range(c.n_blocks):
-                    for j in range(NODE):
-                        last_force = node == c.n_elements and j >= 6
-                        if not last_force:
-                            out[c.aux_offset + node * NODE + j] = offset + (c.first_block + node) * bl.size + bl.aux(j)
-        return out
-
     def start_body_angle_x(self, chain: Chain) -> int | None:
         """x index of a chain's start body's angle (None: prescribed)."""
         b = chain.topology.start_body
@@ -222,10 +196,6 @@ class KernelLayout:
         n_end = 3 if chain.topology.end == "clamped" else 2
         ends = [3 * n_bodies + chain.multiplier_offset + j if j < n_end else -1 for j in range(3)]
         return [3 * b, 3 * b + 1, 3 * b + 2] + ends
-
-    @cached_property
-    def block_flags(self) -> list[np.ndarray]:
-        return [g.flags() for g in self.groups]
 
 
 __all__ = ["BORDER", "Chain", "ChainGroup", "KernelLayout", "own_counts"]
