@@ -23,7 +23,7 @@ from models.context import AssemblyContext
 from models.elements import FAMILIES
 from models.graph_cache import GraphStore
 from models.loads import applied_wrenches
-from models.naming import anonymous, named
+from models.naming import named
 from models.outputs import output_graph, shape_graph
 from models.residual import contributions, held_wrenches, residual_of
 from models.structure import Structure
@@ -78,8 +78,8 @@ class Graphs:
 
     def __init__(self, structure: Structure):
         self.structure = structure
-        self._names = anonymous(structure)[1]
-        self._store = _store_of(structure.unnamed)
+        unnamed, self._names = structure.without_names
+        self._store = _store_of(unnamed)
 
     def _get(self, name: str) -> ca.Function:
         try:

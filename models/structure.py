@@ -85,12 +85,18 @@ class Structure:
         return hashlib.sha256(payload.encode()).hexdigest()[:16]
 
     @cached_property
-    def unnamed(self) -> Structure:
-        """This structure with its names replaced by tokens (models.naming): it keys what
-        every renaming of the structure shares (graphs and the solvers built on them)."""
+    def without_names(self) -> tuple[Structure, tuple[str, ...]]:
+        """(this structure with its names replaced by tokens, the names in token order):
+        models.naming."""
         from models.naming import anonymous
 
-        return anonymous(self)[0]
+        return anonymous(self)
+
+    @property
+    def unnamed(self) -> Structure:
+        """The structure without its names: it keys what every renaming of the structure
+        shares (graphs and the solvers built on them)."""
+        return self.without_names[0]
 
     @cached_property
     def free(self) -> tuple[tuple[int, int], ...]:

@@ -5,7 +5,6 @@ sent documents with ever new names keeps its memory and its disk cache flat."""
 from __future__ import annotations
 
 import copy
-import json
 
 import httpx
 import numpy as np
