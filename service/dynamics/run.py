@@ -83,12 +83,15 @@ def check_steps(spec: SimulateSpec, max_steps: int) -> int:
     return steps
 
 
-def check_scheme(mech: Mechanism, spec: SimulateSpec, x0: np.ndarray) -> None:
+def check_scheme(mech: Mechanism, spec: SimulateSpec, x0: np.ndarray | None = None) -> None:
     """A conditionally stable Newmark pair (a2 < a1) is refused with its critical step, from the
-    mechanism's highest natural frequency at the start."""
+    mechanism's highest natural frequency at the start (x0; None: the undeformed state)."""
     if spec.scheme != "newmark" or spec.a2 >= spec.a1 - 1e-12:
-        return
+        return  # nothing built for every other run
     from service.dynamics.modes import highest_frequency
+
+    if x0 is None:
+        x0 = np.zeros(len(mech.graphs.energy_form.unknowns))
 
     factor = critical_step_factor(spec.a1, spec.a2 / 2)
     omega = highest_frequency(mech.structure, mech.p(), x0)

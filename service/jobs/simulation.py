@@ -13,8 +13,6 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 
-import numpy as np
-
 from models import MechanismError
 from service.costs import Limits, check_result_size
 from service.dynamics.histories import read_histories
@@ -48,7 +46,7 @@ class SimulationJob(InOrder):
         except MechanismError as exc:
             raise under("/document", exc) from None
         steps = check_steps(simulate, limits.max_simulation_steps)  # adaptive: as many as the first step makes
-        check_scheme(mech, simulate, np.zeros(len(mech.graphs.energy_form.unknowns)))
+        check_scheme(mech, simulate)
         read_histories(mech, simulate.histories, simulate.until, "/simulate/histories")
         outputs = wanted_outputs(mech, simulate)
         kept = steps // simulate.every + 2
