@@ -4,6 +4,7 @@ a name, what it compiles (Functions and their libraries), and whether it is ther
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -15,7 +16,7 @@ from models.kernels.chunks import chunks
 from models.kernels.layout import layout_of
 from models.kernels.link_chain import ChainSignature
 from service.kernels.cache import abandoned, library
-from service.kernels.queue import BUILD_ORDER, function_library
+from service.kernels.queue import BUILD_ORDER, function_library, note_of
 
 
 @dataclass
@@ -45,12 +46,10 @@ def builds_of(mech: Mechanism) -> list[Build]:
         from service.impacts.run import impact_model, timed_fields
         from service.impacts.stepping import chunk_function
 
-        import json
-
         model = impact_model(mech.document, timed_fields(mech.document, simulate),
                              json.dumps(simulate.histories, sort_keys=True))
         kind = "event" if simulate.scheme == "event_driven" else "moreau"
         fn, key = chunk_function(model, kind)
         target = function_library(fn, key)
-        out.append(Build(f"impact_{kind}_{target.stem}", [(kind, fn, target)], target.with_suffix(".abandoned.json")))
+        out.append(Build(f"impact_{kind}_{target.stem}", [(kind, fn, target)], note_of(target)))
     return out

@@ -91,7 +91,7 @@ def function_library(fn: ca.Function, key: str) -> Path:
 def request_function(fn: ca.Function, key: str) -> bool:
     """Ask for a whole Function compiled (kept at function_library(fn, key))."""
     target = function_library(fn, key)
-    if target.exists() or _note_of(target).exists() or not accepting():
+    if target.exists() or note_of(target).exists() or not accepting():
         return False
     name = target.stem
     serialized = queue_dir() / f"{name}.casadi"
@@ -104,7 +104,8 @@ def request_function(fn: ca.Function, key: str) -> bool:
     return _write_request(name, {"kind": "function", "serialized": str(serialized), "library": str(target)})
 
 
-def _note_of(target: Path) -> Path:
+def note_of(target: Path) -> Path:
+    """Beside a whole Function's library: the note that its build was abandoned."""
     return target.with_suffix(".abandoned.json")
 
 
@@ -135,7 +136,7 @@ class Builder:
             fn = ca.Function.load(item["serialized"])
             outcome = self.compiler.build(fn, target, self.limits)
             if not outcome.ok:
-                note_abandoned(_note_of(target), outcome)
+                note_abandoned(note_of(target), outcome)
             Path(item["serialized"]).unlink(missing_ok=True)
         log.info("build %s: %s", request.stem, outcome.message)
         request.unlink(missing_ok=True)
