@@ -6,6 +6,8 @@ held shape. Printed per element count: wall seconds per step, flexmech's Newton 
 step, and the exponent of a power law fitted to the seconds per step between 16 and 64
 elements (1: linear).
 
+The peer: pip install "flexmech[bench]" (exudyn). Run from the repository root:
+
     python3 -m benchmarks.dynamics_scaling
 """
 
