@@ -53,8 +53,8 @@ def test_a_store_locked_for_15_s_loses_no_point(tmp_path):
             lock.execute("BEGIN EXCLUSIVE")  # every writer waits 1.5 s, then fails: for 15 s, retried
             locked_at = client.job(job.id).progress.done
             started = time.monotonic()
-            # a new job is refused at once (the lock wait is 1.5 s; it was 30 s, past this timeout)
-            refused = httpx.post(server.url + "/v1/sweeps", json=sweep_of(10, "gripper", None), timeout=10)
+            # a new job is refused (the lock wait is 1.5 s; it was 30 s, past this generous timeout)
+            refused = httpx.post(server.url + "/v1/sweeps", json=sweep_of(10, "gripper", None), timeout=25)
             assert refused.status_code == 503 and refused.json()["error"]["code"] == "store_unavailable"
             assert int(refused.headers["retry-after"]) > 0
             time.sleep(max(15 - (time.monotonic() - started), 0))
