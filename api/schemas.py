@@ -398,4 +398,3 @@ class HealthResponse(BaseModel):
     executor: str
     active_jobs: int
     builder: dict[str, int | bool] | None = Field(None, description="its kernel build queue: pid, running, queued")
-    solvers: list[int] = Field(default_factory=list, description="process ids of its solver workers")

@@ -28,5 +28,4 @@ async def health(services: ServicesDep) -> HealthResponse:
     builder = {"pid": b.pid, "running": b.running(), "queued": b.queued()} if b is not None else None
     return HealthResponse(status="ok", version=_version(),
                           database=make_url(services.store.url).get_backend_name(),
-                          executor=services.executor.description, active_jobs=len(active), builder=builder,
-                          solvers=services.solver.pids)
+                          executor=services.executor.description, active_jobs=len(active), builder=builder)
