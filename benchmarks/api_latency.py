@@ -5,7 +5,7 @@ tool would). Side by side in the same run: the same solve through the Python API
 (no HTTP), so the ratio shows what the service adds. Prints p50/p99 over the requests, and
 requests per second with 4 concurrent clients (each its own keep-alive connection), and the
 same 4 clients' latency while one long simulation (the rod of Lan's Example I.1 at a 0.1 ms
-step, which runs into the server's 10 s solve limit) holds a solver worker: the long run's
+step, which runs into the server's 10 s solve limit) holds the server's solver: the long run's
 wall time against its limit is printed too.
 
     python3 -m benchmarks.api_latency [--requests 200] [--clients 4] [--url URL]
