@@ -20,9 +20,9 @@ from api.limits import BodySizeLimit
 from api.routers import (contacts, drawings, examples, health, impact_studies, jobs, optimize, simulations, solve,
                          sweeps)
 from api.routers.workbench import mount_workbench
-from api.state import Services, SolverThread
+from api.solver_pool import SolverPool
+from api.state import Services
 from service.analyses import ANALYSES
-from service.threads import single_threaded_blas
 from service.examples import ExampleLibrary, examples_directory
 from service.jobs.executors import make_executor
 from service.jobs.kinds import job_kinds
@@ -50,7 +50,7 @@ def _services(settings: Settings) -> Services:
     runner = JobRunner(store, executor, settings.chunk_size, settings.job_time_limit)
     limits = settings.limits()
     library = ExampleLibrary(examples_directory(settings.examples_dir))
-    return Services(settings, limits, store, executor, runner, SolverThread(), library)
+    return Services(settings, limits, store, executor, runner, SolverPool(settings.solver_workers), library)
 
 
 def _builder(settings: Settings) -> BuilderProcess | None:
@@ -69,7 +69,6 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     @asynccontextmanager
     async def lifespan(app: FastAPI):
-        single_threaded_blas()  # the solver thread shares the cores with the pool's workers
         if settings.cache_max_bytes is not None:
             os.environ["FLEXMECH_CACHE_MAX_BYTES"] = str(settings.cache_max_bytes)  # workers and builder too
         builder = _builder(settings)  # before the executor: its workers inherit the queue's setting

@@ -1,4 +1,4 @@
-"""Creating a job of any kind: validated by its kind (on the solver thread: it compiles the
+"""Creating a job of any kind: validated by its kind (in a solver worker: it compiles the
 mechanism), stored, and the runner woken; and the OpenAPI links a new job carries."""
 
 from __future__ import annotations
@@ -20,7 +20,8 @@ JOB_LINKS = {
 async def create_job(kind_name: str, spec: dict, services, owner: str, response: Response) -> JobStatusResponse:
     """202 and the job's status, its Location header pointing at it."""
     kind = kind_named(kind_name)
-    plan = await services.solver.call(kind.prepare, spec, services.limits)
+    plan = await services.solver.call(kind.prepare, spec, services.limits, time_limit=services.limits.solve_time_limit,
+                                      large=True)
     job = await run_in_threadpool(services.store.create, kind_name, owner, spec, plan.meta, plan.total)
     services.runner.wake()
     response.status_code = 202

@@ -2,12 +2,10 @@
 
 from __future__ import annotations
 
-import asyncio
 import hashlib
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
-from functools import partial
 
+from api.solver_pool import SolverPool
 from service.requests import Limits
 from service.examples import ExampleLibrary
 from service.jobs.executors import TaskExecutor
@@ -17,21 +15,6 @@ from service.jobs.store import JobStore
 from service.settings import Settings
 
 
-class SolverThread:
-    """All CasADi work of the server process runs on this one thread. CasADi Functions are
-    shared per structure (models.assembly caches them) and must not be called from several
-    threads at once; one thread also keeps /v1/solve latency steady under load."""
-
-    def __init__(self):
-        self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="flexmech-solver")
-
-    async def call(self, fn, *args, **kwargs):
-        return await asyncio.get_running_loop().run_in_executor(self._pool, partial(fn, *args, **kwargs))
-
-    def close(self) -> None:
-        self._pool.shutdown(wait=True, cancel_futures=True)
-
-
 @dataclass
 class Services:
     settings: Settings
@@ -39,7 +22,7 @@ class Services:
     store: JobStore
     executor: TaskExecutor
     runner: JobRunner
-    solver: SolverThread
+    solver: SolverPool
     examples: ExampleLibrary
     builder: BuilderProcess | None = None
 

@@ -32,6 +32,8 @@ class Settings(BaseSettings):
     database_url: str | None = None  # None: SQLite file data_dir/flexmech.db
     dask_address: str | None = None  # set: sweeps run on that Dask cluster
     workers: int = Field(default_factory=lambda: max(1, os.cpu_count() or 1), ge=1, le=256)
+    solver_workers: int = Field(default_factory=lambda: max(1, os.cpu_count() or 1), ge=1, le=64,
+                                description="processes that run /v1/solve, drawings and job preparation")
     examples_dir: Path | None = None  # None: ./examples, else the one beside the sources
 
     # Access: with keys set, every /v1 request but /v1/health needs X-API-Key.

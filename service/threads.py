@@ -1,7 +1,7 @@
 """One BLAS thread per process where flexmech serves or works.
 
 Multithreaded BLAS on a loaded 2-core machine oversubscribes the cores: a repeated solve went
-from 9 ms to 1.4 s. The server's solver thread and every worker (process pool, Dask) run with
+from 9 ms to 1.4 s. The server's solver workers and every job worker (process pool, Dask) run with
 one BLAS thread; parallelism comes from the workers themselves.
 """
 

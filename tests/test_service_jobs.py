@@ -145,15 +145,19 @@ def test_killed_server_resumes_the_job_and_keeps_every_finished_point(deployment
 
 
 def _pool_workers(server_pid: int) -> list[int]:
-    """Process-pool workers of the server: its children started by multiprocessing's spawn."""
+    """Process-pool workers of the server: its children started by multiprocessing's spawn, but
+    its solver workers (api.solver_pool names them)."""
+    from api.solver_pool import WORKER_NAME
+
     found = []
     for stat in Path("/proc").glob("[0-9]*/stat"):
         try:
             ppid = int(stat.read_text().rsplit(")", 1)[1].split()[1])
             cmdline = (stat.parent / "cmdline").read_bytes()
+            name = (stat.parent / "comm").read_bytes().strip()
         except (OSError, ValueError, IndexError):
             continue
-        if ppid == server_pid and b"spawn_main" in cmdline:
+        if ppid == server_pid and b"spawn_main" in cmdline and name != WORKER_NAME:
             found.append(int(stat.parent.name))
     return found
 

@@ -11,6 +11,7 @@ from fastapi.concurrency import run_in_threadpool
 from api.deps import OwnerDep, ServicesDep
 from api.documents import request_document
 from api.drawing_schemas import DocumentText, DrawingRequest
+from api.parsed_route import ParsedBodyRoute
 from api.responses import ERRORS
 from models import MechanismError
 from models.reading import parse_json, parse_yaml
@@ -20,7 +21,7 @@ from service.drawing_path import path_frames
 from service.reports import plain
 from service.requests import Limits, compile_request, newton_options
 
-router = APIRouter(prefix="/v1", tags=["workbench"])
+router = APIRouter(prefix="/v1", tags=["workbench"], route_class=ParsedBodyRoute)
 
 
 def _drawing(request: DrawingRequest, document: dict, limits: Limits) -> dict:
@@ -47,7 +48,8 @@ async def draw(request: DrawingRequest, services: ServicesDep, _owner: OwnerDep)
     (rad)] about the body's reference point moves them. With state "equilibrium", `deformed`
     holds the deformed centre lines and every body's pose, and `status` the solve's."""
     document = request_document(request, services)
-    return await services.solver.call(_drawing, request, document, services.limits)
+    return await services.solver.call(_drawing, request, document, services.limits,
+                                      time_limit=services.limits.solve_time_limit)
 
 
 def _parsed(request: DocumentText) -> dict:

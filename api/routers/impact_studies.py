@@ -10,10 +10,11 @@ from api.deps import OwnerDep, ServicesDep
 from api.documents import request_document
 from api.impact_study_schemas import ImpactStudyRequest
 from api.job_creation import JOB_LINKS, create_job
+from api.parsed_route import ParsedBodyRoute
 from api.responses import ERRORS
 from api.schemas import JobStatusResponse
 
-router = APIRouter(prefix="/v1", tags=["jobs"])
+router = APIRouter(prefix="/v1", tags=["jobs"], route_class=ParsedBodyRoute)
 
 
 @router.post("/impact-studies", operation_id="create_impact_study", status_code=202, response_model=JobStatusResponse,

@@ -6,11 +6,12 @@ from fastapi import APIRouter, Response
 
 from api.deps import OwnerDep, ServicesDep
 from api.documents import request_document
-from api.responses import ERRORS
 from api.job_creation import JOB_LINKS, create_job
+from api.parsed_route import ParsedBodyRoute
+from api.responses import ERRORS
 from api.schemas import JobStatusResponse, OptimizeRequest
 
-router = APIRouter(prefix="/v1", tags=["jobs"])
+router = APIRouter(prefix="/v1", tags=["jobs"], route_class=ParsedBodyRoute)
 
 
 @router.post("/optimize", operation_id="create_optimization", status_code=202, response_model=JobStatusResponse,

@@ -8,11 +8,12 @@ from fastapi import APIRouter, Response
 from api.deps import OwnerDep, ServicesDep
 from api.documents import request_document
 from api.job_creation import JOB_LINKS, create_job
+from api.parsed_route import ParsedBodyRoute
 from api.responses import ERRORS
 from api.schemas import JobStatusResponse
 from api.simulation_schemas import SimulationRequest
 
-router = APIRouter(prefix="/v1", tags=["jobs"])
+router = APIRouter(prefix="/v1", tags=["jobs"], route_class=ParsedBodyRoute)
 
 
 @router.post("/simulations", operation_id="create_simulation", status_code=202, response_model=JobStatusResponse,

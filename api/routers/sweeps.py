@@ -7,10 +7,11 @@ from fastapi import APIRouter, Response
 from api.deps import OwnerDep, ServicesDep
 from api.documents import request_document
 from api.job_creation import JOB_LINKS, create_job
+from api.parsed_route import ParsedBodyRoute
 from api.responses import ERRORS
 from api.schemas import JobStatusResponse, SweepRequest
 
-router = APIRouter(prefix="/v1", tags=["jobs"])
+router = APIRouter(prefix="/v1", tags=["jobs"], route_class=ParsedBodyRoute)
 
 
 def sweep_spec(request: SweepRequest, document: dict) -> dict:

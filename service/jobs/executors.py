@@ -81,7 +81,7 @@ class ProcessPool(TaskExecutor):
         self._pool = self._new()
 
     def _new(self) -> ProcessPoolExecutor:
-        # spawn: the server has threads (uvicorn, the solver thread); forking them is unsafe.
+        # spawn: the server has threads (uvicorn, the body parser, the solver pool's readers); forking them is unsafe.
         return ProcessPoolExecutor(self.workers, mp_context=multiprocessing.get_context("spawn"),
                                    initializer=worker_started)
 

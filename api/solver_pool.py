@@ -1,0 +1,224 @@
+"""The server's solver workers: processes that do every piece of CasADi work a request needs
+(a solve, a drawing, a job's preparation), so that the process answering requests never holds
+the interpreter for a solve (CasADi calls keep the GIL: one long call in the server process
+stalled every other request, /v1/health included).
+
+- Workers are spawned processes (the server has threads; forking them is unsafe), sized by a
+  setting (default: the core count). Worker 0 starts with the server, the others when a
+  request first needs them (a server that only runs jobs never pays for them). Each keeps its
+  own graph caches; a request goes to the lowest idle worker, so a steady stream of small
+  requests stays on warm caches.
+- Small requests first: with two workers or more, worker 0 is reserved for small requests
+  (the caller says which are large: simulations, traces, contact), so a long run never holds
+  every worker.
+- Time limit: a call's work stops itself at its limit (Newton, IPOPT and the stepping loops
+  are given it; the limit counts solving, not building a new structure's graphs, which the
+  document's costing bounds). A worker still busy `build_allowance` + GRACE seconds past the
+  limit is killed, and a new one starts in its place. A call whose caller went away keeps its
+  worker until its work ends (bounded the same way), so the worker's caches are kept.
+- A worker that ends unexpectedly (a crash, the OOM killer) is replaced; its call is a 503.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import ctypes
+import logging
+import multiprocessing
+import pickle
+import signal
+from concurrent.futures import ThreadPoolExecutor
+
+from api.errors import ApiError
+from models import MechanismError
+
+log = logging.getLogger("flexmech.solvers")
+
+GRACE = 1.0  # seconds a call may run past its time limit before its worker is replaced
+BUILD_ALLOWANCE = 30.0  # seconds of graph building a call may take besides its time limit
+RETRY_AFTER = 2  # seconds, in a 503 for a call whose worker ended
+
+
+# ---- inside a worker ----------------------------------------------------------------------------
+WORKER_NAME = b"flexmech-solver"  # what ps and /proc/<pid>/comm show for a worker
+
+
+def _die_with_parent() -> None:
+    """Ask Linux to end this worker when the server process ends, even by kill -9, and to name
+    it (ps, top)."""
+    try:
+        libc = ctypes.CDLL("libc.so.6", use_errno=True)
+        libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+        libc.prctl(15, ctypes.c_char_p(WORKER_NAME))  # PR_SET_NAME
+    except OSError:  # not Linux: the closed pipe ends the worker at its next call instead
+        pass
+
+
+def _packed(exc: BaseException) -> tuple:
+    """An exception as a message that unpickles: our two error types by their fields (their
+    constructors take more than the message), others as themselves when they survive a round
+    trip, else as their text."""
+    if isinstance(exc, MechanismError):
+        return "mechanism_error", exc.pointer, exc.problem
+    if isinstance(exc, ApiError):
+        return "api_error", exc.status, exc.code, exc.message, exc.pointer
+    try:
+        pickle.loads(pickle.dumps(exc))
+        return "error", exc
+    except Exception:
+        return "error", RuntimeError(f"{type(exc).__name__}: {exc}")
+
+
+def _serve(connection) -> None:
+    """A worker's life: run each (fn, args, kwargs) it is sent and send back its outcome."""
+    _die_with_parent()
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C in a terminal goes to the server, which ends us
+    from service.jobs.kinds import job_kinds
+    from service.threads import single_threaded_blas
+
+    single_threaded_blas()
+    job_kinds()  # the solvers' imports now, not in the first request
+    while True:
+        try:
+            fn, args, kwargs = connection.recv()
+        except (EOFError, OSError):  # the server went away
+            return
+        try:
+            outcome = ("ok", fn(*args, **kwargs))
+        except BaseException as exc:  # every failure goes back to the caller, who knows how to answer it
+            outcome = _packed(exc)
+        try:
+            connection.send(outcome)
+        except Exception as exc:  # a result that does not pickle
+            connection.send(_packed(exc))
+
+
+def _unpacked(outcome: tuple):
+    kind = outcome[0]
+    if kind == "ok":
+        return outcome[1]
+    if kind == "mechanism_error":
+        raise MechanismError(*outcome[1:])
+    if kind == "api_error":
+        raise ApiError(*outcome[1:])
+    raise outcome[1]
+
+
+# ---- in the server --------------------------------------------------------------------------------
+class _Worker:
+    def __init__(self, context, index: int):
+        self.index = index
+        self.connection, theirs = context.Pipe()
+        self.process = context.Process(target=_serve, args=(theirs,), name=f"flexmech-solver-{index}", daemon=True)
+        self.process.start()
+        theirs.close()
+
+    def end(self) -> None:
+        """Kill the worker now (it may be inside a long CasADi call that no signal interrupts)."""
+        if self.process.is_alive():
+            self.process.kill()
+        self.process.join(5)
+        self.connection.close()
+
+
+class SolverPool:
+    """`await pool.call(fn, *args, time_limit=..., large=...)` runs fn(*args) in a worker
+    process; fn, its arguments and its result must pickle (module-level functions, pydantic
+    models, dataclasses)."""
+
+    def __init__(self, workers: int, build_allowance: float = BUILD_ALLOWANCE):
+        self.build_allowance = build_allowance
+        self._context = multiprocessing.get_context("spawn")
+        self._workers: list[_Worker | None] = [_Worker(self._context, 0)] + [None] * (workers - 1)
+        self._idle = set(range(workers))
+        self._changed: asyncio.Condition | None = None
+        # one thread per worker waits on its pipe, so the event loop never blocks on a result
+        self._readers = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="flexmech-solver-reader")
+        self.description = f"{workers} solver worker{'s' if workers != 1 else ''}"
+
+    @property
+    def pids(self) -> list[int]:
+        return [w.process.pid for w in self._workers if w is not None]
+
+    def _choice(self, large: bool) -> int | None:
+        if not self._idle:
+            return None
+        if not large:
+            return min(self._idle)
+        allowed = [i for i in self._idle if i != 0 or len(self._workers) == 1]
+        return max(allowed) if allowed else None
+
+    async def _take(self, large: bool) -> int:
+        if self._changed is None:
+            self._changed = asyncio.Condition()
+        async with self._changed:
+            await self._changed.wait_for(lambda: self._choice(large) is not None)
+            index = self._choice(large)
+            self._idle.discard(index)
+            return index
+
+    async def _give_back(self, index: int) -> None:
+        async with self._changed:
+            self._idle.add(index)
+            self._changed.notify_all()
+
+    def _replace(self, index: int, why: str) -> None:
+        old = self._workers[index]
+        log.warning("solver worker %d (pid %s) replaced: %s", index, old.process.pid, why)
+        old.end()
+        self._workers[index] = None  # a new one starts when a request needs it
+
+    async def call(self, fn, *args, time_limit: float | None = None, large: bool = False, **kwargs):
+        index = await self._take(large)
+        if self._workers[index] is None:
+            self._workers[index] = _Worker(self._context, index)
+        worker = self._workers[index]
+        loop = asyncio.get_running_loop()
+        late = None if time_limit is None else time_limit + self.build_allowance + GRACE
+        started = loop.time()
+        give_back = True
+        try:
+            worker.connection.send((fn, args, kwargs))
+            wait = loop.run_in_executor(self._readers, worker.connection.recv)
+            outcome = await asyncio.wait_for(asyncio.shield(wait), late)
+        except asyncio.TimeoutError:
+            wait.add_done_callback(lambda f: f.exception())  # the killed worker's end of pipe: expected
+            self._replace(index, f"still busy after {late:g} s (time limit {time_limit:g} s)")
+            raise ApiError(503, "time_limit", f"the work did not end within {late:g} s (its time limit of "
+                           f"{time_limit:g} s, {self.build_allowance:g} s of building and {GRACE:g} s of grace) "
+                           "and was stopped") from None
+        except asyncio.CancelledError:  # the caller went away: the worker is busy until its work ends
+            give_back = False
+            remaining = None if late is None else max(late - (loop.time() - started), 0.0)
+            asyncio.ensure_future(self._drain(index, wait, remaining))
+            raise
+        except (EOFError, OSError):
+            code = worker.process.exitcode
+            self._replace(index, f"it ended (exit code {code})")
+            raise ApiError(503, "solver_ended", f"the solver process ended during this request (exit code {code}); "
+                           f"retry in {RETRY_AFTER} s") from None
+        finally:
+            if give_back:
+                await self._give_back(index)
+        return _unpacked(outcome)
+
+    async def _drain(self, index: int, wait, remaining: float | None) -> None:
+        """Wait out the work of a call nobody waits for any more, then free its worker."""
+        try:
+            await asyncio.wait_for(wait, remaining)
+        except asyncio.TimeoutError:
+            wait.add_done_callback(lambda f: f.exception())
+            self._replace(index, "its work outlived its time limit after its caller went away")
+        except (EOFError, OSError):
+            self._replace(index, "it ended")
+        finally:
+            await self._give_back(index)
+
+    def close(self) -> None:
+        for worker in self._workers:
+            if worker is not None:
+                worker.end()
+        self._readers.shutdown(wait=False, cancel_futures=True)
+
+
+__all__ = ["GRACE", "SolverPool", "WORKER_NAME"]
