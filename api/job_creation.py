@@ -20,8 +20,7 @@ JOB_LINKS = {
 async def create_job(kind_name: str, spec: dict, services, owner: str, response: Response) -> JobStatusResponse:
     """202 and the job's status, its Location header pointing at it."""
     kind = kind_named(kind_name)
-    plan = await services.solver.call(kind.prepare, spec, services.limits, time_limit=services.limits.solve_time_limit,
-                                      large=True)
+    plan = await services.solver.call(kind.prepare, spec, services.limits, time_limit=services.limits.solve_time_limit)
     job = await run_in_threadpool(services.store.create, kind_name, owner, spec, plan.meta, plan.total)
     services.runner.wake()
     response.status_code = 202

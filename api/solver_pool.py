@@ -3,14 +3,14 @@
 the interpreter for a solve (CasADi calls keep the GIL: one long call in the server process
 stalled every other request, /v1/health included).
 
-- Workers are spawned processes (the server has threads; forking them is unsafe), sized by a
-  setting (default: the core count). Worker 0 starts with the server, the others when a
-  request first needs them (a server that only runs jobs never pays for them). Each keeps its
-  own graph caches; a request goes to the lowest idle worker, so a steady stream of small
-  requests stays on warm caches.
-- Small requests first: with two workers or more, worker 0 is reserved for small requests
-  (the caller says which are large: simulations, traces, contact), so a long run never holds
-  every worker.
+- Workers are processes forked by multiprocessing's fork server (the server has threads, so
+  forking the server itself is unsafe), which imports the solvers once: a worker, or its
+  replacement, starts in milliseconds. Sized by a setting (default: the core count); worker 0
+  starts with the server, the others when a request first needs them. Each keeps its
+  own graph caches.
+- Two lanes: small requests run on worker 0, so they stay on warm caches; large ones (the
+  caller says which: simulations, traces, contact) on the others, so a long run never holds a
+  small request. With one worker, both lanes share it.
 - Time limit: a call's work stops itself at its limit (Newton, IPOPT and the stepping loops
   are given it; the limit counts solving, not building a new structure's graphs, which the
   document's costing bounds). A worker still busy `build_allowance` + GRACE seconds past the
@@ -121,6 +121,11 @@ class _Worker:
         self.connection.close()
 
 
+# What the fork server imports once, so that no worker imports it again.
+PRELOAD = ["api.solver_pool", "api.routers.solve", "api.routers.drawings", "service.analyses", "service.jobs.contact",
+           "service.jobs.impact_study", "service.jobs.optimize", "service.jobs.simulation", "service.jobs.sweep"]
+
+
 class SolverPool:
     """`await pool.call(fn, *args, time_limit=..., large=...)` runs fn(*args) in a worker
     process; fn, its arguments and its result must pickle (module-level functions, pydantic
@@ -128,7 +133,8 @@ class SolverPool:
 
     def __init__(self, workers: int, build_allowance: float = BUILD_ALLOWANCE):
         self.build_allowance = build_allowance
-        self._context = multiprocessing.get_context("spawn")
+        self._context = multiprocessing.get_context("forkserver")
+        self._context.set_forkserver_preload(PRELOAD)
         self._workers: list[_Worker | None] = [_Worker(self._context, 0)] + [None] * (workers - 1)
         self._idle = set(range(workers))
         self._changed: asyncio.Condition | None = None
@@ -141,12 +147,12 @@ class SolverPool:
         return [w.process.pid for w in self._workers if w is not None]
 
     def _choice(self, large: bool) -> int | None:
-        if not self._idle:
-            return None
-        if not large:
-            return min(self._idle)
-        allowed = [i for i in self._idle if i != 0 or len(self._workers) == 1]
-        return max(allowed) if allowed else None
+        """Two lanes: small requests on worker 0 (its caches warm with them), large ones on the
+        others (all on worker 0 when there is only one)."""
+        if not large or len(self._workers) == 1:
+            return 0 if 0 in self._idle else None
+        allowed = self._idle - {0}
+        return min(allowed) if allowed else None
 
     async def _take(self, large: bool) -> int:
         if self._changed is None:

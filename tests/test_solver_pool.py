@@ -147,19 +147,28 @@ def test_small_solves_answer_while_a_long_simulation_runs(server):
     assert long_answer.status_code == 200 and long_answer.json()["status"] == "time_limit", long_answer.text[:300]
 
 
-def _solver_workers(parent: int) -> list[int]:
-    """The children of `parent` named as solver workers."""
+def _parent_of(pid: int) -> int:
+    with open(f"/proc/{pid}/stat") as stat:
+        return int(stat.read().rsplit(")", 1)[1].split()[1])
+
+
+def _solver_workers(ancestor: int) -> list[int]:
+    """The processes named as solver workers that descend from `ancestor` (the fork server
+    between them)."""
     found = []
-    for entry in os.listdir("/proc"):
+    for entry in filter(str.isdigit, os.listdir("/proc")):
         try:
-            with open(f"/proc/{entry}/stat") as stat:
-                ppid = int(stat.read().rsplit(")", 1)[1].split()[1])
             with open(f"/proc/{entry}/comm", "rb") as comm:
-                name = comm.read().strip()
+                if comm.read().strip() != WORKER_NAME:
+                    continue
+            pid = int(entry)
+            for _ in range(4):
+                pid = _parent_of(pid)
+                if pid == ancestor:
+                    found.append(int(entry))
+                    break
         except (OSError, ValueError, IndexError):
             continue
-        if ppid == parent and name == WORKER_NAME:
-            found.append(int(entry))
     return found
 
 
