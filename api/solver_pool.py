@@ -44,8 +44,8 @@ WORKER_NAME = b"flexmech-solver"  # what ps and /proc/<pid>/comm show for a work
 
 
 def _die_with_parent() -> None:
-    """Ask Linux to end this worker when the server process ends, even by kill -9, and to name
-    it (ps, top)."""
+    """Ask Linux to end this worker when its parent ends (the fork server, which ends with the
+    server process, even on kill -9), and to name it (ps, top)."""
     try:
         libc = ctypes.CDLL("libc.so.6", use_errno=True)
         libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
