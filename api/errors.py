@@ -10,6 +10,7 @@ Shape (api.schemas.ErrorResponse):
     413 body_too_large     the body exceeds FLEXMECH_MAX_REQUEST_BYTES
     422 invalid_request    the body does not fit the schema (pointer: the field)
     422 invalid_input      the mechanism or the analysis cannot be modelled (pointer: the field)
+    422 duplicate_key      a key given twice in one object of the body (the message names it)
     408 request_timeout    the body did not arrive within FLEXMECH_REQUEST_READ_TIMEOUT
     409 conflict           e.g. cancelling a job that has finished
     503 store_unavailable  the job store is locked or its disk full (Retry-After); nothing is lost

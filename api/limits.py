@@ -3,9 +3,10 @@
 - Size: counted as it arrives, so a chunked request without Content-Length is stopped too (413).
 - Time: the whole body must arrive within read_timeout seconds; a client that declares more
   than it sends no longer holds a connection forever (408).
-- JSON: parsed once here with the document reader's bounds (models.reading): a duplicate key,
-  nesting deeper than 64 levels or an integer of thousands of digits is malformed_json (400),
-  never a merged object, a recursion error or a 500. The parse runs on one thread beside the
+- JSON: parsed once here with the document reader's bounds (models.reading): nesting deeper
+  than 64 levels or an integer of thousands of digits is malformed_json (400), a key given
+  twice in one object is duplicate_key (422: the text is JSON, its meaning is not), never a
+  merged object, a recursion error or a 500. The parse runs on one thread beside the
   event loop (its duplicate check is Python: 0.2 s for a megabyte of small objects, which on
   the loop held every other request, /v1/health included), and the routes take the parsed
   value from the scope (api.parsed_route) instead of parsing the body again on the loop.
@@ -21,7 +22,7 @@ from concurrent.futures import ThreadPoolExecutor
 from api.errors import error_response
 from api.parsed_route import PARSED_BODY
 from models import MechanismError
-from models.reading import parse_json
+from models.reading import DuplicateKey, parse_json
 
 _WITH_BODY = {"POST", "PUT", "PATCH"}
 # One parsing thread: parses queue behind each other rather than all contend with the loop for
@@ -84,6 +85,10 @@ class BodySizeLimit:
                 scope[PARSED_BODY] = await asyncio.get_running_loop().run_in_executor(_parser, parse_json, body,
                                                                                       "the body")
             except MechanismError as exc:
+                # the reader raises ours from its own (context kept, not shown): the duplicate's key
+                if isinstance(exc.__context__, DuplicateKey):
+                    return await error_response(422, "duplicate_key", f"the body gives the key "
+                                                f"'{exc.__context__.key}' twice in one object")(scope, receive, send)
                 return await error_response(400, "malformed_json", exc.problem)(scope, receive, send)
         replayed = False
 

@@ -92,8 +92,8 @@ def cases() -> list[Case]:
             E="5 rad"))}, 422, "/document/materials/silicon/E", "'5 rad' is not a stress"),
         Case("mm alone", solve, {"document": changed(gripper(), lambda d: d["elements"]["a"].update(radius="mm"))},
              422, radius, "expected a number"),
-        Case("duplicate keys", solve, b'{"example": "gripper", "example": "gripper_nylon"}', 400, None,
-             "duplicate key 'example'"),
+        Case("duplicate keys", solve, b'{"example": "gripper", "example": "gripper_nylon"}', 422, None,
+             "the body gives the key 'example' twice in one object"),
         Case("a radius swept to -1", sweeps, {"example": "gripper", "parameters": [
             {"path": "/elements/a/radius", "values": [0.2, -1]}]}, 422, "/parameters/0/values/1", "must be positive"),
         Case("an arc angle of 400 deg", sweeps, {"example": "gripper", "parameters": [
