@@ -184,3 +184,24 @@ def test_a_killed_server_leaves_no_solver_worker(server):
     while any(_alive(pid) for pid in workers) and time.monotonic() < deadline:
         time.sleep(0.1)
     assert not [pid for pid in workers if _alive(pid)]
+
+
+def test_ending_a_job_pool_spares_the_other_children_of_the_server():
+    """A job pool that is killed (a stopped job ran on) ends its own workers only: the server's
+    solver workers are its children too (they once died with it, failing their requests)."""
+    import multiprocessing
+
+    from service.jobs.executors import ProcessPool
+
+    bystander = multiprocessing.get_context("spawn").Process(target=time.sleep, args=(60,), name="bystander")
+    bystander.start()
+    pool = ProcessPool(1)
+    try:
+        job_worker = pool.executor().submit(os.getpid).result(timeout=60)
+        pool.kill()
+        assert not _alive(job_worker)
+        assert bystander.is_alive()
+    finally:
+        pool.close()
+        bystander.kill()
+        bystander.join(5)

@@ -100,8 +100,10 @@ class ProcessPool(TaskExecutor):
 
     def _end_pool(self) -> None:
         """Shut the pool down and end its workers now (a running task included)."""
+        # the pool's own workers, taken before shutdown drops them: not every child of this process
+        # (the server's solver workers are children too, and must not die with a job's pool)
+        workers = list((self._pool._processes or {}).values())
         self._pool.shutdown(wait=False, cancel_futures=True)
-        workers = multiprocessing.active_children()  # this process' children: the pool's workers
         for process in workers:
             process.terminate()
         for process in workers:
