@@ -25,6 +25,7 @@ import sys
 import tempfile
 import threading
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
 import httpx
@@ -57,6 +58,21 @@ def start_server(data_dir: str) -> tuple[subprocess.Popen, str]:
             time.sleep(0.1)
     proc.kill()
     raise SystemExit("the server did not start")
+
+
+@contextmanager
+def served(url: str | None):
+    """The server at url, or one started here (SQLite in a temporary folder) and stopped after."""
+    if url is not None:
+        yield url
+        return
+    with tempfile.TemporaryDirectory() as data_dir:
+        proc, url = start_server(data_dir)
+        try:
+            yield url
+        finally:
+            proc.terminate()
+            proc.wait(10)
 
 
 def percentile(values: list[float], q: float) -> float:
@@ -141,19 +157,10 @@ def main() -> None:
     document = json.loads(EXAMPLE.read_text())
     body = {"document": document, "overrides": {ACTUATION: 50.0}}
 
-    proc = None
-    with tempfile.TemporaryDirectory() as data_dir:
-        url = args.url
-        if url is None:
-            proc, url = start_server(data_dir)
-        try:
-            http = latency(url, body, args.requests)
-            rps, failed = throughput(url, body, args.clients, args.requests // args.clients * 2)
-            busy, long_seconds, long_status = during_long_run(url, body, args.clients)
-        finally:
-            if proc is not None:
-                proc.terminate()
-                proc.wait(10)
+    with served(args.url) as url:
+        http = latency(url, body, args.requests)
+        rps, failed = throughput(url, body, args.clients, args.requests // args.clients * 2)
+        busy, long_seconds, long_status = during_long_run(url, body, args.clients)
 
     # the peer, in this process: the Python API with the document compiled per call, as the
     # server does, and with the document compiled once

@@ -16,13 +16,12 @@ from __future__ import annotations
 import argparse
 import json
 import multiprocessing as mp
-import tempfile
 import time
 
 import httpx
 import numpy as np
 
-from benchmarks.api_latency import EXAMPLE, start_server
+from benchmarks.api_latency import EXAMPLE, served
 
 TARGET_P99_MS = 100.0
 BODY_BYTES = 900_000
@@ -94,22 +93,12 @@ def main() -> None:
     args = parser.parse_args()
     bodies = {"0.9 MB description": long_description_body(),
               "0.9 MB of materials": many_materials_body()}
-    proc = None
-    with tempfile.TemporaryDirectory() as data_dir:
-        url = args.url
-        if url is None:
-            proc, url = start_server(data_dir)
-        try:
-            print(f"/v1/health every 20 ms for {args.seconds:g} s; {args.clients} clients posting bodies back to back "
-                  f"(target p99 < {TARGET_P99_MS:g} ms)")
-            report("idle", *under_load(url, None, 0, args.seconds))
-            for label, body in bodies.items():
-                report(f"{label}, {len(body) / 1e6:.2f} MB", *under_load(url, body, args.clients, args.seconds))
-        finally:
-            if proc is not None:
-                proc.terminate()
-                proc.wait(10)
-
+    with served(args.url) as url:
+        print(f"/v1/health every 20 ms for {args.seconds:g} s; {args.clients} clients posting bodies back to back "
+              f"(target p99 < {TARGET_P99_MS:g} ms)")
+        report("idle", *under_load(url, None, 0, args.seconds))
+        for label, body in bodies.items():
+            report(f"{label}, {len(body) / 1e6:.2f} MB", *under_load(url, body, args.clients, args.seconds))
 
 if __name__ == "__main__":
     main()
