@@ -6,7 +6,8 @@ a 2-D friction-contact problem per step), run by Debian's own Python, which has 
 
 It reads the model (mass, inertia, gravity, the flexure's stiffness in its end frame, the
 pin and hole radii, e_N, mu, h, the end time and the start state) as JSON on stdin, and
-writes the impacts, the state at given times and the seconds spent stepping. The pin-in-hole
+writes the impacts, the state at given times, the final state, the seconds spent stepping
+and those of the whole run (building the model, stepping, collecting the report). The pin-in-hole
 contact is a linear relation y = H q + b re-linearized about the current position before
 each step (a nonlinear relation of Siconos 4.4 crashed once contact became active), and the
 flexure and gravity forces are set before each step at the current position: Python work
@@ -64,6 +65,7 @@ class Csfh:
 
 def main():
     m = json.load(sys.stdin)
+    started = time.perf_counter()  # the whole run: the model built, stepped and reported
     model = Csfh(m)
     h, T = m["step"], m["until"]
     q0, v0 = np.array(m["q0"], dtype=float), np.array(m["v0"], dtype=float)
@@ -105,8 +107,9 @@ def main():
         while wanted and t >= wanted[0] - 1e-12:
             states[repr(wanted.pop(0))] = list(np.array(ds.q()))
     seconds = time.perf_counter() - began
-    json.dump({"seconds": seconds, "steps": k, "impacts": impacts, "states": states,
-               "final": list(np.array(ds.q()))}, sys.stdout)
+    json.dump({"seconds": seconds, "total": time.perf_counter() - started, "steps": k, "impacts": impacts,
+               "states": states, "final": list(np.array(ds.q())), "final_velocity": list(np.array(ds.velocity()))},
+              sys.stdout)
 
 
 if __name__ == "__main__":

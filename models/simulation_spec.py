@@ -22,6 +22,8 @@ class BodyStart(StrictModel):
 # More steps than any limit of the server or the command line, and few enough that a step
 # count is an exact integer (until / step of 1e300 / 1e-300 would be infinite).
 MAX_STEP_COUNT = 1e12
+IMPACT_SCHEMES = ("event_driven", "moreau")  # rigid bodies with impacts (service.impacts)
+DEFAULT_MAX_POINTS = 2000  # an impact report's states: about 0.6 MB of JSON for one body and pair
 
 
 class SimulateSpec(StrictModel):
@@ -53,6 +55,9 @@ class SimulateSpec(StrictModel):
     initial: dict[str, BodyStart] = Field(default={}, max_length=64, description="impact simulations: body name "
                                           "-> its start displacement and velocity")
     every: int = Field(default=1, ge=1, le=1_000_000, description="keep every n-th step")
+    max_points: int = Field(default=DEFAULT_MAX_POINTS, ge=2, le=100_000, description="impact simulations (event_driven, moreau): "
+                            "the states the report keeps, spread evenly over the run (after `every`), and besides "
+                            "them the states around each contact's onset and end")
     outputs: list[str] | None = Field(default=None, max_length=512, description="outputs to record (default: all)")
     shapes: bool = Field(default=False, description="also the links' deformed centre lines at every kept state "
                          "(snapshots, animation)")
@@ -70,6 +75,17 @@ class SimulateSpec(StrictModel):
         if until is not None and not until / step <= MAX_STEP_COUNT:
             raise ValueError(f"{until:g} s in steps of {step:g} s would be more than {MAX_STEP_COUNT:g} steps")
         return step
+
+    @field_validator("max_points")
+    @classmethod
+    def _impacts_only(cls, max_points: int, info: ValidationInfo) -> int:
+        """Only impact reports are thinned by it: another value for a link scheme is refused
+        (the default passes, as sections are often copied whole from a dump)."""
+        scheme = info.data.get("scheme")
+        if scheme is not None and scheme not in IMPACT_SCHEMES and max_points != DEFAULT_MAX_POINTS:
+            raise ValueError(f"max_points thins impact simulations ({', '.join(IMPACT_SCHEMES)}); the {scheme} "
+                             "scheme keeps every n-th step (`every`)")
+        return max_points
 
 
 def critical_step_factor(gamma: float, beta: float) -> float:

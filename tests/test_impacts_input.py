@@ -116,14 +116,32 @@ def test_one_response_bounds_the_states_it_keeps():
     from service.impacts.run import run_impacts as run_bounded
 
     document, spec = parsed(csfh("6.1", scheme="moreau", step=1e-5, until=0.1))
-    with pytest.raises(MechanismError) as caught:
-        run_bounded(document, spec, max_kept=1000)
-    assert caught.value.pointer == "/simulate/every"
-    assert "keep every 10th step or more" in caught.value.problem
+    _, report = run_bounded(document, spec, max_kept=1000)
+    assert report["steps"] == 10_000 and "kept one state in 11 of 10000 steps" in report["message"]
+    impact = report["impacts"][0]
+    assert 910 < len(report["times"]) <= 1000 + 4 * len(report["impacts"])
+    assert impact["time"] in report["times"]  # the states around the impact are among the kept ones
     document, spec = parsed(csfh("6.1", until=0.5))
     _, report = run_bounded(document, spec, max_kept=50)
-    assert len(report["times"]) <= 51 and report["times"][-1] == pytest.approx(0.5)
-    assert "kept every" in report["message"]
+    assert len(report["times"]) <= 51 + 2 * len(report["events"]) and report["times"][-1] == pytest.approx(0.5)
+    assert "kept one state in" in report["message"]
+
+
+def test_the_default_report_of_a_long_moreau_run_is_bounded():
+    """10^5 steps: about max_points states (under 2 MB of JSON), every impact among them with
+    its peak force, and each contact's onset and separation as events."""
+    document, spec = parsed(csfh("6.3", scheme="moreau", step=1e-5, until=1.0))
+    _, report = run_impacts(document, spec)
+    assert report["steps"] == 100_000 and len(report["impacts"]) >= 10
+    assert spec.max_points <= len(report["times"]) <= spec.max_points + 4 * len(report["impacts"]) + 1
+    assert len(json.dumps(report)) < 2_000_000
+    for hit in report["impacts"]:
+        assert hit["peak_force"] == pytest.approx(hit["impulse"] / 1e-5, rel=1e-12)  # one step's impulse
+        assert hit["time"] in report["times"]
+    contacts = [e for e in report["events"] if e["kind"] == "contact"]
+    separations = [e for e in report["events"] if e["kind"] == "separation"]
+    assert len(contacts) == len(separations) >= len(report["impacts"])
+    assert all(s["time"] > c["time"] for c, s in zip(contacts, separations))
 
 
 def test_an_impact_study_is_costed_before_it_runs(api_server):

@@ -7,9 +7,10 @@ from __future__ import annotations
 import time
 
 from models import Mechanism
+from models.simulation_spec import IMPACT_SCHEMES
 from service.analyses.base import Analysis, AnalysisRequest
 from service.dynamics.run import run_simulation, simulation_spec
-from service.impacts.run import IMPACT_SCHEMES, run_impacts
+from service.impacts.run import run_impacts
 from service.reports import plain
 
 SYNC_STEPS = 20_000

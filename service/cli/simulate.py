@@ -12,12 +12,12 @@ from typing import Annotated
 import typer
 from rich.markup import escape
 
+from models.simulation_spec import IMPACT_SCHEMES
 from service.cli.application import app
 from service.cli.common import (EXIT_NOT_CONVERGED, OptionError, check_plot_option, consoles, number, table_of,
                                 user_errors, write_json)
 from service.cli.options import DocArg, JsonOpt, PlotOpt, SetOpt, mechanism
 from service.cli.progress import SimulationProgress
-from service.impacts.run import IMPACT_SCHEMES
 
 SHOWN_OUTPUTS = 6
 

@@ -55,3 +55,14 @@ class KeptRows:
 
     def __len__(self) -> int:
         return self._kept
+
+
+def reported_rows(count: int, every: int, limit: int, events: np.ndarray) -> tuple[np.ndarray, int]:
+    """(the rows a report keeps of `count`, the stride): every `every`-th, spread wider when
+    that is more than `limit`, plus the event rows (at most `limit` of them, the first ones)
+    and the last row. The stride is a multiple of `every`."""
+    stride = every
+    if -(-count // every) + 1 > limit:
+        stride = every * -(-count // (every * (limit - 1)))
+    events = np.asarray(events, dtype=int)[:limit]
+    return np.unique(np.r_[np.arange(0, count, stride), events, count - 1]), stride

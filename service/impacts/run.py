@@ -7,8 +7,8 @@ what contact and friction dissipated and the balance."""
 from __future__ import annotations
 
 import json
-import math
-
+import threading
+from collections import OrderedDict
 import casadi as ca
 import numpy as np
 
@@ -19,9 +19,9 @@ from models.simulation_spec import SimulateSpec
 from models.units import document_unit, quantity_to_si
 from service.dynamics.histories import history_expression
 from service.impacts.event_driven import EventLayout, rhs_function
+from service.impacts.kept_rows import reported_rows
 from service.impacts.stepping import Trace, run_events, run_moreau
 
-IMPACT_SCHEMES = ("event_driven", "moreau")
 TRIALS_PER_STEP = 4  # event-driven: trial steps allowed per allowed step (rejections, event location)
 MAX_STEP_PARTS = 500  # event-driven: the default longest step, a part of the run (smooth histories to draw)
 
@@ -65,7 +65,7 @@ def start_state(model: ImpactModel, spec: SimulateSpec, p: np.ndarray) -> tuple[
         for k, kind in enumerate(kinds):
             q0[body.first + k] = book.si(start.displacement[k], kind, f"{pointer}/displacement/{k}")
             v0[body.first + k] = book.si(start.velocity[k], kind, f"{pointer}/velocity/{k}")
-    depth = ca.Function("depth", [model.q, model.t, model.p], [ca.vertcat(*[pair.indentation for pair in model.pairs])])
+    depth = _depth(model)
     pens = np.asarray(depth(q0, 0.0, p)).ravel()
     for pair, pen in zip(model.pairs, pens):
         if pen > 0:
@@ -76,13 +76,62 @@ def start_state(model: ImpactModel, spec: SimulateSpec, p: np.ndarray) -> tuple[
     return q0, v0
 
 
+MODELS_KEPT = 16  # impact models kept per thread, by document: building one costs as much as a second of stepping
+_MODELS: OrderedDict[tuple, ImpactModel] = OrderedDict()
+_MAPPED: dict[tuple, ca.Function] = {}
+
+
+def model_of(document: MechanismDocument, spec: SimulateSpec) -> ImpactModel:
+    """The impact model of a document and its histories, built once per thread (a thread
+    never shares CasADi objects with another)."""
+    histories = json.dumps(spec.histories, sort_keys=True)
+    key = (document.model_dump_json(), histories, threading.get_ident())
+    model = _MODELS.get(key)
+    if model is None:
+        model = impact_model(document, timed_fields(document, spec), histories)
+        if len(_MODELS) >= MODELS_KEPT:
+            _MODELS.popitem(last=False)
+        _MODELS[key] = model
+    _MODELS.move_to_end(key)
+    return model
+
+
+def _energy(model: ImpactModel) -> ca.Function:
+    return ca.Function("energy", [model.q, model.v, model.t, model.p], [model.kinetic, model.elastic, model.gravity])
+
+
+def _depth(model: ImpactModel) -> ca.Function:
+    return ca.Function("depth", [model.q, model.t, model.p], [ca.vertcat(*[pair.indentation for pair in model.pairs])])
+
+
+def mapped(model: ImpactModel, function, count: int) -> ca.Function:
+    """function(model) over `count` states in one call, mapped over a power of two at least
+    `count` (so a few maps serve every run of a structure), built once per thread."""
+    size = 1 << max(count - 1, 1).bit_length()
+    key = (function.__name__, model.structure_key(), size, threading.get_ident())
+    if key not in _MAPPED:
+        if len(_MAPPED) >= 4 * MODELS_KEPT:
+            _MAPPED.pop(next(iter(_MAPPED)))
+        _MAPPED[key] = function(model).map(size)
+    return _MAPPED[key]
+
+
+def evaluated(model: ImpactModel, function, columns: list, p: np.ndarray) -> list[np.ndarray]:
+    """The outputs of function(model) at every column of `columns` (arrays of shape (rows, count)
+    or (count,)), p the same for all: arrays of `count` columns."""
+    count = np.shape(columns[0])[-1]
+    fn = mapped(model, function, count)
+    size = fn.size2_in(0)
+    padded = [np.pad(np.atleast_2d(c), ((0, 0), (0, size - count)), mode="edge") for c in columns]
+    return [np.asarray(out)[:, :count] for out in fn.call([*padded, p])]
+
+
 def run_impacts(document: MechanismDocument, spec: SimulateSpec, stop=None, max_steps: int = 2_000_000,
                 parameters: dict[str, float] | None = None, progress=None,
                 max_kept: int | None = None) -> tuple[Trace, dict]:
     """(the raw trace, the report). `parameters` replaces numbers (SI) by their pointers;
-    `max_kept` bounds the states a report keeps (one response): Moreau's fixed steps are
-    checked before the run, the event-driven ones thinned after it, saying so."""
-    model = impact_model(document, timed_fields(document, spec), json.dumps(spec.histories, sort_keys=True))
+    `max_kept` bounds the states a report keeps below `max_points` (one response)."""
+    model = model_of(document, spec)
     values = np.array(model.book.values)
     values[model.book.pointers.index(DAMPING)] = spec.damping
     for pointer, value in (parameters or {}).items():
@@ -95,10 +144,6 @@ def run_impacts(document: MechanismDocument, spec: SimulateSpec, stop=None, max_
         if steps > max_steps:
             raise MechanismError("/simulate/step", f"the run needs {steps} steps of {spec.step:g} s, over the limit "
                                  f"of {max_steps}: take a longer step or a shorter run")
-        if max_kept is not None and steps // spec.every + 1 > max_kept:
-            raise MechanismError("/simulate/every", f"{steps} steps would keep {steps // spec.every + 1} states, over "
-                                 f"the {max_kept} one response holds: keep every {math.ceil(steps / max_kept)}th "
-                                 "step or more (`every`)")
         trace = run_moreau(model, p, q0, v0, spec.until, spec.step, stop, progress)
     else:
         max_step = spec.max_step if spec.max_step is not None else spec.until / MAX_STEP_PARTS
@@ -108,31 +153,31 @@ def run_impacts(document: MechanismDocument, spec: SimulateSpec, stop=None, max_
 
 
 def report(model: ImpactModel, spec: SimulateSpec, trace: Trace, p: np.ndarray, max_kept: int | None = None) -> dict:
+    """The report of a run. Contact events, impacts and their peak forces come from every
+    state of the trace; the histories (and the energies, evaluated on them alone) from the
+    kept rows: at most `max_points` spread over the run, with the rows around each event."""
     states = np.vstack(trace.states)
-    every = spec.every
-    if max_kept is not None and len(states) > max_kept * every:
-        every = math.ceil(len(states) / max_kept)
-        trace.message = (trace.message + "; " if trace.message else "") + (
-            f"kept every {every}th of {len(states) - 1} steps (one response holds {max_kept} states)")
-    keep = np.unique(np.r_[np.arange(0, len(states), every), len(states) - 1])  # the last state too
     n = model.bodies.size
     book = model.book
     per = {kind: 1 / book.si(1.0, kind, "/units") for kind in ("length", "angle", "force", "energy")}
-    q, v = states[:, 1:1 + n], states[:, 1 + n:1 + 2 * n]
-    works = states[:, 1 + 2 * n:1 + 2 * n + len(WORKS)]
-    # energies of the reported states only: evaluating every step's cost as much as the stepping
-    energy = ca.Function("energy", [model.q, model.v, model.t, model.p], [model.kinetic, model.elastic, model.gravity])
-    T, elastic, gravity = (np.asarray(x).ravel() for x in energy.map(len(keep))(q[keep].T, v[keep].T,
-                                                                                 states[keep, 0], p))
-    works = works[keep]
+    if spec.scheme == "moreau":
+        pairs, events, impacts, joints, event_rows = _moreau_pairs(model, spec, np.vstack(trace.extras), states, per)
+    else:
+        pairs, events, impacts, joints, event_rows = _event_pairs(model, states, p, per)
+    limit = spec.max_points if max_kept is None else min(spec.max_points, max_kept)
+    keep, stride = reported_rows(len(states), spec.every, limit, event_rows)
+    if stride > spec.every:
+        trace.message = (trace.message + "; " if trace.message else "") + (
+            f"kept one state in {stride} of {len(states) - 1} steps, and those around each contact event "
+            f"({len(keep)} states; max_points {limit})")
+    kept = states[keep]
+    q, v = kept[:, 1:1 + n], kept[:, 1 + n:1 + 2 * n]
+    works = kept[:, 1 + 2 * n:1 + 2 * n + len(WORKS)]
+    T, elastic, gravity = (x.ravel() for x in evaluated(model, _energy, [q.T, v.T, kept[:, 0]], p))
     coordinates, velocities = {}, {}
     for k, name in enumerate(model.coordinate_names()):
         scale = per["angle"] if name.endswith(".theta") else per["length"]
         coordinates[name], velocities[name] = q[:, k] * scale, v[:, k] * scale
-    if spec.scheme == "moreau":
-        pairs, events, impacts, joints = _moreau_pairs(model, spec, np.vstack(trace.extras), states, per)
-    else:
-        pairs, events, impacts, joints = _event_pairs(model, states, p, per)
     balance = T + elastic + gravity - works.sum(axis=1)
     balance = balance - balance[0]
     size = max(float(np.abs(T).max()), float(np.ptp(elastic + gravity)), float(np.abs(works).max()), 1e-300)
@@ -144,9 +189,9 @@ def report(model: ImpactModel, spec: SimulateSpec, trace: Trace, p: np.ndarray, 
         "time_reached": float(states[-1, 0]), "steps": trace.steps if trace.steps is not None else len(states) - 1,
         "trial_steps": trace.calls,
         "seconds": trace.seconds, "step": spec.step, "tolerance": spec.tolerance if spec.scheme != "moreau" else None,
-        "times": states[keep, 0].tolist(),
-        "coordinates": {k: c[keep].tolist() for k, c in coordinates.items()},
-        "velocities": {k: c[keep].tolist() for k, c in velocities.items()},
+        "times": kept[:, 0].tolist(),
+        "coordinates": {k: c.tolist() for k, c in coordinates.items()},
+        "velocities": {k: c.tolist() for k, c in velocities.items()},
         "contacts": {name: {k: np.asarray(x)[keep].tolist() for k, x in values.items()} for name, values in pairs.items()},
         "joints": {name: {k: x[keep].tolist() for k, x in values.items()} for name, values in joints.items()},
         "events": events, "impacts": impacts,
@@ -173,12 +218,10 @@ def _clearance(model: ImpactModel) -> float:
 def _event_pairs(model: ImpactModel, states: np.ndarray, p: np.ndarray, per: dict):
     n, P = model.bodies.size, len(model.pairs)
     L = EventLayout(n, P)
-    rhs = rhs_function(model).map(len(states))
     cols = [states[:, L.at(k)].T for k in ("contact", "beyond_v0", "beyond_v1", "speed")]
-    _, _, F_N, F_T, rate, v_T, pins = (np.asarray(x) for x in rhs(states[:, 1:1 + n].T, states[:, 1 + n:1 + 2 * n].T,
-                                                                 states[:, 0], *cols, p))
-    depth = ca.Function("depth", [model.q, model.t, model.p], [ca.vertcat(*[pair.indentation for pair in model.pairs])])
-    pen = np.asarray(depth.map(len(states))(states[:, 1:1 + n].T, states[:, 0], p))
+    _, _, F_N, F_T, rate, v_T, pins = evaluated(model, rhs_function, [states[:, 1:1 + n].T, states[:, 1 + n:1 + 2 * n].T,
+                                                                      states[:, 0], *cols], p)
+    pen = evaluated(model, _depth, [states[:, 1:1 + n].T, states[:, 0]], p)[0]
     pairs, events, impacts = {}, [], []
     for k, pair in enumerate(model.pairs):
         pairs[pair.name] = {"normal_force": F_N[k] * per["force"], "friction_force": F_T[k] * per["force"],
@@ -186,28 +229,30 @@ def _event_pairs(model: ImpactModel, states: np.ndarray, p: np.ndarray, per: dic
                             "in_contact": states[:, L.at("contact")][:, k]}
     joints = _joints(model, pins.reshape(-1, len(states)).T * per["force"])
     flags = np.column_stack([states[:, L.at(key)] for key in ("contact", "beyond_v0", "beyond_v1")])
-    onsets: dict[str, tuple[float, float]] = {}  # per pair, its contact's start and impact speed
-    for row in np.nonzero(states[:, L.at("event")] > 0.5)[0]:
+    onsets: dict[str, tuple[float, float, int]] = {}  # per pair, its contact's start, impact speed and row
+    event_rows = np.nonzero(states[:, L.at("event")] > 0.5)[0]
+    for row in event_rows:
         changed = np.nonzero(flags[row] != flags[row - 1])[0] if row else []
         for index in changed:
             kind, k = divmod(index, P)
             name, t = model.pairs[k].name, float(states[row, 0])
             if kind == 0 and flags[row, index] > 0.5:
-                onsets[name] = (t, float(rate[k, row]))
+                onsets[name] = (t, float(rate[k, row]), row)
                 events.append({"time": t, "pair": name, "kind": "contact", "impact_speed": onsets[name][1] * per["length"]})
             elif kind == 0:
                 exit_speed = float(-rate[k, row])
                 events.append({"time": t, "pair": name, "kind": "separation", "exit_speed": exit_speed * per["length"]})
                 if name in onsets:
-                    start, speed = onsets.pop(name)
+                    start, speed, first = onsets.pop(name)
                     impacts.append({"pair": name, "time": start, "impact_speed": speed * per["length"],
                                     "exit_speed": exit_speed * per["length"], "duration": t - start,
-                                    "rebound_ratio": exit_speed / speed})
+                                    "rebound_ratio": exit_speed / speed,
+                                    "peak_force": float(F_N[k, first:row + 1].max()) * per["force"]})
             else:
                 level = "v0" if kind == 1 else "v1"
                 rising = flags[row, index] > 0.5
                 events.append({"time": t, "pair": name, "kind": f"slip {'above' if rising else 'below'} {level}"})
-    return pairs, events, impacts, joints
+    return pairs, events, impacts, joints, np.unique(np.r_[event_rows - 1, event_rows].clip(0))
 
 
 def _joints(model: ImpactModel, forces: np.ndarray) -> dict:
@@ -216,21 +261,40 @@ def _joints(model: ImpactModel, forces: np.ndarray) -> dict:
 
 
 def _moreau_pairs(model: ImpactModel, spec: SimulateSpec, extras: np.ndarray, states: np.ndarray, per: dict):
+    """Per pair its impulses (and the mean forces over their steps), and from every step: the
+    contact episodes (consecutive steps with a normal impulse) as onset and separation events,
+    and the impacts (an impulse on an approaching contact) with their episode's length and
+    peak force. Row k of `extras` is the step from state k - 1 to state k."""
     P, h = len(model.pairs), spec.step
-    pairs, impacts = {}, []
+    pairs, events, impacts, rows = {}, [], [], []
+    impulse = per["force"]  # N s per document force s
     for k, pair in enumerate(model.pairs):
         lam_N, lam_T = extras[:, k], extras[:, P + k]
         before, after, active = extras[:, 2 * P + k], extras[:, 3 * P + k], extras[:, 4 * P + k]
-        impulse = per["force"]  # N s per document force s
         pairs[pair.name] = {"normal_impulse": lam_N * impulse, "friction_impulse": lam_T * impulse,
                             "normal_force": lam_N / h * per["force"], "friction_force": lam_T / h * per["force"],
                             "active": active}
+        pushing = np.r_[0, (lam_N > 0).astype(np.int8), 0]
+        firsts, lasts = np.nonzero(np.diff(pushing) == 1)[0], np.nonzero(np.diff(pushing) == -1)[0] - 1
+        episode = np.zeros(len(lam_N), dtype=int)  # each step's episode (0: none)
+        for number, (first, last) in enumerate(zip(firsts, lasts), start=1):
+            episode[first:last + 1] = number
+            events.append({"time": float(states[first - 1, 0]), "pair": pair.name, "kind": "contact",
+                           "impact_speed": float(-before[first]) * per["length"]})
+            events.append({"time": float(states[last, 0]), "pair": pair.name, "kind": "separation",
+                           "exit_speed": float(after[last]) * per["length"],
+                           "peak_force": float(lam_N[first:last + 1].max()) / h * per["force"]})
+            rows += [first - 1, first, last, min(last + 1, len(lam_N) - 1)]
         hits = np.nonzero((lam_N > 0) & (before < 0))[0]
         for row in hits:  # an impact: an impulse on an approaching contact
             if row and lam_N[row - 1] > 0 and before[row - 1] < 0:
                 continue  # the same impact, spread over consecutive steps
+            first, last = firsts[episode[row] - 1], lasts[episode[row] - 1]
             impacts.append({"pair": pair.name, "time": float(states[row - 1, 0]) if row else 0.0,
                             "impact_speed": float(-before[row]) * per["length"],
                             "exit_speed": float(after[row]) * per["length"],
-                            "impulse": float(lam_N[row]) * impulse, "rebound_ratio": float(-after[row] / before[row])})
-    return pairs, [], impacts, _joints(model, extras[:, 5 * P:] / h * per["force"])
+                            "impulse": float(lam_N[row]) * impulse, "rebound_ratio": float(-after[row] / before[row]),
+                            "duration": float(states[last, 0] - states[first - 1, 0]),
+                            "peak_force": float(lam_N[first:last + 1].max()) / h * per["force"]})
+    events.sort(key=lambda event: event["time"])
+    return pairs, events, impacts, _joints(model, extras[:, 5 * P:] / h * per["force"]), np.asarray(rows, dtype=int)

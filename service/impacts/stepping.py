@@ -23,6 +23,9 @@ EVENT_CHUNK = 2000  # trial steps per call
 MOREAU_CHUNK = 5000
 MAX_CACHED = 32  # chunk Functions kept in memory
 KEPT_EVENT_ROWS = 100_000  # states an event-driven run holds (service.impacts.kept_rows)
+STEP_SOURCES = ("stepping", "moreau", "event_driven", "contact_forces")  # of service.impacts: the chunks' graphs
+
+
 def _code_version() -> str:
     """A digest of the sources the step graphs come from: a cached library built from older
     code is never loaded."""
@@ -30,12 +33,12 @@ def _code_version() -> str:
     from pathlib import Path
 
     import models.impacts as built
-    import service.impacts as stepping
 
+    here = Path(__file__).parent
+    sources = sorted(Path(built.__file__).parent.glob("*.py")) + [here / f"{name}.py" for name in STEP_SOURCES]
     digest = hashlib.sha256()
-    for package in (built, stepping):
-        for source in sorted(Path(package.__file__).parent.glob("*.py")):
-            digest.update(source.read_bytes())
+    for source in sources:
+        digest.update(source.read_bytes())
     return digest.hexdigest()[:16]
 
 

@@ -13,9 +13,9 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from models import MechanismError
+from models.simulation_spec import IMPACT_SCHEMES
 from service.costs import Limits, check_grid_size
 from service.dynamics.run import check_steps, simulation_spec
-from service.impacts.run import IMPACT_SCHEMES
 from service.impacts.study import influence, sampled_run, study_fields, variant, with_overrides
 from service.jobs.base import Plan
 from service.jobs.control import TaskControl

@@ -14,6 +14,7 @@ import math
 from collections.abc import Mapping
 
 from models import MechanismError
+from models.simulation_spec import IMPACT_SCHEMES
 from service.costs import Limits, check_result_size
 from service.dynamics.histories import read_histories
 from service.dynamics.integrate import Resume, integrate
@@ -21,7 +22,6 @@ from service.dynamics.stepping import WINDOW
 from service.dynamics.run import (MAX_STEPS, check_masses, check_scheme, check_steps, records, scheme_of, scheme_summary,
                                   simulation_spec, start_shape, step_limit, tolerance_of, units, wanted_outputs,
                                   with_balance)
-from service.impacts.run import IMPACT_SCHEMES
 from service.jobs.base import InOrder, Plan
 from service.jobs.control import TaskControl
 from service.jobs.sweep import mechanism_of
