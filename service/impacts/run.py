@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import threading
 from collections import OrderedDict
+from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
@@ -131,6 +132,21 @@ def run_impacts(document: MechanismDocument, spec: SimulateSpec, stop=None, max_
                 max_kept: int | None = None) -> tuple[Trace, dict]:
     """(the raw trace, the report). `parameters` replaces numbers (SI) by their pointers;
     `max_kept` bounds the states a report keeps below `max_points` (one response)."""
+    model, p, trace = integrate(document, spec, stop, max_steps, parameters, progress)
+    return trace, report(model, spec, trace, p, max_kept)  # trace.seconds: the stepping alone
+
+
+def run_with_histories(document: MechanismDocument, spec: SimulateSpec, stop=None,
+                       max_steps: int = 2_000_000) -> tuple[Histories, dict]:
+    """(the histories at every state the run holds, the report)."""
+    model, p, trace = integrate(document, spec, stop, max_steps)
+    full = histories(model, spec, trace, p)
+    return full, report(model, spec, trace, p, full=full)
+
+
+def integrate(document: MechanismDocument, spec: SimulateSpec, stop=None, max_steps: int = 2_000_000,
+              parameters: dict[str, float] | None = None, progress=None) -> tuple[ImpactModel, np.ndarray, Trace]:
+    """(the model, its parameter vector, the trace of the run)."""
     model = model_of(document, spec)
     values = np.array(model.book.values)
     values[model.book.pointers.index(DAMPING)] = spec.damping
@@ -149,23 +165,53 @@ def run_impacts(document: MechanismDocument, spec: SimulateSpec, stop=None, max_
         max_step = spec.max_step if spec.max_step is not None else spec.until / MAX_STEP_PARTS
         trace = run_events(model, p, q0, v0, spec.until, spec.tolerance, spec.step, max_step,
                            max_steps * TRIALS_PER_STEP, stop, progress)
-    return trace, report(model, spec, trace, p, max_kept)  # trace.seconds: the stepping alone
+    return model, p, trace
 
 
-def report(model: ImpactModel, spec: SimulateSpec, trace: Trace, p: np.ndarray, max_kept: int | None = None) -> dict:
-    """The report of a run. Contact events, impacts and their peak forces come from every
-    state of the trace; the histories (and the energies, evaluated on them alone) from the
-    kept rows: at most `max_points` spread over the run, with the rows around each event."""
+@dataclass
+class Histories:
+    """Every state a run holds (rows), in document units: per coordinate its values, per pair
+    its contact quantities, per pin its force; the events and impacts; the rows around events."""
+
+    states: np.ndarray  # SI: [t, q, v, works, ...]
+    per: dict[str, float]  # document units per SI unit, by kind
+    coordinates: dict[str, np.ndarray]
+    velocities: dict[str, np.ndarray]
+    pairs: dict[str, dict[str, np.ndarray]]
+    joints: dict[str, dict[str, np.ndarray]]
+    events: list[dict]
+    impacts: list[dict]
+    event_rows: np.ndarray
+
+    @property
+    def times(self) -> np.ndarray:
+        return self.states[:, 0]
+
+
+def histories(model: ImpactModel, spec: SimulateSpec, trace: Trace, p: np.ndarray) -> Histories:
     states = np.vstack(trace.states)
     n = model.bodies.size
-    book = model.book
-    per = {kind: 1 / book.si(1.0, kind, "/units") for kind in ("length", "angle", "force", "energy")}
+    per = {kind: 1 / model.book.si(1.0, kind, "/units") for kind in ("length", "angle", "force", "energy")}
     if spec.scheme == "moreau":
         pairs, events, impacts, joints, event_rows = _moreau_pairs(model, spec, np.vstack(trace.extras), states, per)
     else:
         pairs, events, impacts, joints, event_rows = _event_pairs(model, states, p, per)
+    coordinates, velocities = {}, {}
+    for k, name in enumerate(model.coordinate_names()):
+        scale = per["angle"] if name.endswith(".theta") else per["length"]
+        coordinates[name], velocities[name] = states[:, 1 + k] * scale, states[:, 1 + n + k] * scale
+    return Histories(states, per, coordinates, velocities, pairs, joints, events, impacts, event_rows)
+
+
+def report(model: ImpactModel, spec: SimulateSpec, trace: Trace, p: np.ndarray, max_kept: int | None = None,
+           full: Histories | None = None) -> dict:
+    """The report of a run. Contact events, impacts and their peak forces come from every
+    state of the trace; the histories (and the energies, evaluated on them alone) from the
+    kept rows: at most `max_points` spread over the run, with the rows around each event."""
+    full = full if full is not None else histories(model, spec, trace, p)
+    states, per, book, n = full.states, full.per, model.book, model.bodies.size
     limit = spec.max_points if max_kept is None else min(spec.max_points, max_kept)
-    keep, stride = reported_rows(len(states), spec.every, limit, event_rows)
+    keep, stride = reported_rows(len(states), spec.every, limit, full.event_rows)
     if stride > spec.every:
         trace.message = (trace.message + "; " if trace.message else "") + (
             f"kept one state in {stride} of {len(states) - 1} steps, and those around each contact event "
@@ -174,10 +220,6 @@ def report(model: ImpactModel, spec: SimulateSpec, trace: Trace, p: np.ndarray, 
     q, v = kept[:, 1:1 + n], kept[:, 1 + n:1 + 2 * n]
     works = kept[:, 1 + 2 * n:1 + 2 * n + len(WORKS)]
     T, elastic, gravity = (x.ravel() for x in evaluated(model, _energy, [q.T, v.T, kept[:, 0]], p))
-    coordinates, velocities = {}, {}
-    for k, name in enumerate(model.coordinate_names()):
-        scale = per["angle"] if name.endswith(".theta") else per["length"]
-        coordinates[name], velocities[name] = q[:, k] * scale, v[:, k] * scale
     balance = T + elastic + gravity - works.sum(axis=1)
     balance = balance - balance[0]
     size = max(float(np.abs(T).max()), float(np.ptp(elastic + gravity)), float(np.abs(works).max()), 1e-300)
@@ -190,11 +232,12 @@ def report(model: ImpactModel, spec: SimulateSpec, trace: Trace, p: np.ndarray, 
         "trial_steps": trace.calls,
         "seconds": trace.seconds, "step": spec.step, "tolerance": spec.tolerance if spec.scheme != "moreau" else None,
         "times": kept[:, 0].tolist(),
-        "coordinates": {k: c.tolist() for k, c in coordinates.items()},
-        "velocities": {k: c.tolist() for k, c in velocities.items()},
-        "contacts": {name: {k: np.asarray(x)[keep].tolist() for k, x in values.items()} for name, values in pairs.items()},
-        "joints": {name: {k: x[keep].tolist() for k, x in values.items()} for name, values in joints.items()},
-        "events": events, "impacts": impacts,
+        "coordinates": {k: c[keep].tolist() for k, c in full.coordinates.items()},
+        "velocities": {k: c[keep].tolist() for k, c in full.velocities.items()},
+        "contacts": {name: {k: np.asarray(x)[keep].tolist() for k, x in values.items()}
+                     for name, values in full.pairs.items()},
+        "joints": {name: {k: x[keep].tolist() for k, x in values.items()} for name, values in full.joints.items()},
+        "events": full.events, "impacts": full.impacts,
         "energies": {k: (np.asarray(x) * per["energy"]).tolist() for k, x in energies.items()},
         "energy_balance_error": float(np.abs(balance).max() / size),
         "flexure_stiffness": book.document.impacts.flexure_stiffness,

@@ -1,26 +1,32 @@
 """The parametric study of an impact model (seed 004 Sec. 7), with numbers in place of the
 paper's arrows: each chosen field of the document is moved by its step, up and down, one at
-a time, and every run is compared with the nominal one on a common time grid. For each
-field and each compared quantity (a body's x, y, theta; a pair's F_N, F_T) it reports
+a time, and every run is compared with the nominal one at every state the nominal run holds
+(a Moreau run's every step: an impact lasts one step, which no common sampling grid would
+catch). For each field and each compared quantity (a body's x, y, theta; a pair's F_N, F_T)
+it reports
 
   departure   the first time the difference exceeds `tolerance` times the nominal range
               (None: it never does), the paper's "early" versus "gradually amplifying";
   rms         the root-mean-square difference over the run, relative to the nominal range;
-  max         the largest difference, relative likewise.
+  max         the largest difference, relative likewise;
+
+and per pair the run's contacts from its events: how many, the first onset and separation,
+and the peak normal force and its time. A run is compared where it is made (each task runs
+the nominal one too, once per process), so a stored point holds numbers, not histories.
 """
 
 from __future__ import annotations
 
 import copy
+import json
+from collections import OrderedDict
 
 import numpy as np
 
 from models import MechanismError
 from models.document import MechanismDocument
 from models.simulation_spec import SimulateSpec
-from service.impacts.run import run_impacts
-
-SAMPLES = 2000  # the common time grid
+from service.impacts.run import Histories, run_with_histories
 
 
 def study_fields(document: dict, fields: list[dict]) -> list[tuple[str, float]]:
@@ -82,26 +88,94 @@ def variant(document: dict, pointer: str | None, change: float) -> dict:
     return doc
 
 
-def sampled_run(document: dict, simulate: dict | None, stop=None, max_steps: int = 2_000_000) -> dict:
-    """One run's compared quantities on the common grid (document units)."""
+NOMINALS_KEPT = 2  # nominal runs kept per process, by document and settings
+_NOMINALS: OrderedDict[str, tuple[Histories, dict]] = OrderedDict()
+
+
+def _run(document: dict, simulate: dict | None, stop, max_steps: int) -> tuple[Histories, dict]:
     doc = MechanismDocument.model_validate(document)
     base = doc.simulate.model_dump() if doc.simulate is not None else {}
     spec = SimulateSpec.model_validate({**base, **{k: v for k, v in (simulate or {}).items() if v is not None}})
-    _, report = run_impacts(doc, spec, stop=stop, max_steps=max_steps)
-    grid = np.linspace(0.0, spec.until, SAMPLES)
-    times = np.asarray(report["times"])
-    series = dict(report["coordinates"])
-    for name, contact in report["contacts"].items():
-        series[f"{name}.F_N"] = contact["normal_force"]
-        series[f"{name}.F_T"] = contact["friction_force"]
-    return {"status": report["status"], "message": report["message"], "time_reached": report["time_reached"], "seconds": report["seconds"],
-            "impacts": len(report["impacts"]),
-            "series": {name: np.interp(grid, times, values).tolist() for name, values in series.items()}}
+    return run_with_histories(doc, spec, stop=stop, max_steps=max_steps)
 
 
-def influence(nominal: dict, run: dict, until: float, tolerance: float) -> dict:
-    """departure, rms and max per compared quantity of a run against the nominal one."""
-    grid = np.linspace(0.0, until, SAMPLES)
+def nominal_run(document: dict, simulate: dict | None, stop=None, max_steps: int = 2_000_000) -> tuple[Histories, dict]:
+    key = json.dumps([document, simulate], sort_keys=True)
+    if key not in _NOMINALS:
+        full, report = _run(document, simulate, stop, max_steps)
+        if report["status"] == "stopped":
+            return full, report  # not kept: a later task runs it whole
+        if len(_NOMINALS) >= NOMINALS_KEPT:
+            _NOMINALS.popitem(last=False)
+        _NOMINALS[key] = (full, report)
+    return _NOMINALS[key]
+
+
+def study_point(document: dict, simulate: dict | None, pointer: str | None, change: float, tolerance: float,
+                stop=None, max_steps: int = 2_000_000) -> dict:
+    """One run of the study (pointer None: the nominal one) with its contacts and, for a
+    moved field, its influence against the nominal run."""
+    full, report = (nominal_run(document, simulate, stop, max_steps) if pointer is None
+                    else _run(variant(document, pointer, change), simulate, stop, max_steps))
+    point = {"status": report["status"], "message": report["message"], "time_reached": report["time_reached"],
+             "seconds": report["seconds"], "impacts": len(report["impacts"]), "contacts": contact_summary(full)}
+    if pointer is not None and report["status"] != "stopped":
+        nominal, nominal_report = nominal_run(document, simulate, stop, max_steps)
+        if nominal_report["status"] == "stopped":
+            point["status"] = "stopped"
+        else:
+            point["influence"] = compared(nominal, full, tolerance)
+    return point
+
+
+def contact_summary(full: Histories) -> dict:
+    """Per pair, from its events and every held state: the contacts, the first onset and
+    separation, and the peak normal force with its time."""
+    out = {}
+    for name, values in full.pairs.items():
+        onsets = [e["time"] for e in full.events if e["pair"] == name and e["kind"] == "contact"]
+        ends = [e["time"] for e in full.events if e["pair"] == name and e["kind"] == "separation"]
+        force = np.asarray(values["normal_force"])
+        top = int(np.argmax(force)) if len(force) else 0
+        out[name] = {"contacts": len(onsets), "first_contact": onsets[0] if onsets else None,
+                     "first_separation": ends[0] if ends else None,
+                     "peak_force": float(force[top]) if len(force) else 0.0,
+                     "peak_time": float(full.times[top]) if len(force) and force[top] > 0 else None}
+    return out
+
+
+def _series(full: Histories) -> dict[str, np.ndarray]:
+    series = dict(full.coordinates)
+    for name, contact in full.pairs.items():
+        series[f"{name}.F_N"] = np.asarray(contact["normal_force"])
+        series[f"{name}.F_T"] = np.asarray(contact["friction_force"])
+    return series
+
+
+def compared(nominal: Histories, run: Histories, tolerance: float) -> dict:
+    """departure, rms and max per compared quantity, at the nominal run's states up to where
+    both reached: directly on a common grid (Moreau's fixed steps), else with the run
+    interpolated linearly between its own states."""
+    times, theirs = nominal.times, run.times
+    same = len(times) == len(theirs) and np.array_equal(times, theirs)
+    upto = times <= theirs[-1] * (1 + 1e-12)
+    reference_series, run_series = _series(nominal), _series(run)
+    out = {}
+    for name, reference in reference_series.items():
+        values = run_series[name] if same else np.interp(times[upto], theirs, run_series[name])
+        reference = reference[upto]
+        span = max(float(np.ptp(reference)), 1e-300)
+        difference = np.abs(values - reference) / span
+        beyond = np.nonzero(difference > tolerance)[0]
+        out[name] = {"departure": float(times[upto][beyond[0]]) if len(beyond) else None,
+                     "rms": float(np.sqrt(np.mean(difference**2))), "max": float(difference.max())}
+    return out
+
+
+def legacy_influence(nominal: dict, run: dict, until: float, tolerance: float) -> dict:
+    """The influence of points stored before runs were compared where they are made: their
+    series sampled on a common grid of 2000 times."""
+    grid = np.linspace(0.0, until, len(next(iter(nominal["series"].values()))))
     out = {}
     for name, reference in nominal["series"].items():
         reference, values = np.asarray(reference), np.asarray(run["series"][name])

@@ -16,7 +16,7 @@ from models import MechanismError
 from models.simulation_spec import IMPACT_SCHEMES
 from service.costs import Limits, check_grid_size
 from service.dynamics.run import check_steps, simulation_spec
-from service.impacts.study import influence, sampled_run, study_fields, variant, with_overrides
+from service.impacts.study import legacy_influence, study_fields, study_point, with_overrides
 from service.jobs.base import Plan
 from service.jobs.control import TaskControl
 from service.requests import compile_request
@@ -68,12 +68,13 @@ class ImpactStudyJob:
 
     def run(self, spec, task):
         runs, control = _runs(spec), TaskControl(task)
+        tolerance = (spec.get("study") or {}).get("tolerance", DEFAULT_TOLERANCE)
         points = []
         for index in task["indices"]:
             if control.should_stop():
                 break
             pointer, change = runs[index]
-            run = sampled_run(variant(_document(spec), pointer, change), spec.get("simulate"), control.should_stop,
+            run = study_point(_document(spec), spec.get("simulate"), pointer, change, tolerance, control.should_stop,
                               task.get("max_steps", 2_000_000))
             if run["status"] == "stopped":  # cancelled or out of time: not stored, so a restart runs it again
                 break
@@ -92,11 +93,15 @@ class ImpactStudyJob:
                     continue
                 entry = fields.setdefault(point["path"], {})
                 side = "+" if point["change"] > 0 else "-"
+                influence = point.get("influence")
+                if influence is None:  # a point stored by an earlier version: sampled series
+                    influence = legacy_influence(nominal, point, plan["until"], plan["tolerance"])
                 entry[side] = {"change": point["change"], "status": point["status"], "impacts": point["impacts"],
-                               "influence": influence(nominal, point, plan["until"], plan["tolerance"])}
+                               "contacts": point.get("contacts"), "influence": influence}
         status = "running" if len(finished) < len(plan["runs"]) else "finished"
         return {"status": status, "until": plan["until"], "tolerance": plan["tolerance"], "scheme": plan["scheme"],
-                "nominal": None if nominal is None else {"impacts": nominal["impacts"], "seconds": nominal["seconds"]},
+                "nominal": None if nominal is None else {"impacts": nominal["impacts"], "seconds": nominal["seconds"],
+                                                         "contacts": nominal.get("contacts")},
                 "fields": fields, "ranking": _ranking(fields)}
 
 
