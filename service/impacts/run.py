@@ -80,6 +80,7 @@ def start_state(model: ImpactModel, spec: SimulateSpec, p: np.ndarray) -> tuple[
 MODELS_KEPT = 16  # impact models kept per thread, by document: building one costs as much as a second of stepping
 _MODELS: OrderedDict[tuple, ImpactModel] = OrderedDict()
 _MAPPED: dict[tuple, ca.Function] = {}
+_CACHES = threading.Lock()  # threads share the dictionaries, never their CasADi objects
 
 
 def model_of(document: MechanismDocument, spec: SimulateSpec) -> ImpactModel:
@@ -87,13 +88,16 @@ def model_of(document: MechanismDocument, spec: SimulateSpec) -> ImpactModel:
     never shares CasADi objects with another)."""
     histories = json.dumps(spec.histories, sort_keys=True)
     key = (document.model_dump_json(), histories, threading.get_ident())
-    model = _MODELS.get(key)
-    if model is None:
-        model = impact_model(document, timed_fields(document, spec), histories)
+    with _CACHES:
+        model = _MODELS.get(key)
+        if model is not None:
+            _MODELS.move_to_end(key)
+            return model
+    model = impact_model(document, timed_fields(document, spec), histories)
+    with _CACHES:
         if len(_MODELS) >= MODELS_KEPT:
             _MODELS.popitem(last=False)
         _MODELS[key] = model
-    _MODELS.move_to_end(key)
     return model
 
 
@@ -110,11 +114,15 @@ def mapped(model: ImpactModel, function, count: int) -> ca.Function:
     `count` (so a few maps serve every run of a structure), built once per thread."""
     size = 1 << max(count - 1, 1).bit_length()
     key = (function.__name__, model.structure_key(), size, threading.get_ident())
-    if key not in _MAPPED:
-        if len(_MAPPED) >= 4 * MODELS_KEPT:
-            _MAPPED.pop(next(iter(_MAPPED)))
-        _MAPPED[key] = function(model).map(size)
-    return _MAPPED[key]
+    with _CACHES:
+        fn = _MAPPED.get(key)
+    if fn is None:
+        fn = function(model).map(size)
+        with _CACHES:
+            if len(_MAPPED) >= 4 * MODELS_KEPT:
+                _MAPPED.pop(next(iter(_MAPPED)))
+            _MAPPED[key] = fn
+    return fn
 
 
 def evaluated(model: ImpactModel, function, columns: list, p: np.ndarray) -> list[np.ndarray]:

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import copy
 import json
+import threading
 from collections import OrderedDict
 
 import numpy as np
@@ -90,6 +91,7 @@ def variant(document: dict, pointer: str | None, change: float) -> dict:
 
 NOMINALS_KEPT = 2  # nominal runs kept per process, by document and settings
 _NOMINALS: OrderedDict[str, tuple[Histories, dict]] = OrderedDict()
+_LOCK = threading.Lock()
 
 
 def _run(document: dict, simulate: dict | None, stop, max_steps: int) -> tuple[Histories, dict]:
@@ -101,14 +103,18 @@ def _run(document: dict, simulate: dict | None, stop, max_steps: int) -> tuple[H
 
 def nominal_run(document: dict, simulate: dict | None, stop=None, max_steps: int = 2_000_000) -> tuple[Histories, dict]:
     key = json.dumps([document, simulate], sort_keys=True)
-    if key not in _NOMINALS:
-        full, report = _run(document, simulate, stop, max_steps)
-        if report["status"] == "stopped":
-            return full, report  # not kept: a later task runs it whole
+    with _LOCK:
+        kept = _NOMINALS.get(key)
+    if kept is not None:
+        return kept
+    full, report = _run(document, simulate, stop, max_steps)
+    if report["status"] == "stopped":
+        return full, report  # not kept: a later task runs it whole
+    with _LOCK:
         if len(_NOMINALS) >= NOMINALS_KEPT:
             _NOMINALS.popitem(last=False)
         _NOMINALS[key] = (full, report)
-    return _NOMINALS[key]
+    return full, report
 
 
 def study_point(document: dict, simulate: dict | None, pointer: str | None, change: float, tolerance: float,
