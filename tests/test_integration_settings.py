@@ -67,6 +67,26 @@ def test_the_command_line_applies_the_services_step_limit():
     assert result.exit_code == 2 and "100 steps of 0.001 s, over the limit of 50" in result.output
 
 
+def test_an_impact_run_is_costed_before_it_starts_and_max_steps_raises_the_limit_on_this_machine(monkeypatch):
+    """Issue 24's `csfh.json --until 1e6` (event-driven: costed at its first step, 1e10 steps)
+    is refused at once; under a lowered service limit, --max-steps raises it for a local run."""
+    env = {"COLUMNS": "200", "NO_COLOR": "1"}
+    result = CliRunner().invoke(app, ["simulate", str(EXAMPLES / "csfh_asymmetric_impact.json"), "--until", "1e6"],
+                                env=env)
+    assert result.exit_code == 2, result.output
+    assert (f"/simulate/until: 1e+06 s from a first step of 0.0001 s is costed at 1e+10 steps, over the limit of "
+            f"{MAX_STEPS}") in " ".join(result.output.split())
+    import service.dynamics.run as run
+
+    monkeypatch.setattr(run, "MAX_STEPS", 100)
+    args = ["simulate", str(EXAMPLES / "csfh.json"), "--scheme", "moreau", "--step", "1e-4", "--until", "0.02"]
+    refused = CliRunner().invoke(app, args, env=env)
+    assert refused.exit_code == 2 and "the run needs 200 steps of 0.0001 s, over the limit of 100" in refused.output
+    raised = CliRunner().invoke(app, args + ["--max-steps", "300"], env=env)
+    assert raised.exit_code == 0, raised.output
+    assert "finished at t = 0.02 s, 200 steps (moreau)" in raised.output
+
+
 def test_a_run_of_uncountably_many_steps_is_refused_on_the_command_line():
     for document, scheme in ((ROD, None), (EXAMPLES / "csfh.json", "moreau"), (EXAMPLES / "csfh.json", "event_driven")):
         args = ["simulate", str(document), "--until", "1e300", "--step", "1e-300"]

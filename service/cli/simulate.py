@@ -28,8 +28,9 @@ def simulate(document: DocArg, sets: SetOpt = None,
              step: Annotated[float | None, typer.Option(help="Time step (s).")] = None,
              scheme: Annotated[str | None, typer.Option(help="generalized_alpha | newmark | event_driven | moreau.")] = None,
              damping: Annotated[float | None, typer.Option(help="Mass-proportional damping (1/s).")] = None,
-             max_steps: Annotated[int | None, typer.Option("--max-steps", help="The most time steps (adaptive: "
-                                                           "accepted steps); capped by the service's limit.")] = None,
+             max_steps: Annotated[int | None, typer.Option("--max-steps", help="The most time steps (adaptive and "
+                                                           "impacts: accepted steps); default the service's limit, "
+                                                           "which this raises for a run on this machine.")] = None,
              compiled: Annotated[bool, typer.Option("--compiled", hidden=True,
                                                     help="Deprecated and ignored: kernels compile in the build "
                                                     "queue (flexmech build).")] = False,
@@ -61,8 +62,10 @@ def simulate(document: DocArg, sets: SetOpt = None,
         if spec.scheme in IMPACT_SCHEMES:
             _impacts(mech, spec, out, err, json_out, plot, snapshots, animation)
             return
-        with SimulationProgress(err, spec.until) as progress:
-            history, report = run_simulation(mech, spec, progress=progress)
+        from service.dynamics.run import MAX_STEPS
+
+        with SimulationProgress(err, spec.until) as progress:  # --max-steps may raise the service's limit here
+            history, report = run_simulation(mech, spec, progress=progress, max_steps=max(MAX_STEPS, max_steps or 0))
         _print(out, report)
         if json_out is not None:
             write_json(json_out, report)
@@ -91,9 +94,8 @@ def _impacts(mech, spec, out, err, json_out, plot, snapshots, animation) -> None
             raise OptionError(option, f"{option} draws links; for impacts --plot draws the motion and contact forces")
     from service.dynamics.run import MAX_STEPS
 
-    with SimulationProgress(err, spec.until) as progress:  # the service's step limit, as for links
-        _, report = run_impacts(mech.document, spec, progress=progress, max_steps=min(spec.max_steps or MAX_STEPS,
-                                                                                     MAX_STEPS))
+    with SimulationProgress(err, spec.until) as progress:  # the service's step limit unless --max-steps raises it
+        _, report = run_impacts(mech.document, spec, progress=progress, max_steps=spec.max_steps or MAX_STEPS)
     out.print(f"[bold]{escape(report['name'])}[/bold]: {report['status']} at t = {report['time_reached']:g} s, "
               f"{report['steps']} steps ({spec.scheme}) in {report['seconds']:.3f} s; energy balance error "
               f"{report['energy_balance_error']:.2e}")

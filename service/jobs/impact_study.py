@@ -15,7 +15,8 @@ from collections.abc import Mapping
 from models import MechanismError
 from models.simulation_spec import IMPACT_SCHEMES
 from service.costs import Limits, check_grid_size
-from service.dynamics.run import check_steps, simulation_spec
+from service.dynamics.run import simulation_spec
+from service.impacts.run import check_cost
 from service.impacts.study import legacy_influence, study_fields, study_point, with_overrides
 from service.jobs.base import Plan
 from service.jobs.control import TaskControl
@@ -52,8 +53,7 @@ class ImpactStudyJob:
                                  "quantity's nominal range")
         runs = _runs(spec)
         check_grid_size([len(runs)], limits, "/study/fields")
-        if simulate.scheme == "moreau":
-            check_steps(simulate, limits.max_simulation_steps)
+        check_cost(simulate, limits.max_simulation_steps)
         return Plan(len(runs), {"runs": [{"path": p, "change": c} for p, c in runs], "until": simulate.until,
                                 "tolerance": tolerance, "scheme": simulate.scheme,
                                 "max_steps": limits.max_simulation_steps})
