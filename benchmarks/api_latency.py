@@ -10,7 +10,7 @@ wall time against its limit is printed too.
 
     python3 -m benchmarks.api_latency [--requests 200] [--clients 4] [--url URL]
 
-Without --url it starts `uvicorn --factory api.app:create_app` on a free port (SQLite store in
+Without --url it starts `flexmech serve` on a free port (SQLite store in
 a temporary folder) and stops it afterwards.
 """
 
@@ -46,9 +46,10 @@ def start_server(data_dir: str) -> tuple[subprocess.Popen, str]:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
-    env = {**os.environ, "FLEXMECH_DATA_DIR": data_dir, "FLEXMECH_WORKERS": "1", "FLEXMECH_API_KEYS": ""}
-    proc = subprocess.Popen([sys.executable, "-m", "uvicorn", "--factory", "api.app:create_app", "--host",
-                             "127.0.0.1", "--port", str(port), "--log-level", "warning"], cwd=REPO, env=env)
+    env = {**os.environ, "FLEXMECH_DATA_DIR": data_dir, "FLEXMECH_WORKERS": "1", "FLEXMECH_API_KEYS": "",
+           "FLEXMECH_LOG_LEVEL": "warning"}
+    proc = subprocess.Popen([sys.executable, "-m", "service.cli", "serve", "--host", "127.0.0.1", "--port", str(port)],
+                            cwd=REPO, env=env)
     url = f"http://127.0.0.1:{port}"
     for _ in range(600):
         try:

@@ -42,6 +42,8 @@ class Settings(BaseSettings):
     # Limits (service.costs): every request is costed against them before anything is built
     max_request_bytes: int = Field(1_000_000, ge=1024)
     request_read_timeout: float = Field(10.0, gt=0, description="seconds to receive a request's body")
+    header_read_timeout: float = Field(10.0, gt=0, description="seconds a connection has to send a request's "
+                                       "headers, from connecting or from its first bytes after an answer")
     max_elements: int = Field(200, ge=1)
     max_bodies: int = Field(200, ge=1)
     max_loads: int = Field(500, ge=1)

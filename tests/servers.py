@@ -1,4 +1,4 @@
-"""Real servers for the service tests: uvicorn running the app, PostgreSQL, a Dask cluster.
+"""Real servers for the service tests: `flexmech serve` (uvicorn running the app), PostgreSQL, a Dask cluster.
 
 Each is a separate process on loopback, started the way an operator would start it, and
 stopped (or killed) as a whole process group.
@@ -71,8 +71,8 @@ class ApiServer(Process):
         self.port = port or free_port()
         self.url = f"http://127.0.0.1:{self.port}"
         level = "info" if access_log else "warning"
-        super().__init__([sys.executable, "-m", "uvicorn", "--factory", "api.app:create_app",
-                          "--host", "127.0.0.1", "--port", str(self.port), "--log-level", level], log, env)
+        super().__init__([sys.executable, "-m", "service.cli", "serve", "--host", "127.0.0.1", "--port", str(self.port)],
+                         log, {"FLEXMECH_LOG_LEVEL": level, **env})
         self.wait_ready()
 
     def wait_ready(self, timeout: float = 90.0) -> None:

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import json
 import re
+import socket
+import time
 
 import httpx
 import pytest
@@ -23,13 +25,68 @@ def server(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("hardening")
     server = Deployment("sqlite", {"FLEXMECH_DATA_DIR": str(tmp / "data"), "FLEXMECH_WORKERS": "1",
                                    "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES), "FLEXMECH_API_KEYS": "",
-                                   "FLEXMECH_MAX_RESULT_VALUES": "5000", "FLEXMECH_MAX_LOADS": "3"}, tmp).start()
+                                   "FLEXMECH_MAX_RESULT_VALUES": "5000", "FLEXMECH_MAX_LOADS": "3",
+                                   "FLEXMECH_HEADER_READ_TIMEOUT": "1"}, tmp).start()
     yield server
     server.stop()
 
 
 def error(r: httpx.Response) -> dict:
     return r.json()["error"]
+
+
+def raw_exchange(url: str, parts: list[bytes], pause: float = 0.0, answer_each: bool = False) -> list[bytes]:
+    """Send parts over one connection (pausing between them, or with answer_each reading an
+    answer to each part before the next), then read until the server closes it: the answers,
+    split at each status line. A server that never closes fails the read's 30 s timeout."""
+    host, port = url.removeprefix("http://").split(":")
+    with socket.create_connection((host, int(port)), timeout=30) as s:
+        received = b""
+        for k, part in enumerate(parts):
+            if k and answer_each:
+                while not _complete(received, k):
+                    received += s.recv(65536)
+            elif k:
+                time.sleep(pause)
+            s.sendall(part)
+        while chunk := s.recv(65536):
+            received += chunk
+    return [b"HTTP/1.1" + answer for answer in received.split(b"HTTP/1.1")[1:]]
+
+
+def _complete(received: bytes, count: int) -> bool:
+    """Whether `received` holds `count` whole answers (each with its content-length body)."""
+    for _ in range(count):
+        head, sep, rest = received.partition(b"\r\n\r\n")
+        if not sep:
+            return False
+        length = int(re.search(rb"content-length: (\d+)", head, re.I).group(1))
+        if len(rest) < length:
+            return False
+        received = rest[length:]
+    return True
+
+
+def test_a_connection_that_does_not_finish_its_headers_is_answered_408_and_closed(server):
+    """The header deadline (FLEXMECH_HEADER_READ_TIMEOUT, 1 s here): nothing sent; half a
+    request line and a header; a second request's first bytes after an answered one."""
+    health = b"GET /v1/health HTTP/1.1\r\nHost: x\r\n\r\n"
+    for parts, answered in (([b""], 0), ([b"POST /v1/solve HTTP/1.1\r\nHost: x\r\nContent-Type: appl"], 0),
+                            ([health, b"GET /v1/hea"], 1)):
+        answers = raw_exchange(server.url, parts, answer_each=True)
+        assert len(answers) == answered + 1, answers
+        assert all(a.startswith(b"HTTP/1.1 200") for a in answers[:answered])
+        late = answers[-1]
+        assert late.startswith(b"HTTP/1.1 408 Request Timeout"), late
+        body = json.loads(late.partition(b"\r\n\r\n")[2])["error"]
+        assert body["code"] == "request_timeout"
+        assert body["message"] == "the request's headers did not arrive within 1 s (FLEXMECH_HEADER_READ_TIMEOUT)"
+
+
+def test_headers_sent_in_pieces_within_the_deadline_are_served(server):
+    answers = raw_exchange(server.url, [b"GET /v1/health HTTP/1.1\r\nHo", b"st: x\r\nConnection: close\r\n\r\n"],
+                           pause=0.3)
+    assert len(answers) == 1 and answers[0].startswith(b"HTTP/1.1 200"), answers
 
 
 # --- 1. bounded work and results -----------------------------------------------------------

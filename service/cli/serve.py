@@ -31,5 +31,6 @@ def serve(
         print_error(err, f"{where}: {first['msg']}")
         raise typer.Exit(EXIT_ERROR) from None
     # The app is named by import string so that the service layer never imports the api package.
+    # The protocol adds a deadline for a request's headers (api.protocol), which uvicorn lacks.
     uvicorn.run("api.app:create_app", factory=True, host=host or settings.host, port=port or settings.port,
-                log_level=settings.log_level)
+                log_level=settings.log_level, http="api.protocol:HeaderTimeoutProtocol")
