@@ -29,6 +29,8 @@ _WITH_BODY = {"POST", "PUT", "PATCH"}
 # the interpreter (the loop then gets its turn at every switch interval, 5 ms).
 _parser = ThreadPoolExecutor(max_workers=1, thread_name_prefix="flexmech-body-parser")
 
+CLOSE = {"connection": "close"}  # an answer given before the whole body was read
+
 
 def is_json(content_type: bytes | None) -> bool:
     """Whether a body is read as JSON: no media type, application/json or any +json type, in
@@ -47,7 +49,7 @@ class BodySizeLimit:
 
     def _too_large(self, size: str):
         return error_response(413, "body_too_large",
-                              f"request body of {size} bytes is over the limit of {self.max_bytes} bytes")
+                              f"request body of {size} bytes is over the limit of {self.max_bytes} bytes", headers=CLOSE)
 
     async def _read(self, scope, receive, send) -> bytes | None:
         """The whole body, or None when an error was answered (or the client went away)."""
@@ -57,8 +59,9 @@ class BodySizeLimit:
             try:
                 message = await asyncio.wait_for(receive(), max(deadline - time.monotonic(), 0.0))
             except asyncio.TimeoutError:
+                # the rest of the body may still come: the connection cannot carry another request
                 await error_response(408, "request_timeout", f"the request body did not arrive within "
-                                     f"{self.read_timeout:g} s")(scope, receive, send)
+                                     f"{self.read_timeout:g} s", headers=CLOSE)(scope, receive, send)
                 return None
             if message["type"] != "http.request":  # the client went away
                 return None

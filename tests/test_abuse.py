@@ -65,6 +65,7 @@ def short_body(url: str) -> tuple[int, dict, float]:
                 break
             answer += chunk
     head, _, body = answer.partition(b"\r\n\r\n")
+    assert b"\r\nconnection: close" in head.lower()  # the rest of the body may come: no next request here
     return int(head.split()[1]), json.loads(body), time.perf_counter() - started
 
 
