@@ -40,14 +40,14 @@ ACTUATION = "/loads/actuation/force/1"
 TARGET_P50_MS = 10.0
 
 
-def start_server(data_dir: str) -> tuple[subprocess.Popen, str]:
+def start_server(data_dir: str, settings: dict[str, str] | None = None) -> tuple[subprocess.Popen, str]:
     import socket
 
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
     env = {**os.environ, "FLEXMECH_DATA_DIR": data_dir, "FLEXMECH_WORKERS": "1", "FLEXMECH_API_KEYS": "",
-           "FLEXMECH_LOG_LEVEL": "warning"}
+           "FLEXMECH_LOG_LEVEL": "warning", **(settings or {})}
     proc = subprocess.Popen([sys.executable, "-m", "service.cli", "serve", "--host", "127.0.0.1", "--port", str(port)],
                             cwd=REPO, env=env)
     url = f"http://127.0.0.1:{port}"
@@ -62,13 +62,14 @@ def start_server(data_dir: str) -> tuple[subprocess.Popen, str]:
 
 
 @contextmanager
-def served(url: str | None):
-    """The server at url, or one started here (SQLite in a temporary folder) and stopped after."""
+def served(url: str | None, settings: dict[str, str] | None = None):
+    """The server at url, or one started here (SQLite in a temporary folder, FLEXMECH_*
+    `settings` over the defaults) and stopped after."""
     if url is not None:
         yield url
         return
     with tempfile.TemporaryDirectory() as data_dir:
-        proc, url = start_server(data_dir)
+        proc, url = start_server(data_dir, settings)
         try:
             yield url
         finally:

@@ -1,4 +1,4 @@
-"""Requests that once broke the service (issue 12), as data: each with the status, the JSON
+"""Requests that once broke the service (issues 12 and 24), as data: each with the status, the JSON
 pointer and a piece of the message it must get. tests/test_abuse.py sends them to a live
 server; the hardening tests use single cases."""
 
@@ -17,7 +17,7 @@ ACTUATION = "/loads/actuation/force/1"
 @dataclass(frozen=True)
 class Case:
     name: str
-    path: str  # /v1/solve or /v1/sweeps
+    path: str  # /v1/solve, /v1/sweeps or /v1/simulations
     body: Any  # JSON-able, or bytes sent as they are
     status: int
     pointer: str | None
@@ -123,6 +123,14 @@ def cases() -> list[Case]:
              "/displacements/input/0", "finite"),
         Case("a 4,300-digit integer", solve, b'{"example": "gripper", "overrides": {"/loads/actuation/force/1": '
              + b"1" * 4400 + b"}}", 400, None, "not valid JSON"),
+        # issue 24: runs costed before they start
+        Case("the CSFH until 1e9 s", solve, {"example": "csfh", "analysis": "simulate", "simulate": {"until": 1e9}},
+             422, "/simulate/step", "1e+09 s in steps of 0.0001 s would be more than 1e+12 steps"),
+        Case("the CSFH until 1e9 s as a job", "/v1/simulations", {"example": "csfh", "simulate": {"until": 1e9}},
+             422, "/simulate/step", "1e+09 s in steps of 0.0001 s would be more than 1e+12 steps"),
+        Case("the asymmetric CSFH until 1e6 s", solve, {"example": "csfh_asymmetric_impact", "analysis": "simulate",
+                                                        "simulate": {"until": 1e6}},
+             422, "/simulate/until", "1e+06 s from a first step of 0.0001 s is costed at 1e+10 steps, over the limit"),
         Case("deep JSON", solve, b'{"example": "gripper", "options": ' + b"[" * 5000 + b"]" * 5000 + b"}", 400, None,
              "nests deeper than"),
     ]
