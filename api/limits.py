@@ -7,9 +7,10 @@
   than 64 levels or an integer of thousands of digits is malformed_json (400), a key given
   twice in one object is duplicate_key (422: the text is JSON, its meaning is not), never a
   merged object, a recursion error or a 500. The parse runs on one thread beside the
-  event loop (its duplicate check is Python: 0.2 s for a megabyte of small objects, which on
-  the loop held every other request, /v1/health included), and the routes take the parsed
-  value from the scope (api.parsed_route) instead of parsing the body again on the loop.
+  event loop, or for a large body in a parser process (api.body_parsing: its duplicate check
+  is Python, 0.26 s for a megabyte of small objects, which on the loop held every other
+  request, /v1/health included), and the routes take the parsed value from the scope
+  (api.parsed_route) instead of parsing the body again on the loop.
 Bodies are small (the limit is about a megabyte), so holding one in memory is fine.
 """
 
@@ -17,17 +18,12 @@ from __future__ import annotations
 
 import asyncio
 import time
-from concurrent.futures import ThreadPoolExecutor
 
+from api.body_parsing import parse_body
 from api.errors import error_response
 from api.parsed_route import PARSED_BODY
-from models import MechanismError
-from models.reading import DuplicateKey, parse_json
 
 _WITH_BODY = {"POST", "PUT", "PATCH"}
-# One parsing thread: parses queue behind each other rather than all contend with the loop for
-# the interpreter (the loop then gets its turn at every switch interval, 5 ms).
-_parser = ThreadPoolExecutor(max_workers=1, thread_name_prefix="flexmech-body-parser")
 
 CLOSE = {"connection": "close"}  # an answer given before the whole body was read
 
@@ -84,15 +80,13 @@ class BodySizeLimit:
         if body is None:
             return
         if body.strip() and scope.get("method") in _WITH_BODY and is_json(headers.get(b"content-type")):
-            try:
-                scope[PARSED_BODY] = await asyncio.get_running_loop().run_in_executor(_parser, parse_json, body,
-                                                                                      "the body")
-            except MechanismError as exc:
-                # the reader raises ours from its own (context kept, not shown): the duplicate's key
-                if isinstance(exc.__context__, DuplicateKey):
-                    return await error_response(422, "duplicate_key", f"the body gives the key "
-                                                f"'{exc.__context__.key}' twice in one object")(scope, receive, send)
-                return await error_response(400, "malformed_json", exc.problem)(scope, receive, send)
+            kind, value = await parse_body(body)
+            if kind == "duplicate_key":
+                return await error_response(422, "duplicate_key", f"the body gives the key '{value}' twice in one "
+                                            "object")(scope, receive, send)
+            if kind == "malformed_json":
+                return await error_response(400, "malformed_json", value)(scope, receive, send)
+            scope[PARSED_BODY] = value
         replayed = False
 
         async def replay():

@@ -43,13 +43,13 @@ RETRY_AFTER = 2  # seconds, in a 503 for a call whose worker ended
 WORKER_NAME = b"flexmech-solver"  # what ps and /proc/<pid>/comm show for a worker
 
 
-def _die_with_parent() -> None:
-    """Ask Linux to end this worker when its parent ends (the fork server, which ends with the
+def die_with_parent(name: bytes = WORKER_NAME) -> None:
+    """Ask Linux to end this process when its parent ends (the fork server, which ends with the
     server process, even on kill -9), and to name it (ps, top)."""
     try:
         libc = ctypes.CDLL("libc.so.6", use_errno=True)
         libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
-        libc.prctl(15, ctypes.c_char_p(WORKER_NAME))  # PR_SET_NAME
+        libc.prctl(15, ctypes.c_char_p(name))  # PR_SET_NAME
     except OSError:  # not Linux: the closed pipe ends the worker at its next call instead
         pass
 
@@ -69,9 +69,9 @@ def _packed(exc: BaseException) -> tuple:
         return "error", RuntimeError(f"{type(exc).__name__}: {exc}")
 
 
-def _serve(connection) -> None:
+def _serve(connection, name: bytes = WORKER_NAME) -> None:
     """A worker's life: run each (fn, args, kwargs) it is sent and send back its outcome."""
-    _die_with_parent()
+    die_with_parent(name)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C in a terminal goes to the server, which ends us
     from service.jobs.kinds import job_kinds
     from service.threads import single_threaded_blas
@@ -106,10 +106,11 @@ def _unpacked(outcome: tuple):
 
 # ---- in the server --------------------------------------------------------------------------------
 class _Worker:
-    def __init__(self, context, index: int):
+    def __init__(self, context, index: int, name: bytes = WORKER_NAME):
         self.index = index
+        self.name = name
         self.connection, theirs = context.Pipe()
-        self.process = context.Process(target=_serve, args=(theirs,), name=f"flexmech-solver-{index}", daemon=True)
+        self.process = context.Process(target=_serve, args=(theirs, name), name=f"{name.decode()}-{index}", daemon=True)
         self.process.start()
         theirs.close()
 
@@ -131,11 +132,12 @@ class SolverPool:
     process; fn, its arguments and its result must pickle (module-level functions, pydantic
     models, dataclasses)."""
 
-    def __init__(self, workers: int, build_allowance: float = BUILD_ALLOWANCE):
+    def __init__(self, workers: int, build_allowance: float = BUILD_ALLOWANCE, name: bytes = WORKER_NAME):
         self.build_allowance = build_allowance
+        self.name = name  # the workers' process name
         self._context = multiprocessing.get_context("forkserver")
         self._context.set_forkserver_preload(PRELOAD)
-        self._workers: list[_Worker | None] = [_Worker(self._context, 0)] + [None] * (workers - 1)
+        self._workers: list[_Worker | None] = [_Worker(self._context, 0, name)] + [None] * (workers - 1)
         self._idle = set(range(workers))
         self._changed: asyncio.Condition | None = None
         # one thread per worker waits on its pipe, so the event loop never blocks on a result
@@ -170,14 +172,14 @@ class SolverPool:
 
     def _replace(self, index: int, why: str) -> None:
         old = self._workers[index]
-        log.warning("solver worker %d (pid %s) replaced: %s", index, old.process.pid, why)
+        log.warning("%s %d (pid %s) replaced: %s", self.name.decode(), index, old.process.pid, why)
         old.end()
         self._workers[index] = None  # a new one starts when a request needs it
 
     async def call(self, fn, *args, time_limit: float | None = None, large: bool = False, **kwargs):
         index = await self._take(large)
         if self._workers[index] is None:
-            self._workers[index] = _Worker(self._context, index)
+            self._workers[index] = _Worker(self._context, index, self.name)
         worker = self._workers[index]
         loop = asyncio.get_running_loop()
         late = None if time_limit is None else time_limit + self.build_allowance + GRACE

@@ -59,6 +59,8 @@ def parse_json(text: str | bytes, what: str = "the document") -> Any:
         if isinstance(text, bytes):
             text = text.decode("utf-8")
         return _check_depth(json.loads(text, object_pairs_hook=_no_duplicates), what)
+    except MechanismError:  # too deep: already said (it is a ValueError too)
+        raise
     except DuplicateKey as exc:
         raise MechanismError("", f"{what} is not valid JSON: {exc}") from None
     except UnicodeDecodeError as exc:

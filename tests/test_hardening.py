@@ -196,6 +196,27 @@ def test_a_duplicate_key_is_refused_whatever_the_letter_case_of_the_media_type(s
     assert error(r)["message"] == "the body gives the key 'example' twice in one object"
 
 
+def test_a_large_body_is_read_as_strictly_in_the_parser_process(server):
+    """Bodies from api.body_parsing.LARGE_BODY bytes parse in their own process: the same
+    answers as on the server's thread (a duplicate key, malformed JSON, too deep, a good body)."""
+    from api.body_parsing import LARGE_BODY
+
+    pad = b'"' + b"x" * LARGE_BODY + b'"'
+    cases = [(b'{"description": ' + pad + b', "example": "gripper", "example": "gripper_nylon"}', 422, "duplicate_key",
+              "the body gives the key 'example' twice in one object"),
+             (b'{"description": ' + pad + b', "example": "gripper",}', 400, "malformed_json", "the body is not valid JSON"),
+             (b'{"description": ' + pad + b', "example": "gripper", "o": ' + b"[" * 100 + b"]" * 100 + b"}", 400,
+              "malformed_json", "the body nests deeper than 64 levels")]
+    for body, status, code, message in cases:
+        assert len(body) >= LARGE_BODY
+        r = httpx.post(server.url + "/v1/solve", content=body, headers={"Content-Type": "application/json"}, timeout=60)
+        assert r.status_code == status and error(r)["code"] == code and error(r)["message"].startswith(message), r.text
+    document = gripper()
+    document["description"] = "x" * LARGE_BODY
+    r = httpx.post(server.url + "/v1/solve", json={"document": document}, timeout=60)
+    assert r.status_code == 200 and r.json()["status"] == "converged", r.text[:300]
+
+
 def test_a_body_of_another_media_type_is_not_read_as_json():
     from api.limits import is_json
 

@@ -152,14 +152,14 @@ def _parent_of(pid: int) -> int:
         return int(stat.read().rsplit(")", 1)[1].split()[1])
 
 
-def _solver_workers(ancestor: int) -> list[int]:
-    """The processes named as solver workers that descend from `ancestor` (the fork server
-    between them)."""
+def _solver_workers(ancestor: int, names: tuple[bytes, ...] = (WORKER_NAME,)) -> list[int]:
+    """The processes named as solver workers (or other `names`) that descend from `ancestor`
+    (the fork server between them)."""
     found = []
     for entry in filter(str.isdigit, os.listdir("/proc")):
         try:
             with open(f"/proc/{entry}/comm", "rb") as comm:
-                if comm.read().strip() != WORKER_NAME:
+                if comm.read().strip() not in names:
                     continue
             pid = int(entry)
             for _ in range(4):
@@ -173,10 +173,16 @@ def _solver_workers(ancestor: int) -> list[int]:
 
 
 def test_a_killed_server_leaves_no_solver_worker(server):
-    """kill -9 of the server process alone (not its group): its workers end with it."""
+    """kill -9 of the server process alone (not its group): its workers, and the process that
+    parses large bodies, end with it."""
     import signal
 
-    workers = _solver_workers(server.proc.pid)
+    from api.body_parsing import LARGE_BODY, PARSER_NAME
+
+    large = {"example": "gripper", "overrides": {"/loads/actuation/force/1": 50.0}, "pad": ["x" * 100] * (LARGE_BODY // 90)}
+    assert httpx.post(server.url + "/v1/solve", json=large, timeout=60).status_code == 422  # parsed, then refused
+    workers = _solver_workers(server.proc.pid, (WORKER_NAME, PARSER_NAME))
+    assert len(_solver_workers(server.proc.pid, (PARSER_NAME,))) == 1
     assert workers and all(_alive(pid) for pid in workers), workers
     os.kill(server.proc.pid, signal.SIGKILL)
     server.proc.wait(10)
