@@ -4,6 +4,9 @@ CLI and the job kinds report the same field."""
 
 from __future__ import annotations
 
+import json
+import threading
+from collections import OrderedDict
 from dataclasses import fields
 from typing import Any
 
@@ -44,9 +47,40 @@ def newton_options(options: dict | None, time_limit: float | None = None, pointe
         raise MechanismError(field, str(exc).split(": ", 1)[-1]) from None
 
 
+COMPILED_KEPT = 32  # mechanisms kept per thread: compiling the gripper costs about as much as solving it
+_COMPILED: OrderedDict[tuple, Mechanism] = OrderedDict()
+_LOCK = threading.Lock()  # threads share the dictionary, never a mechanism (its graphs are CasADi's)
+
+
 def compile_request(document: dict, model: str | None = None, overrides: dict[str, Any] | None = None,
                     limits: Limits = Limits()) -> Mechanism:
-    """Validate and compile a request's document, with its model choice and overrides."""
+    """Validate and compile a request's document, with its model choice and overrides. The
+    compiled mechanism of a document is kept (by its text, the model and the limits), so a
+    design tool sending the same document with other overrides compiles it once."""
+    try:
+        key = (json.dumps(document, sort_keys=True, allow_nan=False), model, limits, threading.get_ident())
+    except (TypeError, ValueError):  # not JSON text (YAML's dates, NaN): compiled, then refused or kept apart
+        key = None
+    with _LOCK:
+        mech = _COMPILED.get(key) if key is not None else None
+        if mech is not None:
+            _COMPILED.move_to_end(key)
+    if mech is None:
+        mech = _compile(document, model, limits)
+        if key is not None:
+            with _LOCK:
+                if len(_COMPILED) >= COMPILED_KEPT:
+                    _COMPILED.popitem(last=False)
+                _COMPILED[key] = mech
+    for pointer, value in (overrides or {}).items():
+        try:
+            mech = mech.with_values({pointer: value})
+        except MechanismError as exc:
+            raise MechanismError(f"/overrides/{escape_pointer_part(pointer)}", exc.problem) from None
+    return mech
+
+
+def _compile(document: dict, model: str | None, limits: Limits) -> Mechanism:
     try:
         doc = parse_document(document)
     except MechanismError as exc:
@@ -55,12 +89,6 @@ def compile_request(document: dict, model: str | None = None, overrides: dict[st
         raise MechanismError("/model", f"unknown model '{model}' ({', '.join(MODELS)})")
     check_document_cost(doc, model, limits)
     try:
-        mech = compile_mechanism(doc, model)
+        return compile_mechanism(doc, model)
     except MechanismError as exc:
         raise under("/document", exc) from None
-    for pointer, value in (overrides or {}).items():
-        try:
-            mech = mech.with_values({pointer: value})
-        except MechanismError as exc:
-            raise MechanismError(f"/overrides/{escape_pointer_part(pointer)}", exc.problem) from None
-    return mech
