@@ -166,28 +166,22 @@ def compared(nominal: Histories, run: Histories, tolerance: float) -> dict:
     same = len(times) == len(theirs) and np.array_equal(times, theirs)
     upto = times <= theirs[-1] * (1 + 1e-12)
     reference_series, run_series = _series(nominal), _series(run)
-    out = {}
-    for name, reference in reference_series.items():
-        values = run_series[name] if same else np.interp(times[upto], theirs, run_series[name])
-        reference = reference[upto]
-        span = max(float(np.ptp(reference)), 1e-300)
-        difference = np.abs(values - reference) / span
-        beyond = np.nonzero(difference > tolerance)[0]
-        out[name] = {"departure": float(times[upto][beyond[0]]) if len(beyond) else None,
-                     "rms": float(np.sqrt(np.mean(difference**2))), "max": float(difference.max())}
-    return out
+    return {name: _measures(times[upto], reference[upto],
+                            run_series[name] if same else np.interp(times[upto], theirs, run_series[name]), tolerance)
+            for name, reference in reference_series.items()}
 
 
 def legacy_influence(nominal: dict, run: dict, until: float, tolerance: float) -> dict:
     """The influence of points stored before runs were compared where they are made: their
     series sampled on a common grid of 2000 times."""
     grid = np.linspace(0.0, until, len(next(iter(nominal["series"].values()))))
-    out = {}
-    for name, reference in nominal["series"].items():
-        reference, values = np.asarray(reference), np.asarray(run["series"][name])
-        span = max(float(np.ptp(reference)), 1e-300)
-        difference = np.abs(values - reference) / span
-        beyond = np.nonzero(difference > tolerance)[0]
-        out[name] = {"departure": float(grid[beyond[0]]) if len(beyond) else None,
-                     "rms": float(np.sqrt(np.mean(difference**2))), "max": float(difference.max())}
-    return out
+    return {name: _measures(grid, np.asarray(reference), np.asarray(run["series"][name]), tolerance)
+            for name, reference in nominal["series"].items()}
+
+
+def _measures(times: np.ndarray, reference: np.ndarray, values: np.ndarray, tolerance: float) -> dict:
+    """departure, rms and max of values against reference, relative to the reference's range."""
+    difference = np.abs(values - reference) / max(float(np.ptp(reference)), 1e-300)
+    beyond = np.nonzero(difference > tolerance)[0]
+    return {"departure": float(times[beyond[0]]) if len(beyond) else None,
+            "rms": float(np.sqrt(np.mean(difference**2))), "max": float(difference.max())}
