@@ -102,11 +102,10 @@ def compile_chunk(doc: dict) -> float:
 
 
 def cold_and_warm(doc: dict) -> dict:
-    first, cold, _ = run(doc, 1)
+    cold = run(doc, 1)[1]
     compiled = compile_chunk(doc)
     report, warm, size = run(doc)
-    return {"report": report, "cold": cold, "compile": compiled, "warm": warm, "bytes": size,
-            "first": first}
+    return {"report": report, "cold": cold, "compile": compiled, "warm": warm, "bytes": size}
 
 
 def energy_at(doc: dict, q: list[float], v: list[float], t: float) -> float:
