@@ -131,6 +131,9 @@ def cases() -> list[Case]:
         Case("the asymmetric CSFH until 1e6 s", solve, {"example": "csfh_asymmetric_impact", "analysis": "simulate",
                                                         "simulate": {"until": 1e6}},
              422, "/simulate/until", "1e+06 s from a first step of 0.0001 s is costed at 1e+10 steps, over the limit"),
+        Case("20 s of Moreau steps of 1e-5 s", solve, {"example": "csfh", "analysis": "simulate", "simulate": {
+            "scheme": "moreau", "step": 1e-5, "until": 20.0}}, 422, "/simulate/until",
+             "of states, over the 192 MiB one run may take"),
         Case("deep JSON", solve, b'{"example": "gripper", "options": ' + b"[" * 5000 + b"]" * 5000 + b"}", 400, None,
              "nests deeper than"),
     ]

@@ -144,6 +144,22 @@ def test_the_default_report_of_a_long_moreau_run_is_bounded():
     assert all(s["time"] > c["time"] for c, s in zip(contacts, separations))
 
 
+def test_a_moreau_run_whose_states_would_not_fit_is_refused_before_it_starts():
+    """The states a report needs are held in memory: 20 s of 1e-5 s steps (2 million, within
+    the step limit) would take about 800 MiB at their peak."""
+    from service.analyses.simulate import SYNC_IMPACT_BYTES
+    from service.impacts.run import held_bytes, model_of
+
+    document, spec = parsed(csfh("6.3", scheme="moreau", step=1e-5, until=20.0))
+    needed = held_bytes(model_of(document, spec), spec)
+    assert needed == 3 * 8 * 2_000_001 * 17  # t, q and v of one body, 5 works; a pair's 5 numbers
+    with pytest.raises(MechanismError) as caught:
+        run_impacts(document, spec, max_bytes=SYNC_IMPACT_BYTES)
+    assert caught.value.pointer == "/simulate/until"
+    assert caught.value.problem.startswith(f"20 s of moreau steps of 1e-05 s would hold about {needed / 2**20:.0f} MiB of "
+                                           "states, over the 192 MiB one run may take")
+
+
 def test_an_impact_study_is_costed_before_it_runs(api_server):
     fields = [{"path": "/bodies/hinge/mass", "step": 0.001 * (k + 1)} for k in range(8)]
     r = httpx.post(f"{api_server.url}/v1/impact-studies", json={

@@ -16,6 +16,7 @@ from service.reports import plain
 SYNC_STEPS = 20_000
 SYNC_IMPACT_STEPS = 2_000_000  # a microsecond each: a few seconds of a compiled impact model
 SYNC_KEPT = 100_000  # states in one response (about 25 numbers each)
+SYNC_IMPACT_BYTES = 192 * 2**20  # the memory one run's states may take in a solver worker
 
 
 class SimulateAnalysis(Analysis):
@@ -30,7 +31,8 @@ class SimulateAnalysis(Analysis):
         deadline = time.perf_counter() + limit if limit else None
         stop = (lambda: time.perf_counter() > deadline) if deadline else None
         if spec.scheme in IMPACT_SCHEMES:
-            _, report = run_impacts(mech.document, spec, stop=stop, max_steps=SYNC_IMPACT_STEPS, max_kept=SYNC_KEPT)
+            _, report = run_impacts(mech.document, spec, stop=stop, max_steps=SYNC_IMPACT_STEPS, max_kept=SYNC_KEPT,
+                                    max_bytes=SYNC_IMPACT_BYTES)
         else:
             _, report = run_simulation(mech, spec, stop=stop, max_steps=SYNC_STEPS)
         if report["status"] == "stopped":

@@ -42,17 +42,9 @@ def simulate(document: DocArg, sets: SetOpt = None,
     """Motion in time: links, bodies and joints under loads and prescribed motions in time."""
     out, err = consoles()
     with user_errors(err):
-        check_plot_option(plot)
-        if snapshots is not None and snapshots.suffix.lower() not in (".png", ".svg", ".pdf"):
-            raise OptionError("--snapshots", f"cannot tell the figure format of '{snapshots}': use .png, .svg or .pdf")
-        if animation is not None:
-            suffix = animation.suffix.lower()
-            if suffix not in (".gif", ".mp4"):
-                raise OptionError("--animation", f"cannot tell the format of '{animation}': use .gif or .mp4")
-            if suffix == ".mp4" and shutil.which("ffmpeg") is None:
-                raise OptionError("--animation", "an .mp4 needs ffmpeg, which is not installed: use .gif")
+        _check_figures(plot, snapshots, animation)
         mech = mechanism(document, None, sets)
-        from service.dynamics.run import run_simulation, simulation_spec
+        from service.dynamics.run import MAX_STEPS, run_simulation, simulation_spec
 
         if compiled:
             err.print("--compiled is deprecated and ignored: element kernels are compiled by `flexmech build` (or "
@@ -62,8 +54,6 @@ def simulate(document: DocArg, sets: SetOpt = None,
         if spec.scheme in IMPACT_SCHEMES:
             _impacts(mech, spec, out, err, json_out, plot, snapshots, animation)
             return
-        from service.dynamics.run import MAX_STEPS
-
         with SimulationProgress(err, spec.until) as progress:  # --max-steps may raise the service's limit here
             history, report = run_simulation(mech, spec, progress=progress, max_steps=max(MAX_STEPS, max_steps or 0))
         _print(out, report)
@@ -83,6 +73,19 @@ def simulate(document: DocArg, sets: SetOpt = None,
             _write(animate, mech, history, animation, option="--animation")
     if report["status"] != "finished":
         raise typer.Exit(EXIT_NOT_CONVERGED)
+
+
+def _check_figures(plot: Path | None, snapshots: Path | None, animation: Path | None) -> None:
+    """The figure options' formats, before anything runs."""
+    check_plot_option(plot)
+    if snapshots is not None and snapshots.suffix.lower() not in (".png", ".svg", ".pdf"):
+        raise OptionError("--snapshots", f"cannot tell the figure format of '{snapshots}': use .png, .svg or .pdf")
+    if animation is not None:
+        suffix = animation.suffix.lower()
+        if suffix not in (".gif", ".mp4"):
+            raise OptionError("--animation", f"cannot tell the format of '{animation}': use .gif or .mp4")
+        if suffix == ".mp4" and shutil.which("ffmpeg") is None:
+            raise OptionError("--animation", "an .mp4 needs ffmpeg, which is not installed: use .gif")
 
 
 def _impacts(mech, spec, out, err, json_out, plot, snapshots, animation) -> None:

@@ -11,15 +11,17 @@ import numpy as np
 
 from models import MechanismError
 from models.document import MechanismDocument
-from models.impacts.model import DAMPING, ImpactModel, impact_model
+from models.impacts.model import DAMPING, WORKS, ImpactModel, impact_model
 from models.simulation_spec import SimulateSpec
 from models.units import document_unit, quantity_to_si
 from service.dynamics.histories import history_expression
 from service.impacts.report import Histories, depth_function, histories, report
-from service.impacts.stepping import Trace, run_events, run_moreau
+from service.impacts.event_driven import EventLayout
+from service.impacts.stepping import KEPT_EVENT_ROWS, Trace, run_events, run_moreau
 
 TRIALS_PER_STEP = 4  # event-driven: trial steps allowed per allowed step (rejections, event location)
 MAX_STEP_PARTS = 500  # event-driven: the default longest step, a part of the run (smooth histories to draw)
+HELD_COPIES = 3  # copies of each state number while a report is made (check_memory)
 
 
 def timed_fields(document: MechanismDocument, spec: SimulateSpec) -> list[tuple[str, str, object]]:
@@ -97,10 +99,11 @@ def model_of(document: MechanismDocument, spec: SimulateSpec) -> ImpactModel:
 
 def run_impacts(document: MechanismDocument, spec: SimulateSpec, stop=None, max_steps: int = 2_000_000,
                 parameters: dict[str, float] | None = None, progress=None,
-                max_kept: int | None = None) -> tuple[Trace, dict]:
+                max_kept: int | None = None, max_bytes: int | None = None) -> tuple[Trace, dict]:
     """(the raw trace, the report). `parameters` replaces numbers (SI) by their pointers;
-    `max_kept` bounds the states a report keeps below `max_points` (one response)."""
-    model, p, trace = integrate(document, spec, stop, max_steps, parameters, progress)
+    `max_kept` bounds the states a report keeps below `max_points` (one response); `max_bytes`
+    the memory the run's states may take (check_memory)."""
+    model, p, trace = integrate(document, spec, stop, max_steps, parameters, progress, max_bytes)
     return trace, report(model, spec, trace, p, max_kept)  # trace.seconds: the stepping alone
 
 
@@ -113,10 +116,13 @@ def run_with_histories(document: MechanismDocument, spec: SimulateSpec, stop=Non
 
 
 def integrate(document: MechanismDocument, spec: SimulateSpec, stop=None, max_steps: int = 2_000_000,
-              parameters: dict[str, float] | None = None, progress=None) -> tuple[ImpactModel, np.ndarray, Trace]:
+              parameters: dict[str, float] | None = None, progress=None,
+              max_bytes: int | None = None) -> tuple[ImpactModel, np.ndarray, Trace]:
     """(the model, its parameter vector, the trace of the run)."""
     check_cost(spec, max_steps)
     model = model_of(document, spec)
+    if max_bytes is not None:
+        check_memory(model, spec, max_bytes)
     values = np.array(model.book.values)
     values[model.book.pointers.index(DAMPING)] = spec.damping
     for pointer, value in (parameters or {}).items():
@@ -131,6 +137,27 @@ def integrate(document: MechanismDocument, spec: SimulateSpec, stop=None, max_st
         trace = run_events(model, p, q0, v0, spec.until, spec.tolerance, spec.step, max_step,
                            max_steps * TRIALS_PER_STEP, stop, progress)
     return model, p, trace
+
+
+def held_bytes(model: ImpactModel, spec: SimulateSpec) -> int:
+    """About the memory a run's states take at their peak: every Moreau step's state and
+    impulses (an event-driven run holds at most KEPT_EVENT_ROWS states), about three copies
+    of each number while the report is made (measured: 360 bytes a step for the CSFH's 17)."""
+    n, P, pins = model.bodies.size, len(model.pairs), model.constraints.numel()
+    if spec.scheme == "moreau":
+        rows, columns = round(spec.until / spec.step) + 1, 1 + 2 * n + len(WORKS) + 5 * P + pins
+    else:
+        rows, columns = KEPT_EVENT_ROWS, EventLayout(n, P).size
+    return HELD_COPIES * 8 * rows * columns
+
+
+def check_memory(model: ImpactModel, spec: SimulateSpec, max_bytes: int) -> None:
+    needed = held_bytes(model, spec)
+    if needed > max_bytes:
+        raise MechanismError("/simulate/until", (
+            f"{spec.until:g} s of {spec.scheme} steps of {spec.step:g} s would hold about {needed / 2**20:.0f} MiB "
+            f"of states, over the {max_bytes / 2**20:.0f} MiB one run may take: simulate a shorter time or take a "
+            "longer step"))
 
 
 def check_cost(spec: SimulateSpec, max_steps: int) -> None:

@@ -16,13 +16,14 @@ from models import MechanismError
 from models.simulation_spec import IMPACT_SCHEMES
 from service.costs import Limits, check_grid_size
 from service.dynamics.run import simulation_spec
-from service.impacts.run import check_cost
+from service.impacts.run import check_cost, check_memory, model_of
 from service.impacts.study import legacy_influence, study_fields, study_point, with_overrides
 from service.jobs.base import Plan
 from service.jobs.control import TaskControl
 from service.requests import compile_request
 
 DEFAULT_TOLERANCE = 0.05
+RUN_BYTES = 192 * 2**20  # the memory one run's states may take (a task holds the nominal run's and one other)
 
 
 def _document(spec: dict) -> dict:
@@ -54,6 +55,7 @@ class ImpactStudyJob:
         runs = _runs(spec)
         check_grid_size([len(runs)], limits, "/study/fields")
         check_cost(simulate, limits.max_simulation_steps)
+        check_memory(model_of(mech.document, simulate), simulate, RUN_BYTES)
         return Plan(len(runs), {"runs": [{"path": p, "change": c} for p, c in runs], "until": simulate.until,
                                 "tolerance": tolerance, "scheme": simulate.scheme,
                                 "max_steps": limits.max_simulation_steps})
