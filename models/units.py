@@ -201,23 +201,27 @@ def _string_to_si(value: str, kind: str, default_unit: str, pointer: str) -> flo
     return number * size
 
 
+_DOCUMENT_UNITS = {  # kind -> its unit, as text, from a document's declared units
+    "length": lambda u: u.length,
+    "force": lambda u: u.force,
+    "moment": lambda u: f"{u.force}*{u.length}",
+    "energy": lambda u: f"{u.force}*{u.length}",
+    "stress": lambda u: u.stress,
+    "angle": lambda u: u.angle,
+    "stiffness": lambda u: f"{u.force}/{u.length}",
+    "area": lambda u: f"({u.length})**2",
+    "second_moment": lambda u: f"({u.length})**4",
+    "dimensionless": lambda u: "dimensionless",
+    "mass": lambda u: u.mass,
+    "inertia": lambda u: f"{u.mass}*({u.length})**2",
+    "density": lambda u: f"{u.mass}/({u.length})**3",
+    "acceleration": lambda u: f"{u.length}/s**2",
+    "rotational_stiffness": lambda u: f"{u.force}*{u.length}/{u.angle}",
+}
+
+
 def document_unit(units, kind: str) -> str:
     """The unit, as text, in which a document with `units` (models.document.Units) states a
-    quantity of `kind`; derived kinds are products of the declared ones."""
-    return {
-        "length": units.length,
-        "force": units.force,
-        "moment": f"{units.force}*{units.length}",
-        "energy": f"{units.force}*{units.length}",
-        "stress": units.stress,
-        "angle": units.angle,
-        "stiffness": f"{units.force}/{units.length}",
-        "area": f"({units.length})**2",
-        "second_moment": f"({units.length})**4",
-        "dimensionless": "dimensionless",
-        "mass": units.mass,
-        "inertia": f"{units.mass}*({units.length})**2",
-        "density": f"{units.mass}/({units.length})**3",
-        "acceleration": f"{units.length}/s**2",
-        "rotational_stiffness": f"{units.force}*{units.length}/{units.angle}",
-    }[kind]
+    quantity of `kind`; derived kinds are products of the declared ones. (Called for every
+    output of every report: only the kind asked for is made.)"""
+    return _DOCUMENT_UNITS[kind](units)
