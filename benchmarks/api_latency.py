@@ -97,17 +97,17 @@ def latency(url: str, body: dict, n: int) -> list[float]:
     return times
 
 
-def throughput(url: str, body: dict, clients: int, per_client: int) -> tuple[float, int]:
-    errors = []
+def concurrently(url: str, clients: int, requests: int, send) -> float:
+    """Requests per second of `clients` threads, each with its own keep-alive connection,
+    each calling send(client) `requests` times once all are connected."""
     barrier = threading.Barrier(clients + 1)
 
     def work():
         with httpx.Client(base_url=url, timeout=30) as client:
-            client.post("/v1/solve", json=body)
+            send(client)  # connected and warm
             barrier.wait()
-            for _ in range(per_client):
-                if client.post("/v1/solve", json=body).status_code != 200:
-                    errors.append(1)
+            for _ in range(requests):
+                send(client)
 
     threads = [threading.Thread(target=work) for _ in range(clients)]
     for t in threads:
@@ -116,35 +116,33 @@ def throughput(url: str, body: dict, clients: int, per_client: int) -> tuple[flo
     started = time.perf_counter()
     for t in threads:
         t.join()
-    return clients * per_client / (time.perf_counter() - started), len(errors)
+    return clients * requests / (time.perf_counter() - started)
+
+
+def throughput(url: str, body: dict, clients: int, per_client: int) -> tuple[float, int]:
+    errors = []
+
+    def send(client):
+        if client.post("/v1/solve", json=body).status_code != 200:
+            errors.append(1)
+
+    return concurrently(url, clients, per_client, send), len(errors)
 
 
 def floor(url: str, clients: int, n: int) -> tuple[float, float]:
     """(p50 s, requests/s with `clients`) of a request that does no work (GET of a path that
     does not exist: 404) through the same clients and server: what HTTP alone costs here."""
+    def send(client):
+        if client.get("/v1/no-such-path").status_code != 404:
+            raise SystemExit("the empty request did not answer 404")
+
     with httpx.Client(base_url=url, timeout=30) as client:
         times = []
         for _ in range(n):
             t = time.perf_counter()
-            if client.get("/v1/no-such-path").status_code != 404:
-                raise SystemExit("the empty request did not answer 404")
+            send(client)
             times.append(time.perf_counter() - t)
-    barrier = threading.Barrier(clients + 1)
-
-    def work():
-        with httpx.Client(base_url=url, timeout=30) as client:
-            barrier.wait()
-            for _ in range(n):
-                client.get("/v1/no-such-path")
-
-    threads = [threading.Thread(target=work) for _ in range(clients)]
-    for t in threads:
-        t.start()
-    barrier.wait()
-    started = time.perf_counter()
-    for t in threads:
-        t.join()
-    return statistics.median(times), clients * n / (time.perf_counter() - started)
+    return statistics.median(times), concurrently(url, clients, n, send)
 
 
 def during_long_run(url: str, body: dict, clients: int) -> tuple[list[float], float, str]:
