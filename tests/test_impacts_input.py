@@ -146,7 +146,7 @@ def test_the_default_report_of_a_long_moreau_run_is_bounded():
 
 def test_a_moreau_run_whose_states_would_not_fit_is_refused_before_it_starts():
     """The states a report needs are held in memory: 20 s of 1e-5 s steps (2 million, within
-    the step limit) would take about 800 MiB at their peak."""
+    the step limit) would take about 780 MiB at their peak."""
     from service.analyses.simulate import SYNC_IMPACT_BYTES
     from service.impacts.run import held_bytes, model_of
 
