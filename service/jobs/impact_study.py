@@ -97,7 +97,8 @@ class ImpactStudyJob:
                 side = "+" if point["change"] > 0 else "-"
                 influence = point.get("influence")
                 if influence is None:  # a point stored by an earlier version: sampled series
-                    influence = legacy_influence(nominal, point, plan["until"], plan["tolerance"])
+                    influence = (legacy_influence(nominal, point, plan["until"], plan["tolerance"])
+                                 if "series" in nominal and "series" in point else {})
                 entry[side] = {"change": point["change"], "status": point["status"], "impacts": point["impacts"],
                                "contacts": point.get("contacts"), "influence": influence}
         status = "running" if len(finished) < len(plan["runs"]) else "finished"
