@@ -173,6 +173,21 @@ def test_a_load_that_grows_in_time_drives_the_body_to_the_surface(scheme):
     assert report["energies"]["input_work"][-1] > 0
 
 
+def test_a_history_is_checked_up_to_each_runs_own_end_time():
+    """1 / (0.15 - t) is finite over a 0.1 s run and not over a 0.2 s one, also when the
+    shorter run's model was built first."""
+    from models import MechanismError
+
+    doc = csfh("6.1", until=0.1, scheme="moreau", step=1e-4, histories={"/loads/push/force/1": "1/(0.15 - t)"})
+    doc["loads"] = {"push": {"type": "force", "body": "hinge", "force": [0, 0]}}
+    document, spec = parsed(doc)
+    assert run_impacts(document, spec)[1]["status"] == "finished"
+    with pytest.raises(MechanismError) as caught:  # the same document, a longer run asked for
+        run_impacts(document, spec.model_copy(update={"until": 0.2}))
+    assert caught.value.pointer == "/simulate/histories/loads~1push~1force~11"
+    assert "not a finite number at t = 0.15 s" in caught.value.problem
+
+
 def test_only_loads_and_gravity_follow_histories():
     from models import MechanismError
 

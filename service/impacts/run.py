@@ -81,9 +81,10 @@ _CACHES = threading.Lock()  # threads share the dictionary, never their CasADi o
 
 def model_of(document: MechanismDocument, spec: SimulateSpec) -> ImpactModel:
     """The impact model of a document and its histories, built once per thread (a thread
-    never shares CasADi objects with another)."""
+    never shares CasADi objects with another). The end time is part of the key: building
+    checks each history is finite up to it."""
     histories = json.dumps(spec.histories, sort_keys=True)
-    key = (document.model_dump_json(), histories, threading.get_ident())
+    key = (document.model_dump_json(), histories, spec.until, threading.get_ident())
     with _CACHES:
         model = _MODELS.get(key)
         if model is not None:
