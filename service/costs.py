@@ -24,6 +24,9 @@ class Limits:
     max_loads: int = 500
     max_outputs: int = 500  # named outputs of a document
     max_link_work: int = 8192  # intervals x order^2, summed over links (and exact curved beams)
+    # intervals of one link by elements (a document takes 128: their kernels do, but every analysis
+    # also builds the dense statics graph, whose size grows with the chain: 32 cubic elements 10 s)
+    max_link_elements: int = 64
     max_result_values: int = 1_000_000  # numbers a job stores: points x values per point
     job_time_limit: float | None = 3600.0
     max_contact_rows: int = 2000  # non-penetration rows of a contact problem (an upper estimate)
@@ -91,6 +94,11 @@ def check_document_cost(doc: MechanismDocument, model: str | None, limits: Limit
         count = len(getattr(doc, collection))
         if count > limit:
             raise MechanismError(f"{prefix}/{collection}", f"{count} {collection}: the limit is {limit}")
+    for name, element in doc.elements.items():
+        if element.type == "link" and element.discretization == "elements" and element.intervals > limits.max_link_elements:
+            raise MechanismError(f"{prefix}/elements/{name}/intervals", (
+                f"{element.intervals} elements: the service takes at most {limits.max_link_elements} in one link "
+                "(its statics graph is built in the request); use fewer elements or a higher degree"))
     total = 0
     for name, work in link_work(doc, model):
         total += work

@@ -49,6 +49,7 @@ class Settings(BaseSettings):
     max_loads: int = Field(500, ge=1)
     max_outputs: int = Field(500, ge=1, description="named outputs of a document")
     max_link_work: int = Field(8192, ge=1, description="intervals x order^2 summed over links")
+    max_link_elements: int = Field(64, ge=1, le=128, description="elements of one link by elements")
     max_sweep_points: int = Field(20_000, ge=1)
     max_result_values: int = Field(1_000_000, ge=1, description="numbers a job stores")
     max_contact_rows: int = Field(2000, ge=1, description="non-penetration rows of a contact problem")
@@ -87,6 +88,7 @@ class Settings(BaseSettings):
         return Limits(max_elements=self.max_elements, max_sweep_points=self.max_sweep_points,
                       solve_time_limit=self.solve_time_limit, max_bodies=self.max_bodies, max_loads=self.max_loads,
                       max_outputs=self.max_outputs, max_link_work=self.max_link_work,
+                      max_link_elements=self.max_link_elements,
                       max_result_values=self.max_result_values, job_time_limit=self.job_time_limit,
                       max_contact_rows=self.max_contact_rows, max_contact_rotations=self.max_contact_rotations,
                       max_simulation_steps=self.max_simulation_steps)

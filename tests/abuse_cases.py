@@ -78,6 +78,10 @@ def cases() -> list[Case]:
              "18446744073709551616 sweep points"),
         Case("8 links x 64 intervals x order 12", solve, {"document": heavy_links()}, 422,
              "/document/elements/L0/intervals", "units of graph work"),
+        Case("a link of 128 elements", solve, {"document": changed(
+            json.loads((EXAMPLES / "rod_free_vibration.json").read_text()),
+            lambda d: d["elements"]["rod"].update(intervals=128))}, 422, "/document/elements/rod/intervals",
+             "128 elements: the service takes at most 64 in one link"),
         Case("10**10**10 mm", solve, {"document": changed(gripper(), lambda d: d["elements"]["a"].update(
             radius="10**10**10 mm"))}, 422, radius, "cannot read '10**10**10 mm' as a quantity"),
         Case("10**10**7 mm", solve, {"document": changed(gripper(), lambda d: d["elements"]["a"].update(

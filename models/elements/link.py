@@ -99,7 +99,7 @@ class Link(TwoBodyElement):
     discretization: Literal["shooting", "elements"] = Field(
         default="shooting", description="multiple shooting (mixes forces and displacements), or displacement-based "
         "elements (an energy: needed for minimum energy and contact)")
-    intervals: int = Field(default=8, ge=1, le=64, description="shooting intervals, or elements")
+    intervals: int = Field(default=8, ge=1, le=128, description="shooting intervals, or elements")
     order: int = Field(default=8, ge=2, le=12, description="shooting: integration order (even), 2 x extrapolation levels")
     degree: int = Field(default=3, ge=1, le=6, description="elements: polynomial degree of the rotation")
 

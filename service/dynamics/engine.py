@@ -119,6 +119,23 @@ class Engine:
                            [new_state, st.monitor(ev, si), ev.norm])
 
     @cached_property
+    def static_iteration(self) -> ca.Function:
+        """(x, Z, p, mask, data...) -> (Z - dZ, norm at Z): one full Newton iteration of the
+        static equilibrium near x: the step system with inertia and damping off (k = (1, 0, 0,
+        1): the coordinates are x + u, nothing moves), its factors made at Z = [u; lam]."""
+        sys, st = self.system, self.stepper
+        _, _, p, pdot, pddot, damping, mask, data = st._symbols()
+        x, Z = ca.MX.sym("x", self.n_x), ca.MX.sym("Z", sys.n_z)
+        k = ca.MX(ca.DM([1, 0, 0, 1]))
+        still = ca.MX.zeros(self.n_x)
+        si = sys.step_inputs((x, still, still), k, p, ca.MX.zeros(pdot.shape), ca.MX.zeros(pddot.shape), ca.MX(0),
+                             mask, data)
+        one = ca.MX(1)
+        factors = sys.factorize(Z, si)
+        ev = sys.evaluate(Z, one, si, factors.kept_reverse)
+        return ca.Function("kernel_static_iteration", [x, Z, p, mask, *data], [Z - sys.solve(ev, one, factors), ev.norm])
+
+    @cached_property
     def start(self) -> ca.Function:
         """(x, v, p, pdot, pddot, damping, mask, data...) -> (qdd, lam, norm, monitor): the
         accelerations and multipliers consistent with (x, v): the equations with the

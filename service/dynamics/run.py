@@ -16,9 +16,11 @@ from models.residual import unknown_names
 from models.simulation_spec import SimulateSpec, critical_step_factor
 from service.costs import Limits
 from service.dynamics.adaptive import Tolerance
-from service.dynamics.histories import read_histories
+from service.dynamics.histories import Histories, read_histories
 from service.dynamics.integrate import History, integrate
 from service.dynamics.schemes import Scheme, generalized_alpha, newmark
+from service.dynamics.static_start import static_shape
+from service.dynamics.stepping import engine_of
 from service.energy import minimize_energy
 from service.reports import output_units
 
@@ -102,15 +104,20 @@ def check_scheme(mech: Mechanism, spec: SimulateSpec, x0: np.ndarray | None = No
                          f"{spec.a1:g}")
 
 
-def start_shape(mech: Mechanism, spec: SimulateSpec) -> tuple[np.ndarray, str]:
-    """The energy form's x at t = 0, and how it was found."""
-    form = mech.graphs.energy_form
+def start_shape(mech: Mechanism, spec: SimulateSpec, histories: Histories | None = None) -> tuple[np.ndarray, str]:
+    """The energy form's x at t = 0, and how it was found: a static start by Newton on the run's
+    own element kernels (service.dynamics.static_start), else by minimizing the energy."""
     if spec.start != "equilibrium":
-        return np.zeros(len(form.unknowns)), "from rest, undeformed"
+        return np.zeros(len(mech.graphs.energy_form.unknowns)), "from rest, undeformed"
+    note = "from rest, in static equilibrium under the document's values"
+    histories = histories or read_histories(mech, spec.histories, spec.until, "/simulate/histories")
+    x = static_shape(engine_of(mech.structure, scheme_of(spec), histories), mech.p())
+    if x is not None:
+        return x, note
     static = minimize_energy(mech)
     if static.status != "converged":
         raise MechanismError("/simulate/start", f"the static start did not converge ({static.status})")
-    return form.x_of_state(static.z), "from rest, in static equilibrium under the document's values"
+    return mech.graphs.energy_form.x_of_state(static.z), note
 
 
 def run_simulation(mech: Mechanism, spec: SimulateSpec, stop=None, progress=None,
@@ -119,7 +126,7 @@ def run_simulation(mech: Mechanism, spec: SimulateSpec, stop=None, progress=None
     check_masses(mech)
     check_steps(spec, max_steps)
     histories = read_histories(mech, spec.histories, spec.until, "/simulate/histories")
-    x0, start_note = start_shape(mech, spec)
+    x0, start_note = start_shape(mech, spec, histories)
     check_scheme(mech, spec, x0)
     n, p = len(x0), mech.p()
     history = integrate(mech.structure, p, x0, np.zeros(n), spec.until, spec.step, scheme_of(spec),

@@ -87,7 +87,7 @@ class SimulationJob(InOrder):
         control = TaskControl(task)
         p, scheme = mech.p(), scheme_of(simulate)
         at = Resume.from_json(task["resume"]) if task.get("resume") is not None else None
-        x0 = start_shape(mech, simulate)[0] if at is None else None
+        x0 = start_shape(mech, simulate, histories)[0] if at is None else None
         points = []
         for index in task["indices"]:
             end = min((index + 1) * task["span"], simulate.until)
