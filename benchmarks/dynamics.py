@@ -53,19 +53,21 @@ def document(example: str, edit=None):
 
 
 def compile_kernels(mech) -> float:
-    """Compile the kernels the mechanism runs on (if not yet): seconds of compiling."""
+    """Compile the kernels the mechanism runs on, then the window that calls them (if not yet):
+    seconds of compiling."""
     from service.kernels.build import Compiler
-    from service.kernels.needs import builds_of
+    from service.kernels.needs import builds_of, window_builds
 
     seconds = 0.0
     compiler = Compiler()
-    for build in builds_of(mech):
-        for _, fn, target in build.functions:
-            if not target.exists():
-                outcome = compiler.build(fn, target)
-                if not outcome.ok:
-                    raise RuntimeError(outcome.message)
-                seconds += outcome.seconds
+    for builds in (lambda: builds_of(mech), lambda: window_builds(mech)):
+        for build in builds():
+            for _, fn, target in build.functions:
+                if not target.exists():
+                    outcome = compiler.build(fn, target, link=build.link)
+                    if not outcome.ok:
+                        raise RuntimeError(outcome.message)
+                    seconds += outcome.seconds
     return seconds
 
 

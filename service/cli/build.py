@@ -25,8 +25,7 @@ def build(documents: Annotated[list[Path] | None, typer.Argument(help="Mechanism
     """Compile the kernels documents run on, once per kernel (shared by every document using it)."""
     from service.examples import examples_directory
     from service.kernels.build import BuildLimits, Compiler
-    from service.kernels.needs import builds_of
-    from service.kernels.queue import note_abandoned
+    from service.kernels.needs import builds_of, window_builds
 
     out, err = consoles()
     with user_errors(err):
@@ -44,22 +43,11 @@ def build(documents: Annotated[list[Path] | None, typer.Argument(help="Mechanism
         compiler = Compiler()
         rows, failed, seen = [], 0, set()
         for path in paths:
-            builds = builds_of(mechanism(path, None, None))
-            for b in builds:
-                for part, fn, target in b.functions:
-                    if str(target) in seen:
-                        continue
-                    seen.add(str(target))
-                    if target.exists():
-                        rows.append({"document": path.name, "kernel": b.name, "part": part, "status": "cached"})
-                        continue
-                    err.print(f"compiling {b.name} {part} ({path.name})", highlight=False)
-                    outcome = compiler.build(fn, target, limits)
-                    if not outcome.ok:
-                        failed += 1
-                        note_abandoned(b.note, outcome)
-                    rows.append({"document": path.name, "kernel": b.name, "part": part,
-                                 "status": "built" if outcome.ok else "abandoned", **outcome.to_json()})
+            mech = mechanism(path, None, None)
+            for b in builds_of(mech):
+                failed += _build(b, path.name, compiler, limits, rows, seen, err)
+            for b in window_builds(mech):  # once the kernels it calls are there
+                failed += _build(b, path.name, compiler, limits, rows, seen, err)
         table = table_of("kernels", "document", "kernel", "part", "status", "C (kB)", "compile (s)", "peak (MiB)",
                          text=4)
         for r in rows:
@@ -74,3 +62,25 @@ def build(documents: Annotated[list[Path] | None, typer.Argument(help="Mechanism
             write_json(json_out, {"kernels": rows})
     if failed:
         raise typer.Exit(EXIT_NOT_CONVERGED)
+
+
+def _build(b, document: str, compiler, limits, rows: list, seen: set, err) -> int:
+    """Compile what a Build holds that is not there yet (a row each): how many failed."""
+    from service.kernels.queue import note_abandoned
+
+    failed = 0
+    for part, fn, target in b.functions:
+        if str(target) in seen:
+            continue
+        seen.add(str(target))
+        if target.exists():
+            rows.append({"document": document, "kernel": b.name, "part": part, "status": "cached"})
+            continue
+        err.print(f"compiling {b.name} {part} ({document})", highlight=False)
+        outcome = compiler.build(fn, target, limits, link=b.link)
+        if not outcome.ok:
+            failed += 1
+            note_abandoned(b.note, outcome)
+        rows.append({"document": document, "kernel": b.name, "part": part,
+                     "status": "built" if outcome.ok else "abandoned", **outcome.to_json()})
+    return failed

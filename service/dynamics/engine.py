@@ -9,6 +9,7 @@ step (service.dynamics.kernel_window)."""
 from __future__ import annotations
 
 import threading
+import time
 from collections import OrderedDict
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -27,6 +28,7 @@ from service.dynamics.schemes import Scheme
 WINDOW_ACCEPTANCE = 10 * NEWTON_TOLERANCE  # a window's step whose residual is below this counts
 RESCUE_ITERATIONS = 16  # full Newton, for a step that the window's factors do not settle
 ENGINES = 8  # kept in memory per process
+RECHECK = 2.0  # seconds between looks for a window's library while it runs interpreted
 
 
 @dataclass
@@ -39,7 +41,10 @@ class Engine:
     def __post_init__(self):
         self.system = StepSystem(self.structure, self.moving, compiled=self.compiled)
         self.stepper = Stepper(self.system, self.scheme)
-        self._windows: dict[int, ca.Function] = {}
+        self._windows: dict[int, tuple[ca.Function, bool]] = {}  # steps -> (window, compiled as a whole)
+        self._glue: dict[int, ca.Function] = {}  # steps -> the window on its kernels, glue interpreted
+        self._keys: dict[int, str] = {}
+        self._looked: dict[int, float] = {}
 
     @property
     def n_x(self) -> int:
@@ -67,11 +72,35 @@ class Engine:
 
     # ---- Functions ----------------------------------------------------------------------------------
     def window(self, steps: int) -> ca.Function:
+        """The window of `steps` (see glue_window), compiled as a whole once the build queue has
+        made it (looked for at most every RECHECK seconds while it runs interpreted)."""
+        fn, compiled = self._windows.get(steps, (None, False))
+        if fn is None or (not compiled and time.monotonic() - self._looked.get(steps, 0.0) > RECHECK):
+            self._looked[steps] = time.monotonic()
+            native = self._compiled_glue(steps)
+            fn, compiled = (native, True) if native is not None else (self.glue_window(steps), False)
+            self._windows[steps] = (fn, compiled)
+        return fn
+
+    def _compiled_glue(self, steps: int) -> ca.Function | None:
+        """The compiled window, when every kernel it calls is compiled and so is it
+        (service.kernels.windows); None otherwise."""
+        signatures = [g.signature for g in self.system.layout.groups]
+        if not signatures or any(s not in self.compiled for s in signatures):
+            return None
+        from service.kernels.windows import compiled_window, window_key
+
+        glue = self.glue_window(steps)
+        if steps not in self._keys:
+            self._keys[steps] = window_key(glue)
+        return compiled_window(glue, self._keys[steps], signatures)
+
+    def glue_window(self, steps: int) -> ca.Function:
         """(s0, h, P, PDOT, PDDOT, damping, mask, count, data...) -> (S, MONITOR, NORMS,
         ITERATIONS): up to `steps` steps, a column each, of which the first `count` run; a step
         after one that did not settle computes nothing (its norm is infinite). One Function per
         window length serves every count: the adaptive steps' last windows build nothing new."""
-        if steps not in self._windows:
+        if steps not in self._glue:
             st = self.stepper
             state, h, p, pdot, pddot, damping, mask, data = st._symbols()
             P, PD, PDD = (ca.MX.sym(name, q.numel(), steps) for name, q in (("P", p), ("PDOT", pdot), ("PDDOT", pddot)))
@@ -86,13 +115,14 @@ class Engine:
                                                           mask, *data)
                 for column, value in zip(columns, (s, monitor, norm, used)):
                     column.append(value)
-            self._windows[steps] = ca.Function(
+            window = ca.Function(
                 f"kernel_window_{steps}", [state, h, P, PD, PDD, damping, mask, count, *data],
                 [ca.horzcat(*column) for column in columns],
                 ["s0", "h", "P", "PDOT", "PDDOT", "damping", "mask", "count",
                  *[f"data{i}" for i in range(len(data))]],
                 ["S", "MONITOR", "NORMS", "ITERATIONS"])
-        return self._windows[steps]
+            self._glue[steps] = window
+        return self._glue[steps]
 
     @cached_property
     def rescue(self) -> ca.Function:

@@ -129,30 +129,49 @@ class Stepper:
         if factors is None:
             factors = sys.factorize(Z, si)
         ev = sys.evaluate(Z, ca.MX(1), si, factors.kept_reverse)
-        previous, g_previous, have = ca.MX.zeros(sys.n_z), ca.MX.zeros(sys.n_z), ca.MX(0)
-        used = ca.MX(0)
-        for _ in range(MAX_ITERATIONS):
-            go = ev.norm > NEWTON_TOLERANCE
-            g = -sys.solve(ev, go, factors)  # the chord step
-            # Anderson's mixing with the last iteration (a secant step)
-            dZ, dg = Z - previous, g - g_previous
-            gamma = have * ca.dot(dg, g) / (ca.dot(dg, dg) + 1e-300)
-            Z_next = Z + g - gamma * (dZ + dg)
-            ev_next = sys.evaluate(Z_next, go, si, factors.kept_reverse)
-            previous, g_previous = ca.if_else(go, Z, previous), ca.if_else(go, g, g_previous)
-            have = ca.if_else(go, 1, have)
-            Z = ca.if_else(go, Z_next, Z)
-            # a gated evaluation computes nothing: keep what the monitor and the test need from the
-            # last one that ran (the eliminated blocks and right-hand side only feed a solve, gated too)
-            ev = Evaluation(ev_next.y, ev_next.rhs, *[ca.if_else(go, new, old) for new, old in zip(
-                [ev_next.all_rows, ev_next.routed, ev_next.energies, ev_next.global_energies, ev_next.norm],
-                [ev.all_rows, ev.routed, ev.energies, ev.global_energies, ev.norm])])
-            used = used + go
+        carry = [Z, ca.MX.zeros(sys.n_z), ca.MX.zeros(sys.n_z), ca.MX(0), ca.MX(0), *ev.parts()]
+        for _ in range(MAX_ITERATIONS):  # one Function called again and again: its code is generated once
+            carry = self.iteration_function(*factors.parts(), state, h, p, pdot, pddot, damping, mask, *data, *carry)
+        Z, used, ev = carry[0], carry[4], Evaluation.of(carry[5:], self.n_groups)
         n_x = self.state.n_x
         u = Z[:n_x]
         cX, cV, _ = affine
         new_state = ca.vertcat(cX + k[0] * u, cV + k[1] * u, c_a1 + fa * u, u, Z[n_x:])
         return new_state, self.monitor(ev, si), ev.norm, used, factors
+
+    @cached_property
+    def iteration_function(self) -> ca.Function:
+        """(factors..., state, h, p, pdot, pddot, damping, mask, data..., Z, previous,
+        g_previous, have, used, evaluation...) -> (the same carry, one iteration on): the chord
+        step on the window's factors, accelerated by Anderson's mixing with the iteration before
+        (a secant step); nothing is computed once the residual is below the tolerance (the
+        evaluation's parts keep the last ones that ran)."""
+        sys = self.system
+        f = self._factor_symbols()
+        state, h, p, pdot, pddot, damping, mask, data = self._symbols()
+        _, k = self.coefficients(h)
+        affine, _ = self._affine(state, h)
+        si = sys.step_inputs(affine, k, p, pdot, pddot, damping, mask, data)
+        Z, previous, g_previous = (ca.MX.sym(name, sys.n_z) for name in ("Z", "previous", "g_previous"))
+        have, used = ca.MX.sym("have"), ca.MX.sym("used")
+        shapes = [part.shape for part in sys.evaluate(Z, ca.MX(1), si, f.kept_reverse).parts()]
+        parts = [ca.MX.sym(f"evaluation{i}", *shape) for i, shape in enumerate(shapes)]
+        ev = Evaluation.of(parts, self.n_groups)
+        go = ev.norm > NEWTON_TOLERANCE
+        g = -sys.solve(ev, go, f)  # the chord step
+        dZ, dg = Z - previous, g - g_previous
+        gamma = have * ca.dot(dg, g) / (ca.dot(dg, dg) + 1e-300)
+        Z_next = Z + g - gamma * (dZ + dg)
+        ev_next = sys.evaluate(Z_next, go, si, f.kept_reverse)
+        # a gated evaluation computes nothing: keep what the monitor and the test need from the
+        # last one that ran (the eliminated blocks and right-hand side only feed a solve, gated too)
+        kept = Evaluation(ev_next.y, ev_next.rhs, *[ca.if_else(go, new, old) for new, old in zip(
+            [ev_next.all_rows, ev_next.routed, ev_next.energies, ev_next.global_energies, ev_next.norm],
+            [ev.all_rows, ev.routed, ev.energies, ev.global_energies, ev.norm])])
+        carry = [ca.if_else(go, Z_next, Z), ca.if_else(go, Z, previous), ca.if_else(go, g, g_previous),
+                 ca.if_else(go, 1, have), used + go, *kept.parts()]
+        return ca.Function("kernel_iteration", [*f.parts(), state, h, p, pdot, pddot, damping, mask, *data, Z, previous,
+                                                g_previous, have, used, *parts], carry)
 
     def monitor(self, ev: Evaluation, si: StepInputs) -> ca.MX:
         """(kinetic, held potential, input power, damping power, motion forces...)."""

@@ -81,8 +81,10 @@ class Compiler:
             except ProcessLookupError:
                 pass
 
-    def build(self, fn: ca.Function, target: Path, limits: BuildLimits = BuildLimits()) -> Outcome:
-        """Generate fn's C and compile it to `target` (installed atomically)."""
+    def build(self, fn: ca.Function, target: Path, limits: BuildLimits = BuildLimits(),
+              link: list[str] | tuple[str, ...] = ()) -> Outcome:
+        """Generate fn's C and compile it to `target` (installed atomically), linked against the
+        libraries `link` (the compiled kernels a window calls)."""
         cc = compiler()
         if cc is None:
             return Outcome(False, "no C compiler (set FLEXMECH_CC or CC, or install gcc)")
@@ -93,7 +95,8 @@ class Compiler:
             source = Path(generator.generate(tmp + os.sep))
             c_bytes = source.stat().st_size
             partial = Path(tmp) / "library.so"
-            outcome = self._run([cc, *FLAGS, str(source), "-o", str(partial), "-lm"], limits, Path(tmp) / "log")
+            outcome = self._run([cc, *FLAGS, str(source), *link, "-o", str(partial), "-lm"], limits,
+                                Path(tmp) / "log")
             outcome.c_bytes = c_bytes
             if outcome.ok:
                 os.replace(partial, target)

@@ -5,7 +5,7 @@ a name, what it compiles (Functions and their libraries), and whether it is ther
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import casadi as ca
@@ -24,6 +24,7 @@ class Build:
     name: str
     functions: list[tuple[str, ca.Function, Path]]  # (part, Function, library)
     note: Path  # where an abandoned build is noted
+    link: list[str] = field(default_factory=list)  # libraries the Functions call (a window: its kernels)
 
     @property
     def built(self) -> bool:
@@ -53,3 +54,32 @@ def builds_of(mech: Mechanism) -> list[Build]:
         target = function_library(fn, key)
         out.append(Build(f"impact_{kind}_{target.stem}", [(kind, fn, target)], note_of(target)))
     return out
+
+
+def window_builds(mech: Mechanism) -> list[Build]:
+    """The window of time steps the document's link dynamics runs, compiled as a whole
+    (service.kernels.windows): only once every kernel it calls is compiled, and none for a
+    document without such a simulation."""
+    from models import MechanismError
+    from service.dynamics.adaptive import ADAPTIVE_WINDOW
+    from service.dynamics.histories import read_histories
+    from service.dynamics.run import scheme_of, simulation_spec
+    from service.dynamics.stepping import WINDOW, engine_of
+    from service.kernels.windows import links, window_key, window_library
+
+    if mech.document.simulate is None or mech.document.simulate.scheme in ("event_driven", "moreau"):
+        return []
+    if not any(isinstance(t, LinkElementsTopology) for t in mech.structure.elements):
+        return []
+    try:
+        spec = simulation_spec(mech)
+        histories = read_histories(mech, spec.histories, spec.until, "/simulate/histories")
+    except MechanismError:
+        return []
+    engine = engine_of(mech.structure, scheme_of(spec), histories)
+    signatures = [g.signature for g in engine.system.layout.groups]
+    if any(s not in engine.compiled for s in signatures):
+        return []
+    fn = engine.glue_window(ADAPTIVE_WINDOW if spec.adaptive else WINDOW)
+    target = window_library(fn, window_key(fn))
+    return [Build(f"window_{target.stem}", [("window", fn, target)], note_of(target), link=links(signatures))]

@@ -88,8 +88,9 @@ def function_library(fn: ca.Function, key: str) -> Path:
     return cache_dir() / "libraries" / f"{fn.name()}_{digest}.so"
 
 
-def request_function(fn: ca.Function, key: str) -> bool:
-    """Ask for a whole Function compiled (kept at function_library(fn, key))."""
+def request_function(fn: ca.Function, key: str, link: list[str] | None = None) -> bool:
+    """Ask for a whole Function compiled (kept at function_library(fn, key)), linked against
+    the libraries `link`."""
     target = function_library(fn, key)
     if target.exists() or note_of(target).exists() or not accepting():
         return False
@@ -101,7 +102,8 @@ def request_function(fn: ca.Function, key: str) -> bool:
     staged = serialized.with_suffix(f".{os.getpid()}.tmp")
     fn.save(str(staged))
     os.replace(staged, serialized)
-    return _write_request(name, {"kind": "function", "serialized": str(serialized), "library": str(target)})
+    return _write_request(name, {"kind": "function", "serialized": str(serialized), "library": str(target),
+                                 "link": list(link or [])})
 
 
 def note_of(target: Path) -> Path:
@@ -134,7 +136,7 @@ class Builder:
         else:
             target = Path(item["library"])
             fn = ca.Function.load(item["serialized"])
-            outcome = self.compiler.build(fn, target, self.limits)
+            outcome = self.compiler.build(fn, target, self.limits, link=item.get("link", []))
             if not outcome.ok:
                 note_abandoned(note_of(target), outcome)
             Path(item["serialized"]).unlink(missing_ok=True)

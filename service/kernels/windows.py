@@ -1,0 +1,61 @@
+"""Compiled windows: a structure's window of time steps (service.dynamics.engine) generated as C
+that calls its compiled chain kernels by name and links against their libraries (it never
+inlines them): about 1 MB of glue for the rod or the four-bar, 5-7 s of gcc, after which a
+window runs without CasADi's virtual machine between its kernels (the rod's step 2.5x faster
+than the same kernels with interpreted glue).
+
+A window is keyed by the Function itself (a hash of its serialization, which names its kernels'
+libraries): a renamed structure has the same graph, so the same library. It is built by the
+build queue once its kernels are there (or by `flexmech build`); until then, and wherever its
+build was abandoned, the window runs with its glue interpreted."""
+
+from __future__ import annotations
+
+import hashlib
+import threading
+from pathlib import Path
+
+import casadi as ca
+
+from models.disk_cache import touch
+from models.kernels.link_chain import ChainSignature
+from service.kernels.cache import KINDS, library
+from service.kernels.queue import function_library, request_function
+
+_loaded: dict[str, ca.Function] = {}
+_lock = threading.Lock()
+
+
+def window_key(fn: ca.Function) -> str:
+    """The window's content key: a hash of its serialized graph (about 4 MB for the four-bar,
+    hashed in a few tens of ms: callers keep it)."""
+    return hashlib.sha256(fn.serialize().encode()).hexdigest()[:24]
+
+
+def links(signatures) -> list[str]:
+    """The kernel libraries a window of these chain signatures calls."""
+    return [str(library(signature, kind)) for signature in signatures for kind in KINDS]
+
+
+def window_library(fn: ca.Function, key: str) -> Path:
+    return function_library(fn, key)
+
+
+def compiled_window(fn: ca.Function, key: str, signatures: list[ChainSignature]) -> ca.Function | None:
+    """The compiled window of fn (key: window_key(fn)) where its library is built, loaded once
+    per process; else None, and a server's build queue is asked for it."""
+    target = window_library(fn, key)
+    with _lock:
+        loaded = _loaded.get(str(target))
+        if loaded is None and target.exists():
+            try:
+                loaded = ca.external(fn.name(), str(target))
+            except RuntimeError:  # damaged, or its kernels' libraries gone: run interpreted
+                loaded = None
+            if loaded is not None:
+                _loaded[str(target)] = loaded
+    if loaded is not None:
+        touch(target)
+        return loaded
+    request_function(fn, key, link=links(signatures))
+    return None

@@ -1,0 +1,106 @@
+"""A structure's window of time steps compiled as a whole (service.kernels.windows): C glue that
+calls the compiled chain kernels by name. It must step exactly as the same window with its glue
+interpreted, be shared by a renamed structure (its key is the graph, not the names), and come
+from the build queue in a server, found by a running engine without a restart."""
+
+from __future__ import annotations
+
+import json
+from collections import OrderedDict
+
+import numpy as np
+import pytest
+
+from conftest import EXAMPLES
+from models import compile_mechanism, load_document
+from service.dynamics import engine as engine_module
+from service.dynamics.histories import read_histories
+from service.dynamics.run import scheme_of, simulation_spec, start_shape
+from service.dynamics.stepping import WINDOW, StepRunner, engine_of, start_of
+from service.kernels.build import BuildLimits, Compiler
+from service.kernels.needs import builds_of, window_builds
+from service.kernels.queue import Builder, accept_requests, queue_dir
+
+
+@pytest.fixture(scope="module")
+def cache(tmp_path_factory):
+    """A cache of this module's own, with the cheapest kernels compiled once for all its tests."""
+    with pytest.MonkeyPatch.context() as patch:
+        folder = tmp_path_factory.mktemp("windows") / "cache"
+        patch.setenv("FLEXMECH_CACHE_DIR", str(folder))
+        patch.setattr(engine_module, "_engines", OrderedDict())  # none on another module's libraries
+        _build_kernels(_rod())
+        yield folder
+        accept_requests(False)
+
+
+def _rod(rename: bool = False, intervals: int = 4):
+    """The rod of Example I.1 on the cheapest kernels there are (linear elements, no shear or
+    axial strain: a second or two of gcc)."""
+    doc = json.loads((EXAMPLES / "rod_free_vibration.json").read_text())
+    doc["elements"]["rod"].update(degree=1, shear=False, axial=False, intervals=intervals)
+    if rename:
+        doc["elements"]["beam"] = doc["elements"].pop("rod")
+        doc["bodies"]["end"] = doc["bodies"].pop("tip")
+        doc["elements"]["beam"]["to"] = "end"
+        doc["loads"]["hold"]["body"] = "end"
+        doc["outputs"] = {}
+    return compile_mechanism(load_document(doc))
+
+
+def _build_kernels(mech) -> None:
+    compiler = Compiler()
+    for b in builds_of(mech):
+        for _, fn, target in b.functions:
+            assert compiler.build(fn, target, BuildLimits()).ok
+
+
+def _first_window(mech):
+    """(engine, the window's inputs from the static start)."""
+    spec = simulation_spec(mech, {"until": 0.1})
+    histories = read_histories(mech, spec.histories, spec.until)
+    x0, _ = start_shape(mech, spec, histories)
+    p, scheme = mech.p(), scheme_of(spec)
+    start = start_of(mech.structure, p, x0, 0 * x0, histories, 0.0, scheme)
+    runner = StepRunner(mech.structure, p, spec.step, scheme, 0.0, histories, spec.until, 1)
+    P, PD, PDD = histories.at_times(p, spec.step * np.arange(1, WINDOW + 1))
+    return runner.engine, [start.state, spec.step, P, PD, PDD, 0.0, runner.mask, WINDOW, *runner.data]
+
+
+def test_a_compiled_window_steps_as_its_interpreted_glue_does(cache):
+    mech = _rod()
+    [window] = window_builds(mech)
+    (_, fn, target), = window.functions
+    assert window.link and all(path.endswith(".so") for path in window.link)  # it calls the kernels' libraries
+    outcome = Compiler().build(fn, target, BuildLimits(), link=window.link)
+    assert outcome.ok, outcome.message
+    engine, args = _first_window(mech)
+    native = engine.window(WINDOW)
+    assert native.is_a("External")
+    interpreted = engine.glue_window(WINDOW)
+    S_native, _, norms, iterations = (np.asarray(q) for q in native(*args))
+    S_glue, _, _, iterations_glue = (np.asarray(q) for q in interpreted(*args))
+    assert np.all(norms <= engine_module.WINDOW_ACCEPTANCE) and iterations.sum() > WINDOW  # real Newton work
+    np.testing.assert_array_equal(iterations, iterations_glue)
+    np.testing.assert_allclose(S_native, S_glue, rtol=0, atol=1e-12 * np.abs(S_glue).max())
+
+
+def test_a_renamed_structure_shares_the_window_and_another_count_does_not(cache):
+    mech, renamed, longer = _rod(), _rod(rename=True), _rod(intervals=5)
+    targets = [window_builds(m)[0].functions[0][2] for m in (mech, renamed, longer)]
+    assert targets[0] == targets[1]
+    assert targets[2] != targets[0]
+
+
+def test_the_queue_builds_a_window_and_a_running_engine_finds_it(cache, monkeypatch):
+    monkeypatch.setattr(engine_module, "RECHECK", 0.0)
+    mech = _rod(intervals=3)  # a window no other test builds
+    accept_requests(True)
+    spec = simulation_spec(mech, {"until": 0.1})
+    engine = engine_of(mech.structure, scheme_of(spec), read_histories(mech, spec.histories, spec.until))
+    assert not engine.window(WINDOW).is_a("External")  # interpreted glue, and a request for the build
+    [request] = [json.loads(p.read_text()) for p in queue_dir().glob("*.json")]
+    assert request["kind"] == "function" and len(request["link"]) == 5
+    Builder(BuildLimits()).run_one(next(queue_dir().glob("*.json")))
+    assert engine.window(WINDOW).is_a("External")
+    assert not list(queue_dir().glob("*.json"))
