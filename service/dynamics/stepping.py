@@ -17,6 +17,7 @@ import numpy as np
 from models import MechanismError
 from models.structure import Structure
 from models.kernels.layout import layout_of
+from service.dynamics.buffered import BufferedCall
 from service.dynamics.engine import WINDOW_ACCEPTANCE, Engine, engine_for
 from service.dynamics.histories import Histories
 from service.kernels import compiled_for
@@ -131,6 +132,7 @@ class StepRunner:
         self.n = self.engine.n_x
         self.mask = histories.load_mask(len(p))
         self.data = self.engine.data(histories.at(p, 0.0)[0])
+        self._buffered: BufferedCall | None = None
 
     def done(self, at: Resume) -> bool:
         return at.step >= self.steps
@@ -145,12 +147,19 @@ class StepRunner:
         size = self.window_steps
         P, PD, PDD = self.histories.at_times(self.p, at.time + h * np.minimum(np.arange(1, size + 1), steps))
         try:
-            S, monitors, norms, iterations = (np.asarray(q, dtype=float) for q in self.engine.window(size)(
-                at.state, h, P, PD, PDD, self.damping, self.mask, steps, *self.data))
+            S, monitors, norms, iterations = self._call(self.engine.window(size))(
+                at.state, h, P, PD, PDD, self.damping, self.mask, steps, *self.data)
         except RuntimeError:  # a factorization met a singular or non-finite system: no step of it counts
             return (P, PD, PDD), None, None, np.zeros(steps), 0
         unsettled = np.flatnonzero(~(norms.ravel()[:steps] <= WINDOW_ACCEPTANCE))  # NaN too
         return (P, PD, PDD), S, monitors, iterations.ravel(), unsettled[0] if len(unsettled) else steps
+
+    def _call(self, window):
+        """The window called on buffers of its own (service.dynamics.buffered); a new one when the
+        engine hands another window (its compiled library has arrived)."""
+        if self._buffered is None or self._buffered.fn is not window:
+            self._buffered = BufferedCall(window)
+        return self._buffered
 
     def window(self, history: History, at: Resume) -> Resume:
         steps = min(WINDOW, self.steps - at.step)
