@@ -137,8 +137,8 @@ def rod(interpreted: dict) -> None:
         print(f"  {name:32s} {period:10.6f} {abs(period / reference - 1):9.1e} {drift:9.1e} {per_second:13.3f} "
               f"{per_second / rows[0][3]:11.2f}x")
     print(f"  flexmech: {warm['steps']} steps, {warm['iterations'] / max(warm['steps'], 1):.2f} Newton "
-          f"iterations per step; kernels compiled once in {compiled:.1f} s (shared by every structure of this "
-          f"element family), engine built in {built:.2f} s")
+          f"iterations per step; kernels and window compiled once in {compiled:.1f} s (the kernels shared by every "
+          f"structure of this element family, the window this structure's), engine built in {built:.2f} s")
     print(f"  cold: the whole `flexmech simulate rod_free_vibration.json --until 1` on an empty cache: {cold:.1f} s")
     accurate = [row for row in rows[2:] if abs(row[1] / reference - 1) <= 1e-3]
     if accurate:
@@ -172,8 +172,8 @@ def four_bar(interpreted: dict) -> None:
     for name, balance, work, angle, steps, per_second in rows:
         print(f"  {name:40s} {balance:9.2e} {work:9.3f} {angle:10.4f} {steps:6d} {per_second:13.3f} "
               f"{per_second / rows[0][5]:11.2f}x")
-    print(f"  flexmech: kernels compiled once in {compiled:.1f} s (0: the rod's, the same element family), engine "
-          f"built in {built:.2f} s")
+    print(f"  flexmech: its window compiled once in {compiled:.1f} s (its kernels are the rod's, the same element "
+          f"family), engine built in {built:.2f} s")
     accurate = [row for row in rows[2:] if row[1] <= rows[0][1]]
     if accurate:
         print(f"  the first Exudyn run with flexmech's energy balance ({accurate[0][0]}) takes "
