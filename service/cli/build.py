@@ -1,5 +1,5 @@
-"""`flexmech build`: compile the kernels a document runs on (or every example's), in the
-foreground, each compiler run under the build limits; a table of what was built: the C's size,
+"""`flexmech build`: compile the kernels a document runs on (or every example's), then its
+window of time steps that calls them (service.kernels.windows), in the foreground, each compiler run under the build limits; a table of what was built: the C's size,
 the compile time and the compiler's peak memory. Later runs, and a server on the same cache,
 use them; a server also builds them itself, in its build queue, when first asked."""
 
@@ -22,7 +22,8 @@ def build(documents: Annotated[list[Path] | None, typer.Argument(help="Mechanism
           seconds: Annotated[float, typer.Option("--seconds", help="Time limit of one compiler run (s).")] = 60.0,
           memory: Annotated[float, typer.Option("--memory", help="Memory limit of one compiler run (MiB).")] = 1024.0,
           json_out: JsonOpt = None) -> None:
-    """Compile the kernels documents run on, once per kernel (shared by every document using it)."""
+    """Compile the kernels documents run on, once per kernel (shared by every document using it), and then each
+    document's window of time steps that calls them."""
     from service.examples import examples_directory
     from service.kernels.build import BuildLimits, Compiler
     from service.kernels.needs import builds_of, window_builds
