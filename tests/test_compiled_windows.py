@@ -16,7 +16,7 @@ from models import compile_mechanism, load_document
 from service.dynamics import engine as engine_module
 from service.dynamics.histories import read_histories
 from service.dynamics.run import scheme_of, simulation_spec, start_shape
-from service.dynamics.stepping import WINDOW, StepRunner, engine_of, start_of
+from service.dynamics.stepping import WINDOW, StepRunner, start_of
 from service.kernels.build import BuildLimits, Compiler
 from service.kernels.needs import builds_of, window_builds
 from service.kernels.queue import Builder, accept_requests, queue_dir
@@ -67,24 +67,6 @@ def _first_window(mech):
     return runner.engine, [start.state, spec.step, P, PD, PDD, 0.0, runner.mask, WINDOW, *runner.data]
 
 
-def test_a_compiled_window_steps_as_its_interpreted_glue_does(cache):
-    mech = _rod()
-    [window] = window_builds(mech)
-    (_, fn, target), = window.functions
-    assert window.link and all(path.endswith(".so") for path in window.link)  # it calls the kernels' libraries
-    outcome = Compiler().build(fn, target, BuildLimits(), link=window.link)
-    assert outcome.ok, outcome.message
-    engine, args = _first_window(mech)
-    native = engine.window(WINDOW)
-    assert native.is_a("External")
-    interpreted = engine.glue_window(WINDOW)
-    S_native, _, norms, iterations = (np.asarray(q) for q in native(*args))
-    S_glue, _, _, iterations_glue = (np.asarray(q) for q in interpreted(*args))
-    assert np.all(norms <= engine_module.WINDOW_ACCEPTANCE) and iterations.sum() > WINDOW  # real Newton work
-    np.testing.assert_array_equal(iterations, iterations_glue)
-    np.testing.assert_allclose(S_native, S_glue, rtol=0, atol=1e-12 * np.abs(S_glue).max())
-
-
 def test_a_renamed_structure_shares_the_window_and_another_count_does_not(cache):
     mech, renamed, longer = _rod(), _rod(rename=True), _rod(intervals=5)
     targets = [window_builds(m)[0].functions[0][2] for m in (mech, renamed, longer)]
@@ -92,15 +74,25 @@ def test_a_renamed_structure_shares_the_window_and_another_count_does_not(cache)
     assert targets[2] != targets[0]
 
 
-def test_the_queue_builds_a_window_and_a_running_engine_finds_it(cache, monkeypatch):
+def test_the_queue_builds_a_window_that_steps_as_its_interpreted_glue_does(cache, monkeypatch):
+    """A run in a process that takes build requests asks for its window and goes on with the
+    glue interpreted; the builder compiles it (linked against the kernels); the running engine
+    then switches to it, and the compiled window takes the same Newton iterations to the same
+    states as the interpreted glue."""
     monkeypatch.setattr(engine_module, "RECHECK", 0.0)
-    mech = _rod(intervals=3)  # a window no other test builds
+    mech = _rod()
     accept_requests(True)
-    spec = simulation_spec(mech, {"until": 0.1})
-    engine = engine_of(mech.structure, scheme_of(spec), read_histories(mech, spec.histories, spec.until))
-    assert not engine.window(WINDOW).is_a("External")  # interpreted glue, and a request for the build
+    engine, args = _first_window(mech)
+    assert not engine.window(WINDOW).is_a("External")
     [request] = [json.loads(p.read_text()) for p in queue_dir().glob("*.json")]
     assert request["kind"] == "function" and len(request["link"]) == 5
+    assert request["library"] == str(window_builds(mech)[0].functions[0][2])  # as `flexmech build` names it
     Builder(BuildLimits()).run_one(next(queue_dir().glob("*.json")))
-    assert engine.window(WINDOW).is_a("External")
     assert not list(queue_dir().glob("*.json"))
+    native = engine.window(WINDOW)
+    assert native.is_a("External")
+    S_native, _, norms, iterations = (np.asarray(q) for q in native(*args))
+    S_glue, _, _, iterations_glue = (np.asarray(q) for q in engine.glue_window(WINDOW)(*args))
+    assert np.all(norms <= engine_module.WINDOW_ACCEPTANCE) and iterations.sum() > WINDOW  # real Newton work
+    np.testing.assert_array_equal(iterations, iterations_glue)
+    np.testing.assert_allclose(S_native, S_glue, rtol=0, atol=1e-12 * np.abs(S_glue).max())
