@@ -65,7 +65,7 @@ def window_builds(mech: Mechanism) -> list[Build]:
     from service.dynamics.histories import read_histories
     from service.dynamics.run import scheme_of, simulation_spec
     from service.dynamics.stepping import WINDOW, engine_of
-    from service.kernels.windows import links, window_key, window_library
+    from service.kernels.windows import links, window_key
 
     if mech.document.simulate is None or mech.document.simulate.scheme in ("event_driven", "moreau"):
         return []
@@ -81,5 +81,5 @@ def window_builds(mech: Mechanism) -> list[Build]:
     if any(s not in engine.compiled for s in signatures):
         return []
     fn = engine.glue_window(ADAPTIVE_WINDOW if spec.adaptive else WINDOW)
-    target = window_library(fn, window_key(fn))
+    target = function_library(fn, window_key(fn))
     return [Build(f"window_{target.stem}", [("window", fn, target)], note_of(target), link=links(signatures))]

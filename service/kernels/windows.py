@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import hashlib
 import threading
-from pathlib import Path
+from collections import OrderedDict
 
 import casadi as ca
 
@@ -22,7 +22,8 @@ from models.kernels.link_chain import ChainSignature
 from service.kernels.cache import KINDS, library
 from service.kernels.queue import function_library, request_function
 
-_loaded: dict[str, ca.Function] = {}
+LOADED = 32  # compiled windows kept loaded per process (one per structure and window length)
+_loaded: "OrderedDict[str, ca.Function]" = OrderedDict()
 _lock = threading.Lock()
 
 
@@ -37,14 +38,10 @@ def links(signatures) -> list[str]:
     return [str(library(signature, kind)) for signature in signatures for kind in KINDS]
 
 
-def window_library(fn: ca.Function, key: str) -> Path:
-    return function_library(fn, key)
-
-
 def compiled_window(fn: ca.Function, key: str, signatures: list[ChainSignature]) -> ca.Function | None:
     """The compiled window of fn (key: window_key(fn)) where its library is built, loaded once
     per process; else None, and a server's build queue is asked for it."""
-    target = window_library(fn, key)
+    target = function_library(fn, key)
     with _lock:
         loaded = _loaded.get(str(target))
         if loaded is None and target.exists():
@@ -54,6 +51,10 @@ def compiled_window(fn: ca.Function, key: str, signatures: list[ChainSignature])
                 loaded = None
             if loaded is not None:
                 _loaded[str(target)] = loaded
+                while len(_loaded) > LOADED:
+                    _loaded.popitem(last=False)
+        if loaded is not None:
+            _loaded.move_to_end(str(target))
     if loaded is not None:
         touch(target)
         return loaded
