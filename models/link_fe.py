@@ -130,6 +130,7 @@ class LinkElements:
     def __init__(self, props: LinkProperties, elements: int, degree: int):
         self.props, self.elements, self.degree = props, elements, degree
         self.rule = element_rule(degree)
+        self._steps: dict[tuple, _ElementStep] = {}
 
     @property
     def n_rotations(self) -> int:
@@ -146,31 +147,84 @@ class LinkElements:
         None), start: position of u = 0."""
         P, rule, p = self.props, self.rule, self.degree
         h = 1.0 / self.elements
+        step = self._element_step(gamma is not None, eps is not None, positions_at_quadrature)
         energy, elongation = ca.SX(0), ca.SX(0)
         position = start
         node_u, node_psi, node_position, points, contact = [0.0], [P.eta(ca.SX(0)) + theta[0]], [start], [], []
         for e in range(self.elements):
-            element = _Element(P, e * h, h, theta[e * p:e * p + p + 1],
-                               gamma[e * p:e * p + p] if gamma is not None else None,
-                               eps[e * p:e * p + p] if eps is not None else None)
-            increment = ca.SX.zeros(2)
+            local = [theta[e * p:e * p + p + 1]]
+            local += [field[e * p:e * p + p] for field in (gamma, eps) if field is not None]
+            at_end, energy, elongation, psi, normal, where, contact_psi, contact_normal, contact_where = step(
+                *local, position, energy, elongation, e * h)
             for q in range(len(rule.xi)):
-                psi, normal, r_u = element.tangent(rule.xi[q], rule.rotation[q], rule.strain[q])
-                increment = increment + h * rule.weights[q] * r_u
-                energy = energy + h * rule.weights[q] * element.energy_density(rule.xi[q], rule.slope[q], rule.strain[q])
-                if eps is not None:
-                    elongation = elongation + h * rule.weights[q] * P.length * element.axial_strain(rule.strain[q])
-                where = element.position(position, rule.at_quadrature, q) if positions_at_quadrature else None
-                points.append(LinkPoint(e * h + h * rule.xi[q], h * rule.weights[q], psi, where, normal))
+                points.append(LinkPoint(e * h + h * rule.xi[q], h * rule.weights[q], psi[q],
+                                        where[:, q] if positions_at_quadrature else None, normal[:, q]))
             for j in range(len(rule.at_contact.xi)):
-                psi, normal, _ = element.tangent(rule.at_contact.xi[j], rule.at_contact.rotation[j], rule.at_contact.strain[j])
-                contact.append(LinkPoint(e * h + h * rule.at_contact.xi[j], h * rule.contact_weights[j], psi,
-                                         element.position(position, rule.at_contact, j), normal))
-            position = position + increment
+                contact.append(LinkPoint(e * h + h * rule.at_contact.xi[j], h * rule.contact_weights[j], contact_psi[j],
+                                         contact_where[:, j], contact_normal[:, j]))
+            position = at_end
             node_u.append(e * h + h)
             node_psi.append(P.eta(ca.SX(e * h + h)) + theta[e * p + p])
             node_position.append(position)
         return LinkKinematics(node_u, node_psi, node_position, points, contact, energy, elongation)
+
+    def _element_step(self, shear: bool, axial: bool, positions_at_quadrature: bool) -> "_ElementStep":
+        """One element's kinematics as a Function, built once and called (inlined) on every
+        element: the same expressions as writing them out element by element, built in a
+        fraction of the time (a link's graph is mostly this)."""
+        key = (shear, axial, positions_at_quadrature)
+        if key not in self._steps:
+            self._steps[key] = _element_step(self.props, self.rule, 1.0 / self.elements, *key)
+        return self._steps[key]
+
+
+@dataclass(frozen=True)
+class _ElementStep:
+    """(theta_e, [gamma_e], [eps_e], start, energy, elongation, u0) -> (end position, energy,
+    elongation, psi (q), normals (2 x q), positions (2 x q; zeros unless asked), contact psi
+    (c), contact normals (2 x c), contact positions (2 x c)): one element from u0, the energy
+    and elongation carried on (summed in the order of writing them out element by element)."""
+
+    function: ca.Function
+    free: list  # the symbols of the properties' expressions (parameters), passed through
+
+    def __call__(self, *args):
+        return self.function(*args, *self.free)
+
+
+def _element_step(props: LinkProperties, rule: ElementRule, h: float, shear: bool, axial: bool,
+                  positions_at_quadrature: bool) -> _ElementStep:
+    p = rule.degree
+    theta = ca.SX.sym("theta", p + 1)
+    gamma = ca.SX.sym("gamma", p) if shear else None
+    eps = ca.SX.sym("eps", p) if axial else None
+    start, energy_in, elongation_in, u0 = (ca.SX.sym("start", 2), ca.SX.sym("energy"), ca.SX.sym("elongation"),
+                                           ca.SX.sym("u0"))
+    element = _Element(props, u0, h, theta, gamma, eps)
+    energy, elongation = energy_in, elongation_in
+    increment = ca.SX.zeros(2)
+    psis, normals, wheres = [], [], []
+    for q in range(len(rule.xi)):
+        psi, normal, r_u = element.tangent(rule.xi[q], rule.rotation[q], rule.strain[q])
+        increment = increment + h * rule.weights[q] * r_u
+        energy = energy + h * rule.weights[q] * element.energy_density(rule.xi[q], rule.slope[q], rule.strain[q])
+        if eps is not None:
+            elongation = elongation + h * rule.weights[q] * props.length * element.axial_strain(rule.strain[q])
+        psis.append(psi)
+        normals.append(normal)
+        wheres.append(element.position(start, rule.at_quadrature, q) if positions_at_quadrature else ca.SX.zeros(2))
+    contact_psi, contact_normals, contact_wheres = [], [], []
+    for j in range(len(rule.at_contact.xi)):
+        psi, normal, _ = element.tangent(rule.at_contact.xi[j], rule.at_contact.rotation[j], rule.at_contact.strain[j])
+        contact_psi.append(psi)
+        contact_normals.append(normal)
+        contact_wheres.append(element.position(start, rule.at_contact, j))
+    outputs = [start + increment, energy, elongation, ca.vertcat(*psis), ca.horzcat(*normals), ca.horzcat(*wheres),
+               ca.vertcat(*contact_psi), ca.horzcat(*contact_normals), ca.horzcat(*contact_wheres)]
+    inputs = [theta] + [field for field in (gamma, eps) if field is not None] + [start, energy_in, elongation_in, u0]
+    declared = {v.element_hash() for symbol in inputs for v in ca.symvar(symbol)}
+    free = [v for v in ca.symvar(ca.vertcat(*[ca.vec(o) for o in outputs])) if v.element_hash() not in declared]
+    return _ElementStep(ca.Function("link_element_step", [*inputs, *free], outputs), free)
 
 
 class _Element:
