@@ -40,7 +40,7 @@ element of a link: its F_{e+1} column is the border's lambda).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 
 import casadi as ca
 import numpy as np
@@ -133,27 +133,23 @@ def _lu(D: ca.SX) -> ca.SX:
 
 def lu_solve(LU: ca.SX, b: ca.SX) -> ca.SX:
     """D^-1 b for the packed factors of _lu (b: n x m)."""
-    n, m = LU.shape[0], b.shape[1]
-    columns = []
-    for c in range(m):
-        y = [b[i, c] for i in range(n)]
-        for i in range(n):
-            for j in range(i):
-                y[i] = y[i] - LU[i, j] * y[j]
-        for i in reversed(range(n)):
-            for j in range(i + 1, n):
-                y[i] = y[i] - LU[i, j] * y[j]
-            y[i] = y[i] / LU[i, i]
-        columns.append(ca.vertcat(*y))
-    return ca.horzcat(*columns)
+    solve = _column_solver(LU.shape[0], transposed=False)
+    return ca.horzcat(*[solve(LU, b[:, c]) for c in range(b.shape[1])])
 
 
 def lu_solve_transposed(LU: ca.SX, b: ca.SX) -> ca.SX:
     """D^-T b (b: n x m)."""
-    n, m = LU.shape[0], b.shape[1]
-    columns = []
-    for c in range(m):
-        y = [b[i, c] for i in range(n)]
+    solve = _column_solver(LU.shape[0], transposed=True)
+    return ca.horzcat(*[solve(LU, b[:, c]) for c in range(b.shape[1])])
+
+
+@lru_cache(maxsize=None)
+def _column_solver(n: int, transposed: bool) -> ca.Function:
+    """(LU, b) -> D^-1 b (or D^-T b) for one column b: written out once and called (inlined)
+    per column, the same expressions as writing out every column, built many times faster."""
+    LU, b = ca.SX.sym("LU", n, n), ca.SX.sym("b", n)
+    y = [b[i] for i in range(n)]
+    if transposed:
         for i in range(n):  # U^T
             for j in range(i):
                 y[i] = y[i] - LU[j, i] * y[j]
@@ -161,8 +157,15 @@ def lu_solve_transposed(LU: ca.SX, b: ca.SX) -> ca.SX:
         for i in reversed(range(n)):  # L^T
             for j in range(i + 1, n):
                 y[i] = y[i] - LU[j, i] * y[j]
-        columns.append(ca.vertcat(*y))
-    return ca.horzcat(*columns)
+    else:
+        for i in range(n):
+            for j in range(i):
+                y[i] = y[i] - LU[i, j] * y[j]
+        for i in reversed(range(n)):
+            for j in range(i + 1, n):
+                y[i] = y[i] - LU[i, j] * y[j]
+            y[i] = y[i] / LU[i, i]
+    return ca.Function("lu_column_solve", [LU, b], [ca.vertcat(*y)])
 
 
 class _Split:
