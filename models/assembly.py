@@ -32,16 +32,38 @@ log = logging.getLogger("flexmech.graphs")
 
 # The Functions of the residual form, by name; each is (z, p) -> ... unless noted.
 FUNCTIONS = ("residual", "residual_and_tangent", "body_wrenches", "displacements", "outputs", "shapes")
+REPORTING = ("outputs", "shapes")  # what a report of given states needs (Graphs.prefer_reporting)
+
+
+@lru_cache(maxsize=2)
+def _symbolic(structure: Structure):
+    """The residual form's expressions: kept for the few latest structures, so that the whole
+    build after the reporting one (service.dynamics reports, then a statics analysis) does
+    not build them again."""
+    ctx = AssemblyContext(structure)
+    z = ca.SX.sym("z", structure.n_unknowns)
+    d = ctx.displacements(z)
+    return ctx, z, d, contributions(ctx, z, d), applied_wrenches(ctx, d)
+
+
+def _reporting(ctx, z, d, parts, applied) -> tuple[dict[str, ca.Function], dict]:
+    functions = {}
+    functions["outputs"], names, kinds = output_graph(ctx, z, d, parts, applied)
+    functions["shapes"], segments = shape_graph(ctx, z, parts)
+    return functions, {"output_names": names, "output_kinds": kinds, "shape_segments": segments}
+
+
+def build_reporting(structure: Structure) -> tuple[dict[str, ca.Function], dict]:
+    """The outputs and shapes alone (without the residual and its tangent, the most of a
+    large structure's build): for reporting states found by other means (the kernels'
+    time steps)."""
+    return _reporting(*_symbolic(structure))
 
 
 def build_functions(structure: Structure) -> tuple[dict[str, ca.Function], dict]:
     """The residual form's Functions and their metadata (output names and kinds, segments)."""
-    ctx = AssemblyContext(structure)
+    ctx, z, d, parts, applied = _symbolic(structure)
     p = ctx.p
-    z = ca.SX.sym("z", structure.n_unknowns)
-    d = ctx.displacements(z)
-    parts = contributions(ctx, z, d)
-    applied = applied_wrenches(ctx, d)
     R = residual_of(ctx, parts, applied)
     K = ca.jacobian(R, z)
     fn = dict(cse=True)
@@ -51,12 +73,12 @@ def build_functions(structure: Structure) -> tuple[dict[str, ca.Function], dict]
         "body_wrenches": _body_wrenches(ctx),
         "displacements": ca.Function("displacements", [z, p], [ca.vertcat(*d)], ["z", "p"], ["d"], fn),
     }
-    functions["outputs"], names, kinds = output_graph(ctx, z, d, parts, applied)
-    functions["shapes"], segments = shape_graph(ctx, z, parts)
+    reporting, meta = _reporting(ctx, z, d, parts, applied)
+    functions.update(reporting)
     for f in functions.values():
         if f.has_free():
             raise RuntimeError(f"graph {f.name()} has free symbols {f.get_free()}")
-    return functions, {"output_names": names, "output_kinds": kinds, "shape_segments": segments}
+    return functions, meta
 
 
 def _body_wrenches(ctx: AssemblyContext) -> ca.Function:
@@ -79,24 +101,37 @@ class Graphs:
     def __init__(self, structure: Structure):
         self.structure = structure
         unnamed, self._names = structure.without_names
-        self._store = _store_of(unnamed)
+        self._store, self._reporting = _store_of(unnamed), _reporting_store_of(unnamed)
+        self._reporting_first = False
+
+    def prefer_reporting(self) -> None:
+        """Serve the outputs and shapes from their own graphs while the whole residual form is
+        neither built nor saved: for reports of states found by other means (a simulation's, on
+        the element kernels), which then never build the residual and its tangent."""
+        self._reporting_first = True
+
+    def _serving(self, name: str) -> GraphStore:
+        if name in REPORTING and self._reporting_first and not self._store.available():
+            return self._reporting
+        return self._store
 
     def _get(self, name: str) -> ca.Function:
         try:
-            return self._store.function(name)
+            return self._serving(name).function(name)
         except Exception:
             if not self._names:
                 raise
             # Build with the mechanism's own names: an error then names its own parts, and a
             # structure the renaming got wrong still gets its graphs (noted: it is a bug).
-            self._store, self._names = GraphStore(self.structure, build_functions), ()
-            function = self._store.function(name)
+            self._store = GraphStore(self.structure, build_functions)
+            self._reporting, self._names = GraphStore(self.structure, build_reporting, "reporting"), ()
+            function = self._serving(name).function(name)
             log.warning("the graphs of structure %s built only with its own names", self.structure.key)
             return function
 
     def _meta(self, key: str):
-        self._get("residual")  # builds (or loads) the store, falling back as _get does
-        return named(self._store.meta[key], self._names)
+        self._get("outputs")  # builds (or loads) the store that serves them, falling back as _get does
+        return named(self._serving("outputs").meta[key], self._names)
 
     residual = property(lambda self: self._get("residual"))  # (z, p) -> R
     residual_and_tangent = property(lambda self: self._get("residual_and_tangent"))  # (z, p) -> (R, K)
@@ -152,3 +187,8 @@ def graphs_for(structure: Structure) -> Graphs:
 def _store_of(unnamed: Structure) -> GraphStore:
     """The Functions of a structure without names (models.naming), shared by its renamings."""
     return GraphStore(unnamed, build_functions)
+
+
+@lru_cache(maxsize=16)
+def _reporting_store_of(unnamed: Structure) -> GraphStore:
+    return GraphStore(unnamed, build_reporting, "reporting")

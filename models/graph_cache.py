@@ -49,10 +49,12 @@ def write_atomically(target: Path, write) -> None:
 class GraphStore:
     """The Functions of one structure: from memory, else from disk, else built (and saved)."""
 
-    def __init__(self, structure: Structure, build: Callable[[Structure], tuple[dict[str, ca.Function], dict]]):
+    def __init__(self, structure: Structure, build: Callable[[Structure], tuple[dict[str, ca.Function], dict]],
+                 kind: str = ""):
         self.structure = structure
         self.build = build  # structure -> (Functions by name, their metadata)
-        self.folder = cache_dir() / "graphs" / f"{structure.key}-{code_version()}"
+        suffix = f"-{kind}" if kind else ""  # a store of a part of the Functions (its own build) has its own folder
+        self.folder = cache_dir() / "graphs" / f"{structure.key}-{code_version()}{suffix}"
         self._functions: dict[str, ca.Function] = {}
         self._meta: dict | None = None
 
@@ -63,6 +65,10 @@ class GraphStore:
             if self._meta is None:
                 self._build()
         return self._meta
+
+    def available(self) -> bool:
+        """Built in this process or saved: its Functions load without building."""
+        return self._meta is not None or (self.folder / "meta.json").exists()
 
     def function(self, name: str) -> ca.Function:
         if name not in self._functions:

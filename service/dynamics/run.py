@@ -50,6 +50,13 @@ def scheme_of(spec: SimulateSpec) -> Scheme:
     return generalized_alpha(spec.rho_inf)
 
 
+def simulated(mech: Mechanism) -> Mechanism:
+    """The mechanism, its reports read from the graphs of outputs alone: a simulation's states
+    come from the element kernels, so the residual form is never built for it."""
+    mech.graphs.prefer_reporting()
+    return mech
+
+
 def check_masses(mech: Mechanism) -> None:
     """Every link carries mass: a massless link has no dynamics of its own to integrate."""
     for t in mech.structure.elements:
@@ -123,6 +130,7 @@ def start_shape(mech: Mechanism, spec: SimulateSpec, histories: Histories | None
 def run_simulation(mech: Mechanism, spec: SimulateSpec, stop=None, progress=None,
                    max_steps: int = MAX_STEPS) -> tuple[History, dict]:
     """(the raw history, the report)."""
+    simulated(mech)
     check_masses(mech)
     check_steps(spec, max_steps)
     histories = read_histories(mech, spec.histories, spec.until, "/simulate/histories")

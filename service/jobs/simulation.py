@@ -20,8 +20,8 @@ from service.dynamics.histories import read_histories
 from service.dynamics.integrate import Resume, integrate
 from service.dynamics.stepping import WINDOW
 from service.dynamics.run import (MAX_STEPS, check_masses, check_scheme, check_steps, records, scheme_of, scheme_summary,
-                                  simulation_spec, start_shape, step_limit, tolerance_of, units, wanted_outputs,
-                                  with_balance)
+                                  simulated, simulation_spec, start_shape, step_limit, tolerance_of, units,
+                                  wanted_outputs, with_balance)
 from service.jobs.base import InOrder, Plan
 from service.jobs.control import TaskControl
 from service.jobs.sweep import mechanism_of
@@ -35,7 +35,7 @@ class SimulationJob(InOrder):
     paged = True
 
     def prepare(self, spec: dict, limits: Limits) -> Plan:
-        mech = compile_request(spec["document"], spec.get("model"), spec.get("overrides"), limits)
+        mech = simulated(compile_request(spec["document"], spec.get("model"), spec.get("overrides"), limits))
         simulate = simulation_spec(mech, spec.get("simulate"))
         if simulate.scheme in IMPACT_SCHEMES:
             raise MechanismError("/simulate/scheme", f"an {simulate.scheme} impact simulation runs in one call of "
@@ -81,7 +81,7 @@ class SimulationJob(InOrder):
                 "max_steps": plan.get("max_steps")}
 
     def run(self, spec, task):
-        mech = mechanism_of(spec)
+        mech = simulated(mechanism_of(spec))
         simulate = simulation_spec(mech, spec.get("simulate"))
         histories = read_histories(mech, simulate.histories, simulate.until, "/simulate/histories")
         control = TaskControl(task)
