@@ -26,6 +26,7 @@ from models.loads import applied_wrenches
 from models.naming import named
 from models.outputs import output_graph, shape_graph
 from models.residual import contributions, held_wrenches, residual_of
+from models.split_jacobian import jacobian
 from models.structure import Structure
 
 log = logging.getLogger("flexmech.graphs")
@@ -65,7 +66,7 @@ def build_functions(structure: Structure) -> tuple[dict[str, ca.Function], dict]
     ctx, z, d, parts, applied = _symbolic(structure)
     p = ctx.p
     R = residual_of(ctx, parts, applied)
-    K = ca.jacobian(R, z)
+    K = jacobian(R, z)
     fn = dict(cse=True)
     functions = {
         "residual": ca.Function("residual", [z, p], [R], ["z", "p"], ["R"], fn),
