@@ -155,12 +155,23 @@ class LinkShooting:
         # The unloaded link: no internal force and no weight (its own weight is a load).
         self.f_unloaded = rhs_function(props, p, weighed=False) if self.weighed else self.f
         self.H = 1.0 / intervals
+        self._steps: dict[tuple, ca.Function] = {}
 
     def step(self, k: int, s, n, H=None, u0=None, order=None, unloaded: bool = False):
         H = self.H if H is None else H
         u0 = k * self.H if u0 is None else u0
-        f = self.f_unloaded if unloaded else self.f
-        return extrapolated_step(f, u0, s, H, order or self.order, n, self.p)
+        return self._step_function(H, order or self.order, unloaded)(u0, s, n, self.p)
+
+    def _step_function(self, H: float, order: int, unloaded: bool) -> ca.Function:
+        """(u0, s, n, p) -> s at u0 + H: one extrapolated step written out once per step length
+        and order, and called (inlined) at every node: the same expressions as writing out
+        every step, built several times faster (a link's graph is mostly its steps)."""
+        key = (H, order, unloaded)
+        if key not in self._steps:
+            f = self.f_unloaded if unloaded else self.f
+            u0, s, n, p = (ca.SX.sym(name, f.sparsity_in(i)) for i, name in enumerate(("u0", "s", "n", "p")))
+            self._steps[key] = ca.Function("link_step", [u0, s, n, p], [extrapolated_step(f, u0, s, H, order, n, p)])
+        return self._steps[key]
 
     def _with_energy_reset(self, head: ca.SX, state: ca.SX) -> ca.SX:
         """(psi, m, x, y) `head`, the energy restarted at 0, and the mass carried over."""
