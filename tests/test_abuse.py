@@ -1,8 +1,8 @@
 """A live server driven through the requests that once broke it (tests/abuse_cases.py), while a
 small /v1/solve runs alongside: every abusive request is answered with its 4xx naming the
 field, and every small solve is answered throughout. Their times are printed, not asserted
-(tests pass on a loaded machine): benchmarks/abuse_replay.py and benchmarks/api_latency.py
-measure them."""
+(tests pass on a loaded machine): benchmarks/abuse_replay.py times every answer against its
+2 s target, benchmarks/api_latency.py small solves beside a long run."""
 
 from __future__ import annotations
 
