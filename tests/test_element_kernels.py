@@ -123,3 +123,29 @@ def test_newton_on_the_kernels_converges_quadratically():
     assert norms[0] > 1.0 and converged <= 6, norms
     a, b = norms[converged - 2], norms[converged - 1]  # the last two before round-off
     assert a < 1e-2 and np.log(b) / np.log(a) > 1.8, norms  # |F+| ~ C |F|^2: the exponent is 2
+
+
+@pytest.mark.parametrize("example", ["rod_free_vibration.json", "four_bar_dynamics.json"])
+def test_the_expanded_window_steps_as_the_window_of_calls_does(example):
+    """Interpreted kernels run each Newton iteration as one expanded SX Function gated as a
+    whole (service.dynamics.kernel_window): the same operations as the window of MX calls, so
+    the same states, monitors, residuals and iteration counts, to round-off; a gate that let a
+    converged iteration run, or kept the wrong part of the carry, would show here."""
+    mech, spec, histories, scheme, x0 = _setup(example)
+    start = start_of(mech.structure, mech.p(), x0, np.zeros(len(x0)), histories, 0.0, scheme)
+    h, steps = spec.step, 20
+    P, PD, PDD = histories.at_times(mech.p(), h * np.arange(1, steps + 1))
+    mask = histories.load_mask(len(mech.p()))
+    windows = {}
+    for expanded in (True, False):
+        engine = Engine(mech.structure, scheme, histories.moving)
+        assert engine.stepper.expanded  # no compiled kernels: they run interpreted, expanded
+        engine.stepper.expanded = expanded
+        window = engine.glue_window(steps)
+        windows[expanded] = [np.asarray(q, dtype=float) for q in window(
+            start.state, h, P, PD, PDD, 0.0, mask, steps, *engine.data(P[:, 0]))]
+    S, monitors, norms, iterations = windows[True]
+    assert np.all(norms <= 10 * NEWTON_TOLERANCE) and iterations.sum() >= 2 * steps, (norms, iterations)
+    np.testing.assert_array_equal(iterations, windows[False][3])
+    for ours, theirs in zip(windows[True][:2], windows[False][:2]):
+        np.testing.assert_allclose(ours, theirs, rtol=1e-12, atol=1e-12 * np.abs(theirs).max())
