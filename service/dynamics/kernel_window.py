@@ -10,9 +10,9 @@ from step to step. Iterations run while the residual is above the tolerance, up 
 MAX_ITERATIONS: once it is below, the kernels of the remaining iterations are gated off
 (models.kernels.chunks) and their results keep the last ones; kernels that run interpreted
 (no compiled library yet) run each iteration as one expanded Function, gated as a whole
-(Stepper.gated_iteration). A step left above the
-tolerance is reported by its residual: the caller cuts the window there and starts the next
-one, with fresh factors, from the last good step.
+(Stepper.gated_iteration). A step left above the tolerance is reported by its residual: the
+caller cuts the window there and starts the next one, with fresh factors, from the last good
+step.
 
 The state carried from step to step is [x; v; a; qdd; lam] (the energy form's coordinates,
 rates, the scheme's acceleration-like variable, accelerations, multipliers). Per step the
