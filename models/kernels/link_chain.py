@@ -307,22 +307,23 @@ class ElementEquations:
 
         J_delta = self.lever
         J_delta_gyro, J_delta_accel = (levers(pts.increment, q) for q in (tan.gyro, tan.accel))
+        # each mass point's levers, built once (the expressions are the same wherever they are used)
+        P_lever, P_gyro, P_accel = ([levers(pts.mass_positions[q], kind) for q in range(nq)]
+                                    for kind in (tan.levers, tan.gyro, tan.accel))
         # d P''_q / du and d P'_q / du (P' and P'' move with X, V and A)
-        dPdd = [ka * levers(pts.mass_positions[q], tan.levers) + kv * levers(pts.mass_positions[q], tan.gyro)
-                + kx * levers(pts.mass_positions[q], tan.accel) for q in range(nq)]
-        dPd = [kv * levers(pts.mass_positions[q], tan.levers) + kx / 2 * levers(pts.mass_positions[q], tan.gyro)
-               for q in range(nq)]
+        dPdd = [ka * P_lever[q] + kv * P_gyro[q] + kx * P_accel[q] for q in range(nq)]
+        dPd = [kv * P_lever[q] + kx / 2 * P_gyro[q] for q in range(nq)]
         df = [m[q] * (dPdd[q] + alpha * dPd[q]) for q in range(nq)]  # d f_q / du_c
         K = ca.SX.zeros(n_c, n_c)
         for q in range(nq):
-            K = K + ca.mtimes(levers(pts.mass_positions[q], tan.levers).T, df[q])
+            K = K + ca.mtimes(P_lever[q].T, df[q])
             rot = ca.SX.zeros(n_c, 1)
             rot[:sig.degree + 1] = ca.DM(pts.quad_rotation[q])
             K = K + rotary[q] * (ka + alpha * kv) * ca.mtimes(rot, rot.T)
         K = K + kx * (self._stiffness(d) + self._curvature(tan, h))
         eye, zero = ca.SX.eye(2), ca.SX.zeros(2, 2)
         mass_sum = sum((m[q] for q in range(nq)), ca.SX(0))
-        lever_sum = sum((m[q] * levers(pts.mass_positions[q], tan.levers) for q in range(nq)), ca.SX.zeros(2, n_c))
+        lever_sum = sum((m[q] * P_lever[q] for q in range(nq)), ca.SX.zeros(2, n_c))
         # columns: [u_c | rho_e v_e a_e F_e | rho_{e+1} v_{e+1} a_{e+1} F_{e+1}]
         gen = ca.horzcat(K, ca.SX.zeros(n_c, 2), alpha * lever_sum.T, lever_sum.T, ca.SX.zeros(n_c, 8), J_delta.T)
         force = ca.horzcat(-sum(df, ca.SX.zeros(2, n_c)), zero, -alpha * mass_sum * eye, -mass_sum * eye, eye,
