@@ -14,13 +14,31 @@ is not a modulus and "5 percent" not an angle. A unit must have exactly the kind
 from __future__ import annotations
 
 import re
+import sys
 from collections import Counter
 from functools import lru_cache
 
-import pint
-
 from models.errors import MechanismError
 from models.disk_cache import cache_dir
+
+
+def _import_pint():
+    """pint, without its optional dask support. Where dask is installed (distributed sweeps)
+    pint imports it at once: 0.2 s of every process's start, for dask arrays of quantities that
+    flexmech never makes (its quantities are single numbers). importlib's find_spec answers None
+    for a name held as None in sys.modules, so pint sees no dask; the entry goes right after."""
+    if "dask" in sys.modules or "pint" in sys.modules:
+        import pint
+        return pint
+    sys.modules["dask"] = None  # type: ignore[assignment]
+    try:
+        import pint
+    finally:
+        del sys.modules["dask"]
+    return pint
+
+
+pint = _import_pint()
 
 # The kinds of quantity a document holds, with the SI unit each converts to.
 SI_UNITS: dict[str, str] = {
