@@ -14,7 +14,8 @@ Exit codes: 0 success; 1 the solver did not converge (status and diagnostics are
 and --json/--plot files are still written); 2 a problem with the document or the options,
 printed as one line "error: <where>: <problem>" on stderr.
 
-One module per command; importing it registers the command on the shared typer app.
+One module per command; importing it registers the command on the shared typer app. The
+`flexmech` script runs main() (service.cli.leaving): the app, then a quick exit.
 """
 
 from service.cli.application import app
@@ -29,5 +30,6 @@ from service.cli import serve  # noqa: F401
 from service.cli import contact  # noqa: F401
 from service.cli import simulate  # noqa: F401
 from service.cli import build  # noqa: F401
+from service.cli.leaving import main
 
-__all__ = ["app"]
+__all__ = ["app", "main"]

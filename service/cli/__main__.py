@@ -1,5 +1,5 @@
 """`python -m service.cli`: the flexmech command line."""
 
-from service.cli import app
+from service.cli import main
 
-app()
+main()
