@@ -121,14 +121,11 @@ def _lu(D: ca.SX) -> ca.SX:
     """Doolittle LU without pivoting, packed: strictly lower L (unit diagonal) and upper U.
     A block's pivots are a mass plus stiffness (its coordinates), then near 1 (its node
     quantities' definitions), or 1 (dummies): no pivoting is needed."""
-    n = D.shape[0]
-    A = [[D[i, j] for j in range(n)] for i in range(n)]
-    for k in range(n):
-        for i in range(k + 1, n):
-            A[i][k] = A[i][k] / A[k][k]
-            for j in range(k + 1, n):
-                A[i][j] = A[i][j] - A[i][k] * A[k][j]
-    return ca.vertcat(*[ca.horzcat(*row) for row in A])
+    A = ca.SX(D)
+    for k in range(D.shape[0] - 1):  # a column and a rank-one update per pivot, as matrix operations
+        A[k + 1:, k] = A[k + 1:, k] / A[k, k]
+        A[k + 1:, k + 1:] = A[k + 1:, k + 1:] - ca.mtimes(A[k + 1:, k], A[k, k + 1:])
+    return A
 
 
 def lu_solve(LU: ca.SX, b: ca.SX) -> ca.SX:
