@@ -37,7 +37,7 @@ differentiating the graph would take ten.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 
 import casadi as ca
 import numpy as np
@@ -164,24 +164,34 @@ def _combine(weights: np.ndarray, vectors: list[ca.SX]) -> ca.SX:
 
 def _lever_matrix(signature: ChainSignature, weights: np.ndarray, levers: list[tuple]) -> ca.SX:
     """(2, n_c): sum_s weights[s] dT_s/dc, for levers of the rule's points."""
+    stacked = ca.horzcat(*[q for lever in levers for q in lever])
+    return _weighted_levers(signature)(ca.DM(weights), stacked)
+
+
+@lru_cache(maxsize=None)
+def _weighted_levers(signature: ChainSignature) -> ca.Function:
+    """(weights (ns), levers (2 x 3 ns): rotation, shear, axial per point) -> (2, n_c): written
+    out once per signature and called (inlined) with each sum's weights. A zero weight's term
+    folds away (0 x = 0, y + 0 = y): the same expressions as writing out every sum, built once."""
     pts = signature.points
+    ns = len(pts.xi)
+    weights, levers = ca.SX.sym("weights", ns), ca.SX.sym("levers", 2, 3 * ns)
     blocks = [ca.SX.zeros(2, signature.degree + 1)]
     if signature.shear:
         blocks.append(ca.SX.zeros(2, signature.degree))
     if signature.axial:
         blocks.append(ca.SX.zeros(2, signature.degree))
-    for s, weight in enumerate(weights):
-        if weight == 0.0:
-            continue
-        rotation, shear, axial = levers[s]
-        blocks[0] = blocks[0] + float(weight) * ca.mtimes(rotation, ca.DM(pts.rotation[s]).T)
+    for s in range(ns):
+        weight = weights[s]
+        rotation, shear, axial = (levers[:, 3 * s + i] for i in range(3))
+        blocks[0] = blocks[0] + weight * ca.mtimes(rotation, ca.DM(pts.rotation[s]).T)
         k = 1
         if signature.shear:
-            blocks[k] = blocks[k] + float(weight) * ca.mtimes(shear, ca.DM(pts.strain[s]).T)
+            blocks[k] = blocks[k] + weight * ca.mtimes(shear, ca.DM(pts.strain[s]).T)
             k += 1
         if signature.axial:
-            blocks[k] = blocks[k] + float(weight) * ca.mtimes(axial, ca.DM(pts.strain[s]).T)
-    return ca.horzcat(*blocks)
+            blocks[k] = blocks[k] + weight * ca.mtimes(axial, ca.DM(pts.strain[s]).T)
+    return ca.Function(f"{signature.key}_weighted_levers", [weights, levers], [ca.horzcat(*blocks)])
 
 
 @dataclass
