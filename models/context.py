@@ -55,14 +55,15 @@ class AssemblyContext:
         return ca.SX.zeros(2)
 
     def body_axes(self, b: int, point: ca.SX) -> ca.SX:
-        """A global undeformed point in body b's axes, from its reference point."""
+        """A global undeformed point (or 2 x n points) in body b's axes, from its reference point."""
         r_hat, th_hat = self.reference(b)
-        return rot(th_hat).T @ (point - r_hat)
+        return rot(th_hat).T @ (point - _spread(r_hat, point))
 
     def place(self, b: int, local: ca.SX, d: list[ca.SX]) -> ca.SX:
-        """Global position of a point of body b (body axes `local`) for displacements d."""
+        """Global position of a point (or 2 x n points) of body b (body axes `local`) for
+        displacements d."""
         r_hat, th_hat = self.reference(b)
-        return r_hat + d[b][:2] + rot(th_hat + d[b][2]) @ local
+        return _spread(r_hat + d[b][:2], local) + rot(th_hat + d[b][2]) @ local
 
     def arm(self, b: int, local: ca.SX, d: list[ca.SX]) -> ca.SX:
         """From body b's displaced reference point to its point `local`, global axes."""
@@ -91,3 +92,9 @@ class AssemblyContext:
                     comps.append(self.P[row[c]])
             out.append(ca.vertcat(*comps))
         return out
+
+
+def _spread(column: ca.SX, like) -> ca.SX:
+    """column repeated over like's columns (a point, or 2 x n points); itself for one."""
+    n = like.shape[1] if len(getattr(like, "shape", ())) == 2 else 1
+    return column if n == 1 else ca.repmat(column, 1, n)

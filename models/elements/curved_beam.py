@@ -211,20 +211,19 @@ def _outputs(st: dict) -> list[tuple[str, str, ca.SX]]:
 def _centre_line(ctx: AssemblyContext, f: FlexureTopology, st: dict, d) -> CentreLine:
     """The undeformed arc, and a display of the deformed one that blends the two end bodies'
     rigid motions (exact at both ends, end tangents included); the beam's own deflection
-    field is not modelled by the constant-stiffness models."""
+    field is not modelled by the constant-stiffness models. All samples at once, as matrices
+    (2 x samples): the same operations per sample as one at a time, built several times faster."""
     arc = st["arc"]
     start_angle = arc.start_frame_angle - ca.pi / 2
     center = arc.start_point - st["r"] * ca.vertcat(ca.cos(start_angle), ca.sin(start_angle))
-    deformed, undeformed = [], []
-    for k in range(ARC_SAMPLES):
-        t = k / (ARC_SAMPLES - 1)
-        a = start_angle + t * st["theta_f"]
-        pt = center + st["r"] * ca.vertcat(ca.cos(a), ca.sin(a))
-        ends = [ctx.place(b, ctx.body_axes(b, pt), d) for b in (f.start_body, f.end_body)]
-        blend = 3 * t**2 - 2 * t**3
-        deformed.append((1 - blend) * ends[0] + blend * ends[1])
-        undeformed.append(pt)
-    return CentreLine(deformed, undeformed, [st["h"] / 2] * ARC_SAMPLES)
+    ts = [k / (ARC_SAMPLES - 1) for k in range(ARC_SAMPLES)]
+    a = start_angle + ca.DM(ts).T * st["theta_f"]
+    points = ca.repmat(center, 1, ARC_SAMPLES) + st["r"] * ca.vertcat(ca.cos(a), ca.sin(a))
+    ends = [ctx.place(b, ctx.body_axes(b, points), d) for b in (f.start_body, f.end_body)]
+    blend = [3 * t**2 - 2 * t**3 for t in ts]
+    deformed = (ca.repmat(ca.DM([1 - q for q in blend]).T, 2, 1) * ends[0]
+                + ca.repmat(ca.DM(blend).T, 2, 1) * ends[1])
+    return CentreLine(ca.horzsplit(deformed), ca.horzsplit(points), [st["h"] / 2] * ARC_SAMPLES)
 
 
 CURVED_BEAM = CurvedBeamFamily()
