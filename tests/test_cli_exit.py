@@ -41,8 +41,8 @@ def test_a_bad_document_exits_with_2_and_says_why(tmp_path):
 
 
 def test_what_a_command_printed_is_flushed_before_the_exit():
-    """print() into a pipe is block-buffered (unless PYTHONUNBUFFERED is set, as it is on some
-    machines: not here): without the flush the lines would be lost."""
+    """print() into a pipe is block-buffered (PYTHONUNBUFFERED, which some machines set, is
+    unset for the child): without the flush the lines would be lost."""
     buffered = {k: v for k, v in os.environ.items() if k != "PYTHONUNBUFFERED"}
     script = ("import sys, service.cli.leaving as leaving\n"
               "def app():\n    print('\\n'.join(f'line {i}' for i in range(100)))\n    sys.exit(3)\n"

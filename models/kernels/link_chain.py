@@ -176,21 +176,12 @@ def _weighted_levers(signature: ChainSignature) -> ca.Function:
     pts = signature.points
     ns = len(pts.xi)
     weights, levers = ca.SX.sym("weights", ns), ca.SX.sym("levers", 2, 3 * ns)
-    blocks = [ca.SX.zeros(2, signature.degree + 1)]
-    if signature.shear:
-        blocks.append(ca.SX.zeros(2, signature.degree))
-    if signature.axial:
-        blocks.append(ca.SX.zeros(2, signature.degree))
+    blocks = [ca.SX.zeros(2, signature.degree + (k == 0)) for k in range(1 + signature.shear + signature.axial)]
     for s in range(ns):
-        weight = weights[s]
         rotation, shear, axial = (levers[:, 3 * s + i] for i in range(3))
-        blocks[0] = blocks[0] + weight * ca.mtimes(rotation, ca.DM(pts.rotation[s]).T)
-        k = 1
-        if signature.shear:
-            blocks[k] = blocks[k] + weight * ca.mtimes(shear, ca.DM(pts.strain[s]).T)
-            k += 1
-        if signature.axial:
-            blocks[k] = blocks[k] + weight * ca.mtimes(axial, ca.DM(pts.strain[s]).T)
+        bases = [(rotation, pts.rotation[s])] + [(shear, pts.strain[s])] * signature.shear \
+            + [(axial, pts.strain[s])] * signature.axial
+        blocks = [block + weights[s] * ca.mtimes(lever, ca.DM(basis).T) for block, (lever, basis) in zip(blocks, bases)]
     return ca.Function(f"{signature.key}_weighted_levers", [weights, levers], [ca.horzcat(*blocks)])
 
 

@@ -1,7 +1,7 @@
 """The `flexmech` script's entry: the command, then an exit without Python's teardown.
 
 Tearing the interpreter down (every module's objects freed one by one: pint's, pydantic's,
-CasADi's) takes 0.15-0.2 s after every command, a twentieth of a cold simulation. Like mypy's
+CasADi's) takes 0.15-0.2 s after every command, about a twentieth of a cold simulation. Like mypy's
 hard exit, main() leaves by os._exit once the command is done and nothing is left to end: the
 atexit handlers have run and the streams are flushed. A command that leaves a thread or a
 child process behind (a server, a pool, a Dask cluster) exits the ordinary way.
@@ -29,6 +29,7 @@ def exit_code(exc: SystemExit) -> int:
 
 
 def main() -> None:
+    """The `flexmech` script: run the command, then leave quickly where nothing else runs."""
     try:
         app()
         code = 0

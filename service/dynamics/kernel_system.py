@@ -109,6 +109,7 @@ class StepSystem:
         self.structure, self.moving, self.level = structure, moving, level
         self.chunks: list[Chunks] = [(compiled or {}).get(g.signature) or chunks(g.signature)
                                      for g in self.layout.groups]
+        # no compiled kernel at all: the time step may expand them (kernel_window.Stepper.gated_iteration)
         self.interpreted = not any(g.signature in (compiled or {}) for g in self.layout.groups)
         self.global_part = _gated(global_part(self.layout, moving, level))
         self.start_nodes = _gated(start_nodes(self.layout, moving))
