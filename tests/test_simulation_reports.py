@@ -14,6 +14,7 @@ from conftest import EXAMPLES
 from models import compile_mechanism, load_document
 from models.assembly import build_functions
 from service.dynamics.run import run_simulation, simulation_spec
+from service.dynamics.state_map import state_map
 from service.equilibrium import solve_equilibrium
 
 
@@ -63,3 +64,16 @@ def test_statics_after_a_simulation_builds_the_whole_form(tmp_path, monkeypatch)
     for name in ("bodies.tip.x", "bodies.tip.y", "bodies.tip.angle"):
         kind = mech.graphs.output_kinds[names.index(name)]
         assert report["outputs"][name][0] == pytest.approx(y[names.index(name)] / mech.nd_per_doc(kind), rel=1e-9)
+
+
+@pytest.mark.parametrize("example", ["rod_free_vibration.json", "four_bar_dynamics.json", "slider_crank_dynamics.json",
+                                     "rod_tip_mass_gravity.json", "spinning_rod_case1.json"])
+def test_the_state_map_is_the_energy_forms(example):
+    """A report places the kernels' state in z by service.dynamics.state_map, from element counts;
+    the energy form places it by building every element's terms: they must agree."""
+    mech = compile_mechanism(load_document(EXAMPLES / example))
+    form, light = mech.graphs.energy_form, state_map(mech.structure)
+    assert light.x_in_state == form.x_in_state and light.multipliers_in_state == form.multipliers_in_state
+    rng = np.random.default_rng(4)
+    x, lam = rng.standard_normal(len(form.x_in_state)), rng.standard_normal(len(form.multipliers_in_state))
+    np.testing.assert_array_equal(light.to_state(x, lam), form.to_state(x, lam))

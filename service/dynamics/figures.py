@@ -9,6 +9,7 @@ import numpy as np
 
 from models import Mechanism
 from service.dynamics.integrate import History
+from service.dynamics.state_map import state_map
 
 
 def plot_history(report: dict, outputs: list[str], path: Path) -> None:
@@ -38,7 +39,7 @@ def plot_history(report: dict, outputs: list[str], path: Path) -> None:
 
 
 def _centre_lines(mech: Mechanism, history: History, chosen) -> list[np.ndarray]:
-    form = mech.graphs.energy_form
+    form = state_map(mech.structure)
     scale = mech.scales.length / mech.doc_factor("length")
     return [np.asarray(mech.graphs.shapes(form.to_state(history.x[k], history.lam[k]), history.p[k])[0]) * scale
             for k in chosen]

@@ -19,6 +19,7 @@ from service.dynamics.adaptive import Tolerance
 from service.dynamics.histories import Histories, read_histories
 from service.dynamics.integrate import History, integrate
 from service.dynamics.schemes import Scheme, generalized_alpha, newmark
+from service.dynamics.state_map import state_map
 from service.dynamics.static_start import static_shape
 from service.dynamics.stepping import engine_of
 from service.energy import minimize_energy
@@ -146,7 +147,7 @@ def run_simulation(mech: Mechanism, spec: SimulateSpec, stop=None, progress=None
 def records(mech: Mechanism, spec: SimulateSpec, history: History, histories) -> dict:
     """The kept states of a history in document units: times, outputs, constraint forces,
     the prescribed motions' reactions, and the energies and works (from t = 0)."""
-    form = mech.graphs.energy_form
+    form = state_map(mech.structure)
     names, kinds = mech.graphs.output_names, mech.graphs.output_kinds
     wanted = wanted_outputs(mech, spec)
     if history.times:
