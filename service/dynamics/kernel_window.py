@@ -74,6 +74,15 @@ class Stepper:
                 ca.MX.sym("pdot", self.n_moving), ca.MX.sym("pddot", self.n_moving), ca.MX.sym("damping"),
                 ca.MX.sym("mask", self.n_p), data)
 
+    def _iteration_symbols(self):
+        """(factors, a step's symbols, the step's shared inputs from them), made in this order."""
+        f = self._factor_symbols()
+        state, h, p, pdot, pddot, damping, mask, data = self._symbols()
+        _, k = self.coefficients(h)
+        affine, _ = self._affine(state, h)
+        return f, (state, h, p, pdot, pddot, damping, mask, data), self.system.step_inputs(
+            affine, k, p, pdot, pddot, damping, mask, data)
+
     def _factor_symbols(self) -> Factors:
         sys = self.system
         shapes = [(ch.factor_size, gr.blocks) for ch, gr in zip(sys.chunks, sys.groups)]
@@ -155,11 +164,7 @@ class Stepper:
         (a secant step); nothing is computed once the residual is below the tolerance (the
         evaluation's parts keep the last ones that ran)."""
         sys = self.system
-        f = self._factor_symbols()
-        state, h, p, pdot, pddot, damping, mask, data = self._symbols()
-        _, k = self.coefficients(h)
-        affine, _ = self._affine(state, h)
-        si = sys.step_inputs(affine, k, p, pdot, pddot, damping, mask, data)
+        f, (state, h, p, pdot, pddot, damping, mask, data), si = self._iteration_symbols()
         Z, previous, g_previous = (ca.MX.sym(name, sys.n_z) for name in ("Z", "previous", "g_previous"))
         have, used = ca.MX.sym("have"), ca.MX.sym("used")
         shapes = [part.shape for part in sys.evaluate(Z, ca.MX(1), si, f.kept_reverse).parts()]
@@ -202,14 +207,9 @@ class Stepper:
     def evaluation_function(self) -> ca.Function:
         """(kept_rev..., state, h, p, pdot, pddot, damping, mask, data..., Z) -> the
         evaluation's parts: a step's first evaluation, expanded like gated_iteration."""
-        sys = self.system
-        f = self._factor_symbols()
-        state, h, p, pdot, pddot, damping, mask, data = self._symbols()
-        _, k = self.coefficients(h)
-        affine, _ = self._affine(state, h)
-        si = sys.step_inputs(affine, k, p, pdot, pddot, damping, mask, data)
-        Z = ca.MX.sym("Z", sys.n_z)
-        ev = sys.evaluate(Z, ca.MX(1), si, f.kept_reverse)
+        f, (state, h, p, pdot, pddot, damping, mask, data), si = self._iteration_symbols()
+        Z = ca.MX.sym("Z", self.system.n_z)
+        ev = self.system.evaluate(Z, ca.MX(1), si, f.kept_reverse)
         return ca.Function("kernel_evaluation", [*f.kept_reverse, state, h, p, pdot, pddot, damping, mask, *data, Z],
                            ev.parts()).expand()
 
