@@ -31,6 +31,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 from api.errors import ApiError
 from models import MechanismError
+from models.graph_cache import defer_saves, flush_saves
 
 log = logging.getLogger("flexmech.solvers")
 
@@ -78,6 +79,7 @@ def _serve(connection, name: bytes = WORKER_NAME) -> None:
 
     single_threaded_blas()
     job_kinds()  # the solvers' imports now, not in the first request
+    defer_saves()  # a new structure's graphs go to the disk cache after its answer, not before
     while True:
         try:
             fn, args, kwargs = connection.recv()
@@ -91,6 +93,7 @@ def _serve(connection, name: bytes = WORKER_NAME) -> None:
             connection.send(outcome)
         except Exception as exc:  # a result that does not pickle
             connection.send(_packed(exc))
+        flush_saves()
 
 
 def _unpacked(outcome: tuple):

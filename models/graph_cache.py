@@ -8,6 +8,10 @@ least recently used evicted) when first built, and a new process
 hashes the sources of the models package and the CasADi version: any change to how graphs
 are built makes a new folder. Files are written to a temporary name and renamed, so a
 concurrent reader never sees half a file; a file that does not load is rebuilt.
+
+Writing a large structure's graphs takes 0.3-0.45 s (CasADi's serializer), most of what its
+first solve has left after building them. A solver worker (api.solver_pool) defers the
+writing until its answer has gone out: defer_saves(), then flush_saves() between calls.
 """
 
 from __future__ import annotations
@@ -37,6 +41,27 @@ def code_version() -> str:
         digest.update(str(path.relative_to(root)).encode())
         digest.update(path.read_bytes())
     return digest.hexdigest()[:12]
+
+
+_deferred: list[Callable[[], None]] | None = None  # saves waiting for flush_saves(); None: save at once
+
+
+def defer_saves() -> None:
+    """From now on, graphs built in this process are written by flush_saves(), not at once."""
+    global _deferred
+    if _deferred is None:
+        _deferred = []
+
+
+def flush_saves() -> None:
+    """Write the graphs whose saving was deferred (a save that fails is logged: the graphs are
+    built again by the next process that needs them)."""
+    while _deferred:
+        save = _deferred.pop(0)
+        try:
+            save()
+        except Exception as exc:  # noqa: BLE001 (CasADi's serializer raises RuntimeError)
+            log.warning("cannot save graphs: %s", exc)
 
 
 def write_atomically(target: Path, write) -> None:
@@ -103,7 +128,10 @@ class GraphStore:
         functions, meta = self.build(self.structure)
         self._functions.update(functions)
         self._meta = meta
-        self._save(functions, meta)
+        if _deferred is None:
+            self._save(functions, meta)
+        else:
+            _deferred.append(lambda: self._save(functions, meta))
 
     def _save(self, functions: dict[str, ca.Function], meta: dict) -> None:
         try:

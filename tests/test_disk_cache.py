@@ -1,11 +1,18 @@
 """The disk cache is bounded: over its size, whole entries go, least recently used first, and
-using an entry (loading its graphs or kernels) makes it recent."""
+using an entry (loading its graphs or kernels) makes it recent. A solver worker writes a new
+structure's graphs after its answer."""
 
 from __future__ import annotations
 
 import os
 
+import numpy as np
+
+from conftest import EXAMPLES
+from models import compile_mechanism, graph_cache, load_document
+from models.assembly import build_functions
 from models.disk_cache import bound, entries, touch
+from models.graph_cache import GraphStore
 
 
 def _entry(root, section: str, name: str, size: int, used: float):
@@ -35,3 +42,26 @@ def test_the_bound_is_a_setting(tmp_path, monkeypatch):
     kept = _entry(tmp_path, "libraries", "b", 3000, 2_000)
     gone = _entry(tmp_path, "libraries", "a", 3000, 1_000)
     assert bound() == [gone] and kept.exists()
+
+
+def test_deferred_graphs_are_written_at_the_flush_and_then_loaded(tmp_path, monkeypatch):
+    """A solver worker defers writing a new structure's graphs until its answer has gone out
+    (models.graph_cache.defer_saves): nothing is on disk before the flush, everything after,
+    and another store (another process) loads them instead of building."""
+    monkeypatch.setenv("FLEXMECH_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(graph_cache, "_deferred", None)  # restored after the test: saving at once
+    graph_cache.defer_saves()
+    mech = compile_mechanism(load_document(EXAMPLES / "cantilever.json"))
+    built = GraphStore(mech.structure, build_functions)
+    residual = built.function("residual")
+    assert not list(tmp_path.rglob("*.casadi"))
+    graph_cache.flush_saves()
+    (meta,) = tmp_path.glob("graphs/*/meta.json")
+    assert (meta.parent / "residual_and_tangent.casadi").exists()
+
+    def build_again(structure):
+        raise AssertionError("the saved graphs were built again")
+
+    loaded = GraphStore(mech.structure, build_again).function("residual")
+    z = np.linspace(0.0, 0.01, residual.size1_in(0))
+    np.testing.assert_array_equal(np.asarray(loaded(z, mech.p())), np.asarray(residual(z, mech.p())))
