@@ -65,12 +65,10 @@ def build_functions(structure: Structure) -> tuple[dict[str, ca.Function], dict]
     """The residual form's Functions and their metadata (output names and kinds, segments)."""
     ctx, z, d, parts, applied = _symbolic(structure)
     p = ctx.p
-    # The residual's common subexpressions are merged before it is differentiated, so its
-    # tangent comes out merged too: the same values (every example's residual to the last bit,
-    # its tangent to round-off) in 4-5% more instructions, where CasADi's pass over the residual
-    # and its tangent together took 0.5-0.66 s of a large structure's first solve (six_bar,
-    # gripper_exact), 0.2 s now.
-    R = ca.cse(residual_of(ctx, parts, applied))
+    # No pass of CasADi's cse over the residual (0.1-0.17 s of a large structure's first
+    # solve): the families write no common subexpression twice (a link's steps share their
+    # first slope, its unloaded nodes are merged per link), so it would merge less than 0.2%.
+    R = residual_of(ctx, parts, applied)
     K = jacobian(R, z)
     functions = {
         "residual": ca.Function("residual", [z, p], [R], ["z", "p"], ["R"]),

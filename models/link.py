@@ -30,9 +30,11 @@ link is one SX graph with exact derivatives.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable
+from typing import Callable, NamedTuple
 
 import casadi as ca
+
+from models.link_steps import general_step, local_form
 
 STATE = ("psi", "m", "x", "y", "e", "mu")  # mu only for links with mass
 
@@ -58,36 +60,54 @@ class LinkProperties:
         return 6 if self.line_mass is not None else 5
 
 
-def rhs_function(props: LinkProperties, p: ca.SX, weighed: bool = True) -> ca.Function:
-    """f(u, s, n, p) -> s' for the state s (props.states) and the internal force n = (h, v)
-    at u = 0; weighed (with gravity and a line mass), the force at u is n - mu(u) g: n less
-    the weight of the part behind."""
+class RightHandSide(NamedTuple):
+    f: ca.Function  # (u, s, n, P) -> s'
+    P: ca.SX  # the parameters f reads
+    uniform: bool  # every coefficient uniform along the link: f computes no parameter alone
+
+
+def rhs_function(props: LinkProperties, p: ca.SX, weighed: bool = True) -> RightHandSide:
+    """f(u, s, n, P) -> s' for the state s (props.states) and the internal force n = (h, v) at
+    u = 0; weighed (with gravity and a line mass), the force at u is n - mu(u) g: n less the
+    weight of the part behind. P is the link's coefficients that are uniform along it (its
+    length, and each stiffness, slope and line mass that does not vary with u), then p: they
+    are computed once per link instead of at each of the hundreds of evaluations of f, and
+    links of one kind share one form of f (models.link_steps)."""
     u, s, n_start = ca.SX.sym("u"), ca.SX.sym("s", props.states), ca.SX.sym("n", 2)
+    u_eta = ca.SX.sym("u_eta")
+    fields = {"L": props.length, "EI": props.EI(u),
+              "EA": props.EA(u) if props.EA is not None else None,
+              "kGA": props.kGA(u) if props.kGA is not None else None,
+              "slope": ca.substitute(ca.jacobian(ca.SX(props.eta(u_eta)), u_eta), u_eta, u),
+              "mass": props.line_mass(u) if props.line_mass is not None else None}
+    given = {name: value for name, value in fields.items() if value is not None and not ca.SX(value).is_constant()}
+    uniform = [name for name, value in given.items() if not ca.depends_on(value, u)]
+    c = ca.SX.sym("c", len(uniform))
+    at = {name: (c[uniform.index(name)] if name in uniform else value) for name, value in fields.items()}
     psi, m = s[0], s[1]
     n = n_start
     if weighed and props.line_mass is not None and props.gravity is not None:
         n = n_start - s[5] * props.gravity
     h, v = n[0], n[1]
-    L = props.length
-    c, sn = ca.cos(psi), ca.sin(psi)
-    N = h * c + v * sn
-    V = -h * sn + v * c
-    EI = props.EI(u)
-    eps = N / props.EA(u) if props.EA is not None else 0
-    gamma = V / props.kGA(u) if props.kGA is not None else 0
-    dx = L * ((1 + eps) * c - gamma * sn)
-    dy = L * ((1 + eps) * sn + gamma * c)
-    u_eta = ca.SX.sym("u_eta")
-    eta_slope = ca.substitute(ca.jacobian(ca.SX(props.eta(u_eta)), u_eta), u_eta, u)
+    L, EI, EA, kGA = at["L"], at["EI"], at["EA"], at["kGA"]
+    c_psi, s_psi = ca.cos(psi), ca.sin(psi)
+    N = h * c_psi + v * s_psi
+    V = -h * s_psi + v * c_psi
+    eps = N / EA if EA is not None else 0
+    gamma = V / kGA if kGA is not None else 0
+    dx = L * ((1 + eps) * c_psi - gamma * s_psi)
+    dy = L * ((1 + eps) * s_psi + gamma * c_psi)
     energy = m**2 / (2 * EI)
-    if props.EA is not None:
-        energy = energy + N**2 / (2 * props.EA(u))
-    if props.kGA is not None:
-        energy = energy + V**2 / (2 * props.kGA(u))
-    ds = [eta_slope + L * m / EI, h * dy - v * dx, dx, dy, L * energy]
-    if props.line_mass is not None:
-        ds.append(props.line_mass(u))
-    return ca.Function("link_rhs", [u, s, n_start, p], [ca.vertcat(*ds)], ["u", "s", "n", "p"], ["ds"])
+    if EA is not None:
+        energy = energy + N**2 / (2 * EA)
+    if kGA is not None:
+        energy = energy + V**2 / (2 * kGA)
+    ds = [at["slope"] + L * m / EI, h * dy - v * dx, dx, dy, L * energy]
+    if at["mass"] is not None:
+        ds.append(at["mass"])
+    P = ca.vertcat(c, p)
+    f = ca.Function("link_rhs", [u, s, n_start, P], [ca.vertcat(*ds)], ["u", "s", "n", "p"], ["ds"])
+    return RightHandSide(f, ca.vertcat(*[fields[name] for name in uniform], p), len(uniform) == len(given))
 
 
 def inverse_rhs_function(props: LinkProperties, psi: Callable[[ca.SX], ca.SX], p: ca.SX, q: ca.SX) -> ca.Function:
@@ -117,9 +137,10 @@ def extrapolated_step(f: ca.Function, u0, s0, H, order: int, n, p) -> ca.SX:
     levels = order // 2
     steps = [2 * (j + 1) for j in range(levels)]
     table: list[list[ca.SX]] = []
+    slope0 = f(u0, s0, n, p)  # every sequence starts with it: written once
     for j, count in enumerate(steps):
         h = H / count
-        previous, current = s0, s0 + h * f(u0, s0, n, p)
+        previous, current = s0, s0 + h * slope0
         for i in range(1, count):
             previous, current = current, previous + 2 * h * f(u0 + i * h, current, n, p)
         row = [current]
@@ -147,31 +168,28 @@ class LinkShooting:
     def __init__(self, props: LinkProperties, p: ca.SX, intervals: int, order: int,
                  rhs: ca.Function | None = None, rhs_parameters: ca.SX | None = None):
         self.props = props
-        self.p = p if rhs_parameters is None else rhs_parameters
         self.K = intervals
         self.order = order
-        self.f = rhs_function(props, p) if rhs is None else rhs
+        f, P, self.uniform = rhs_function(props, p) if rhs is None else (rhs, rhs_parameters, False)
         self.weighed = rhs is None and props.line_mass is not None and props.gravity is not None
         # The unloaded link: no internal force and no weight (its own weight is a load).
-        self.f_unloaded = rhs_function(props, p, weighed=False) if self.weighed else self.f
+        f_unloaded, P_unloaded, _ = rhs_function(props, p, weighed=False) if self.weighed else (f, P, None)
         self.H = 1.0 / intervals
-        self._steps: dict[tuple, ca.Function] = {}
+        loaded = local_form(f)
+        self._forms = {False: loaded, True: loaded if f_unloaded is f else local_form(f_unloaded)}
+        self._q = {False: P[loaded.used], True: P_unloaded[self._forms[True].used]}
 
-    def step(self, k: int, s, n, H=None, u0=None, order=None, unloaded: bool = False):
+    def step(self, k: int, s, n, H=None, u0=None, order=None, unloaded: bool = False, inline: bool = True):
+        """s at u0 + H (default: node k to node k + 1), by the general step of the link's form
+        of right-hand side (models.link_steps). inline=False keeps the step a call in the
+        graph: for what only reports (samples, error estimates), which then costs a node to
+        build instead of the step's whole expression, and is differentiated and generated as a
+        call."""
         H = self.H if H is None else H
         u0 = k * self.H if u0 is None else u0
-        return self._step_function(H, order or self.order, unloaded)(u0, s, n, self.p)
-
-    def _step_function(self, H: float, order: int, unloaded: bool) -> ca.Function:
-        """(u0, s, n, p) -> s at u0 + H: one extrapolated step written out once per step length
-        and order, and called (inlined) at every node: the same expressions as writing out
-        every step, built several times faster (a link's graph is mostly its steps)."""
-        key = (H, order, unloaded)
-        if key not in self._steps:
-            f = self.f_unloaded if unloaded else self.f
-            u0, s, n, p = (ca.SX.sym(name, f.sparsity_in(i)) for i, name in enumerate(("u0", "s", "n", "p")))
-            self._steps[key] = ca.Function("link_step", [u0, s, n, p], [extrapolated_step(f, u0, s, H, order, n, p)])
-        return self._steps[key]
+        step = general_step(self._forms[unloaded], order or self.order, extrapolated_step)
+        args = [ca.SX(u0), s, n, self._q[unloaded], ca.SX(H)]
+        return step(*args) if inline else step.call(args, False, True)[0]
 
     def _with_energy_reset(self, head: ca.SX, state: ca.SX) -> ca.SX:
         """(psi, m, x, y) `head`, the energy restarted at 0, and the mass carried over."""
@@ -191,7 +209,10 @@ class LinkShooting:
         for k in range(self.K):
             s = self.step(k, self._with_energy_reset(s[:4], s), zero, unloaded=True)
             nodes.append(s)
-        return nodes
+        # Unloaded, each step recomputes what depends on the parameters alone (a straight
+        # link's cos and sin of its angle, at every evaluation): merged here, on the link's
+        # few thousand nodes, the structure's residual needs no pass over it all.
+        return ca.vertsplit(ca.cse(ca.vertcat(*nodes)), s.numel())
 
     def solve_nodes(self, zl: ca.SX, start_xy: ca.SX, undeformed: list[ca.SX]) -> LinkSolution:
         """Deformed node states from the link's unknowns zl = [h, v, dpsi0, m0, (dpsi, m, dx,
@@ -226,9 +247,9 @@ class LinkShooting:
         scale = 1 - 2.0 ** (-self.order)
         for k in range(self.K):
             s = solution.nodes[k]
-            full = self.step(k, s, solution.n)
-            half = self.step(k, s, solution.n, H=self.H / 2)
-            half = self.step(k, half, solution.n, H=self.H / 2, u0=(k + 0.5) * self.H)
+            full = self.step(k, s, solution.n, inline=False)
+            half = self.step(k, s, solution.n, H=self.H / 2, inline=False)
+            half = self.step(k, half, solution.n, H=self.H / 2, u0=(k + 0.5) * self.H, inline=False)
             diff = (full - half) / scale
             total_position = total_position + ca.norm_2(diff[2:4])
             total_angle = total_angle + ca.fabs(diff[0])
@@ -242,7 +263,7 @@ class LinkShooting:
             s = solution.nodes[k]
             out.append(s)
             for i in range(1, per_interval):
-                s = self.step(k, s, solution.n, H=H, u0=k * self.H + (i - 1) * H)
+                s = self.step(k, s, solution.n, H=H, u0=k * self.H + (i - 1) * H, inline=False)
                 out.append(s)
         out.append(solution.nodes[-1])
         return out
@@ -256,7 +277,7 @@ class LinkShooting:
             s = nodes[k]
             out.append(s)
             for q in range(1, per_interval):
-                s = self.step(k, s, zero, H=H, u0=k * self.H + (q - 1) * H, unloaded=True)
+                s = self.step(k, s, zero, H=H, u0=k * self.H + (q - 1) * H, unloaded=True, inline=False)
                 out.append(s)
         out.append(nodes[-1])
         return out

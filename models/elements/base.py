@@ -67,6 +67,7 @@ class Contribution:
     outputs: list[tuple[str, str, ca.SX]] = field(default_factory=list)  # (name, kind, value)
     energy: ca.SX | None = None  # strain energy, for reporting (models without an energy form too)
     centre_line: CentreLine | None = None
+    merged: bool = False  # no common subexpression in from_bodies and rows is written twice
 
 
 @dataclass

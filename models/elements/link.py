@@ -235,7 +235,7 @@ class LinkFamily:
         if t.weighs:
             outputs.append(("mass", "mass", sol.undeformed[-1][5]))
         return Contribution({t.start_body: attached.on_start, t.end_body: attached.on_end}, attached.rows,
-                            outputs, sol.energy, _centre_line(shooting, sol, samples))
+                            outputs, sol.energy, _centre_line(shooting, sol, samples), merged=shooting.uniform)
 
     def unknowns(self, t: LinkTopology) -> list[tuple[str, str]]:
         """h, v, rotation_start, M_start, then nodeK.psi, .m, .dx, .dy of the inner nodes."""
