@@ -5,7 +5,9 @@ Graphs depend on names only through labels (output names, drawn segments) and th
 pointers that find a number among the parameters. Replacing every name by a token in order
 of first appearance (a bijection applied to the name fields and to the name segment of
 every pointer, nowhere else) gives a structure whose graphs serve every renaming of it; the
-labels of its metadata are turned back into a mechanism's own names by `named`.
+labels of its metadata are turned back into a mechanism's own names by `named`. A name is
+tokenized within its collection: an output called like its body ("J2" and "J2") and the same
+output renamed are one structure.
 """
 
 from __future__ import annotations
@@ -21,6 +23,11 @@ NAME_FIELDS = frozenset({"name", "material", "section", "element", "link", "bodi
 POINTER_FIELDS = frozenset({"pointer", "prescribed"})
 NAMED_SECTIONS = frozenset({"bodies", "elements", "loads", "outputs", "materials", "sections"})
 TOKEN = re.compile(r"⟨(\d+)⟩")
+# The collection of a `name` field, by the class that holds it (a class not listed: its own)
+NAME_OWNERS = {"LoadTopology": "loads", "PointTopology": "outputs", "SectionTopology": "sections",
+               "ObjectTopology": "contacts/objects", "SiteTopology": "contacts/sites", "PairTopology": "contacts/pairs"}
+FIELD_COLLECTIONS = {"material": "materials", "section": "sections", "bodies": "bodies", "element": "elements",
+                     "link": "elements"}
 # A name with these could be taken for a token ('/' and '~', which would split a pointer, are
 # refused by models.collect anyway): such a structure keeps its own names and graphs.
 UNSAFE = re.compile(r"[/~⟨⟩]")
@@ -29,40 +36,49 @@ UNSAFE = re.compile(r"[/~⟨⟩]")
 class _Renamer:
     def __init__(self):
         self.names: list[str] = []
-        self.tokens: dict[str, str] = {}
+        self.tokens: dict[tuple[str, str], str] = {}
 
-    def token(self, name: str) -> str:
+    def token(self, name: str, collection: str) -> str:
         if UNSAFE.search(name):
             raise _Unsafe(name)
-        if name not in self.tokens:
-            self.tokens[name] = f"⟨{len(self.names)}⟩"
+        key = (collection, name)
+        if key not in self.tokens:
+            self.tokens[key] = f"⟨{len(self.names)}⟩"
             self.names.append(name)
-        return self.tokens[name]
+        return self.tokens[key]
 
     def pointer(self, pointer: str) -> str:
         parts = pointer.split("/")
         at = 3 if len(parts) > 3 and parts[1] == "contacts" else 2 if len(parts) > 2 and parts[1] in NAMED_SECTIONS else 0
         if at:
-            parts[at] = self.token(parts[at])
+            parts[at] = self.token(parts[at], "/".join(parts[1:at]))
         return "/".join(parts)
 
-    def value(self, value: Any, role: str | None) -> Any:
+    def value(self, value: Any, role: str | None, collection: str = "") -> Any:
         if isinstance(value, str):
             if role == "name":
-                return self.token(value)
+                return self.token(value, collection)
             return self.pointer(value) if role == "pointer" else value
         if isinstance(value, tuple):
             if role == "reactions":  # (output name, body)
-                return tuple((self.token(name), body) for name, body in value)
-            return tuple(self.value(item, role) for item in value)
+                return tuple((self.token(name, "outputs"), body) for name, body in value)
+            return tuple(self.value(item, role, collection) for item in value)
         if is_dataclass(value) and not isinstance(value, type):
-            return replace(value, **{f.name: self.value(getattr(value, f.name), _role(f.name)) for f in fields(value)
-                                     if f.init})
+            return replace(value, **{f.name: self.value(getattr(value, f.name), _role(f.name), _collection(value, f.name))
+                                     for f in fields(value) if f.init})
         return value
 
 
 class _Unsafe(Exception):
     pass
+
+
+def _collection(holder: Any, field: str) -> str:
+    """The collection whose names a field of `holder` holds: elements' names are their own."""
+    if field != "name":
+        return FIELD_COLLECTIONS.get(field, field)
+    owner = type(holder).__name__
+    return NAME_OWNERS.get(owner, "elements" if owner.endswith("Topology") else owner)
 
 
 def _role(field: str) -> str | None:

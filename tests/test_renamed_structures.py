@@ -5,11 +5,13 @@ sent documents with ever new names keeps its memory and its disk cache flat."""
 from __future__ import annotations
 
 import copy
+import json
 
 import httpx
 import numpy as np
 import pytest
 
+from conftest import EXAMPLES
 from models import compile_mechanism, load_document
 from models.assembly import graphs_for
 from models.naming import anonymous
@@ -65,6 +67,19 @@ def test_a_renamed_gripper_shares_the_graphs_and_reaches_the_same_closing_force(
     a = solve_equilibrium(original)
     b = solve_equilibrium(other)
     np.testing.assert_allclose(b.z, a.z, rtol=0, atol=1e-14)
+
+
+def test_an_output_named_like_its_body_and_renamed_is_the_same_structure():
+    """Names are tokens within their collection: the six-bar's outputs "J2" and "J4" (named
+    like their bodies) renamed alone leave the structure as it was; a body renamed alone, too."""
+    doc = json.loads((EXAMPLES / "six_bar.json").read_text())
+    base = compile_mechanism(load_document(doc)).structure
+    outputs = copy.deepcopy(doc)
+    outputs["outputs"] = {f"point_{name}": spec for name, spec in doc["outputs"].items()}
+    bodies = renamed(doc, lambda n: "hub" if n == "J3" else n)
+    for variant in (outputs, bodies):
+        structure = compile_mechanism(load_document(variant)).structure
+        assert structure != base and structure.unnamed == base.unnamed
 
 
 def test_a_structure_with_the_models_permuted_is_not_taken_for_a_renaming(gripper_dict):
