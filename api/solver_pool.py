@@ -93,7 +93,7 @@ def _serve(connection, name: bytes = WORKER_NAME) -> None:
             connection.send(outcome)
         except Exception as exc:  # a result that does not pickle
             connection.send(_packed(exc))
-        flush_saves()
+        flush_saves(stop=connection.poll)  # while no request waits
 
 
 def _unpacked(outcome: tuple):

@@ -9,9 +9,10 @@ hashes the sources of the models package and the CasADi version: any change to h
 are built makes a new folder. Files are written to a temporary name and renamed, so a
 concurrent reader never sees half a file; a file that does not load is rebuilt.
 
-Writing a large structure's graphs takes 0.3-0.45 s (CasADi's serializer), most of what its
-first solve has left after building them. A solver worker (api.solver_pool) defers the
-writing until its answer has gone out: defer_saves(), then flush_saves() between calls.
+Writing a large structure's graphs takes 0.1-0.45 s (CasADi's serializer), half of what its
+first solve takes. A solver worker (api.solver_pool) defers the writing until its answer has
+gone out and no other request waits: defer_saves(), then flush_saves(stop) between calls, one
+file at a time while stop() is false (a request that arrives meanwhile waits for one file).
 """
 
 from __future__ import annotations
@@ -43,7 +44,8 @@ def code_version() -> str:
     return digest.hexdigest()[:12]
 
 
-_deferred: list[Callable[[], None]] | None = None  # saves waiting for flush_saves(); None: save at once
+# per structure, its files' writes waiting for flush_saves(), in order; None: written at once
+_deferred: list[list[Callable[[], None]]] | None = None
 
 
 def defer_saves() -> None:
@@ -53,15 +55,19 @@ def defer_saves() -> None:
         _deferred = []
 
 
-def flush_saves() -> None:
-    """Write the graphs whose saving was deferred (a save that fails is logged: the graphs are
-    built again by the next process that needs them)."""
-    while _deferred:
-        save = _deferred.pop(0)
+def flush_saves(stop: Callable[[], bool] = lambda: False) -> None:
+    """Write the deferred graphs, one file at a time, until all are written or stop() is true
+    (the rest waits for the next call). A structure whose file fails is logged and left: its
+    graphs are built again by the next process that needs them."""
+    while _deferred and not stop():
+        writes = _deferred[0]
         try:
-            save()
+            writes.pop(0)()
         except Exception as exc:  # noqa: BLE001 (CasADi's serializer raises RuntimeError)
             log.warning("cannot save graphs: %s", exc)
+            writes.clear()
+        if not writes:
+            _deferred.pop(0)
 
 
 def write_atomically(target: Path, write) -> None:
@@ -128,17 +134,24 @@ class GraphStore:
         functions, meta = self.build(self.structure)
         self._functions.update(functions)
         self._meta = meta
+        writes = self._writes(functions, meta)
         if _deferred is None:
-            self._save(functions, meta)
+            try:
+                for write in writes:
+                    write()
+            except OSError as exc:  # a read-only home: graphs are rebuilt per process, nothing breaks
+                log.warning("cannot save graphs in %s: %s", self.folder, exc)
         else:
-            _deferred.append(lambda: self._save(functions, meta))
+            _deferred.append(writes)
 
-    def _save(self, functions: dict[str, ca.Function], meta: dict) -> None:
-        try:
-            self.folder.mkdir(parents=True, exist_ok=True)
-            for name, fn in functions.items():
-                write_atomically(self.folder / f"{name}.casadi", lambda path, fn=fn: fn.save(str(path)))
-            write_atomically(self.folder / "meta.json", lambda path: path.write_text(json.dumps(meta)))
-            bound()
-        except OSError as exc:  # a read-only home: graphs are rebuilt per process, nothing breaks
-            log.warning("cannot save graphs in %s: %s", self.folder, exc)
+    def _writes(self, functions: dict[str, ca.Function], meta: dict) -> list[Callable[[], None]]:
+        """The writes that save the graphs, in order: the folder, each Function, then the
+        metadata (which marks the folder complete: available()) and the cache's bound."""
+        writes = [lambda: self.folder.mkdir(parents=True, exist_ok=True)]
+        for name, fn in functions.items():
+            writes.append(lambda name=name, fn=fn: write_atomically(self.folder / f"{name}.casadi",
+                                                                    lambda path: fn.save(str(path))))
+        text = json.dumps(meta)
+        writes.append(lambda: write_atomically(self.folder / "meta.json", lambda path: path.write_text(text)))
+        writes.append(bound)
+        return writes

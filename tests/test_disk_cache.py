@@ -10,7 +10,7 @@ import numpy as np
 
 from conftest import EXAMPLES
 from models import compile_mechanism, graph_cache, load_document
-from models.assembly import build_functions
+from models.assembly import FUNCTIONS, build_functions
 from models.disk_cache import bound, entries, touch
 from models.graph_cache import GraphStore
 
@@ -65,3 +65,28 @@ def test_deferred_graphs_are_written_at_the_flush_and_then_loaded(tmp_path, monk
     loaded = GraphStore(mech.structure, build_again).function("residual")
     z = np.linspace(0.0, 0.01, residual.size1_in(0))
     np.testing.assert_array_equal(np.asarray(loaded(z, mech.p())), np.asarray(residual(z, mech.p())))
+
+
+def test_a_flush_stops_between_files_when_told_and_goes_on_later(tmp_path, monkeypatch):
+    """A worker flushes while no request waits (flush_saves(stop)): it stops between two files
+    when stop() is true, the structure then has no metadata (not available: another process
+    builds rather than load half of it), and the next flush writes the rest."""
+    monkeypatch.setenv("FLEXMECH_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(graph_cache, "_deferred", None)
+    graph_cache.defer_saves()
+    mech = compile_mechanism(load_document(EXAMPLES / "cantilever.json"))
+    store = GraphStore(mech.structure, build_functions)
+    store.function("residual")
+    calls = []
+
+    def stop_after_three_files():
+        calls.append(1)
+        return len(calls) > 4  # the folder, then three files
+
+    graph_cache.flush_saves(stop=stop_after_three_files)
+    assert len(list(tmp_path.rglob("*.casadi"))) == 3
+    assert not list(tmp_path.rglob("meta.json")) and not GraphStore(mech.structure, build_functions).available()
+    graph_cache.flush_saves()
+    assert len(list(tmp_path.rglob("*.casadi"))) == len(FUNCTIONS)
+    assert GraphStore(mech.structure, build_functions).available()
+    assert graph_cache._deferred == []
