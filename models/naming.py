@@ -64,7 +64,8 @@ class _Renamer:
                 return tuple((self.token(name, "outputs"), body) for name, body in value)
             return tuple(self.value(item, role, collection) for item in value)
         if is_dataclass(value) and not isinstance(value, type):
-            return replace(value, **{f.name: self.value(getattr(value, f.name), _role(f.name), _collection(value, f.name))
+            return replace(value, **{f.name: self.value(getattr(value, f.name), _role(f.name),
+                                                        _collection(value, f.name))
                                      for f in fields(value) if f.init})
         return value
 
