@@ -11,11 +11,14 @@ stalled every other request, /v1/health included).
 - Two lanes: small requests run on worker 0, so they stay on warm caches; large ones (the
   caller says which: simulations, traces, contact) on the others, so a long run never holds a
   small request. With one worker, both lanes share it.
-- Time limit: a call's work stops itself at its limit (Newton, IPOPT and the stepping loops
-  are given it; the limit counts solving, not building a new structure's graphs, which the
-  document's costing bounds). A worker still busy `build_allowance` + GRACE seconds past the
-  limit is killed, and a new one starts in its place. A call whose caller went away keeps its
-  worker until its work ends (bounded the same way), so the worker's caches are kept.
+- Time limit: a call's work stops itself at its limit. Its first solving loop (Newton, IPOPT,
+  a trace, a simulation, a drawing) starts the call's one clock, and every loop after it
+  stops at the same deadline (service.deadline), which the worker publishes in a value shared
+  with the server. A worker still busy GRACE seconds past that deadline is killed, and a new
+  one starts in its place; before any loop has started (building a new structure's graphs,
+  which the document's costing bounds) it may take the limit plus `build_allowance`. A call
+  whose caller went away keeps its worker until its work ends (bounded the same way), so the
+  worker's caches are kept.
 - A worker that ends unexpectedly (a crash, the OOM killer) is replaced; its call is a 503.
 """
 
@@ -32,10 +35,12 @@ from concurrent.futures import ThreadPoolExecutor
 from api.errors import ApiError
 from models import MechanismError
 from models.graph_cache import defer_saves, flush_saves
+from service.deadline import call_scope
 
 log = logging.getLogger("flexmech.solvers")
 
 GRACE = 1.0  # seconds a call may run past its time limit before its worker is replaced
+POLL = 0.1  # seconds between looks at a busy worker's deadline
 BUILD_ALLOWANCE = 30.0  # seconds of graph building a call may take besides its time limit
 RETRY_AFTER = 2  # seconds, in a 503 for a call whose worker ended
 
@@ -70,8 +75,9 @@ def _packed(exc: BaseException) -> tuple:
         return "error", RuntimeError(f"{type(exc).__name__}: {exc}")
 
 
-def _serve(connection, name: bytes = WORKER_NAME) -> None:
-    """A worker's life: run each (fn, args, kwargs) it is sent and send back its outcome."""
+def _serve(connection, name: bytes = WORKER_NAME, deadline=None) -> None:
+    """A worker's life: run each (fn, args, kwargs) it is sent and send back its outcome,
+    publishing each call's deadline in `deadline` (a shared double; 0: no loop started)."""
     die_with_parent(name)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C in a terminal goes to the server, which ends us
     from service.jobs.kinds import job_kinds
@@ -86,7 +92,8 @@ def _serve(connection, name: bytes = WORKER_NAME) -> None:
         except (EOFError, OSError):  # the server went away
             return
         try:
-            outcome = ("ok", fn(*args, **kwargs))
+            with call_scope(deadline):
+                outcome = ("ok", fn(*args, **kwargs))
         except BaseException as exc:  # every failure goes back to the caller, who knows how to answer it
             outcome = _packed(exc)
         try:
@@ -113,7 +120,9 @@ class _Worker:
         self.index = index
         self.name = name
         self.connection, theirs = context.Pipe()
-        self.process = context.Process(target=_serve, args=(theirs, name), name=f"{name.decode()}-{index}", daemon=True)
+        self.deadline = context.Value("d", 0.0, lock=False)  # its call's deadline (time.monotonic); 0: none yet
+        self.process = context.Process(target=_serve, args=(theirs, name, self.deadline), name=f"{name.decode()}-{index}",
+                                       daemon=True)
         self.process.start()
         theirs.close()
 
@@ -187,23 +196,19 @@ class SolverPool:
             self._workers[index] = _Worker(self._context, index, self.name)
         worker = self._workers[index]
         loop = asyncio.get_running_loop()
-        late = None if time_limit is None else time_limit + self.build_allowance + GRACE
-        started = loop.time()
+        started = loop.time()  # loop.time() is time.monotonic(): the workers' clock
         give_back = True
         try:
             worker.connection.send((fn, args, kwargs))
             wait = loop.run_in_executor(self._readers, worker.connection.recv)
-            outcome = await asyncio.wait_for(asyncio.shield(wait), late)
-        except asyncio.TimeoutError:
+            outcome = await self._within_limit(worker, wait, started, time_limit)
+        except asyncio.TimeoutError as late:
             wait.add_done_callback(lambda f: f.exception())  # the killed worker's end of pipe: expected
-            self._replace(index, f"still busy after {late:g} s (time limit {time_limit:g} s)")
-            raise ApiError(503, "time_limit", f"the work did not end within {late:g} s (its time limit of "
-                           f"{time_limit:g} s, {self.build_allowance:g} s of building and {GRACE:g} s of grace) "
-                           "and was stopped") from None
+            self._replace(index, f"still busy {late} (time limit {time_limit:g} s)")
+            raise ApiError(503, "time_limit", f"the work did not end {late} and was stopped") from None
         except asyncio.CancelledError:  # the caller went away: the worker is busy until its work ends
             give_back = False
-            remaining = None if late is None else max(late - (loop.time() - started), 0.0)
-            asyncio.ensure_future(self._drain(index, wait, remaining))
+            asyncio.ensure_future(self._drain(index, worker, wait, started, time_limit))
             raise
         except (EOFError, OSError):
             code = worker.process.exitcode
@@ -215,10 +220,31 @@ class SolverPool:
                 await self._give_back(index)
         return _unpacked(outcome)
 
-    async def _drain(self, index: int, wait, remaining: float | None) -> None:
+    async def _within_limit(self, worker: _Worker, wait, started: float, time_limit: float | None):
+        """The call's outcome; asyncio.TimeoutError (saying when it should have ended) once the
+        worker is GRACE seconds past its call's deadline, or, before any of its loops started,
+        past the limit and the build allowance."""
+        if time_limit is None:
+            return await asyncio.shield(wait)
+        loop = asyncio.get_running_loop()
+        building = started + time_limit + self.build_allowance + GRACE
+        while True:
+            deadline = worker.deadline.value
+            late = deadline + GRACE if deadline > 0 else building
+            done, _ = await asyncio.wait({wait}, timeout=max(min(late - loop.time(), POLL), 0.0))
+            if done:
+                return wait.result()
+            if loop.time() >= late and worker.deadline.value == deadline:
+                if deadline > 0:
+                    raise asyncio.TimeoutError(f"within {GRACE:g} s past its deadline, {deadline - started:.3g} s "
+                                               f"after the call started (its time limit of {time_limit:g} s)")
+                raise asyncio.TimeoutError(f"within {late - started:g} s (its time limit of {time_limit:g} s, "
+                                           f"{self.build_allowance:g} s of building and {GRACE:g} s of grace)")
+
+    async def _drain(self, index: int, worker: _Worker, wait, started: float, time_limit: float | None) -> None:
         """Wait out the work of a call nobody waits for any more, then free its worker."""
         try:
-            await asyncio.wait_for(wait, remaining)
+            await self._within_limit(worker, wait, started, time_limit)
         except asyncio.TimeoutError:
             wait.add_done_callback(lambda f: f.exception())
             self._replace(index, "its work outlived its time limit after its caller went away")

@@ -4,12 +4,10 @@ a continuation sweep solves them), and each state becomes a frame (service.drawi
 
 from __future__ import annotations
 
-import math
-import time
-
 import numpy as np
 
 from models import Mechanism, MechanismError
+from service.deadline import ends_after, passed
 from service.drawing import state_frame
 from service.equilibrium import newton
 from service.newton import NewtonOptions
@@ -29,10 +27,10 @@ def path_frames(mech: Mechanism, pointer: str, values: list[float], options: New
     except MechanismError as exc:
         raise MechanismError("/path/path", exc.problem) from None
     guess = np.zeros(mech.structure.n_unknowns)
-    deadline = time.perf_counter() + options.time_limit if options.time_limit else math.inf
+    end = ends_after(options.time_limit)
     frames = []
     for value in values:
-        if frames and time.perf_counter() > deadline:
+        if frames and passed(end):
             break
         at = mech.with_values({pointer: value})
         result = newton(at, at.p(), guess, options)

@@ -17,6 +17,8 @@ from typing import Any, Callable
 import casadi as ca
 import numpy as np
 
+from service.deadline import ends_after, passed
+
 LINEAR_SOLVERS = ("mumps", "spral")
 
 # The IPOPT options a caller may set, with a check of the value.
@@ -144,11 +146,12 @@ def cached_solvers() -> int:
 
 
 def deadline(seconds: float | None) -> Callable[[], bool] | None:
-    """A stop() for solve(): True once `seconds` have passed (None: never)."""
+    """A stop() for solve(): True once `seconds` have passed, or the call's deadline
+    (service.deadline; None: never)."""
     if seconds is None:
         return None
-    end = time.monotonic() + seconds
-    return lambda: time.monotonic() > end
+    end = ends_after(seconds)
+    return lambda: passed(end)
 
 
 @dataclass

@@ -12,12 +12,13 @@ adapter serves the small augmented systems (targets, continuation, the link inve
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 from typing import Callable, Literal
 
 import casadi as ca
 import numpy as np
+
+from service.deadline import ends_after, passed
 
 Status = Literal["converged", "not_converged", "singular", "time_limit"]
 JacobianChoice = Literal["full", "first_term", "frozen"]
@@ -56,7 +57,7 @@ def iterate(residual: Residual, direction: Direction, z0: np.ndarray,
     """Converged when |R|_inf <= tol_residual and the last step |dz|_inf <= tol_step (or the
     guess already satisfies the residual tolerance).
     Returns (status, z, |R|_inf, iterations, residual history, message)."""
-    started = time.perf_counter()
+    end = ends_after(options.time_limit)
     z = np.array(z0, dtype=float)
     R = residual(z)
     norm = _norm(R)
@@ -70,7 +71,7 @@ def iterate(residual: Residual, direction: Direction, z0: np.ndarray,
             return "not_converged", z, norm, k, history, "residual became non-finite"
         if k == options.max_iterations:
             break
-        if options.time_limit is not None and time.perf_counter() - started > options.time_limit:
+        if passed(end):
             return "time_limit", z, norm, k, history, f"stopped by the time limit of {options.time_limit:g} s"
         dz = direction(z, R)
         if dz is None:

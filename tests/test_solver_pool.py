@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import asyncio
 import os
+import re
 import time
 
 import httpx
@@ -67,6 +68,53 @@ def test_a_call_past_its_time_limit_ends_its_worker_and_a_new_one_serves():
                             "1 s of grace) and was stopped")
     assert not _alive(first)
     assert serving == listed != first
+
+
+def _a_loop_that_hangs(limit: float) -> None:
+    from service.deadline import ends_after
+
+    ends_after(limit)  # a solving loop starts the call's clock, then never checks it
+    time.sleep(600)
+
+
+def test_a_worker_past_its_loops_deadline_is_replaced_without_the_build_allowance():
+    """Once a call's first loop has started its clock (service.deadline), the worker is
+    replaced one second past that deadline: the minute of build allowance no longer applies."""
+    async def scenario():
+        pool = SolverPool(1, build_allowance=60.0)
+        try:
+            first = pool.pids[0]
+            with pytest.raises(ApiError) as late:
+                await pool.call(_a_loop_that_hangs, 0.3, time_limit=10.0)
+            return first, late.value, await pool.call(os.getpid)
+        finally:
+            pool.close()
+
+    first, late, serving = _run(scenario())
+    assert (late.status, late.code) == (503, "time_limit")
+    assert re.fullmatch(r"the work did not end within 1 s past its deadline, [0-9.]+ s after the call started "
+                        r"\(its time limit of 10 s\) and was stopped", late.message), late.message
+    assert not _alive(first) and serving != first
+
+
+def test_loops_of_one_call_share_the_first_deadline():
+    from multiprocessing import Value
+
+    from service.deadline import call_scope, ends_after
+
+    shared = Value("d", 0.0, lock=False)
+    outside = ends_after(5.0)
+    with call_scope(shared):
+        first = ends_after(5.0)
+        assert shared.value == first
+        time.sleep(0.01)
+        assert ends_after(5.0) == first  # a later loop: the call's deadline, not its own
+        shorter = ends_after(1.0)
+        assert shorter < first and shared.value == shorter  # a shorter limit moves it earlier
+        assert ends_after(None) == float("inf")
+    assert shared.value == 0.0
+    time.sleep(0.01)
+    assert ends_after(5.0) > outside  # outside a call, every loop has its own
 
 
 def test_a_call_whose_caller_went_away_keeps_its_worker_until_its_work_ends():

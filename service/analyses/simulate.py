@@ -4,11 +4,10 @@ response, so its steps are bounded (SYNC_STEPS)."""
 
 from __future__ import annotations
 
-import time
-
 from models import Mechanism
 from models.simulation_spec import IMPACT_SCHEMES
 from service.analyses.base import Analysis, AnalysisRequest
+from service.deadline import ends_after, passed
 from service.dynamics.run import run_simulation, simulation_spec
 from service.impacts.run import run_impacts
 from service.reports import plain
@@ -28,8 +27,8 @@ class SimulateAnalysis(Analysis):
     def run(self, mech: Mechanism, request: AnalysisRequest) -> dict:
         spec = simulation_spec(mech, request.get("simulate", {}))
         limit = request.options.time_limit
-        deadline = time.perf_counter() + limit if limit else None
-        stop = (lambda: time.perf_counter() > deadline) if deadline else None
+        end = ends_after(limit)
+        stop = (lambda: passed(end)) if limit else None
         if spec.scheme in IMPACT_SCHEMES:
             _, report = run_impacts(mech.document, spec, stop=stop, max_steps=SYNC_IMPACT_STEPS, max_kept=SYNC_KEPT,
                                     max_bytes=SYNC_IMPACT_BYTES)

@@ -18,7 +18,6 @@ a path stopped by it is status "time_limit" with its points so far.
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass
 from typing import Any
 
@@ -28,6 +27,7 @@ from models import Mechanism, MechanismError
 from models.units import quantity_to_si
 from service.analyses.base import Analysis, AnalysisRequest
 from service.continuation import trace_path
+from service.deadline import ends_after, passed
 from service.drawing import state_frame
 from service.newton import NewtonOptions
 from service.reports import output_units, plain
@@ -121,9 +121,9 @@ def trace_report(mech: Mechanism, options: NewtonOptions, given: dict | None = N
         except MechanismError as exc:
             raise MechanismError("/document/sweep/start", exc.problem) from None
     try:
-        deadline = time.perf_counter() + options.time_limit if options.time_limit else None
+        end = ends_after(options.time_limit)
         result = trace_path(mech, spec.path, spec.stop, spec.step, spec.max_points, options,
-                            should_stop=(lambda: time.perf_counter() > deadline) if deadline else None)
+                            should_stop=(lambda: passed(end)) if options.time_limit else None)
     except MechanismError as exc:
         if exc.pointer in ("/step", "/stop"):
             where = "/trace" if spec.source == "request" else "/document/sweep"
