@@ -36,12 +36,16 @@ class Scales:
     force: float
 
     def of(self, kind: str) -> float:
+        return self._table[kind]
+
+    @cached_property
+    def _table(self) -> dict[str, float]:
         L, F = self.length, self.force
         return {
             "length": L, "force": F, "moment": F * L, "energy": F * L, "stress": F / L**2, "angle": 1.0,
             "stiffness": F / L, "rotational_stiffness": F * L, "area": L**2, "second_moment": L**4,
             "dimensionless": 1.0, "mass": F / L, "inertia": F * L, "acceleration": L, "density": F / L**4,
-        }[kind]
+        }
 
 
 def _scales(structure: Structure, si: np.ndarray) -> Scales:
@@ -106,7 +110,14 @@ class Mechanism:
 
     def nd_per_doc(self, kind: str) -> float:
         """Nondimensional value of one document unit of `kind`."""
-        return self.doc_factor(kind) / self.scales.of(kind)
+        found = self._nd_per_doc.get(kind)
+        if found is None:
+            found = self._nd_per_doc[kind] = self.doc_factor(kind) / self.scales.of(kind)
+        return found
+
+    @cached_property
+    def _nd_per_doc(self) -> dict[str, float]:
+        return {}  # by kind, filled as asked (a report asks dozens of times)
 
     # --- parameters ----------------------------------------------------------------------
     def parameter_index(self, pointer: str) -> int:
@@ -121,7 +132,11 @@ class Mechanism:
         return self.parameters[self.parameter_index(pointer)].kind
 
     def p(self) -> np.ndarray:
-        """Nondimensional parameter vector."""
+        """Nondimensional parameter vector (a copy: the caller may change it)."""
+        return self._p.copy()
+
+    @cached_property
+    def _p(self) -> np.ndarray:
         kinds = np.array([self.scales.of(p.kind) for p in self.parameters])
         return self.si_values / kinds
 

@@ -19,6 +19,7 @@ from models import Mechanism, MechanismError
 from models.assembly import graphs_for
 from models.residual import unknown_names as element_unknowns
 from service import ipopt
+from service.buffered import BufferedCall
 from service.newton import NewtonOptions, Status, dense_solve, iterate, iterate_dense, sparse_direction, sparse_step  # noqa: F401 (NewtonOptions, Status: re-exported)
 from service.units import displacement_to_doc, outputs_in_doc_units, residual_report
 
@@ -130,9 +131,10 @@ def newton(mech: Mechanism, p: np.ndarray, z0: np.ndarray, options: NewtonOption
     sparsely), its first term K_T^I, or K_T frozen (at the undeformed state by default)."""
     g = mech.graphs
     started = time.perf_counter()
+    evaluate = BufferedCall(g.residual) if mech.n_free else None  # 15 us a call instead of 80
 
     def residual(z):
-        return np.asarray(g.residual(z, p)).ravel()
+        return evaluate(z, p)[0].ravel() if evaluate is not None else np.asarray(g.residual(z, p)).ravel()
 
     if options.jacobian == "full" and mech.n_free:
         direction = sparse_direction(_newton_step(mech.structure.unnamed), p)

@@ -18,6 +18,7 @@ from typing import Callable, Literal
 import casadi as ca
 import numpy as np
 
+from service.buffered import BufferedCall
 from service.deadline import ends_after, passed
 
 Status = Literal["converged", "not_converged", "singular", "time_limit"]
@@ -134,9 +135,11 @@ def sparse_step(residual_and_tangent: ca.Function) -> ca.Function:
 
 
 def sparse_direction(step: ca.Function, p: np.ndarray) -> Direction:
+    call = BufferedCall(step)  # 30 us a call instead of 80
+
     def direction(z: np.ndarray, R: np.ndarray) -> np.ndarray | None:
         try:
-            dz = np.asarray(step(z, p)).ravel()
+            dz = call(z, p)[0].ravel()
         except RuntimeError:  # CSparse: "factorization failed, check if Jacobian is singular"
             return None
         return dz if np.all(np.isfinite(dz)) else None

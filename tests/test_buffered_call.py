@@ -7,7 +7,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from service.dynamics.buffered import BufferedCall
+from service.buffered import BufferedCall
 
 
 def test_a_buffered_call_returns_what_the_ordinary_call_does():

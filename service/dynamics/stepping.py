@@ -17,7 +17,7 @@ import numpy as np
 from models import MechanismError
 from models.structure import Structure
 from models.kernels.layout import layout_of
-from service.dynamics.buffered import BufferedCall
+from service.buffered import BufferedCall
 from service.dynamics.engine import WINDOW_ACCEPTANCE, Engine, engine_for
 from service.dynamics.histories import Histories
 from service.kernels import compiled_for
