@@ -64,13 +64,16 @@ def start_server(data_dir: str, settings: dict[str, str] | None = None) -> tuple
 
 
 @contextmanager
-def served(url: str | None, settings: dict[str, str] | None = None):
+def served(url: str | None, settings: dict[str, str] | None = None, empty_cache: bool = False):
     """The server at url, or one started here (SQLite in a temporary folder, FLEXMECH_*
-    `settings` over the defaults) and stopped after."""
+    `settings` over the defaults; empty_cache: its graph and kernel cache in that folder too)
+    and stopped after."""
     if url is not None:
         yield url
         return
     with tempfile.TemporaryDirectory() as data_dir:
+        if empty_cache:
+            settings = {**(settings or {}), "FLEXMECH_CACHE_DIR": os.path.join(data_dir, "cache")}
         proc, url = start_server(data_dir, settings)
         try:
             yield url

@@ -20,15 +20,13 @@ from __future__ import annotations
 
 import copy
 import json
-import os
 import statistics
-import tempfile
 import time
 from pathlib import Path
 
 import httpx
 
-from benchmarks.api_latency import start_server
+from benchmarks.api_latency import served
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 # the element copied, and what changes in the copy
@@ -81,31 +79,23 @@ def timed(client: httpx.Client, doc: dict) -> tuple[float, str]:
 
 
 def main() -> None:
-    with tempfile.TemporaryDirectory() as tmp:
-        os.environ["FLEXMECH_CACHE_DIR"] = os.path.join(tmp, "cache")
-        proc, url = start_server(os.path.join(tmp, "data"))
-        try:
-            with httpx.Client(base_url=url, timeout=120) as client:
-                health = []
-                for _ in range(20):
-                    t = time.perf_counter()
-                    client.get("/v1/health")
-                    health.append(time.perf_counter() - t)
-                print(f"server floor: /v1/health p50 {1e3 * statistics.median(health):.1f} ms")
-                print(f"{'example':16s} {'first ever':>12s} {'renamed':>22s} {'count':>22s} {'topology':>22s}")
-                for name in TOPOLOGY:
-                    doc = json.loads((EXAMPLES / f"{name}.json").read_text())
-                    first = timed(client, doc)
-                    cells = []
-                    for make in (lambda k: renamed(doc, k), lambda k: recounted(doc, k),
-                                 lambda k: extended(doc, name, k)):
-                        runs = [timed(client, variant) for variant in (make(k) for k in (1, 2, 3)) if variant]
-                        cells.append(" ".join(f"{s:.2f}" for s, _ in runs) + (
-                            f" ({','.join(sorted({st for _, st in runs}))})" if runs else "n/a"))
-                    print(f"{name:16s} {first[0]:8.2f} s   " + "  ".join(f"{c:>22s}" for c in cells))
-        finally:
-            proc.terminate()
-            proc.wait(timeout=30)
+    with served(None, empty_cache=True) as url, httpx.Client(base_url=url, timeout=120) as client:
+        health = []
+        for _ in range(20):
+            t = time.perf_counter()
+            client.get("/v1/health")
+            health.append(time.perf_counter() - t)
+        print(f"server floor: /v1/health p50 {1e3 * statistics.median(health):.1f} ms")
+        print(f"{'example':16s} {'first ever':>12s} {'renamed':>22s} {'count':>22s} {'topology':>22s}")
+        for name in TOPOLOGY:
+            doc = json.loads((EXAMPLES / f"{name}.json").read_text())
+            first = timed(client, doc)
+            cells = []
+            for make in (lambda k: renamed(doc, k), lambda k: recounted(doc, k), lambda k: extended(doc, name, k)):
+                runs = [timed(client, variant) for variant in (make(k) for k in (1, 2, 3)) if variant]
+                cells.append(" ".join(f"{s:.2f}" for s, _ in runs) + (
+                    f" ({','.join(sorted({st for _, st in runs}))})" if runs else "n/a"))
+            print(f"{name:16s} {first[0]:8.2f} s   " + "  ".join(f"{c:>22s}" for c in cells))
 
 
 if __name__ == "__main__":
