@@ -58,7 +58,7 @@ class ContactProblem:
     rows: ca.Function  # (w, p) -> h, normals (2 x rows), points (2 x rows), along
     frames: ca.Function  # (w, p) -> origins (2 x objects), angles
     kkt: ca.Function  # (v = [w; lam_eq; lam_in; tau], p, mode...) -> F, dF/dv (see _kkt_functions)
-    kkt_parameters: ca.Function  # the same inputs -> dF/dp
+    kkt_parameters: ca.Function  # the same inputs -> dF/dp, dF/dphi
     slides: ca.Function  # (w, p, points_old, origins_old, angles_old) -> per row, the site's tangential slide,
     #                      and its w- and p-Jacobians
     pair_results: ca.Function  # (v, p, phi, stick, weights) -> per pair: force on the site, normal and
@@ -200,7 +200,9 @@ def _kkt_functions(V, g_eq, h_in, constraints, x, a, p, n_pairs: int, n_objects:
     inputs = [v, p, active, phi, freeze, ref, stick, weights, points_old, origins_old, angles_old]
     names = ["v", "p", "active", "phi", "freeze", "ref", "stick", "weights", "points_old", "origins_old", "angles_old"]
     kkt = ca.Function("contact_kkt", inputs, [F, ca.jacobian(F, v)], names, ["F", "J"])
-    kkt_p = ca.Function("contact_kkt_p", inputs, [ca.jacobian(F, p)], names, ["Fp"])
+    # phi (= mu sigma at a slipping row) is an input: its Jacobian carries a friction coefficient's
+    # derivative (service.contact.sensitivity), which dF/dp alone would miss
+    kkt_p = ca.Function("contact_kkt_p", inputs, [ca.jacobian(F, p), ca.jacobian(F, phi)], names, ["Fp", "Fphi"])
     slide_values = _stack(slides)
     slide_fn = ca.Function("contact_slides", [w, p, points_old, origins_old, angles_old],
                            [slide_values, ca.jacobian(slide_values, w), ca.jacobian(slide_values, p)],
@@ -276,8 +278,9 @@ def _outputs(structure, results, corrections, w, p, n_eq, n_in, n_pairs, x_in_st
 def _jacobians(outputs: ca.Function) -> ca.Function:
     args = [ca.SX.sym(outputs.name_in(i), outputs.sparsity_in(i)) for i in range(outputs.n_in())]
     y = outputs(*args)
-    return ca.Function("contact_outputs_jacobian", args, [ca.jacobian(y, args[0]), ca.jacobian(y, args[1])],
-                       [outputs.name_in(i) for i in range(outputs.n_in())], ["y_v", "y_p"])
+    return ca.Function("contact_outputs_jacobian", args, [ca.jacobian(y, args[0]), ca.jacobian(y, args[1]),
+                                                          ca.jacobian(y, args[2])],
+                       [outputs.name_in(i) for i in range(outputs.n_in())], ["y_v", "y_p", "y_phi"])
 
 
 def _drawing(energy, geometry, w, p, unnudged):

@@ -1,8 +1,10 @@
 """Sensitivities of a contact state: at a converged state, on its active set (and with its
 friction directions and sticking pairs held), the KKT system F(v, p) = 0 gives
 dv/dp = -F_v^-1 F_p, and every contact output (forces, contact points, site parameters, the
-structure's outputs) follows: dy/dp = y_v dv/dp + y_p. Rows whose multiplier is below
-WEAK of the largest are reported: there the derivative is one-sided."""
+structure's outputs) follows: dy/dp = y_v dv/dp + y_p. A friction coefficient enters through the
+slipping rows' factor phi = mu sigma, an input of F and y: F_p and y_p carry its part, F_phi
+dphi/dp and y_phi dphi/dp (without it, the derivatives in mu came out 0). Rows whose
+multiplier is below WEAK of the largest are reported: there the derivative is one-sided."""
 
 from __future__ import annotations
 
@@ -35,17 +37,38 @@ def contact_sensitivities(mech: Mechanism, problem: ContactProblem, state: Conta
         rows.append(problem.output_names.index(name))
     mode = state.mode
     arguments = mode.arguments(state.v, state.p)
+    phi_p = friction_rates(mech, problem, state, slots)
     F_v = np.asarray(problem.kkt(**arguments)["J"], dtype=float)
-    F_p = np.asarray(problem.kkt_parameters(**arguments)["Fp"], dtype=float)[:, slots]
+    terms = problem.kkt_parameters(**arguments)
+    F_p = np.asarray(terms["Fp"], dtype=float)[:, slots] + np.asarray(terms["Fphi"], dtype=float) @ phi_p
     dv = -np.linalg.solve(F_v, F_p)
     jac = problem.outputs_jacobian(v=state.v, p=state.p, phi=mode.phi, stick=mode.stick, weights=mode.weights)
-    y_v, y_p = np.asarray(jac["y_v"], dtype=float)[rows], np.asarray(jac["y_p"], dtype=float)[rows][:, slots]
+    y_v = np.asarray(jac["y_v"], dtype=float)[rows]
+    y_p = np.asarray(jac["y_p"], dtype=float)[rows][:, slots] + np.asarray(jac["y_phi"], dtype=float)[rows] @ phi_p
     nd = y_v @ dv + y_p
     out_kinds = [problem.output_kinds[r] for r in rows]
     in_kinds = [mech.parameter_kind(path) for path in parameters]
     factor = np.array([[mech.nd_per_doc(ki) / mech.nd_per_doc(ko) for ki in in_kinds] for ko in out_kinds])
     units = [[f"{mech.doc_unit(ko)}/{mech.doc_unit(ki)}" for ki in in_kinds] for ko in out_kinds]
     return Sensitivities(list(parameters), list(outputs), nd * factor, units), _weak_rows(problem, state)
+
+
+def friction_rates(mech: Mechanism, problem: ContactProblem, state: ContactState, slots: list[int]) -> np.ndarray:
+    """d phi / d p[slots] (rows x slots). A slipping row's friction factor phi = mu sigma moves
+    with its pair's friction coefficient mu (sigma, its direction, held); a sticking pair's
+    force is what holds it (tau, an unknown), whatever mu, and a frictionless row has none."""
+    mode = state.mode
+    out = np.zeros((len(mode.phi), len(slots)))
+    pairs = problem.structure.contacts.pairs
+    coefficient = {mech.parameter_index(f"{pair.pointer}/friction"): j for j, pair in enumerate(pairs)}
+    for column, slot in enumerate(slots):
+        j = coefficient.get(slot)
+        if j is None or mode.stick[j] > 0:
+            continue
+        for k, row_pair in enumerate(problem.row_pairs):
+            if row_pair == j:
+                out[problem.n_element_in + k, column] = state.sigma[j]
+    return out
 
 
 def _weak_rows(problem: ContactProblem, state: ContactState) -> list[str]:
