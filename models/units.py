@@ -5,7 +5,9 @@ string "<number> <unit>" ("25 um", "300 deg", "1.77 N*m/rad"). The string is rea
 module, not evaluated by pint: a decimal number (at most MAX_NUMBER_CHARS characters), then a
 unit made of at most MAX_UNIT_FACTORS unit names joined by * and /, each with an optional
 integer power up to MAX_POWER (** or ^), parentheses allowed. pint only looks up single unit
-names (their size and dimension); nothing a user writes is run as an expression.
+names (their size and dimension; the common ones come from a table of its answers,
+unit_names.json, so a process that reads only those neither imports pint nor parses its
+definitions); nothing a user writes is run as an expression.
 
 Angles are a dimension of their own here (pint counts the radian as dimensionless): "5 rad"
 is not a modulus and "5 percent" not an angle. A unit must have exactly the kind's dimension.
@@ -13,16 +15,18 @@ is not a modulus and "5 percent" not an angle. A unit must have exactly the kind
 
 from __future__ import annotations
 
+import json
 import re
 import sys
 from collections import Counter
 from functools import lru_cache
+from pathlib import Path
 
 from models.errors import MechanismError
 from models.disk_cache import cache_dir
 
 
-def _import_pint():
+def pint_module():
     """pint, without its optional dask support. Where dask is installed (distributed sweeps)
     pint imports it at once: 0.2 s of every process's start, for dask arrays of quantities that
     flexmech never makes (its quantities are single numbers). importlib's find_spec answers None
@@ -37,8 +41,6 @@ def _import_pint():
         del sys.modules["dask"]
     return pint
 
-
-pint = _import_pint()
 
 # The kinds of quantity a document holds, with the SI unit each converts to.
 SI_UNITS: dict[str, str] = {
@@ -59,6 +61,7 @@ SI_UNITS: dict[str, str] = {
     "rotational_stiffness": "N*m/rad",
 }
 
+KNOWN_NAMES = Path(__file__).with_name("unit_names.json")
 MAX_NUMBER_CHARS = 32
 MAX_UNIT_CHARS = 64
 MAX_UNIT_FACTORS = 8
@@ -72,8 +75,10 @@ Dimension = tuple[tuple[str, int], ...]  # sorted (base dimension, power), power
 
 
 @lru_cache(maxsize=1)
-def registry() -> pint.UnitRegistry:
-    """pint's registry, its parsed definitions cached on disk: 30 ms to start, not 150."""
+def registry():
+    """pint's registry (pint imported now: 0.2 s a process that reads only common names saves),
+    its parsed definitions cached on disk: 30 ms to start, not 150."""
+    pint = pint_module()
     try:
         return pint.UnitRegistry(cache_folder=cache_dir() / "pint")
     except OSError:  # a read-only cache folder: parse the definitions every time
@@ -85,15 +90,34 @@ def _shown(text: str, limit: int = 40) -> str:
     return repr(text) if len(text) <= limit else repr(text[:limit]) + f"... ({len(text)} characters)"
 
 
+@lru_cache(maxsize=1)
+def _known() -> dict[str, tuple[float, Dimension]]:
+    """pint's answers for the unit names documents use most (scripts/unit_names.py writes them,
+    tests/test_units.py checks them): a process on an empty cache reads these instead of
+    parsing pint's definitions, 0.5-0.75 s."""
+    try:
+        table = json.loads(KNOWN_NAMES.read_text())
+    except (OSError, ValueError):
+        return {}
+    return {name: (float(size), tuple((str(d), int(p)) for d, p in dimension)) for name, (size, dimension) in table.items()}
+
+
 @lru_cache(maxsize=512)
 def _named(name: str) -> tuple[float, Dimension]:
-    """SI size and dimension of one unit name (pint looks the name up; nothing is evaluated)."""
+    """SI size and dimension of one unit name: from the table of common names, else pint's."""
+    known = _known().get(name)
+    return known if known is not None else pint_named(name)
+
+
+def pint_named(name: str) -> tuple[float, Dimension]:
+    """SI size and dimension of one unit name as pint has it (pint looks the name up; nothing
+    is evaluated)."""
     ureg = registry()
     if name in ANGLE_UNITS:
         return float(ureg.Quantity(1.0, name).to("rad").magnitude), (("[angle]", 1),)
     try:
         quantity = ureg.Quantity(1.0, ureg.Unit(name)).to_base_units()
-    except (pint.errors.PintError, AttributeError, ValueError, TypeError):
+    except (pint_module().errors.PintError, AttributeError, ValueError, TypeError):
         raise ValueError(f"unknown unit '{name}'") from None
     dimension = tuple(sorted((str(d), int(p)) for d, p in quantity.dimensionality.items() if p))
     return float(quantity.magnitude), dimension
