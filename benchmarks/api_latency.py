@@ -7,7 +7,8 @@ requests per second with 4 concurrent clients (each its own keep-alive connectio
 same 4 clients' latency while one long simulation (the rod of Lan's Example I.1 at a 0.1 ms
 step, which runs into the server's 10 s solve limit) holds the server's solver: the long run's
 wall time against its limit is printed too, and what a request that does no work (a 404)
-costs through the same clients and server: the floor under every figure above.
+costs through the same clients and server: the floor under every figure above; and the same
+404 from a FastAPI app with nothing in it, on the same uvicorn: the framework's own floor.
 
     python3 -m benchmarks.api_latency [--requests 200] [--clients 4] [--url URL]
 
@@ -132,11 +133,11 @@ def throughput(url: str, body: dict, clients: int, per_client: int) -> tuple[flo
     return concurrently(url, clients, per_client, send), len(errors)
 
 
-def floor(url: str, clients: int, n: int) -> tuple[float, float]:
+def floor(url: str, clients: int, n: int, path: str = "/v1/no-such-path") -> tuple[float, float]:
     """(p50 s, requests/s with `clients`) of a request that does no work (GET of a path that
     does not exist: 404) through the same clients and server: what HTTP alone costs here."""
     def send(client):
-        if client.get("/v1/no-such-path").status_code != 404:
+        if client.get(path).status_code != 404:
             raise SystemExit("the empty request did not answer 404")
 
     with httpx.Client(base_url=url, timeout=30) as client:
@@ -146,6 +147,44 @@ def floor(url: str, clients: int, n: int) -> tuple[float, float]:
             send(client)
             times.append(time.perf_counter() - t)
     return statistics.median(times), concurrently(url, clients, n, send)
+
+
+BARE_APP = """from fastapi import FastAPI
+
+app = FastAPI()
+
+
+@app.get("/ping")
+async def ping():
+    return {"ok": True}
+"""
+
+
+def framework_floor(clients: int, n: int) -> tuple[float, float]:
+    """floor() of a FastAPI app with no middleware and nothing else (its 404), on the same
+    uvicorn (httptools, uvloop) with the same clients: what the framework and the clients
+    alone cost on this machine."""
+    import socket
+
+    with tempfile.TemporaryDirectory() as folder, socket.socket() as s:
+        Path(folder, "bare_app.py").write_text(BARE_APP)
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+        s.close()
+        proc = subprocess.Popen([sys.executable, "-m", "uvicorn", "bare_app:app", "--port", str(port), "--log-level",
+                                 "warning", "--http", "httptools", "--loop", "uvloop"], cwd=folder)
+        url = f"http://127.0.0.1:{port}"
+        try:
+            for _ in range(300):
+                try:
+                    httpx.get(url + "/ping", timeout=1)
+                    break
+                except httpx.HTTPError:
+                    time.sleep(0.1)
+            return floor(url, clients, n, path="/no-such-path")
+        finally:
+            proc.terminate()
+            proc.wait(10)
 
 
 def during_long_run(url: str, body: dict, clients: int) -> tuple[list[float], float, str]:
@@ -195,6 +234,7 @@ def main() -> None:
         rps, failed = throughput(url, body, args.clients, args.requests // args.clients * 2)
         busy, long_seconds, long_status = during_long_run(url, body, args.clients)
         empty_p50, empty_rps = floor(url, args.clients, args.requests)
+    bare_p50, bare_rps = framework_floor(args.clients, args.requests)
 
     # the peer, in this process: the Python API with the document compiled per call, as the
     # server does, and with the document compiled once
@@ -218,6 +258,8 @@ def main() -> None:
     print(f"  {args.clients} concurrent clients: {rps:.0f} requests/s ({failed} failed; target >= {TARGET_RPS:g})")
     print(f"  a request that does no work (404), same clients and server: p50 {empty_p50 * ms:.2f} ms, "
           f"{args.clients} clients {empty_rps:.0f} requests/s")
+    print(f"  the same 404 from a FastAPI app with nothing in it (no middleware, same uvicorn and clients): "
+          f"p50 {bare_p50 * ms:.2f} ms, {args.clients} clients {bare_rps:.0f} requests/s")
     print(f"  while a simulation ran into the 10 s solve limit ({long_seconds:.2f} s wall, status {long_status}): "
           f"{args.clients} clients' p50 {statistics.median(busy) * ms:.2f} ms  p99 {percentile(busy, 99) * ms:.2f} ms  "
           f"max {max(busy) * ms:.1f} ms over {len(busy)} solves (target p99 < 100 ms)")
