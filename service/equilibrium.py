@@ -112,10 +112,22 @@ def check_constrained(mech: Mechanism, p: np.ndarray | None = None, again: bool 
         modes = vt[sv <= 1e-10 * max(sv[0], 1e-300)]  # every motion nothing resists
         amplitude = np.abs(modes).max(axis=0)
         moving = [name for name, a in zip(mech.free_coordinates, amplitude) if a > 1e-6]
+        if moving:
+            raise MechanismError(
+                "/bodies",
+                "under-constrained: the tangent stiffness is singular in the undeformed state; "
+                f"nothing resists a motion of {', '.join(moving)} (connect those bodies with flexures or fix them)",
+            )
+        # no body moves: the singular direction is in the elements' own unknowns, forces that
+        # nothing determines (two inextensible links that hold the same distance, say)
+        undetermined = [name for (name, _), a in zip(element_unknowns(mech.structure), amplitude)
+                        if a > 1e-6 and name not in mech.free_coordinates]
+        shown = ", ".join(undetermined[:8]) + (f" and {len(undetermined) - 8} more" if len(undetermined) > 8 else "")
         raise MechanismError(
-            "/bodies",
-            "under-constrained: the tangent stiffness is singular in the undeformed state; "
-            f"nothing resists a motion of {', '.join(moving)} (connect those bodies with flexures or fix them)",
+            "/elements",
+            "the tangent stiffness is singular in the undeformed state, though every body is held: the elements' "
+            f"unknowns {shown} are not determined (redundant constraints: for example inextensible links that "
+            "fix the same distance; give one of them axial strain or remove it)",
         )
     _CHECKED.add(mech.structure.key)
 

@@ -134,6 +134,21 @@ def test_a_body_held_only_by_pins_must_be_a_joint():
         solve_equilibrium(mech)
 
 
+def test_an_undetermined_force_is_named_when_no_body_moves():
+    """An inextensible straight link between two fixed bodies: no body can move, but its axial
+    force is not determined (the distance is held twice). The message names the unknown, not
+    an empty list of moving coordinates."""
+    bodies = {"A": {"fixed": True, "position": [0, 0]}, "B": {"fixed": True, "position": [1, 0]}}
+    mech = models.compile_mechanism(models.load_document(network(bodies, {"L1": {"from": "A", "to": "B",
+                                                                                 "length": 1.0}}, {})))
+    with pytest.raises(MechanismError) as info:
+        solve_equilibrium(mech)
+    assert info.value.pointer == "/elements"
+    assert "every body is held: the elements' unknowns L1.h are not determined" in info.value.problem
+    stretchy = network(bodies, {"L1": {"from": "A", "to": "B", "length": 1.0, "axial": True}}, {})
+    assert solve_equilibrium(models.compile_mechanism(models.load_document(stretchy))).converged
+
+
 def test_a_moment_on_a_pin_joint_is_refused():
     bodies = {"A": {"fixed": True, "position": [0, 0]}, "J": {"joint": True, "position": [1, 0]}}
     links = {"L1": {"from": "A", "to": "J", "length": 1.0, "end": "pinned"}}
