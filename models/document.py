@@ -288,7 +288,10 @@ def _models_in(annotation: Any) -> list[type]:
 
 
 def unknown_field_message(key: str) -> str:
-    """"unknown field 'radious' (did you mean 'radius'?)"."""
+    """"unknown field 'radious' (did you mean 'radius'?)"; a field that other kinds of object
+    have (a rectangle section's 'A') is said to be theirs, not suggested as itself."""
+    if key in _field_names():
+        return f"unknown field '{key}' (other kinds of object have it, this one does not)"
     close = difflib.get_close_matches(key, _field_names(), n=1, cutoff=0.75)
     return f"unknown field '{key}'" + (f" (did you mean '{close[0]}'?)" if close else "")
 

@@ -309,6 +309,12 @@ def test_a_misspelled_key_is_named(server):
     with pytest.raises(MechanismError) as info:
         load_document(document)
     assert info.value.problem.startswith("unknown field 'radious' (did you mean 'radius'?)")
+    document = gripper()
+    document["sections"]["flexure"]["A"] = 1.0  # a field of a general section, not of a rectangle
+    with pytest.raises(MechanismError) as info:
+        load_document(document)
+    assert (info.value.pointer, info.value.problem) == (
+        "/sections/flexure/A", "unknown field 'A' (other kinds of object have it, this one does not)")
 
 
 def test_documents_read_from_files_keep_their_meaning(tmp_path):
