@@ -10,6 +10,7 @@ root after upgrading pint or adding names:
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 PREFIXED = {"m": ("n", "u", "m", "c", "k", ""), "N": ("n", "u", "m", "k", "M", ""), "Pa": ("k", "M", "G", ""),
@@ -25,6 +26,7 @@ def names() -> list[str]:
 
 
 def main() -> None:
+    sys.path.insert(0, str(TABLE.parents[1]))  # this checkout's models, installed or not
     from models import units
 
     table = {}
