@@ -131,26 +131,6 @@ def inverse_rhs_function(props: LinkProperties, psi: Callable[[ca.SX], ca.SX], p
     return ca.Function("link_inverse_rhs", [u, s, n, ca.vertcat(p, q)], [ds], ["u", "s", "n", "p"], ["ds"])
 
 
-def extrapolated_step(f: ca.Function, u0, s0, H, order: int, n, p) -> ca.SX:
-    """s at u0 + H from s0: modified midpoint with 2, 4, ..., order substeps, extrapolated
-    to h = 0 by Aitken-Neville in h^2 (Gragg's error expansion); error O(H^(order+1))."""
-    levels = order // 2
-    steps = [2 * (j + 1) for j in range(levels)]
-    table: list[list[ca.SX]] = []
-    slope0 = f(u0, s0, n, p)  # every sequence starts with it: written once
-    for j, count in enumerate(steps):
-        h = H / count
-        previous, current = s0, s0 + h * slope0
-        for i in range(1, count):
-            previous, current = current, previous + 2 * h * f(u0 + i * h, current, n, p)
-        row = [current]
-        for k in range(1, j + 1):
-            ratio = (steps[j] / steps[j - k]) ** 2
-            row.append(row[k - 1] + (row[k - 1] - table[j - 1][k - 1]) / (ratio - 1))
-        table.append(row)
-    return table[-1][-1]
-
-
 @dataclass
 class LinkSolution:
     """Symbolic node states of one link for given unknowns, and its end quantities."""
@@ -187,7 +167,7 @@ class LinkShooting:
         call."""
         H = self.H if H is None else H
         u0 = k * self.H if u0 is None else u0
-        step = general_step(self._forms[unloaded], order or self.order, extrapolated_step)
+        step = general_step(self._forms[unloaded], order or self.order)
         args = [ca.SX(u0), s, n, self._q[unloaded], ca.SX(H)]
         return step(*args) if inline else step.call(args, False, True)[0]
 

@@ -1,4 +1,4 @@
-"""A link's extrapolated steps (models.link.extrapolated_step), written out once per form of its
+"""A link's extrapolated steps (extrapolated_step), written out once per form of its
 right-hand side and shared by every link, and every structure, with that form.
 
 A link's right-hand side f(u, s, n, p) reads a few entries of the structure's parameter vector
@@ -14,7 +14,6 @@ from __future__ import annotations
 import threading
 from collections import OrderedDict
 from dataclasses import dataclass
-from typing import Callable
 
 import casadi as ca
 
@@ -45,9 +44,9 @@ def local_form(f: ca.Function) -> LocalForm:
     return LocalForm(local, used, local.serialize())
 
 
-def general_step(form: LocalForm, order: int, write: Callable) -> ca.Function:
-    """(u0, s, n, q, H) -> s at u0 + H for the form's right-hand side, written by
-    write(rhs, u0, s, H, order, n, q) once per thread."""
+def general_step(form: LocalForm, order: int) -> ca.Function:
+    """(u0, s, n, q, H) -> s at u0 + H for the form's right-hand side, written out once per
+    thread."""
     key = (form.key, order)
     if not hasattr(_kept, "steps"):
         _kept.steps = OrderedDict()
@@ -59,9 +58,29 @@ def general_step(form: LocalForm, order: int, write: Callable) -> ca.Function:
     f = form.local
     u0, s, n, q = (ca.SX.sym(name, f.sparsity_in(i)) for i, name in enumerate(("u0", "s", "n", "q")))
     H = ca.SX.sym("H")
-    step = ca.Function("link_general_step", [u0, s, n, q, H], [write(f, u0, s, H, order, n, q)],
+    step = ca.Function("link_general_step", [u0, s, n, q, H], [extrapolated_step(f, u0, s, H, order, n, q)],
                        ["u0", "s", "n", "q", "H"], ["s_end"])
     kept[key] = step
     while len(kept) > KEPT:
         kept.popitem(last=False)
     return step
+
+
+def extrapolated_step(f: ca.Function, u0, s0, H, order: int, n, p) -> ca.SX:
+    """s at u0 + H from s0: modified midpoint with 2, 4, ..., order substeps, extrapolated
+    to h = 0 by Aitken-Neville in h^2 (Gragg's error expansion); error O(H^(order+1))."""
+    levels = order // 2
+    steps = [2 * (j + 1) for j in range(levels)]
+    table: list[list[ca.SX]] = []
+    slope0 = f(u0, s0, n, p)  # every sequence starts with it: written once
+    for j, count in enumerate(steps):
+        h = H / count
+        previous, current = s0, s0 + h * slope0
+        for i in range(1, count):
+            previous, current = current, previous + 2 * h * f(u0 + i * h, current, n, p)
+        row = [current]
+        for k in range(1, j + 1):
+            ratio = (steps[j] / steps[j - k]) ** 2
+            row.append(row[k - 1] + (row[k - 1] - table[j - 1][k - 1]) / (ratio - 1))
+        table.append(row)
+    return table[-1][-1]
