@@ -54,6 +54,9 @@ class SimulateSpec(StrictModel):
                                       "expression in t, {table: [[t, value], ...]} or {pieces: [{until, value}, ...]}")
     initial: dict[str, BodyStart] = Field(default={}, max_length=64, description="impact simulations: body name "
                                           "-> its start displacement and velocity")
+    sensitivities: list[str] = Field(default=[], max_length=16, description="event_driven: numbers of the "
+                                     "document (JSON pointers, e.g. /impacts/pairs/conjugate/normal/restitution) "
+                                     "to differentiate the state at the end time by, exactly")
     every: int = Field(default=1, ge=1, le=1_000_000, description="keep every n-th step")
     max_points: int = Field(default=DEFAULT_MAX_POINTS, ge=2, le=100_000, description="impact simulations (event_driven, moreau): "
                             "the states the report keeps, spread evenly over the run (after `every`), and besides "
@@ -75,6 +78,15 @@ class SimulateSpec(StrictModel):
         if until is not None and not until / step <= MAX_STEP_COUNT:
             raise ValueError(f"{until:g} s in steps of {step:g} s would be more than {MAX_STEP_COUNT:g} steps")
         return step
+
+    @field_validator("sensitivities")
+    @classmethod
+    def _of_event_driven(cls, pointers: list[str], info: ValidationInfo) -> list[str]:
+        scheme = info.data.get("scheme")
+        if pointers and scheme != "event_driven":
+            raise ValueError(f"sensitivities are those of an event_driven run (its located contact events move with "
+                             f"the numbers); the {scheme} scheme has none: set scheme to event_driven")
+        return [pointer if pointer.startswith("/") else f"/{pointer}" for pointer in pointers]
 
     @field_validator("max_points")
     @classmethod

@@ -19,13 +19,16 @@ class ParameterBook:
         self.values: list[float] = []
         self._symbols: list[ca.SX] = []
         self._derived: list[tuple[ca.SX, ca.SX]] = []  # (symbol, expression of the numbers)
+        self.units: dict[str, tuple[str, float]] = {}  # pointer -> (its unit in the document, SI per that unit)
 
     def si(self, value, kind: str, pointer: str) -> float:
         """A document number (or quantity string) of `kind` in SI."""
         return quantity_to_si(value, kind, document_unit(self.document.units, kind), pointer)
 
-    def add(self, pointer: str, value: float, check: str | None = None) -> ca.SX:
-        """Register an SI value under its document pointer; its symbol."""
+    def add(self, pointer: str, value: float, check: str | None = None, unit: tuple[str, float] = ("SI", 1.0)) -> ca.SX:
+        """Register an SI value under its document pointer; its symbol. `unit`: the number's
+        unit in the document and its SI value (sensitivities are reported per that unit)."""
+        self.units.setdefault(pointer, unit)
         if not np.isfinite(value):
             raise MechanismError(pointer, "must be a finite number")
         if check == "positive" and value <= 0:
@@ -41,7 +44,8 @@ class ParameterBook:
         return symbol
 
     def number(self, pointer: str, value, kind: str, check: str | None = None) -> ca.SX:
-        return self.add(pointer, self.si(value, kind, pointer), check)
+        unit = document_unit(self.document.units, kind) if kind != "dimensionless" else "1"
+        return self.add(pointer, self.si(value, kind, pointer), check, (unit, self.si(1.0, kind, pointer)))
 
     def vector(self, pointer: str, value, kind: str) -> ca.SX:
         return ca.vertcat(*[self.number(f"{pointer}/{k}", v, kind) for k, v in enumerate(value)])
@@ -73,3 +77,11 @@ class ParameterBook:
         numbers = ca.vertcat(*self._symbols)
         derived = ca.Function("derived", [numbers], [ca.vertcat(*[ca.vec(e) for _, e in self._derived])])
         return np.concatenate([values, np.asarray(derived(values)).ravel()])
+
+    def parameter_jacobian(self, values=None) -> np.ndarray:
+        """d p / d numbers at the numbers `values` (default: the document's): the identity over
+        the numbers, and the hoisted expressions' derivatives below it."""
+        values = np.asarray(self.values if values is None else values, dtype=float)
+        numbers = ca.vertcat(*self._symbols)
+        p = ca.vertcat(numbers, *[ca.vec(e) for _, e in self._derived])
+        return np.asarray(ca.Function("dp", [numbers], [ca.jacobian(p, numbers)])(values))

@@ -55,7 +55,9 @@ def normal_force(law: str, K, exponent, restitution, q, qdot, qdot_minus, esdu=N
     if law == "lna_esdu":
         elastic, tangent = esdu_force(q, *esdu)
         return ca.fmax(elastic + d * tangent * q * qdot / qdot_minus, 0.0)
-    elastic = K * q**exponent
+    # 0 at q = 0 exactly as 0^n, with derivatives that stay finite there: q^n's by n is
+    # q^n ln q, 0 * -inf (a run's sensitivities differentiate the law at every step)
+    elastic = ca.if_else(q > 0, K * ca.fmax(q, 1e-300)**exponent, 0.0)
     if law == "hertz":
         return elastic
     return ca.fmax(elastic * (1 + d * qdot / qdot_minus), 0.0)

@@ -109,7 +109,7 @@ def impact_model(document: MechanismDocument, histories: list[tuple[str, str, ob
     extra = Q_nc + ca.gradient(flexures, q) if turning else ca.SX.zeros(rb.size)
     mass = rb.mass_diagonal()
     alpha = document.simulate.damping if document.simulate is not None else 0.0
-    damping = -book.add(DAMPING, alpha, "nonnegative") * mass * v
+    damping = -book.add(DAMPING, alpha, "nonnegative", ("1/s", 1.0)) * mass * v
     loads, motions = _split(book, rb, histories, t)
     moving_symbols = ca.vertcat(*[symbol for symbol, _ in motions]) if motions else ca.SX(0, 1)
     moving_values = ca.vertcat(*[value for _, value in motions]) if motions else ca.SX(0, 1)

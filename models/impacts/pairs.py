@@ -17,6 +17,8 @@ from models.impacts.document import ImpactPair
 from models.impacts.laws import hertz_stiffness
 from models.planar import rot
 
+ONE, SPEED = ("1", 1.0), ("m/s", 1.0)  # units of the laws' numbers (seed 004 gives v0, v1 in m/s)
+
 
 @dataclass
 class PairModel:
@@ -68,7 +70,7 @@ def pair_model(rb: RigidBodies, name: str, pair: ImpactPair) -> PairModel:
     law = pair.normal
     R1_si = book.value(f"/impacts/surfaces/{pair.surfaces[0]}/radius")
     K, esdu = _stiffness(rb, base, law, R1_si, R2_si, clearance, second.type)
-    c_r = book.add(f"{base}/normal/restitution", law.restitution)
+    c_r = book.add(f"{base}/normal/restitution", law.restitution, unit=ONE)
     if not 0 < law.restitution <= 1:
         raise MechanismError(f"{base}/normal/restitution", f"the coefficient of restitution c_r must be in (0, 1], "
                              f"got {law.restitution:g}")
@@ -77,9 +79,11 @@ def pair_model(rb: RigidBodies, name: str, pair: ImpactPair) -> PairModel:
     adherence = friction.adherence if friction.adherence is not None else friction.sliding
     return PairModel(
         name, law.law, friction.law, indentation, direction(n_c), direction(t_c), K,
-        book.add(f"{base}/normal/exponent", law.exponent, "positive"), c_r,
-        book.add(f"{base}/friction/sliding", friction.sliding), book.add(f"{base}/friction/adherence", adherence),
-        book.add(f"{base}/friction/v0", friction.v0, "positive"), book.add(f"{base}/friction/v1", friction.v1, "positive"),
+        book.add(f"{base}/normal/exponent", law.exponent, "positive", ONE), c_r,
+        book.add(f"{base}/friction/sliding", friction.sliding, unit=ONE),
+        book.add(f"{base}/friction/adherence", adherence, unit=ONE),
+        book.add(f"{base}/friction/v0", friction.v0, "positive", SPEED),
+        book.add(f"{base}/friction/v1", friction.v1, "positive", SPEED),
         esdu, scale, point=C, bodies=(body1, body2), normal=n_c)
 
 
@@ -145,14 +149,17 @@ def _stiffness(rb: RigidBodies, base: str, law, R1: float, R2: float | None, cle
             raise MechanismError(f"{base}/normal/length", "the lna_esdu law needs the contact `length` and the two "
                                  "`materials`")
         (E1, nu1), (E2, nu2) = _materials(rb, f"{base}/normal/materials", law.materials)
-        sigma = book.add(f"{base}/normal/compliance_sum", (1 - nu1**2) / E1 + (1 - nu2**2) / E2, "positive")
+        sigma = book.add(f"{base}/normal/compliance_sum", (1 - nu1**2) / E1 + (1 - nu2**2) / E2, "positive",
+                         ("1/Pa", 1.0))
         esdu = (sigma, book.number(f"{base}/normal/length", law.length, "length", "positive"),
-                book.add(f"{base}/clearance", clearance, "positive"))
+                book.add(f"{base}/clearance", clearance, "positive", ("m", 1.0)))
     if isinstance(law.stiffness, str):
         raise MechanismError(pointer, "give K as a number, in the document's force / length^exponent")
     if isinstance(law.stiffness, (int, float)):
         per = book.si(1.0, "force", pointer) / book.si(1.0, "length", pointer) ** law.exponent
-        return book.add(pointer, float(law.stiffness) * per, "positive"), esdu
+        units = book.document.units
+        return book.add(pointer, float(law.stiffness) * per, "positive",
+                        (f"{units.force}/{units.length}^{law.exponent:g}", per)), esdu
     spec = law.stiffness
     (E1, nu1), (E2, nu2) = _materials(rb, f"{pointer}/materials", spec.materials)
     length = None
@@ -161,4 +168,4 @@ def _stiffness(rb: RigidBodies, base: str, law, R1: float, R2: float | None, cle
             raise MechanismError(f"{pointer}/length", "cylinders need the contact length L (Eq. 16)")
         length = book.si(spec.length, "length", f"{pointer}/length")
     K = hertz_stiffness(spec.contact, E1, nu1, E2, nu2, R1, R2, spec.radius, length)
-    return book.add(pointer, K, "positive"), esdu
+    return book.add(pointer, K, "positive", (f"N/m^{law.exponent:g}", 1.0)), esdu

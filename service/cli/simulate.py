@@ -31,6 +31,9 @@ def simulate(document: DocArg, sets: SetOpt = None,
              max_steps: Annotated[int | None, typer.Option("--max-steps", help="The most time steps (adaptive and "
                                                            "impacts: accepted steps); default the service's limit, "
                                                            "which this raises for a run on this machine.")] = None,
+             sensitivity: Annotated[list[str] | None, typer.Option(
+                 "--sensitivity", metavar="POINTER", help="event_driven: differentiate the end state by this number "
+                 "of the document, exactly (repeatable), e.g. /impacts/pairs/conjugate/normal/restitution.")] = None,
              compiled: Annotated[bool, typer.Option("--compiled", hidden=True,
                                                     help="Deprecated and ignored: kernels compile in the build "
                                                     "queue (flexmech build).")] = False,
@@ -50,7 +53,7 @@ def simulate(document: DocArg, sets: SetOpt = None,
             err.print("--compiled is deprecated and ignored: element kernels are compiled by `flexmech build` (or "
                       "the server's build queue) and used once built")
         spec = simulation_spec(mech, {"until": until, "step": step, "scheme": scheme, "damping": damping,
-                                      "max_steps": max_steps})
+                                      "max_steps": max_steps, "sensitivities": sensitivity or None})
         if spec.scheme in IMPACT_SCHEMES:
             _impacts(mech, spec, out, err, json_out, plot, snapshots, animation)
             return
@@ -107,6 +110,8 @@ def _impacts(mech, spec, out, err, json_out, plot, snapshots, animation) -> None
         table.add_row(str(k + 1), escape(hit["pair"]), f"{hit['time']:.7f}",
                       *(number(hit[key], "") for key in ("impact_speed", "exit_speed", "rebound_ratio")))
     out.print(table)
+    if "sensitivities" in report:
+        _print_sensitivities(out, report["sensitivities"])
     if json_out is not None:
         write_json(json_out, report)
     if plot is not None:
@@ -115,6 +120,19 @@ def _impacts(mech, spec, out, err, json_out, plot, snapshots, animation) -> None
         _write(plot_impacts, report, plot, option="--plot")
     if report["status"] != "finished":
         raise typer.Exit(EXIT_NOT_CONVERGED)
+
+
+def _print_sensitivities(out, sensitivities: dict) -> None:
+    """d (coordinate at the end time) / d field, a row per field."""
+    fields = sensitivities["fields"]
+    names = list(next(iter(fields.values()))["coordinates"]) if fields else []
+    table = table_of(f"d (state at t = {sensitivities['time']:g} s) / d field; "
+                     f"{sensitivities['units']['coordinates']}", "field", "unit", *names, text=2)
+    for pointer, values in fields.items():
+        table.add_row(escape(pointer), escape(values["unit"]), *(number(values["coordinates"][name], "") for name in names))
+    out.print(table)
+    for warning in sensitivities["warnings"]:
+        out.print(f"[yellow]warning:[/yellow] {escape(warning)}")
 
 
 def _write(draw, *args, option: str) -> None:

@@ -35,6 +35,7 @@ SWITCH_TOLERANCE = 1e-13  # of each switching function's scale
 MIN_IMPACT_SPEED = 1e-9  # m/s: the frozen qdot_minus of a grazing onset, so the laws stay finite
 HYSTERESIS = 1e-8  # of each switching function's scale
 MASKED = -10.0
+ERR_FLOOR = 1e-12  # (0.9 / 4)^5 = 6e-4 and below all grow a step fourfold
 BAUMGARTE = 50.0  # 1/s: the rate at which the pins' drift (integration error) is pulled back  # a switching value that cannot trigger (friction out of contact)
 
 
@@ -192,8 +193,10 @@ def event_step(model: ImpactModel) -> ca.Function:
     G_hi_loc = ca.if_else(crossed, G1, ca.if_else(side < 0, G_hi / 2, G_hi))
     G_lo_loc = ca.if_else(crossed, ca.if_else(side > 0, G_lo / 2, G_lo), G1)
     advance = ca.logic_or(accept, commit)
-    growth = ca.fmin(4.0, ca.fmax(0.2, 0.9 * (err + 1e-300) ** -0.2))
-    h_next = ca.if_else(reject, h * ca.fmax(0.1, 0.9 * (err + 1e-300) ** -0.2),
+    # err below ERR_FLOOR grows the step by the most (4) either way; the floor keeps its
+    # derivative finite (state_sensitivity differentiates these steps)
+    growth = ca.fmin(4.0, ca.fmax(0.2, 0.9 * ca.fmax(err, ERR_FLOOR) ** -0.2))
+    h_next = ca.if_else(reject, h * ca.fmax(0.1, 0.9 * ca.fmax(err, ERR_FLOOR) ** -0.2),
                         ca.if_else(accept, ca.fmin(h_max, dt * growth), h))
     flags = switched_flags(model, commit, viol1 >= 0, end, contact, b0, b1, speed)
     out = ca.vertcat(

@@ -17,6 +17,7 @@ from models.units import document_unit, quantity_to_si
 from service.dynamics.histories import history_expression
 from service.impacts.report import Histories, depth_function, histories, report
 from service.impacts.event_driven import EventLayout
+from service.impacts.state_sensitivity import check_fields, end_state_derivatives, parameter_directions
 from service.impacts.stepping import KEPT_EVENT_ROWS, Trace, run_events, run_moreau
 
 TRIALS_PER_STEP = 4  # event-driven: trial steps allowed per allowed step (rejections, event location)
@@ -105,7 +106,10 @@ def run_impacts(document: MechanismDocument, spec: SimulateSpec, stop=None, max_
     `max_kept` bounds the states a report keeps below `max_points` (one response); `max_bytes`
     the memory the run's states may take (check_memory)."""
     model, p, trace = integrate(document, spec, stop, max_steps, parameters, progress, max_bytes)
-    return trace, report(model, spec, trace, p, max_kept)  # trace.seconds: the stepping alone
+    answer = report(model, spec, trace, p, max_kept)  # trace.seconds: the stepping alone
+    if trace.derivatives is not None:
+        answer["sensitivities"] = end_state_derivatives(model, trace, spec.sensitivities, answer["events"])
+    return trace, answer
 
 
 def run_with_histories(document: MechanismDocument, spec: SimulateSpec, stop=None,
@@ -131,12 +135,16 @@ def integrate(document: MechanismDocument, spec: SimulateSpec, stop=None, max_st
     p = model.book.parameter_vector(values)
     check_laws(model, spec)
     q0, v0 = start_state(model, spec, p)
+    directions = None
+    if spec.sensitivities:
+        check_fields(model.book, spec.sensitivities)
+        directions = parameter_directions(model.book, values, spec.sensitivities)
     if spec.scheme == "moreau":
         trace = run_moreau(model, p, q0, v0, spec.until, spec.step, stop, progress)
     else:
         max_step = spec.max_step if spec.max_step is not None else spec.until / MAX_STEP_PARTS
         trace = run_events(model, p, q0, v0, spec.until, spec.tolerance, spec.step, max_step,
-                           max_steps * TRIALS_PER_STEP, stop, progress)
+                           max_steps * TRIALS_PER_STEP, stop, progress, directions)
     return model, p, trace
 
 

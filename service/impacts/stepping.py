@@ -18,6 +18,7 @@ from service.impacts.event_driven import EventLayout, event_step
 from service.impacts.kept_rows import KeptRows
 from service.impacts.moreau import moreau_step
 from service.impacts.native import NativeFunction
+from service.impacts.state_sensitivity import SensitivityChunk
 
 EVENT_CHUNK = 2000  # trial steps per call
 MOREAU_CHUNK = 5000
@@ -57,6 +58,7 @@ class Trace:
     calls: int = 0
     seconds: float = 0.0
     steps: int | None = None  # accepted steps, when `states` holds only some of them
+    derivatives: np.ndarray | None = None  # event-driven: d (end state) / d numbers (state_sensitivity)
 
 
 class Chunk:
@@ -128,14 +130,18 @@ def event_settings(model: ImpactModel, until: float, tolerance: float, max_step:
 
 
 def run_events(model: ImpactModel, p: np.ndarray, q0, v0, until: float, tolerance: float, first_step: float,
-               max_step: float, max_calls: int, stop=None, progress=None) -> Trace:
+               max_step: float, max_calls: int, stop=None, progress=None, directions: np.ndarray | None = None) -> Trace:
+    """`directions`: d p / d number, one column per number the end state is differentiated by."""
     n, P = model.bodies.size, len(model.pairs)
     L = EventLayout(n, P)
     S = np.zeros(L.size)
     S[L.y] = np.concatenate([q0, v0, np.zeros(len(WORKS))])
     S[L.at("h")] = first_step
     settings = event_settings(model, until, tolerance, max_step)
-    steps = chunk(model, "event", [p, settings])
+    if directions is None:
+        steps = chunk(model, "event", [p, settings])
+    else:
+        steps = SensitivityChunk(model, p, directions, settings, EVENT_CHUNK)
     trace = Trace()
     rows = KeptRows(KEPT_EVENT_ROWS, L.at("event"))
     rows.add(S.reshape(1, -1).copy())
@@ -156,6 +162,8 @@ def run_events(model: ImpactModel, p: np.ndarray, q0, v0, until: float, toleranc
             break
     trace.seconds = time.perf_counter() - began
     trace.states, trace.steps = [rows.rows()], rows.seen - 1
+    if directions is not None:
+        trace.derivatives = steps.derivatives
     if rows.stride > 1:
         trace.message = (trace.message + "; " if trace.message else "") + (
             f"held {len(rows)} of {rows.seen - 1} steps (every contact event among them)")
