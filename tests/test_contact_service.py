@@ -417,6 +417,29 @@ def test_sensitivities_equal_central_differences(api_server, mu, motion):
             assert abs(exact - fd) <= 1e-5 * max(abs(fd), scale), (name, parameter, exact, fd)
 
 
+SLIDING_OUTPUTS = OUTPUTS[:2]
+
+
+def _slipping(x_o: float, mu: float, **fields) -> dict:
+    doc = example(x_o)
+    doc["contacts"]["pairs"]["insertion"]["friction"] = mu
+    answer = run_contact(doc, motion={X_O: -1}, **fields)
+    assert answer["status"] == "converged" and answer["pairs"]["insertion"]["state"] == "slipping", answer["message"]
+    return answer
+
+
+@pytest.mark.parametrize("x_o", [60.0, 64.0, 66.0, 67.81, 70.0, 72.0])
+def test_friction_sensitivities_of_a_slipping_jaw_equal_central_differences(x_o):
+    """Example I, mu = 0.5, the fixture withdrawing: d/d mu of the pair's force_x and normal
+    force, exact, against central differences in mu (1e-5 relative; they agree to ~1e-10)."""
+    found = _slipping(x_o, 0.5, sensitivities={"parameters": [MU], "outputs": SLIDING_OUTPUTS})
+    step = 1e-5
+    up, down = (_values(_slipping(x_o, 0.5 + sign * step)) for sign in (1, -1))
+    for name in SLIDING_OUTPUTS:
+        exact, fd = found["sensitivities"]["derivatives"][name][MU], (up[name] - down[name]) / (2 * step)
+        assert abs(fd) > 1.0 and abs(exact - fd) <= 1e-5 * abs(fd), (name, exact, fd)
+
+
 # --- F. the command line -----------------------------------------------------------------------
 @pytest.fixture
 def run():

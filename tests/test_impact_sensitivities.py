@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import httpx
 import numpy as np
 import pytest
 from typer.testing import CliRunner
@@ -103,3 +104,19 @@ def test_the_command_line_prints_the_derivatives_it_writes(tmp_path):
     assert written["coordinates"]["hinge.y"] > 0  # a livelier rebound ends higher
     assert "d (state at t = 0.1 s) / d field" in result.stdout
     assert f"{written['coordinates']['hinge.y']:.6g}" in result.stdout
+
+
+def test_the_service_answers_sensitivities_and_refuses_them_for_moreau_with_422(api_server):
+    doc = json.loads((EXAMPLES / "csfh_central_impact.json").read_text())
+    local = run_impacts(MechanismDocument.model_validate(doc), SimulateSpec.model_validate(
+        {**doc["simulate"], "until": 0.1, "sensitivities": ["/bodies/hinge/mass"]}))[1]["sensitivities"]
+    asked = {"until": 0.1, "sensitivities": ["/bodies/hinge/mass"]}
+    r = httpx.post(f"{api_server.url}/v1/solve", json={"document": doc, "analysis": "simulate", "simulate": asked},
+                   timeout=120)
+    assert r.status_code == 200, r.text
+    assert r.json()["sensitivities"]["fields"] == local["fields"]
+    r = httpx.post(f"{api_server.url}/v1/solve", json={"document": doc, "analysis": "simulate",
+                                                        "simulate": {**asked, "scheme": "moreau"}}, timeout=120)
+    assert r.status_code == 422, r.text
+    error = r.json()["error"]
+    assert error["pointer"] == "/simulate/sensitivities" and "event_driven" in error["message"], error
