@@ -29,7 +29,7 @@ class ImpactStudyRequest(DocumentRequest):
 
     model_config = ConfigDict(json_schema_extra={"examples": [
         {"example": "csfh", "simulate": {"until": 0.3},
-         "study": {"fields": [{"path": "/impacts/surfaces/pin/radius", "step": 0.001},
+         "study": {"fields": [{"path": "/contacts/sites/pin/radius", "step": 0.001},
                               {"path": "/bodies/hinge/mass", "step": 0.1}]}},
     ]})
 

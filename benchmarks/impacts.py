@@ -46,7 +46,7 @@ import numpy as np
 
 from models.curved_beam import stiffness
 from models.document import MechanismDocument
-from models.impacts.laws import hertz_stiffness
+from models.contact.laws.penalty import hertz_stiffness
 from models.simulation_spec import SimulateSpec
 from service.impacts.run import model_of, run_impacts
 
@@ -56,14 +56,21 @@ UNTIL = 1.0
 
 
 def document(name: str, **simulate) -> dict:
+    """An example with `simulate` fields over it; for the moreau scheme, the laws it takes
+    (restitution impulses with the example's coefficient, Coulomb's friction)."""
     doc = json.loads((ROOT / "examples" / name).read_text())
     doc["simulate"].update(simulate)
+    if simulate.get("scheme") == "moreau":
+        pair = doc["contacts"]["pairs"]["conjugate"]
+        pair["normal"] = {"law": "restitution", "restitution": pair["normal"]["restitution"]}
+        pair["friction"] = {"law": "coulomb", "adherence": pair["friction"]["adherence"],
+                            "sliding": pair["friction"]["sliding"]}
     return doc
 
 
 def coulomb(doc: dict, adherence: float, sliding: float) -> dict:
     doc = copy.deepcopy(doc)
-    doc["impacts"]["pairs"]["conjugate"]["friction"] = {"law": "coulomb", "adherence": adherence, "sliding": sliding}
+    doc["contacts"]["pairs"]["conjugate"]["friction"] = {"law": "coulomb", "adherence": adherence, "sliding": sliding}
     return doc
 
 
@@ -140,12 +147,12 @@ def peer_model(doc: dict, mu: float) -> dict:
         arm = [flexure["center"][0] + flexure["radius"] * math.cos(end),
                flexure["center"][1] + flexure["radius"] * math.sin(end)]  # C1 - G1, G1 at the origin
         frame = end + math.pi / 2
-    body, surfaces = doc["bodies"]["hinge"], doc["impacts"]["surfaces"]
+    body, contacts = doc["bodies"]["hinge"], doc["contacts"]
     start = doc["simulate"]["initial"]["hinge"]
     return {"mass": body["mass"], "inertia": body["inertia"], "gravity": doc["gravity"], "flexure_K": K,
-            "flexure_frame_angle": frame, "flexure_arm": arm, "pin_radius": surfaces["pin"]["radius"],
-            "hole_radius": surfaces["hole"]["radius"],
-            "restitution": doc["impacts"]["pairs"]["conjugate"]["normal"]["restitution"], "mu": mu,
+            "flexure_frame_angle": frame, "flexure_arm": arm, "pin_radius": contacts["sites"]["pin"]["radius"],
+            "hole_radius": contacts["objects"]["hole"]["radius"],
+            "restitution": contacts["pairs"]["conjugate"]["normal"]["restitution"], "mu": mu,
             "step": doc["simulate"]["step"], "until": doc["simulate"]["until"],
             "q0": start["displacement"][:2] + [math.radians(start["displacement"][2])], "v0": [0.0, 0.0, 0.0],
             "at": [0.1, 0.5, doc["simulate"]["until"]]}

@@ -38,7 +38,7 @@ MODELS = {
     "LNA-ESDU": ({"law": "lna_esdu", "restitution": 0.9, "exponent": 1.5, "length": 0.025, "materials": ["body", "body"],
                   "stiffness": {"contact": "cylinders", "length": 0.025, "materials": ["body", "body"]}},
                  AMBROSIO, {}),
-    "Moreau": ({"law": "lankarani_nikravesh", "restitution": 0.9, "stiffness": 1.0},
+    "Moreau": ({"law": "restitution", "restitution": 0.9},
                {"law": "coulomb", "adherence": 0.11, "sliding": 0.055}, {"scheme": "moreau", "step": 1e-5}),
 }
 
@@ -46,7 +46,7 @@ MODELS = {
 def model_document(scenario: str, model: str, until: float) -> dict:
     doc = json.loads((HERE / SCENARIOS[scenario]).read_text())
     normal, friction, simulate = MODELS[model]
-    pair = doc["impacts"]["pairs"]["conjugate"]
+    pair = doc["contacts"]["pairs"]["conjugate"]
     pair["normal"], pair["friction"] = copy.deepcopy(normal), copy.deepcopy(friction)
     doc["simulate"].update(until=until, **simulate)
     return doc

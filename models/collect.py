@@ -154,14 +154,15 @@ def _reduce_pinned_joints(c: Collector, prescribed) -> None:
 
 
 def _check_grounded(c: Collector, prescribed) -> None:
-    """Every body must reach a fixed one through elements or impact pairs (a body in a
-    clearance is held by the surface it rests on), or nothing holds it."""
+    """Every body must reach a fixed one through elements or contact pairs between bodies (a
+    body in a clearance is held by the surface it rests on), or nothing holds it."""
     neighbours: dict[str, set[str]] = {name: set() for name in c.bodies}
     links = [(el.from_, el.to) for el in c.doc.elements.values()]
-    if c.doc.impacts is not None:
-        surfaces = c.doc.impacts.surfaces
-        links += [(surfaces[a].body, surfaces[b].body) for a, b in (pair.surfaces for pair in c.doc.impacts.pairs.values())
-                  if a in surfaces and b in surfaces and surfaces[a].body in neighbours and surfaces[b].body in neighbours]
+    contacts = c.doc.contacts
+    if contacts is not None:
+        ends = [(getattr(contacts.sites.get(pair.site), "body", None), getattr(contacts.objects.get(pair.object), "body", None))
+                for pair in contacts.pairs.values()]
+        links += [(a, b) for a, b in ends if a in neighbours and b in neighbours]
     for a, b in links:
         neighbours[a].add(b)
         neighbours[b].add(a)

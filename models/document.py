@@ -15,12 +15,11 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Annotated, Any, Literal, Union
 
-from pydantic import Field, ValidationError, model_validator
+from pydantic import Field, ValidationError, field_validator, model_validator
 
 from models.contact.document import OBJECT_TYPES, SITE_TYPES, Contacts
 from models.elements import FAMILIES
 from models.elements.link import SHAPE_TYPES
-from models.impacts.document import Impacts
 from models.simulation_spec import SimulateSpec
 from models.errors import MechanismError, pointer_of
 from models.fields import MAX_QUANTITY_CHARS, Number, StrictModel, Vec2
@@ -218,16 +217,25 @@ class MechanismDocument(StrictModel):
     outputs: dict[str, Output] = {}
     contacts: Contacts | None = Field(default=None, description="rigid objects, contact sites and pairs (the "
                                       "contact analysis)")
-    impacts: Impacts | None = Field(default=None, description="body surfaces that may touch in a simulation, with "
-                                    "impact and friction laws (seed 004)")
+    impacts: Any = Field(default=None, description="replaced by `contacts`: `flexmech upgrade DOC` converts it")
     sweep: SweepSpec | None = None
     inverse: InverseSpec | None = None
     optimize: OptimizeSpec | None = None
     simulate: SimulateSpec | None = Field(default=None, description="a time simulation (the simulate analysis)")
 
+    @field_validator("impacts")
+    @classmethod
+    def _upgraded(cls, impacts: Any) -> None:
+        if impacts is not None:
+            raise ValueError(UPGRADE_HINT)
+        return None
+
     def to_json_dict(self) -> dict[str, Any]:
         return self.model_dump(mode="json", by_alias=True, exclude_none=True)
 
+
+UPGRADE_HINT = ("the `impacts` section is now part of `contacts` (its surfaces are sites and objects, its pairs "
+                "contact pairs with their laws): convert the document with `flexmech upgrade DOC`")
 
 # pydantic's error types when a value is not a number (a Number is a float or a quantity string)
 _NOT_A_NUMBER = {"float_type", "string_type", "float_parsing", "finite_number", "string_too_long", "bool_type"}

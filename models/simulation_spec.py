@@ -54,8 +54,11 @@ class SimulateSpec(StrictModel):
                                       "expression in t, {table: [[t, value], ...]} or {pieces: [{until, value}, ...]}")
     initial: dict[str, BodyStart] = Field(default={}, max_length=64, description="impact simulations: body name "
                                           "-> its start displacement and velocity")
+    flexure_stiffness: Literal["constant", "turning"] = Field(
+        default="constant", description="curved beams in impact simulations: the closed-form stiffness of seed 000 "
+        "constant in space (conservative, the default), or turning with the body (seed 004 Eq. 8, not conservative)")
     sensitivities: list[str] = Field(default=[], max_length=16, description="event_driven: numbers of the "
-                                     "document (JSON pointers, e.g. /impacts/pairs/conjugate/normal/restitution) "
+                                     "document (JSON pointers, e.g. /contacts/pairs/conjugate/normal/restitution) "
                                      "to differentiate the state at the end time by, exactly")
     every: int = Field(default=1, ge=1, le=1_000_000, description="keep every n-th step")
     max_points: int = Field(default=DEFAULT_MAX_POINTS, ge=2, le=100_000, description="impact simulations (event_driven, moreau): "

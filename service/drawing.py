@@ -15,7 +15,7 @@ import numpy as np
 
 from models import Mechanism, MechanismError
 from service.configuration_plot import load_point
-from service.drawing_outlines import contact_objects, document_length, impact_surfaces, in_body, turned
+from service.drawing_outlines import circle_sites, contact_objects, document_length, in_body, turned
 
 
 def mechanism_drawing(mech: Mechanism, z: np.ndarray | None = None, outputs: dict | None = None) -> dict:
@@ -42,7 +42,7 @@ def mechanism_drawing(mech: Mechanism, z: np.ndarray | None = None, outputs: dic
     for point in drawing["points"]:  # a point output is on its body: joined to its reference point
         bodies[point["body"]]["skeleton"].append(point["point"])
     span = drawing_span(drawing)
-    drawing["outlines"] = contact_objects(mech, bodies, span) + impact_surfaces(mech, bodies, span)
+    drawing["outlines"] = contact_objects(mech, bodies, span) + circle_sites(mech, bodies)
     if z is not None:
         drawing["deformed"] = state_frame(mech, state, mech.p(), outputs or {})
     return drawing

@@ -1,5 +1,5 @@
 """Outlines of the drawing (service.drawing): contact objects (circle, hole, ellipse, polygon,
-half-plane) and impact surfaces (circle, hole, line) as closed or open polylines, globally in
+half-plane) and circle sites as closed or open polylines, globally in
 the undeformed configuration (document length units), with the body that carries them."""
 
 from __future__ import annotations
@@ -101,24 +101,19 @@ def _normal_of(obj, bodies: dict) -> list[float]:
     return turned(normal, bodies[obj.body]["angle"]).tolist() if obj.body is not None else normal
 
 
-def impact_surfaces(mech: Mechanism, bodies: dict, span: float) -> list[dict]:
-    impacts = getattr(mech.document, "impacts", None)
-    if impacts is None:
+def circle_sites(mech: Mechanism, bodies: dict) -> list[dict]:
+    """The circle sites of `contacts` (pins, rollers), solid, on their bodies."""
+    contacts = getattr(mech.document, "contacts", None)
+    if contacts is None:
         return []
     drawn = []
-    for name, surface in impacts.surfaces.items():
-        pointer = f"/impacts/surfaces/{name}"
-        if surface.type == "line":
-            point = in_body(bodies, surface.body, [document_length(mech, v, f"{pointer}/point/{i}")
-                                                   for i, v in enumerate(surface.point)])
-            normal = turned([float(v) for v in surface.normal], bodies[surface.body]["angle"])
-            points, closed = boundary_line(point, normal, span), False
-            extra = {"normal": normal.tolist()}
-        else:
-            centre = in_body(bodies, surface.body, [document_length(mech, v, f"{pointer}/centre/{i}")
-                                                    for i, v in enumerate(surface.centre)])
-            r = document_length(mech, surface.radius, f"{pointer}/radius")
-            points, closed, extra = ellipse(centre, r, r), True, {}
-        drawn.append({"name": name, "kind": "surface", "type": surface.type, "body": surface.body, "points": points,
-                      "closed": closed, "solid": surface.type == "circle", **extra})
+    for name, site in contacts.sites.items():
+        if site.type != "circle":
+            continue
+        pointer = f"/contacts/sites/{name}"
+        centre = in_body(bodies, site.body, [document_length(mech, v, f"{pointer}/centre/{i}")
+                                             for i, v in enumerate(site.centre)])
+        r = document_length(mech, site.radius, f"{pointer}/radius")
+        drawn.append({"name": name, "kind": "site", "type": "circle", "body": site.body, "points": ellipse(centre, r, r),
+                      "closed": True, "solid": True})
     return drawn

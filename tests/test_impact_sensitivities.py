@@ -19,7 +19,7 @@ from service.impacts.run import run_impacts
 from service.impacts.study import variant
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
-PAIR = "/impacts/pairs/conjugate"
+PAIR = "/contacts/pairs/conjugate"
 STIFFNESS = f"{PAIR}/normal/stiffness"
 # scenario 6.3 (a flexure, Lankarani-Nikravesh impacts, Ambrosio friction) over its first three
 # contacts: the law's stiffness and restitution, the friction, a mass and the flexure's modulus
@@ -32,7 +32,7 @@ def _csfh(until: float) -> dict:
     """Scenario 6.3 with the law's stiffness written as its number (N/m^1.5, Table 2), so the
     document holds every field differentiated."""
     doc = json.loads((EXAMPLES / "csfh.json").read_text())
-    doc["impacts"]["pairs"]["conjugate"]["normal"]["stiffness"] = 2.2656e9
+    doc["contacts"]["pairs"]["conjugate"]["normal"]["stiffness"] = 2.2656e9
     doc["simulate"]["until"] = until
     return doc
 

@@ -11,7 +11,7 @@ from tests.impact_cases import csfh
 
 TOLERANCE = 0.05
 STEP = 1e-5
-SLIDING = "/impacts/pairs/conjugate/friction/sliding"
+SLIDING = "/contacts/pairs/conjugate/friction/sliding"
 
 
 @pytest.fixture(scope="module")
@@ -50,7 +50,7 @@ def test_a_larger_pin_meets_the_hole_earlier_and_a_heavier_turn_changes_the_firs
     the nominal first contact, at its own first contact, with another peak force; 0.001 kg m^2
     more inertia leaves the flight alone and departs at the first impact itself."""
     nominal = study_point(moreau, None, None, 0.0, TOLERANCE)["contacts"]["conjugate"]
-    larger = study_point(moreau, None, "/impacts/surfaces/pin/radius", 0.001, TOLERANCE)
+    larger = study_point(moreau, None, "/contacts/sites/pin/radius", 0.001, TOLERANCE)
     departure = larger["influence"]["conjugate.F_N"]["departure"]
     assert departure < nominal["first_contact"]
     assert departure == pytest.approx(larger["contacts"]["conjugate"]["first_contact"], abs=2 * STEP)

@@ -12,10 +12,11 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.special import ellipk
 
-from models.impacts.laws import damping_factor, effective_restitution
+from models.contact.laws import NORMAL_LAWS
+from models.contact.laws.penalty import effective_restitution
 from models.impacts.model import impact_model
 from service.impacts.run import run_impacts
-from tests.impact_cases import csfh, parsed, with_pair
+from tests.impact_cases import as_moreau, csfh, parsed, with_pair
 
 G = 9.81
 FALL = 0.03  # from y = 0.01 to the surface at y = -0.02
@@ -62,8 +63,9 @@ def test_each_law_rebounds_with_its_exact_effective_restitution(law):
     """A body thrown at the hole's wall without gravity: its rebound ratio is the law's
     closed-form effective restitution (0.9132 for Lankarani-Nikravesh with c_r = 0.9), which
     an independent quadrature of the one-degree-of-freedom impact confirms."""
-    exact = effective_restitution(damping_factor(law, 0.9))
-    assert exact == pytest.approx(_one_dof_rebound(damping_factor(law, 0.9)), abs=1e-8)
+    d = NORMAL_LAWS[law].damping_factor(0.9)
+    exact = effective_restitution(d)
+    assert exact == pytest.approx(_one_dof_rebound(d), abs=1e-8)
     doc = with_pair(csfh("6.1", until=0.1), law=law)
     doc["gravity"] = [0, 0]
     doc["simulate"]["initial"]["hinge"] = {"displacement": [0, 0, 0], "velocity": [0, -0.5, 0]}
@@ -140,7 +142,7 @@ def _paper_flexure_force(q: np.ndarray, turning: bool) -> np.ndarray:
 def test_the_flexure_force_is_the_papers_eqs_5_to_9(turning):
     doc = csfh("6.3")
     doc["gravity"] = [0, 0]
-    doc["impacts"]["flexure_stiffness"] = "turning" if turning else "constant"
+    doc["simulate"]["flexure_stiffness"] = "turning" if turning else "constant"
     model = impact_model(parsed(doc)[0])
     force = ca.Function("f", [model.q, model.v, model.p], [model.force])
     p = model.book.parameter_vector()
@@ -227,7 +229,7 @@ def test_table_2_stiffnesses_follow_from_e_210_gpa_and_the_external_radius():
     """Seed 004 Table 2 (47.35 and 2.27 "GPa") reproduces with E = 210 GPa, R1 R2 / (R1 + R2)
     in Eq. 14 and L = b in Eq. 16 (../shared/notes/seed-004-csfh.md); Table 1's 100 GPa with
     the conformal radius R1 R2 / (R2 - R1) of a pin in a hole gives twice Table 2's spheres."""
-    from models.impacts.laws import hertz_stiffness
+    from models.contact.laws.penalty import hertz_stiffness
 
     assert hertz_stiffness("spheres", 210e9, 0.3, 210e9, 0.3, 0.18, 0.20, "external", None) == pytest.approx(
         47.353e9, rel=1e-4)
@@ -243,7 +245,7 @@ def test_the_esdu_law_is_solved_exactly():
     tangent stiffness against a finite difference."""
     from scipy.special import lambertw
 
-    from models.impacts.laws import esdu_force
+    from models.contact.laws.penalty import esdu_force
 
     sigma, length, clearance = 2 * (1 - 0.09) / 100e9, 0.025, 0.02
     a, b = sigma / length, 4 * length * clearance / sigma
@@ -258,21 +260,25 @@ def test_the_esdu_law_is_solved_exactly():
         assert slope == pytest.approx((float(f(depth + step)[0]) - float(f(depth - step)[0])) / (2 * step), rel=1e-6)
 
 
+def _laws(scheme: str, pair: dict) -> dict:
+    return as_moreau(pair) if scheme == "moreau" else pair
+
+
 def _ball(surface: dict, until: float, scheme: str, friction: dict, velocity=(0.0, 0.0, 0.0), drop=0.0) -> dict:
     """A disk (m = 1 kg, R = 0.1 m, I = m R^2 / 2) centred at the origin, `drop` above the
     surface `surface` of the fixed ground."""
     return {"units": {"length": "m", "force": "N", "angle": "rad", "mass": "kg"}, "gravity": [0, -9.81],
             "bodies": {"ground": {"fixed": True, "position": [0, 0]},
                        "ball": {"position": [0, 0], "mass": 1.0, "inertia": 0.005}},
-            "impacts": {"surfaces": {"rim": {"type": "circle", "body": "ball", "radius": 0.1}, "other": surface},
-                        "pairs": {"touch": {"surfaces": ["rim", "other"], "friction": friction,
-                                            "normal": {"law": "lankarani_nikravesh", "restitution": 0.9,
-                                                       "stiffness": 1e9, "exponent": 1.5}}}},
+            "contacts": {"sites": {"rim": {"type": "circle", "body": "ball", "radius": 0.1}}, "objects": {"other": surface},
+                         "pairs": {"touch": _laws(scheme, {"site": "rim", "object": "other", "friction": friction,
+                                                           "normal": {"law": "lankarani_nikravesh", "restitution": 0.9,
+                                                                      "stiffness": 1e9, "exponent": 1.5}})}},
             "simulate": {"scheme": scheme, "until": until, "step": 1e-4, "tolerance": 1e-10,
                          "initial": {"ball": {"displacement": [0, drop, 0], "velocity": list(velocity)}}}}
 
 
-@pytest.mark.parametrize("surface", [{"type": "line", "body": "ground", "point": [0, -0.1], "normal": [0, 1]},
+@pytest.mark.parametrize("surface", [{"type": "half_plane", "body": "ground", "point": [0, -0.1], "normal": [0, 1]},
                                      {"type": "circle", "body": "ground", "centre": [0, -0.35], "radius": 0.25}])
 def test_a_disk_dropped_on_a_line_or_a_circle_lands_at_the_free_fall_time(surface):
     report = run(_ball(surface, 0.2, "event_driven", {"law": "none"}, drop=0.05))
@@ -284,7 +290,7 @@ def test_friction_at_the_contact_point_spins_a_sliding_disk_up_to_rolling():
     """The friction force acts at C = O - R n_c (the lever the paper's Eqs. 30 and 38 drop):
     a disk launched sliding at 1 m/s without spin ends rolling at m R^2 / (I + m R^2) = 2/3
     of it, with omega = -v / R (angular momentum about the contact point is conserved)."""
-    floor = {"type": "line", "body": "ground", "point": [0, -0.1], "normal": [0, 1]}
+    floor = {"type": "half_plane", "body": "ground", "point": [0, -0.1], "normal": [0, 1]}
     report = run(_ball(floor, 0.3, "moreau", {"law": "coulomb", "adherence": 0.3, "sliding": 0.3},
                        velocity=(1.0, 0.0, 0.0)))
     v, w = report["velocities"]["ball.x"][-1], report["velocities"]["ball.theta"][-1]
@@ -314,11 +320,11 @@ def _pendulum(scheme: str, phi0: float) -> tuple[dict, float, float, float]:
            "bodies": {"ground": {"fixed": True, "position": [0, 0]},
                       "bob": {"position": [0, -l], "mass": m, "inertia": I_G}},
            "elements": {"hinge": {"type": "pin", "from": "ground", "to": "bob", "at": [0, 0]}},
-           "impacts": {"surfaces": {"disk": {"type": "circle", "body": "bob", "radius": r},
-                                    "wall": {"type": "line", "body": "ground", "point": [r, 0], "normal": [-1, 0]}},
-                       "pairs": {"stop": {"surfaces": ["disk", "wall"],
-                                          "normal": {"law": "lankarani_nikravesh", "restitution": 0.9,
-                                                     "stiffness": 1e10, "exponent": 1.5}}}},
+           "contacts": {"sites": {"disk": {"type": "circle", "body": "bob", "radius": r}},
+                        "objects": {"wall": {"type": "half_plane", "body": "ground", "point": [r, 0], "normal": [-1, 0]}},
+                        "pairs": {"stop": _laws(scheme, {"site": "disk", "object": "wall", "friction": {"law": "none"},
+                                                         "normal": {"law": "lankarani_nikravesh", "restitution": 0.9,
+                                                                    "stiffness": 1e10, "exponent": 1.5}})}},
            "simulate": {"scheme": scheme, "until": 0.6, "step": 1e-5 if scheme == "moreau" else 1e-4,
                         "tolerance": 1e-10, "initial": {"bob": {"displacement": [
                             l * math.sin(phi0), l * (1 - math.cos(phi0)), phi0]}}}}

@@ -24,25 +24,34 @@ def _broken(change) -> dict:
 
 
 def _pair(doc):
-    return doc["impacts"]["pairs"]["conjugate"]
+    return doc["contacts"]["pairs"]["conjugate"]
 
 
 BAD = [
     (lambda d: d["bodies"]["hinge"].pop("mass"), "/bodies/hinge/mass", "moves and has no mass"),
     (lambda d: d["simulate"]["initial"].update(hinge={"displacement": [0, -0.03, 0]}), "/simulate/initial/hinge",
      "the start state penetrates: pair 'conjugate' overlaps by 0.01 m"),
-    (lambda d: _pair(d)["normal"].update(restitution=1.2), "/impacts/pairs/conjugate/normal/restitution",
+    (lambda d: _pair(d)["normal"].update(restitution=1.2), "/contacts/pairs/conjugate/normal/restitution",
      "must be in (0, 1], got 1.2"),
-    (lambda d: _pair(d)["normal"].update(restitution=0.0), "/impacts/pairs/conjugate/normal/restitution",
+    (lambda d: _pair(d)["normal"].update(restitution=0.0), "/contacts/pairs/conjugate/normal/restitution",
      "must be in (0, 1], got 0"),
-    (lambda d: _pair(d)["friction"].update(sliding=-0.05), "/impacts/pairs/conjugate/friction/sliding",
+    (lambda d: _pair(d)["friction"].update(sliding=-0.05), "/contacts/pairs/conjugate/friction/sliding",
      "a friction coefficient must not be negative, got -0.05"),
-    (lambda d: _pair(d).update(surfaces=["pin", "hol"]), "/impacts/pairs/conjugate/surfaces/1",
-     "unknown surface 'hol' (surfaces: pin, hole)"),
-    (lambda d: d["impacts"]["surfaces"]["hole"].update(radius=0.18), "/impacts/surfaces/hole/radius",
+    (lambda d: _pair(d).update(object="hol"), "/contacts/pairs/conjugate/object",
+     "unknown object 'hol' (objects: hole)"),
+    (lambda d: d["contacts"]["objects"]["hole"].update(radius=0.18), "/contacts/objects/hole/radius",
      "the clearance of pair 'conjugate' (hole radius 0.18 m minus pin radius 0.18 m) must be positive, got 0 m"),
-    (lambda d: _pair(d)["friction"].update(law="coulomb"), "/impacts/pairs/conjugate/friction/law",
-     "the event_driven scheme takes ambrosio"),
+    (lambda d: _pair(d)["friction"].update(law="coulomb"), "/contacts/pairs/conjugate/friction/law",
+     "an event_driven simulation does not take the friction law 'coulomb' (it is for a quasi-static contact solve, "
+     "a moreau simulation); it takes none or ambrosio"),
+    (lambda d: _pair(d)["normal"].update(law="unilateral"), "/contacts/pairs/conjugate/normal/law",
+     "an event_driven simulation does not take the normal law 'unilateral' (it is for a quasi-static contact "
+     "solve); it takes hertz or hunt_crossley or lankarani_nikravesh or flores or lna_esdu or linear"),
+    (lambda d: d["simulate"].update(scheme="moreau", step=1e-5), "/contacts/pairs/conjugate/normal/law",
+     "a moreau simulation does not take the normal law 'lankarani_nikravesh' (it is for an event_driven "
+     "simulation); it takes restitution"),
+    (lambda d: _pair(d)["normal"].update(law="lankarani_nikravsh"), "/contacts/pairs/conjugate/normal/law",
+     "unknown normal law 'lankarani_nikravsh'; the normal laws are unilateral, restitution, hertz"),
     (lambda d: d["simulate"]["initial"].update(frame={"displacement": [0, 0.001, 0]}), "/simulate/initial/frame",
      "body 'frame' is fixed"),
 ]
@@ -85,7 +94,7 @@ def test_the_cli_runs_an_impact_example_and_names_bad_fields(tmp_path):
     bad.write_text(json.dumps(_broken(BAD[6][0])))
     result = runner.invoke(app, ["simulate", str(bad)])
     assert result.exit_code != 0
-    assert "/impacts/surfaces/hole/radius" in result.output and "must be positive" in result.output
+    assert "/contacts/objects/hole/radius" in result.output and "must be positive" in result.output
 
 
 def test_the_impact_study_ranks_the_clearance_above_the_inertia(api_server):
@@ -95,20 +104,20 @@ def test_the_impact_study_ranks_the_clearance_above_the_inertia(api_server):
 
     with Client(api_server.url) as client:
         job = client.impact_study(example="csfh", simulate={"until": 0.3}, study={"fields": [
-            {"path": "/impacts/surfaces/pin/radius", "step": 0.001}, {"path": "/bodies/hinge/inertia", "step": 0.001}]})
+            {"path": "/contacts/sites/pin/radius", "step": 0.001}, {"path": "/bodies/hinge/inertia", "step": 0.001}]})
         assert job.progress.total == 5
         final = client.wait(job.id, timeout=300)
         assert final.status == "succeeded", final
         result = client.result(job.id).result
-    radius = result["fields"]["/impacts/surfaces/pin/radius"]
+    radius = result["fields"]["/contacts/sites/pin/radius"]
     inertia = result["fields"]["/bodies/hinge/inertia"]
-    assert result["ranking"][0]["path"] == "/impacts/surfaces/pin/radius"
+    assert result["ranking"][0]["path"] == "/contacts/sites/pin/radius"
     # a 1 mm smaller pin falls 1 mm further: the first impact, and the departure, come later
     early = radius["+"]["influence"]["hinge.y"]["departure"]
     assert early is not None and early < 0.08
     assert inertia["+"]["influence"]["hinge.y"]["rms"] < radius["+"]["influence"]["hinge.y"]["rms"] / 10
     bad = httpx.post(f"{api_server.url}/v1/impact-studies", json={"example": "csfh", "study": {"fields": [
-        {"path": "/impacts/surfaces/pin/colour", "step": 1}]}})
+        {"path": "/contacts/sites/pin/colour", "step": 1}]}})
     assert bad.status_code == 422 and bad.json()["error"]["pointer"] == "/study/fields/0/path", bad.text
 
 

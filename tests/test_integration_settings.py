@@ -15,6 +15,7 @@ from service.analyses.base import AnalysisRequest
 from service.cli import app
 from service.cli.progress import SimulationProgress
 from service.dynamics.run import MAX_STEPS
+from tests.impact_cases import csfh
 
 ROD = EXAMPLES / "rod_free_vibration.json"
 
@@ -67,7 +68,7 @@ def test_the_command_line_applies_the_services_step_limit():
     assert result.exit_code == 2 and "100 steps of 0.001 s, over the limit of 50" in result.output
 
 
-def test_an_impact_run_is_costed_before_it_starts_and_max_steps_raises_the_limit_on_this_machine(monkeypatch):
+def test_an_impact_run_is_costed_before_it_starts_and_max_steps_raises_the_limit_on_this_machine(monkeypatch, tmp_path):
     """Issue 24's `csfh.json --until 1e6` (event-driven: costed at its first step, 1e10 steps)
     is refused at once; under a lowered service limit, --max-steps raises it for a local run."""
     env = {"COLUMNS": "200", "NO_COLOR": "1"}
@@ -79,7 +80,9 @@ def test_an_impact_run_is_costed_before_it_starts_and_max_steps_raises_the_limit
     import service.dynamics.run as run
 
     monkeypatch.setattr(run, "MAX_STEPS", 100)
-    args = ["simulate", str(EXAMPLES / "csfh.json"), "--scheme", "moreau", "--step", "1e-4", "--until", "0.02"]
+    moreau = tmp_path / "csfh_moreau.json"  # scenario 6.3 with the laws moreau takes
+    moreau.write_text(json.dumps(csfh("6.3", scheme="moreau")))
+    args = ["simulate", str(moreau), "--step", "1e-4", "--until", "0.02"]
     refused = CliRunner().invoke(app, args, env=env)
     assert refused.exit_code == 2 and "the run needs 200 steps of 0.0001 s, over the limit of 100" in refused.output
     raised = CliRunner().invoke(app, args + ["--max-steps", "300"], env=env)

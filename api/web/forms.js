@@ -6,7 +6,8 @@ const num = (value) => (value === "" || value === null || value === undefined ? 
 const sweepOf = (doc) => doc.sweep || {};
 const pathOf = (doc) => ((doc.contacts && doc.contacts.path && doc.contacts.path.parameters) || [])[0] || {};
 const simulateOf = (doc) => doc.simulate || {};
-const hasImpacts = (doc) => Boolean(doc.impacts);
+const IMPACT_SCHEMES = ["event_driven", "moreau"];
+const hasImpacts = (doc) => Boolean(doc.simulate && IMPACT_SCHEMES.includes(doc.simulate.scheme));
 
 function sweepStop(doc) {
   const sweep = sweepOf(doc);
@@ -101,7 +102,7 @@ const JOBS = {
   },
   impact_study: {
     label: "impact study (job)", endpoint: "/v1/impact-studies",
-    fields: [["fields", "Fields", "json", () => "[]", '[{"path": "/impacts/surfaces/pin/radius", "step": 0.001}]'],
+    fields: [["fields", "Fields", "json", () => "[]", '[{"path": "/contacts/sites/pin/radius", "step": 0.001}]'],
              ["tolerance", "Tolerance", "number", () => 0.05]],
     build: (v) => ({ study: { fields: JSON.parse(v.fields || "[]"), tolerance: num(v.tolerance) } }),
   },

@@ -7,7 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from models.contact.document import Contacts, JawSite
+from models.contact.document import Contacts, FrictionFields, JawSite
+from models.contact.laws import friction_law, normal_law
 from models.contact.polygons import convex_pieces, self_intersection, signed_area
 from models.contact.topology import ContactTopology, ObjectTopology, PairTopology, SiteTopology
 from models.errors import MechanismError
@@ -39,8 +40,14 @@ def collect_contacts(c, contacts: Contacts | None, elements: list[ElementTopolog
         if site.type == "surface" and obj.type == "polygon":
             raise MechanismError(f"{base}/object", f"a link surface cannot touch the polygon '{obj.name}': polygons "
                                  "touch jaws (give the link a jaw, or describe the object as an implicit curve)")
-        c.add(f"{base}/friction", pair.friction, "dimensionless", "nonnegative")
-        pairs.append(PairTopology(name, site_names.index(pair.site), object_names.index(pair.object)))
+        normal_law(pair.normal.law, f"{base}/normal/law")
+        if isinstance(pair.friction, FrictionFields):
+            friction_law(pair.friction.law, f"{base}/friction/law")
+        friction = pair.friction_pointer(base)
+        c.add(friction, pair.friction_coefficient(), "dimensionless", "nonnegative")
+        law = pair.friction.law if isinstance(pair.friction, FrictionFields) else "coulomb"
+        pairs.append(PairTopology(name, site_names.index(pair.site), object_names.index(pair.object), friction,
+                                  pair.normal.law, law))
     return ContactTopology(objects, sites, tuple(pairs))
 
 

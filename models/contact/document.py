@@ -6,6 +6,11 @@
       "pairs":   {"grip": {"site": "jaw", "object": "fixture", "friction": 0.5}}
     }
 
+A pair's `normal` law and `friction` (a coefficient, or a law with its numbers) come from
+the registries of models.contact.laws; each analysis takes the laws it can (a quasi-static
+solve the unilateral law, an event_driven simulation the penalty laws, moreau restitution).
+A pin in a hole is a circle site on one body and a hole object on another.
+
 An object's pose is numbers (so a sweep, a path or an optimization moves it without
 rebuilding anything); with `body` its pose is in that body's axes (from its reference
 point) and it moves with the body. Sites are a rigid jaw (a polygon or polyline carried by a
@@ -120,10 +125,59 @@ ContactSite = Annotated[Union[JawSite, SurfaceSite, CircleSite], Field(discrimin
 SITE_TYPES = ("jaw", "surface", "circle")
 
 
+class ComputedStiffness(StrictModel):
+    """Hertz's generalized stiffness from geometry and materials: two spheres (Eq. 14, with
+    the radius of external contact R1 R2 / (R1 + R2) or of a pin in a hole R1 R2 / (R2 - R1))
+    or two cylinders of contact length L (Eq. 16, pi E* L / 4)."""
+
+    contact: Literal["spheres", "cylinders"]
+    materials: tuple[str, str] = Field(description="the two bodies' materials (E and nu)")
+    radius: Literal["external", "conformal"] = Field(
+        default="conformal", description="spheres: which effective radius (Table 2 of seed 004 uses external)")
+    length: Number | None = Field(default=None, description="cylinders: the contact length")
+
+
+class NormalLawFields(StrictModel):
+    """How the pair pushes: a law of models.contact.laws (unilateral, restitution, hertz,
+    hunt_crossley, lankarani_nikravesh, flores, lna_esdu, linear, or one registered) and the
+    numbers it reads. Stiffness and damping are in the document's force / length^exponent and
+    force s / length unless computed from the materials."""
+
+    law: str = Field(default="unilateral", max_length=64, description="a registered normal law")
+    stiffness: Number | ComputedStiffness | None = Field(default=None, description="penalty laws: K, or computed")
+    exponent: float = Field(default=1.5, gt=0, le=3, description="n of F = K q^n")
+    restitution: float = Field(default=0.9, description="c_r in (0, 1]: the damped laws' damping; moreau's e_N")
+    damping: Number | None = Field(default=None, description="linear: the dashpot's c (force s / length)")
+    length: Number | None = Field(default=None, description="lna_esdu: the contact length L of Eq. 18")
+    materials: tuple[str, str] | None = Field(default=None, description="lna_esdu: the two materials (Eq. 18)")
+
+
+class FrictionFields(StrictModel):
+    """A friction law of models.contact.laws: none; coulomb (adherence f_a, sliding f_d;
+    quasi-static solves slip at f_d); ambrosio (event_driven: none below v0, f_d from v1)."""
+
+    law: str = Field(default="coulomb", max_length=64, description="a registered friction law")
+    sliding: float = Field(default=0.0, description="f_d, the dynamic coefficient")
+    adherence: float | None = Field(default=None, description="f_a, the static coefficient (moreau; default f_d)")
+    v0: float = Field(default=1e-4, gt=0, description="ambrosio: no friction below this slip speed (m/s)")
+    v1: float = Field(default=1e-2, gt=0, description="ambrosio: full friction from this slip speed (m/s)")
+
+
 class ContactPair(StrictModel):
     site: str
     object: str
-    friction: Number = Field(default=0.0, description="Coulomb's coefficient mu")
+    normal: NormalLawFields = Field(default_factory=NormalLawFields, description="the normal law (default: "
+                                    "unilateral, the exact contact of quasi-static solves)")
+    friction: Number | FrictionFields = Field(default=0.0, description="Coulomb's coefficient mu, or a friction law")
+
+    def friction_pointer(self, base: str) -> str:
+        """Where the coefficient a quasi-static solve slips at is: the number, or f_d of a law."""
+        return f"{base}/friction" if not isinstance(self.friction, FrictionFields) else f"{base}/friction/sliding"
+
+    def friction_coefficient(self):
+        if not isinstance(self.friction, FrictionFields):
+            return self.friction
+        return 0.0 if self.friction.law == "none" else self.friction.sliding
 
 
 class PathParameter(StrictModel):

@@ -41,6 +41,9 @@ class PairTopology:
     name: str
     site: int  # index into ContactTopology.sites
     object: int
+    friction_pointer: str = ""  # the coefficient a quasi-static solve slips at (models.contact.document)
+    normal_law: str = "unilateral"  # the laws' names (models.contact.laws): each analysis checks its own
+    friction_law: str = "coulomb"
 
     @property
     def pointer(self) -> str:

@@ -77,7 +77,7 @@ class ImpactModel:
     def structure_key(self) -> str:
         """What decides the graphs (not the numbers)."""
         doc = self.book.document
-        parts = [doc.impacts.model_dump_json(include={"flexure_stiffness"}), ",".join(self.book.pointers),
+        parts = [str(self.turning), ",".join(self.book.pointers),
                  str(self.book.symbols.numel())]
         parts += [f"{b.name}:{b.first}" for b in self.bodies.bodies.values()]
         parts += [f"{e.type}:{getattr(e, 'kind', '')}:{getattr(e, 'direction', '')}:{getattr(e, 'at', 0) is None}"
@@ -85,7 +85,8 @@ class ImpactModel:
         parts += [f"{k}:{getattr(v, 'type', '')}:{getattr(v, 'offset', None) is None}:{getattr(v, 'at', None) is None}"
                   for k, v in doc.loads.items()]
         parts += [f"{p.name}:{p.law}:{p.friction}:{p.esdu is None}" for p in self.pairs]
-        parts += [f"{k}:{s.type}:{s.body}" for k, s in doc.impacts.surfaces.items()]
+        parts += [f"{k}:{s.type}:{getattr(s, 'body', None)}" for group in (doc.contacts.sites, doc.contacts.objects)
+                  for k, s in group.items()]
         return "|".join(parts + [self.history_key])
 
 
@@ -94,17 +95,17 @@ def impact_model(document: MechanismDocument, histories: list[tuple[str, str, ob
     """`histories`: (field pointer, where the history is given, t -> SI value as an SX) for
     the loads, gravity and prescribed displacements that change in time; `history_key` says
     what they are (they shape the graphs)."""
-    if document.impacts is None or not document.impacts.pairs:
-        raise MechanismError("/impacts/pairs", "an impact simulation needs contact pairs: give the `impacts` section "
-                             "its surfaces and pairs")
+    if document.contacts is None or not document.contacts.pairs:
+        raise MechanismError("/contacts/pairs", "an impact simulation needs contact pairs: give the `contacts` section "
+                             "its sites (circles on bodies), objects and pairs")
     book = ParameterBook(document)
     rb = RigidBodies(book)
-    turning = document.impacts.flexure_stiffness == "turning"
+    turning = document.simulate is not None and document.simulate.flexure_stiffness == "turning"
     V_smooth, Q_nc = smooth_forces(rb, turning)  # V_smooth holds the flexures only when they are constant
     flexures, springs = flexure_energy(rb), spring_energy(rb)
     elastic = flexures + springs
     gravity = V_smooth - springs - (0 if turning else flexures)
-    pairs = [pair_model(rb, name, pair) for name, pair in document.impacts.pairs.items()]
+    pairs = [pair_model(rb, name, pair) for name, pair in document.contacts.pairs.items()]
     q, v, t = rb.q, rb.v, ca.SX.sym("t")
     extra = Q_nc + ca.gradient(flexures, q) if turning else ca.SX.zeros(rb.size)
     mass = rb.mass_diagonal()

@@ -1,9 +1,10 @@
-"""Contact pairs between body surfaces: the indentation q (positive in contact; the gap is
--q), the contact normal n_c (pushing the circle's body out of contact), the tangent t_c (n_c
-turned +90 deg), and the generalized directions of a unit normal and tangent force. A force
-F_N n_c + F_T t_c acts on the circle's body at the contact point C = O1 - R1 n_c, and its
-opposite on the other body at C: its lever includes the -R1 n_c term that seed 004's Eqs. 30
-and 38 drop, so friction turns the circle by -R1 F_T."""
+"""Contact pairs of the document's `contacts` in a simulation, a circle site on one body
+against a circle, hole or half-plane object carried by another: the indentation q (positive
+in contact; the gap is -q), the contact normal n_c (pushing the circle's body out of
+contact), the tangent t_c (n_c turned +90 deg), and the generalized directions of a unit
+normal and tangent force. A force F_N n_c + F_T t_c acts on the circle's body at the contact
+point C = O1 - R1 n_c, and its opposite on the other body at C: its lever includes the -R1 n_c
+term that seed 004's Eqs. 30 and 38 drop, so friction turns the circle by -R1 F_T."""
 
 from __future__ import annotations
 
@@ -12,19 +13,22 @@ from dataclasses import dataclass, field
 import casadi as ca
 
 from models.errors import MechanismError
+from models.contact.document import ContactPair, Contacts, FrictionFields, NormalLawFields
+from models.contact.laws import FRICTION_LAWS, FrictionLaw, NormalLaw, friction_law, normal_law
+from models.contact.laws.penalty import hertz_stiffness
 from models.impacts.bodies import RigidBodies
-from models.impacts.document import ImpactPair
-from models.impacts.laws import hertz_stiffness
 from models.planar import rot
 
 ONE, SPEED = ("1", 1.0), ("m/s", 1.0)  # units of the laws' numbers (seed 004 gives v0, v1 in m/s)
+IMPACT_OBJECTS = ("circle", "hole", "half_plane")
+DEFAULT_V0, DEFAULT_V1 = 1e-4, 1e-2  # m/s: the slip speeds no Coulomb law reads (masked switching functions)
 
 
 @dataclass
 class PairModel:
     name: str
-    law: str
-    friction: str  # ambrosio | coulomb | none
+    law: str  # the normal law's name (models.contact.laws)
+    friction: str  # the friction law's name
     indentation: ca.SX  # q(q)
     normal_direction: ca.SX  # generalized force of a unit F_N (n)
     tangent_direction: ca.SX  # of a unit F_T (n)
@@ -37,6 +41,9 @@ class PairModel:
     v1: ca.SX
     esdu: tuple | None  # (sigma1 + sigma2, L, clearance) for lna_esdu
     length_scale: float  # SI: the clearance, or the pin radius
+    normal_law: NormalLaw = None
+    friction_law: FrictionLaw = None
+    damping: ca.SX = field(default_factory=lambda: ca.SX(0))  # the linear law's dashpot c
     normal_drift: ca.SX = field(default_factory=lambda: ca.SX(0))  # n_c.(v_1 - v_2) at C from driven bodies
     tangent_drift: ca.SX = field(default_factory=lambda: ca.SX(0))  # t_c.(v_1 - v_2) likewise
     point: ca.SX | None = None  # the contact point C
@@ -44,23 +51,17 @@ class PairModel:
     normal: ca.SX | None = None  # n_c
 
 
-def pair_model(rb: RigidBodies, name: str, pair: ImpactPair) -> PairModel:
-    book, doc = rb.book, rb.book.document
-    base = f"/impacts/pairs/{name}"
-    surfaces = doc.impacts.surfaces
-    for k, surface in enumerate(pair.surfaces):
-        if surface not in surfaces:
-            raise MechanismError(f"{base}/surfaces/{k}", f"unknown surface '{surface}' (surfaces: "
-                                 f"{', '.join(surfaces) or 'none'})")
-    first, second = (surfaces[s] for s in pair.surfaces)
-    if first.type != "circle":
-        raise MechanismError(f"{base}/surfaces/0", f"the first surface of a pair is a circle, '{pair.surfaces[0]}' is a "
-                             f"{first.type}")
-    body1, body2 = rb.body(first.body, f"/impacts/surfaces/{pair.surfaces[0]}/body"), \
-        rb.body(second.body, f"/impacts/surfaces/{pair.surfaces[1]}/body")
+def pair_model(rb: RigidBodies, name: str, pair: ContactPair) -> PairModel:
+    """The pair `name` of the document's `contacts`: a circle site on a body against a circle,
+    hole or half-plane object carried by another body."""
+    book = rb.book
+    base = f"/contacts/pairs/{name}"
+    site, obj = _surfaces(book.document.contacts, base, pair)
+    body1 = rb.body(site.body, f"/contacts/sites/{pair.site}/body")
+    body2 = rb.body(obj.body, f"/contacts/objects/{pair.object}/body")
     if body1.name == body2.name:
-        raise MechanismError(f"{base}/surfaces", "both surfaces are on the same body")
-    R1, O1, indentation, n_c, scale, R2_si, clearance = _geometry(rb, name, pair, first, second, body1, body2)
+        raise MechanismError(base, f"the site and the object are both on body '{body1.name}'")
+    R1, O1, indentation, n_c, scale, R2_si, clearance = _geometry(rb, name, pair, site, obj, body1, body2)
     t_c = ca.vertcat(-n_c[1], n_c[0])
     C = O1 - R1 * n_c
 
@@ -68,60 +69,104 @@ def pair_model(rb: RigidBodies, name: str, pair: ImpactPair) -> PairModel:
         return rb.wrench(body1, C, unit) - rb.wrench(body2, C, unit)
 
     law = pair.normal
-    R1_si = book.value(f"/impacts/surfaces/{pair.surfaces[0]}/radius")
-    K, esdu = _stiffness(rb, base, law, R1_si, R2_si, clearance, second.type)
+    normal = normal_law(law.law, f"{base}/normal/law")
+    R1_si = book.value(f"/contacts/sites/{pair.site}/radius")
+    K, esdu = _stiffness(rb, base, law, normal, R1_si, R2_si, clearance, obj.type)
     c_r = book.add(f"{base}/normal/restitution", law.restitution, unit=ONE)
     if not 0 < law.restitution <= 1:
         raise MechanismError(f"{base}/normal/restitution", f"the coefficient of restitution c_r must be in (0, 1], "
                              f"got {law.restitution:g}")
-    friction = pair.friction
-    _check_friction(base, friction)
-    adherence = friction.adherence if friction.adherence is not None else friction.sliding
+    exponent = book.add(f"{base}/normal/exponent", law.exponent, "positive", ONE)
+    friction, sliding, adherence, v0, v1 = _friction(book, base, pair)
     return PairModel(
-        name, law.law, friction.law, indentation, direction(n_c), direction(t_c), K,
-        book.add(f"{base}/normal/exponent", law.exponent, "positive", ONE), c_r,
-        book.add(f"{base}/friction/sliding", friction.sliding, unit=ONE),
-        book.add(f"{base}/friction/adherence", adherence, unit=ONE),
-        book.add(f"{base}/friction/v0", friction.v0, "positive", SPEED),
-        book.add(f"{base}/friction/v1", friction.v1, "positive", SPEED),
-        esdu, scale, point=C, bodies=(body1, body2), normal=n_c)
+        name, law.law, friction.name, indentation, direction(n_c), direction(t_c), K, exponent, c_r, sliding, adherence,
+        v0, v1, esdu, scale, normal, friction, _damping(rb, base, law, normal), point=C, bodies=(body1, body2),
+        normal=n_c)
 
 
-def _check_friction(base: str, friction) -> None:
-    for name in ("sliding", "adherence"):
-        value = getattr(friction, name)
+def _surfaces(contacts: Contacts, base: str, pair: ContactPair):
+    """(the site, the object) of a pair, checked for an impact simulation."""
+    if pair.site not in contacts.sites:
+        raise MechanismError(f"{base}/site", f"unknown site '{pair.site}' (sites: {', '.join(contacts.sites) or 'none'})")
+    if pair.object not in contacts.objects:
+        raise MechanismError(f"{base}/object", f"unknown object '{pair.object}' (objects: "
+                             f"{', '.join(contacts.objects) or 'none'})")
+    site, obj = contacts.sites[pair.site], contacts.objects[pair.object]
+    if site.type != "circle":
+        raise MechanismError(f"{base}/site", f"in a simulation a pair's site is a circle on a body (a pin, a roller); "
+                             f"'{pair.site}' is a {site.type}")
+    if obj.type not in IMPACT_OBJECTS:
+        raise MechanismError(f"{base}/object", f"in a simulation a circle touches a circle, a hole or a half_plane; "
+                             f"'{pair.object}' is a {obj.type}")
+    if obj.body is None:
+        raise MechanismError(f"/contacts/objects/{pair.object}/body", "in a simulation an object is carried by a body: "
+                             "give it `body` (a fixed one for the ground)")
+    return site, obj
+
+
+def _friction(book, base: str, pair: ContactPair):
+    """(the law, f_d, f_a, v0, v1): a number is Coulomb's mu, both coefficients (0: none)."""
+    friction = pair.friction
+    if not isinstance(friction, FrictionFields):
+        mu = book.number(f"{base}/friction", friction, "dimensionless")
+        if book.value(f"{base}/friction") < 0:
+            raise MechanismError(f"{base}/friction", "a friction coefficient must not be negative, got "
+                                 f"{book.value(f'{base}/friction'):g}")
+        law = FRICTION_LAWS["coulomb" if book.value(f"{base}/friction") > 0 else "none"]
+        return law, mu, mu, DEFAULT_V0, DEFAULT_V1
+    law = friction_law(friction.law, f"{base}/friction/law")
+    for key in ("sliding", "adherence"):
+        value = getattr(friction, key)
         if value is not None and value < 0:
-            raise MechanismError(f"{base}/friction/{name}", f"a friction coefficient must not be negative, got {value:g}")
-    if friction.law == "ambrosio" and friction.v1 <= friction.v0:
+            raise MechanismError(f"{base}/friction/{key}", f"a friction coefficient must not be negative, got {value:g}")
+    if law.speed_events and friction.v1 <= friction.v0:
         raise MechanismError(f"{base}/friction/v1", f"v1 ({friction.v1:g}) must exceed v0 ({friction.v0:g})")
+    adherence = friction.adherence if friction.adherence is not None else friction.sliding
+    return (law, book.add(f"{base}/friction/sliding", friction.sliding, unit=ONE),
+            book.add(f"{base}/friction/adherence", adherence, unit=ONE),
+            book.add(f"{base}/friction/v0", friction.v0, "positive", SPEED),
+            book.add(f"{base}/friction/v1", friction.v1, "positive", SPEED))
 
 
-def _geometry(rb: RigidBodies, name: str, pair: ImpactPair, first, second, body1, body2):
+def _geometry(rb: RigidBodies, name: str, pair: ContactPair, site, obj, body1, body2):
     """(R1, O1, indentation, n_c, length scale, R2 (SI or None), clearance (SI or None))."""
     book = rb.book
-    s1, s2 = (f"/impacts/surfaces/{s}" for s in pair.surfaces)
-    R1 = book.number(f"{s1}/radius", first.radius, "length", "positive")
-    O1 = rb.point(body1, book.vector(f"{s1}/centre", first.centre, "length"))
+    s1, s2 = f"/contacts/sites/{pair.site}", f"/contacts/objects/{pair.object}"
+    R1 = book.number(f"{s1}/radius", site.radius, "length", "positive")
+    O1 = rb.point(body1, book.vector(f"{s1}/centre", site.centre, "length"))
     R1_si = book.value(f"{s1}/radius")
-    if second.type == "line":
-        normal = book.vector(f"{s2}/normal", second.normal, "dimensionless")
+    if obj.type == "half_plane":
+        normal = book.vector(f"{s2}/normal", obj.normal, "dimensionless")
         if book.value(f"{s2}/normal/0") == 0 and book.value(f"{s2}/normal/1") == 0:
             raise MechanismError(f"{s2}/normal", "the normal must not be zero")
         n_c = rot(rb.turn(body2) - body2.angle) @ normal / ca.norm_2(normal)
-        P2 = rb.point(body2, book.vector(f"{s2}/point", second.point, "length"))
+        P2 = rb.point(body2, book.vector(f"{s2}/point", obj.point, "length"))
         return R1, O1, R1 - ca.dot(O1 - P2, n_c), n_c, R1_si, None, None
-    R2 = book.number(f"{s2}/radius", second.radius, "length", "positive")
+    R2 = book.number(f"{s2}/radius", obj.radius, "length", "positive")
     R2_si = book.value(f"{s2}/radius")
-    O2 = rb.point(body2, book.vector(f"{s2}/centre", second.centre, "length"))
+    O2 = rb.point(body2, book.vector(f"{s2}/centre", obj.centre, "length"))
     e = O1 - O2
     distance = ca.sqrt(ca.dot(e, e) + 1e-300)
-    if second.type == "hole":
+    if obj.type == "hole":
         clearance = R2_si - R1_si
         if clearance <= 0:
             raise MechanismError(f"{s2}/radius", f"the clearance of pair '{name}' (hole radius {R2_si:g} m minus "
                                  f"pin radius {R1_si:g} m) must be positive, got {clearance:g} m")
         return R1, O1, distance - (R2 - R1), -e / distance, clearance, R2_si, clearance
     return R1, O1, R1 + R2 - distance, e / distance, min(R1_si, R2_si), R2_si, None
+
+
+def _damping(rb: RigidBodies, base: str, law: NormalLawFields, normal: NormalLaw) -> ca.SX:
+    """The linear law's dashpot c (document force s / length), SI."""
+    if "damping" not in normal.needs:
+        return ca.SX(0)
+    pointer = f"{base}/normal/damping"
+    if law.damping is None:
+        raise MechanismError(pointer, f"the {normal.name} law needs the dashpot's `damping` c (force s / length)")
+    units = rb.book.document.units
+    per = rb.book.si(1.0, "force", pointer) / rb.book.si(1.0, "length", pointer)
+    value = rb.book.si(law.damping, "dimensionless", pointer) * per
+    return rb.book.add(pointer, value, "nonnegative", (f"{units.force}*s/{units.length}", per))
 
 
 def _materials(rb: RigidBodies, pointer: str, names) -> list[tuple[float, float]]:
@@ -137,12 +182,14 @@ def _materials(rb: RigidBodies, pointer: str, names) -> list[tuple[float, float]
     return out
 
 
-def _stiffness(rb: RigidBodies, base: str, law, R1: float, R2: float | None, clearance: float | None, kind: str):
-    """(K symbol, ESDU numbers or None). A computed stiffness is a value of the book too."""
+def _stiffness(rb: RigidBodies, base: str, law: NormalLawFields, normal: NormalLaw, R1: float, R2: float | None,
+               clearance: float | None, kind: str):
+    """(K symbol, ESDU numbers or None). A computed stiffness is a value of the book too; a
+    law that needs none has K = 0."""
     book = rb.book
     pointer = f"{base}/normal/stiffness"
     esdu = None
-    if law.law == "lna_esdu":
+    if normal.name == "lna_esdu":
         if kind != "hole":
             raise MechanismError(f"{base}/normal/law", "the ESDU law (Eq. 18) is for a pin in a hole")
         if law.length is None or law.materials is None:
@@ -153,13 +200,19 @@ def _stiffness(rb: RigidBodies, base: str, law, R1: float, R2: float | None, cle
                          ("1/Pa", 1.0))
         esdu = (sigma, book.number(f"{base}/normal/length", law.length, "length", "positive"),
                 book.add(f"{base}/clearance", clearance, "positive", ("m", 1.0)))
+    if law.stiffness is None:
+        if "stiffness" in normal.needs:
+            raise MechanismError(pointer, f"the {normal.name} law needs the stiffness K (a number in the document's "
+                                 "force / length^exponent, or computed from the materials)")
+        return ca.SX(0), esdu
     if isinstance(law.stiffness, str):
         raise MechanismError(pointer, "give K as a number, in the document's force / length^exponent")
     if isinstance(law.stiffness, (int, float)):
-        per = book.si(1.0, "force", pointer) / book.si(1.0, "length", pointer) ** law.exponent
+        exponent = law.exponent if "exponent" in normal.needs else 1.0
+        per = book.si(1.0, "force", pointer) / book.si(1.0, "length", pointer) ** exponent
         units = book.document.units
         return book.add(pointer, float(law.stiffness) * per, "positive",
-                        (f"{units.force}/{units.length}^{law.exponent:g}", per)), esdu
+                        (f"{units.force}/{units.length}^{exponent:g}", per)), esdu
     spec = law.stiffness
     (E1, nu1), (E2, nu2) = _materials(rb, f"{pointer}/materials", spec.materials)
     length = None

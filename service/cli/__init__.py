@@ -30,6 +30,7 @@ from service.cli import serve  # noqa: F401
 from service.cli import contact  # noqa: F401
 from service.cli import simulate  # noqa: F401
 from service.cli import build  # noqa: F401
+from service.cli import upgrade  # noqa: F401
 from service.cli.leaving import main
 
 __all__ = ["app", "main"]

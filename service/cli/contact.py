@@ -110,12 +110,12 @@ def _runs(mech, friction: list[float] | None) -> list[tuple[str, object]]:
     """(label, mechanism) of each run: the document's, or one per --friction value."""
     if not friction:
         return [("", mech)]
-    pairs = [pair.pointer for pair in mech.structure.contacts.pairs]
+    pairs = [pair.friction_pointer for pair in mech.structure.contacts.pairs]
     runs = []
     for mu in friction:
         if not np.isfinite(mu) or mu < 0:
             raise OptionError("--friction", f"must be a number of at least 0, got {mu:g}")
-        runs.append((f"mu = {mu:g}", mech.with_values({f"{pointer}/friction": mu for pointer in pairs})))
+        runs.append((f"mu = {mu:g}", mech.with_values({pointer: mu for pointer in pairs})))
     return runs
 
 

@@ -33,7 +33,7 @@ def simulate(document: DocArg, sets: SetOpt = None,
                                                            "which this raises for a run on this machine.")] = None,
              sensitivity: Annotated[list[str] | None, typer.Option(
                  "--sensitivity", metavar="POINTER", help="event_driven: differentiate the end state by this number "
-                 "of the document, exactly (repeatable), e.g. /impacts/pairs/conjugate/normal/restitution.")] = None,
+                 "of the document, exactly (repeatable), e.g. /contacts/pairs/conjugate/normal/restitution.")] = None,
              compiled: Annotated[bool, typer.Option("--compiled", hidden=True,
                                                     help="Deprecated and ignored: kernels compile in the build "
                                                     "queue (flexmech build).")] = False,

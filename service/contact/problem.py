@@ -29,6 +29,7 @@ import casadi as ca
 import numpy as np
 
 from models.assembly import graphs_for
+from models.contact.laws import FRICTION_LAWS, NORMAL_LAWS, check_law
 from models.contact.constraints import ContactGeometry, contact_constraints, substituted
 from models.errors import MechanismError
 from models.planar import rot
@@ -94,6 +95,9 @@ class ContactProblem:
 def contact_problem(structure: Structure) -> ContactProblem:
     if structure.contacts is None or not structure.contacts.pairs:
         raise MechanismError("/contacts/pairs", "the contact analysis needs at least one contact pair")
+    for pair in structure.contacts.pairs:
+        check_law(NORMAL_LAWS, "normal", pair.normal_law, "contact", f"{pair.pointer}/normal/law")
+        check_law(FRICTION_LAWS, "friction", pair.friction_law, "contact", f"{pair.pointer}/friction/law")
     energy = symbolic_energy(structure, nudged=True)
     nudge = ca.vec(energy.nudge)
     geometry = ContactGeometry(energy.ctx, energy.d, energy.surfaces, structure.contacts)

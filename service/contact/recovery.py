@@ -42,7 +42,7 @@ def recovered_forces(mech: Mechanism, frictionless_report: dict, consistent_repo
         clamp = np.array([outputs[f"elements.{link}.x_start"], outputs[f"elements.{link}.y_start"]])
         n = np.array(before["normal"])
         t = np.array([-n[1], n[0]])
-        mu = mech.value(f"{pair.pointer}/friction")
+        mu = mech.value(pair.friction_pointer)
         sigma = np.sign(after["friction_force"]) if after["state"] == "slipping" else 0.0
         direction = n + mu * sigma * t
         arm = np.array(before["point"]) - clamp

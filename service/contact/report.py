@@ -15,7 +15,7 @@ from service.units import outputs_in_doc_units
 
 def friction_coefficients(mech: Mechanism, problem: ContactProblem, p: np.ndarray | None = None) -> np.ndarray:
     p = mech.p() if p is None else p
-    return np.array([p[mech.parameter_index(f"{pair.pointer}/friction")] for pair in problem.structure.contacts.pairs])
+    return np.array([p[mech.parameter_index(pair.friction_pointer)] for pair in problem.structure.contacts.pairs])
 
 
 def pair_values(problem: ContactProblem, state: ContactState) -> dict[str, np.ndarray]:

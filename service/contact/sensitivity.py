@@ -60,7 +60,7 @@ def friction_rates(mech: Mechanism, problem: ContactProblem, state: ContactState
     mode = state.mode
     out = np.zeros((len(mode.phi), len(slots)))
     pairs = problem.structure.contacts.pairs
-    coefficient = {mech.parameter_index(f"{pair.pointer}/friction"): j for j, pair in enumerate(pairs)}
+    coefficient = {mech.parameter_index(pair.friction_pointer): j for j, pair in enumerate(pairs)}
     for column, slot in enumerate(slots):
         j = coefficient.get(slot)
         if j is None or mode.stick[j] > 0:

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import casadi as ca
 
-from models.impacts.laws import ambrosio_friction, normal_force
 from models.impacts.model import ImpactModel
 
 
@@ -23,11 +22,7 @@ def regularized_forces(model: ImpactModel, geometry, contact, beyond_v0, beyond_
     forces = []
     for k, (pair, (pen, rate, v_T, _, _)) in enumerate(zip(model.pairs, geometry)):
         speed = ca.fmax(impact_speed[k], 1e-300)  # out of contact it is 0: keep 0 * F finite
-        F_N = ca.if_else(contact[k], normal_force(pair.law, pair.K, pair.exponent, pair.restitution, pen, rate,
-                                                  speed, pair.esdu), 0)
-        if pair.friction == "ambrosio":
-            F_T = ca.if_else(contact[k], 1, 0) * ambrosio_friction(v_T, F_N, pair.sliding, pair.v0, pair.v1, beyond_v0[k], beyond_v1[k])
-        else:
-            F_T = ca.SX(0)
+        F_N = ca.if_else(contact[k], pair.normal_law.force(pair, pen, rate, speed), 0)
+        F_T = ca.if_else(contact[k], 1, 0) * pair.friction_law.force(pair, v_T, F_N, beyond_v0[k], beyond_v1[k])
         forces.append((F_N, F_T))
     return forces

@@ -121,7 +121,7 @@ def violations(model: ImpactModel, switching, contact, b0, b1) -> ca.SX:
     for k, pair in enumerate(model.pairs):
         s = switching[3 * k:3 * k + 3]
         out.append((1 - 2 * contact[k]) * s[0])
-        live = contact[k] if pair.friction == "ambrosio" else 0
+        live = contact[k] if pair.friction_law.speed_events else 0
         out.append(ca.if_else(live, (1 - 2 * b0[k]) * s[1], MASKED))
         out.append(ca.if_else(live, (1 - 2 * b1[k]) * s[2], MASKED))
     return ca.vertcat(*out)

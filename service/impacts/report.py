@@ -130,7 +130,7 @@ def report(model: ImpactModel, spec: SimulateSpec, trace: Trace, p: np.ndarray, 
         "events": full.events, "impacts": full.impacts,
         "energies": {k: (np.asarray(x) * per["energy"]).tolist() for k, x in energies.items()},
         "energy_balance_error": float(np.abs(balance).max() / size),
-        "flexure_stiffness": book.document.impacts.flexure_stiffness,
+        "flexure_stiffness": "turning" if model.turning else "constant",
         "clearance": _clearance(model) * per["length"],
         "units": {"time": "s", "length": book.document.units.length, "angle": book.document.units.angle,
                   "force": book.document.units.force, "energy": f"{book.document.units.force}*{book.document.units.length}",
@@ -140,9 +140,9 @@ def report(model: ImpactModel, spec: SimulateSpec, trace: Trace, p: np.ndarray, 
 
 def _clearance(model: ImpactModel) -> float:
     """The radial clearance of the first pin-in-hole pair (SI; 0 without one), for drawing."""
-    doc = model.book.document
-    for pair in doc.impacts.pairs.values():
-        pin, other = (doc.impacts.surfaces[s] for s in pair.surfaces)
+    contacts = model.book.document.contacts
+    for pair in contacts.pairs.values():
+        pin, other = contacts.sites[pair.site], contacts.objects[pair.object]
         if other.type == "hole":
             return model.book.si(other.radius, "length", "") - model.book.si(pin.radius, "length", "")
     return 0.0

@@ -10,6 +10,8 @@ from collections import OrderedDict
 import numpy as np
 
 from models import MechanismError
+from models.contact.document import FrictionFields
+from models.contact.laws import FRICTION_LAWS, NORMAL_LAWS, check_law
 from models.document import MechanismDocument
 from models.impacts.model import DAMPING, WORKS, ImpactModel, impact_model
 from models.simulation_spec import SimulateSpec
@@ -42,13 +44,14 @@ def timed_fields(document: MechanismDocument, spec: SimulateSpec) -> list[tuple[
 
 
 def check_laws(model: ImpactModel, spec: SimulateSpec) -> None:
-    """Coulomb's friction is set-valued: only Moreau-Jean's impulses take it."""
-    if spec.scheme != "event_driven":
-        return
+    """Each pair's laws are ones the scheme takes (models.contact.laws): penalty laws and
+    Ambrosio's friction for event_driven, restitution and Coulomb's friction for moreau."""
     for pair in model.pairs:
-        if pair.friction == "coulomb":
-            raise MechanismError(f"/impacts/pairs/{pair.name}/friction/law", "Coulomb's friction is set-valued: the "
-                                 "event_driven scheme takes ambrosio's regularized law (moreau takes coulomb)")
+        base = f"/contacts/pairs/{pair.name}"
+        check_law(NORMAL_LAWS, "normal", pair.law, spec.scheme, f"{base}/normal/law")
+        written = model.book.document.contacts.pairs[pair.name].friction
+        check_law(FRICTION_LAWS, "friction", pair.friction, spec.scheme,
+                  f"{base}/friction/law" if isinstance(written, FrictionFields) else f"{base}/friction")
 
 
 def start_state(model: ImpactModel, spec: SimulateSpec, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -38,7 +38,7 @@ def study_fields(document: dict, fields: list[dict]) -> list[tuple[str, float]]:
         where = f"/study/fields/{k}"
         if not isinstance(pointer, str) or not pointer.startswith("/"):
             raise MechanismError(f"{where}/path", "give the field as a JSON pointer into the document, e.g. "
-                                 "/impacts/surfaces/pin/radius")
+                                 "/contacts/sites/pin/radius")
         if not isinstance(step, (int, float)) or isinstance(step, bool) or step == 0:
             raise MechanismError(f"{where}/step", "give a non-zero number: the field moves by +step and -step")
         value = _at(document, pointer, f"{where}/path")

@@ -3,7 +3,7 @@ pool or Dask, one point per run: point 0 is the nominal run, then each field mov
 and by -step. Points are independent, so they run in any order and in parallel.
 
 spec:
-  document    the mechanism document (its `impacts` and `simulate` sections)
+  document    the mechanism document (its `contacts` and `simulate` sections)
   simulate    optional fields over the document's `simulate`
   study       {fields: [{path, step}], tolerance (default 0.05 of each quantity's nominal range)}
 """

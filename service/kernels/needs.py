@@ -10,7 +10,7 @@ from pathlib import Path
 
 import casadi as ca
 
-from models import Mechanism
+from models import Mechanism, MechanismError
 from models.elements.link import LinkElementsTopology
 from models.kernels.chunks import chunks
 from models.kernels.layout import layout_of
@@ -44,11 +44,15 @@ def builds_of(mech: Mechanism) -> list[Build]:
         out += [chain_build(g.signature) for g in layout_of(mech.structure).groups]
     simulate = mech.document.simulate
     if simulate is not None and simulate.scheme in ("event_driven", "moreau"):
-        from service.impacts.run import impact_model, timed_fields
+        from service.impacts.run import check_laws, impact_model, timed_fields
         from service.impacts.stepping import chunk_function
 
         model = impact_model(mech.document, timed_fields(mech.document, simulate),
                              json.dumps(simulate.histories, sort_keys=True))
+        try:
+            check_laws(model, simulate)
+        except MechanismError:
+            return out  # a run refuses these laws by name: there is nothing to build for it
         kind = "event" if simulate.scheme == "event_driven" else "moreau"
         fn, key = chunk_function(model, kind)
         target = function_library(fn, key)
@@ -60,7 +64,6 @@ def window_builds(mech: Mechanism) -> list[Build]:
     """The window of time steps the document's link dynamics runs, compiled as a whole
     (service.kernels.windows): only once every kernel it calls is compiled, and none for a
     document without such a simulation."""
-    from models import MechanismError
     from service.dynamics.adaptive import ADAPTIVE_WINDOW
     from service.dynamics.histories import read_histories
     from service.dynamics.run import scheme_of, simulation_spec
