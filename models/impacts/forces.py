@@ -12,7 +12,7 @@ from models.errors import MechanismError
 from models.impacts.bodies import RigidBodies
 from models.planar import rot
 
-SUPPORTED = ("curved_beam", "spring", "pin")
+SUPPORTED = ("curved_beam", "spring", "pin", "slider")
 
 
 def smooth_forces(rb: RigidBodies, turning: bool) -> tuple[ca.SX, ca.SX]:
@@ -43,7 +43,7 @@ def smooth_forces(rb: RigidBodies, turning: bool) -> tuple[ca.SX, ca.SX]:
                 V += energy
         elif element.type == "spring":
             V += _spring(rb, name, element, base)
-        elif element.type == "pin":
+        elif element.type in ("pin", "slider"):
             continue  # a constraint (models.impacts.joints)
         else:
             raise MechanismError(f"{base}/type", f"a {element.type} element is not part of impact simulations "

@@ -21,7 +21,7 @@ from models.errors import MechanismError
 from models.impacts.bodies import RigidBodies
 from models.impacts.book import ParameterBook
 from models.impacts.forces import flexure_energy, smooth_forces, spring_energy
-from models.impacts.joints import pin_constraints
+from models.impacts.joints import joint_constraints
 from models.impacts.pairs import PairModel, pair_model
 from models.planar import rot
 
@@ -47,8 +47,9 @@ class ImpactModel:
     turning: bool
     t: ca.SX
     history_key: str = ""
-    constraints: ca.SX = None  # g(q, t) = 0 of the pins (2 per pin)
+    constraints: ca.SX = None  # g(q, t) = 0 of the pins and sliders (2 rows each)
     joint_names: tuple[str, ...] = ()
+    joint_labels: tuple[tuple, ...] = ()  # per joint its multipliers' (label, kind) (models.impacts.joints)
 
     @property
     def q(self) -> ca.SX:
@@ -126,9 +127,10 @@ def impact_model(document: MechanismDocument, histories: list[tuple[str, str, ob
     acting = ca.substitute(gravity - held, timed, ca.vertcat(*[value for _, value in loads])) if loads else ca.SX(0)
     V = elastic + held
     power = -ca.dot(ca.gradient(acting, q), v) + ca.jacobian(V, t)  # timed loads; moving supports
-    g, joints = pin_constraints(rb)
+    g, joints, labels = joint_constraints(rb)
     return ImpactModel(book, rb, pairs, mass, -ca.gradient(V + acting, q) + extra + damping, extra, damping,
-                       power, 0.5 * ca.dot(mass * v, v), elastic, held, turning, t, history_key, driven(g), tuple(joints))
+                       power, 0.5 * ca.dot(mass * v, v), elastic, held, turning, t, history_key, driven(g),
+                       tuple(joints), tuple(labels))
 
 
 def _split(book: ParameterBook, rb: RigidBodies, histories, t) -> tuple[list, list]:

@@ -160,7 +160,7 @@ def _event_pairs(model: ImpactModel, states: np.ndarray, p: np.ndarray, per: dic
         pairs[pair.name] = {"normal_force": F_N[k] * per["force"], "friction_force": F_T[k] * per["force"],
                             "indentation": pen[k] * per["length"], "slip_speed": v_T[k] * per["length"],
                             "in_contact": states[:, L.at("contact")][:, k]}
-    joints = _joints(model, pins.reshape(-1, len(states)).T * per["force"])
+    joints = _joints(model, pins.reshape(-1, len(states)).T, per)
     flags = np.column_stack([states[:, L.at(key)] for key in ("contact", "beyond_v0", "beyond_v1")])
     onsets: dict[str, tuple[float, float, int]] = {}  # per pair, its contact's start, impact speed and row
     event_rows = np.nonzero(states[:, L.at("event")] > 0.5)[0]
@@ -188,9 +188,12 @@ def _event_pairs(model: ImpactModel, states: np.ndarray, p: np.ndarray, per: dic
     return pairs, events, impacts, joints, np.unique(np.r_[event_rows - 1, event_rows].clip(0))
 
 
-def _joints(model: ImpactModel, forces: np.ndarray) -> dict:
-    """Per pin, the force it applies to its `to` body (rows: states)."""
-    return {name: {"Fx": forces[:, 2 * k], "Fy": forces[:, 2 * k + 1]} for k, name in enumerate(model.joint_names)}
+def _joints(model: ImpactModel, forces: np.ndarray, per: dict) -> dict:
+    """Per joint, what it applies to its `to` body (rows: states; `forces` SI): a pin's force
+    (Fx, Fy), a slider's force along the axis normal and couple (N, M)."""
+    scale = {"force": per["force"], "moment": per["force"] * per["length"]}
+    return {name: {label: forces[:, 2 * k + i] * scale[kind] for i, (label, kind) in enumerate(labels)}
+            for k, (name, labels) in enumerate(zip(model.joint_names, model.joint_labels))}
 
 
 def _moreau_pairs(model: ImpactModel, spec: SimulateSpec, extras: np.ndarray, states: np.ndarray, per: dict):
@@ -230,4 +233,4 @@ def _moreau_pairs(model: ImpactModel, spec: SimulateSpec, extras: np.ndarray, st
                             "duration": float(states[last, 0] - states[first - 1, 0]),
                             "peak_force": float(lam_N[first:last + 1].max()) / h * per["force"]})
     events.sort(key=lambda event: event["time"])
-    return pairs, events, impacts, _joints(model, extras[:, 5 * P:] / h * per["force"]), np.asarray(rows, dtype=int)
+    return pairs, events, impacts, _joints(model, extras[:, 5 * P:] / h, per), np.asarray(rows, dtype=int)

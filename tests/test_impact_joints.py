@@ -1,0 +1,43 @@
+"""Joints of impact simulations (models.impacts.joints): a pin in its hole riding a slider
+meets the hole at the time and speed of a fall along the slider, held by the slider's
+normal force alone."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from service.impacts.run import run_impacts
+from tests.impact_cases import csfh, parsed
+
+G, MASS, CLEARANCE = 9.81, 10.0, 0.02
+ANGLE = 60.0  # deg: the slider's axis from the x axis, through the hole's centre
+
+
+@pytest.mark.parametrize("scheme", ["event_driven", "moreau"])
+def test_a_pin_on_a_slider_falls_along_it_into_its_hole(scheme):
+    """Released at the hole's centre, the body slides down the axis with g sin(60 deg) and
+    meets the hole after sqrt(2 c / (g sin)) at sqrt(2 g sin c); until then the slider pushes
+    across its axis with m g cos(60 deg) and no couple, and the body never turns."""
+    doc = csfh("6.1", scheme=scheme, until=0.15, step=1e-5 if scheme == "moreau" else 1e-4)
+    doc["simulate"]["initial"]["hinge"] = {"displacement": [0, 0, 0]}
+    doc["elements"] = {"rail": {"type": "slider", "from": "frame", "to": "hinge", "angle": ANGLE}}
+    report = run_impacts(*parsed(doc))[1]
+    along = G * math.sin(math.radians(ANGLE))
+    first = report["impacts"][0]
+    fall = math.sqrt(2 * CLEARANCE / along)
+    if scheme == "event_driven":
+        assert first["time"] == pytest.approx(fall, rel=1e-8)
+        assert first["impact_speed"] == pytest.approx(math.sqrt(2 * along * CLEARANCE), rel=1e-8)
+    else:
+        assert abs(first["time"] - fall) <= 1e-5  # within a step
+    times = np.array(report["times"])
+    before = (times > 0.01) & (times < first["time"] - 1e-3)
+    rail = report["joints"]["rail"]
+    np.testing.assert_allclose(np.array(rail["N"])[before], MASS * G * math.cos(math.radians(ANGLE)), rtol=1e-6)
+    assert np.abs(np.array(rail["M"])[before]).max() < 1e-6
+    assert np.abs(report["coordinates"]["hinge.theta"]).max() < 1e-9
+    x, y = (np.array(report["coordinates"][f"hinge.{c}"]) for c in "xy")
+    np.testing.assert_allclose(y, x * math.tan(math.radians(ANGLE)), atol=1e-9)  # on the axis throughout
