@@ -3,7 +3,7 @@ shape every sensitivity analysis answers in (equilibrium, optimum, contact)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -14,8 +14,13 @@ class Sensitivities:
     outputs: list[str]
     matrix: np.ndarray  # (outputs, parameters), document units
     units: list[list[str]]  # "output unit / parameter unit"
+    not_differentiable: list[str] = field(default_factory=list)  # why no derivative is given (none: all are)
 
     def to_dict(self) -> dict:
-        return {"parameters": self.parameters, "outputs": self.outputs,
-                "derivatives": {o: dict(zip(self.parameters, row.tolist())) for o, row in zip(self.outputs, self.matrix)},
-                "units": {o: dict(zip(self.parameters, row)) for o, row in zip(self.outputs, self.units)}}
+        out = {"parameters": self.parameters, "outputs": self.outputs,
+               "derivatives": {o: dict(zip(self.parameters, [None if np.isnan(x) else x for x in row.tolist()]))
+                               for o, row in zip(self.outputs, self.matrix)},
+               "units": {o: dict(zip(self.parameters, row)) for o, row in zip(self.outputs, self.units)}}
+        if self.not_differentiable:
+            out["not_differentiable"] = self.not_differentiable
+        return out

@@ -440,6 +440,34 @@ def test_friction_sensitivities_of_a_slipping_jaw_equal_central_differences(x_o)
         assert abs(fd) > 1.0 and abs(exact - fd) <= 1e-5 * abs(fd), (name, exact, fd)
 
 
+def _onset() -> tuple[float, float]:
+    """Fixture positions (mm) 1e-12 apart about where the jaw first touches: (touching, open)."""
+    touching, apart = 70.0, 80.0
+    while apart - touching > 1e-12:
+        middle = 0.5 * (touching + apart)
+        if run_contact(example(middle))["pairs"]["insertion"]["state"] == "open":
+            apart = middle
+        else:
+            touching = middle
+    return touching, apart
+
+
+def test_no_derivative_is_given_where_the_contact_is_about_to_change_state():
+    """At the onset, from either side, the outputs have one-sided derivatives only: none is
+    given, and the answer names the pair and why; clear of it, an open pair's forces have
+    derivative 0 (not norm_2's 0/0) and a touching one numbers."""
+    asked = {"parameters": [X_O], "outputs": OUTPUTS}
+    for x_o, why in zip(_onset(), ("touches with a vanishing force (about to open)",
+                                   "is apart by a vanishing gap (about to touch)")):
+        found = run_contact(example(x_o), sensitivities=asked)["sensitivities"]
+        assert all(row[X_O] is None for row in found["derivatives"].values()), found
+        assert found["not_differentiable"] == [f"pair 'insertion' {why}: the derivatives are one-sided, none is given"]
+    clear = run_contact(example(78.5), sensitivities=asked)["sensitivities"]
+    assert all(row[X_O] == 0.0 for row in clear["derivatives"].values()) and "not_differentiable" not in clear
+    touching = run_contact(example(77.9), sensitivities=asked)["sensitivities"]
+    assert all(row[X_O] is not None and row[X_O] != 0.0 for row in touching["derivatives"].values()), touching
+
+
 # --- F. the command line -----------------------------------------------------------------------
 @pytest.fixture
 def run():

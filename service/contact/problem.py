@@ -243,15 +243,22 @@ def pair_results(constraints, w: ca.SX, p: ca.SX, n_eq: int, n_element: int, n_p
         point[j] = point[j] + pushing * row.point
         along[j] = along[j] + pushing * row.site_parameter
     tiny = 1e-300
-    normal_force = [ca.norm_2(n) for n in normal_sum]
-    tangential = [ca.dot(f, ca.vertcat(-n[1], n[0])) / (ca.norm_2(n) + tiny) for f, n in zip(friction_sum, normal_sum)]
+    normal_force = [_length(n) for n in normal_sum]
+    tangential = [ca.dot(f, ca.vertcat(-n[1], n[0])) / (_length(n) + tiny) for f, n in zip(friction_sum, normal_sum)]
     v = ca.vertcat(w, lam_eq, lam, tau)
     outputs = [ca.horzcat(*[n + f for n, f in zip(normal_sum, friction_sum)]), ca.vertcat(*normal_force),
                ca.vertcat(*tangential), ca.horzcat(*[q / (m + tiny) for q, m in zip(point, magnitude)]),
                ca.vertcat(*[s / (m + tiny) for s, m in zip(along, magnitude)]),
-               ca.horzcat(*[n / (ca.norm_2(n) + tiny) for n in normal_sum])]
+               ca.horzcat(*[n / (_length(n) + tiny) for n in normal_sum])]
     return ca.Function("pair_results", [v, p, phi, stick, weights], outputs, ["v", "p", "phi", "stick", "weights"],
                        ["force", "normal_force", "tangential_force", "point", "along", "normal"])
+
+
+def _length(vector: ca.SX) -> ca.SX:
+    """|vector|, 0 at 0 with a derivative there (0, not norm_2's 0/0: an open pair's forces do
+    not change)."""
+    square = ca.dot(vector, vector)
+    return ca.if_else(square > 0, ca.sqrt(ca.fmax(square, 1e-300)), 0.0)
 
 
 def _outputs(structure, results, corrections, w, p, n_eq, n_in, n_pairs, x_in_state, multipliers_in_state):

@@ -3,20 +3,22 @@ friction directions and sticking pairs held), the KKT system F(v, p) = 0 gives
 dv/dp = -F_v^-1 F_p, and every contact output (forces, contact points, site parameters, the
 structure's outputs) follows: dy/dp = y_v dv/dp + y_p. A friction coefficient enters through the
 slipping rows' factor phi = mu sigma, an input of F and y: F_p and y_p carry its part, F_phi
-dphi/dp and y_phi dphi/dp (without it, the derivatives in mu came out 0). Rows whose
-multiplier is below WEAK of the largest are reported: there the derivative is one-sided."""
+dphi/dp and y_phi dphi/dp (without it, the derivatives in mu came out 0). At a pair about to
+change state (touching with a vanishing force, or apart by a vanishing gap) the derivatives
+are one-sided: none is given, and the answer says which pair and why."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from models import Mechanism, MechanismError
-from service.contact.kkt import split
+from service.contact.kkt import inequality_values, split
 from service.contact.problem import ContactProblem
 from service.contact.solve import ContactState
 from service.sensitivity_table import Sensitivities
 
 WEAK = 1e-8
+TOUCHING = 1e-6  # a gap (nondimensional, of the solve's accuracy: an open pair at its onset shows 2e-7) below which a pair is about to touch
 
 
 def contact_sensitivities(mech: Mechanism, problem: ContactProblem, state: ContactState, parameters: list[str],
@@ -35,6 +37,24 @@ def contact_sensitivities(mech: Mechanism, problem: ContactProblem, state: Conta
                                  "contacts.<pair>.force_x, force_y, normal_force, friction_force, point_x, point_y, "
                                  "site_parameter, and the mechanism's outputs)")
         rows.append(problem.output_names.index(name))
+    out_kinds = [problem.output_kinds[r] for r in rows]
+    in_kinds = [mech.parameter_kind(path) for path in parameters]
+    factor = np.array([[mech.nd_per_doc(ki) / mech.nd_per_doc(ko) for ki in in_kinds] for ko in out_kinds])
+    units = [[f"{mech.doc_unit(ko)}/{mech.doc_unit(ki)}" for ki in in_kinds] for ko in out_kinds]
+    boundary = _at_a_state_change(problem, state)
+    matrix = np.full(factor.shape, np.nan)
+    if not boundary:
+        try:
+            matrix = _derivatives(mech, problem, state, slots, rows) * factor
+        except np.linalg.LinAlgError:
+            boundary = ["the KKT system is singular at this state (contact rows that do not determine their "
+                        "forces): no derivative is given"]
+    return Sensitivities(list(parameters), list(outputs), matrix, units, boundary), boundary
+
+
+def _derivatives(mech: Mechanism, problem: ContactProblem, state: ContactState, slots: list[int],
+                 rows: list[int]) -> np.ndarray:
+    """d(outputs[rows]) / d(p[slots]), nondimensional, on the state's active set."""
     mode = state.mode
     arguments = mode.arguments(state.v, state.p)
     phi_p = friction_rates(mech, problem, state, slots)
@@ -45,12 +65,7 @@ def contact_sensitivities(mech: Mechanism, problem: ContactProblem, state: Conta
     jac = problem.outputs_jacobian(v=state.v, p=state.p, phi=mode.phi, stick=mode.stick, weights=mode.weights)
     y_v = np.asarray(jac["y_v"], dtype=float)[rows]
     y_p = np.asarray(jac["y_p"], dtype=float)[rows][:, slots] + np.asarray(jac["y_phi"], dtype=float)[rows] @ phi_p
-    nd = y_v @ dv + y_p
-    out_kinds = [problem.output_kinds[r] for r in rows]
-    in_kinds = [mech.parameter_kind(path) for path in parameters]
-    factor = np.array([[mech.nd_per_doc(ki) / mech.nd_per_doc(ko) for ki in in_kinds] for ko in out_kinds])
-    units = [[f"{mech.doc_unit(ko)}/{mech.doc_unit(ki)}" for ki in in_kinds] for ko in out_kinds]
-    return Sensitivities(list(parameters), list(outputs), nd * factor, units), _weak_rows(problem, state)
+    return y_v @ dv + y_p
 
 
 def friction_rates(mech: Mechanism, problem: ContactProblem, state: ContactState, slots: list[int]) -> np.ndarray:
@@ -71,13 +86,22 @@ def friction_rates(mech: Mechanism, problem: ContactProblem, state: ContactState
     return out
 
 
-def _weak_rows(problem: ContactProblem, state: ContactState) -> list[str]:
+def _at_a_state_change(problem: ContactProblem, state: ContactState) -> list[str]:
+    """The pairs about to change state, where the outputs have one-sided derivatives only:
+    touching with a vanishing force (a multiplier below WEAK of the largest: about to
+    open), or apart by a vanishing gap (below TOUCHING: about to touch)."""
     lam = split(problem, state.v).lam_in
     active = state.mode.active > 0.5
-    if not active.any():
-        return []
+    gaps = inequality_values(problem, split(problem, state.v).w, state.p)
     largest = float(np.abs(lam[active]).max(initial=0.0))
     weak = active & (lam < WEAK * max(largest, 1e-300))
-    pairs = sorted({problem.structure.contacts.pairs[problem.row_pairs[k - problem.n_element_in]].name
-                    for k in np.flatnonzero(weak) if k >= problem.n_element_in})
-    return [f"pair '{name}' touches with a vanishing force: its derivatives are one-sided" for name in pairs]
+    near = ~active & (gaps < TOUCHING)
+    pairs = problem.structure.contacts.pairs
+    def named(rows) -> set[str]:
+        return {pairs[problem.row_pairs[k - problem.n_element_in]].name for k in np.flatnonzero(rows)
+                if k >= problem.n_element_in}
+
+    opening, touching = named(weak), named(near) - named(active)  # a touching pair is about to open, if at all
+    return [f"pair '{name}' {what}: the derivatives are one-sided, none is given"
+            for names, what in ((opening, "touches with a vanishing force (about to open)"),
+                                (touching, "is apart by a vanishing gap (about to touch)")) for name in sorted(names)]
