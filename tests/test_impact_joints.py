@@ -1,6 +1,7 @@
-"""Joints of impact simulations (models.impacts.joints): a pin in its hole riding a slider
-meets the hole at the time and speed of a fall along the slider, held by the slider's
-normal force alone."""
+"""Element families in impact simulations (models.impacts.joints and forces, through each
+family's impact hooks): a pin in its hole riding a slider meets the hole at the time and
+speed of a fall along the slider, held by the slider's normal force alone; a family that
+brings nothing is refused by name."""
 
 from __future__ import annotations
 
@@ -41,3 +42,20 @@ def test_a_pin_on_a_slider_falls_along_it_into_its_hole(scheme):
     assert np.abs(report["coordinates"]["hinge.theta"]).max() < 1e-9
     x, y = (np.array(report["coordinates"][f"hinge.{c}"]) for c in "xy")
     np.testing.assert_allclose(y, x * math.tan(math.radians(ANGLE)), atol=1e-9)  # on the axis throughout
+
+
+def test_an_element_no_family_brings_to_impacts_is_refused_with_those_that_do():
+    """Each family says what it gives an impact model (models.elements: impact_flexure,
+    impact_energy, impact_constraint); a link gives nothing yet, and the message lists them."""
+    from models import MechanismError
+
+    doc = csfh("6.1", until=0.01)
+    doc["materials"]["steel"] = {"E": 210, "nu": 0.3}
+    doc["sections"] = {"strip": {"b": 0.01, "h": 0.001}}
+    doc["elements"] = {"arm": {"type": "link", "from": "frame", "to": "hinge", "length": 0.1, "material": "steel",
+                               "section": "strip"}}
+    with pytest.raises(MechanismError) as caught:
+        run_impacts(*parsed(doc))
+    assert caught.value.pointer == "/elements/arm/type"
+    assert caught.value.problem == ("a link element is not part of impact simulations (they take curved_beam, "
+                                    "spring, pin, slider)")

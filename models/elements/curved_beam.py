@@ -88,6 +88,36 @@ class CurvedBeamFamily:
     type = "curved_beam"
     schema = CurvedBeam
 
+    def impact_flexure(self, rb, name: str, el: CurvedBeam):
+        """In an impact simulation (models.impacts): (1/2 psi.K.psi, psi, K), psi seed 000's
+        deformation of the arc's end relative to its start (Eqs. 5-8) in the end frame S_fj,
+        exact for any rotation of the start body; every number a parameter of rb's book."""
+        book, doc, base = rb.book, rb.book.document, f"/elements/{name}"
+        if el.material not in doc.materials:
+            raise MechanismError(f"{base}/material", f"unknown material '{el.material}'")
+        if el.section not in doc.sections or not hasattr(doc.sections[el.section], "b"):
+            raise MechanismError(f"{base}/section", f"'{el.section}' is not a rectangle section of the document")
+        section = doc.sections[el.section]
+        E = book.number(f"/materials/{el.material}/E", doc.materials[el.material].E, "stress", "positive")
+        width = book.number(f"/sections/{el.section}/b", section.b, "length", "positive")
+        h = book.number(f"/sections/{el.section}/h", section.h, "length", "positive")
+        r = book.number(f"{base}/radius", el.radius, "length", "positive")
+        theta_f = book.number(f"{base}/arc_angle", el.arc_angle, "angle", "positive")
+        start_angle = book.number(f"{base}/start_angle", el.start_angle, "angle")
+        centre = book.vector(f"{base}/center", el.center, "length")
+        i, j = rb.body(el.from_, f"{base}/from"), rb.body(el.to, f"{base}/to")
+        if el.direction == "cw":  # the model runs counter-clockwise: swap the ends
+            i, j, start_angle = j, i, start_angle - theta_f
+        arc = kernel.arc_geometry(centre, r, start_angle, theta_f)
+        hoist = book.hoist
+        start = rb.point(i, hoist(rb.body_offset(i, arc.start_point)))
+        end = rb.point(j, hoist(rb.body_offset(j, arc.end_point)))
+        chord, frame = hoist(arc.end_point - arc.start_point), hoist(rot(arc.end_frame_angle))
+        relative = rot(-rb.rotation(i)) @ (end - start) - chord
+        psi = ca.vertcat(frame.T @ relative, rb.rotation(j) - rb.rotation(i))
+        K = hoist(kernel.stiffness(r, theta_f, E * width * h**3 / 12))
+        return 0.5 * ca.dot(psi, K @ psi), psi, K
+
     def collect(self, c, name: str, el: CurvedBeam, i: int, j: int) -> ElementTopology:
         base = f"/elements/{name}"
         c.use_material(el.material, f"{base}/material")

@@ -17,6 +17,7 @@ from pydantic import Field
 
 from models.context import AssemblyContext
 from models.elements.base import Contribution, EnergyTerms, ScaleHint, SiValues, TwoBodyElement, constraint_wrenches
+from models.errors import MechanismError
 from models.fields import Vec2
 from models.structure import ElementTopology
 
@@ -84,3 +85,19 @@ class JointFamily(ABC):
 
     def scale_hint(self, t: JointTopology, values: SiValues) -> ScaleHint:
         return ScaleHint()
+
+    impact_labels: tuple[tuple[str, str], tuple[str, str]] = ()  # (label, kind) of an impact model's multipliers
+
+    def impact_constraint(self, rb, name: str, el: RigidJoint) -> tuple[ca.SX, tuple]:
+        """In an impact simulation (models.impacts): (g(q), the multipliers' labels), from the
+        joint point `at` (global in the drawn pose; default the `to` body's reference point)
+        carried by each body."""
+        base = f"/elements/{name}"
+        first, second = rb.body(el.from_, f"{base}/from"), rb.body(el.to, f"{base}/to")
+        at = rb.book.vector(f"{base}/at", el.at, "length") if el.at is not None else second.position
+        apart = rb.drawn_point(second, at) - rb.drawn_point(first, at)
+        return self.impact_rows(rb, name, el, first, second, apart), self.impact_labels
+
+    def impact_rows(self, rb, name: str, el: RigidJoint, first, second, apart: ca.SX) -> ca.SX:
+        """g(q) of an impact model from `apart`, the joint point on `to` less that on `from`."""
+        raise MechanismError(f"/elements/{name}/type", f"{self.type} joints are not part of impact simulations")

@@ -25,6 +25,10 @@ class PinFamily(JointFamily):
     schema = Pin
     constraint_names = ("x", "y")
     multiplier_names = (("lambda_x", "force"), ("lambda_y", "force"))
+    impact_labels = (("Fx", "force"), ("Fy", "force"))  # the force the pin applies to `to`
+
+    def impact_rows(self, rb, name, el, first, second, apart) -> ca.SX:
+        return apart
 
     def constraints(self, ctx, t: JointTopology, d) -> ca.SX:
         a, b, _, _ = joint_points(ctx, t, d)

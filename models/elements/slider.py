@@ -35,6 +35,12 @@ class SliderFamily(JointFamily):
     schema = Slider
     constraint_names = ("normal", "rotation")
     multiplier_names = (("lambda_n", "force"), ("lambda_m", "moment"))
+    impact_labels = (("N", "force"), ("M", "moment"))  # across the axis on `to`, and the couple on it
+
+    def impact_rows(self, rb, name, el, first, second, apart) -> ca.SX:
+        alpha = rb.book.number(f"/elements/{name}/angle", el.angle, "angle") + rb.rotation(first)
+        normal = ca.vertcat(-ca.sin(alpha), ca.cos(alpha))
+        return ca.vertcat(ca.dot(normal, apart), rb.rotation(second) - rb.rotation(first))
 
     def collect(self, c, name: str, el: Slider, i: int, j: int) -> JointTopology:
         topology = collect_joint(c, self.type, name, el, i, j)

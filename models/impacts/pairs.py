@@ -87,7 +87,8 @@ def pair_model(rb: RigidBodies, name: str, pair: ContactPair) -> PairModel:
 def _surfaces(contacts: Contacts, base: str, pair: ContactPair):
     """(the site, the object) of a pair, checked for an impact simulation."""
     if pair.site not in contacts.sites:
-        raise MechanismError(f"{base}/site", f"unknown site '{pair.site}' (sites: {', '.join(contacts.sites) or 'none'})")
+        raise MechanismError(f"{base}/site", f"unknown site '{pair.site}' (sites: "
+                             f"{', '.join(contacts.sites) or 'none'})")
     if pair.object not in contacts.objects:
         raise MechanismError(f"{base}/object", f"unknown object '{pair.object}' (objects: "
                              f"{', '.join(contacts.objects) or 'none'})")
@@ -118,7 +119,8 @@ def _friction(book, base: str, pair: ContactPair):
     for key in ("sliding", "adherence"):
         value = getattr(friction, key)
         if value is not None and value < 0:
-            raise MechanismError(f"{base}/friction/{key}", f"a friction coefficient must not be negative, got {value:g}")
+            raise MechanismError(f"{base}/friction/{key}", "a friction coefficient must not be negative, got "
+                                 f"{value:g}")
     if law.speed_events and friction.v1 <= friction.v0:
         raise MechanismError(f"{base}/friction/v1", f"v1 ({friction.v1:g}) must exceed v0 ({friction.v0:g})")
     adherence = friction.adherence if friction.adherence is not None else friction.sliding

@@ -18,7 +18,9 @@ from service.contact.solve import ContactState
 from service.sensitivity_table import Sensitivities
 
 WEAK = 1e-8
-TOUCHING = 1e-6  # a gap (nondimensional, of the solve's accuracy: an open pair at its onset shows 2e-7) below which a pair is about to touch
+# a gap (nondimensional) below which a pair is about to touch: the solve's accuracy (an open
+# pair at its onset shows 2e-7)
+TOUCHING = 1e-6
 
 
 def contact_sensitivities(mech: Mechanism, problem: ContactProblem, state: ContactState, parameters: list[str],

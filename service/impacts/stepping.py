@@ -130,7 +130,8 @@ def event_settings(model: ImpactModel, until: float, tolerance: float, max_step:
 
 
 def run_events(model: ImpactModel, p: np.ndarray, q0, v0, until: float, tolerance: float, first_step: float,
-               max_step: float, max_calls: int, stop=None, progress=None, directions: np.ndarray | None = None) -> Trace:
+               max_step: float, max_calls: int, stop=None, progress=None,
+               directions: np.ndarray | None = None) -> Trace:
     """`directions`: d p / d number, one column per number the end state is differentiated by."""
     n, P = model.bodies.size, len(model.pairs)
     L = EventLayout(n, P)
