@@ -170,6 +170,10 @@ class Client:
         undeformed, equilibrium or path)."""
         return _parse(self._http.post("/v1/drawings", json=_request_body(DrawingRequest, request, fields)), dict)
 
+    def upgrade_document(self, document: dict) -> dict:
+        """{document: in today's shape, changes: what changed} for a document of an older shape."""
+        return _parse(self._http.post("/v1/documents/upgrade", json={"document": document}), dict)
+
     def job(self, job_id: str) -> JobStatusResponse:
         return _parse(self._http.get(f"/v1/jobs/{job_id}"), JobStatusResponse)
 
@@ -246,6 +250,9 @@ class AsyncClient:
 
     async def drawing(self, request: DrawingRequest | None = None, **fields: Any) -> dict:
         return _parse(await self._http.post("/v1/drawings", json=_request_body(DrawingRequest, request, fields)), dict)
+
+    async def upgrade_document(self, document: dict) -> dict:
+        return _parse(await self._http.post("/v1/documents/upgrade", json={"document": document}), dict)
 
     async def job(self, job_id: str) -> JobStatusResponse:
         return _parse(await self._http.get(f"/v1/jobs/{job_id}"), JobStatusResponse)

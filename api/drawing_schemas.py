@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
@@ -45,3 +45,11 @@ class DocumentText(BaseModel):
 
     text: str = Field(max_length=MAX_DOCUMENT_TEXT)
     format: Literal["auto", "json", "yaml"] = "auto"
+
+
+class DocumentUpgrade(BaseModel):
+    """A document of an older shape (an `impacts` section), to be converted to today's."""
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+    document: dict[str, Any]

@@ -235,7 +235,8 @@ class MechanismDocument(StrictModel):
 
 
 UPGRADE_HINT = ("the `impacts` section is now part of `contacts` (its surfaces are sites and objects, its pairs "
-                "contact pairs with their laws): convert the document with `flexmech upgrade DOC`")
+                "contact pairs with their laws): convert the document with `flexmech upgrade DOC` (or POST it to "
+                "/v1/documents/upgrade)")
 
 # pydantic's error types when a value is not a number (a Number is a float or a quantity string)
 _NOT_A_NUMBER = {"float_type", "string_type", "float_parsing", "finite_number", "string_too_long", "bool_type"}

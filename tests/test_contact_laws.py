@@ -16,6 +16,7 @@ import httpx
 import pytest
 from typer.testing import CliRunner
 
+from api.client import Client
 from models import MechanismError, compile_mechanism, load_document
 from models.contact.laws import NORMAL_LAWS, NormalLaw, register_normal_law
 from models.upgrade import upgraded
@@ -143,6 +144,13 @@ def test_the_service_refuses_an_old_document_with_the_upgrade_command(api_server
     assert r.status_code == 422, r.text
     error = r.json()["error"]
     assert error["pointer"] == "/document/impacts" and "flexmech upgrade DOC" in error["message"], error
-    r = httpx.post(f"{api_server.url}/v1/solve", json={"document": upgraded(copy.deepcopy(old))[0],
-                                                        "analysis": "simulate", "simulate": {"until": 0.1}}, timeout=60)
+    assert "/v1/documents/upgrade" in error["message"]
+    with Client(api_server.url) as client:
+        answer = client.upgrade_document(old)
+    assert answer == {"document": upgraded(copy.deepcopy(old))[0], "changes": upgraded(old)[1]}
+    r = httpx.post(f"{api_server.url}/v1/solve", json={"document": answer["document"], "analysis": "simulate",
+                                                        "simulate": {"until": 0.1}}, timeout=60)
     assert r.status_code == 200, r.text
+    broken = {**old, "impacts": {**old["impacts"], "surfaces": {"pin": {"type": "square", "body": "hinge"}}}}
+    error = httpx.post(f"{api_server.url}/v1/documents/upgrade", json={"document": broken}, timeout=60).json()["error"]
+    assert error["pointer"] == "/document/impacts/surfaces/pin/type" and "so a circle; it is a square" in error["message"]

@@ -1,5 +1,6 @@
 """POST /v1/drawings: a mechanism drawn to scale; POST /v1/documents/parse: document text
-(JSON or YAML) read into a document. The workbench page draws and edits with them."""
+(JSON or YAML) read into a document; POST /v1/documents/upgrade: a document of an older
+shape in today's (models.upgrade). The workbench page draws and edits with them."""
 
 from __future__ import annotations
 
@@ -10,11 +11,12 @@ from fastapi.concurrency import run_in_threadpool
 
 from api.deps import OwnerDep, ServicesDep
 from api.documents import request_document
-from api.drawing_schemas import DocumentText, DrawingRequest
+from api.drawing_schemas import DocumentText, DocumentUpgrade, DrawingRequest
 from api.parsed_route import ParsedBodyRoute
 from api.responses import ERRORS
 from models import MechanismError
 from models.reading import parse_json, parse_yaml
+from models.upgrade import upgraded
 from service.analyses.equilibrium import solve_state
 from service.drawing import mechanism_drawing
 from service.drawing_path import path_frames
@@ -68,3 +70,13 @@ async def parse_document(request: DocumentText, _owner: OwnerDep) -> dict:
         return await run_in_threadpool(_parsed, request)
     except MechanismError as exc:
         raise MechanismError("/text", exc.problem) from None
+
+
+@router.post("/documents/upgrade", operation_id="upgrade_document", response_model=dict[str, Any], responses=ERRORS,
+             summary="A document of an older shape in today's, and what changed (as `flexmech upgrade`)")
+async def upgrade_document(request: DocumentUpgrade, _owner: OwnerDep) -> dict:
+    try:
+        document, changes = await run_in_threadpool(upgraded, request.document)
+    except MechanismError as exc:
+        raise MechanismError(f"/document{exc.pointer}", exc.problem) from None
+    return {"document": document, "changes": changes}
