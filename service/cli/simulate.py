@@ -129,7 +129,8 @@ def _print_sensitivities(out, sensitivities: dict) -> None:
     table = table_of(f"d (state at t = {sensitivities['time']:g} s) / d field; "
                      f"{sensitivities['units']['coordinates']}", "field", "unit", *names, text=2)
     for pointer, values in fields.items():
-        table.add_row(escape(pointer), escape(values["unit"]), *(number(values["coordinates"][name], "") for name in names))
+        row = [number(values["coordinates"][name], "") for name in names]
+        table.add_row(escape(pointer), escape(values["unit"]), *row)
     out.print(table)
     for warning in sensitivities["warnings"]:
         out.print(f"[yellow]warning:[/yellow] {escape(warning)}")
