@@ -120,3 +120,21 @@ def test_the_service_answers_sensitivities_and_refuses_them_for_moreau_with_422(
     assert r.status_code == 422, r.text
     error = r.json()["error"]
     assert error["pointer"] == "/simulate/sensitivities" and "event_driven" in error["message"], error
+
+
+def test_the_damping_of_the_simulate_section_is_a_number_too():
+    """d (end state) / d alpha of the mass-proportional damping, against central differences."""
+    doc = _csfh(0.15)
+    doc["simulate"].update(damping=2.0, sensitivities=["/simulate/damping"])
+    found = _run(doc)["sensitivities"]["fields"]["/simulate/damping"]
+    assert found["unit"] == "1/s"
+    exact = np.array([values[name] for values in (found["coordinates"], found["velocities"]) for name in values])
+    doc["simulate"]["sensitivities"] = []
+    step = 1e-5
+    up, down = (_end_state(_run(variant(doc, "/simulate/damping", sign * step))) for sign in (1, -1))
+    differences = (up - down) / (2 * step)
+    assert np.abs(exact - differences).max() <= 1e-5 * np.abs(differences).max(), (exact, differences)
+    doc["simulate"].update(histories={"/gravity/1": "-9.81"}, sensitivities=["/gravity/1"])
+    with pytest.raises(MechanismError, match="'/gravity/1' is not a number of this run") as caught:
+        _run(doc)
+    assert caught.value.pointer == "/simulate/sensitivities/0"

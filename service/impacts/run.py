@@ -140,7 +140,7 @@ def integrate(document: MechanismDocument, spec: SimulateSpec, stop=None, max_st
     q0, v0 = start_state(model, spec, p)
     directions = None
     if spec.sensitivities:
-        check_fields(model.book, spec.sensitivities)
+        check_fields(model.book, spec.sensitivities, spec.histories)
         directions = parameter_directions(model.book, values, spec.sensitivities)
     if spec.scheme == "moreau":
         trace = run_moreau(model, p, q0, v0, spec.until, spec.step, stop, progress)

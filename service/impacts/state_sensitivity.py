@@ -45,9 +45,11 @@ def parameter_directions(book: ParameterBook, values: np.ndarray, pointers: list
     return book.parameter_jacobian(values)[:, [book.pointers.index(pointer) for pointer in pointers]]
 
 
-def check_fields(book: ParameterBook, pointers: list[str]) -> None:
-    """Every pointer names a number of the run (one of the graphs' parameters)."""
-    known = [pointer for pointer in book.pointers if not pointer.startswith("/simulate/")]
+def check_fields(book: ParameterBook, pointers: list[str], driven=()) -> None:
+    """Every pointer names a number of the run (one of the graphs' parameters), and not one a
+    history drives (`driven`: its value is the history's, not a number)."""
+    driven = {pointer if pointer.startswith("/") else f"/{pointer}" for pointer in driven}
+    known = [pointer for pointer in book.pointers if pointer not in driven]
     for k, pointer in enumerate(pointers):
         if pointer not in known:
             close = difflib.get_close_matches(pointer, known, n=3)
