@@ -153,4 +153,5 @@ def test_the_service_refuses_an_old_document_with_the_upgrade_command(api_server
     assert r.status_code == 200, r.text
     broken = {**old, "impacts": {**old["impacts"], "surfaces": {"pin": {"type": "square", "body": "hinge"}}}}
     error = httpx.post(f"{api_server.url}/v1/documents/upgrade", json={"document": broken}, timeout=60).json()["error"]
-    assert error["pointer"] == "/document/impacts/surfaces/pin/type" and "so a circle; it is a square" in error["message"]
+    assert error["pointer"] == "/document/impacts/surfaces/pin/type"
+    assert "so a circle; it is a square" in error["message"]
