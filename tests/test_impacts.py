@@ -279,7 +279,9 @@ def _ball(surface: dict, until: float, scheme: str, friction: dict, velocity=(0.
 
 
 @pytest.mark.parametrize("surface", [{"type": "half_plane", "body": "ground", "point": [0, -0.1], "normal": [0, 1]},
-                                     {"type": "circle", "body": "ground", "centre": [0, -0.35], "radius": 0.25}])
+                                     {"type": "circle", "body": "ground", "centre": [0, -0.35], "radius": 0.25},
+                                     {"type": "half_plane", "point": [0, -0.1], "normal": [0, 1]}],
+                         ids=["line", "circle", "line_of_no_body"])  # an object without a body is fixed in global axes
 def test_a_disk_dropped_on_a_line_or_a_circle_lands_at_the_free_fall_time(surface):
     report = run(_ball(surface, 0.2, "event_driven", {"law": "none"}, drop=0.05))
     assert report["impacts"][0]["time"] == pytest.approx(math.sqrt(2 * 0.05 / G), rel=1e-9)

@@ -58,7 +58,11 @@ class RigidBodies:
         self.q = ca.SX.sym("q", n)
         self.v = ca.SX.sym("v", n)
 
-    def body(self, name: str, pointer: str) -> RigidBody:
+    def body(self, name: str | None, pointer: str) -> RigidBody:
+        """The body `name`; None is the world, fixed at the origin (an object given without
+        a body is in global axes and never moves)."""
+        if name is None:
+            return RigidBody("world", None, ca.SX.zeros(2), ca.SX(0), ca.SX.zeros(2))
         if name not in self.bodies:
             raise MechanismError(pointer, f"unknown body '{name}' (bodies: {', '.join(self.bodies)})")
         return self.bodies[name]

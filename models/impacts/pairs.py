@@ -53,13 +53,13 @@ class PairModel:
 
 def pair_model(rb: RigidBodies, name: str, pair: ContactPair) -> PairModel:
     """The pair `name` of the document's `contacts`: a circle site on a body against a circle,
-    hole or half-plane object carried by another body."""
+    hole or half-plane object carried by another body, or fixed in global axes."""
     book = rb.book
     base = f"/contacts/pairs/{name}"
     site, obj = _surfaces(book.document.contacts, base, pair)
     body1 = rb.body(site.body, f"/contacts/sites/{pair.site}/body")
     body2 = rb.body(obj.body, f"/contacts/objects/{pair.object}/body")
-    if body1.name == body2.name:
+    if body1 is body2:
         raise MechanismError(base, f"the site and the object are both on body '{body1.name}'")
     R1, O1, indentation, n_c, scale, R2_si, clearance = _geometry(rb, name, pair, site, obj, body1, body2)
     t_c = ca.vertcat(-n_c[1], n_c[0])
@@ -99,9 +99,6 @@ def _surfaces(contacts: Contacts, base: str, pair: ContactPair):
     if obj.type not in IMPACT_OBJECTS:
         raise MechanismError(f"{base}/object", f"in a simulation a circle touches a circle, a hole or a half_plane; "
                              f"'{pair.object}' is a {obj.type}")
-    if obj.body is None:
-        raise MechanismError(f"/contacts/objects/{pair.object}/body", "in a simulation an object is carried by a body: "
-                             "give it `body` (a fixed one for the ground)")
     return site, obj
 
 
