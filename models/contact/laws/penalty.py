@@ -35,7 +35,9 @@ class DampedPowerLaw(NormalLaw):
     needs: tuple[str, ...] = POWER_LAW_NEEDS
 
     def damping_factor(self, restitution):
-        raise NotImplementedError
+        """d of the law from c_r; each damped law gives its own (Eqs. 21-23)."""
+        raise TypeError(f"{type(self).__name__} is the damped laws' shape, not a law: register one of its "
+                        "subclasses, which give damping_factor")
 
     def force(self, pair, q, rate, impact_speed):
         d = self.damping_factor(pair.restitution)

@@ -29,7 +29,8 @@ class NormalLaw:
         """F_N (CasADi) at indentation q > 0, its rate (positive approaching) and the rate
         frozen at the contact's onset; `pair` holds the law's numbers as symbols (K,
         exponent, restitution, damping, esdu)."""
-        raise NotImplementedError(f"the {self.name} law has no penalty force")
+        # unreachable through the service: check_law lets only penalty laws into a run that asks this
+        raise TypeError(f"the {self.name} law has no penalty force: it is enforced by its analysis")
 
 
 @dataclass(frozen=True)
@@ -44,7 +45,8 @@ class FrictionLaw:
 
     def force(self, pair, slip_speed, normal_force, beyond_v0, beyond_v1):
         """F_T along the tangent (CasADi), for an event-driven simulation."""
-        raise NotImplementedError(f"the {self.name} friction law has no regularized force")
+        # unreachable through the service: check_law lets only regularized laws into a run that asks this
+        raise TypeError(f"the {self.name} friction law has no regularized force: it is enforced by its analysis")
 
 
 NORMAL_LAWS: dict[str, NormalLaw] = {}
