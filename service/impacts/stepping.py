@@ -28,15 +28,17 @@ STEP_SOURCES = ("stepping", "moreau", "event_driven", "contact_forces")  # of se
 
 
 def _code_version() -> str:
-    """A digest of the sources the step graphs come from: a cached library built from older
-    code is never loaded."""
+    """A digest of the sources the step graphs come from (the impact model, the contact laws,
+    the steps): a cached library built from older code is never loaded."""
     import hashlib
     from pathlib import Path
 
+    import models.contact.laws as laws
     import models.impacts as built
 
     here = Path(__file__).parent
-    sources = sorted(Path(built.__file__).parent.glob("*.py")) + [here / f"{name}.py" for name in STEP_SOURCES]
+    sources = (sorted(Path(built.__file__).parent.glob("*.py")) + sorted(Path(laws.__file__).parent.glob("*.py"))
+               + [here / f"{name}.py" for name in STEP_SOURCES])
     digest = hashlib.sha256()
     for source in sources:
         digest.update(source.read_bytes())
