@@ -29,16 +29,18 @@ STEP_SOURCES = ("stepping", "moreau", "event_driven", "contact_forces")  # of se
 
 def _code_version() -> str:
     """A digest of the sources the step graphs come from (the impact model, the contact laws,
-    the steps): a cached library built from older code is never loaded."""
+    the element families' impact parts, the steps): a cached library built from older code is never loaded."""
     import hashlib
     from pathlib import Path
 
     import models.contact.laws as laws
+    import models.elements as families
     import models.impacts as built
 
     here = Path(__file__).parent
-    sources = (sorted(Path(built.__file__).parent.glob("*.py")) + sorted(Path(laws.__file__).parent.glob("*.py"))
-               + [here / f"{name}.py" for name in STEP_SOURCES])
+    folders = [Path(module.__file__).parent for module in (built, laws, families)]
+    sources = [path for folder in folders for path in sorted(folder.glob("*.py"))] + [
+        here / f"{name}.py" for name in STEP_SOURCES]
     digest = hashlib.sha256()
     for source in sources:
         digest.update(source.read_bytes())
