@@ -58,7 +58,13 @@ class Body(StrictModel):
                                         "(default: the reference point)")
 
 
-Element = Annotated[Union[FAMILIES.schemas()], Field(discriminator="type")]
+def _element_union() -> Any:
+    """A document element: the section of one registered family, told apart by its `type`."""
+    schemas = FAMILIES.schemas()
+    return Annotated[Union[schemas], Field(discriminator="type")] if len(schemas) > 1 else schemas[0]
+
+
+Element = _element_union()
 
 
 class _PointOnBody(StrictModel):
@@ -233,6 +239,16 @@ class MechanismDocument(StrictModel):
     def to_json_dict(self) -> dict[str, Any]:
         return self.model_dump(mode="json", by_alias=True, exclude_none=True)
 
+
+def _families_changed() -> None:
+    """A family registered (or removed) after import: the document's elements take its
+    section (pydantic builds the validator again from the new union)."""
+    MechanismDocument.model_fields["elements"].annotation = dict[str, _element_union()]
+    MechanismDocument.model_rebuild(force=True)
+    _field_names.cache_clear()
+
+
+FAMILIES.on_change(_families_changed)
 
 UPGRADE_HINT = ("the `impacts` section is now part of `contacts` (its surfaces are sites and objects, its pairs "
                 "contact pairs with their laws): convert the document with `flexmech upgrade DOC` (or POST it to "

@@ -33,13 +33,25 @@ from models.structure import Structure
 log = logging.getLogger("flexmech.graphs")
 
 
-@lru_cache(maxsize=1)
 def code_version() -> str:
-    """A hash of the models package's sources and the CasADi version."""
+    """A hash of the models package's sources, of every registered element family's (one
+    registered from elsewhere, a plug-in or a test, is outside the package) and the CasADi
+    version."""
+    from models.elements import FAMILIES
+
+    return _code_version(FAMILIES.sources())
+
+
+@lru_cache(maxsize=4)
+def _code_version(family_sources: tuple[str, ...]) -> str:
     digest = hashlib.sha256(ca.__version__.encode())
     root = Path(__file__).resolve().parent
+    outside = [Path(source) for source in family_sources if not Path(source).resolve().is_relative_to(root)]
     for path in sorted(root.rglob("*.py")):
         digest.update(str(path.relative_to(root)).encode())
+        digest.update(path.read_bytes())
+    for path in outside:
+        digest.update(str(path).encode())
         digest.update(path.read_bytes())
     return digest.hexdigest()[:12]
 

@@ -1,7 +1,7 @@
 """Element families in impact simulations (models.impacts.joints and forces, through each
 family's impact hooks): a pin in its hole riding a slider meets the hole at the time and
-speed of a fall along the slider, held by the slider's normal force alone; a family that
-brings nothing is refused by name."""
+speed of a fall along the slider, held by the slider's normal force alone; an element with
+unknowns of its own is refused, saying why."""
 
 from __future__ import annotations
 
@@ -44,9 +44,10 @@ def test_a_pin_on_a_slider_falls_along_it_into_its_hole(scheme):
     np.testing.assert_allclose(y, x * math.tan(math.radians(ANGLE)), atol=1e-9)  # on the axis throughout
 
 
-def test_an_element_no_family_brings_to_impacts_is_refused_with_those_that_do():
-    """Each family says what it gives an impact model (models.elements: impact_flexure,
-    impact_energy, impact_constraint); a link gives nothing yet, and the message lists them."""
+def test_an_element_with_unknowns_of_its_own_is_refused_by_name_and_why():
+    """An element enters an impact model by a hook (a flexure's, a joint's) or by its statics
+    energy in the bodies' poses (models.impacts.elastic); a link has unknowns of its own (its
+    shooting states), so it is refused, saying why."""
     from models import MechanismError
 
     doc = csfh("6.1", until=0.01)
@@ -57,5 +58,6 @@ def test_an_element_no_family_brings_to_impacts_is_refused_with_those_that_do():
     with pytest.raises(MechanismError) as caught:
         run_impacts(*parsed(doc))
     assert caught.value.pointer == "/elements/arm/type"
-    assert caught.value.problem == ("a link element is not part of impact simulations (they take curved_beam, "
-                                    "spring, pin, slider)")
+    assert caught.value.problem == ("a link element is not part of impact simulations: it has unknowns of its own "
+                                    "(its strain energy is not a function of the bodies' poses alone), and impact "
+                                    "simulations take rigid bodies and the massless elements between them")

@@ -27,6 +27,7 @@ is then the gradient of the Lagrangian, which tests check.
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Callable, Protocol
@@ -151,10 +152,37 @@ class Families:
 
     def __init__(self, families: list[ElementFamily]):
         self._by_type: dict[str, ElementFamily] = {}
+        self._listeners: list[Callable[[], None]] = []
         for family in families:
-            if family.type in self._by_type:
-                raise ValueError(f"two element families of type '{family.type}'")
-            self._by_type[family.type] = family
+            self._add(family)
+
+    def _add(self, family: ElementFamily) -> None:
+        if family.type in self._by_type:
+            raise ValueError(f"two element families of type '{family.type}'")
+        self._by_type[family.type] = family
+
+    def register(self, family: ElementFamily) -> None:
+        """Add a family after import (a plug-in, a test): the document schema takes its section
+        at once (through the listeners, models.document)."""
+        self._add(family)
+        self._changed()
+
+    def unregister(self, type_name: str) -> None:
+        self._by_type.pop(type_name)
+        self._changed()
+
+    def sources(self) -> tuple[str, ...]:
+        """The files the families are written in (a registered family's too): what a cache of
+        graphs built from them must be keyed by."""
+        return tuple(sorted({inspect.getsourcefile(type(family)) for family in self}))
+
+    def on_change(self, listener: Callable[[], None]) -> None:
+        """`listener()` runs after every register and unregister."""
+        self._listeners.append(listener)
+
+    def _changed(self) -> None:
+        for listener in self._listeners:
+            listener()
 
     def __iter__(self) -> Iterator[ElementFamily]:
         return iter(self._by_type.values())

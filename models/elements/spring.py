@@ -76,26 +76,6 @@ class SpringFamily:
     type = "spring"
     schema = Spring
 
-    def impact_energy(self, rb, name: str, el: Spring) -> ca.SX:
-        """In an impact simulation (models.impacts): a linear spring's energy, its numbers
-        parameters of rb's book."""
-        base = f"/elements/{name}"
-        if el.stiffness is None:
-            raise MechanismError(f"{base}/law", "impact simulations take linear springs (`stiffness`)")
-        book = rb.book
-        i, j = rb.body(el.from_, f"{base}/from"), rb.body(el.to, f"{base}/to")
-        if el.kind == "torsional":
-            k = book.number(f"{base}/stiffness", el.stiffness, "rotational_stiffness", "nonnegative")
-            rest = book.number(f"{base}/rest", el.rest if el.rest is not None else 0.0, "angle")
-            return 0.5 * k * (rb.rotation(j) - rb.rotation(i) - rest) ** 2
-        k = book.number(f"{base}/stiffness", el.stiffness, "stiffness", "nonnegative")
-        a_drawn = book.vector(f"{base}/from_at", el.from_at, "length") if el.from_at is not None else i.position
-        b_drawn = book.vector(f"{base}/to_at", el.to_at, "length") if el.to_at is not None else j.position
-        a, b = rb.drawn_point(i, a_drawn), rb.drawn_point(j, b_drawn)
-        drawn = ca.norm_2(b_drawn - a_drawn)
-        rest = book.number(f"{base}/rest", el.rest, "length", "nonnegative") if el.rest is not None else drawn
-        return 0.5 * k * (ca.sqrt(ca.sumsqr(b - a) + 1e-300) - rest) ** 2
-
     def collect(self, c, name: str, el: Spring, i: int, j: int) -> SpringTopology:
         base = f"/elements/{name}"
         translational = el.kind == "translational"

@@ -1,24 +1,24 @@
-"""The smooth forces of an impact model: gravity, constant loads, linear springs and the
-curved-beam flexures of seed 000 (closed-form stiffness, Eq. 2), as a potential V(q) plus the
-generalized force Q_nc(q) that no potential gives (the flexure whose stiffness turns with the
-body, seed 004 Eq. 8)."""
+"""The smooth forces of an impact model: gravity, constant loads, the curved-beam flexures of
+seed 000 (closed-form stiffness, Eq. 2) and the elements that enter by their statics energy
+(springs, and any family without an impact hook: models.impacts.elastic), as a potential V(q)
+plus the generalized force Q_nc(q) that no potential gives (the flexure whose stiffness turns
+with the body, seed 004 Eq. 8)."""
 
 from __future__ import annotations
 
 import casadi as ca
 
 from models.elements import FAMILIES
-from models.errors import MechanismError
 from models.impacts.bodies import RigidBodies
 from models.planar import rot
 
-IMPACT_HOOKS = ("impact_flexure", "impact_energy", "impact_constraint")  # what a family gives an impact model
 
 
-def smooth_forces(rb: RigidBodies, turning: bool) -> tuple[ca.SX, ca.SX]:
-    """(V, Q_nc): the potential of the conservative forces and the rest."""
+def smooth_forces(rb: RigidBodies, turning: bool, elements: ca.SX) -> tuple[ca.SX, ca.SX]:
+    """(V, Q_nc): the potential of the conservative forces and the rest; `elements` is the
+    energy of the elements that enter by their statics energy (elastic.element_energy)."""
     doc, book = rb.book.document, rb.book
-    V = ca.SX(0)
+    V = elements
     Q_nc = ca.SX.zeros(rb.size)
     if doc.gravity is not None:
         V += rb.gravity_energy(book.vector("/gravity", doc.gravity, "acceleration"))
@@ -42,12 +42,6 @@ def smooth_forces(rb: RigidBodies, turning: bool) -> tuple[ca.SX, ca.SX]:
                 Q_nc -= ca.mtimes(ca.jacobian(psi, rb.q).T, A3 @ K @ A3.T @ psi)
             else:
                 V += energy
-        elif hasattr(family, "impact_energy"):
-            V += family.impact_energy(rb, name, element)
-        elif not hasattr(family, "impact_constraint"):  # a joint: a constraint (models.impacts.joints)
-            taking = [f.type for f in FAMILIES if any(hasattr(f, hook) for hook in IMPACT_HOOKS)]
-            raise MechanismError(f"/elements/{name}/type", f"a {element.type} element is not part of impact "
-                                 f"simulations (they take {', '.join(taking)})")
     return V, Q_nc
 
 
@@ -58,15 +52,6 @@ def flexure_energy(rb: RigidBodies) -> ca.SX:
         family = FAMILIES.named(element.type)
         if hasattr(family, "impact_flexure"):
             total += family.impact_flexure(rb, name, element)[0]
-    return total
-
-
-def spring_energy(rb: RigidBodies) -> ca.SX:
-    total = ca.SX(0)
-    for name, element in rb.book.document.elements.items():
-        family = FAMILIES.named(element.type)
-        if hasattr(family, "impact_energy"):
-            total += family.impact_energy(rb, name, element)
     return total
 
 

@@ -20,7 +20,8 @@ from models.document import MechanismDocument
 from models.errors import MechanismError
 from models.impacts.bodies import RigidBodies
 from models.impacts.book import ParameterBook
-from models.impacts.forces import flexure_energy, smooth_forces, spring_energy
+from models.impacts.elastic import element_energy
+from models.impacts.forces import flexure_energy, smooth_forces
 from models.impacts.joints import joint_constraints
 from models.impacts.pairs import PairModel, pair_model
 from models.planar import rot
@@ -50,6 +51,7 @@ class ImpactModel:
     constraints: ca.SX = None  # g(q, t) = 0 of the pins and sliders (2 rows each)
     joint_names: tuple[str, ...] = ()
     joint_labels: tuple[tuple, ...] = ()  # per joint its multipliers' (label, kind) (models.impacts.joints)
+    element_key: str = ""  # the topologies of the elements that enter by their statics energy
 
     @property
     def q(self) -> ca.SX:
@@ -88,7 +90,7 @@ class ImpactModel:
         parts += [f"{p.name}:{p.law}:{p.friction}:{p.esdu is None}" for p in self.pairs]
         parts += [f"{k}:{s.type}:{getattr(s, 'body', None)}" for group in (doc.contacts.sites, doc.contacts.objects)
                   for k, s in group.items()]
-        return "|".join(parts + [self.history_key])
+        return "|".join(parts + [self.history_key, self.element_key])
 
 
 def impact_model(document: MechanismDocument, histories: list[tuple[str, str, object]] = (),
@@ -102,8 +104,9 @@ def impact_model(document: MechanismDocument, histories: list[tuple[str, str, ob
     book = ParameterBook(document)
     rb = RigidBodies(book)
     turning = document.simulate is not None and document.simulate.flexure_stiffness == "turning"
-    V_smooth, Q_nc = smooth_forces(rb, turning)  # V_smooth holds the flexures only when they are constant
-    flexures, springs = flexure_energy(rb), spring_energy(rb)
+    springs, element_key = element_energy(rb)
+    V_smooth, Q_nc = smooth_forces(rb, turning, springs)  # V_smooth holds the flexures only when they are constant
+    flexures = flexure_energy(rb)
     elastic = flexures + springs
     gravity = V_smooth - springs - (0 if turning else flexures)
     pairs = [pair_model(rb, name, pair) for name, pair in document.contacts.pairs.items()]
@@ -130,7 +133,7 @@ def impact_model(document: MechanismDocument, histories: list[tuple[str, str, ob
     g, joints, labels = joint_constraints(rb)
     return ImpactModel(book, rb, pairs, mass, -ca.gradient(V + acting, q) + extra + damping, extra, damping,
                        power, 0.5 * ca.dot(mass * v, v), elastic, held, turning, t, history_key, driven(g),
-                       tuple(joints), tuple(labels))
+                       tuple(joints), tuple(labels), element_key)
 
 
 def _split(book: ParameterBook, rb: RigidBodies, histories, t) -> tuple[list, list]:

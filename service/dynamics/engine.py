@@ -66,6 +66,8 @@ class Engine:
 
     def data(self, p: np.ndarray) -> list[np.ndarray]:
         """Per chain group, every element's data (padded to whole chunks) at parameters p."""
+        if not self.system.layout.groups:  # no link: a Function of no outputs answers None
+            return []
         out = self._data_function(p)
         out = out if isinstance(out, (list, tuple)) else [out]
         return [np.asarray(q, dtype=float) for q in out]

@@ -8,10 +8,12 @@ from __future__ import annotations
 import threading
 import time
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import casadi as ca
 import numpy as np
 
+from models.elements import FAMILIES
 from models.impacts.model import WORKS, ImpactModel
 from service.kernels.queue import function_library, request_function
 from service.impacts.event_driven import EventLayout, event_step
@@ -27,27 +29,30 @@ KEPT_EVENT_ROWS = 100_000  # states an event-driven run holds (service.impacts.k
 STEP_SOURCES = ("stepping", "moreau", "event_driven", "contact_forces")  # of service.impacts: the chunks' graphs
 
 
-def _code_version() -> str:
+@lru_cache(maxsize=4)
+def _code_version(family_sources: tuple[str, ...]) -> str:
     """A digest of the sources the step graphs come from (the impact model, the contact laws,
-    the element families' impact parts, the steps): a cached library built from older code is never loaded."""
+    the element families, the statics context their energies are written in, the steps): a
+    cached library built from older code is never loaded."""
     import hashlib
     from pathlib import Path
 
     import models.contact.laws as laws
+    import models.context as statics_context  # the statics energies of models.impacts.elastic read it
     import models.elements as families
     import models.impacts as built
 
     here = Path(__file__).parent
     folders = [Path(module.__file__).parent for module in (built, laws, families)]
     sources = [path for folder in folders for path in sorted(folder.glob("*.py"))] + [
-        here / f"{name}.py" for name in STEP_SOURCES]
+        here / f"{name}.py" for name in STEP_SOURCES] + [Path(statics_context.__file__)] + [
+        Path(source) for source in family_sources]  # a family registered from elsewhere too
     digest = hashlib.sha256()
     for source in sources:
         digest.update(source.read_bytes())
     return digest.hexdigest()[:16]
 
 
-_CODE = _code_version()
 
 
 @dataclass
@@ -96,7 +101,7 @@ def chunk_function(model: ImpactModel, kind: str) -> tuple[ca.Function, str]:
         fn = event_step(model).mapaccum("event_chunk", EVENT_CHUNK)
     else:
         fn = moreau_step(model).mapaccum("moreau_chunk", MOREAU_CHUNK, ["S"], ["S1"])
-    return fn, f"{_CODE}|{kind}|{model.structure_key()}"
+    return fn, f"{_code_version(FAMILIES.sources())}|{kind}|{model.structure_key()}"
 
 
 def chunk(model: ImpactModel, kind: str, columns: list[np.ndarray]) -> Chunk:
