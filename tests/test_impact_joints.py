@@ -1,7 +1,7 @@
 """Element families in impact simulations (models.impacts.joints and forces, through each
 family's impact hooks): a pin in its hole riding a slider meets the hole at the time and
-speed of a fall along the slider, held by the slider's normal force alone; an element with
-unknowns of its own is refused, saying why."""
+speed of a fall along the slider, held by the slider's normal force alone; an element
+without a finite stiffness at its end is refused, saying why."""
 
 from __future__ import annotations
 
@@ -44,10 +44,10 @@ def test_a_pin_on_a_slider_falls_along_it_into_its_hole(scheme):
     np.testing.assert_allclose(y, x * math.tan(math.radians(ANGLE)), atol=1e-9)  # on the axis throughout
 
 
-def test_an_element_with_unknowns_of_its_own_is_refused_by_name_and_why():
-    """An element enters an impact model by a hook (a flexure's, a joint's) or by its statics
-    energy in the bodies' poses (models.impacts.elastic); a link has unknowns of its own (its
-    shooting states), so it is refused, saying why."""
+def test_an_element_without_a_finite_stiffness_at_its_end_is_refused_saying_why():
+    """An element with unknowns of its own enters an impact model by its statics stiffness at
+    its end (models.impacts.condensed): an inextensible straight link has none along itself
+    (refused, saying so); given axial strain, the same link runs."""
     from models import MechanismError
 
     doc = csfh("6.1", until=0.01)
@@ -58,6 +58,9 @@ def test_an_element_with_unknowns_of_its_own_is_refused_by_name_and_why():
     with pytest.raises(MechanismError) as caught:
         run_impacts(*parsed(doc))
     assert caught.value.pointer == "/elements/arm/type"
-    assert caught.value.problem == ("a link element is not part of impact simulations: it has unknowns of its own "
-                                    "(its strain energy is not a function of the bodies' poses alone), and impact "
-                                    "simulations take rigid bodies and the massless elements between them")
+    assert caught.value.problem == ("the element's stiffness at body 'hinge' is not finite and positive in every "
+                                    "direction, and an impact simulation takes an element by that stiffness: an "
+                                    "inextensible straight link is rigid along itself (give it \"axial\": true), a "
+                                    "pinned end leaves its body free to turn (clamp it)")
+    doc["elements"]["arm"]["axial"] = True
+    assert run_impacts(*parsed(doc))[1]["status"] == "finished"

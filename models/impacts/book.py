@@ -19,6 +19,7 @@ class ParameterBook:
         self.values: list[float] = []
         self._symbols: list[ca.SX] = []
         self._derived: list[tuple[ca.SX, ca.SX]] = []  # (symbol, expression of the numbers)
+        self._computed: list[tuple[ca.SX, ca.Function, ca.SX]] = []  # (symbol, Function, its input in the numbers)
         self.units: dict[str, tuple[str, float]] = {}  # pointer -> (its unit in the document, SI per that unit)
 
     def si(self, value, kind: str, pointer: str) -> float:
@@ -60,28 +61,54 @@ class ParameterBook:
         self._derived.append((symbol, expression))
         return symbol
 
+    def computed(self, function: ca.Function, inputs: ca.SX, name: str) -> ca.SX:
+        """A stand-in for `function(inputs)`, a Function of one input and one output that SX
+        cannot hold (a linear solve, a root): evaluated once per run, differentiated exactly
+        (parameter_jacobian), its input an expression of the numbers."""
+        out = function.sparsity_out(0)
+        symbol = ca.SX.sym(name, out.size1(), out.size2())
+        self._computed.append((symbol, function, inputs))
+        return symbol
+
     def value(self, pointer: str) -> float:
         return self.values[self.pointers.index(pointer)]
 
     @property
     def symbols(self) -> ca.SX:
-        """The numbers, then the hoisted expressions: the graphs' parameter vector p."""
-        base = list(self._symbols) + [ca.vec(symbol) for symbol, _ in self._derived]
+        """The numbers, then the hoisted expressions, then the computed blocks: the graphs'
+        parameter vector p."""
+        base = list(self._symbols) + [ca.vec(symbol) for symbol, _ in self._derived] + [
+            ca.vec(symbol) for symbol, _, _ in self._computed]
         return ca.vertcat(*base) if base else ca.SX(0, 1)
 
-    def parameter_vector(self, values=None) -> np.ndarray:
-        """p for the numbers `values` (default: the document's), hoisted expressions evaluated."""
-        values = np.asarray(self.values if values is None else values, dtype=float)
-        if not self._derived:
-            return values
+    def _beyond_numbers(self) -> ca.Function | None:
+        """numbers (MX) -> the hoisted expressions and the computed blocks, or None if none."""
+        if not self._derived and not self._computed:
+            return None
         numbers = ca.vertcat(*self._symbols)
-        derived = ca.Function("derived", [numbers], [ca.vertcat(*[ca.vec(e) for _, e in self._derived])])
-        return np.concatenate([values, np.asarray(derived(values)).ravel()])
+        x = ca.MX.sym("numbers", numbers.numel())
+        computed = [function(ca.Function("inputs", [numbers], [inputs])(x)) for _, function, inputs in self._computed]
+        # hoisted expressions may hold computed blocks (a point where a computed end lies)
+        hoisted = ca.Function("hoisted", [numbers, *[symbol for symbol, _, _ in self._computed]],
+                              [ca.vertcat(*[ca.vec(e) for _, e in self._derived])])
+        return ca.Function("beyond_numbers", [x], [ca.vertcat(hoisted(x, *computed), *[ca.vec(c) for c in computed])])
+
+    def parameter_vector(self, values=None) -> np.ndarray:
+        """p for the numbers `values` (default: the document's), hoisted expressions and
+        computed blocks evaluated."""
+        values = np.asarray(self.values if values is None else values, dtype=float)
+        beyond = self._beyond_numbers()
+        if beyond is None:
+            return values
+        return np.concatenate([values, np.asarray(beyond(values)).ravel()])
 
     def parameter_jacobian(self, values=None) -> np.ndarray:
         """d p / d numbers at the numbers `values` (default: the document's): the identity over
-        the numbers, and the hoisted expressions' derivatives below it."""
+        the numbers, and the derivatives of what is computed from them below it."""
         values = np.asarray(self.values if values is None else values, dtype=float)
-        numbers = ca.vertcat(*self._symbols)
-        p = ca.vertcat(numbers, *[ca.vec(e) for _, e in self._derived])
-        return np.asarray(ca.Function("dp", [numbers], [ca.jacobian(p, numbers)])(values))
+        beyond = self._beyond_numbers()
+        if beyond is None:
+            return np.eye(len(values))
+        x = ca.MX.sym("numbers", len(values))
+        jacobian = ca.Function("dp", [x], [ca.jacobian(ca.vertcat(x, beyond(x)), x)])
+        return np.asarray(jacobian(values))

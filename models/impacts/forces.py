@@ -10,13 +10,29 @@ import casadi as ca
 
 from models.elements import FAMILIES
 from models.impacts.bodies import RigidBodies
+from models.impacts.condensed import condensed_flexure
 from models.planar import rot
 
 
 
-def smooth_forces(rb: RigidBodies, turning: bool, elements: ca.SX) -> tuple[ca.SX, ca.SX]:
+def flexures(rb: RigidBodies, condensed: tuple[str, ...]) -> list[tuple[str, ca.SX, ca.SX, ca.SX]]:
+    """(name, 1/2 psi.K.psi, psi, K) of every flexure: the elements whose family has an
+    impact_flexure hook (the curved beams' closed form) and those condensed from their statics
+    (`condensed`: elements with unknowns of their own, models.impacts.condensed)."""
+    out = []
+    for name, element in rb.book.document.elements.items():
+        family = FAMILIES.named(element.type)
+        if hasattr(family, "impact_flexure"):
+            out.append((name, *family.impact_flexure(rb, name, element)))
+        elif name in condensed:
+            out.append((name, *condensed_flexure(rb, name)))
+    return out
+
+
+def smooth_forces(rb: RigidBodies, turning: bool, elements: ca.SX, flexures: list) -> tuple[ca.SX, ca.SX]:
     """(V, Q_nc): the potential of the conservative forces and the rest; `elements` is the
-    energy of the elements that enter by their statics energy (elastic.element_energy)."""
+    energy of the elements that enter by their statics energy (elastic.element_energy),
+    `flexures` those of flexures()."""
     doc, book = rb.book.document, rb.book
     V = elements
     Q_nc = ca.SX.zeros(rb.size)
@@ -31,28 +47,16 @@ def smooth_forces(rb: RigidBodies, turning: bool, elements: ca.SX) -> tuple[ca.S
         elif load.type == "moment":
             V -= book.number(f"{base}/moment", load.moment, "moment") * rb.rotation(b)
         # a displacement drives its body (models.impacts.bodies): no force
-    for name, element in doc.elements.items():
-        family = FAMILIES.named(element.type)
-        if hasattr(family, "impact_flexure"):
-            energy, psi, K = family.impact_flexure(rb, name, element)
-            if turning:
-                i = rb.body(element.from_, f"/elements/{name}/from")
-                j = rb.body(element.to, f"/elements/{name}/to")
-                A3 = ca.diagcat(rot(rb.rotation(j) - rb.rotation(i)), ca.SX(1))
-                Q_nc -= ca.mtimes(ca.jacobian(psi, rb.q).T, A3 @ K @ A3.T @ psi)
-            else:
-                V += energy
+    for name, energy, psi, K in flexures:
+        if turning:
+            element = doc.elements[name]
+            i = rb.body(element.from_, f"/elements/{name}/from")
+            j = rb.body(element.to, f"/elements/{name}/to")
+            A3 = ca.diagcat(rot(rb.rotation(j) - rb.rotation(i)), ca.SX(1))
+            Q_nc -= ca.mtimes(ca.jacobian(psi, rb.q).T, A3 @ K @ A3.T @ psi)
+        else:
+            V += energy
     return V, Q_nc
-
-
-def flexure_energy(rb: RigidBodies) -> ca.SX:
-    """The strain energy 1/2 psi.K.psi of every flexure (reported with either stiffness)."""
-    total = ca.SX(0)
-    for name, element in rb.book.document.elements.items():
-        family = FAMILIES.named(element.type)
-        if hasattr(family, "impact_flexure"):
-            total += family.impact_flexure(rb, name, element)[0]
-    return total
 
 
 def _load_point(rb: RigidBodies, b, load, base: str) -> ca.SX:

@@ -21,7 +21,7 @@ from models.errors import MechanismError
 from models.impacts.bodies import RigidBodies
 from models.impacts.book import ParameterBook
 from models.impacts.elastic import element_energy
-from models.impacts.forces import flexure_energy, smooth_forces
+from models.impacts.forces import flexures as flexures_of, smooth_forces
 from models.impacts.joints import joint_constraints
 from models.impacts.pairs import PairModel, pair_model
 from models.planar import rot
@@ -104,9 +104,10 @@ def impact_model(document: MechanismDocument, histories: list[tuple[str, str, ob
     book = ParameterBook(document)
     rb = RigidBodies(book)
     turning = document.simulate is not None and document.simulate.flexure_stiffness == "turning"
-    springs, element_key = element_energy(rb)
-    V_smooth, Q_nc = smooth_forces(rb, turning, springs)  # V_smooth holds the flexures only when they are constant
-    flexures = flexure_energy(rb)
+    springs, element_key, condensed = element_energy(rb)
+    each_flexure = flexures_of(rb, condensed)
+    V_smooth, Q_nc = smooth_forces(rb, turning, springs, each_flexure)  # V_smooth: the flexures if constant
+    flexures = sum((energy for _, energy, _, _ in each_flexure), ca.SX(0))
     elastic = flexures + springs
     gravity = V_smooth - springs - (0 if turning else flexures)
     pairs = [pair_model(rb, name, pair) for name, pair in document.contacts.pairs.items()]
