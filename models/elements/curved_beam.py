@@ -88,6 +88,11 @@ class CurvedBeamFamily:
     type = "curved_beam"
     schema = CurvedBeam
 
+    def impact_by_statics(self, el: CurvedBeam) -> bool:
+        """The exact model (a link) enters an impact simulation by its own statics stiffness
+        (models.impacts.condensed); the others by the closed form below."""
+        return el.model == "exact"
+
     def impact_flexure(self, rb, name: str, el: CurvedBeam):
         """In an impact simulation (models.impacts): (1/2 psi.K.psi, psi, K), psi seed 000's
         deformation of the arc's end relative to its start (Eqs. 5-8) in the end frame S_fj,

@@ -28,6 +28,8 @@ NOT_SECTIONS = {"loads": {}, "outputs": {}, "contacts": None, "simulate": None, 
 def bridged(element) -> bool:
     """Whether an element enters an impact model by its statics energy (no hook of its own)."""
     family = FAMILIES.named(element.type)
+    if hasattr(family, "impact_by_statics") and family.impact_by_statics(element):
+        return True
     return not any(hasattr(family, hook) for hook in ("impact_flexure", "impact_constraint"))
 
 

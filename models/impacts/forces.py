@@ -22,10 +22,10 @@ def flexures(rb: RigidBodies, condensed: tuple[str, ...]) -> list[tuple[str, ca.
     out = []
     for name, element in rb.book.document.elements.items():
         family = FAMILIES.named(element.type)
-        if hasattr(family, "impact_flexure"):
-            out.append((name, *family.impact_flexure(rb, name, element)))
-        elif name in condensed:
+        if name in condensed:
             out.append((name, *condensed_flexure(rb, name)))
+        elif hasattr(family, "impact_flexure"):
+            out.append((name, *family.impact_flexure(rb, name, element)))
     return out
 
 
