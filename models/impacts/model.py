@@ -88,8 +88,8 @@ class ImpactModel:
         parts += [f"{k}:{getattr(v, 'type', '')}:{getattr(v, 'offset', None) is None}:{getattr(v, 'at', None) is None}"
                   for k, v in doc.loads.items()]
         parts += [f"{p.name}:{p.law}:{p.friction}:{p.esdu is None}" for p in self.pairs]
-        parts += [f"{k}:{s.type}:{getattr(s, 'body', None)}" for group in (doc.contacts.sites, doc.contacts.objects)
-                  for k, s in group.items()]
+        parts += [f"{k}:{s.type}:{getattr(s, 'body', None)}:{len(getattr(s, 'vertices', ()))}"
+                  for group in (doc.contacts.sites, doc.contacts.objects) for k, s in group.items()]
         return "|".join(parts + [self.history_key, self.element_key])
 
 

@@ -1,5 +1,5 @@
 """Contact pairs of the document's `contacts` in a simulation, a circle site on one body
-against a circle, hole or half-plane object carried by another: the indentation q (positive
+against a circle, hole, half-plane or polygon object carried by another: the indentation q (positive
 in contact; the gap is -q), the contact normal n_c (pushing the circle's body out of
 contact), the tangent t_c (n_c turned +90 deg), and the generalized directions of a unit
 normal and tangent force. A force F_N n_c + F_T t_c acts on the circle's body at the contact
@@ -20,7 +20,7 @@ from models.impacts.bodies import RigidBodies
 from models.planar import rot
 
 ONE, SPEED = ("1", 1.0), ("m/s", 1.0)  # units of the laws' numbers (seed 004 gives v0, v1 in m/s)
-IMPACT_OBJECTS = ("circle", "hole", "half_plane")
+IMPACT_OBJECTS = ("circle", "hole", "half_plane", "polygon")
 DEFAULT_V0, DEFAULT_V1 = 1e-4, 1e-2  # m/s: the slip speeds no Coulomb law reads (masked switching functions)
 
 
@@ -97,8 +97,8 @@ def _surfaces(contacts: Contacts, base: str, pair: ContactPair):
         raise MechanismError(f"{base}/site", f"in a simulation a pair's site is a circle on a body (a pin, a roller); "
                              f"'{pair.site}' is a {site.type}")
     if obj.type not in IMPACT_OBJECTS:
-        raise MechanismError(f"{base}/object", f"in a simulation a circle touches a circle, a hole or a half_plane; "
-                             f"'{pair.object}' is a {obj.type}")
+        raise MechanismError(f"{base}/object", f"in a simulation a circle touches a circle, a hole, a half_plane or a "
+                             f"polygon; '{pair.object}' is a {obj.type}")
     return site, obj
 
 
@@ -141,6 +141,11 @@ def _geometry(rb: RigidBodies, name: str, pair: ContactPair, site, obj, body1, b
         n_c = rot(rb.turn(body2) - body2.angle) @ normal / ca.norm_2(normal)
         P2 = rb.point(body2, book.vector(f"{s2}/point", obj.point, "length"))
         return R1, O1, R1 - ca.dot(O1 - P2, n_c), n_c, R1_si, None, None
+    if obj.type == "polygon":
+        closest = _closest_on_polygon(rb, body2, s2, obj, O1)
+        e = O1 - closest
+        distance = ca.sqrt(ca.dot(e, e) + 1e-300)
+        return R1, O1, R1 - distance, e / distance, R1_si, None, None
     R2 = book.number(f"{s2}/radius", obj.radius, "length", "positive")
     R2_si = book.value(f"{s2}/radius")
     O2 = rb.point(body2, book.vector(f"{s2}/centre", obj.centre, "length"))
@@ -153,6 +158,29 @@ def _geometry(rb: RigidBodies, name: str, pair: ContactPair, site, obj, body1, b
                                  f"pin radius {R1_si:g} m) must be positive, got {clearance:g} m")
         return R1, O1, distance - (R2 - R1), -e / distance, clearance, R2_si, clearance
     return R1, O1, R1 + R2 - distance, e / distance, min(R1_si, R2_si), R2_si, None
+
+
+def _closest_on_polygon(rb: RigidBodies, body, pointer: str, obj, O1: ca.SX) -> ca.SX:
+    """The point of the polygon's boundary nearest the circle's centre O1: the nearest of each
+    edge's nearest points (a polygon convex or not, its edges closed; the centre outside it,
+    so that the indentation R1 - |O1 - point| is the depth)."""
+    book = rb.book
+    position = book.vector(f"{pointer}/position", obj.position, "length")
+    turn = rot(book.number(f"{pointer}/angle", obj.angle, "angle"))
+    corners = [rb.point(body, position + turn @ book.vector(f"{pointer}/vertices/{k}", vertex, "length"))
+               for k, vertex in enumerate(obj.vertices)]
+    best, best_squared = None, None
+    for A, B in zip(corners, corners[1:] + corners[:1]):
+        edge = B - A
+        along = ca.fmin(ca.fmax(ca.dot(O1 - A, edge) / ca.dot(edge, edge), 0), 1)
+        nearest = A + along * edge
+        squared = ca.sumsqr(O1 - nearest)
+        if best is None:
+            best, best_squared = nearest, squared
+        else:
+            closer = squared < best_squared
+            best, best_squared = ca.if_else(closer, nearest, best), ca.if_else(closer, squared, best_squared)
+    return best
 
 
 def _damping(rb: RigidBodies, base: str, law: NormalLawFields, normal: NormalLaw) -> ca.SX:
