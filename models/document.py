@@ -270,13 +270,29 @@ def _raise_first(exc: ValidationError) -> None:
         message = "required field is missing"
     elif first["type"] == "extra_forbidden":
         message = unknown_field_message(str(location[-1]) if location else "")
+    elif first["type"] in ("union_tag_invalid", "union_tag_not_found"):
+        location, message = _tag_problem(first, location)
     elif all(e["type"] in _NOT_A_NUMBER for e in here):
         message = (f"expected a number (or a quantity string like '25 um', at most {MAX_QUANTITY_CHARS} "
                    f"characters), got {_shown(first.get('input'))}")
-    others = len({_field_location(e["loc"]) for e in errors} - {location})
+    others = len({_field_location(e["loc"]) for e in errors} - {location, _field_location(first["loc"])})
     if others:
         message += f" (and {others} more field{'s' if others > 1 else ''} with problems)"
     raise MechanismError(pointer_of(location), message) from None
+
+
+def _tag_problem(error: dict, location: tuple) -> tuple[tuple, str]:
+    """An object of a tagged collection whose tag (`type`) is missing or unknown: the tag's
+    location, and the kinds there are (the nearest first, if one is close)."""
+    context = error.get("ctx", {})
+    tag_field = str(context.get("discriminator", "'type'")).strip("'")
+    if error["type"] == "union_tag_not_found":
+        return (*location, tag_field), "required field is missing"
+    kinds = [kind.strip().strip("'") for kind in str(context.get("expected_tags", "")).split(",") if kind.strip()]
+    tag = str(context.get("tag", ""))
+    close = difflib.get_close_matches(tag, kinds, n=1, cutoff=0.75)
+    hint = f"did you mean '{close[0]}'? " if close else ""
+    return (*location, tag_field), f"unknown {tag_field} '{tag}' ({hint}{tag_field}s: {', '.join(kinds)})"
 
 
 def _shown(value: Any) -> str:

@@ -97,7 +97,10 @@ def test_schema_violations_name_the_field(gripper_dict):
     expect_error(gripper_dict, lambda d: d["elements"]["a"].update(radious=0.2),
                  "/elements/a/radious", "unknown field")
     expect_error(gripper_dict, lambda d: d["elements"]["a"].update(type="hinge"),
-                 "/elements/a", "does not match any of the expected tags")
+                 "/elements/a/type", "unknown type 'hinge' (types: curved_beam, link, spring, pin, slider)")
+    expect_error(gripper_dict, lambda d: d["elements"]["a"].update(type="curved_bem"),
+                 "/elements/a/type", "unknown type 'curved_bem' (did you mean 'curved_beam'? types: ")
+    expect_error(gripper_dict, lambda d: d["elements"]["a"].pop("type"), "/elements/a/type", "required field is missing")
     expect_error(gripper_dict, lambda d: d["loads"]["actuation"].update(force=[1.0]),
                  "/loads/actuation/force/1", "required field is missing")
     expect_error(gripper_dict, lambda d: d["materials"]["silicon"].update(E=[100]),

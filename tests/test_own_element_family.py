@@ -102,9 +102,17 @@ def block_on_a_bushing(**fields) -> dict:
 def test_a_document_names_an_unregistered_family_as_an_unknown_type():
     with pytest.raises(MechanismError) as caught:
         load_document(block_on_a_bushing())
-    assert caught.value.pointer == "/elements/mount"
-    assert caught.value.problem == ("Input tag 'bushing' found using 'type' does not match any of the expected tags: "
-                                    "'curved_beam', 'link', 'spring', 'pin', 'slider'")
+    assert caught.value.pointer == "/elements/mount/type"
+    assert caught.value.problem == "unknown type 'bushing' (types: curved_beam, link, spring, pin, slider)"
+
+
+def test_a_registered_family_is_among_the_types_a_document_is_told_of(bushing):
+    doc = block_on_a_bushing()
+    doc["elements"]["mount"]["type"] = "bushin"
+    with pytest.raises(MechanismError) as caught:
+        load_document(doc)
+    assert caught.value.problem == ("unknown type 'bushin' (did you mean 'bushing'? types: curved_beam, link, spring, "
+                                    "pin, slider, bushing)")
 
 
 def test_statics_deflects_the_block_by_load_over_stiffness(bushing):
