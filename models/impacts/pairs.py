@@ -1,5 +1,5 @@
 """Contact pairs of the document's `contacts` in a simulation, a circle site on one body
-against a circle, hole, half-plane or polygon object carried by another: the indentation q (positive
+against a circle, hole, half-plane, polygon or ellipse object carried by another: the indentation q (positive
 in contact; the gap is -q), the contact normal n_c (pushing the circle's body out of
 contact), the tangent t_c (n_c turned +90 deg), and the generalized directions of a unit
 normal and tangent force. A force F_N n_c + F_T t_c acts on the circle's body at the contact
@@ -20,7 +20,9 @@ from models.impacts.bodies import RigidBodies
 from models.planar import rot
 
 ONE, SPEED = ("1", 1.0), ("m/s", 1.0)  # units of the laws' numbers (seed 004 gives v0, v1 in m/s)
-IMPACT_OBJECTS = ("circle", "hole", "half_plane", "polygon")
+IMPACT_OBJECTS = ("circle", "hole", "half_plane", "polygon", "ellipse")
+ELLIPSE_BISECTIONS = 80  # halvings of the foot point's bracket: to round-off from any start
+ELLIPSE_NEWTON = 2  # Newton steps after them, so that derivatives are the implicit function's
 DEFAULT_V0, DEFAULT_V1 = 1e-4, 1e-2  # m/s: the slip speeds no Coulomb law reads (masked switching functions)
 
 
@@ -97,8 +99,8 @@ def _surfaces(contacts: Contacts, base: str, pair: ContactPair):
         raise MechanismError(f"{base}/site", f"in a simulation a pair's site is a circle on a body (a pin, a roller); "
                              f"'{pair.site}' is a {site.type}")
     if obj.type not in IMPACT_OBJECTS:
-        raise MechanismError(f"{base}/object", f"in a simulation a circle touches a circle, a hole, a half_plane or a "
-                             f"polygon; '{pair.object}' is a {obj.type}")
+        raise MechanismError(f"{base}/object", f"in a simulation a circle touches a circle, a hole, a half_plane, a "
+                             f"polygon or an ellipse; '{pair.object}' is a {obj.type}")
     return site, obj
 
 
@@ -141,8 +143,8 @@ def _geometry(rb: RigidBodies, name: str, pair: ContactPair, site, obj, body1, b
         n_c = rot(rb.turn(body2) - body2.angle) @ normal / ca.norm_2(normal)
         P2 = rb.point(body2, book.vector(f"{s2}/point", obj.point, "length"))
         return R1, O1, R1 - ca.dot(O1 - P2, n_c), n_c, R1_si, None, None
-    if obj.type == "polygon":
-        closest = _closest_on_polygon(rb, body2, s2, obj, O1)
+    if obj.type in ("polygon", "ellipse"):
+        closest = (_closest_on_polygon if obj.type == "polygon" else _closest_on_ellipse)(rb, body2, s2, obj, O1)
         e = O1 - closest
         distance = ca.sqrt(ca.dot(e, e) + 1e-300)
         return R1, O1, R1 - distance, e / distance, R1_si, None, None
@@ -181,6 +183,43 @@ def _closest_on_polygon(rb: RigidBodies, body, pointer: str, obj, O1: ca.SX) -> 
             closer = squared < best_squared
             best, best_squared = ca.if_else(closer, nearest, best), ca.if_else(closer, squared, best_squared)
     return best
+
+
+def _closest_on_ellipse(rb: RigidBodies, body, pointer: str, obj, O1: ca.SX) -> ca.SX:
+    """The point of the ellipse nearest the circle's centre O1 (outside it). In the ellipse's
+    axes, O1 at p and the boundary at (a cos t, b sin t): the foot point's t solves
+    f(t) = (a^2 - b^2) sin t cos t - a p_x sin t + b p_y cos t = 0. Bisection of Eberly's
+    bracket in the first quadrant finds it from anywhere (the larger semi-axis first); Newton
+    steps on f then give the derivatives of t that the implicit function theorem gives."""
+    book = rb.book
+    axes = book.vector(f"{pointer}/semi_axes", obj.semi_axes, "length")
+    for k in (0, 1):
+        if book.value(f"{pointer}/semi_axes/{k}") <= 0:
+            raise MechanismError(f"{pointer}/semi_axes/{k}", "a semi-axis must be positive")
+    a, b = axes[0], axes[1]
+    centre = rb.point(body, book.vector(f"{pointer}/centre", obj.centre, "length"))
+    turn = rot(rb.turn(body) + book.number(f"{pointer}/angle", obj.angle, "angle"))  # in the body's axes
+    p = turn.T @ (O1 - centre)
+    swapped = a < b  # Eberly's bracket wants the larger semi-axis first
+    e0, e1 = ca.if_else(swapped, b, a), ca.if_else(swapped, a, b)
+    y0 = ca.fabs(ca.if_else(swapped, p[1], p[0]))
+    y1 = ca.fabs(ca.if_else(swapped, p[0], p[1]))
+    r0, z0, z1 = (e0 / e1) ** 2, y0 / e0, y1 / e1
+    low, high = z1 - 1, ca.sqrt((r0 * z0) ** 2 + z1**2) - 1
+    for _ in range(ELLIPSE_BISECTIONS):
+        s = (low + high) / 2
+        outside = (r0 * z0 / (s + r0)) ** 2 + (z1 / (s + 1)) ** 2 - 1 > 0
+        low, high = ca.if_else(outside, s, low), ca.if_else(outside, high, s)
+    s = (low + high) / 2
+    x0, x1 = r0 * y0 / (s + r0), y1 / (s + 1)  # the foot point in the first quadrant, (e0, e1) axes
+    u0 = ca.if_else(swapped, x1 * ca.sign(p[0]), x0 * ca.sign(p[0]))
+    u1 = ca.if_else(swapped, x0 * ca.sign(p[1]), x1 * ca.sign(p[1]))
+    t = ca.atan2(u1 / b, u0 / a)
+    for _ in range(ELLIPSE_NEWTON):
+        f = (a**2 - b**2) * ca.sin(t) * ca.cos(t) - a * p[0] * ca.sin(t) + b * p[1] * ca.cos(t)
+        slope = (a**2 - b**2) * ca.cos(2 * t) - a * p[0] * ca.cos(t) - b * p[1] * ca.sin(t)
+        t = t - f / slope
+    return centre + turn @ ca.vertcat(a * ca.cos(t), b * ca.sin(t))
 
 
 def _damping(rb: RigidBodies, base: str, law: NormalLawFields, normal: NormalLaw) -> ca.SX:
