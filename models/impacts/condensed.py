@@ -5,12 +5,13 @@ tangent about the drawn (unloaded) state, condensed onto its end body.
 The statics of the element alone, its `from` body held as drawn and its `to` body free, has
 the tangent K_T(z, p) of the residual form (models.assembly); at the undeformed state z = 0
 the inverse of its compliance (the free body's motion under unit loads on it) is the 3 x 3
-stiffness K of that body's reference point (global axes, SI), moved to the element's end. The impact model then writes the flexure as the
-curved beams' closed form does (seed 000, Eq. 2): energy 1/2 psi.K.psi with psi the end
-body's displacement relative to the start body, in the start body's axes, and with the
-`turning` stiffness K turns with the end body (seed 004, Eq. 8). So at small deflection the
-impact run agrees with the element's statics to first order; large deflection of the element
-is not modelled (as for the curved beams' constant-stiffness models).
+stiffness K of that body's reference point (global axes, SI), moved to the element's end E.
+The impact model then writes the flexure as the curved beams' closed form does (seed 000,
+Eq. 2): energy 1/2 psi.K.psi with psi the motion of the end body's point at E relative to the
+start body's point there, in the start body's axes; with the `turning` stiffness K turns with
+the end body (seed 004, Eq. 8). So at small deflection the impact run agrees with the
+element's statics to first order; large deflection of the element is not modelled (as for
+the curved beams' constant-stiffness models), and neither is its mass.
 
 K is a computed block of the book (models.impacts.book): a CasADi Function of the element's
 numbers, evaluated once per run and differentiated exactly, so sensitivities and studies see

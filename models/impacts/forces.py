@@ -14,7 +14,6 @@ from models.impacts.condensed import condensed_flexure
 from models.planar import rot
 
 
-
 def flexures(rb: RigidBodies, condensed: tuple[str, ...]) -> list[tuple[str, ca.SX, ca.SX, ca.SX]]:
     """(name, 1/2 psi.K.psi, psi, K) of every flexure: the elements whose family has an
     impact_flexure hook (the curved beams' closed form) and those condensed from their statics

@@ -53,8 +53,6 @@ def _code_version(family_sources: tuple[str, ...]) -> str:
     return digest.hexdigest()[:16]
 
 
-
-
 @dataclass
 class Trace:
     """Accepted states, rows of the state vector (event-driven: EventLayout; moreau: [t, q, v,
