@@ -156,17 +156,20 @@ def _reduce_pinned_joints(c: Collector, prescribed) -> None:
 def _check_grounded(c: Collector, prescribed) -> None:
     """Every body must reach a fixed one through elements or contact pairs between bodies (a
     body in a clearance is held by the surface it rests on), or nothing holds it."""
-    neighbours: dict[str, set[str]] = {name: set() for name in c.bodies}
+    world = None  # an object given without a body is fixed in global axes: ground
+    neighbours: dict[str | None, set[str | None]] = {name: set() for name in c.bodies}
+    neighbours[world] = set()
     links = [(el.from_, el.to) for el in c.doc.elements.values()]
     contacts = c.doc.contacts
     if contacts is not None:
         ends = [(getattr(contacts.sites.get(pair.site), "body", None), getattr(contacts.objects.get(pair.object), "body", None))
-                for pair in contacts.pairs.values()]
-        links += [(a, b) for a, b in ends if a in neighbours and b in neighbours]
+                for pair in contacts.pairs.values() if pair.site in contacts.sites and pair.object in contacts.objects]
+        # a site without a body is on a link (its ends' bodies are the link's business), never ground
+        links += [(a, b) for a, b in ends if a is not None and a in neighbours and b in neighbours and a != b]
     for a, b in links:
         neighbours[a].add(b)
         neighbours[b].add(a)
-    grounded = [name for b, name in enumerate(c.bodies) if all(v is not None for v in prescribed[b])]
+    grounded = [world] + [name for b, name in enumerate(c.bodies) if all(v is not None for v in prescribed[b])]
     seen, stack = set(grounded), list(grounded)
     while stack:
         for other in neighbours[stack.pop()]:

@@ -18,6 +18,9 @@ from models.structure import ElementTopology
 IMPLICIT_PROBES = ((0.0, 0.0), (1.0, 0.5), (-0.7, 1.3))  # where g must be a finite number (object frame)
 
 
+CIRCLE_TOUCHES = ("circle", "hole", "half_plane", "polygon", "ellipse")  # polygons, ellipses: simulations only
+
+
 def collect_contacts(c, contacts: Contacts | None, elements: list[ElementTopology]) -> ContactTopology | None:
     if contacts is None:
         return None
@@ -34,9 +37,9 @@ def collect_contacts(c, contacts: Contacts | None, elements: list[ElementTopolog
             raise MechanismError(f"{base}/object", f"unknown object '{pair.object}' "
                                  f"(objects: {', '.join(object_names) or 'none'})")
         site, obj = sites[site_names.index(pair.site)], objects[object_names.index(pair.object)]
-        if site.type == "circle" and obj.type not in ("circle", "hole", "half_plane"):
-            raise MechanismError(f"{base}/object", f"a circle site touches circles, holes and half-planes, not the "
-                                 f"{obj.type} '{obj.name}'")
+        if site.type == "circle" and obj.type not in CIRCLE_TOUCHES:
+            raise MechanismError(f"{base}/object", f"a circle site touches circles, holes, half-planes, polygons and "
+                                 f"ellipses, not the {obj.type} '{obj.name}'")
         if site.type == "surface" and obj.type == "polygon":
             raise MechanismError(f"{base}/object", f"a link surface cannot touch the polygon '{obj.name}': polygons "
                                  "touch jaws (give the link a jaw, or describe the object as an implicit curve)")

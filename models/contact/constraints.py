@@ -25,10 +25,12 @@ from dataclasses import dataclass, field
 import casadi as ca
 
 from models.contact.topology import ContactTopology, ObjectTopology, SiteTopology
+from models.errors import MechanismError
 from models.expression import compile_expression
 from models.planar import rot
 
 SAMPLES_PER_EDGE = 8  # points per jaw edge checked against an implicit curve
+QUASI_STATIC_CIRCLE_TOUCHES = ("circle", "hole", "half_plane")  # distances exact here
 
 
 @dataclass
@@ -181,6 +183,10 @@ def contact_constraints(geometry: ContactGeometry) -> ContactConstraints:
             _carried(rows, first, site.link)
             continue
         if site.type == "circle":
+            if obj.type not in QUASI_STATIC_CIRCLE_TOUCHES:
+                raise MechanismError(f"{pair.pointer}/object", f"a quasi-static contact solve takes a circle site "
+                                     f"against circles, holes and half-planes; the {obj.type} '{obj.name}' touches "
+                                     "a circle in simulations (event_driven, moreau)")
             rows.append(_circle_row(geometry, k, site, obj, frame))
             continue
         vertices, along = geometry.jaw_vertices(site)
