@@ -13,6 +13,8 @@ from dataclasses import dataclass, field
 import casadi as ca
 
 from models.errors import MechanismError
+from models.contact.circle_contact import (against_circle, against_half_plane, against_hole, against_nearest,
+                                           closest_on_ellipse, closest_on_polygon)
 from models.contact.document import ContactPair, Contacts, FrictionFields, NormalLawFields
 from models.contact.laws import FRICTION_LAWS, FrictionLaw, NormalLaw, friction_law, normal_law
 from models.contact.laws.penalty import hertz_stiffness
@@ -21,8 +23,6 @@ from models.planar import rot
 
 ONE, SPEED = ("1", 1.0), ("m/s", 1.0)  # units of the laws' numbers (seed 004 gives v0, v1 in m/s)
 IMPACT_OBJECTS = ("circle", "hole", "half_plane", "polygon", "ellipse")
-ELLIPSE_BISECTIONS = 80  # halvings of the foot point's bracket: to round-off from any start
-ELLIPSE_NEWTON = 2  # Newton steps after them, so that derivatives are the implicit function's
 DEFAULT_V0, DEFAULT_V1 = 1e-4, 1e-2  # m/s: the slip speeds no Coulomb law reads (masked switching functions)
 
 
@@ -142,84 +142,40 @@ def _geometry(rb: RigidBodies, name: str, pair: ContactPair, site, obj, body1, b
             raise MechanismError(f"{s2}/normal", "the normal must not be zero")
         n_c = rot(rb.turn(body2) - body2.angle) @ normal / ca.norm_2(normal)
         P2 = rb.point(body2, book.vector(f"{s2}/point", obj.point, "length"))
-        return R1, O1, R1 - ca.dot(O1 - P2, n_c), n_c, R1_si, None, None
+        return R1, O1, *against_half_plane(O1, R1, P2, n_c), R1_si, None, None
     if obj.type in ("polygon", "ellipse"):
-        closest = (_closest_on_polygon if obj.type == "polygon" else _closest_on_ellipse)(rb, body2, s2, obj, O1)
-        e = O1 - closest
-        distance = ca.sqrt(ca.dot(e, e) + 1e-300)
-        return R1, O1, R1 - distance, e / distance, R1_si, None, None
+        closest = (_polygon_nearest if obj.type == "polygon" else _ellipse_nearest)(rb, body2, s2, obj, O1)
+        return R1, O1, *against_nearest(O1, R1, closest), R1_si, None, None
     R2 = book.number(f"{s2}/radius", obj.radius, "length", "positive")
     R2_si = book.value(f"{s2}/radius")
     O2 = rb.point(body2, book.vector(f"{s2}/centre", obj.centre, "length"))
-    e = O1 - O2
-    distance = ca.sqrt(ca.dot(e, e) + 1e-300)
     if obj.type == "hole":
         clearance = R2_si - R1_si
         if clearance <= 0:
             raise MechanismError(f"{s2}/radius", f"the clearance of pair '{name}' (hole radius {R2_si:g} m minus "
                                  f"pin radius {R1_si:g} m) must be positive, got {clearance:g} m")
-        return R1, O1, distance - (R2 - R1), -e / distance, clearance, R2_si, clearance
-    return R1, O1, R1 + R2 - distance, e / distance, min(R1_si, R2_si), R2_si, None
+        return R1, O1, *against_hole(O1, R1, O2, R2), clearance, R2_si, clearance
+    return R1, O1, *against_circle(O1, R1, O2, R2), min(R1_si, R2_si), R2_si, None
 
 
-def _closest_on_polygon(rb: RigidBodies, body, pointer: str, obj, O1: ca.SX) -> ca.SX:
-    """The point of the polygon's boundary nearest the circle's centre O1: the nearest of each
-    edge's nearest points (a polygon convex or not, its edges closed; the centre outside it,
-    so that the indentation R1 - |O1 - point| is the depth)."""
+def _polygon_nearest(rb: RigidBodies, body, pointer: str, obj, O1: ca.SX) -> ca.SX:
     book = rb.book
     position = book.vector(f"{pointer}/position", obj.position, "length")
     turn = rot(book.number(f"{pointer}/angle", obj.angle, "angle"))
     corners = [rb.point(body, position + turn @ book.vector(f"{pointer}/vertices/{k}", vertex, "length"))
                for k, vertex in enumerate(obj.vertices)]
-    best, best_squared = None, None
-    for A, B in zip(corners, corners[1:] + corners[:1]):
-        edge = B - A
-        along = ca.fmin(ca.fmax(ca.dot(O1 - A, edge) / ca.dot(edge, edge), 0), 1)
-        nearest = A + along * edge
-        squared = ca.sumsqr(O1 - nearest)
-        if best is None:
-            best, best_squared = nearest, squared
-        else:
-            closer = squared < best_squared
-            best, best_squared = ca.if_else(closer, nearest, best), ca.if_else(closer, squared, best_squared)
-    return best
+    return closest_on_polygon(corners, O1)
 
 
-def _closest_on_ellipse(rb: RigidBodies, body, pointer: str, obj, O1: ca.SX) -> ca.SX:
-    """The point of the ellipse nearest the circle's centre O1 (outside it). In the ellipse's
-    axes, O1 at p and the boundary at (a cos t, b sin t): the foot point's t solves
-    f(t) = (a^2 - b^2) sin t cos t - a p_x sin t + b p_y cos t = 0. Bisection of Eberly's
-    bracket in the first quadrant finds it from anywhere (the larger semi-axis first); Newton
-    steps on f then give the derivatives of t that the implicit function theorem gives."""
+def _ellipse_nearest(rb: RigidBodies, body, pointer: str, obj, O1: ca.SX) -> ca.SX:
     book = rb.book
     axes = book.vector(f"{pointer}/semi_axes", obj.semi_axes, "length")
     for k in (0, 1):
         if book.value(f"{pointer}/semi_axes/{k}") <= 0:
             raise MechanismError(f"{pointer}/semi_axes/{k}", "a semi-axis must be positive")
-    a, b = axes[0], axes[1]
     centre = rb.point(body, book.vector(f"{pointer}/centre", obj.centre, "length"))
     turn = rot(rb.turn(body) + book.number(f"{pointer}/angle", obj.angle, "angle"))  # in the body's axes
-    p = turn.T @ (O1 - centre)
-    swapped = a < b  # Eberly's bracket wants the larger semi-axis first
-    e0, e1 = ca.if_else(swapped, b, a), ca.if_else(swapped, a, b)
-    y0 = ca.fabs(ca.if_else(swapped, p[1], p[0]))
-    y1 = ca.fabs(ca.if_else(swapped, p[0], p[1]))
-    r0, z0, z1 = (e0 / e1) ** 2, y0 / e0, y1 / e1
-    low, high = z1 - 1, ca.sqrt((r0 * z0) ** 2 + z1**2) - 1
-    for _ in range(ELLIPSE_BISECTIONS):
-        s = (low + high) / 2
-        outside = (r0 * z0 / (s + r0)) ** 2 + (z1 / (s + 1)) ** 2 - 1 > 0
-        low, high = ca.if_else(outside, s, low), ca.if_else(outside, high, s)
-    s = (low + high) / 2
-    x0, x1 = r0 * y0 / (s + r0), y1 / (s + 1)  # the foot point in the first quadrant, (e0, e1) axes
-    u0 = ca.if_else(swapped, x1 * ca.sign(p[0]), x0 * ca.sign(p[0]))
-    u1 = ca.if_else(swapped, x0 * ca.sign(p[1]), x1 * ca.sign(p[1]))
-    t = ca.atan2(u1 / b, u0 / a)
-    for _ in range(ELLIPSE_NEWTON):
-        f = (a**2 - b**2) * ca.sin(t) * ca.cos(t) - a * p[0] * ca.sin(t) + b * p[1] * ca.cos(t)
-        slope = (a**2 - b**2) * ca.cos(2 * t) - a * p[0] * ca.cos(t) - b * p[1] * ca.sin(t)
-        t = t - f / slope
-    return centre + turn @ ca.vertcat(a * ca.cos(t), b * ca.sin(t))
+    return closest_on_ellipse(centre, turn, axes[0], axes[1], O1)
 
 
 def _damping(rb: RigidBodies, base: str, law: NormalLawFields, normal: NormalLaw) -> ca.SX:
