@@ -3,13 +3,16 @@ and under gravity the weight of every body with mass, at its mass centre.
 
 applied_wrenches gives them as [Fx, Fy, M about the reference point] per body (the residual
 form); load_potential is minus their work from the undeformed state (the energy form), so
-that its gradient in the body displacements is minus the applied wrenches.
+that its gradient in the body displacements is minus the applied wrenches. Both include the
+contact pairs with an elastic law (models.contact.elastic_pairs): their forces come from a
+potential, so every form sees them alike.
 """
 
 from __future__ import annotations
 
 import casadi as ca
 
+from models.contact.elastic_pairs import contact_potential, contact_wrenches
 from models.context import AssemblyContext
 from models.planar import cross
 
@@ -48,7 +51,7 @@ def applied_wrenches(ctx: AssemblyContext, d: list[ca.SX]) -> list[ca.SX]:
         wrenches[b] = wrenches[b] + ca.vertcat(F, cross(arm, F))
     for b, M in moments:
         wrenches[b] = wrenches[b] + ca.vertcat(0, 0, M)
-    return wrenches
+    return [wrench + contact for wrench, contact in zip(wrenches, contact_wrenches(ctx, d))]
 
 
 def load_potential(ctx: AssemblyContext, d: list[ca.SX]) -> ca.SX:
@@ -60,7 +63,7 @@ def load_potential(ctx: AssemblyContext, d: list[ca.SX]) -> ca.SX:
         work = work + ca.dot(F, d[b][:2] + ctx.arm(b, local, d) - ctx.arm(b, local, zero))
     for b, M in moments:
         work = work + M * d[b][2]
-    return -work
+    return contact_potential(ctx, d) - work
 
 
 def kinetic_energy(ctx: AssemblyContext, d: list[ca.SX], v: list[ca.SX]) -> ca.SX:

@@ -10,6 +10,7 @@ from __future__ import annotations
 import casadi as ca
 
 from models.residual import held_wrenches
+from models.contact.elastic_pairs import contact_outputs
 from models.context import AssemblyContext
 from models.elements.base import Contribution
 
@@ -47,6 +48,8 @@ def output_graph(ctx: AssemblyContext, z: ca.SX, d: list[ca.SX], parts: list[Con
         if part.energy is not None:
             energy = energy + part.energy
     emit("energy", "energy", energy)
+    for name, kind, value in contact_outputs(ctx, d):  # the elastic contact pairs
+        emit(name, kind, value)
     zero = [ca.SX.zeros(3) for _ in range(ctx.n_bodies)]
     for pt in s.points:
         local = ctx.local_point(pt.body, f"/outputs/{pt.name}", pt.location)

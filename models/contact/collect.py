@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from models.contact.document import Contacts, FrictionFields, JawSite
+from models.contact.elastic_pairs import ELASTIC_LAWS
 from models.contact.laws import friction_law, normal_law
 from models.contact.polygons import convex_pieces, self_intersection, signed_area
 from models.contact.topology import ContactTopology, ObjectTopology, PairTopology, SiteTopology
@@ -44,6 +45,8 @@ def collect_contacts(c, contacts: Contacts | None, elements: list[ElementTopolog
             raise MechanismError(f"{base}/object", f"a link surface cannot touch the polygon '{obj.name}': polygons "
                                  "touch jaws (give the link a jaw, or describe the object as an implicit curve)")
         normal_law(pair.normal.law, f"{base}/normal/law")
+        if pair.normal.law in ELASTIC_LAWS and site.type == "circle":
+            _collect_elastic(c, base, pair)
         if isinstance(pair.friction, FrictionFields):
             friction_law(pair.friction.law, f"{base}/friction/law")
         friction = pair.friction_pointer(base)
@@ -52,6 +55,17 @@ def collect_contacts(c, contacts: Contacts | None, elements: list[ElementTopolog
         pairs.append(PairTopology(name, site_names.index(pair.site), object_names.index(pair.object), friction,
                                   pair.normal.law, law))
     return ContactTopology(objects, sites, tuple(pairs))
+
+
+def _collect_elastic(c, base: str, pair) -> None:
+    """An elastic pair's numbers (models.contact.elastic_pairs): K in the document's force /
+    length^n and n, read through the unit parameters; a stiffness computed from materials is
+    left to the impact model, which computes it (the statics says so if asked)."""
+    c.add(f"{base}/normal/exponent", pair.normal.exponent, "dimensionless", "positive")
+    if isinstance(pair.normal.stiffness, (int, float)):
+        c.add(f"{base}/normal/stiffness", pair.normal.stiffness, "dimensionless", "positive")
+    for kind in ("length", "force"):
+        c.unit_parameter(kind)
 
 
 def _vertices(c, base: str, vertices) -> np.ndarray:

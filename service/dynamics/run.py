@@ -12,6 +12,7 @@ import numpy as np
 from pydantic import ValidationError
 
 from models import Mechanism, MechanismError
+from models.contact.elastic_pairs import check_link_dynamics
 from models.residual import unknown_names
 from models.simulation_spec import SimulateSpec, critical_step_factor
 from service.costs import Limits
@@ -133,6 +134,7 @@ def run_simulation(mech: Mechanism, spec: SimulateSpec, stop=None, progress=None
     """(the raw history, the report)."""
     simulated(mech)
     check_masses(mech)
+    check_link_dynamics(mech.document)  # its contact pairs: elastic, frictionless
     check_steps(spec, max_steps)
     histories = read_histories(mech, spec.histories, spec.until, "/simulate/histories")
     x0, start_note = start_shape(mech, spec, histories)

@@ -47,7 +47,11 @@ class DampedPowerLaw(NormalLaw):
 
 @dataclass(frozen=True)
 class Hertz(DampedPowerLaw):
+    """Elastic: the gradient of K q^(n+1) / (n+1), so the statics and link dynamics take it too
+    (models.contact.elastic_pairs)."""
+
     name: str = "hertz"
+    analyses: frozenset[str] = frozenset({"event_driven", "link_dynamics"})
     summary: str = "F = K q^n, elastic (Eq. 13)"
     needs: tuple[str, ...] = ("stiffness", "exponent")
 

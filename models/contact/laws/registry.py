@@ -11,7 +11,8 @@ from models.errors import MechanismError
 
 # the analyses that use contact laws, and how a message names them
 ANALYSES = {"contact": "a quasi-static contact solve", "event_driven": "an event_driven simulation",
-            "moreau": "a moreau simulation"}
+            "moreau": "a moreau simulation",
+            "link_dynamics": "a newmark or generalized_alpha simulation (and the equilibrium solve)"}
 
 
 @dataclass(frozen=True)

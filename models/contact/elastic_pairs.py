@@ -1,0 +1,142 @@
+"""Contact pairs with an elastic penalty law in the statics and in link dynamics: a circle site
+on a body against a circle, hole, half-plane, polygon or ellipse object (on a body, or fixed)
+pushes with F = K q^n at an indentation q > 0 (Hertz, seed 004 Eq. 13; n = 1 a linear spring),
+the gradient of the potential K q^(n+1) / (n+1). So the pair is part of the mechanism's energy:
+the equilibrium solve, the energy form and the link dynamics' time steps all see it, and a
+damped simulation settles where the equilibrium solve stands.
+
+K is in the document's force / length^n and q in its length: the graphs take them through the
+unit parameters (nondimensional values of one document unit), as a spring's law does. The
+pairs of other laws belong to other analyses (the unilateral law to the quasi-static contact
+solve, the damped laws to event-driven simulations); a link dynamics run refuses them."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+
+from models.context import AssemblyContext
+from models.contact.circle_contact import (against_circle, against_half_plane, against_hole, against_nearest,
+                                           closest_on_ellipse, closest_on_polygon)
+from models.contact.constraints import ContactGeometry
+from models.contact.document import FrictionFields
+from models.contact.laws import FRICTION_LAWS, NORMAL_LAWS, check_law
+from models.contact.laws.penalty import elastic_power
+from models.contact.topology import ContactTopology, PairTopology
+from models.errors import MechanismError
+from models.planar import rot
+
+ELASTIC_LAWS = ("hertz",)  # normal laws with a potential
+
+
+@dataclass
+class ElasticPair:
+    name: str
+    indentation: ca.SX  # document length units
+    force: ca.SX  # document force units
+    potential: ca.SX  # nondimensional, as the mechanism's energy
+
+
+def check_link_dynamics(document) -> None:
+    """A link dynamics run takes the elastic pairs, frictionless: refuse any other law (and a
+    friction coefficient), naming what it takes."""
+    if document.contacts is None:
+        return
+    for name, pair in document.contacts.pairs.items():
+        base = f"/contacts/pairs/{name}"
+        check_law(NORMAL_LAWS, "normal", pair.normal.law, "link_dynamics", f"{base}/normal/law")
+        site = document.contacts.sites.get(pair.site)
+        if site is not None and site.type != "circle":
+            raise MechanismError(f"{base}/site", "a newmark or generalized_alpha simulation takes a pair's site as a "
+                                 f"circle on a body (a pin, a roller, a pad); '{pair.site}' is a {site.type}")
+        if isinstance(pair.friction, FrictionFields):
+            check_law(FRICTION_LAWS, "friction", pair.friction.law, "link_dynamics", f"{base}/friction/law")
+        elif pair.friction != 0:
+            raise MechanismError(f"{base}/friction", "a newmark or generalized_alpha simulation takes contact "
+                                 "pairs without friction: give 0, or run the pair in an event_driven simulation")
+
+
+def elastic(topology: ContactTopology | None) -> list[PairTopology]:
+    """The pairs with an elastic law and a circle site (the others are other analyses' business;
+    a link dynamics run refuses them)."""
+    if topology is None:
+        return []
+    return [pair for pair in topology.pairs
+            if pair.normal_law in ELASTIC_LAWS and topology.sites[pair.site].type == "circle"]
+
+
+def elastic_pairs(ctx: AssemblyContext, d: list[ca.SX]) -> list[ElasticPair]:
+    topology = ctx.structure.contacts
+    pairs = elastic(topology)
+    if not pairs:
+        return []
+    geometry = ContactGeometry(ctx, d, {}, topology)
+    unit_length, unit_force = ctx.unit("length"), ctx.unit("force")
+    out = []
+    for pair in pairs:
+        site, obj = topology.sites[pair.site], topology.objects[pair.object]
+        origin, angle = geometry.site_frame(site)
+        centre = origin + rot(angle) @ ctx.P.vec(f"{site.pointer}/centre")
+        q = _indentation(geometry, obj, centre, ctx.P[f"{site.pointer}/radius"]) / unit_length
+        K, n = _numbers(ctx, pair)
+        force = elastic_power(K, ca.fmax(q, 0.0), n)
+        potential = elastic_power(K, ca.fmax(q, 0.0), n + 1) / (n + 1) * unit_force * unit_length
+        out.append(ElasticPair(pair.name, q, force, potential))
+    return out
+
+
+def contact_potential(ctx: AssemblyContext, d: list[ca.SX]) -> ca.SX:
+    return sum((pair.potential for pair in elastic_pairs(ctx, d)), ca.SX(0))
+
+
+def contact_wrenches(ctx: AssemblyContext, d: list[ca.SX]) -> list[ca.SX]:
+    """Per body, the wrench [Fx, Fy, M about its reference point] the elastic pairs apply to
+    it: minus the potential's gradient in its displacement."""
+    if not elastic(ctx.structure.contacts):
+        return [ca.SX.zeros(3) for _ in range(ctx.n_bodies)]
+    symbols = [ca.SX.sym(f"d{b}", 3) for b in range(ctx.n_bodies)]
+    potential = contact_potential(ctx, symbols)
+    return [ca.substitute(-ca.gradient(potential, symbols[b]), ca.vertcat(*symbols), ca.vertcat(*d))
+            for b in range(ctx.n_bodies)]
+
+
+def contact_outputs(ctx: AssemblyContext, d: list[ca.SX]) -> list[tuple[str, str, ca.SX]]:
+    """(name, kind, nondimensional value): each elastic pair's normal force and indentation."""
+    out = []
+    for pair in elastic_pairs(ctx, d):
+        out.append((f"contacts.{pair.name}.normal_force", "force", pair.force * ctx.unit("force")))
+        out.append((f"contacts.{pair.name}.indentation", "length", pair.indentation * ctx.unit("length")))
+    return out
+
+
+def _indentation(geometry: ContactGeometry, obj, centre: ca.SX, radius: ca.SX) -> ca.SX:
+    P = geometry.P
+    frame = geometry.object_frame(obj)
+    base = obj.pointer
+    if obj.type == "circle":
+        return against_circle(centre, radius, frame.origin, P[f"{base}/radius"])[0]
+    if obj.type == "hole":
+        return against_hole(centre, radius, frame.origin, P[f"{base}/radius"])[0]
+    if obj.type == "half_plane":
+        normal = rot(frame.angle) @ P.vec(f"{base}/normal")
+        return against_half_plane(centre, radius, frame.origin, normal / ca.norm_2(normal))[0]
+    if obj.type == "polygon":
+        count = 1 + max(max(piece) for piece in obj.pieces)
+        corners = [frame.origin + rot(frame.angle) @ P.vec(f"{base}/vertices/{k}") for k in range(count)]
+        return against_nearest(centre, radius, closest_on_polygon(corners, centre))[0]
+    if obj.type == "ellipse":
+        nearest = closest_on_ellipse(frame.origin, rot(frame.angle), P[f"{base}/semi_axes/0"],
+                                     P[f"{base}/semi_axes/1"], centre)
+        return against_nearest(centre, radius, nearest)[0]
+    raise MechanismError(f"{base}/type", f"an elastic contact pair takes circles, holes, half-planes, polygons and "
+                         f"ellipses, not the {obj.type} '{obj.name}'")
+
+
+def _numbers(ctx: AssemblyContext, pair: PairTopology) -> tuple[ca.SX, ca.SX]:
+    base = f"{pair.pointer}/normal"
+    if f"{base}/stiffness" not in ctx.P:
+        raise MechanismError(f"{base}/stiffness", f"the statics and link dynamics take the {pair.normal_law} law's "
+                             "stiffness K as a number (force / length^exponent in the document's units), not "
+                             "computed from the materials")
+    return ctx.P[f"{base}/stiffness"], ctx.P[f"{base}/exponent"]
