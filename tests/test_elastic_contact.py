@@ -99,6 +99,10 @@ def test_a_compliant_rod_bent_against_a_stop_settles_on_the_equilibrium_solve():
      "/contacts/pairs/touch/normal/law",
      "a newmark or generalized_alpha simulation (and the equilibrium solve) does not take the normal law "
      "'lankarani_nikravesh' (it is for an event_driven simulation); it takes hertz"),
+    ({"normal": {"law": "hertz", "stiffness": {"contact": "spheres", "materials": ["steel", "steel"]}}},
+     "/contacts/pairs/touch/normal/stiffness",
+     "a newmark or generalized_alpha simulation takes the hertz law's stiffness K as a number (force / "
+     "length^exponent in the document's units), not computed from the materials"),
     ({"friction": 0.3}, "/contacts/pairs/touch/friction",
      "a newmark or generalized_alpha simulation takes contact pairs without friction: give 0, or run the pair in an "
      "event_driven simulation"),

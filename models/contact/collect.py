@@ -45,7 +45,9 @@ def collect_contacts(c, contacts: Contacts | None, elements: list[ElementTopolog
             raise MechanismError(f"{base}/object", f"a link surface cannot touch the polygon '{obj.name}': polygons "
                                  "touch jaws (give the link a jaw, or describe the object as an implicit curve)")
         normal_law(pair.normal.law, f"{base}/normal/law")
-        if pair.normal.law in ELASTIC_LAWS and site.type == "circle":
+        potential = pair.normal.law in ELASTIC_LAWS and site.type == "circle" and isinstance(
+            pair.normal.stiffness, (int, float))
+        if potential:
             _collect_elastic(c, base, pair)
         if isinstance(pair.friction, FrictionFields):
             friction_law(pair.friction.law, f"{base}/friction/law")
@@ -53,17 +55,16 @@ def collect_contacts(c, contacts: Contacts | None, elements: list[ElementTopolog
         c.add(friction, pair.friction_coefficient(), "dimensionless", "nonnegative")
         law = pair.friction.law if isinstance(pair.friction, FrictionFields) else "coulomb"
         pairs.append(PairTopology(name, site_names.index(pair.site), object_names.index(pair.object), friction,
-                                  pair.normal.law, law))
+                                  pair.normal.law, law, potential))
     return ContactTopology(objects, sites, tuple(pairs))
 
 
 def _collect_elastic(c, base: str, pair) -> None:
     """An elastic pair's numbers (models.contact.elastic_pairs): K in the document's force /
-    length^n and n, read through the unit parameters; a stiffness computed from materials is
-    left to the impact model, which computes it (the statics says so if asked)."""
+    length^n and n, read through the unit parameters. (A stiffness computed from materials is
+    the impact model's, which computes it; a link dynamics run asks for a number.)"""
     c.add(f"{base}/normal/exponent", pair.normal.exponent, "dimensionless", "positive")
-    if isinstance(pair.normal.stiffness, (int, float)):
-        c.add(f"{base}/normal/stiffness", pair.normal.stiffness, "dimensionless", "positive")
+    c.add(f"{base}/normal/stiffness", pair.normal.stiffness, "dimensionless", "positive")
     for kind in ("length", "force"):
         c.unit_parameter(kind)
 

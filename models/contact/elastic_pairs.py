@@ -50,6 +50,10 @@ def check_link_dynamics(document) -> None:
         if site is not None and site.type != "circle":
             raise MechanismError(f"{base}/site", "a newmark or generalized_alpha simulation takes a pair's site as a "
                                  f"circle on a body (a pin, a roller, a pad); '{pair.site}' is a {site.type}")
+        if not isinstance(pair.normal.stiffness, (int, float)):
+            raise MechanismError(f"{base}/normal/stiffness", "a newmark or generalized_alpha simulation takes the "
+                                 f"{pair.normal.law} law's stiffness K as a number (force / length^exponent in the "
+                                 "document's units), not computed from the materials")
         if isinstance(pair.friction, FrictionFields):
             check_law(FRICTION_LAWS, "friction", pair.friction.law, "link_dynamics", f"{base}/friction/law")
         elif pair.friction != 0:
@@ -58,12 +62,9 @@ def check_link_dynamics(document) -> None:
 
 
 def elastic(topology: ContactTopology | None) -> list[PairTopology]:
-    """The pairs with an elastic law and a circle site (the others are other analyses' business;
-    a link dynamics run refuses them)."""
-    if topology is None:
-        return []
-    return [pair for pair in topology.pairs
-            if pair.normal_law in ELASTIC_LAWS and topology.sites[pair.site].type == "circle"]
+    """The pairs with an elastic law, a circle site and K a number (the collector marks them;
+    the others are other analyses' business, and a link dynamics run refuses them)."""
+    return [] if topology is None else [pair for pair in topology.pairs if pair.potential]
 
 
 def elastic_pairs(ctx: AssemblyContext, d: list[ca.SX]) -> list[ElasticPair]:
@@ -135,8 +136,4 @@ def _indentation(geometry: ContactGeometry, obj, centre: ca.SX, radius: ca.SX) -
 
 def _numbers(ctx: AssemblyContext, pair: PairTopology) -> tuple[ca.SX, ca.SX]:
     base = f"{pair.pointer}/normal"
-    if f"{base}/stiffness" not in ctx.P:
-        raise MechanismError(f"{base}/stiffness", f"the statics and link dynamics take the {pair.normal_law} law's "
-                             "stiffness K as a number (force / length^exponent in the document's units), not "
-                             "computed from the materials")
     return ctx.P[f"{base}/stiffness"], ctx.P[f"{base}/exponent"]

@@ -44,6 +44,7 @@ class PairTopology:
     friction_pointer: str = ""  # the coefficient a quasi-static solve slips at (models.contact.document)
     normal_law: str = "unilateral"  # the laws' names (models.contact.laws): each analysis checks its own
     friction_law: str = "coulomb"
+    potential: bool = False  # part of the mechanism's energy (models.contact.elastic_pairs)
 
     @property
     def pointer(self) -> str:
