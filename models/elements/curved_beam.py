@@ -51,8 +51,12 @@ class CurvedBeam(TwoBodyElement):
     material: str
     section: str
     model: Literal["linear", "partial_nonlinear", "exact", "conservative"] = "partial_nonlinear"
-    intervals: int = Field(default=8, ge=1, le=64, description="shooting intervals (exact model)")
-    order: int = Field(default=8, ge=2, le=12, description="integration order, even (exact model)")
+    intervals: int = Field(default=8, ge=1, le=64, description="shooting intervals, or elements (exact model)")
+    order: int = Field(default=8, ge=2, le=12, description="integration order, even (exact model by shooting)")
+    discretization: Literal["shooting", "elements"] = Field(
+        default="shooting", description="the exact model's: shooting, or elements (an energy and a mass: needed "
+        "for minimum energy, contact and simulations)")
+    degree: int = Field(default=3, ge=1, le=6, description="exact model by elements: polynomial degree of the rotation")
 
 
 @dataclass(frozen=True)

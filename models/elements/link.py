@@ -283,9 +283,10 @@ def exact_arc(c, name: str, el, start: int, end: int, geometry, section: Section
     """The exact model of a curved beam: a clamped-clamped link along its arc."""
     if el.order % 2:
         raise MechanismError(f"/elements/{name}/order", f"the integration order must be even, got {el.order}")
-    return LinkTopology(name, "link", start, end, "clamped", "clamped", geometry, el.material, section,
-                        False, False, el.intervals, el.order,
-                        c.has_density(el.material, needs_area=False, section=el.section))
+    topology = LinkTopology(name, "link", start, end, "clamped", "clamped", geometry, el.material, section,
+                            False, False, el.intervals, el.order,
+                            c.has_density(el.material, needs_area=False, section=el.section))
+    return as_elements(topology, el.degree) if el.discretization == "elements" else topology
 
 
 def link_properties(ctx: AssemblyContext, t: LinkTopology) -> LinkProperties:
