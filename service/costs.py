@@ -40,11 +40,18 @@ def link_work(doc: MechanismDocument, model: str | None) -> list[tuple[str, int]
     work = []
     for name, element in doc.elements.items():
         exact = element.type == "curved_beam" and (model or element.model) == "exact"
-        if element.type == "link" and element.discretization == "elements":
+        if _by_elements(element, model):
             work.append((name, element.intervals * (element.degree + 2) ** 2))
         elif element.type == "link" or exact:
             work.append((name, element.intervals * element.order**2))
     return work
+
+
+def _by_elements(element, model: str | None) -> bool:
+    """A link by elements, or an exact curved beam by elements (a link inside)."""
+    if element.type == "curved_beam" and (model or element.model) != "exact":
+        return False
+    return element.type in ("link", "curved_beam") and element.discretization == "elements"
 
 
 def check_contact_rotations(doc: MechanismDocument, limits: Limits, prefix: str) -> None:
@@ -53,7 +60,7 @@ def check_contact_rotations(doc: MechanismDocument, limits: Limits, prefix: str)
     96 rotations here."""
     total = 0
     for name, element in doc.elements.items():
-        if element.type == "link" and element.discretization == "elements":
+        if _by_elements(element, None):
             total += element.intervals * element.degree
             if total > limits.max_contact_rotations:
                 raise MechanismError(f"{prefix}/elements/{name}/intervals", (

@@ -46,3 +46,16 @@ def test_the_gripper_strikes_the_part_and_settles_on_the_equilibrium_solve():
     assert forces[0] == 0 and forces.max() > 5 * held  # it closes from open and strikes
     assert forces[-1] == pytest.approx(held, rel=1e-6)
     assert run["outputs"]["bodies.part.y"][-1] == pytest.approx(static["outputs"]["bodies.part.y"], abs=1e-7)  # mm
+
+
+def test_exact_curved_beams_by_elements_are_priced_as_elements():
+    """The service's costing (service.costs) prices an exact beam by elements as a link by
+    elements, intervals x (degree + 2)^2, not as shooting's intervals x order^2."""
+    from service.costs import link_work
+
+    doc = json.loads((EXAMPLES / "gripper_grasp_dynamics.json").read_text())
+    beams = [name for name, element in doc["elements"].items() if element["type"] == "curved_beam"]
+    assert dict(link_work(load_document(doc), None)) == {name: 4 * 5**2 for name in beams}
+    for name in beams:
+        doc["elements"][name]["discretization"] = "shooting"
+    assert dict(link_work(load_document(doc), None)) == {name: 4 * 8**2 for name in beams}
