@@ -24,8 +24,11 @@ MAX_NAME = 64
 DOCUMENT_UNITS = (("length", "length"), ("force", "force"), ("stress", "stress"), ("angle", "angle"), ("mass", "mass"))
 
 
-def collect(doc: MechanismDocument, model_override: str | None) -> tuple[Structure, np.ndarray, list[str]]:
-    """The structure, its parameter values (SI) and notes on inputs that are not used."""
+def collect(doc: MechanismDocument, model_override: str | None,
+            grounded: bool = True) -> tuple[Structure, np.ndarray, list[str]]:
+    """The structure, its parameter values (SI) and notes on inputs that are not used;
+    `grounded` False leaves out the check that every body reaches ground (for a part of a
+    document whose other parts hold the bodies: an impact model's, models.impacts.coordinates)."""
     if model_override is not None and model_override not in MODELS:
         raise MechanismError("model", f"unknown model '{model_override}' (choose from {', '.join(MODELS)})")
     if not doc.bodies:
@@ -49,7 +52,8 @@ def collect(doc: MechanismDocument, model_override: str | None) -> tuple[Structu
     for name in sorted(c.sections):
         collect_section(c, name, doc.sections[name], c.sections[name])
     _reduce_pinned_joints(c, prescribed)
-    _check_grounded(c, prescribed)
+    if grounded:
+        _check_grounded(c, prescribed)
     loads = _collect_loads(c)
     points, reactions = _collect_outputs(c, prescribed)
     structure = Structure(

@@ -164,11 +164,12 @@ class Mechanism:
         return float(self.si_values[i] / self.doc_factor(self.parameters[i].kind))
 
 
-def compile_mechanism(document: MechanismDocument, model: str | None = None) -> Mechanism:
+def compile_mechanism(document: MechanismDocument, model: str | None = None, grounded: bool = True) -> Mechanism:
     """Check a validated document and prepare its graphs (built lazily, cached by structure).
 
-    `model` overrides the model of every curved beam (models.MODELS).
+    `model` overrides the model of every curved beam (models.MODELS); `grounded` False skips
+    the check that every body reaches a fixed one (models.collect.collect).
     """
-    structure, si, notes = collect(document, model)
+    structure, si, notes = collect(document, model, grounded)
     return Mechanism(document=document, structure=structure, si_values=si, scales=_scales(structure, si),
                      notes=tuple(notes))

@@ -23,14 +23,13 @@ import casadi as ca
 import numpy as np
 
 from models.errors import MechanismError
-from models.impacts.bodies import RigidBodies
-from models.impacts.elastic import NOT_SECTIONS, parameters_of
+from models.impacts.coordinates import NOT_SECTIONS, BodyCoordinates, parameters_of
 from models.planar import rot
 
 UNDEFORMED_TOLERANCE = 1e-10  # the residual at z = 0 (nondimensional): the element is unloaded as drawn
 
 
-def condensed_flexure(rb: RigidBodies, name: str) -> tuple[ca.SX, ca.SX, ca.SX]:
+def condensed_flexure(rb: BodyCoordinates, name: str) -> tuple[ca.SX, ca.SX, ca.SX]:
     """(1/2 psi.K.psi, psi, K) of element `name`, as an impact_flexure hook gives them."""
     from models.mechanism import compile_mechanism
 

@@ -18,11 +18,9 @@ import casadi as ca
 
 from models.document import MechanismDocument
 from models.errors import MechanismError
-from models.impacts.bodies import RigidBodies
 from models.impacts.book import ParameterBook
-from models.impacts.elastic import element_energy
-from models.impacts.forces import flexures as flexures_of, smooth_forces
-from models.impacts.joints import joint_constraints
+from models.impacts.coordinates import BodyCoordinates
+from models.impacts.elements import element_energy, flexures as flexures_of, joint_constraints, turning_force
 from models.impacts.pairs import PairModel, pair_model
 from models.planar import rot
 
@@ -35,7 +33,7 @@ TIMED = ("/loads/", "/gravity/")  # the fields that may follow a history in time
 @dataclass
 class ImpactModel:
     book: ParameterBook
-    bodies: RigidBodies
+    bodies: BodyCoordinates
     pairs: list[PairModel]
     mass: ca.SX  # diagonal (n)
     force: ca.SX  # smooth generalized force (n), damping included, at time t
@@ -50,7 +48,7 @@ class ImpactModel:
     history_key: str = ""
     constraints: ca.SX = None  # g(q, t) = 0 of the pins and sliders (2 rows each)
     joint_names: tuple[str, ...] = ()
-    joint_labels: tuple[tuple, ...] = ()  # per joint its multipliers' (label, kind) (models.impacts.joints)
+    joint_labels: tuple[tuple, ...] = ()  # per joint its multipliers' (label, kind) (models.impacts.elements)
     element_key: str = ""  # the topologies of the elements that enter by their statics energy
 
     @property
@@ -102,17 +100,16 @@ def impact_model(document: MechanismDocument, histories: list[tuple[str, str, ob
         raise MechanismError("/contacts/pairs", "an impact simulation needs contact pairs: give the `contacts` section "
                              "its sites (circles on bodies), objects and pairs")
     book = ParameterBook(document)
-    rb = RigidBodies(book)
+    rb = BodyCoordinates(book)
     turning = document.simulate is not None and document.simulate.flexure_stiffness == "turning"
     springs, element_key, condensed = element_energy(rb)
     each_flexure = flexures_of(rb, condensed)
-    V_smooth, Q_nc = smooth_forces(rb, turning, springs, each_flexure)  # V_smooth: the flexures if constant
     flexures = sum((energy for _, energy, _, _ in each_flexure), ca.SX(0))
     elastic = flexures + springs
-    gravity = V_smooth - springs - (0 if turning else flexures)
+    gravity = rb.load_potential()  # and the constant loads
     pairs = [pair_model(rb, name, pair) for name, pair in document.contacts.pairs.items()]
     q, v, t = rb.q, rb.v, ca.SX.sym("t")
-    extra = Q_nc + ca.gradient(flexures, q) if turning else ca.SX.zeros(rb.size)
+    extra = turning_force(rb, each_flexure) + ca.gradient(flexures, q) if turning else ca.SX.zeros(rb.size)
     mass = rb.mass_diagonal()
     alpha = document.simulate.damping if document.simulate is not None else 0.0
     damping = -book.add(DAMPING, alpha, "nonnegative", ("1/s", 1.0)) * mass * v
@@ -137,7 +134,7 @@ def impact_model(document: MechanismDocument, histories: list[tuple[str, str, ob
                        tuple(joints), tuple(labels), element_key)
 
 
-def _split(book: ParameterBook, rb: RigidBodies, histories, t) -> tuple[list, list]:
+def _split(book: ParameterBook, rb: BodyCoordinates, histories, t) -> tuple[list, list]:
     """The histories' (symbol, value in t) pairs: loads and gravity, and prescribed motions."""
     motions = {f"/loads/{name}/{part}" for name, load in book.document.loads.items() if load.type == "displacement"
                for part in ("dx", "dy", "rotation")}
@@ -150,7 +147,7 @@ def _split(book: ParameterBook, rb: RigidBodies, histories, t) -> tuple[list, li
     return loads, moving
 
 
-def _drive_pair(rb: RigidBodies, pair: PairModel, driven, t) -> None:
+def _drive_pair(rb: BodyCoordinates, pair: PairModel, driven, t) -> None:
     """The pair's expressions in time, and the velocity at C that driven bodies add: each
     body's material point at C moves at J v plus its explicit rate in time."""
     for name in ("indentation", "normal_direction", "tangent_direction", "K", "point", "normal"):

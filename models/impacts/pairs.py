@@ -18,7 +18,7 @@ from models.contact.circle_contact import (against_circle, against_half_plane, a
 from models.contact.document import ContactPair, Contacts, FrictionFields, NormalLawFields
 from models.contact.laws import FRICTION_LAWS, FrictionLaw, NormalLaw, friction_law, normal_law
 from models.contact.laws.penalty import hertz_stiffness
-from models.impacts.bodies import RigidBodies
+from models.impacts.coordinates import BodyCoordinates
 from models.planar import rot
 
 ONE, SPEED = ("1", 1.0), ("m/s", 1.0)  # units of the laws' numbers (seed 004 gives v0, v1 in m/s)
@@ -53,7 +53,7 @@ class PairModel:
     normal: ca.SX | None = None  # n_c
 
 
-def pair_model(rb: RigidBodies, name: str, pair: ContactPair) -> PairModel:
+def pair_model(rb: BodyCoordinates, name: str, pair: ContactPair) -> PairModel:
     """The pair `name` of the document's `contacts`: a circle site on a body against a circle,
     hole or half-plane object carried by another body, or fixed in global axes."""
     book = rb.book
@@ -129,7 +129,7 @@ def _friction(book, base: str, pair: ContactPair):
             book.add(f"{base}/friction/v1", friction.v1, "positive", SPEED))
 
 
-def _geometry(rb: RigidBodies, name: str, pair: ContactPair, site, obj, body1, body2):
+def _geometry(rb: BodyCoordinates, name: str, pair: ContactPair, site, obj, body1, body2):
     """(R1, O1, indentation, n_c, length scale, R2 (SI or None), clearance (SI or None))."""
     book = rb.book
     s1, s2 = f"/contacts/sites/{pair.site}", f"/contacts/objects/{pair.object}"
@@ -158,7 +158,7 @@ def _geometry(rb: RigidBodies, name: str, pair: ContactPair, site, obj, body1, b
     return R1, O1, *against_circle(O1, R1, O2, R2), min(R1_si, R2_si), R2_si, None
 
 
-def _polygon_nearest(rb: RigidBodies, body, pointer: str, obj, O1: ca.SX) -> ca.SX:
+def _polygon_nearest(rb: BodyCoordinates, body, pointer: str, obj, O1: ca.SX) -> ca.SX:
     book = rb.book
     position = book.vector(f"{pointer}/position", obj.position, "length")
     turn = rot(book.number(f"{pointer}/angle", obj.angle, "angle"))
@@ -167,7 +167,7 @@ def _polygon_nearest(rb: RigidBodies, body, pointer: str, obj, O1: ca.SX) -> ca.
     return closest_on_polygon(corners, O1)
 
 
-def _ellipse_nearest(rb: RigidBodies, body, pointer: str, obj, O1: ca.SX) -> ca.SX:
+def _ellipse_nearest(rb: BodyCoordinates, body, pointer: str, obj, O1: ca.SX) -> ca.SX:
     book = rb.book
     axes = book.vector(f"{pointer}/semi_axes", obj.semi_axes, "length")
     for k in (0, 1):
@@ -178,7 +178,7 @@ def _ellipse_nearest(rb: RigidBodies, body, pointer: str, obj, O1: ca.SX) -> ca.
     return closest_on_ellipse(centre, turn, axes[0], axes[1], O1)
 
 
-def _damping(rb: RigidBodies, base: str, law: NormalLawFields, normal: NormalLaw) -> ca.SX:
+def _damping(rb: BodyCoordinates, base: str, law: NormalLawFields, normal: NormalLaw) -> ca.SX:
     """The linear law's dashpot c (document force s / length), SI."""
     if "damping" not in normal.needs:
         return ca.SX(0)
@@ -191,7 +191,7 @@ def _damping(rb: RigidBodies, base: str, law: NormalLawFields, normal: NormalLaw
     return rb.book.add(pointer, value, "nonnegative", (f"{units.force}*s/{units.length}", per))
 
 
-def _materials(rb: RigidBodies, pointer: str, names) -> list[tuple[float, float]]:
+def _materials(rb: BodyCoordinates, pointer: str, names) -> list[tuple[float, float]]:
     doc, out = rb.book.document, []
     for k, name in enumerate(names):
         if name not in doc.materials:
@@ -204,7 +204,7 @@ def _materials(rb: RigidBodies, pointer: str, names) -> list[tuple[float, float]
     return out
 
 
-def _stiffness(rb: RigidBodies, base: str, law: NormalLawFields, normal: NormalLaw, R1: float, R2: float | None,
+def _stiffness(rb: BodyCoordinates, base: str, law: NormalLawFields, normal: NormalLaw, R1: float, R2: float | None,
                clearance: float | None, kind: str):
     """(K symbol, ESDU numbers or None). A computed stiffness is a value of the book too; a
     law that needs none has K = 0."""

@@ -38,14 +38,15 @@ def _code_version(family_sources: tuple[str, ...]) -> str:
     from pathlib import Path
 
     import models.contact.laws as laws
-    import models.context as statics_context  # the statics energies of models.impacts.elastic read it
+    import models.context as statics_context  # the statics energies of models.impacts.elements read it
+    import models.loads as statics_loads  # the bodies' kinetic energy, gravity and loads (models.impacts.coordinates)
     import models.elements as families
     import models.impacts as built
 
     here = Path(__file__).parent
     folders = [Path(module.__file__).parent for module in (built, laws, families)]
     sources = [path for folder in folders for path in sorted(folder.glob("*.py"))] + [
-        here / f"{name}.py" for name in STEP_SOURCES] + [Path(statics_context.__file__)] + [
+        here / f"{name}.py" for name in STEP_SOURCES] + [Path(statics_context.__file__), Path(statics_loads.__file__)] + [
         Path(source) for source in family_sources]  # a family registered from elsewhere too
     digest = hashlib.sha256()
     for source in sources:
