@@ -61,3 +61,27 @@ def test_gravity_an_offset_force_and_a_moment_give_the_hand_wrench_about_the_mas
         arm = at - centre
         by_hand = np.concatenate([F + M * G, [arm[0] * F[1] - arm[1] * F[0] + MOMENT]])
         assert np.asarray(force(q, [0, 0, 0], p)).ravel() == pytest.approx(by_hand, rel=1e-12, abs=1e-12)
+
+
+def test_a_driven_bodys_weight_works_through_its_drive_and_leaves_the_motion_alone():
+    """A frame of mass m shaken by dy = A sin(w t) under gravity: its weight is part of the
+    potential (the statics' load potential), its change is the input's work, m g dy at the
+    end, and the pin moves as it does under a massless frame."""
+    from service.impacts.run import run_impacts
+
+    A, w, until, mass = 0.03, 10.0, 0.15, 5.0
+    reports = []
+    for frame_mass in (None, mass):
+        doc = csfh("6.1", until=until, scheme="event_driven", step=1e-4, histories={"/loads/shake/dy": f"{A}*sin({w}*t)"},
+                   initial={"hinge": {"displacement": [0, 0, 0]}})
+        doc["loads"] = {"shake": {"type": "displacement", "body": "frame", "dx": 0, "dy": 0, "rotation": 0}}
+        if frame_mass is not None:
+            doc["bodies"]["frame"].update(mass=frame_mass, inertia=1.0)
+        reports.append(run_impacts(*parsed(doc))[1])
+    light, heavy = reports
+    assert heavy["impacts"][0]["time"] == light["impacts"][0]["time"]
+    assert heavy["coordinates"]["hinge.y"][-1] == pytest.approx(light["coordinates"]["hinge.y"][-1], rel=1e-12)
+    weight_work = mass * 9.81 * A * np.sin(w * until)
+    assert heavy["energies"]["gravity"][-1] - light["energies"]["gravity"][-1] == pytest.approx(weight_work, rel=1e-9)
+    assert heavy["energies"]["input_work"][-1] == pytest.approx(weight_work, rel=1e-6)
+    assert heavy["energy_balance_error"] < 1e-6
