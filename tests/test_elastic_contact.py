@@ -104,8 +104,13 @@ def test_a_compliant_rod_bent_against_a_stop_settles_on_the_equilibrium_solve():
      "a newmark or generalized_alpha simulation takes the hertz law's stiffness K as a number (force / "
      "length^exponent in the document's units), not computed from the materials"),
     ({"friction": 0.3}, "/contacts/pairs/touch/friction",
-     "a newmark or generalized_alpha simulation takes contact pairs without friction: give 0, or run the pair in an "
-     "event_driven simulation"),
+     "a newmark or generalized_alpha simulation takes a regularized friction law of the slip speed ({\"law\": "
+     "\"ambrosio\", \"sliding\": f_d, \"v0\": ..., \"v1\": ...}), not Coulomb's coefficient: give the law, or 0"),
+    ({"friction": {"law": "coulomb", "sliding": 0.3}}, "/contacts/pairs/touch/friction/law",
+     "a newmark or generalized_alpha simulation (and the equilibrium solve) does not take the friction law 'coulomb' "
+     "(it is for a quasi-static contact solve, a moreau simulation); it takes none or ambrosio"),
+    ({"friction": {"law": "ambrosio", "sliding": 0.3, "v0": 0.01, "v1": 0.01}}, "/contacts/pairs/touch/friction/v1",
+     "must exceed v0 (0.01 m/s): the law ramps the friction up between them"),
 ])
 def test_link_dynamics_refuses_a_pair_it_does_not_model(change, pointer, problem):
     doc = block_against_a_stop(simulate={"until": 0.1})

@@ -9,6 +9,7 @@ import numpy as np
 
 from models.contact.document import Contacts, FrictionFields, JawSite
 from models.contact.elastic_pairs import ELASTIC_LAWS
+from models.contact.pair_friction import REGULARIZED
 from models.contact.laws import friction_law, normal_law
 from models.contact.polygons import convex_pieces, self_intersection, signed_area
 from models.contact.topology import ContactTopology, ObjectTopology, PairTopology, SiteTopology
@@ -49,6 +50,12 @@ def collect_contacts(c, contacts: Contacts | None, elements: list[ElementTopolog
             pair.normal.stiffness, (int, float))
         if potential:
             _collect_elastic(c, base, pair)
+            if isinstance(pair.friction, FrictionFields) and pair.friction.law in REGULARIZED:
+                if pair.friction.v1 <= pair.friction.v0:
+                    raise MechanismError(f"{base}/friction/v1", f"must exceed v0 ({pair.friction.v0:g} m/s): the law "
+                                         "ramps the friction up between them")
+                for speed in ("v0", "v1"):  # m/s (models.contact.pair_friction)
+                    c.add(f"{base}/friction/{speed}", getattr(pair.friction, speed), "dimensionless", "positive")
         if isinstance(pair.friction, FrictionFields):
             friction_law(pair.friction.law, f"{base}/friction/law")
         friction = pair.friction_pointer(base)

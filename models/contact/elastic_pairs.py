@@ -8,7 +8,8 @@ damped simulation settles where the equilibrium solve stands.
 K is in the document's force / length^n and q in its length: the graphs take them through the
 unit parameters (nondimensional values of one document unit), as a spring's law does. The
 pairs of other laws belong to other analyses (the unilateral law to the quasi-static contact
-solve, the damped laws to event-driven simulations); a link dynamics run refuses them."""
+solve, the damped laws to event-driven simulations); a link dynamics run refuses them. A
+pair's regularized friction acts in link dynamics (models.contact.pair_friction)."""
 
 from __future__ import annotations
 
@@ -36,11 +37,14 @@ class ElasticPair:
     indentation: ca.SX  # document length units
     force: ca.SX  # document force units
     potential: ca.SX  # nondimensional, as the mechanism's energy
+    topology: PairTopology | None = None
+    point: ca.SX | None = None  # where the site's circle meets the object (nondimensional, global)
+    normal: ca.SX | None = None  # unit, from the object towards the site
 
 
 def check_link_dynamics(document) -> None:
-    """A link dynamics run takes the elastic pairs, frictionless: refuse any other law (and a
-    friction coefficient), naming what it takes."""
+    """A link dynamics run takes the elastic pairs, with a regularized friction law or none:
+    refuse any other law (and a bare friction coefficient, Coulomb's), naming what it takes."""
     if document.contacts is None:
         return
     for name, pair in document.contacts.pairs.items():
@@ -57,8 +61,9 @@ def check_link_dynamics(document) -> None:
         if isinstance(pair.friction, FrictionFields):
             check_law(FRICTION_LAWS, "friction", pair.friction.law, "link_dynamics", f"{base}/friction/law")
         elif pair.friction != 0:
-            raise MechanismError(f"{base}/friction", "a newmark or generalized_alpha simulation takes contact "
-                                 "pairs without friction: give 0, or run the pair in an event_driven simulation")
+            raise MechanismError(f"{base}/friction", "a newmark or generalized_alpha simulation takes a regularized "
+                                 "friction law of the slip speed ({\"law\": \"ambrosio\", \"sliding\": f_d, \"v0\": ..., "
+                                 "\"v1\": ...}), not Coulomb's coefficient: give the law, or 0")
 
 
 def elastic(topology: ContactTopology | None) -> list[PairTopology]:
@@ -79,11 +84,13 @@ def elastic_pairs(ctx: AssemblyContext, d: list[ca.SX]) -> list[ElasticPair]:
         site, obj = topology.sites[pair.site], topology.objects[pair.object]
         origin, angle = geometry.site_frame(site)
         centre = origin + rot(angle) @ ctx.P.vec(f"{site.pointer}/centre")
-        q = _indentation(geometry, obj, centre, ctx.P[f"{site.pointer}/radius"]) / unit_length
+        radius = ctx.P[f"{site.pointer}/radius"]
+        gap, normal = _indentation(geometry, obj, centre, radius)
+        q = gap / unit_length
         K, n = _numbers(ctx, pair)
         force = elastic_power(K, ca.fmax(q, 0.0), n)
         potential = elastic_power(K, ca.fmax(q, 0.0), n + 1) / (n + 1) * unit_force * unit_length
-        out.append(ElasticPair(pair.name, q, force, potential))
+        out.append(ElasticPair(pair.name, q, force, potential, pair, centre - radius * normal, normal))
     return out
 
 
@@ -111,25 +118,26 @@ def contact_outputs(ctx: AssemblyContext, d: list[ca.SX]) -> list[tuple[str, str
     return out
 
 
-def _indentation(geometry: ContactGeometry, obj, centre: ca.SX, radius: ca.SX) -> ca.SX:
+def _indentation(geometry: ContactGeometry, obj, centre: ca.SX, radius: ca.SX) -> tuple[ca.SX, ca.SX]:
+    """(indentation, unit normal from the object towards the circle's centre)."""
     P = geometry.P
     frame = geometry.object_frame(obj)
     base = obj.pointer
     if obj.type == "circle":
-        return against_circle(centre, radius, frame.origin, P[f"{base}/radius"])[0]
+        return against_circle(centre, radius, frame.origin, P[f"{base}/radius"])
     if obj.type == "hole":
-        return against_hole(centre, radius, frame.origin, P[f"{base}/radius"])[0]
+        return against_hole(centre, radius, frame.origin, P[f"{base}/radius"])
     if obj.type == "half_plane":
         normal = rot(frame.angle) @ P.vec(f"{base}/normal")
-        return against_half_plane(centre, radius, frame.origin, normal / ca.norm_2(normal))[0]
+        return against_half_plane(centre, radius, frame.origin, normal / ca.norm_2(normal))
     if obj.type == "polygon":
         count = 1 + max(max(piece) for piece in obj.pieces)
         corners = [frame.origin + rot(frame.angle) @ P.vec(f"{base}/vertices/{k}") for k in range(count)]
-        return against_nearest(centre, radius, closest_on_polygon(corners, centre))[0]
+        return against_nearest(centre, radius, closest_on_polygon(corners, centre))
     if obj.type == "ellipse":
         nearest = closest_on_ellipse(frame.origin, rot(frame.angle), P[f"{base}/semi_axes/0"],
                                      P[f"{base}/semi_axes/1"], centre)
-        return against_nearest(centre, radius, nearest)[0]
+        return against_nearest(centre, radius, nearest)
     raise MechanismError(f"{base}/type", f"an elastic contact pair takes circles, holes, half-planes, polygons and "
                          f"ellipses, not the {obj.type} '{obj.name}'")
 

@@ -26,8 +26,9 @@ def plot_history(report: dict, outputs: list[str], path: Path) -> None:
     top.legend(fontsize=8)
     energies, unit = report["energies"], report["units"]["energy"]
     for key, label in (("kinetic", "kinetic T"), ("potential", "strain and gravity V"),
-                       ("input_work", "work of inputs"), ("damping_work", "work of damping"), ("balance", "balance")):
-        if np.any(np.array(energies[key]) != 0):
+                       ("input_work", "work of inputs"), ("damping_work", "work of damping"), ("friction_work", "work of friction"),
+                       ("balance", "balance")):
+        if np.any(np.array(energies.get(key, [0])) != 0):
             bottom.plot(t, energies[key], label=label)
     bottom.set_xlabel("t (s)")
     bottom.set_ylabel(f"energy ({unit})")

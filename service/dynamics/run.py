@@ -177,7 +177,8 @@ def records(mech: Mechanism, spec: SimulateSpec, history: History, histories) ->
             "energies": {"kinetic": [e * energy for e in history.kinetic],
                          "potential": [e * energy for e in history.potential],
                          "input_work": [e * energy for e in history.input_work],
-                         "damping_work": [e * energy for e in history.damping_work]}}
+                         "damping_work": [e * energy for e in history.damping_work],
+                         "friction_work": [e * energy for e in history.friction_work]}}
     if spec.shapes:
         kept["shapes"] = shapes_of(mech, states, history.p) if history.times else []
     return kept
@@ -207,12 +208,14 @@ def wanted_outputs(mech: Mechanism, spec: SimulateSpec) -> list[str]:
 
 
 def with_balance(energies: dict) -> tuple[dict, float | None]:
-    """The energies with their balance T + V - W_inputs + W_damping (less its start), and the
-    largest |balance| relative to the largest energy seen."""
+    """The energies with their balance T + V - W_inputs + W_damping - W_friction (less its start;
+    W_friction <= 0 is the friction's work), and the largest |balance| relative to the largest
+    energy seen."""
     T, V, W, D = (np.array(energies[k]) for k in ("kinetic", "potential", "input_work", "damping_work"))
     if not len(T):
         return {**energies, "balance": []}, None
-    balance = T + V - W + D
+    friction = np.array(energies.get("friction_work", np.zeros(len(T))))  # none in windows stored before it
+    balance = T + V - W + D - (friction if len(friction) == len(T) else 0.0)
     balance = balance - balance[0]
     size = max(np.abs(T).max(), np.abs(V - V[0]).max(), np.abs(W).max(), 1e-300)
     return {**energies, "balance": balance.tolist()}, float(np.abs(balance).max() / size)

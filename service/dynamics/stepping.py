@@ -41,6 +41,7 @@ class History:
     potential: list[float] = field(default_factory=list)  # strain and gravity: without the varying loads
     input_work: list[float] = field(default_factory=list)
     damping_work: list[float] = field(default_factory=list)
+    friction_work: list[float] = field(default_factory=list)  # of the contacts' friction (<= 0)
     newton_iterations: int = 0  # steps rescued by full Newton
     iterations: int = 0  # Newton iterations in all
     steps: int = 0
@@ -54,7 +55,7 @@ class Resume:
 
     step: int
     state: np.ndarray  # [x; v; a; qdd; lam]
-    works: np.ndarray  # (inputs, damping)
+    works: np.ndarray  # (inputs, damping, friction)
     monitor: np.ndarray  # the last step's monitor column
     time: float = 0.0  # seconds
     h: float | None = None  # adaptive steps: the next step to try
@@ -65,8 +66,10 @@ class Resume:
 
     @classmethod
     def from_json(cls, data: dict) -> "Resume":
-        return cls(int(data["step"]), *(np.array(data[k], dtype=float) for k in ("state", "works", "monitor")),
-                   float(data.get("time", 0.0)), data.get("h"))
+        state, works, monitor = (np.array(data[k], dtype=float) for k in ("state", "works", "monitor"))
+        if len(works) == 2:  # stored before friction had its row: none acted
+            works, monitor = np.append(works, 0.0), np.insert(monitor, 4, 0.0)
+        return cls(int(data["step"]), state, works, monitor, float(data.get("time", 0.0)), data.get("h"))
 
 
 def engine_of(structure: Structure, scheme, histories: Histories) -> Engine:
@@ -101,7 +104,7 @@ def start_of(structure: Structure, p, x0, v0, histories: Histories, damping: flo
                              + ": give the body a mass (and an inertia, for its angle), or tie the coordinate by a "
                              "joint or a link")
     state = np.concatenate([x, v, qdd, qdd, lam])
-    return Resume(0, state, np.zeros(2), monitor)
+    return Resume(0, state, np.zeros(3), monitor)
 
 
 def massless_coordinates(structure: Structure, x: np.ndarray, p: np.ndarray) -> list[str]:
@@ -189,7 +192,7 @@ class StepRunner:
         if count == 0:
             return at
         previous = np.column_stack([at.monitor, monitors[:, :count - 1]])
-        works = at.works[:, None] + np.cumsum(0.5 * h * (monitors[2:4, :count] + previous[2:4]), axis=1)
+        works = at.works[:, None] + np.cumsum(0.5 * h * (monitors[2:5, :count] + previous[2:5]), axis=1)
         start = at
         for j in range(count):
             step, last = start.step + j + 1, j == count - 1
@@ -202,7 +205,7 @@ class StepRunner:
         return at
 
     def advance(self, history, at: Resume, state, monitor, h: float, final: bool = False, p=None) -> Resume:
-        works = at.works + 0.5 * h * (monitor[2:4] + at.monitor[2:4])
+        works = at.works + 0.5 * h * (monitor[2:5] + at.monitor[2:5])
         step = at.step + 1
         now = Resume(step, np.array(state), works, np.array(monitor), self.time_of(step, at, h), at.h)
         if now.step % self.every == 0 or final or self.done(now):
@@ -220,8 +223,9 @@ def _keep(history: History, t, state, n, p, monitor, works) -> None:
     history.acceleration.append(state[3 * n:4 * n].copy())
     history.lam.append(state[4 * n:].copy())
     history.p.append(np.array(p, dtype=float))
-    history.motion_forces.append(np.array(monitor[4:]))
+    history.motion_forces.append(np.array(monitor[5:]))
     history.kinetic.append(float(monitor[0]))
     history.potential.append(float(monitor[1]))
     history.input_work.append(float(works[0]))
     history.damping_work.append(float(works[1]))
+    history.friction_work.append(float(works[2]))

@@ -107,7 +107,8 @@ class SimulationJob(InOrder):
     def result(self, spec, plan, finished):
         windows = [finished[i] for i in sorted(finished)]
         joined = {"times": [], "outputs": {}, "constraint_forces": {}, "motion_forces": {},
-                  "energies": {"kinetic": [], "potential": [], "input_work": [], "damping_work": []}}
+                  "energies": {"kinetic": [], "potential": [], "input_work": [], "damping_work": [],
+                               "friction_work": []}}
         for window in windows:
             joined["times"] += window["times"]
             for group in ("outputs", "constraint_forces", "motion_forces", "energies"):

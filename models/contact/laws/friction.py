@@ -1,7 +1,7 @@
 """Friction laws: none; Coulomb's (stick and slip, set-valued: the quasi-static solve's slip
 against the motion and Moreau-Jean's impulses take it, with adherence f_a and sliding f_d);
 Ambrosio's regularized law (seed 004 Eq. 26), a force of the slip speed for event-driven
-runs."""
+runs and link dynamics (models.contact.pair_friction)."""
 
 from __future__ import annotations
 
@@ -36,7 +36,7 @@ class Ambrosio(FrictionLaw):
     smooth within a step."""
 
     name: str = "ambrosio"
-    analyses: frozenset[str] = frozenset({"event_driven"})
+    analyses: frozenset[str] = frozenset({"event_driven", "link_dynamics"})
     summary: str = "Ambrosio's regularized law: none below v0, f_d F_N from v1 (Eq. 26)"
     speed_events: bool = True
 
