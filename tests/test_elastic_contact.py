@@ -95,10 +95,11 @@ def test_a_compliant_rod_bent_against_a_stop_settles_on_the_equilibrium_solve():
 
 
 @pytest.mark.parametrize("change, pointer, problem", [
-    ({"normal": {"law": "lankarani_nikravesh", "stiffness": HERTZ, "restitution": 0.9}},
+    ({"normal": {"law": "lna_esdu", "length": 0.01, "materials": ["steel", "steel"]}},
      "/contacts/pairs/touch/normal/law",
      "a newmark or generalized_alpha simulation (and the equilibrium solve) does not take the normal law "
-     "'lankarani_nikravesh' (it is for an event_driven simulation); it takes hertz"),
+     "'lna_esdu' (it is for an event_driven simulation); it takes hertz or hunt_crossley or lankarani_nikravesh or "
+     "flores"),
     ({"normal": {"law": "hertz", "stiffness": {"contact": "spheres", "materials": ["steel", "steel"]}}},
      "/contacts/pairs/touch/normal/stiffness",
      "a newmark or generalized_alpha simulation takes the hertz law's stiffness K as a number (force / "

@@ -49,7 +49,7 @@ BAD = [
      "solve); it takes hertz or hunt_crossley or lankarani_nikravesh or flores or lna_esdu or linear"),
     (lambda d: d["simulate"].update(scheme="moreau", step=1e-5), "/contacts/pairs/conjugate/normal/law",
      "a moreau simulation does not take the normal law 'lankarani_nikravesh' (it is for an event_driven "
-     "simulation); it takes restitution"),
+     "simulation, a newmark or generalized_alpha simulation (and the equilibrium solve)); it takes restitution"),
     (lambda d: _pair(d)["normal"].update(law="lankarani_nikravsh"), "/contacts/pairs/conjugate/normal/law",
      "unknown normal law 'lankarani_nikravsh'; the normal laws are unilateral, restitution, hertz"),
     (lambda d: d["simulate"]["initial"].update(frame={"displacement": [0, 0.001, 0]}), "/simulate/initial/frame",

@@ -1,4 +1,4 @@
-"""Friction of an elastic contact pair in link dynamics (models.contact.pair_friction): a disk
+"""Friction of an elastic contact pair in link dynamics (models.contact.pair_forces): a disk
 pushed across a floor slips and spins up exactly as rigid-body mechanics says, and the
 friction's work closes the energy balance.
 
@@ -73,13 +73,13 @@ def test_without_friction_the_disk_slides_without_turning_and_no_work_is_lost():
 
 def test_a_run_stored_before_friction_had_its_row_resumes_with_none():
     """A simulation job stored its Resume with two works (inputs, damping) and a monitor
-    without the friction's power; it goes on with the friction's work and power at zero, the
-    prescribed motions' forces where they were."""
+    without the contacts' friction and damping powers; it goes on with their works and powers
+    at zero, the prescribed motions' forces where they were."""
     from service.dynamics.stepping import Resume
 
     stored = {"step": 7, "state": [0.1, 0.2], "works": [3.0, 4.0], "monitor": [1.0, 2.0, 5.0, 6.0, 42.0],
               "time": 0.007, "h": None}
     at = Resume.from_json(stored)
-    assert at.works.tolist() == [3.0, 4.0, 0.0]
-    assert at.monitor.tolist() == [1.0, 2.0, 5.0, 6.0, 0.0, 42.0]
+    assert at.works.tolist() == [3.0, 4.0, 0.0, 0.0]
+    assert at.monitor.tolist() == [1.0, 2.0, 5.0, 6.0, 0.0, 0.0, 42.0]
     assert Resume.from_json(at.to_json()).monitor.tolist() == at.monitor.tolist()

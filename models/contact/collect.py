@@ -8,8 +8,8 @@ from __future__ import annotations
 import numpy as np
 
 from models.contact.document import Contacts, FrictionFields, JawSite
-from models.contact.elastic_pairs import ELASTIC_LAWS
-from models.contact.pair_friction import REGULARIZED
+from models.contact.elastic_pairs import DAMPED_LAWS, ELASTIC_LAWS
+from models.contact.pair_forces import REGULARIZED
 from models.contact.laws import friction_law, normal_law
 from models.contact.polygons import convex_pieces, self_intersection, signed_area
 from models.contact.topology import ContactTopology, ObjectTopology, PairTopology, SiteTopology
@@ -54,7 +54,7 @@ def collect_contacts(c, contacts: Contacts | None, elements: list[ElementTopolog
                 if pair.friction.v1 <= pair.friction.v0:
                     raise MechanismError(f"{base}/friction/v1", f"must exceed v0 ({pair.friction.v0:g} m/s): the law "
                                          "ramps the friction up between them")
-                for speed in ("v0", "v1"):  # m/s (models.contact.pair_friction)
+                for speed in ("v0", "v1"):  # m/s (models.contact.pair_forces)
                     c.add(f"{base}/friction/{speed}", getattr(pair.friction, speed), "dimensionless", "positive")
         if isinstance(pair.friction, FrictionFields):
             friction_law(pair.friction.law, f"{base}/friction/law")
@@ -68,10 +68,17 @@ def collect_contacts(c, contacts: Contacts | None, elements: list[ElementTopolog
 
 def _collect_elastic(c, base: str, pair) -> None:
     """An elastic pair's numbers (models.contact.elastic_pairs): K in the document's force /
-    length^n and n, read through the unit parameters. (A stiffness computed from materials is
-    the impact model's, which computes it; a link dynamics run asks for a number.)"""
+    length^n and n, read through the unit parameters; a damped law's restitution and the
+    approach speed at its contact's onset (set by the run that locates it:
+    service.dynamics.onsets). (A stiffness computed from materials is the impact model's, which
+    computes it; a link dynamics run asks for a number.)"""
     c.add(f"{base}/normal/exponent", pair.normal.exponent, "dimensionless", "positive")
     c.add(f"{base}/normal/stiffness", pair.normal.stiffness, "dimensionless", "positive")
+    if pair.normal.law in DAMPED_LAWS:
+        if not 0 < pair.normal.restitution <= 1:
+            raise MechanismError(f"{base}/normal/restitution", f"must be in (0, 1], got {pair.normal.restitution:g}")
+        c.add(f"{base}/normal/restitution", pair.normal.restitution, "dimensionless", "positive")
+        c.add(f"{base}/normal/onset_speed", 1.0, "dimensionless", "positive")  # no contact yet: any will do
     for kind in ("length", "force"):
         c.unit_parameter(kind)
 

@@ -1,15 +1,17 @@
-"""Contact pairs with an elastic penalty law in the statics and in link dynamics: a circle site
-on a body against a circle, hole, half-plane, polygon or ellipse object (on a body, or fixed)
-pushes with F = K q^n at an indentation q > 0 (Hertz, seed 004 Eq. 13; n = 1 a linear spring),
+"""Contact pairs with a penalty law in the statics and in link dynamics: a circle site on a
+body against a circle, hole, half-plane, polygon or ellipse object (on a body, or fixed)
+pushes with the law's elastic part F = K q^n at an indentation q > 0 (Hertz, seed 004 Eq. 13,
+and the elastic part of Hunt-Crossley, Lankarani-Nikravesh and Flores),
 the gradient of the potential K q^(n+1) / (n+1). So the pair is part of the mechanism's energy:
 the equilibrium solve, the energy form and the link dynamics' time steps all see it, and a
-damped simulation settles where the equilibrium solve stands.
+damped simulation settles where the equilibrium solve stands. The damped laws' damping and a
+regularized friction act in link dynamics on top (models.contact.pair_forces).
 
 K is in the document's force / length^n and q in its length: the graphs take them through the
 unit parameters (nondimensional values of one document unit), as a spring's law does. The
 pairs of other laws belong to other analyses (the unilateral law to the quasi-static contact
-solve, the damped laws to event-driven simulations); a link dynamics run refuses them. A
-pair's regularized friction acts in link dynamics (models.contact.pair_friction)."""
+solve, ESDU's and the linear spring-dashpot to event-driven simulations); a link dynamics run
+refuses them."""
 
 from __future__ import annotations
 
@@ -28,7 +30,20 @@ from models.contact.topology import ContactTopology, PairTopology
 from models.errors import MechanismError
 from models.planar import rot
 
-ELASTIC_LAWS = ("hertz",)  # normal laws with a potential
+# normal laws with an elastic part K q^n, a potential: the statics and link dynamics take them;
+# the damped ones' damping acts in link dynamics (models.contact.pair_forces). The linear law's
+# dashpot jumps to c qdot at the onset, where an implicit step's equations may have no root.
+ELASTIC_LAWS = ("hertz", "hunt_crossley", "lankarani_nikravesh", "flores")
+DAMPED_LAWS = ELASTIC_LAWS[1:]
+
+
+@dataclass
+class LawNumbers:
+    """What a normal law's force reads (models.contact.laws.NormalLaw.force), as parameters."""
+
+    K: ca.SX
+    exponent: ca.SX
+    restitution: ca.SX | None = None
 
 
 @dataclass
@@ -61,9 +76,9 @@ def check_link_dynamics(document) -> None:
         if isinstance(pair.friction, FrictionFields):
             check_law(FRICTION_LAWS, "friction", pair.friction.law, "link_dynamics", f"{base}/friction/law")
         elif pair.friction != 0:
-            raise MechanismError(f"{base}/friction", "a newmark or generalized_alpha simulation takes a regularized "
-                                 "friction law of the slip speed ({\"law\": \"ambrosio\", \"sliding\": f_d, \"v0\": ..., "
-                                 "\"v1\": ...}), not Coulomb's coefficient: give the law, or 0")
+            raise MechanismError(f"{base}/friction", "a newmark or generalized_alpha simulation takes a "
+                                 "regularized friction law of the slip speed ({\"law\": \"ambrosio\", \"sliding\": "
+                                 "f_d, \"v0\": ..., \"v1\": ...}), not Coulomb's coefficient: give the law, or 0")
 
 
 def elastic(topology: ContactTopology | None) -> list[PairTopology]:
@@ -143,5 +158,12 @@ def _indentation(geometry: ContactGeometry, obj, centre: ca.SX, radius: ca.SX) -
 
 
 def _numbers(ctx: AssemblyContext, pair: PairTopology) -> tuple[ca.SX, ca.SX]:
+    numbers = law_numbers(ctx, pair)
+    return numbers.K, numbers.exponent
+
+
+def law_numbers(ctx: AssemblyContext, pair: PairTopology) -> LawNumbers:
+    """The pair's law's numbers (document units; models.contact.collect adds them)."""
     base = f"{pair.pointer}/normal"
-    return ctx.P[f"{base}/stiffness"], ctx.P[f"{base}/exponent"]
+    restitution = ctx.P[f"{base}/restitution"] if pair.normal_law in DAMPED_LAWS else None
+    return LawNumbers(ctx.P[f"{base}/stiffness"], ctx.P[f"{base}/exponent"], restitution)

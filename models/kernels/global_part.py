@@ -1,7 +1,7 @@
-"""The global part of a structure's kernel system: the bodies (inertia, loads, weights, the
-friction of elastic contact pairs: models.contact.pair_friction), the
-elements of families other than links by elements (their energies and equalities), and the
-caps that tie each chain of link elements to its bodies. Its unknowns are few (body
+"""The global part of a structure's kernel system: the bodies (inertia, loads, weights, and the
+contact pairs' potential, friction and damping: models.contact.pair_forces), the elements of
+families other than links by elements (their energies and equalities), and the caps that tie
+each chain of link elements to its bodies. Its unknowns are few (body
 coordinates and multipliers), so it is one small graph per structure.
 
 One Lagrangian gives every row:
@@ -29,12 +29,13 @@ from models.elements import FAMILIES
 from models.kernels.layout import KernelLayout
 from models.kernels.link_chain import data_layout
 from models.kernels.link_data import link_data
-from models.contact.pair_friction import contact_friction
+from models.contact.pair_forces import contact_forces
 from models.loads import kinetic_energy, load_potential
 
 INPUTS = ("uG", "affine", "k", "starts", "ends", "p", "pdot", "pddot", "damping", "mask")
 OUTPUTS = ("rows", "J", "start_rows", "start_C", "start_W", "end_theta", "energies")
-ENERGIES = ("kinetic", "potential", "held", "power", "friction_power")
+# the held potential: without the varying loads; power: the varying loads' (the input)
+ENERGIES = ("kinetic", "potential", "held", "power", "friction_power", "contact_damping_power")
 
 
 def global_part(layout: KernelLayout, moving: tuple[int, ...], level: str = "position") -> ca.Function:
@@ -44,8 +45,7 @@ def global_part(layout: KernelLayout, moving: tuple[int, ...], level: str = "pos
     elements' own variables, then every multiplier), J (the Newton rows' derivative in uG),
     start_rows (6 x chains: node 0's definitions), start_C (6 x 3 chains: their derivative in
     the start body's unknowns), start_W (3 x 2 chains: the start body's rows' derivative in
-    F_0), end_theta (chains: lam_rot, to add to theta_N's row), energies (kinetic, potential,
-    held potential, input power of the varying loads, power of the contacts' friction)).
+    F_0), end_theta (chains: lam_rot, to add to theta_N's row), energies (ENERGIES)).
 
     level "position": equalities held at position level, rows g / kx (time steps); level
     "acceleration": their second derivatives (consistent accelerations at a start)."""
@@ -72,9 +72,9 @@ def global_part(layout: KernelLayout, moving: tuple[int, ...], level: str = "pos
     momentum = ca.gradient(kinetic, Qd)
     mass = ca.jacobian(momentum, Qd)
     inertia = ca.mtimes(mass, Qdd) + ca.jtimes(momentum, Q, Qd) - ca.gradient(kinetic, Q)
-    rubbing, friction_power = contact_friction(ctx, d, [Dd[3 * b:3 * b + 3] for b in range(n_b)])
+    pairs = contact_forces(ctx, d, [Dd[3 * b:3 * b + 3] for b in range(n_b)])
     q_rows = (inertia + damping * ca.mtimes(mass, Qd) + ca.gradient(lagrangian + caps, Q)
-              - ca.vertcat(*rubbing, ca.SX.zeros(n_own)))
+              - ca.vertcat(*pairs.wrenches, ca.SX.zeros(n_own)))
     # the varying loads: V enters linearly in them; their power through the free coordinates
     free = np.zeros(3 * n_b + n_own)
     free[[3 * b + c for b, c in s.free]] = 1.0
@@ -85,14 +85,14 @@ def global_part(layout: KernelLayout, moving: tuple[int, ...], level: str = "pos
     old = ca.vertcat(Q, Qd, Qdd)
     new = ca.vertcat(values, X[len(s.free):], rates, V[len(s.free):], accelerations, A[len(s.free):])
     starts_rows = ca.vertcat(*start_rows) if start_rows else ca.SX(0, 1)
-    rows, starts_rows, kinetic, potential, held, power, friction_power = ca.substitute(
-        [rows, starts_rows, kinetic, potential, held, power, friction_power], [old], [new])
+    rows, starts_rows, kinetic, potential, held, power, friction_power, contact_damping_power = ca.substitute(
+        [rows, starts_rows, kinetic, potential, held, power, pairs.friction_power, pairs.damping_power], [old], [new])
     newton_rows = ca.vertcat(*[rows[3 * b + c] for b, c in s.free], rows[3 * n_b:])
     start_C, start_W = _start_blocks(layout, uG, rows, starts_rows, starts)
     inputs = [uG, affine, k, starts, ends, p, pdot, pddot, damping, mask]
     outputs = [rows, ca.jacobian(newton_rows, uG), starts_rows, ca.horzcat(*start_C) if start_C else ca.SX(6, 0),
                ca.horzcat(*start_W) if start_W else ca.SX(3, 0), ca.vertcat(*end_theta) if end_theta else ca.SX(0, 1),
-               ca.vertcat(kinetic, potential, held, power, friction_power)]
+               ca.vertcat(kinetic, potential, held, power, friction_power, contact_damping_power)]
     fn = ca.Function(f"global_part_{level}", inputs, outputs, list(INPUTS), list(OUTPUTS), {"cse": True})
     if fn.has_free():
         raise RuntimeError(f"global part has free symbols {fn.get_free()}")

@@ -9,7 +9,8 @@ steps is run in one step size; its steps are accepted up to the first whose erro
 tolerance, and the next step is h (tol / e)^(1/3) with a safety factor, at most twice the last
 and at most max_step. A step that the window's factors did not settle (they were made at the
 window's first step) is no error: the next window starts there with the same step and new
-factors. The last window ends on `until` exactly. A run stops with status step_limit after
+factors. The last window ends on `until` exactly. A step that enters a damped contact is
+replaced by steps onto its onset (service.dynamics.onsets). A run stops with status step_limit after
 max_steps accepted steps, min_step when the step would fall below min_step."""
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from service.dynamics.onsets import crossing, step_onto_onset
 from service.dynamics.stepping import History, Resume, StepRunner
 
 SAFETY = 0.9
@@ -82,6 +84,13 @@ class AdaptiveRunner(StepRunner):
                 # not settled on the window's first factors (made at this very step), or too large
                 h = h_use * (0.5 if not too_large or not np.isfinite(errors[0]) else _shrink(tol, errors[0]))
                 continue
+            entering = crossing(self, at, inputs, S, first_bad)
+            if entering is not None:  # a damped contact begins within a step: step onto its onset
+                history.iterations += int(iterations[:entering[0]].sum())
+                at = self.accept(history, at, S, monitors, inputs[0], entering[0], h_use)
+                at = step_onto_onset(self, history, at, entering[1], entering[2], h_use)
+                at.h = h_use
+                return at
             history.iterations += int(iterations[:first_bad].sum())
             at = self.accept(history, at, S, monitors, inputs[0], first_bad, h_use, first_bad == count == needed)
             if too_large:

@@ -27,6 +27,7 @@ def plot_history(report: dict, outputs: list[str], path: Path) -> None:
     energies, unit = report["energies"], report["units"]["energy"]
     for key, label in (("kinetic", "kinetic T"), ("potential", "strain and gravity V"),
                        ("input_work", "work of inputs"), ("damping_work", "work of damping"), ("friction_work", "work of friction"),
+                       ("contact_damping_work", "work of contact damping"),
                        ("balance", "balance")):
         if np.any(np.array(energies.get(key, [0])) != 0):
             bottom.plot(t, energies[key], label=label)

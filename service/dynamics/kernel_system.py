@@ -57,7 +57,7 @@ class Evaluation:
     all_rows: ca.MX  # rows of every body coordinate (prescribed too), own variable and multiplier
     routed: ca.MX  # (clamped chains,): each clamped start's theta_0 row (its start body's angle row)
     energies: ca.MX  # (6,): the links' kinetic and strain energy, first moment and momentum of their mass
-    global_energies: ca.MX  # (5,): the global part's (models.kernels.global_part.ENERGIES)
+    global_energies: ca.MX  # (6,): the global part's (models.kernels.global_part.ENERGIES)
     norm: ca.MX
 
     def parts(self) -> list[ca.MX]:

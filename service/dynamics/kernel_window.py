@@ -17,8 +17,8 @@ step.
 The state carried from step to step is [x; v; a; qdd; lam] (the energy form's coordinates,
 rates, the scheme's acceleration-like variable, accelerations, multipliers). Per step the
 window also returns the monitor (kinetic energy, the potential without the varying loads, the
-input power, the damping power, the contacts' friction power, the prescribed motions'
-forces), the residual's norm and the iterations it took.
+input power, the damping power, the contacts' friction and damping powers, the prescribed
+motions' forces), the residual's norm and the iterations it took.
 """
 
 from __future__ import annotations
@@ -214,7 +214,8 @@ class Stepper:
                            ev.parts()).expand()
 
     def monitor(self, ev: Evaluation, si: StepInputs) -> ca.MX:
-        """(kinetic, held potential, input power, damping power, friction power, motion forces...)."""
+        """(kinetic, held potential, input power, damping power, the contacts' friction power and
+        damping power, motion forces...)."""
         sys = self.system
         kinetic = ev.global_energies[0] + ev.energies[0]
         held, power = ev.global_energies[2] + ev.energies[1], ev.global_energies[3]
@@ -232,7 +233,8 @@ class Stepper:
         Q = ca.vertcat(*Q) if Q else ca.MX(0, 1)
         if self.n_moving:
             power = power + ca.dot(Q, si.pdot)
-        return ca.vertcat(kinetic, held, power, 2 * si.damping * kinetic, ev.global_energies[4], Q)
+        return ca.vertcat(kinetic, held, power, 2 * si.damping * kinetic, ev.global_energies[4],
+                          ev.global_energies[5], Q)
 
     @cached_property
     def _motion_rows(self) -> list[tuple[int, int | None]]:

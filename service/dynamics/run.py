@@ -13,6 +13,7 @@ from pydantic import ValidationError
 
 from models import Mechanism, MechanismError
 from models.contact.elastic_pairs import check_link_dynamics
+from service.dynamics.onsets import Onsets
 from models.residual import unknown_names
 from models.simulation_spec import SimulateSpec, critical_step_factor
 from service.costs import Limits
@@ -159,6 +160,7 @@ def records(mech: Mechanism, spec: SimulateSpec, history: History, histories) ->
         values = np.zeros((len(names), 0))
     outputs = {name: (values[names.index(name)] / mech.nd_per_doc(kinds[names.index(name)])).tolist()
                for name in wanted}
+    _damped_normal_forces(mech, history, histories, outputs)
     state_names = unknown_names(mech.structure)
     forces = {}
     multipliers = np.array(history.lam).reshape(len(history.lam), -1)
@@ -178,10 +180,27 @@ def records(mech: Mechanism, spec: SimulateSpec, history: History, histories) ->
                          "potential": [e * energy for e in history.potential],
                          "input_work": [e * energy for e in history.input_work],
                          "damping_work": [e * energy for e in history.damping_work],
-                         "friction_work": [e * energy for e in history.friction_work]}}
+                         "friction_work": [e * energy for e in history.friction_work],
+                         "contact_damping_work": [e * energy for e in history.contact_damping_work]}}
     if spec.shapes:
         kept["shapes"] = shapes_of(mech, states, history.p) if history.times else []
     return kept
+
+
+def _damped_normal_forces(mech: Mechanism, history: History, histories, outputs: dict) -> None:
+    """A damped contact pair's normal force is its elastic part and its damping, which reads the
+    velocities: the outputs of the states alone give the first; this puts in the whole."""
+    onsets = Onsets(mech.structure, histories.moving)
+    wanted = [name for name in onsets.names if f"contacts.{name}.normal_force" in outputs]
+    if not wanted or not history.times:
+        return
+    n = len(mech.structure.free)
+    x, v = (np.column_stack([q[:n] for q in rows]) for rows in (history.x, history.v))
+    rates = np.array([histories.at(mech.p(), t)[1] for t in history.times], dtype=float).reshape(
+        len(history.times), len(histories.moving)).T
+    forces = onsets.normal_forces(x, v, np.column_stack(history.p), rates)
+    for name in wanted:
+        outputs[f"contacts.{name}.normal_force"] = forces[name].tolist()
 
 
 def shapes_of(mech: Mechanism, states: np.ndarray, parameters: list) -> list[dict]:
@@ -208,14 +227,16 @@ def wanted_outputs(mech: Mechanism, spec: SimulateSpec) -> list[str]:
 
 
 def with_balance(energies: dict) -> tuple[dict, float | None]:
-    """The energies with their balance T + V - W_inputs + W_damping - W_friction (less its start;
-    W_friction <= 0 is the friction's work), and the largest |balance| relative to the largest
-    energy seen."""
+    """The energies with their balance T + V - W_inputs + W_damping - W_friction - W_contact_damping
+    (less its start; the contacts' works are <= 0), and the largest |balance| relative to the
+    largest energy seen."""
     T, V, W, D = (np.array(energies[k]) for k in ("kinetic", "potential", "input_work", "damping_work"))
     if not len(T):
         return {**energies, "balance": []}, None
-    friction = np.array(energies.get("friction_work", np.zeros(len(T))))  # none in windows stored before it
-    balance = T + V - W + D - (friction if len(friction) == len(T) else 0.0)
+    balance = T + V - W + D
+    for key in ("friction_work", "contact_damping_work"):  # none in windows stored before them
+        work = np.array(energies.get(key, []))
+        balance = balance - (work if len(work) == len(T) else 0.0)
     balance = balance - balance[0]
     size = max(np.abs(T).max(), np.abs(V - V[0]).max(), np.abs(W).max(), 1e-300)
     return {**energies, "balance": balance.tolist()}, float(np.abs(balance).max() / size)

@@ -1,6 +1,8 @@
 """Stepping the dynamics form on element kernels (service.dynamics.engine): each step solves for
 the accelerations and the constraint forces at the step's end by Newton, the constraints held
 at position level; loads and motions take their values at the step's end from the histories.
+A step that enters a damped contact is replaced by a step onto its onset and one over the rest
+(service.dynamics.onsets), so a fixed-step run's states are on its grid but for those onsets.
 
 Every step also measures the energies: kinetic T, the potential V_held without the varying
 loads, the power of the inputs (varying loads and prescribed motions) and of the damping,
@@ -20,6 +22,7 @@ from models.kernels.layout import layout_of
 from service.buffered import BufferedCall
 from service.dynamics.engine import WINDOW_ACCEPTANCE, Engine, engine_for
 from service.dynamics.histories import Histories
+from service.dynamics.onsets import Onsets, crossing, step_onto_onset
 from service.kernels import compiled_for
 from service.kernels.queue import request_chain
 
@@ -42,6 +45,7 @@ class History:
     input_work: list[float] = field(default_factory=list)
     damping_work: list[float] = field(default_factory=list)
     friction_work: list[float] = field(default_factory=list)  # of the contacts' friction (<= 0)
+    contact_damping_work: list[float] = field(default_factory=list)  # of the contacts' damping (<= 0)
     newton_iterations: int = 0  # steps rescued by full Newton
     iterations: int = 0  # Newton iterations in all
     steps: int = 0
@@ -55,21 +59,25 @@ class Resume:
 
     step: int
     state: np.ndarray  # [x; v; a; qdd; lam]
-    works: np.ndarray  # (inputs, damping, friction)
+    works: np.ndarray  # (inputs, damping, contacts' friction, contacts' damping)
     monitor: np.ndarray  # the last step's monitor column
     time: float = 0.0  # seconds
     h: float | None = None  # adaptive steps: the next step to try
+    inserted: int = 0  # steps added at located contact onsets (service.dynamics.onsets)
+    onset_speeds: list[float] | None = None  # per damped contact pair, its approach speed at its last onset
 
     def to_json(self) -> dict:
         return {"step": self.step, "state": self.state.tolist(), "works": self.works.tolist(),
-                "monitor": self.monitor.tolist(), "time": self.time, "h": self.h}
+                "monitor": self.monitor.tolist(), "time": self.time, "h": self.h, "inserted": self.inserted,
+                "onset_speeds": self.onset_speeds}
 
     @classmethod
     def from_json(cls, data: dict) -> "Resume":
         state, works, monitor = (np.array(data[k], dtype=float) for k in ("state", "works", "monitor"))
-        if len(works) == 2:  # stored before friction had its row: none acted
-            works, monitor = np.append(works, 0.0), np.insert(monitor, 4, 0.0)
-        return cls(int(data["step"]), state, works, monitor, float(data.get("time", 0.0)), data.get("h"))
+        if len(works) == 2:  # stored before the contacts' friction and damping had rows: none acted
+            works, monitor = np.append(works, [0.0, 0.0]), np.insert(monitor, 4, [0.0, 0.0])
+        return cls(int(data["step"]), state, works, monitor, float(data.get("time", 0.0)), data.get("h"),
+                   int(data.get("inserted", 0)), data.get("onset_speeds"))
 
 
 def engine_of(structure: Structure, scheme, histories: Histories) -> Engine:
@@ -104,7 +112,7 @@ def start_of(structure: Structure, p, x0, v0, histories: Histories, damping: flo
                              + ": give the body a mass (and an inertia, for its angle), or tie the coordinate by a "
                              "joint or a link")
     state = np.concatenate([x, v, qdd, qdd, lam])
-    return Resume(0, state, np.zeros(3), monitor)
+    return Resume(0, state, np.zeros(4), monitor)
 
 
 def massless_coordinates(structure: Structure, x: np.ndarray, p: np.ndarray) -> list[str]:
@@ -136,9 +144,20 @@ class StepRunner:
         self.mask = histories.load_mask(len(p))
         self.data = self.engine.data(histories.at(p, 0.0)[0])
         self._buffered: BufferedCall | None = None
+        self.onsets = Onsets(structure, histories.moving)
 
     def done(self, at: Resume) -> bool:
-        return at.step >= self.steps
+        return at.step - at.inserted >= self.steps
+
+    def speeds(self, at: Resume) -> list[float]:
+        """The damped contact pairs' onset speeds (service.dynamics.onsets) as `at` has them."""
+        return at.onset_speeds if at.onset_speeds is not None else [1.0] * len(self.onsets.names)
+
+    def indentations_at(self, at: Resume) -> np.ndarray:
+        """The damped contact pairs' indentations at `at`."""
+        p, pdot, _ = self.histories.at(self.p, at.time)
+        P = self.onsets.apply(np.asarray(p, dtype=float)[:, None], self.speeds(at))
+        return self.onsets.indentations(at.state[:, None], self.n, P, np.asarray(pdot, dtype=float)[:, None])[0][:, 0]
 
     def keep(self, history: History, at: Resume, p: np.ndarray | None = None) -> None:
         p = self.histories.at(self.p, at.time)[0] if p is None else p
@@ -149,6 +168,8 @@ class StepRunner:
         steps settled, for its first `steps` steps."""
         size = self.window_steps
         P, PD, PDD = self.histories.at_times(self.p, at.time + h * np.minimum(np.arange(1, size + 1), steps))
+        if self.onsets:
+            P = self.onsets.apply(P, self.speeds(at))
         try:
             S, monitors, norms, iterations = self._call(self.engine.window(size))(
                 at.state, h, P, PD, PDD, self.damping, self.mask, steps, *self.data)
@@ -165,10 +186,15 @@ class StepRunner:
         return self._buffered
 
     def window(self, history: History, at: Resume) -> Resume:
-        steps = min(WINDOW, self.steps - at.step)
+        steps = min(WINDOW, self.steps - (at.step - at.inserted))
         inputs, S, monitors, iterations, settled = self.run_window(at, self.h, steps)
+        entering = crossing(self, at, inputs, S, settled)
+        if entering is not None:  # a damped contact begins within that step: step onto its onset
+            settled = entering[0]
         history.iterations += int(iterations[:settled].sum())
         at = self.accept(history, at, S, monitors, inputs[0], settled, self.h)
+        if entering is not None:
+            return step_onto_onset(self, history, at, entering[1], entering[2], self.h)
         if not self.done(at) and settled < steps:  # the window's factors did not settle this step: full Newton
             step_inputs = tuple(q[:, settled] for q in inputs)
             state, monitor, norm = self.rescue(at, step_inputs, self.h)
@@ -192,28 +218,34 @@ class StepRunner:
         if count == 0:
             return at
         previous = np.column_stack([at.monitor, monitors[:, :count - 1]])
-        works = at.works[:, None] + np.cumsum(0.5 * h * (monitors[2:5, :count] + previous[2:5]), axis=1)
+        works = at.works[:, None] + np.cumsum(0.5 * h * (monitors[2:6, :count] + previous[2:6]), axis=1)
         start = at
         for j in range(count):
             step, last = start.step + j + 1, j == count - 1
             now = self.time_of(step, start, h * (j + 1))
-            kept = step % self.every == 0 or (last and final) or now >= self.until * (1 - 1e-12)
+            kept = (step - start.inserted) % self.every == 0 or (last and final) or now >= self.until * (1 - 1e-12)
             if kept or last:
-                at = Resume(step, S[:, j].copy(), works[:, j], monitors[:, j].copy(), now, start.h)
+                at = Resume(step, S[:, j].copy(), works[:, j], monitors[:, j].copy(), now, start.h, start.inserted,
+                            start.onset_speeds)
             if kept:
                 self.keep(history, at, P[:, j])
         return at
 
-    def advance(self, history, at: Resume, state, monitor, h: float, final: bool = False, p=None) -> Resume:
-        works = at.works + 0.5 * h * (monitor[2:5] + at.monitor[2:5])
+    def advance(self, history, at: Resume, state, monitor, h: float, final: bool = False, p=None, time=None,
+                kept: bool = False, speeds=None, inserted: int | None = None) -> Resume:
+        """One step h on from `at`; `time`, `speeds` and `inserted` given for a step onto a
+        contact's onset (service.dynamics.onsets), which is `kept`."""
+        works = at.works + 0.5 * h * (monitor[2:6] + at.monitor[2:6])
         step = at.step + 1
-        now = Resume(step, np.array(state), works, np.array(monitor), self.time_of(step, at, h), at.h)
-        if now.step % self.every == 0 or final or self.done(now):
+        now = Resume(step, np.array(state), works, np.array(monitor), self.time_of(step, at, h) if time is None else time,
+                     at.h, at.inserted if inserted is None else inserted,
+                     at.onset_speeds if speeds is None else speeds)
+        if kept or (now.step - now.inserted) % self.every == 0 or final or self.done(now):
             self.keep(history, now, p)
         return now
 
     def time_of(self, step: int, at: Resume, h: float) -> float:
-        return step * self.h  # fixed steps: no sum of rounding errors
+        return (step - at.inserted) * self.h  # fixed steps: no sum of rounding errors
 
 
 def _keep(history: History, t, state, n, p, monitor, works) -> None:
@@ -223,9 +255,10 @@ def _keep(history: History, t, state, n, p, monitor, works) -> None:
     history.acceleration.append(state[3 * n:4 * n].copy())
     history.lam.append(state[4 * n:].copy())
     history.p.append(np.array(p, dtype=float))
-    history.motion_forces.append(np.array(monitor[5:]))
+    history.motion_forces.append(np.array(monitor[6:]))
     history.kinetic.append(float(monitor[0]))
     history.potential.append(float(monitor[1]))
     history.input_work.append(float(works[0]))
     history.damping_work.append(float(works[1]))
     history.friction_work.append(float(works[2]))
+    history.contact_damping_work.append(float(works[3]))

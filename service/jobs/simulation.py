@@ -108,7 +108,7 @@ class SimulationJob(InOrder):
         windows = [finished[i] for i in sorted(finished)]
         joined = {"times": [], "outputs": {}, "constraint_forces": {}, "motion_forces": {},
                   "energies": {"kinetic": [], "potential": [], "input_work": [], "damping_work": [],
-                               "friction_work": []}}
+                               "friction_work": [], "contact_damping_work": []}}
         for window in windows:
             joined["times"] += window["times"]
             for group in ("outputs", "constraint_forces", "motion_forces", "energies"):

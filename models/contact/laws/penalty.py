@@ -25,12 +25,15 @@ def elastic_power(K, q, exponent):
     return ca.if_else(q > 0, K * ca.fmax(q, 1e-300)**exponent, 0.0)
 
 
+LINK_DYNAMICS = frozenset({"event_driven", "link_dynamics"})  # link dynamics locates their onsets
+
+
 @dataclass(frozen=True)
 class DampedPowerLaw(NormalLaw):
     """F = K q^n (1 + d qdot / qdot_minus), d from the restitution c_r (Eqs. 21-23)."""
 
     name: str = "damped_power"
-    analyses: frozenset[str] = EVENT_DRIVEN
+    analyses: frozenset[str] = LINK_DYNAMICS
     summary: str = ""
     needs: tuple[str, ...] = POWER_LAW_NEEDS
 
@@ -51,7 +54,7 @@ class Hertz(DampedPowerLaw):
     (models.contact.elastic_pairs)."""
 
     name: str = "hertz"
-    analyses: frozenset[str] = frozenset({"event_driven", "link_dynamics"})
+    analyses: frozenset[str] = LINK_DYNAMICS
     summary: str = "F = K q^n, elastic (Eq. 13)"
     needs: tuple[str, ...] = ("stiffness", "exponent")
 
@@ -96,6 +99,7 @@ class LnaEsdu(LankaraniNikravesh):
     that makes its damping term a force). A pin in a hole only."""
 
     name: str = "lna_esdu"
+    analyses: frozenset[str] = EVENT_DRIVEN  # its elastic part has no closed-form potential
     summary: str = "ESDU-78035 of a pin in a hole with Lankarani-Nikravesh damping (Eqs. 18, 24)"
     needs: tuple[str, ...] = ("restitution", "length", "materials")
 
@@ -111,7 +115,7 @@ class LinearSpringDashpot(NormalLaw):
     """F = K q + c qdot (Kelvin-Voigt), never pulling: it ends where the dashpot would pull."""
 
     name: str = "linear"
-    analyses: frozenset[str] = EVENT_DRIVEN
+    analyses: frozenset[str] = EVENT_DRIVEN  # its force jumps at the onset: implicit steps may find no root
     summary: str = "linear spring-dashpot, F = K q + c qdot (K in force / length, c in force s / length)"
     needs: tuple[str, ...] = ("stiffness", "damping")
 
