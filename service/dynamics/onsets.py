@@ -109,7 +109,7 @@ def crossing(runner, at, inputs, S, settled: int) -> tuple[int, int, float] | No
     onsets = runner.onsets
     if not onsets or S is None or settled == 0:
         return None
-    P, PD, _ = inputs
+    P, PD = (q if np.ndim(q) == 2 else np.asarray(q, dtype=float)[:, None] for q in inputs[:2])  # or one step's
     after, _ = onsets.indentations(S[:, :settled], runner.n, P[:, :settled], PD[:, :settled])
     before = np.column_stack([runner.indentations_at(at), after[:, :-1]])
     found = onsets.first_crossing(before, after)

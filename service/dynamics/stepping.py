@@ -199,6 +199,9 @@ class StepRunner:
             step_inputs = tuple(q[:, settled] for q in inputs)
             state, monitor, norm = self.rescue(at, step_inputs, self.h)
             history.newton_iterations += 1
+            entering = crossing(self, at, step_inputs, state[:, None], 1) if norm <= WINDOW_ACCEPTANCE else None
+            if entering is not None:  # it enters a damped contact (whose force made it hard): onto the onset
+                return step_onto_onset(self, history, at, entering[1], entering[2], self.h)
             if not norm <= WINDOW_ACCEPTANCE:
                 history.status = "not_converged"
                 history.message = (f"the step from t = {at.time:g} s to {at.time + self.h:g} s did not converge "
