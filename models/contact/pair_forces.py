@@ -20,8 +20,8 @@ switches regime by the slip speed itself here (without the hysteresis flags that
 runs locate), so it is continuous in the slip speed and piecewise smooth.
 
 Units: the graphs' lengths and forces are nondimensional and time is in seconds
-(models.mechanism.Scales); the laws read the document's units (K, c, q and qdot in its force
-and length per second), v0 and v1 are given in m/s."""
+(models.mechanism.Scales); the normal laws read the document's units (K, q and qdot in its
+force and length per second), v0 and v1 are given in m/s."""
 
 from __future__ import annotations
 
@@ -79,11 +79,7 @@ def contact_forces(ctx: AssemblyContext, d: list[ca.SX], rates: list[ca.SX]) -> 
         bodies = (contacts.sites[topology.site].body, contacts.objects[topology.object].body)
         dv = _velocity(ctx, bodies[0], pair.point, d, rates) - _velocity(ctx, bodies[1], pair.point, d, rates)
         tangent = ca.vertcat(-pair.normal[1], pair.normal[0])
-        force = ca.SX.zeros(2)  # on the site's body, nondimensional; the object's body takes the opposite
-        if rubbing(topology):
-            along, slip = _friction(ctx, pair, ca.dot(tangent, dv))
-            force = force + along * tangent
-            out.friction_power = out.friction_power + along * slip
+        force, whole = ca.SX.zeros(2), pair.force  # on the site's body (nondimensional), the object's the opposite
         if topology.normal_law in DAMPED_LAWS:
             qdot = -ca.dot(pair.normal, dv) / unit_length  # document length per second
             law = NORMAL_LAWS[topology.normal_law]
@@ -93,6 +89,10 @@ def contact_forces(ctx: AssemblyContext, d: list[ca.SX], rates: list[ca.SX]) -> 
             force = force + extra * pair.normal
             out.damping_power = out.damping_power - extra * qdot * unit_length
             out.normal_forces[topology.name] = whole
+        if rubbing(topology):  # on the whole normal force
+            along, slip = _friction(ctx, pair, ca.dot(tangent, dv), whole * unit_force)
+            force = force + along * tangent
+            out.friction_power = out.friction_power + along * slip
         for body, sign in zip(bodies, (1, -1)):
             if body is not None:
                 arm = pair.point - (ctx.reference(body)[0] + d[body][:2])
@@ -100,7 +100,7 @@ def contact_forces(ctx: AssemblyContext, d: list[ca.SX], rates: list[ca.SX]) -> 
     return out
 
 
-def _friction(ctx: AssemblyContext, pair: ElasticPair, slip: ca.SX) -> tuple[ca.SX, ca.SX]:
+def _friction(ctx: AssemblyContext, pair: ElasticPair, slip: ca.SX, normal_force: ca.SX) -> tuple[ca.SX, ca.SX]:
     """(the friction force along the tangent, nondimensional; the slip speed)."""
     topology = pair.topology
     per_metre_per_second = ctx.unit("length") / ctx.structure.length_unit_si
@@ -109,7 +109,7 @@ def _friction(ctx: AssemblyContext, pair: ElasticPair, slip: ca.SX) -> tuple[ca.
                               ctx.P[f"{base}/v1"] * per_metre_per_second)
     speed = ca.fabs(slip)
     law = FRICTION_LAWS[topology.friction_law]
-    return law.force(numbers, slip, pair.force * ctx.unit("force"), speed > numbers.v0, speed > numbers.v1), slip
+    return law.force(numbers, slip, normal_force, speed > numbers.v0, speed > numbers.v1), slip
 
 
 def _velocity(ctx: AssemblyContext, body: int | None, point: ca.SX, d: list[ca.SX], rates: list[ca.SX]) -> ca.SX:

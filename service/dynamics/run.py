@@ -13,13 +13,13 @@ from pydantic import ValidationError
 
 from models import Mechanism, MechanismError
 from models.contact.elastic_pairs import check_link_dynamics
-from service.dynamics.onsets import Onsets
 from models.residual import unknown_names
 from models.simulation_spec import SimulateSpec, critical_step_factor
 from service.costs import Limits
 from service.dynamics.adaptive import Tolerance
 from service.dynamics.histories import Histories, read_histories
 from service.dynamics.integrate import History, integrate
+from service.dynamics.onsets import Onsets
 from service.dynamics.schemes import Scheme, generalized_alpha, newmark
 from service.dynamics.state_map import state_map
 from service.dynamics.static_start import static_shape

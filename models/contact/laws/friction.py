@@ -1,7 +1,7 @@
 """Friction laws: none; Coulomb's (stick and slip, set-valued: the quasi-static solve's slip
 against the motion and Moreau-Jean's impulses take it, with adherence f_a and sliding f_d);
 Ambrosio's regularized law (seed 004 Eq. 26), a force of the slip speed for event-driven
-runs and link dynamics (models.contact.pair_friction)."""
+runs and link dynamics (models.contact.pair_forces)."""
 
 from __future__ import annotations
 
