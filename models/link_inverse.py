@@ -132,6 +132,11 @@ def _inverse_link(ctx: AssemblyContext, t: LinkTopology, psi, q: ca.SX, d, zl):
     return Contribution(wrenches, rows, values)
 
 
+def _invertible(t) -> bool:
+    """Whether the inverse solves the element's shape (its family says: links by shooting)."""
+    return getattr(FAMILIES.of(t), "invertible", False)
+
+
 def _build(structure: Structure, layout: InverseLayout) -> InverseGraphs:
     ctx = AssemblyContext(structure)
     q = ca.SX.sym("q", layout.q_size)
@@ -148,7 +153,7 @@ def _build(structure: Structure, layout: InverseLayout) -> InverseGraphs:
     psi_builders = iter(_psi_builders(layout, q))
     parts, names, kinds, values = [], [], [], []
     for t, offset in zip(structure.elements, structure.element_offsets):
-        if t.family == "link":
+        if _invertible(t):
             part = _inverse_link(ctx, t, next(psi_builders), q, d, z[offset:offset + t.unknowns])
             for quantity, kind, value in part.outputs:
                 names.append(f"elements.{t.name}.{quantity}")
@@ -158,7 +163,7 @@ def _build(structure: Structure, layout: InverseLayout) -> InverseGraphs:
             part = FAMILIES.of(t).contribute(ctx, t, rotations, ca.SX(0, 1))
             part = Contribution(part.from_bodies)
         parts.append(part)
-    links = [k for k, t in enumerate(structure.elements) if t.family == "link"]
+    links = [k for k, t in enumerate(structure.elements) if _invertible(t)]
     specified_values = q[layout.q_size - len(layout.specified):]
     specified_rows = [z[structure.element_offsets[links[link]] + component] - specified_values[k]
                       for k, (link, component) in enumerate(layout.specified)]

@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 from models import MechanismError
 from models.document import MechanismDocument
+from models.elements import FAMILIES
+from models.elements.base import Discretization
 
 
 @dataclass(frozen=True)
@@ -34,24 +36,22 @@ class Limits:
     max_simulation_steps: int = 1_000_000  # time steps of a simulation job
 
 
+def discretizations(doc: MechanismDocument, model: str | None) -> list[tuple[str, Discretization]]:
+    """(element, what its unknowns cost) of every element with unknowns of its own, as its
+    family says (models.elements.base.Discretization)."""
+    out = []
+    for name, element in doc.elements.items():
+        ask = getattr(FAMILIES.named(element.type), "discretization", None)
+        cost = ask(element, model) if ask is not None else None
+        if cost is not None:
+            out.append((name, cost))
+    return out
+
+
 def link_work(doc: MechanismDocument, model: str | None) -> list[tuple[str, int]]:
     """(element, intervals x order^2) of every element solved by shooting; a link by elements:
     intervals x (degree + 2)^2, its quadrature and contact points' work alike."""
-    work = []
-    for name, element in doc.elements.items():
-        exact = element.type == "curved_beam" and (model or element.model) == "exact"
-        if _by_elements(element, model):
-            work.append((name, element.intervals * (element.degree + 2) ** 2))
-        elif element.type == "link" or exact:
-            work.append((name, element.intervals * element.order**2))
-    return work
-
-
-def _by_elements(element, model: str | None) -> bool:
-    """A link by elements, or an exact curved beam by elements (a link inside)."""
-    if element.type == "curved_beam" and (model or element.model) != "exact":
-        return False
-    return element.type in ("link", "curved_beam") and element.discretization == "elements"
+    return [(name, cost.work) for name, cost in discretizations(doc, model)]
 
 
 def check_contact_rotations(doc: MechanismDocument, limits: Limits, prefix: str) -> None:
@@ -59,14 +59,13 @@ def check_contact_rotations(doc: MechanismDocument, limits: Limits, prefix: str)
     moves with every rotation before it): building it grows with their square, about 4 s for
     96 rotations here."""
     total = 0
-    for name, element in doc.elements.items():
-        if _by_elements(element, None):
-            total += element.intervals * element.degree
-            if total > limits.max_contact_rotations:
-                raise MechanismError(f"{prefix}/elements/{name}/intervals", (
-                    f"a contact problem's links have at most {limits.max_contact_rotations} rotations "
-                    f"(intervals x degree, summed), these have more; use fewer elements (8 cubic ones "
-                    "reach 1e-9 on a finger) or a lower degree"))
+    for name, cost in discretizations(doc, None):
+        total += cost.rotations
+        if total > limits.max_contact_rotations:
+            raise MechanismError(f"{prefix}/elements/{name}/intervals", (
+                f"a contact problem's links have at most {limits.max_contact_rotations} rotations "
+                f"(intervals x degree, summed), these have more; use fewer elements (8 cubic ones "
+                "reach 1e-9 on a finger) or a lower degree"))
 
 
 def contact_rows(doc: MechanismDocument) -> list[tuple[str, int]]:
@@ -101,10 +100,10 @@ def check_document_cost(doc: MechanismDocument, model: str | None, limits: Limit
         count = len(getattr(doc, collection))
         if count > limit:
             raise MechanismError(f"{prefix}/{collection}", f"{count} {collection}: the limit is {limit}")
-    for name, element in doc.elements.items():
-        if element.type == "link" and element.discretization == "elements" and element.intervals > limits.max_link_elements:
+    for name, cost in discretizations(doc, model):
+        if cost.elements > limits.max_link_elements:
             raise MechanismError(f"{prefix}/elements/{name}/intervals", (
-                f"{element.intervals} elements: the service takes at most {limits.max_link_elements} in one link "
+                f"{cost.elements} elements: the service takes at most {limits.max_link_elements} in one link "
                 "(its statics graph is built in the request); use fewer elements or a higher degree"))
     total = 0
     for name, work in link_work(doc, model):

@@ -17,6 +17,7 @@ import numpy as np
 from models import Mechanism, MechanismError
 from models.context import AssemblyContext
 from models.document import PrescribedDisplacement
+from models.elements import FAMILIES
 from models.elements.link import attach, link_shooting
 from models.link_inverse import InverseLayout, PsiLayout, inverse_graphs_for
 from models.structure import Structure
@@ -148,7 +149,7 @@ def _invertible_links(mech: Mechanism) -> list:
             raise MechanismError(f"/loads/{name}", "the link inverse takes forces and moments; prescribed "
                                  "displacements belong to the forward problem")
     for element in structure.elements:
-        if element.family != "link" and element.unknowns:
+        if not getattr(FAMILIES.of(element), "invertible", False) and element.unknowns:
             raise MechanismError(f"/elements/{element.name}", "the link inverse takes links and elements whose "
                                  f"forces follow from the body motions; '{element.name}' ({element.family}) "
                                  "has unknowns of its own")

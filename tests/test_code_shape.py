@@ -99,3 +99,42 @@ def test_no_import_cycles():
         if name not in state:
             visit(name, [])
     assert not cycles
+
+
+def element_types() -> set[str]:
+    """The element families' type names, as their modules declare them (`type = "..."`)."""
+    names = set()
+    for path in (ROOT / "models" / "elements").glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if (isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == "type" for t in node.targets)
+                    and isinstance(node.value, ast.Constant) and isinstance(node.value.value, str)):
+                names.add(node.value.value)
+    return names
+
+
+def _strings(node: ast.AST) -> set[str]:
+    if isinstance(node, ast.Constant) and isinstance(node.value, str):
+        return {node.value}
+    if isinstance(node, (ast.Tuple, ast.List, ast.Set)):
+        return set().union(*(_strings(item) for item in node.elts)) if node.elts else set()
+    return set()
+
+
+def test_no_element_type_is_compared_outside_its_family():
+    """Per-type questions go through the element registry (issue 26): a comparison of an
+    element's `type` or `family` with a family's name belongs in models/elements only."""
+    types = element_types()
+    assert {"link", "link_elements", "curved_beam", "spring", "pin", "slider"} <= types
+    found = []
+    for name, tree in trees().items():
+        if name.startswith("models.elements"):
+            continue
+        for node in ast.walk(tree):
+            if not isinstance(node, ast.Compare):
+                continue
+            sides = [node.left, *node.comparators]
+            asks = any(isinstance(side, ast.Attribute) and side.attr in ("type", "family") for side in sides)
+            named = set().union(*(_strings(side) for side in sides)) & types
+            if asks and named:
+                found.append(f"{name}:{node.lineno} compares with {', '.join(sorted(named))}")
+    assert not found, found

@@ -11,6 +11,7 @@ from models.contact.document import Contacts, FrictionFields, JawSite
 from models.contact.elastic_pairs import DAMPED_LAWS, ELASTIC_LAWS
 from models.contact.pair_forces import REGULARIZED
 from models.contact.laws import friction_law, normal_law
+from models.elements import FAMILIES
 from models.contact.polygons import convex_pieces, self_intersection, signed_area
 from models.contact.topology import ContactTopology, ObjectTopology, PairTopology, SiteTopology
 from models.errors import MechanismError
@@ -27,7 +28,7 @@ def collect_contacts(c, contacts: Contacts | None, elements: list[ElementTopolog
     if contacts is None:
         return None
     objects = tuple(_collect_object(c, name, obj) for name, obj in contacts.objects.items())
-    links = {t.name: t for t in elements if t.family in ("link", "link_elements")}
+    links = {t.name: t for t in elements if getattr(FAMILIES.of(t), "centre_line_sites", False)}
     sites = tuple(_collect_site(c, name, site, links) for name, site in contacts.sites.items())
     object_names, site_names = [o.name for o in objects], [s.name for s in sites]
     pairs = []

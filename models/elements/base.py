@@ -129,7 +129,34 @@ class ScaleHint:
     rotational_stiffness: float | None = None
 
 
+@dataclass(frozen=True)
+class Discretization:
+    """What an element's unknowns cost (service.costs): its statics work (intervals x order^2 of
+    shooting, intervals x (degree + 2)^2 of elements), the rotations a contact problem's dense
+    KKT matrix grows with, and its number of finite elements (0 for shooting)."""
+
+    work: int
+    rotations: int = 0
+    elements: int = 0
+
+
+def beam_discretization(element) -> Discretization:
+    """A beam discretized by shooting or by elements (its `discretization`, `intervals`,
+    `order` and `degree` fields)."""
+    if element.discretization == "elements":
+        return Discretization(element.intervals * (element.degree + 2) ** 2, element.intervals * element.degree,
+                              element.intervals)
+    return Discretization(element.intervals * element.order**2)
+
+
 class ElementFamily(Protocol):
+    """The contract of an element family. Optional hooks, asked only where a family has them:
+    discretization(element, model) -> Discretization | None (what its unknowns cost);
+    check_simulated(topology) (raise MechanismError where link dynamics cannot take it);
+    model_name(element) -> str (the model a report names); centre_line_sites (attribute: contact
+    sites lie on its centre line); invertible (attribute: the link inverse solves its shape);
+    impact_flexure, impact_constraint, impact_by_statics (models.impacts.elements)."""
+
     type: str
     schema: type[TwoBodyElement] | None
 

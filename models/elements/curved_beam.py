@@ -23,8 +23,8 @@ from pydantic import Field
 
 from models import curved_beam as kernel
 from models.context import AssemblyContext
-from models.elements.base import (CentreLine, Contribution, EnergyTerms, NoEnergyForm, ScaleHint, SiValues,
-                                  TwoBodyElement)
+from models.elements.base import (CentreLine, Contribution, Discretization, EnergyTerms, NoEnergyForm, ScaleHint,
+                                  SiValues, TwoBodyElement, beam_discretization)
 from models.errors import MechanismError
 from models.fields import Number, Vec2
 from models.planar import cross, rot
@@ -91,6 +91,14 @@ class ArcGeometry:
 class CurvedBeamFamily:
     type = "curved_beam"
     schema = CurvedBeam
+
+    def discretization(self, el: CurvedBeam, model: str | None) -> Discretization | None:
+        """The exact model is a link inside (by shooting or by elements); the others have no
+        unknowns of their own."""
+        return beam_discretization(el) if (model or el.model) == "exact" else None
+
+    def model_name(self, el: CurvedBeam) -> str:
+        return el.model
 
     def impact_by_statics(self, el: CurvedBeam) -> bool:
         """The exact model (a link) enters an impact simulation by its own statics stiffness

@@ -23,7 +23,8 @@ import casadi as ca
 from pydantic import Field
 
 from models.context import AssemblyContext
-from models.elements.base import CentreLine, Contribution, NoEnergyForm, NoMassForm, ScaleHint, SiValues, TwoBodyElement
+from models.elements.base import (CentreLine, Contribution, Discretization, NoEnergyForm, NoMassForm, ScaleHint,
+                                  SiValues, TwoBodyElement, beam_discretization)
 from models.errors import MechanismError
 from models.expression import compile_expression, finite_on
 from models.fields import Number, StrictModel, Vec2
@@ -181,6 +182,15 @@ def as_elements(t: LinkTopology, degree: int) -> LinkElementsTopology:
 class LinkFamily:
     type = "link"
     schema = Link
+    centre_line_sites = True  # contact sites lie on its centre line (models.contact)
+    invertible = True  # the link inverse (models.link_inverse) solves its shape by shooting
+
+    def discretization(self, el: Link, model: str | None) -> Discretization:
+        return beam_discretization(el)
+
+    def check_simulated(self, t: "LinkTopology") -> None:
+        raise MechanismError(f"/elements/{t.name}/discretization", f"link '{t.name}' is discretized by shooting: "
+                             "a simulation needs \"discretization\": \"elements\"")
 
     def collect(self, c, name: str, el: Link, i: int, j: int) -> LinkTopology:
         base = f"/elements/{name}"

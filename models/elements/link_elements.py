@@ -16,6 +16,7 @@ import casadi as ca
 
 from models.context import AssemblyContext
 from models.elements.base import CentreLine, Contribution, EnergyTerms, InertiaPoint, NoMassForm, ScaleHint, SiValues
+from models.errors import MechanismError
 from models.elements.link import LINK, Link, LinkElementsTopology, link_properties
 from models.elements.surfaces import ElementSurfaces, SurfacePoint
 from models.elements.variational import variational_parts
@@ -35,6 +36,12 @@ class _Stated:
 class LinkElementsFamily:
     type = "link_elements"
     schema = None  # a `link` document with discretization "elements"
+    centre_line_sites = True  # contact sites lie on its centre line (models.contact)
+
+    def check_simulated(self, t: LinkElementsTopology) -> None:
+        if not t.weighs:
+            raise MechanismError(f"/materials/{t.material}/density", f"link '{t.name}' has no mass: give its "
+                                 f"material '{t.material}' a density")
 
     def collect(self, c, name: str, el: Link, i: int, j: int) -> LinkElementsTopology:
         raise RuntimeError("links by elements are collected by the link family")

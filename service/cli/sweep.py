@@ -14,6 +14,7 @@ from rich.table import Table
 
 from models import COMPARED_MODELS, Mechanism, MechanismError
 from models.document import SweepSpec, SweepUntil
+from models.elements import FAMILIES
 from models.units import quantity_to_si
 from service.cli.application import app
 from service.cli.common import (EXIT_NOT_CONVERGED, OptionError, check_plot_option, consoles, default_xy,
@@ -137,8 +138,8 @@ def curve_label(mech: Mechanism, model: str | None) -> str:
     """The material (when there is one) and the model of the curved beams."""
     elements = mech.structure.elements
     materials = sorted({t.material for t in elements if hasattr(t, "material")})
-    models = sorted({t.model for t in mech.structure.of_family("curved_beam")}
-                    | {"exact" for t in mech.structure.of_family("link") if mech.document.elements[t.name].type == "curved_beam"})
+    named = [getattr(FAMILIES.named(element.type), "model_name", None) for element in mech.document.elements.values()]
+    models = sorted({name(element) for name, element in zip(named, mech.document.elements.values()) if name})
     parts = [", ".join(materials)] if len(materials) == 1 else []
     if model or models:  # a mechanism without curved beams has no model to name
         parts.append(model or (models[0] if len(models) == 1 else "mixed models"))

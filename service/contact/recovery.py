@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from models import Mechanism
+from models.elements import FAMILIES
 
 METHOD = ("Lan 2005 Eqs. 6.6-6.10: the frictionless shape, the force recovered from the clamp moment and split "
           "with |F_t| = mu |F_n|; the friction force is not a load on that shape (no equilibrium with friction)")
@@ -22,7 +23,8 @@ def carrying_link(mech: Mechanism, site) -> str | None:
     """The link whose clamp the site's force runs to: its own link, or the link ending on its body."""
     if site.link is not None:
         return site.link
-    ends = [t.name for t in mech.structure.elements if t.family in ("link", "link_elements") and t.end_body == site.body]
+    ends = [t.name for t in mech.structure.elements
+            if getattr(FAMILIES.of(t), "centre_line_sites", False) and t.end_body == site.body]
     return ends[0] if len(ends) == 1 else None
 
 

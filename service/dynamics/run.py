@@ -13,6 +13,7 @@ from pydantic import ValidationError
 
 from models import Mechanism, MechanismError
 from models.contact.elastic_pairs import check_link_dynamics
+from models.elements import FAMILIES
 from models.residual import unknown_names
 from models.simulation_spec import SimulateSpec, critical_step_factor
 from service.costs import Limits
@@ -61,14 +62,12 @@ def simulated(mech: Mechanism) -> Mechanism:
 
 
 def check_masses(mech: Mechanism) -> None:
-    """Every link carries mass: a massless link has no dynamics of its own to integrate."""
+    """Every element link dynamics integrates carries mass (a link by shooting or a massless one
+    has no dynamics of its own): each family says (its check_simulated)."""
     for t in mech.structure.elements:
-        if t.family == "link":
-            raise MechanismError(f"/elements/{t.name}/discretization", f"link '{t.name}' is discretized by shooting: "
-                                 "a simulation needs \"discretization\": \"elements\"")
-        if t.family == "link_elements" and not t.weighs:
-            raise MechanismError(f"/materials/{t.material}/density", f"link '{t.name}' has no mass: give its material "
-                                 f"'{t.material}' a density")
+        check = getattr(FAMILIES.of(t), "check_simulated", None)
+        if check is not None:
+            check(t)
 
 
 def tolerance_of(spec: SimulateSpec, max_steps: int = MAX_STEPS) -> Tolerance | None:
