@@ -26,6 +26,11 @@ from service.newton import NewtonOptions, Status, iterate_dense
 
 # --- forward dense output -------------------------------------------------------------------
 @lru_cache(maxsize=32)
+def invertible(structure: Structure) -> list:
+    """The elements whose shape the inverse solves (their family says: links by shooting)."""
+    return [t for t in structure.elements if getattr(FAMILIES.of(t), "invertible", False)]
+
+
 def _sampler(structure: Structure, name: str, at: tuple[float, ...]) -> ca.Function:
     ctx = AssemblyContext(structure)
     index = [t.name for t in structure.elements].index(name)
@@ -47,7 +52,7 @@ def _sampler(structure: Structure, name: str, at: tuple[float, ...]) -> ca.Funct
 def link_states(mech: Mechanism, z: np.ndarray, name: str, u) -> dict[str, np.ndarray]:
     """psi [rad], m, x, y (document units) of link `name` at the positions u in [0, 1], from
     the nodes of the solution z with one high-order step each."""
-    names = [link.name for link in mech.structure.of_family("link")]
+    names = [link.name for link in invertible(mech.structure)]
     if name not in names:
         raise MechanismError("/elements", f"no link named '{name}' (links: {', '.join(names) or 'none'})")
     at = tuple(float(x) for x in np.atleast_1d(u))
@@ -141,7 +146,7 @@ def inverse_links(mech: Mechanism, shapes: dict, internal_forces: dict, unknown_
 
 def _invertible_links(mech: Mechanism) -> list:
     structure = mech.structure
-    links = list(structure.of_family("link"))
+    links = invertible(structure)
     if not links:
         raise MechanismError("/shapes", "this mechanism has no links to invert")
     for name, load in mech.document.loads.items():
@@ -149,7 +154,7 @@ def _invertible_links(mech: Mechanism) -> list:
             raise MechanismError(f"/loads/{name}", "the link inverse takes forces and moments; prescribed "
                                  "displacements belong to the forward problem")
     for element in structure.elements:
-        if not getattr(FAMILIES.of(element), "invertible", False) and element.unknowns:
+        if not getattr(FAMILIES.of(element), "invertible", False) and element.unknowns:  # links by shooting
             raise MechanismError(f"/elements/{element.name}", "the link inverse takes links and elements whose "
                                  f"forces follow from the body motions; '{element.name}' ({element.family}) "
                                  "has unknowns of its own")
@@ -207,7 +212,7 @@ def _unknown_loads(mech: Mechanism, unknown_loads) -> list[int]:
 
 
 def _report_links(mech: Mechanism, values: dict[str, float], result: LinkInverseResult) -> None:
-    for link in mech.structure.of_family("link"):
+    for link in invertible(mech.structure):
         base = f"elements.{link.name}"
         nodes = range(link.intervals + 1)
         result.links[link.name] = {

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from models import Mechanism, MechanismError
+from models.elements import FAMILIES
 from service.units import coordinate_kinds, matrix_to_doc
 
 
@@ -48,7 +49,8 @@ def tangent_stiffness(mech: Mechanism, z: np.ndarray | None = None) -> TangentSt
     _, K = mech.graphs.residual_and_tangent(z, p)
     n_bodies = mech.n_body_coordinates
     terms = {}
-    if mech.structure.of_family("curved_beam") and not any(t.unknowns for t in mech.structure.elements):
+    splits = any(getattr(FAMILIES.of(t), "splits_tangent", False) for t in mech.structure.elements)
+    if splits and not any(t.unknowns for t in mech.structure.elements):
         parts = mech.graphs.tangent_terms(z, p)
         terms = {name: matrix_to_doc(mech, np.asarray(t)) for name, t in zip(("I", "II", "III", "load"), parts)}
     rows, cols = coordinate_kinds(mech)

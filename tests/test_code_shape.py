@@ -122,7 +122,8 @@ def _strings(node: ast.AST) -> set[str]:
 
 def test_no_element_type_is_compared_outside_its_family():
     """Per-type questions go through the element registry (issue 26): a comparison of an
-    element's `type` or `family` with a family's name belongs in models/elements only."""
+    element's `type` or `family` with a family's name, or a selection by a family's name
+    (Structure.of_family), belongs in models/elements only."""
     types = element_types()
     assert {"link", "link_elements", "curved_beam", "spring", "pin", "slider"} <= types
     found = []
@@ -130,6 +131,11 @@ def test_no_element_type_is_compared_outside_its_family():
         if name.startswith("models.elements"):
             continue
         for node in ast.walk(tree):
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "of_family":
+                named = set().union(set(), *(_strings(arg) for arg in node.args)) & types
+                if named:
+                    found.append(f"{name}:{node.lineno} selects the family {', '.join(sorted(named))}")
+                continue
             if not isinstance(node, ast.Compare):
                 continue
             sides = [node.left, *node.comparators]

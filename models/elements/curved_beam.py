@@ -97,6 +97,11 @@ class CurvedBeamFamily:
         unknowns of their own."""
         return beam_discretization(el) if (model or el.model) == "exact" else None
 
+    # Cammarata et al.'s split of K_T into terms I-III is written for these flexures (service.stiffness)
+    splits_tangent = True
+    # what a flexures table reports of each (elements.<name>.<output>; service.cli.report_tables)
+    flexure_outputs = ("rotation", "M", "stress_start", "stress_end", "stress_max")
+
     def model_name(self, el: CurvedBeam) -> str:
         return el.model
 

@@ -8,6 +8,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from models import Mechanism
+from models.elements import FAMILIES
 from service.cli.common import number, table_of
 from service.plotting import output_unit
 
@@ -87,7 +88,7 @@ def flexures_table(mech: Mechanism, values: dict) -> Table | None:
     """Rotation, end moment and stresses of the curved beams (None if there are none); the
     model is a column only when the beams differ in it."""
     structure = mech.structure
-    beams = structure.of_family("curved_beam")
+    beams = [t for t in structure.elements if getattr(FAMILIES.of(t), "flexure_outputs", None)]
     if not beams:
         return None
     A, M, S = mech.doc_unit("angle"), mech.doc_unit("moment"), mech.doc_unit("stress")
@@ -101,7 +102,7 @@ def flexures_table(mech: Mechanism, values: dict) -> Table | None:
         e = f"elements.{f.name}"
         cells = [f.name, f"{structure.bodies[f.start_body]}→{structure.bodies[f.end_body]}"]
         cells += [f.model] if mixed else []
-        cells += [number(values[f"{e}.{q}"]) for q in ("rotation", "M", "stress_start", "stress_end", "stress_max")]
+        cells += [number(values[f"{e}.{q}"]) for q in FAMILIES.of(f).flexure_outputs]
         table.add_row(*cells)
     return table
 
