@@ -15,8 +15,6 @@ import casadi as ca
 
 from models.context import AssemblyContext
 from models.elements import FAMILIES
-from models.elements.base import Contribution
-from models.elements.curved_beam import FlexureTopology, flexure_wrenches
 from models.loads import applied_wrenches
 from models.residual import residual_of
 from models.structure import Structure
@@ -33,9 +31,9 @@ def tangent_terms(structure: Structure) -> ca.Function:
     d = {k: ctx.displacements(v) for k, v in copies.items()}
     parts = []
     for t, offset in zip(structure.elements, structure.element_offsets):
-        if isinstance(t, FlexureTopology):
-            on_i, on_j, _ = flexure_wrenches(ctx, t, d["psi"], d["N"], d["T"])
-            parts.append(Contribution({t.start_body: on_i, t.end_body: on_j}))
+        split = getattr(FAMILIES.of(t), "split_contribution", None)
+        if split is not None:
+            parts.append(split(ctx, t, d["psi"], d["N"], d["T"]))
         else:
             parts.append(FAMILIES.of(t).contribute(ctx, t, d["psi"], copies["psi"][offset:offset + t.unknowns]))
     R = residual_of(ctx, parts, applied_wrenches(ctx, d["load"]))

@@ -49,7 +49,7 @@ def tangent_stiffness(mech: Mechanism, z: np.ndarray | None = None) -> TangentSt
     _, K = mech.graphs.residual_and_tangent(z, p)
     n_bodies = mech.n_body_coordinates
     terms = {}
-    splits = any(getattr(FAMILIES.of(t), "splits_tangent", False) for t in mech.structure.elements)
+    splits = any(hasattr(FAMILIES.of(t), "split_contribution") for t in mech.structure.elements)
     if splits and not any(t.unknowns for t in mech.structure.elements):
         parts = mech.graphs.tangent_terms(z, p)
         terms = {name: matrix_to_doc(mech, np.asarray(t)) for name, t in zip(("I", "II", "III", "load"), parts)}

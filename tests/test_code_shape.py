@@ -112,6 +112,22 @@ def element_types() -> set[str]:
     return names
 
 
+def element_classes() -> set[str]:
+    """The classes models/elements defines (an element's schema, topology, family)."""
+    return {node.name for path in (ROOT / "models" / "elements").glob("*.py")
+            for node in ast.walk(ast.parse(path.read_text())) if isinstance(node, ast.ClassDef)}
+
+
+def _names(node: ast.AST) -> set[str]:
+    if isinstance(node, ast.Name):
+        return {node.id}
+    if isinstance(node, ast.Attribute):
+        return {node.attr}
+    if isinstance(node, ast.Tuple):
+        return set().union(set(), *(_names(item) for item in node.elts))
+    return set()
+
+
 def _strings(node: ast.AST) -> set[str]:
     if isinstance(node, ast.Constant) and isinstance(node.value, str):
         return {node.value}
@@ -122,15 +138,21 @@ def _strings(node: ast.AST) -> set[str]:
 
 def test_no_element_type_is_compared_outside_its_family():
     """Per-type questions go through the element registry (issue 26): a comparison of an
-    element's `type` or `family` with a family's name, or a selection by a family's name
-    (Structure.of_family), belongs in models/elements only."""
-    types = element_types()
+    element's `type` or `family` with a family's name, a selection by a family's name
+    (Structure.of_family) or an isinstance of an element class belongs in models/elements only."""
+    types, classes = element_types(), element_classes() - {"TwoBodyElement"}  # the base of every schema
     assert {"link", "link_elements", "curved_beam", "spring", "pin", "slider"} <= types
+    assert {"LinkElementsTopology", "FlexureTopology", "CurvedBeam"} <= classes
     found = []
     for name, tree in trees().items():
         if name.startswith("models.elements"):
             continue
         for node in ast.walk(tree):
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == "isinstance":
+                named = _names(node.args[1]) & classes if len(node.args) == 2 else set()
+                if named:
+                    found.append(f"{name}:{node.lineno} asks isinstance of {', '.join(sorted(named))}")
+                continue
             if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "of_family":
                 named = set().union(set(), *(_strings(arg) for arg in node.args)) & types
                 if named:

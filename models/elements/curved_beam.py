@@ -97,13 +97,18 @@ class CurvedBeamFamily:
         unknowns of their own."""
         return beam_discretization(el) if (model or el.model) == "exact" else None
 
-    # Cammarata et al.'s split of K_T into terms I-III is written for these flexures (service.stiffness)
-    splits_tangent = True
     # what a flexures table reports of each (elements.<name>.<output>; service.cli.report_tables)
     flexure_outputs = ("rotation", "M", "stress_start", "stress_end", "stress_max")
 
     def model_name(self, el: CurvedBeam) -> str:
         return el.model
+
+    def split_contribution(self, ctx: AssemblyContext, t: "FlexureTopology", d_psi, d_N, d_T) -> Contribution:
+        """The flexure's wrenches with its rotation, axial and transverse parts read from separate
+        copies of the displacements: Cammarata et al.'s split of K_T into terms I-III
+        (models.tangent_split), written for these flexures."""
+        on_i, on_j, _ = flexure_wrenches(ctx, t, d_psi, d_N, d_T)
+        return Contribution({t.start_body: on_i, t.end_body: on_j})
 
     def impact_by_statics(self, el: CurvedBeam) -> bool:
         """The exact model (a link) enters an impact simulation by its own statics stiffness

@@ -37,6 +37,14 @@ class LinkElementsFamily:
     type = "link_elements"
     schema = None  # a `link` document with discretization "elements"
     centre_line_sites = True  # contact sites lie on its centre line (models.contact)
+    kernel_chain = True  # it runs as a chain of element kernels (models.kernels)
+
+    def energy_form_counts(self, t: LinkElementsTopology) -> tuple[int, int]:
+        """(own variables, equalities) in the energy form: its rotations and strains; the end
+        conditions."""
+        rotations = t.intervals * t.degree + (1 if t.start == "pinned" else 0)
+        strains = t.intervals * t.degree * (int(t.shear) + int(t.axial))
+        return rotations + strains, 2 + (1 if t.end == "clamped" else 0)
 
     def check_simulated(self, t: LinkElementsTopology) -> None:
         if not t.weighs:

@@ -28,12 +28,15 @@ from models.structure import Structure
 
 
 def own_counts(t) -> tuple[int, int]:
-    """(own variables, equalities) of an element in the energy form."""
-    if isinstance(t, LinkElementsTopology):
-        rotations = t.intervals * t.degree + (1 if t.start == "pinned" else 0)
-        strains = t.intervals * t.degree * (int(t.shear) + int(t.axial))
-        return rotations + strains, 2 + (1 if t.end == "clamped" else 0)
-    return 0, t.unknowns  # joints: multipliers only; springs, flexures: none
+    """(own variables, equalities) of an element in the energy form, as its family counts them
+    (joints: multipliers only; springs, flexures: none)."""
+    counts = getattr(FAMILIES.of(t), "energy_form_counts", None)
+    return counts(t) if counts is not None else (0, t.unknowns)
+
+
+def runs_in_chains(t) -> bool:
+    """Whether the element runs as a chain of element kernels (its family says)."""
+    return getattr(FAMILIES.of(t), "kernel_chain", False)
 
 
 @dataclass
@@ -103,7 +106,7 @@ class KernelLayout:
         for k, t in enumerate(structure.elements):
             own, eq = own_counts(t)
             names = [f"{t.name}.{name}" for name, _ in FAMILIES.of(t).unknowns(t)]
-            if isinstance(t, LinkElementsTopology):
+            if runs_in_chains(t):
                 sig = signature_of(t, rule)
                 group = groups.setdefault(sig, ChainGroup(sig))
                 chain = Chain(k, t, len(x_names), len(lam_names), group.n_blocks, aux, sig)

@@ -11,9 +11,8 @@ from pathlib import Path
 import casadi as ca
 
 from models import Mechanism, MechanismError
-from models.elements.link import LinkElementsTopology
 from models.kernels.chunks import chunks
-from models.kernels.layout import layout_of
+from models.kernels.layout import layout_of, runs_in_chains
 from models.kernels.link_chain import ChainSignature
 from service.kernels.cache import abandoned, library
 from service.kernels.queue import BUILD_ORDER, function_library, note_of
@@ -40,7 +39,7 @@ def chain_build(signature: ChainSignature) -> Build:
 def builds_of(mech: Mechanism) -> list[Build]:
     """The kernels a document's analyses run on (none for documents without dynamics)."""
     out = []
-    if any(isinstance(t, LinkElementsTopology) for t in mech.structure.elements):
+    if any(runs_in_chains(t) for t in mech.structure.elements):
         out += [chain_build(g.signature) for g in layout_of(mech.structure).groups]
     simulate = mech.document.simulate
     if simulate is not None and simulate.scheme in ("event_driven", "moreau"):
@@ -72,7 +71,7 @@ def window_builds(mech: Mechanism) -> list[Build]:
 
     if mech.document.simulate is None or mech.document.simulate.scheme in ("event_driven", "moreau"):
         return []
-    if not any(isinstance(t, LinkElementsTopology) for t in mech.structure.elements):
+    if not any(runs_in_chains(t) for t in mech.structure.elements):
         return []
     try:
         spec = simulation_spec(mech)
