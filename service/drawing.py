@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from models import Mechanism, MechanismError
+from models.elements import FAMILIES
 from service.configuration_plot import load_point
 from service.drawing_outlines import circle_sites, contact_objects, document_length, in_body, turned
 
@@ -107,23 +108,20 @@ def _connectors(mech: Mechanism, bodies: dict) -> list[dict]:
     """Pins, sliders and springs: where they are (undeformed), on which bodies."""
     drawn = []
     for name, spec in mech.document.elements.items():
-        kind = getattr(spec, "type", None)
-        if kind not in ("pin", "slider", "spring"):
+        ask = getattr(FAMILIES.named(spec.type), "connector", None)
+        if ask is None:
             continue
-        ends = (spec.from_, spec.to)
-        pointer = f"/elements/{name}"
-        if kind == "spring":
-            at = {"from_at": spec.from_at, "to_at": spec.to_at}
-        else:
-            at = {"at": spec.at}
-        points = [bodies[body]["reference"] if where is None else
-                  [document_length(mech, v, f"{pointer}/{field}/{i}") for i, v in enumerate(where)]
-                  for body, (field, where) in zip(ends[-len(at):], at.items())]
-        entry = {"name": name, "type": kind, "bodies": list(ends), "points": points}
-        if kind == "slider":
-            entry["angle"] = float(mech.value(f"/elements/{name}/angle")) * mech.doc_factor("angle")
-        if kind == "spring":
-            entry["kind"] = spec.kind
+        connector, pointer = ask(spec), f"/elements/{name}"
+        points = []
+        for field, body in connector.points:
+            where = getattr(spec, field)
+            points.append(bodies[body]["reference"] if where is None else
+                          [document_length(mech, v, f"{pointer}/{field}/{i}") for i, v in enumerate(where)])
+        entry = {"name": name, "type": spec.type, "bodies": [spec.from_, spec.to], "points": points}
+        if connector.angle_field is not None:
+            entry["angle"] = float(mech.value(f"{pointer}/{connector.angle_field}")) * mech.doc_factor("angle")
+        if connector.kind is not None:
+            entry["kind"] = connector.kind
         drawn.append(entry)
     return drawn
 

@@ -140,6 +140,18 @@ class Discretization:
     elements: int = 0
 
 
+@dataclass(frozen=True)
+class Connector:
+    """How the page draws an element that connects two bodies at points (service.drawing): per
+    point the field holding it (global, undeformed) and the body whose reference point stands in
+    when the field is left out; a field in the document's angle unit to draw (a slider's axis);
+    its kind."""
+
+    points: tuple[tuple[str, str], ...]
+    angle_field: str | None = None
+    kind: str | None = None
+
+
 def beam_discretization(element) -> Discretization:
     """A beam discretized by shooting or by elements (its `discretization`, `intervals`,
     `order` and `degree` fields)."""
@@ -153,7 +165,8 @@ class ElementFamily(Protocol):
     """The contract of an element family. Optional hooks, asked only where a family has them:
     discretization(element, model) -> Discretization | None (what its unknowns cost);
     check_simulated(topology) (raise MechanismError where link dynamics cannot take it);
-    model_name(element) -> str (the model a report names); centre_line_sites (attribute: contact
+    model_name(element) -> str (the model a report names); connector(element) -> Connector (the
+    page draws it as a connector: pins, sliders, springs); centre_line_sites (attribute: contact
     sites lie on its centre line); invertible (attribute: the link inverse solves its shape);
     impact_flexure, impact_constraint, impact_by_statics (models.impacts.elements)."""
 

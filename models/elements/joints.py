@@ -16,7 +16,8 @@ import casadi as ca
 from pydantic import Field
 
 from models.context import AssemblyContext
-from models.elements.base import Contribution, EnergyTerms, ScaleHint, SiValues, TwoBodyElement, constraint_wrenches
+from models.elements.base import (Connector, Contribution, EnergyTerms, ScaleHint, SiValues, TwoBodyElement,
+                                  constraint_wrenches)
 from models.errors import MechanismError
 from models.fields import Vec2
 from models.structure import ElementTopology
@@ -85,6 +86,10 @@ class JointFamily(ABC):
 
     def scale_hint(self, t: JointTopology, values: SiValues) -> ScaleHint:
         return ScaleHint()
+
+    def connector(self, el: RigidJoint) -> Connector:
+        """Drawn at its joint point `at` (default: the `to` body's reference point)."""
+        return Connector((("at", el.to),))
 
     impact_labels: tuple[tuple[str, str], tuple[str, str]] = ()  # (label, kind) of an impact model's multipliers
 

@@ -13,6 +13,7 @@ from typing import Literal
 
 import casadi as ca
 
+from models.elements.base import Connector
 from models.elements.joints import JointFamily, JointTopology, RigidJoint, collect_joint, joint_points
 from models.fields import Number
 
@@ -36,6 +37,9 @@ class SliderFamily(JointFamily):
     constraint_names = ("normal", "rotation")
     multiplier_names = (("lambda_n", "force"), ("lambda_m", "moment"))
     impact_labels = (("N", "force"), ("M", "moment"))  # across the axis on `to`, and the couple on it
+
+    def connector(self, el: Slider) -> Connector:
+        return Connector((("at", el.to),), angle_field="angle")
 
     def impact_rows(self, rb, name, el, first, second, apart) -> ca.SX:
         alpha = rb.book.number(f"/elements/{name}/angle", el.angle, "angle") + rb.rotation(first)

@@ -26,7 +26,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from models.context import AssemblyContext
-from models.elements.base import Contribution, EnergyTerms, ScaleHint, SiValues, TwoBodyElement
+from models.elements.base import Connector, Contribution, EnergyTerms, ScaleHint, SiValues, TwoBodyElement
 from models.errors import MechanismError
 from models.expression import CONSTANTS, FUNCTIONS, compile_expression, finite_on
 from models.fields import Number, Vec2
@@ -75,6 +75,10 @@ class SpringTopology(ElementTopology):
 class SpringFamily:
     type = "spring"
     schema = Spring
+
+    def connector(self, el: Spring) -> Connector:
+        """Drawn between its two points (default: the bodies' reference points)."""
+        return Connector((("from_at", el.from_), ("to_at", el.to)), kind=el.kind)
 
     def collect(self, c, name: str, el: Spring, i: int, j: int) -> SpringTopology:
         base = f"/elements/{name}"
