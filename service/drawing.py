@@ -117,7 +117,8 @@ def _connectors(mech: Mechanism, bodies: dict) -> list[dict]:
             where = getattr(spec, field)
             points.append(bodies[body]["reference"] if where is None else
                           [document_length(mech, v, f"{pointer}/{field}/{i}") for i, v in enumerate(where)])
-        entry = {"name": name, "type": spec.type, "bodies": [spec.from_, spec.to], "points": points}
+        entry = {"name": name, "type": spec.type, "glyph": connector.glyph, "bodies": [spec.from_, spec.to],
+                 "points": points}
         if connector.angle_field is not None:
             entry["angle"] = float(mech.value(f"{pointer}/{connector.angle_field}")) * mech.doc_factor("angle")
         if connector.kind is not None:

@@ -136,3 +136,27 @@ def test_the_client_draws_and_reads_a_jobs_request(api_server):
         with pytest.raises(ValidationError) as refused:
             flexmech.drawing(example="gripper", state="path")  # refused before it is sent
         assert "give path with state 'path'" in str(refused.value)
+
+
+def test_each_connector_is_drawn_by_the_glyph_and_points_its_family_gives():
+    """Pins, sliders and springs come to the page with their family's glyph (models.elements:
+    connector()), their points where the document puts them (the body's reference point where
+    it leaves them out), a slider's axis in rad and a spring's kind."""
+    doc = {"units": {"length": "mm", "force": "N", "angle": "deg"},
+           "bodies": {"ground": {"fixed": True, "position": [0, 0]}, "carriage": {"position": [10, 2]},
+                      "arm": {"position": [20, 2]}},
+           "elements": {"rail": {"type": "slider", "from": "ground", "to": "carriage", "angle": 30},
+                        "hinge": {"type": "pin", "from": "carriage", "to": "arm", "at": [15, 2]},
+                        "coil": {"type": "spring", "from": "ground", "to": "arm", "stiffness": 1.0,
+                                 "from_at": [0, 5], "to_at": [20, 5]},
+                        "twist": {"type": "spring", "kind": "torsional", "from": "carriage", "to": "arm",
+                                  "stiffness": 1.0}}}
+    drawn = {c["name"]: c for c in mechanism_drawing(compile_mechanism(load_document(doc)))["connectors"]}
+    assert {name: c["glyph"] for name, c in drawn.items()} == {"rail": "slider", "hinge": "pin", "coil": "zigzag",
+                                                               "twist": "zigzag"}
+    assert drawn["rail"]["points"] == [[10, 2]] and drawn["rail"]["angle"] == pytest.approx(math.pi / 6)
+    assert drawn["hinge"]["points"] == [[15, 2]] and drawn["hinge"]["bodies"] == ["carriage", "arm"]
+    assert drawn["coil"]["points"] == [[0, 5], [20, 5]] and drawn["coil"]["kind"] == "translational"
+    assert drawn["twist"]["points"] == [[10, 2], [20, 2]] and drawn["twist"]["kind"] == "torsional"
+    scene = (WEB / "scene.js").read_text()
+    assert 'joint.glyph === "zigzag"' in scene and 'joint.glyph === "slider"' in scene  # the page draws by glyph

@@ -169,13 +169,13 @@ function springPath(a, b, map) {
 function drawConnectors(layer, drawing, frame, view) {
   for (const joint of drawing.connectors) {
     const [first, second] = joint.bodies;
-    if (joint.type === "spring" && joint.points.length === 2) {
+    if (joint.glyph === "zigzag" && joint.points.length === 2) {
       const a = placed(drawing, frame, first, joint.points[0]), b = placed(drawing, frame, second, joint.points[1]);
       node("path", { d: springPath(a, b, view.map), fill: "none", stroke: COLORS.body, "stroke-width": "1.2", "data-connector": joint.name }, layer);
       continue;
     }
     const [x, y] = view.map(placed(drawing, frame, second, joint.points[0]));
-    if (joint.type === "slider") {
+    if (joint.glyph === "slider") {
       const c = Math.cos(joint.angle), s = Math.sin(joint.angle);
       node("line", { x1: x - 30 * c, y1: y + 30 * s, x2: x + 30 * c, y2: y - 30 * s, stroke: COLORS.body, "stroke-width": "1.2" }, layer);
       node("rect", { x: x - 8, y: y - 5, width: 16, height: 10, fill: "#fff", stroke: COLORS.body, "data-connector": joint.name,

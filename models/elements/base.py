@@ -142,11 +142,13 @@ class Discretization:
 
 @dataclass(frozen=True)
 class Connector:
-    """How the page draws an element that connects two bodies at points (service.drawing): per
-    point the field holding it (global, undeformed) and the body whose reference point stands in
-    when the field is left out; a field in the document's angle unit to draw (a slider's axis);
-    its kind."""
+    """How the page draws an element that connects two bodies at points (service.drawing): its
+    glyph (the page's vocabulary: "pin" a ring at the point, "slider" a block on its axis,
+    "zigzag" a spring between two points); per point the field holding it (global, undeformed)
+    and the body whose reference point stands in when the field is left out; a field in the
+    document's angle unit to draw (a slider's axis); its kind."""
 
+    glyph: str
     points: tuple[tuple[str, str], ...]
     angle_field: str | None = None
     kind: str | None = None

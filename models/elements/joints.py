@@ -89,7 +89,7 @@ class JointFamily(ABC):
 
     def connector(self, el: RigidJoint) -> Connector:
         """Drawn at its joint point `at` (default: the `to` body's reference point)."""
-        return Connector((("at", el.to),))
+        return Connector("pin", (("at", el.to),))
 
     impact_labels: tuple[tuple[str, str], tuple[str, str]] = ()  # (label, kind) of an impact model's multipliers
 

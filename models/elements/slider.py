@@ -39,7 +39,7 @@ class SliderFamily(JointFamily):
     impact_labels = (("N", "force"), ("M", "moment"))  # across the axis on `to`, and the couple on it
 
     def connector(self, el: Slider) -> Connector:
-        return Connector((("at", el.to),), angle_field="angle")
+        return Connector("slider", (("at", el.to),), angle_field="angle")
 
     def impact_rows(self, rb, name, el, first, second, apart) -> ca.SX:
         alpha = rb.book.number(f"/elements/{name}/angle", el.angle, "angle") + rb.rotation(first)

@@ -78,7 +78,7 @@ class SpringFamily:
 
     def connector(self, el: Spring) -> Connector:
         """Drawn between its two points (default: the bodies' reference points)."""
-        return Connector((("from_at", el.from_), ("to_at", el.to)), kind=el.kind)
+        return Connector("zigzag", (("from_at", el.from_), ("to_at", el.to)), kind=el.kind)
 
     def collect(self, c, name: str, el: Spring, i: int, j: int) -> SpringTopology:
         base = f"/elements/{name}"
