@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from models.collector import Collector
-from models.contact.collect import collect_contacts
+from models.contact.collect_contacts import collect_contacts
 from models.document import ForceLoad, MechanismDocument, MomentLoad, PointOutput, PrescribedDisplacement, ReactionOutput
 from models.elements import FAMILIES, MODELS
 from models.errors import MechanismError, pointer_of

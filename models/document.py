@@ -17,7 +17,7 @@ from typing import Annotated, Any, Literal, Union
 
 from pydantic import Field, ValidationError, field_validator, model_validator
 
-from models.contact.document import OBJECT_TYPES, SITE_TYPES, Contacts
+from models.contact.schema import OBJECT_TYPES, SITE_TYPES, Contacts
 from models.elements import FAMILIES
 from models.elements.link import SHAPE_TYPES
 from models.simulation_spec import SimulateSpec

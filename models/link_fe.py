@@ -30,7 +30,7 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
-from models.link import LinkProperties
+from models.link_shooting import LinkProperties
 
 
 def _lagrange(nodes: np.ndarray, xi: float) -> tuple[np.ndarray, np.ndarray]:

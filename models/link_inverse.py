@@ -32,7 +32,7 @@ from models.context import AssemblyContext
 from models.elements import FAMILIES
 from models.elements.base import Contribution
 from models.elements.link import LinkTopology, link_shooting
-from models.link import LinkShooting, inverse_rhs_function
+from models.link_shooting import LinkShooting, inverse_rhs_function
 from models.loads import applied_wrenches
 from models.planar import cross, rot
 from models.residual import residual_of

@@ -20,7 +20,7 @@ from models import Mechanism, MechanismDocument, MechanismError, compile_mechani
 from service.analyses.equilibrium import equilibrium_report
 from service.design import design_problem
 from service.equilibrium import NewtonOptions
-from service.link_inverse import inverse_links
+from service.inverse_links import inverse_links
 from service.optimize import optimize
 from service.reports import plain
 from service.sweep import document_sweep

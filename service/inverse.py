@@ -17,7 +17,7 @@ def inverse_wrenches(mech: Mechanism, displacements: dict[str, tuple[float, floa
 
     No iteration: it evaluates the elastic wrenches of the flexures in that configuration.
     Links are distributed: their shape between given ends is itself an equilibrium problem,
-    so they take the link inverse (service.link_inverse) instead.
+    so they take the link inverse (service.inverse_links) instead.
     """
     owning = [t.name for t in mech.structure.elements if t.unknowns]
     if owning:

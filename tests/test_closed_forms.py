@@ -49,7 +49,7 @@ def document(bodies, elements, loads):
 
 @pytest.mark.parametrize("arc_deg", [60.0, 180.0, 300.0])
 def test_eq_2_equals_castigliano(arc_deg):
-    from models.curved_beam import compliance
+    from models.curved_beam_closed_form import compliance
     r, theta = 0.01, math.radians(arc_deg)
     C = np.array(compliance(r, theta, EI))
     np.testing.assert_allclose(C, castigliano_compliance(r, theta), rtol=1e-10)

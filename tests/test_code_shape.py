@@ -164,3 +164,12 @@ def test_no_element_type_is_compared_outside_its_family():
             if named:
                 found.append(f"{name}:{node.lineno} compares with {', '.join(sorted(named))}")
     assert not found, found
+
+
+def test_no_two_modules_of_models_share_a_name():
+    """Rooms that show the shape (issue 26): a module's name says which one it is."""
+    seen: dict[str, list[str]] = {}
+    for name in modules():
+        if name.startswith("models.") and not name.endswith("__init__"):
+            seen.setdefault(name.rsplit(".", 1)[1], []).append(name)
+    assert not {stem: names for stem, names in seen.items() if len(names) > 1}

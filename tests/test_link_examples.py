@@ -12,7 +12,7 @@ import models
 from conftest import EXAMPLES
 from elastica_oracles import cantilever_tip
 from service.equilibrium import NewtonOptions, solve_equilibrium
-from service.link_inverse import inverse_links
+from service.inverse_links import inverse_links
 from service.sweep import document_sweep
 
 LINK_EXAMPLES = ["cantilever", "compliant_slider", "parallel_mechanism", "planar_spring", "curved_indexer",

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import models
-from models import curved_beam
+from models import curved_beam_closed_form as curved_beam
 from service.equilibrium import NewtonOptions, solve_equilibrium
 from elastica_oracles import cantilever_tip, circular_arc_tip, timoshenko_tip_deflection
 

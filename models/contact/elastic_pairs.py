@@ -23,7 +23,7 @@ from models.context import AssemblyContext
 from models.contact.circle_contact import (against_circle, against_half_plane, against_hole, against_nearest,
                                            closest_on_ellipse, closest_on_polygon)
 from models.contact.constraints import ContactGeometry
-from models.contact.document import FrictionFields
+from models.contact.schema import FrictionFields
 from models.contact.laws import FRICTION_LAWS, NORMAL_LAWS, check_law
 from models.contact.laws.penalty import elastic_power
 from models.contact.topology import ContactTopology, PairTopology
@@ -163,7 +163,7 @@ def _numbers(ctx: AssemblyContext, pair: PairTopology) -> tuple[ca.SX, ca.SX]:
 
 
 def law_numbers(ctx: AssemblyContext, pair: PairTopology) -> LawNumbers:
-    """The pair's law's numbers (document units; models.contact.collect adds them)."""
+    """The pair's law's numbers (document units; models.contact.collect_contacts adds them)."""
     base = f"{pair.pointer}/normal"
     restitution = ctx.P[f"{base}/restitution"] if pair.normal_law in DAMPED_LAWS else None
     return LawNumbers(ctx.P[f"{base}/stiffness"], ctx.P[f"{base}/exponent"], restitution)

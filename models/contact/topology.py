@@ -41,7 +41,7 @@ class PairTopology:
     name: str
     site: int  # index into ContactTopology.sites
     object: int
-    friction_pointer: str = ""  # the coefficient a quasi-static solve slips at (models.contact.document)
+    friction_pointer: str = ""  # the coefficient a quasi-static solve slips at (models.contact.schema)
     normal_law: str = "unilateral"  # the laws' names (models.contact.laws): each analysis checks its own
     friction_law: str = "coulomb"
     potential: bool = False  # part of the mechanism's energy (models.contact.elastic_pairs)

@@ -21,7 +21,7 @@ from typing import Literal
 import casadi as ca
 from pydantic import Field
 
-from models import curved_beam as kernel
+from models import curved_beam_closed_form as kernel
 from models.context import AssemblyContext
 from models.elements.base import (CentreLine, Contribution, Discretization, EnergyTerms, NoEnergyForm, ScaleHint,
                                   SiValues, TwoBodyElement, beam_discretization)

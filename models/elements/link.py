@@ -1,5 +1,5 @@
 """The link family (Lan 2005): a distributed elastica between two bodies, solved by multiple
-shooting inside the graph (models.link). Also the exact model of a curved beam, whose centre
+shooting inside the graph (models.link_shooting). Also the exact model of a curved beam, whose centre
 line is the beam's arc.
 
 Unknowns (4 x intervals): h, v (the internal force at u = 0, global), the start rotation and
@@ -28,7 +28,7 @@ from models.elements.base import (CentreLine, Contribution, Discretization, NoEn
 from models.errors import MechanismError
 from models.expression import compile_expression, finite_on
 from models.fields import Number, StrictModel, Vec2
-from models.link import LinkProperties, LinkShooting, LinkSolution
+from models.link_shooting import LinkProperties, LinkShooting, LinkSolution
 from models.planar import cross
 from models.sections import GeneralSection, SectionTopology, nominal_EI, section_properties, section_topology
 from models.structure import ElementTopology

@@ -15,7 +15,7 @@ from service.cli.options import DocArg, JsonOpt, MaxIterOpt, SetOpt, mechanism
 from service.newton import NewtonOptions
 
 if TYPE_CHECKING:  # the link inverse is imported when the command runs
-    from service.link_inverse import LinkInverseResult
+    from service.inverse_links import LinkInverseResult
 
 
 def internal_forces(given: dict[str, dict[str, float]], items: list[str] | None) -> dict[str, dict[str, float]]:
@@ -64,7 +64,7 @@ def inverse(
 ) -> None:
     """Link inverse (Lan 2005 Sec. 5.3): initial shapes and unknown loads from the deformed
     shapes and internal forces of the document's `inverse` section."""
-    from service.link_inverse import inverse_links
+    from service.inverse_links import inverse_links
 
     out, err = consoles()
     with user_errors(err):

@@ -10,7 +10,7 @@ from collections import OrderedDict
 import numpy as np
 
 from models import MechanismError
-from models.contact.document import FrictionFields
+from models.contact.schema import FrictionFields
 from models.contact.laws import FRICTION_LAWS, NORMAL_LAWS, check_law
 from models.document import MechanismDocument
 from models.impacts.model import DAMPING, WORKS, ImpactModel, impact_model

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from models.contact.document import Contacts, FrictionFields, JawSite
+from models.contact.schema import Contacts, FrictionFields, JawSite
 from models.contact.elastic_pairs import DAMPED_LAWS, ELASTIC_LAWS
 from models.contact.pair_forces import REGULARIZED
 from models.contact.laws import friction_law, normal_law
