@@ -1,4 +1,4 @@
-"""Element families in impact simulations (models.impacts.elements, through each
+"""Element families in impact simulations (models.impacts.families, through each
 family's impact hooks): a pin in its hole riding a slider meets the hole at the time and
 speed of a fall along the slider, held by the slider's normal force alone; an element
 without a finite stiffness at its end is refused, saying why."""

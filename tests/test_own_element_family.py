@@ -1,6 +1,6 @@
 """An element family of the test's own, added with one registration line, works in statics,
 link dynamics and impact simulations (models.elements.base: the contract; models.document
-takes its section at once; models.impacts.elements brings its statics energy to impacts).
+takes its section at once; models.impacts.families brings its statics energy to impacts).
 
 The family is a bushing: a zero-length spring of stiffness k between the point of two bodies
 that coincides with `to`'s reference point as drawn, and a torsional spring kt between their

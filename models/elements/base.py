@@ -170,7 +170,7 @@ class ElementFamily(Protocol):
     model_name(element) -> str (the model a report names); connector(element) -> Connector (the
     page draws it as a connector: pins, sliders, springs); centre_line_sites (attribute: contact
     sites lie on its centre line); invertible (attribute: the link inverse solves its shape);
-    impact_flexure, impact_constraint, impact_by_statics (models.impacts.elements)."""
+    impact_flexure, impact_constraint, impact_by_statics (models.impacts.families)."""
 
     type: str
     schema: type[TwoBodyElement] | None

@@ -20,7 +20,7 @@ from models.document import MechanismDocument
 from models.errors import MechanismError
 from models.impacts.book import ParameterBook
 from models.impacts.coordinates import BodyCoordinates
-from models.impacts.elements import element_energy, flexures as flexures_of, joint_constraints, turning_force
+from models.impacts.families import element_energy, flexures as flexures_of, joint_constraints, turning_force
 from models.impacts.pairs import PairModel, pair_model
 from models.planar import rot
 
@@ -48,7 +48,7 @@ class ImpactModel:
     history_key: str = ""
     constraints: ca.SX = None  # g(q, t) = 0 of the pins and sliders (2 rows each)
     joint_names: tuple[str, ...] = ()
-    joint_labels: tuple[tuple, ...] = ()  # per joint its multipliers' (label, kind) (models.impacts.elements)
+    joint_labels: tuple[tuple, ...] = ()  # per joint its multipliers' (label, kind) (models.impacts.families)
     element_key: str = ""  # the topologies of the elements that enter by their statics energy
 
     @property

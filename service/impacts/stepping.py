@@ -38,7 +38,7 @@ def _code_version(family_sources: tuple[str, ...]) -> str:
     from pathlib import Path
 
     import models.contact.laws as laws
-    import models.context as statics_context  # the statics energies of models.impacts.elements read it
+    import models.context as statics_context  # the statics energies of models.impacts.families read it
     import models.loads as statics_loads  # the bodies' kinetic energy, gravity and loads (models.impacts.coordinates)
     import models.elements as families
     import models.impacts as built
