@@ -63,6 +63,39 @@ def test_bad_simulation_fields_are_422_naming_them(api_server):
         assert error["pointer"] == pointer and words in error["message"], error
 
 
+def test_a_simulation_job_carries_a_located_contact_onset_across_its_windows(api_server):
+    """The dynamic grasp (a Lankarani-Nikravesh pair): the job's stored windows carry the onset
+    located in one of them (its approach speed, the step it added) to the next, and the job's
+    contact force follows the one-call run's (to the Newton tolerance: after the onset the two
+    cut their windows of steps in other places)."""
+    simulate = {"until": 0.005, "every": 1}
+    with Client(api_server.url) as client:
+        job = client.simulation(example="gripper_grasp_dynamics", simulate=simulate)
+        final = client.wait(job.id, timeout=300)
+        assert final.status == "succeeded", final.error
+        result = client.result(job.id).result
+    one = solved_in_one(api_server, "gripper_grasp_dynamics", simulate)
+    assert result["windows_stored"] > 5 and len(result["times"]) == len(one["times"])
+    np.testing.assert_allclose(result["times"], one["times"], rtol=1e-9)  # the onset's time to round-off
+    indentation = np.array(result["outputs"]["contacts.grip.indentation"])
+    assert np.abs(indentation).min() < 1e-12  # the onset's own state, stored by its window
+    force = np.array(one["outputs"]["contacts.grip.normal_force"])
+    np.testing.assert_allclose(result["outputs"]["contacts.grip.normal_force"], force, rtol=1e-6, atol=1e-9 * force.max())
+
+
+def test_a_simulation_job_refuses_a_contact_law_link_dynamics_does_not_take(api_server):
+    import json
+    from pathlib import Path
+
+    doc = json.loads((Path(__file__).resolve().parents[1] / "examples" / "gripper_grasp_dynamics.json").read_text())
+    doc["contacts"]["pairs"]["grip"]["friction"] = 0.3  # Coulomb's coefficient
+    r = httpx.post(f"{api_server.url}/v1/simulations", json={"document": doc})
+    assert r.status_code == 422, r.text
+    error = r.json()["error"]
+    assert error["pointer"] == "/document/contacts/pairs/grip/friction"
+    assert "not Coulomb's coefficient" in error["message"]
+
+
 def test_a_killed_server_resumes_the_simulation_from_its_last_window(deployment):
     """SIGKILL mid-run (the four-bar, 0.2 s in 1000 steps, stored in 50 windows of 20); a new
     server on the same store finishes it. The windows stored before come back as they were, and

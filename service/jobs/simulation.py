@@ -14,6 +14,7 @@ import math
 from collections.abc import Mapping
 
 from models import MechanismError
+from models.contact.elastic_pairs import check_link_dynamics
 from models.simulation_spec import IMPACT_SCHEMES
 from service.costs import Limits, check_result_size
 from service.dynamics.histories import read_histories
@@ -43,6 +44,7 @@ class SimulationJob(InOrder):
                                  "study job (/v1/impact-studies) runs many")
         try:
             check_masses(mech)
+            check_link_dynamics(mech.document)  # its contact pairs' laws, as a call of /v1/solve checks them
         except MechanismError as exc:
             raise under("/document", exc) from None
         steps = check_steps(simulate, limits.max_simulation_steps)  # adaptive: as many as the first step makes
@@ -50,7 +52,7 @@ class SimulationJob(InOrder):
         read_histories(mech, simulate.histories, simulate.until, "/simulate/histories")
         outputs = wanted_outputs(mech, simulate)
         kept = steps // simulate.every + 2
-        per_state = len(outputs) + len(mech.graphs.energy_form.equality_names) + 5
+        per_state = len(outputs) + len(mech.graphs.energy_form.equality_names) + 7  # time and six energies
         if simulate.shapes:
             per_state += 2 * sum(count for _, _, count, _, _ in mech.graphs.shape_segments)
         check_result_size(kept, per_state, limits, "/simulate/every")
