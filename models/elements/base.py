@@ -170,6 +170,9 @@ class ElementFamily(Protocol):
     model_name(element) -> str (the model a report names); connector(element) -> Connector (the
     page draws it as a connector: pins, sliders, springs); centre_line_sites (attribute: contact
     sites lie on its centre line); invertible (attribute: the link inverse solves its shape);
+    kernel_chain and energy_form_counts(topology) (it runs as a chain of element kernels, and
+    its own variables and equalities: models.kernels.layout); split_contribution (Cammarata et
+    al.'s K_T terms: models.tangent_split); flexure_outputs (a flexures table's columns);
     impact_flexure, impact_constraint, impact_by_statics (models.impacts.families)."""
 
     type: str
