@@ -1,7 +1,6 @@
-"""Located contact onsets in link dynamics. A damped normal law (models.contact.pair_forces)
-pushes from the contact's onset with a force that jumps there (a dashpot's c qdot) or that
-reads the approach speed there (Hunt-Crossley, Lankarani-Nikravesh, Flores: qdot_minus), so a
-run steps onto each onset: a step whose end is in contact while its start is not is replaced by
+"""Located contact onsets in link dynamics. A damped normal law (models.contact.pair_forces:
+Hunt-Crossley, Lankarani-Nikravesh, Flores) reads the approach speed at its contact's onset,
+qdot_minus, so a run steps onto each onset: a step whose end is in contact while its start is not is replaced by
 a step to the onset, whose length the Illinois method finds (the indentation at the end of a
 step of that length from the same start is zero), and a step over the rest of the interval.
 From then on the pair's onset speed (a parameter of the graphs) is the approach speed
@@ -151,7 +150,7 @@ def _locate(runner, at, pair: int, q_end: float, h: float):
     start (out of contact) and end (in contact); None if a trial step does not settle."""
     q_start = float(runner.indentations_at(at)[pair])
     lo, f_lo, hi, f_hi, last = 0.0, q_start, h, q_end, 0
-    inside = None  # the latest trial that ended in contact
+    inside, inside_q = None, q_end  # the latest trial that ended in contact, and its indentation
     for _ in range(LANDING_ITERATIONS):
         tau = hi - f_hi * (hi - lo) / (f_hi - f_lo)
         trial = _trial(runner, at, tau)
@@ -161,13 +160,13 @@ def _locate(runner, at, pair: int, q_end: float, h: float):
         q, qdot = runner.onsets.indentations(state[:, None], runner.n, inputs[0][:, :1], inputs[1][:, :1])
         f = float(q[pair, 0])
         if f > 0:
-            inside = (state, monitor, inputs[0][:, 0], tau, float(qdot[pair, 0]))
+            inside, inside_q = (state, monitor, inputs[0][:, 0], tau, float(qdot[pair, 0])), f
             hi, f_hi = tau, f
             f_lo, last = (f_lo / 2 if last == 1 else f_lo), 1
         else:
             lo, f_lo = tau, f
             f_hi, last = (f_hi / 2 if last == -1 else f_hi), -1
-        if hi - lo <= GRID_SLACK * h or (inside is not None and f_hi <= 1e-12 * (q_end - q_start)):
+        if hi - lo <= GRID_SLACK * h or (inside is not None and inside_q <= 1e-12 * (q_end - q_start)):
             break
     if inside is None:  # every trial fell short: the whole step is the one that enters
         trial = _trial(runner, at, h)
@@ -181,8 +180,8 @@ def _locate(runner, at, pair: int, q_end: float, h: float):
 
 def _trial(runner, at, h: float):
     """(state, monitor, the step's inputs) of one step h from `at`, by full Newton where the
-    window's chord iterations do not settle it (a dashpot's force jumps at the onset); None if
-    neither does."""
+    window's chord iterations do not settle it (a trial in contact still damps with the last
+    onset's speed, which may be far off); None if neither does."""
     inputs, S, monitors, _, settled = runner.run_window(at, h, 1)
     if S is not None and settled >= 1:
         return S[:, 0], monitors[:, 0], inputs

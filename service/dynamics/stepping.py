@@ -199,8 +199,11 @@ class StepRunner:
             step_inputs = tuple(q[:, settled] for q in inputs)
             state, monitor, norm = self.rescue(at, step_inputs, self.h)
             history.newton_iterations += 1
-            entering = crossing(self, at, step_inputs, state[:, None], 1) if norm <= WINDOW_ACCEPTANCE else None
-            if entering is not None:  # it enters a damped contact (whose force made it hard): onto the onset
+            # a step that enters a damped contact (whose last onset's speed made it hard): onto the onset,
+            # judged by the full Newton state, or else by the window's last iterate
+            judged = state if norm <= WINDOW_ACCEPTANCE else (S[:, settled] if S is not None else np.full(1, np.nan))
+            entering = crossing(self, at, step_inputs, judged[:, None], 1) if np.all(np.isfinite(judged)) else None
+            if entering is not None:
                 return step_onto_onset(self, history, at, entering[1], entering[2], self.h)
             if not norm <= WINDOW_ACCEPTANCE:
                 history.status = "not_converged"
