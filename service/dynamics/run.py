@@ -189,14 +189,13 @@ def records(mech: Mechanism, spec: SimulateSpec, history: History, histories) ->
 def _damped_normal_forces(mech: Mechanism, history: History, histories, outputs: dict) -> None:
     """A damped contact pair's normal force is its elastic part and its damping, which reads the
     velocities: the outputs of the states alone give the first; this puts in the whole."""
-    onsets = Onsets(mech.structure, histories.moving)
+    onsets = Onsets(mech.structure, histories.moving)  # a run's own: CasADi Functions are not shared across threads
     wanted = [name for name in onsets.names if f"contacts.{name}.normal_force" in outputs]
     if not wanted or not history.times:
         return
     n = len(mech.structure.free)
     x, v = (np.column_stack([q[:n] for q in rows]) for rows in (history.x, history.v))
-    rates = np.array([histories.at(mech.p(), t)[1] for t in history.times], dtype=float).reshape(
-        len(history.times), len(histories.moving)).T
+    rates = histories.at_times(mech.p(), np.asarray(history.times))[1]
     forces = onsets.normal_forces(x, v, np.column_stack(history.p), rates)
     for name in wanted:
         outputs[f"contacts.{name}.normal_force"] = forces[name].tolist()
