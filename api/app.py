@@ -18,8 +18,9 @@ from api import body_parsing
 from api.errors import install_error_handlers
 from api.headers import SecurityHeaders
 from api.limits import BodySizeLimit
-from api.routers import (contacts, drawings, examples, health, impact_studies, jobs, optimize, simulations, solve,
-                         sweeps)
+from api.routers import contacts, drawings, examples, health, impact_studies, jobs, optimize, simulations, sweeps
+from api.routers.solve import solve_router
+from api.analysis_requests import documented
 from api.routers.workbench import mount_workbench
 from api.solver_pool import SolverPool
 from api.state import Services
@@ -94,7 +95,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     # The /docs page's scripts come from the package (fastapi-offline), not a CDN: it works offline.
     app = FastAPIOffline(title="flexmech", version="1", description=DESCRIPTION, lifespan=lifespan, redoc_url=None)
     install_error_handlers(app)
-    for module in (solve, sweeps, optimize, contacts, simulations, impact_studies, jobs, examples, drawings, health):
+    app.include_router(solve_router())
+    for module in (sweeps, optimize, contacts, simulations, impact_studies, jobs, examples, drawings, health):
         app.include_router(module.router)
     mount_workbench(app)
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_request_bytes, read_timeout=settings.request_read_timeout)
@@ -105,17 +107,18 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
 def _list_analyses_in_schema(app: FastAPI) -> None:
     """The analyses are a registry of the service (service.analyses), not a list the client
-    schemas keep: the OpenAPI schema enumerates them for generated clients."""
+    schemas keep: the OpenAPI schema enumerates the sweepable ones for generated clients (the
+    solve request is a union over all of them already)."""
     build = app.openapi
 
     def openapi() -> dict:
-        schema = build()
+        if app.openapi_schema is not None:
+            return app.openapi_schema
+        schema = documented(build())
         components = schema.get("components", {}).get("schemas", {})
-        for name, which in (("SolveRequest", ANALYSES.names()),
-                            ("SweepRequest", [a["name"] for a in ANALYSES.describe() if a["sweepable"]])):
-            field = components.get(name, {}).get("properties", {}).get("analysis")
-            if field is not None:
-                field["enum"] = which
+        field = components.get("SweepRequest", {}).get("properties", {}).get("analysis")
+        if field is not None:
+            field["enum"] = [a.name for a in ANALYSES if a.sweepable]
         return schema
 
     app.openapi = openapi

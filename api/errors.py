@@ -22,7 +22,6 @@ from __future__ import annotations
 import difflib
 import logging
 import re
-from functools import lru_cache
 
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
@@ -34,6 +33,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from api import schemas
 from models import MechanismError
 from models.errors import pointer_of
+from service.analyses import ANALYSES
 
 log = logging.getLogger("flexmech.api")
 
@@ -84,20 +84,56 @@ def _unwrapped_document(body) -> bool:
         len(_DOCUMENT_FIELDS & set(body)) >= 2
 
 
-@lru_cache(maxsize=1)
+def _error_pointer(error: dict) -> str:
+    if error.get("type", "").startswith("union_tag_"):  # the solve request's tag: its analysis
+        return "/analysis"
+    return _validation_pointer(tuple(error.get("loc", ())))
+
+
+def _fields_of(models: list[type[BaseModel]]) -> dict[str, type[BaseModel]]:
+    """Every field name of the models and the models nested in them, with one model naming it."""
+    names: dict[str, type[BaseModel]] = {}
+    stack, seen = list(models), set()
+    while stack:
+        model = stack.pop()
+        if model in seen:
+            continue
+        seen.add(model)
+        for name, info in model.model_fields.items():
+            names.setdefault(info.alias or name, model)
+            stack += [t for t in getattr(info.annotation, "__args__", (info.annotation,))
+                      if isinstance(t, type) and issubclass(t, BaseModel)]
+    return names
+
+
 def _request_field_names() -> tuple[str, ...]:
-    names, stack = set(), [m for m in vars(schemas).values() if isinstance(m, type) and issubclass(m, BaseModel)]
-    for model in stack:
-        names.update(info.alias or name for name, info in model.model_fields.items())
-    return tuple(sorted(names))
+    models = [m for m in vars(schemas).values() if isinstance(m, type) and issubclass(m, BaseModel)]
+    return tuple(sorted(_fields_of(models + [a.Options for a in ANALYSES])))
+
+
+def _taken_by(key: str, analysis: str | None) -> str:
+    """' (the trace analysis takes it)' when another analysis' options have the field."""
+    takers = [a.name for a in ANALYSES if a.name != analysis and key in a.Options.model_fields]
+    return f" (the {' and '.join(takers)} analysis takes it)" if takers else ""
 
 
 def _message(first: dict) -> str:
     message = first.get("msg", "invalid")
-    if first.get("type") == "missing":
+    kind = first.get("type")
+    if kind == "missing":
         return "required field is missing"
-    if first.get("type") == "extra_forbidden":
-        key = str(first.get("loc", ("",))[-1])
+    if kind == "union_tag_invalid":  # the solve request's tag (api.analysis_requests)
+        return f"unknown analysis '{first['ctx']['tag'].strip('[]')}' (analyses: {', '.join(ANALYSES.names())})"
+    if kind == "union_tag_not_found":
+        return f"expected the name of an analysis ({', '.join(ANALYSES.names())})"
+    if kind == "extra_forbidden":
+        loc = first.get("loc", ("",))
+        key = str(loc[-1])
+        analysis = next((p.strip("[]") for p in loc if isinstance(p, str) and p.startswith("[")), None)
+        if analysis is not None and len(loc) <= 3:  # a top-level field of a solve request
+            taken = _taken_by(key, analysis)
+            if taken:
+                return f"unknown field '{key}' for the {analysis} analysis{taken}"
         close = difflib.get_close_matches(key, _request_field_names(), n=1, cutoff=0.75)
         return f"unknown field '{key}'" + (f" (did you mean '{close[0]}'?)" if close else "")
     return message[len("Value error, "):] if message.startswith("Value error, ") else message
@@ -114,9 +150,9 @@ def _on_validation_error(_request: Request, exc: RequestValidationError) -> JSON
                               '{"document": <the document>} (or name one of GET /v1/examples as {"example": "<name>"})',
                               "")
     first = next((e for e in errors if e.get("type") == "extra_forbidden"), errors[0])
-    pointer = _validation_pointer(tuple(first.get("loc", ())))
+    pointer = _error_pointer(first)
     message = _message(first)
-    others = len({_validation_pointer(tuple(e.get("loc", ()))) for e in errors} - {pointer})
+    others = len({_error_pointer(e) for e in errors} - {pointer})
     if others:
         message += f" (and {others} more field{'s' if others > 1 else ''} with problems)"
     where = pointer or "body"

@@ -10,8 +10,6 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from api.trace_schemas import TraceIn
-
 # The models of a curved beam: models.MODELS, which a test pins this list to (the client does not import the core).
 Model = Literal["linear", "partial_nonlinear", "exact", "conservative"]
 JobStatusName = Literal["queued", "running", "succeeded", "failed", "cancelled"]
@@ -59,85 +57,42 @@ class DocumentRequest(_Request):
         return self
 
 
-class Target(_Request):
-    """Find the value of numeric field `path` at which `output` equals `equals`."""
-
-    path: str = Field(pattern=r"^/", max_length=256, examples=["/loads/actuation/force/1"])
-    output: str = Field(max_length=128, examples=["end_effector.x"])
-    equals: float = Field(description="document units of the output")
-
-
-class SensitivitiesIn(_Request):
-    """Exact derivatives of outputs with respect to numeric fields at the equilibrium (with a
-    target: the target's field follows, and may be named among the outputs)."""
-
-    parameters: list[str] = Field(min_length=1, max_length=64, examples=[["/sections/flexure/h"]])
-    outputs: list[str] = Field(min_length=1, max_length=256, examples=[["end_effector.x"]])
-
-
 class SolveRequest(DocumentRequest):
-    """One analysis of one mechanism, answered in the response."""
+    """One analysis of one mechanism, as the client sends it: the analysis' own options are
+    further fields, which the server checks against that analysis' options model (GET
+    /v1/analyses lists them; /openapi.json has the request of each analysis)."""
 
-    model_config = ConfigDict(json_schema_extra={"examples": [
-        {"example": "gripper", "overrides": {"/loads/actuation/force/1": 50}},
-        {"example": "gripper", "target": {"path": "/loads/actuation/force/1", "output": "end_effector.x", "equals": 0}},
-        {"example": "gripper", "analysis": "linearization", "at": "undeformed"},
-        # requests that once broke the service, answered 422 now (schemathesis sends every example)
-        *({"example": "gripper", "overrides": {"/elements/a/radius": value}}
-          for value in ("10**10**10 mm", "5 percent", "mm", "1e308 mm", "5e-324", "1" * 90 + " mm")),
-        {"example": "gripper", "analysis": "inverse", "displacements": {"input": [1e308, 0, 0]}},
-        *({"document": {"units": {"length": "m", "force": "N", "stress": "Pa", "angle": "rad"},
-                        "materials": {"m": {"E": 2e11}}, "sections": {"s": {"b": 0.01, "h": 0.001}},
-                        "bodies": {"wall": {"fixed": True, "position": [0, 0]}, "tip": {"position": [0.1, 0]}},
-                        "elements": {"L": {"type": "link", "from": "wall", "to": "tip", "length": 0.1, "material": "m",
-                                           "section": "s", "shape": {"type": "expression", "expression": text}}}}}
-          for text in ("9**9**9", "1/0", "(-1)**0.5", "log(0)", "exp(1000)*0", "sqrt(-1)")),
-    ]})
+    model_config = ConfigDict(extra="allow")
 
-    analysis: str = Field("equilibrium", min_length=1, max_length=64, pattern=r"^[a-z_]+$",
-                          description="an analysis the server offers (the schema lists them)")
-    target: Target | None = Field(None, description="equilibrium: solve for the field value that reaches a target")
-    stiffness: bool = Field(False, description="equilibrium: also return K_T at the solution")
-    sensitivities: SensitivitiesIn | None = Field(
-        None, description="equilibrium: also return d(outputs)/d(parameters) by the implicit function theorem")
-    at: Literal["equilibrium", "undeformed"] = Field("equilibrium", description="linearization: where")
-    displacements: dict[str, tuple[float, float, float]] | None = Field(
-        None, description="inverse: [dx, dy, rotation] of bodies; bodies not named stay put")
-    penetrating_start: Literal["approach", "refuse"] = Field(
-        "approach", description="contact: an object inside a site in the undeformed state is approached from "
-                                "outside (relaxed, then tightened in steps), or refused naming the pair and depth")
-    motion: dict[str, float] | None = Field(
-        None, max_length=64, description="contact: how the moving fields change (document units per unit of "
-                                         "progress): friction opposes the sliding this motion causes")
-    thesis_recovery: bool = Field(False, description="contact: also the thesis' recovery of the forces from the "
-                                                     "frictionless shape (Lan 2005 Eqs. 6.6-6.10), labelled")
-    trace: TraceIn | None = Field(None, description="trace: the path followed (default: the document's sweep section)")
-    simulate: dict[str, Any] | None = Field(
-        None, description="simulate: fields of the document's `simulate` section (until, step, scheme, histories, "
-                          "...) that override it")
-
-    @model_validator(mode="after")
-    def _inverse_has_displacements(self):
-        if self.analysis == "inverse" and self.displacements is None:
-            raise ValueError("an inverse analysis needs displacements")
-        return self
+    analysis: str = Field("equilibrium", min_length=1, max_length=64, description="an analysis the server offers")
 
 
 class SweepParameter(_Request):
+    """A numeric field's values: listed, or start to stop in equal steps (stop left out when the
+    sweep has `until`: the value found is the stop)."""
+
     path: str = Field(pattern=r"^/", max_length=256, description="JSON pointer of a numeric field")
     values: list[float] | None = Field(None, min_length=1, description="document units")
-    start: float | None = None
-    stop: float | None = None
+    start: float | None = Field(None, description="document units")
+    stop: float | None = Field(None, description="document units (with `until`: found)")
     steps: int | None = Field(None, ge=1, description="equal steps: steps + 1 values")
 
     @model_validator(mode="after")
     def _values_or_range(self):
-        ranged = (self.start, self.stop, self.steps)
-        if self.values is not None and any(v is not None for v in ranged):
+        ranged = (self.start, self.steps)
+        if self.values is not None and any(v is not None for v in (*ranged, self.stop)):
             raise ValueError("give values, or start, stop and steps, not both")
         if self.values is None and any(v is None for v in ranged):
             raise ValueError("give values, or start, stop and steps")
         return self
+
+
+class SweepUntil(_Request):
+    """Sweep until an output reaches a value: the value of the (one, ranged) parameter at which
+    it does is found first (as the equilibrium's target), and is the sweep's stop."""
+
+    output: str = Field(max_length=128, description="the output", examples=["end_effector.x"])
+    equals: float = Field(description="its value, in its document unit")
 
 
 class SweepRequest(DocumentRequest):
@@ -158,11 +113,13 @@ class SweepRequest(DocumentRequest):
         {"example": "gripper", "parameters": [{"path": "/elements/a/arc_angle", "values": [400]}]},
     ]})
 
-    parameters: list[SweepParameter] = Field(min_length=1, max_length=8)
+    parameters: list[SweepParameter] = Field(min_length=1, max_length=8, json_schema_extra={"document_default": "/sweep"})
     grid: Literal["cartesian", "zip"] = "cartesian"
     continuation: str | None = Field(
         None, description="path of the swept parameter that is a load path: solved in order, "
-                          "each point from the previous one")
+                          "each point from the previous one", json_schema_extra={"document_default": "/sweep/path"})
+    until: SweepUntil | None = Field(None, description="stop where an output reaches a value (one ranged parameter)",
+                                     json_schema_extra={"document_default": "/sweep/until"})
     outputs: list[str] | None = Field(None, min_length=1, description="outputs to keep (default: all)")
     analysis: str = Field("equilibrium", min_length=1, max_length=64, pattern=r"^[a-z_]+$",
                           description="the analysis of every point (a sweepable one the schema lists)")
@@ -181,7 +138,8 @@ class ContactPathRequest(DocumentRequest):
     ]})
 
     path: list[SweepParameter] | None = Field(None, min_length=1, max_length=8,
-                                              description="fields that change together along the path")
+                                              description="fields that change together along the path",
+                                              json_schema_extra={"document_default": "/contacts/path/parameters/0"})
     outputs: list[str] | None = Field(None, min_length=1, max_length=256,
                                       description="outputs kept per state (default: every pair's results)")
     penetrating_start: Literal["approach", "refuse"] = "approach"
@@ -347,6 +305,8 @@ class SweepResult(BaseModel):
     residual_unit: str
     residual_moment_unit: str | None = None
     analysis: str = "equilibrium"
+    until: dict[str, Any] | None = Field(None, description="with until: its output, value, and the parameter's "
+                                                           "value found (path, value, unit)")
     points: list[SweepPoint]
 
 

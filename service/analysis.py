@@ -12,7 +12,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from models import Mechanism
-from service.analyses import ANALYSES, AnalysisRequest
+from service.analyses import ANALYSES, AnalysisOptions, AnalysisRequest
 from service.analyses.equilibrium import equilibrium_report
 from service.analyses.inverse import inverse_report
 from service.analyses.linearization import linearization_report
@@ -21,9 +21,11 @@ from service.reports import coordinate_units, output_units, plain, stiffness_dic
 from service.requests import Limits, compile_request, escape_pointer_part, newton_options, under
 
 
-def run_analysis(mech: Mechanism, name: str, options: NewtonOptions, fields: Mapping[str, Any] | None = None) -> dict:
-    """The report of analysis `name` (MechanismError at /analysis when there is none)."""
-    return ANALYSES.named(name).run(mech, AnalysisRequest(options, fields or {}))
+def run_analysis(mech: Mechanism, name: str, options: NewtonOptions,
+                 given: AnalysisOptions | Mapping[str, Any] | None = None) -> dict:
+    """The report of analysis `name` (MechanismError at /analysis when there is none) under its
+    options (typed, or a mapping checked into them)."""
+    return ANALYSES.named(name).run(mech, AnalysisRequest(options, given))
 
 
 __all__ = ["Limits", "compile_request", "coordinate_units", "equilibrium_report", "escape_pointer_part",

@@ -24,7 +24,7 @@ def simulate(name: str, document_edit=None, **fields) -> dict:
     if document_edit is not None:
         document_edit(document)
     mech = compile_mechanism(load_document(document))
-    return ANALYSES.named("simulate").run(mech, AnalysisRequest(fields={"simulate": fields}))
+    return ANALYSES.named("simulate").run(mech, AnalysisRequest(given={"simulate": fields}))
 
 
 @pytest.mark.parametrize("case, L, rho, E, omega, exact", [

@@ -22,7 +22,7 @@ ROD = EXAMPLES / "rod_free_vibration.json"
 
 def simulate(path, **fields) -> dict:
     mech = compile_mechanism(load_document(json.loads(path.read_text())))
-    return ANALYSES.named("simulate").run(mech, AnalysisRequest(fields={"simulate": fields}))
+    return ANALYSES.named("simulate").run(mech, AnalysisRequest(given={"simulate": fields}))
 
 
 def periods(report: dict) -> np.ndarray:

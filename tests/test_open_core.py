@@ -117,8 +117,10 @@ def test_an_unknown_analysis_names_the_field_and_the_choices(api_server):
     assert error["message"] == ("/analysis: unknown analysis 'simulation' (analyses: equilibrium, linearization, "
                                 "trace, inverse, energy, contact, simulate)")
     schema = httpx.get(api_server.url + "/openapi.json").json()["components"]["schemas"]
-    assert schema["SolveRequest"]["properties"]["analysis"]["enum"] == ["equilibrium", "linearization", "trace",
+    assert list(schema["SolveRequest"]["discriminator"]["mapping"]) == ["equilibrium", "linearization", "trace",
                                                                        "inverse", "energy", "contact", "simulate"]
+    assert schema["TraceSolve"]["properties"]["analysis"]["const"] == "trace"
+    assert "trace" in schema["TraceSolve"]["properties"] and "trace" not in schema["EquilibriumSolve"]["properties"]
     assert schema["SweepRequest"]["properties"]["analysis"]["enum"] == ["equilibrium", "energy"]
 
 

@@ -162,7 +162,8 @@ def test_openapi_operation_ids_are_stable(api_server):
     ids = {op["operationId"] for path in spec["paths"].values() for op in path.values()}
     assert ids == {"solve", "create_sweep", "create_optimization", "create_contact_path", "create_simulation",
                    "create_impact_study", "draw", "parse_document", "upgrade_document",
-                   "get_job", "get_job_result", "get_job_request", "cancel_job", "list_examples", "get_example", "health"}
+                   "get_job", "get_job_result", "get_job_request", "cancel_job", "list_examples", "get_example", "health",
+                   "list_analyses"}
 
 
 # --- API keys -------------------------------------------------------------------------------

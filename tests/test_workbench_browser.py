@@ -96,7 +96,8 @@ def simulate_to_the_first_frame(page, example: str, until: float) -> None:
     """Run the simulate analysis of an example until `until` s; the slider at its first frame."""
     open_example(page, example)
     choose(page, "solve:simulate")
-    page.fill("#option-until", str(until))
+    page.check("#option-simulate")
+    page.fill("#option-simulate-until", str(until))
     run_and_wait(page, "simulate: finished", timeout=180_000)
     page.locator("#frame").focus()
     page.keyboard.press("Home")
@@ -138,7 +139,7 @@ def test_the_page_asks_for_the_key_then_paints_the_gripper_within_a_second(brows
 def test_the_gripper_closing_force_is_read_from_the_page(page, closing_force):
     choose(page, "solve:equilibrium")
     assert page.is_checked("#option-target")  # from the document's sweep: until end_effector.x = 0
-    assert page.input_value("#option-target_path") == "/loads/actuation/force/1"
+    assert page.input_value("#option-target-path") == "/loads/actuation/force/1"
     run_and_wait(page, "equilibrium: converged")
     shown = page.text_content("#target-value")
     assert shown.startswith("77.03") and float(shown) == pytest.approx(closing_force, abs=1e-3)
@@ -151,11 +152,30 @@ def test_the_gripper_closing_force_is_read_from_the_page(page, closing_force):
     screenshot(page, "03-gripper-closing-force")
 
 
+def test_the_sweep_job_runs_until_the_gripper_closes(page, closing_force):
+    """The form comes from the sweep request's schema, its `until` from the document's sweep
+    section (as `flexmech sweep` reads it): the load path ends at the closing force."""
+    choose(page, "job:sweep")
+    assert page.is_checked("#option-until")
+    assert page.input_value("#option-until-output") == "end_effector.x"
+    assert page.input_value("#option-parameters-0-start") == "-60"
+    assert page.input_value("#option-parameters-0-stop") == ""  # until finds it
+    page.fill("#option-outputs", "end_effector.x")
+    run_and_wait(page, "job succeeded", timeout=180_000)
+    result = json.loads(page.text_content("#raw"))
+    assert result["until"]["value"] == pytest.approx(closing_force, rel=1e-9)
+    last = result["points"][-1]
+    assert len(result["points"]) == 101 and last["values"][0] == pytest.approx(closing_force, rel=1e-9)
+    assert abs(last["outputs"]["end_effector.x"]) < 1e-9
+    screenshot(page, "04-sweep-until-closed")
+
+
 def test_a_sweep_shows_its_progress_up_to_100_percent_and_its_curve_with_hover(page):
     choose(page, "job:sweep")
-    page.fill("#option-start", "0")
-    page.fill("#option-stop", "80")
-    page.fill("#option-steps", "600")  # a load path in order, two points per task: seconds of work
+    page.uncheck("#option-until")  # the document's sweep runs until closure: here a fixed range
+    page.fill("#option-parameters-0-start", "0")
+    page.fill("#option-parameters-0-stop", "80")
+    page.fill("#option-parameters-0-steps", "600")  # a load path in order, two points per task: seconds of work
     page.fill("#option-outputs", "end_effector.x, end_effector.y")
     page.evaluate("""() => {
         window.progressSeen = [];
@@ -220,10 +240,11 @@ def test_an_unknown_body_is_shown_at_its_pointer(page, log):
 def test_a_contact_path_runs_as_a_job_and_its_animation_steps(page):
     open_example(page, "gripper_jaw_contact")
     choose(page, "job:contact_path")
-    assert page.input_value("#option-path") == "/contacts/objects/fixture/centre/0"
-    page.fill("#option-start", "80")
-    page.fill("#option-stop", "60")
-    page.fill("#option-steps", "8")
+    assert page.is_checked("#option-path")  # from the document's contacts.path
+    assert page.input_value("#option-path-0-path") == "/contacts/objects/fixture/centre/0"
+    page.fill("#option-path-0-start", "80")
+    page.fill("#option-path-0-stop", "60")
+    page.fill("#option-path-0-steps", "8")
     run_and_wait(page, "job succeeded", timeout=180_000)
     assert page.get_attribute("#frame", "max") == "8"
     slider = page.locator("#frame")
@@ -274,8 +295,8 @@ def test_an_impact_simulation_moves_the_body_inside_its_clearance(page):
 def test_a_running_job_is_cancelled_from_the_page(page):
     open_example(page, "four_bar_dynamics")
     choose(page, "job:simulation")
-    page.fill("#option-until", "30")  # minutes of work
-    page.uncheck("#option-shapes")
+    page.fill("#option-simulate-until", "30")  # minutes of work
+    page.uncheck("#option-simulate-shapes")
     page.click("#run")
     page.wait_for_function("() => document.getElementById('progress-text').textContent.includes('running')", timeout=60_000)
     screenshot(page, "12-job-running")
@@ -316,9 +337,10 @@ def test_the_page_fits_a_narrow_window_and_is_reached_by_keyboard(page):
 def test_a_trace_passes_the_arch_limit_points(page):
     open_example(page, "snap_through_arch")
     choose(page, "solve:trace")
-    page.fill("#option-path", "/loads/P/force/1")
-    page.fill("#option-stop", "-300")
-    page.fill("#option-step", "5")
+    page.check("#option-trace")
+    page.fill("#option-trace-path", "/loads/P/force/1")
+    page.fill("#option-trace-stop", "-300")
+    page.fill("#option-trace-step", "5")
     run_and_wait(page, "trace: converged", timeout=120_000)
     rows = page.locator("#panel-table table:has(caption:text('Limit points')) tbody tr")
     assert rows.count() == 2
@@ -341,7 +363,7 @@ def test_a_trace_passes_the_arch_limit_points(page):
 
 def test_an_optimization_shows_its_design_and_draws_the_optimum(page):
     open_example(page, "gripper_sections")
-    choose(page, "job:optimize")
+    choose(page, "job:optimization")
     run_and_wait(page, "job succeeded", timeout=180_000)
     row = page.locator('#panel-table tr[data-name="/sections/flexure/h"] td')
     start, optimum = (float(row.nth(k).get_attribute("title")) for k in (0, 1))
@@ -390,11 +412,11 @@ def test_a_contact_solve_draws_the_state_and_tables_the_pair(page):
 def test_a_bad_option_is_marked_at_its_field(page, log):
     log.answered = (422,)
     choose(page, "job:sweep")
-    page.fill("#option-path", "/loads/actuation/force/7")
+    page.fill("#option-parameters-0-path", "/loads/actuation/force/7")
     page.click("#run")
     problem = page.locator('#problems li[data-pointer="/parameters/0/path"]')
     problem.wait_for(timeout=30_000)
     assert "not a numeric field of this mechanism" in problem.text_content()
-    assert page.get_attribute("#option-path", "aria-invalid") == "true"
-    assert page.evaluate("document.activeElement.id") == "option-path"
+    assert page.get_attribute("#option-parameters-0-path", "aria-invalid") == "true"
+    assert page.evaluate("document.activeElement.id") == "option-parameters-0-path"
     screenshot(page, "20-bad-option")

@@ -1,39 +1,51 @@
-"""POST /v1/solve: one analysis of one mechanism, answered synchronously."""
+"""POST /v1/solve: one analysis of one mechanism, answered synchronously. Its body is the union
+of the registered analyses' requests (api.analysis_requests), so the route is made when the
+app is. GET /v1/analyses lists them with their options' and results' JSON schemas: what the
+client's methods, the workbench's forms and generated clients are made from."""
 
-from __future__ import annotations
+# No `from __future__ import annotations`: the body's type is built at run time and FastAPI
+# reads the endpoint's annotations as objects.
 
 from fastapi import APIRouter
 
+from api.analysis_requests import options_of, solve_request_type
 from api.deps import OwnerDep, ServicesDep
 from api.documents import request_document
 from api.parsed_route import ParsedBodyRoute
 from api.responses import ERRORS
-from api.schemas import SolveRequest, SolveResponse
-from service.analyses import ANALYSES, AnalysisRequest
+from api.schemas import DocumentRequest, SolveResponse
+from service.analyses import ANALYSES, AnalysisOptions, AnalysisRequest
 from service.requests import Limits, compile_request, newton_options
 
-router = APIRouter(prefix="/v1", tags=["solve"], route_class=ParsedBodyRoute)
 
-# The request fields an analysis may read (the rest say which mechanism and how to solve it).
-ANALYSIS_FIELDS = ("target", "stiffness", "sensitivities", "at", "displacements", "penetrating_start", "motion",
-                   "thesis_recovery", "simulate", "trace")
-# Analyses that may run for seconds: they never take the worker kept for small requests.
-LONG_ANALYSES = frozenset({"trace", "contact", "simulate"})
-
-
-def _solve(request: SolveRequest, document: dict, limits: Limits) -> dict:
-    analysis = ANALYSES.named(request.analysis)
+def _solve(name: str, given: AnalysisOptions, request: DocumentRequest, document: dict, limits: Limits) -> dict:
+    """In a solver worker: the analysis by name (the worker has the same registry)."""
     options = newton_options(request.options.given() if request.options else None, limits.solve_time_limit)
     mech = compile_request(document, request.model, request.overrides, limits)
-    return analysis.run(mech, AnalysisRequest(options, request.model_dump(include=set(ANALYSIS_FIELDS))))
+    return ANALYSES.named(name).run(mech, AnalysisRequest(options, given))
 
 
-@router.post("/solve", operation_id="solve", response_model=SolveResponse, responses=ERRORS,
-             summary="Solve one mechanism: equilibrium, linearization, trace, inverse, energy, contact, simulate")
-async def solve(request: SolveRequest, services: ServicesDep, _owner: OwnerDep) -> dict:
-    """Runs in a solver worker (api.solver_pool). Non-convergence is a 200 with `status` and
-    diagnostics; a document that cannot be modelled is a 422 naming the field."""
-    document = request_document(request, services)
-    return await services.solver.call(_solve, request, document, services.limits,
-                                      time_limit=services.limits.solve_time_limit,
-                                      large=request.analysis in LONG_ANALYSES)
+def solve_router() -> APIRouter:
+    router = APIRouter(prefix="/v1", tags=["solve"], route_class=ParsedBodyRoute)
+    body = solve_request_type()
+
+    @router.post("/solve", operation_id="solve", response_model=SolveResponse, responses=ERRORS,
+                 summary=f"Solve one mechanism: {', '.join(ANALYSES.names())}")
+    async def solve(request: body, services: ServicesDep, _owner: OwnerDep) -> dict:  # type: ignore[valid-type]
+        """Runs in a solver worker (api.solver_pool). Non-convergence is a 200 with `status` and
+        diagnostics; a document that cannot be modelled is a 422 naming the field."""
+        analysis = ANALYSES.named(request.analysis)
+        document = request_document(request, services)
+        # the common fields travel as a plain DocumentRequest: the request's own class is made here
+        common = DocumentRequest.model_construct(**{n: getattr(request, n) for n in DocumentRequest.model_fields})
+        return await services.solver.call(_solve, analysis.name, options_of(analysis, request), common, document,
+                                          services.limits, time_limit=services.limits.solve_time_limit,
+                                          large=analysis.long)
+
+    @router.get("/analyses", operation_id="list_analyses", summary="The analyses /v1/solve runs, with their options")
+    async def analyses() -> list[dict]:
+        """Each analysis' name, summary, whether a sweep may run it, and the JSON schemas of its
+        options (the request's own fields) and of its result."""
+        return ANALYSES.describe()
+
+    return router

@@ -23,6 +23,7 @@ def sweep_spec(request: SweepRequest, document: dict) -> dict:
         "parameters": [p.model_dump(exclude_none=True) for p in request.parameters],
         "grid": request.grid,
         "continuation": request.continuation,
+        "until": request.until.model_dump() if request.until else None,
         "outputs": request.outputs,
         "analysis": request.analysis,
     }

@@ -1,159 +1,155 @@
-// What the page can run: every analysis of /v1/solve (the service lists them) and every job
-// kind, each with a form of its options. Defaults come from the open document (its sweep,
-// contacts.path and simulate sections), so an example runs as its author meant.
+// What the page can run, and the form of each, made from the service's own schemas: every
+// analysis of /v1/solve (GET /v1/analyses: its options' JSON schema) and every job kind (each
+// POST of /openapi.json answered 202, with its request's schema). A field's description is
+// its hint; its starting value is the open document's field at its `document_default` (a JSON
+// pointer), else its `form_default`, else its schema default, so an example runs as its
+// author meant. An input's id is "option-" and the field's JSON pointer in the request with
+// "-" between its parts: the pointer of a 422 finds its input.
 
-const num = (value) => (value === "" || value === null || value === undefined ? undefined : Number(value));
-const sweepOf = (doc) => doc.sweep || {};
-const pathOf = (doc) => ((doc.contacts && doc.contacts.path && doc.contacts.path.parameters) || [])[0] || {};
-const simulateOf = (doc) => doc.simulate || {};
-const IMPACT_SCHEMES = ["event_driven", "moreau"];
-const hasImpacts = (doc) => Boolean(doc.simulate && IMPACT_SCHEMES.includes(doc.simulate.scheme));
+import { ApiProblem } from "./api.js";
 
-function sweepStop(doc) {
-  const sweep = sweepOf(doc);
-  if (sweep.stop !== undefined) return sweep.stop;
-  return sweep.start ? -sweep.start : 1;
+// The fields every request has, set elsewhere on the page (the editor, the model menu, Extra).
+const COMMON = new Set(["document", "example", "model", "overrides", "options", "analysis"]);
+
+function lookup(root, ref) {
+  return ref.replace(/^#\//, "").split("/").reduce((node, part) => (node ? node[part] : undefined), root);
 }
 
-// Each field: [name, label, type, default(doc), help]. Types: text, number, checkbox, select:a|b, json.
-const FORMS = {
-  equilibrium: {
-    fields: [
-      ["target", "Solve for a target", "checkbox", (d) => Boolean(sweepOf(d).until), "the field's value at which the output reaches a value"],
-      ["target_path", "Field", "text", (d) => sweepOf(d).path || "", "JSON pointer of a numeric field"],
-      ["target_output", "Output", "text", (d) => (sweepOf(d).until || {}).output || ""],
-      ["target_equals", "Equals", "number", (d) => (sweepOf(d).until || {}).equals ?? ""],
-      ["stiffness", "Tangent stiffness", "checkbox", () => false],
-    ],
-    build: (v) => ({
-      ...(v.target ? { target: { path: v.target_path, output: v.target_output, equals: num(v.target_equals) } } : {}),
-      ...(v.stiffness ? { stiffness: true } : {}),
-    }),
-  },
-  linearization: { fields: [["at", "At", "select:equilibrium|undeformed", () => "equilibrium"]], build: (v) => ({ at: v.at }) },
-  inverse: {
-    fields: [["displacements", "Displacements", "json", () => "{}", '{"body": [dx, dy, rotation]}']],
-    build: (v) => ({ displacements: JSON.parse(v.displacements || "{}") }),
-  },
-  contact: {
-    fields: [["penetrating_start", "Penetrating start", "select:approach|refuse", () => "approach"],
-             ["thesis_recovery", "Thesis recovery", "checkbox", () => false]],
-    build: (v) => ({ penetrating_start: v.penetrating_start, ...(v.thesis_recovery ? { thesis_recovery: true } : {}) }),
-  },
-  simulate: {
-    fields: [
-      ["until", "Until [s]", "number", (d) => simulateOf(d).until ?? ""],
-      ["step", "Step [s]", "number", (d) => simulateOf(d).step ?? ""],
-      ["scheme", "Scheme", "select:|newmark|generalized_alpha|event_driven|moreau", () => "", "empty: as in the document"],
-      ["shapes", "Shapes for the animation", "checkbox", (d) => !hasImpacts(d)],
-    ],
-    build: (v) => ({ simulate: clean({ until: num(v.until), step: num(v.step), scheme: v.scheme || undefined,
-                                       shapes: v.shapes || undefined }) }),
-  },
-  trace: {
-    fields: [
-      ["path", "Field", "text", (d) => sweepOf(d).path || ""],
-      ["stop", "Stop", "number", (d) => sweepStop(d)],
-      ["step", "First step", "number", (d) => (sweepOf(d).start !== undefined ? Math.abs(sweepStop(d) - sweepOf(d).start) / (sweepOf(d).steps || 100) : "")],
-      ["max_points", "Most points", "number", () => 400],
-    ],
-    build: (v) => ({ trace: clean({ path: v.path, stop: num(v.stop), step: num(v.step), max_points: num(v.max_points) }) }),
-  },
-};
-
-const JOBS = {
-  sweep: {
-    label: "sweep (job)", endpoint: "/v1/sweeps",
-    fields: [
-      ["path", "Field", "text", (d) => sweepOf(d).path || ""],
-      ["start", "Start", "number", (d) => sweepOf(d).start ?? 0],
-      ["stop", "Stop", "number", sweepStop],
-      ["steps", "Steps", "number", (d) => sweepOf(d).steps ?? 20],
-      ["continuation", "Load path (continuation)", "checkbox", () => true],
-      ["outputs", "Outputs", "text", () => "", "comma-separated; empty: all"],
-    ],
-    build: (v) => ({
-      parameters: [{ path: v.path, start: num(v.start), stop: num(v.stop), steps: num(v.steps) }],
-      ...(v.continuation ? { continuation: v.path } : {}),
-      ...(v.outputs.trim() ? { outputs: v.outputs.split(",").map((s) => s.trim()).filter(Boolean) } : {}),
-    }),
-  },
-  contact_path: {
-    label: "contact path (job)", endpoint: "/v1/contacts",
-    fields: [
-      ["path", "Field", "text", (d) => pathOf(d).path || ""],
-      ["start", "Start", "number", (d) => pathOf(d).start ?? ""],
-      ["stop", "Stop", "number", (d) => pathOf(d).stop ?? ""],
-      ["steps", "Steps", "number", (d) => pathOf(d).steps ?? 20],
-    ],
-    build: (v) => ({ path: [{ path: v.path, start: num(v.start), stop: num(v.stop), steps: num(v.steps) }] }),
-  },
-  simulation: {
-    label: "simulation (job)", endpoint: "/v1/simulations",
-    fields: [["until", "Until [s]", "number", (d) => simulateOf(d).until ?? ""],
-             ["step", "Step [s]", "number", (d) => simulateOf(d).step ?? ""],
-             ["shapes", "Shapes for the animation", "checkbox", (d) => !hasImpacts(d)]],
-    build: (v) => ({ simulate: clean({ until: num(v.until), step: num(v.step), shapes: v.shapes || undefined }) }),
-  },
-  optimize: {
-    label: "optimize (job)", endpoint: "/v1/optimize",
-    fields: [["starts", "Starts", "number", (d) => (d.optimize || {}).starts ?? ""]],
-    build: (v, d) => (num(v.starts) && d.optimize ? { problem: { ...d.optimize, starts: num(v.starts) } } : {}),
-  },
-  impact_study: {
-    label: "impact study (job)", endpoint: "/v1/impact-studies",
-    fields: [["fields", "Fields", "json", () => "[]", '[{"path": "/contacts/sites/pin/radius", "step": 0.001}]'],
-             ["tolerance", "Tolerance", "number", () => 0.05]],
-    build: (v) => ({ study: { fields: JSON.parse(v.fields || "[]"), tolerance: num(v.tolerance) } }),
-  },
-};
-
-function clean(object) {
-  return Object.fromEntries(Object.entries(object).filter(([, value]) => value !== undefined && value !== ""));
+function resolved(schema, root) {
+  return schema && schema.$ref ? resolved(lookup(root, schema.$ref), root) : schema || {};
 }
 
-// The choices of the Run menu: solve analyses (as the service lists them), then the jobs.
-export function choices(analyses) {
-  return [...analyses.map((name) => ({ id: `solve:${name}`, label: name, kind: "solve", analysis: name })),
-          ...Object.entries(JOBS).map(([id, job]) => ({ id: `job:${id}`, label: job.label, kind: "job", job: id, endpoint: job.endpoint }))];
+// (the schema without its null alternative, whether null was one)
+function withoutNull(schema, root) {
+  const options = schema.anyOf || schema.oneOf;
+  if (!options) return [resolved(schema, root), false];
+  const rest = options.filter((s) => s.type !== "null");
+  return [rest.length === 1 ? resolved(rest[0], root) : { anyOf: rest }, rest.length < options.length];
 }
 
-function formOf(choice) {
-  return choice.kind === "solve" ? FORMS[choice.analysis] || { fields: [], build: () => ({}) } : JOBS[choice.job];
+const isObjectModel = (s) => s.type === "object" && s.properties;
+
+// The field tree of a schema's properties: {key, path, label, kind, schema, optional, children}.
+function fieldsOf(schema, root, path = [], skip = COMMON) {
+  return Object.entries(schema.properties || {}).filter(([key]) => !skip.has(key)).map(([key, raw]) => {
+    const [s, nullable] = withoutNull(raw, root);
+    const label = raw.title || key.charAt(0).toUpperCase() + key.slice(1).replace(/_/g, " ");
+    const field = { key, path: [...path, key], label, schema: { ...s, ...raw },
+                    optional: nullable || !(schema.required || []).includes(key) };
+    if (isObjectModel(s)) return { ...field, kind: "group", children: fieldsOf(s, root, field.path, new Set()) };
+    const item = s.type === "array" ? resolved(s.items, root) : null;
+    if (item && isObjectModel(item)) {
+      return { ...field, kind: "list", children: fieldsOf(item, root, [...field.path, "0"], new Set()) };
+    }
+    if (s.type === "boolean") return { ...field, kind: "checkbox" };
+    if (s.enum || s.const !== undefined) return { ...field, kind: "select", choices: s.enum || [s.const] };
+    if (s.type === "number" || s.type === "integer") return { ...field, kind: "number" };
+    if (s.type === "string") return { ...field, kind: "text" };
+    if (s.type === "array" && resolved(s.items, root).type === "string") return { ...field, kind: "names" };
+    return { ...field, kind: "json" };
+  });
 }
 
-function inputFor([name, label, type, initial, help], doc) {
+function pointed(doc, pointer) {
+  if (!doc || !pointer) return undefined;
+  return pointer.split("/").slice(1).reduce((node, part) => (node && typeof node === "object" ? node[part] : undefined), doc);
+}
+
+// A field starts from the document at its own document_default, else at its key under its
+// group's (`base`).
+function startOf(field, doc, base) {
+  const fromDoc = pointed(doc, field.schema.document_default ?? (base ? `${base}/${field.key}` : undefined));
+  if (fromDoc !== undefined) return fromDoc;
+  if (field.schema.form_default !== undefined) return field.schema.form_default;
+  return field.schema.default ?? undefined;
+}
+
+// The choices of the Run menu: the analyses (as the service lists them), then the job kinds.
+export function choices(analyses, openapi) {
+  const solve = analyses.map((a) => ({ id: `solve:${a.name}`, label: a.name, kind: "solve", analysis: a.name,
+                                       summary: a.summary, fields: fieldsOf(a.options, a.options) }));
+  const jobs = [];
+  for (const [path, operations] of Object.entries((openapi && openapi.paths) || {})) {
+    const post = operations.post;
+    if (!post || !post.responses || !post.responses["202"]) continue;
+    const body = resolved(post.requestBody.content["application/json"].schema, openapi);
+    const id = (post.operationId || path.split("/").pop()).replace(/^create_/, "");
+    jobs.push({ id: `job:${id}`, label: `${id.replace(/_/g, " ")} (job)`, kind: "job", job: id, endpoint: path,
+                summary: post.summary || "", fields: fieldsOf(body, openapi) });
+  }
+  return [...solve, ...jobs];
+}
+
+const inputId = (path) => `option-${path.join("-")}`;
+
+function hinted(element, field) {
+  const help = field.schema.description || "";
+  if (help) element.title = help;
+  return element;
+}
+
+function leafInput(field, doc, base) {
   const wrapper = document.createElement("div");
   wrapper.className = "field";
-  const id = `option-${name}`;
   const caption = document.createElement("label");
-  caption.htmlFor = id;
-  caption.textContent = label;
+  caption.htmlFor = inputId(field.path);
+  caption.textContent = field.schema.unit ? `${field.label} [${field.schema.unit}]` : field.label;
   let input;
-  if (type.startsWith("select:")) {
+  const start = startOf(field, doc, base);
+  if (field.kind === "select") {
     input = document.createElement("select");
-    for (const option of type.slice(7).split("|")) input.append(new Option(option || "(document)", option));
+    if (field.optional) input.append(new Option("(default)", ""));
+    for (const choice of field.choices) input.append(new Option(choice, choice));
+    input.value = start ?? "";
   } else {
     input = document.createElement("input");
-    input.type = type === "json" ? "text" : type;
-    if (type === "number") input.step = "any";
+    input.type = field.kind === "checkbox" || field.kind === "number" ? field.kind : "text";
+    if (field.kind === "number") input.step = "any";
+    if (field.kind === "checkbox") input.checked = Boolean(start);
+    else if (field.kind === "json") input.value = start === undefined ? "" : JSON.stringify(start);
+    else if (field.kind === "names") input.value = Array.isArray(start) ? start.join(", ") : "";
+    else input.value = start ?? "";
+    if (field.kind === "names") input.placeholder = "comma-separated";
+    else if (field.schema.description && field.kind !== "checkbox") input.placeholder = field.schema.description;
   }
-  input.id = id;
-  input.name = name;
-  const value = initial(doc);
-  if (type === "checkbox") input.checked = Boolean(value);
-  else input.value = value;
-  if (help) { input.title = help; input.placeholder = help; }
-  wrapper.append(caption, input);
+  input.id = inputId(field.path);
+  input.dataset.kind = field.kind;
+  wrapper.append(caption, hinted(input, field));
   return wrapper;
+}
+
+function groupInput(field, doc, base) {
+  const own = field.schema.document_default ?? (base ? `${base}/${field.key}` : undefined);
+  const group = document.createElement("fieldset");
+  group.className = "group";
+  const legend = document.createElement("legend");
+  if (field.optional) {
+    const enabled = document.createElement("input");
+    enabled.type = "checkbox";
+    enabled.id = inputId(field.path);
+    enabled.dataset.kind = "enable";
+    enabled.checked = pointed(doc, own) !== undefined || field.schema.form_default === true;
+    const caption = document.createElement("label");
+    caption.htmlFor = enabled.id;
+    caption.textContent = field.label;
+    legend.append(hinted(enabled, field), caption);
+  } else {
+    legend.textContent = field.label;
+  }
+  group.append(legend);
+  for (const child of field.children) group.append(inputFor(child, doc, own));
+  return group;
+}
+
+function inputFor(field, doc, base) {
+  return field.kind === "group" || field.kind === "list" ? groupInput(field, doc, base) : leafInput(field, doc, base);
 }
 
 export function renderForm(fieldset, choice, doc) {
   const legend = fieldset.querySelector("legend");
   fieldset.replaceChildren(legend);
-  const form = formOf(choice);
-  for (const field of form.fields) fieldset.append(inputFor(field, doc || {}));
-  if (!form.fields.length) {
+  for (const field of choice.fields) fieldset.append(inputFor(field, doc || {}));
+  if (!choice.fields.length) {
     const none = document.createElement("p");
     none.className = "hint";
     none.textContent = "No options: the document says it all (more fields below).";
@@ -161,20 +157,54 @@ export function renderForm(fieldset, choice, doc) {
   }
 }
 
-function values(fieldset) {
-  const out = {};
-  for (const input of fieldset.querySelectorAll("input, select")) out[input.name] = input.type === "checkbox" ? input.checked : input.value;
-  return out;
+function formProblem(path, message) {
+  const pointer = `/${path.join("/")}`;
+  return new ApiProblem(422, `${pointer}: ${message}`, pointer);
+}
+
+const same = (a, b) => JSON.stringify(a) === JSON.stringify(b);
+
+// The value of a field as the form holds it; undefined: not given (the service's default).
+function valueOf(field, fieldset) {
+  const input = fieldset.querySelector(`#${CSS.escape(inputId(field.path))}`);
+  if (field.kind === "group" || field.kind === "list") {
+    if (field.optional && input && !input.checked) return undefined;
+    const object = {};
+    for (const child of field.children) {
+      const value = valueOf(child, fieldset);
+      if (value !== undefined) object[child.key] = value;
+    }
+    if (field.optional && !Object.keys(object).length) return undefined;
+    return field.kind === "list" ? [object] : object;
+  }
+  if (!input) return undefined;
+  if (field.kind === "checkbox") return same(input.checked, field.schema.default ?? false) ? undefined : input.checked;
+  const text = input.value.trim();
+  if (text === "") return undefined;
+  if (field.kind === "number") return Number(text);
+  if (field.kind === "names") return text.split(",").map((s) => s.trim()).filter(Boolean);
+  if (field.kind === "json") {
+    try { return JSON.parse(text); } catch (error) { throw formProblem(field.path, `not JSON (${error.message})`); }
+  }
+  return field.kind === "select" && same(text, field.schema.default) && !field.optional ? undefined : text;
+}
+
+function merged(into, extra) {
+  for (const [key, value] of Object.entries(extra || {})) {
+    const both = value && typeof value === "object" && !Array.isArray(value) && into[key] && typeof into[key] === "object";
+    into[key] = both ? { ...into[key], ...value } : value;
+  }
+  return into;
 }
 
 // The request body of the choice: the document, the model, the form's fields, then `extra`
 // (an object of further request fields) over them.
 export function buildRequest(choice, fieldset, doc, model, extra) {
-  const request = { document: doc, ...(model ? { model } : {}), ...formOf(choice).build(values(fieldset), doc || {}) };
+  const request = { document: doc, ...(model ? { model } : {}) };
   if (choice.kind === "solve") request.analysis = choice.analysis;
-  for (const [key, value] of Object.entries(extra || {})) {
-    const both = value && typeof value === "object" && !Array.isArray(value) && request[key] && typeof request[key] === "object";
-    request[key] = both ? { ...request[key], ...value } : value;
+  for (const field of choice.fields) {
+    const value = valueOf(field, fieldset);
+    if (value !== undefined) request[field.key] = value;
   }
-  return JSON.parse(JSON.stringify(request)); // drops fields left undefined
+  return JSON.parse(JSON.stringify(merged(request, extra))); // drops fields left undefined
 }

@@ -30,14 +30,16 @@ function say(id, text, failed = false) {
   $(id).classList.toggle("failed", failed);
 }
 
-// The option of the form a request pointer names (/target/output -> target_output, then
-// /parameters/0/path -> path): marked invalid and focused.
+// The option of the form a request pointer names (its input's id is the pointer's parts,
+// forms.js): marked invalid and focused; a pointer into a field of it finds the field.
 function markOption(pointer) {
   for (const input of document.querySelectorAll("#options [aria-invalid]")) input.removeAttribute("aria-invalid");
   if (!pointer) return;
   const tokens = pointer.split("/").filter(Boolean);
-  const input = $(`option-${tokens.slice(-2).join("_")}`) || $(`option-${tokens.at(-1)}`);
-  if (input) { input.setAttribute("aria-invalid", "true"); input.focus(); }
+  for (let n = tokens.length; n > 0; n -= 1) {
+    const input = $(`option-${tokens.slice(0, n).join("-")}`);
+    if (input) { input.setAttribute("aria-invalid", "true"); input.focus(); return; }
+  }
 }
 
 // A problem from the service or the page, shown at the field it names.
@@ -190,13 +192,10 @@ async function cancelJob() {
   try { await cancel(state.jobId); say("run-state", "cancelling…"); } catch (error) { report(error); }
 }
 
-async function analysesOffered() {
-  try {
-    const schema = await get("/openapi.json");
-    return schema.components.schemas.SolveRequest.properties.analysis.enum;
-  } catch {
-    return ["equilibrium", "linearization", "inverse", "energy", "contact", "simulate"];
-  }
+// The analyses (with their options' schemas) and the job kinds (the API's own schema).
+async function offered() {
+  const [analyses, openapi] = await Promise.all([get("/v1/analyses"), get("/openapi.json")]);
+  return choices(analyses, openapi);
 }
 
 async function examples() {
@@ -241,8 +240,8 @@ function wire() {
 
 // Examples, analyses, then the example asked for (?example=) or the job of the address.
 async function load() {
-  const [offered] = await Promise.all([analysesOffered(), examples()]);
-  state.choices = choices(offered);
+  const [offer] = await Promise.all([offered(), examples()]);
+  state.choices = offer;
   $("analysis").replaceChildren(...state.choices.map((c) => new Option(c.label, c.id)));
   const job = location.pathname.match(/^\/jobs\/([0-9a-f]{32})$/);
   const wanted = new URLSearchParams(location.search).get("example") || DEFAULT_EXAMPLE;

@@ -1,7 +1,9 @@
-"""The analyses /v1/solve, the CLI and the sweep job dispatch through: one module each,
-registered here (one line per analysis). A new analysis is a new module and a line."""
+"""The analyses /v1/solve, the CLI, the client, batch, the workbench and the sweep job take from
+the registry: one module each, registered here (one line per analysis). A new analysis is a
+new module and a line (or, outside the package, `ANALYSES.register(...)` in a plugin module
+named by FLEXMECH_PLUGINS)."""
 
-from service.analyses.base import Analyses, Analysis, AnalysisRequest
+from service.analyses.base import Analyses, Analysis, AnalysisOptions, AnalysisRequest, AnalysisResult
 from service.analyses.contact import CONTACT
 from service.analyses.energy import ENERGY
 from service.analyses.equilibrium import EQUILIBRIUM
@@ -20,4 +22,4 @@ ANALYSES = Analyses([
     SIMULATE,
 ])
 
-__all__ = ["ANALYSES", "Analysis", "AnalysisRequest"]
+__all__ = ["ANALYSES", "Analysis", "AnalysisOptions", "AnalysisRequest", "AnalysisResult"]

@@ -1,50 +1,90 @@
-"""The contract of an analysis, and the registry that /v1/solve, the CLI and the sweep job
-dispatch through.
+"""The contract of an analysis, and the registry that /v1/solve, the CLI, the client, batch and
+the workbench take their analyses from.
 
-An analysis has a name and a one-line summary, and says:
-  run(mech, request) -> report    the JSON-able report of one mechanism (document units),
-                                   raising MechanismError naming the field for bad input;
-                                   non-convergence is a status in the report
-  point(mech, p, guess, options)   one point of a sweep: an EquilibriumResult at the
-                                   nondimensional parameters p from the state `guess`
-                                   (sweepable analyses only)
+An analysis has a name, a one-line summary, and two pydantic models: its `Options` (the
+request fields it reads, typed and described: the HTTP schema, the CLI's flags, the client's
+docstrings and the workbench's form are made from them) and its `Result` (what its report
+holds). It says:
+  report(mech, newton, options) -> dict   the JSON-able report of one mechanism (document
+                                          units), raising MechanismError naming the field for
+                                          bad input; non-convergence is a status in the report
+  point(mech, p, guess, newton)           one point of a sweep: an EquilibriumResult at the
+                                          nondimensional parameters p from the state `guess`
+                                          (sweepable analyses only)
+A new analysis is one module with a subclass and one line `ANALYSES.register(...)`.
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Mapping
-from dataclasses import dataclass, field
-from typing import Any
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any, ClassVar
 
 import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from models import Mechanism, MechanismError
+from models.errors import pointer_of
 from service.equilibrium import EquilibriumResult
 from service.newton import NewtonOptions
 
 
+class AnalysisOptions(BaseModel):
+    """The request fields of an analysis (none by default). Each field's description is the
+    help the CLI, the client and the workbench show; `json_schema_extra={"unit": ...}` names
+    its unit, `{"document_default": "/pointer"}` the document field the workbench starts from."""
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+
+class AnalysisResult(BaseModel):
+    """What every report holds; an analysis' Result adds its own fields."""
+
+    model_config = ConfigDict(extra="allow")
+
+    analysis: str
+    name: str = Field(description="the document's name")
+    status: str = Field(description="converged, not_converged, singular, time_limit, infeasible (finished: "
+                                    "a simulation reached its end)")
+    message: str = ""
+    warnings: list[str] = Field(default_factory=list)
+
+
 @dataclass(frozen=True)
 class AnalysisRequest:
-    """What an analysis reads from a request: the Newton options, and the request's own fields
-    (target, stiffness, sensitivities, at, displacements, ...: JSON as given)."""
+    """What an analysis is asked: the Newton options, and its typed options (a mapping is
+    checked into the analysis' Options first, its problems named by JSON pointer)."""
 
     options: NewtonOptions = NewtonOptions()
-    fields: Mapping[str, Any] = field(default_factory=dict)
-
-    def get(self, name: str, default: Any = None) -> Any:
-        value = self.fields.get(name)
-        return default if value is None else value
+    given: AnalysisOptions | Mapping[str, Any] | None = None
 
 
 class Analysis(ABC):
-    name: str
-    summary: str
-    sweepable: bool = False
+    name: ClassVar[str]
+    summary: ClassVar[str]
+    sweepable: ClassVar[bool] = False
+    long: ClassVar[bool] = False  # may run for seconds: never on the worker kept for small requests
+    Options: ClassVar[type[AnalysisOptions]] = AnalysisOptions
+    Result: ClassVar[type[AnalysisResult]] = AnalysisResult
+
+    def run(self, mech: Mechanism, request: AnalysisRequest = AnalysisRequest()) -> dict:
+        """The report of one mechanism."""
+        return self.report(mech, request.options, self.options_of(request.given))
 
     @abstractmethod
-    def run(self, mech: Mechanism, request: AnalysisRequest) -> dict:
-        """The report of one mechanism."""
+    def report(self, mech: Mechanism, newton: NewtonOptions, options: Any) -> dict:
+        """The report of one mechanism under this analysis' typed options."""
+
+    def options_of(self, given: AnalysisOptions | Mapping[str, Any] | None) -> AnalysisOptions:
+        """Typed options: as given, or checked from a mapping (MechanismError at the field)."""
+        if isinstance(given, self.Options):
+            return given
+        try:
+            return self.Options.model_validate(dict(given or {}))
+        except ValidationError as exc:
+            first = exc.errors()[0]
+            raise MechanismError(pointer_of(tuple(first["loc"])), first["msg"]) from None
 
     def point(self, mech: Mechanism, p: np.ndarray, guess: np.ndarray, options: NewtonOptions) -> EquilibriumResult:
         raise MechanismError("/analysis", f"the {self.name} analysis has no points to sweep "
@@ -52,11 +92,34 @@ class Analysis(ABC):
 
 
 class Analyses:
+    """The registry. Listeners (the CLI's command maker) hear of every analysis, registered
+    before or after they listen."""
+
     def __init__(self, analyses: list[Analysis]):
-        self._by_name = {a.name: a for a in analyses}
+        self._by_name: dict[str, Analysis] = {}
+        self._listeners: list[Callable[[Analysis], None]] = []
+        for analysis in analyses:
+            self.register(analysis)
+
+    def register(self, analysis: Analysis) -> Analysis:
+        if analysis.name in self._by_name and self._by_name[analysis.name] is not analysis:
+            raise ValueError(f"an analysis named '{analysis.name}' is registered already")
+        if analysis.name not in self._by_name:
+            self._by_name[analysis.name] = analysis
+            for listener in self._listeners:
+                listener(analysis)
+        return analysis
+
+    def listen(self, listener: Callable[[Analysis], None]) -> None:
+        self._listeners.append(listener)
+        for analysis in list(self._by_name.values()):
+            listener(analysis)
 
     def names(self) -> list[str]:
         return list(self._by_name)
+
+    def __iter__(self):
+        return iter(list(self._by_name.values()))
 
     def named(self, name: str, pointer: str = "/analysis") -> Analysis:
         if name not in self._by_name:
@@ -64,4 +127,7 @@ class Analyses:
         return self._by_name[name]
 
     def describe(self) -> list[dict]:
-        return [{"name": a.name, "summary": a.summary, "sweepable": a.sweepable} for a in self._by_name.values()]
+        """Each analysis with its options' and result's JSON schemas (GET /v1/analyses)."""
+        return [{"name": a.name, "summary": a.summary, "sweepable": a.sweepable,
+                 "options": a.Options.model_json_schema(), "result": a.Result.model_json_schema()}
+                for a in self._by_name.values()]

@@ -6,16 +6,21 @@ labelled comparison. A quasi-static path is the contact job (service.jobs.contac
 
 from __future__ import annotations
 
+from typing import Literal
+
 import numpy as np
+from pydantic import Field
 
 from models import Mechanism, MechanismError
-from service.analyses.base import Analysis, AnalysisRequest
+from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult
+from service.analyses.shared_options import Sensitivities
 from service.contact.drawing import state_drawing
 from service.contact.problem import contact_problem
 from service.contact.recovery import recovered_forces
 from service.contact.report import friction_coefficients, penetration_error, state_report
 from service.contact.sensitivity import contact_sensitivities
 from service.contact.solve import ContactOptions, PenetratingStart, solve_state
+from service.newton import NewtonOptions
 from service.reports import output_units, plain
 from service.requests import under
 
@@ -42,16 +47,39 @@ def motion_rates(mech: Mechanism, motion: dict, p: np.ndarray) -> np.ndarray:
     return rates / size
 
 
+class ContactAnalysisOptions(AnalysisOptions):
+    penetrating_start: Literal["approach", "refuse"] = Field(
+        "approach", description="an object inside a site in the undeformed state is approached from outside "
+                                "(relaxed, then tightened in steps), or refused naming the pair and depth")
+    motion: dict[str, float] | None = Field(
+        None, max_length=64, description="how the moving fields change (document units per unit of progress): "
+                                         "friction opposes the sliding this motion causes",
+        examples=[{"/contacts/objects/fixture/centre/0": -1}])
+    sensitivities: Sensitivities | None = Field(None, description="also d(outputs)/d(parameters) at the state")
+    thesis_recovery: bool = Field(False, description="also the thesis' recovery of the forces from the "
+                                                     "frictionless shape (Lan 2005 Eqs. 6.6-6.10), labelled")
+
+
+class ContactReport(AnalysisResult):
+    pairs: dict[str, dict] = Field(default_factory=dict, description="every pair's state and forces")
+    units: dict[str, str] = Field(default_factory=dict, description="the units of the pairs' numbers")
+    kkt_residual: float | None = Field(None, description="the largest residual of its KKT system (force unit)")
+
+
 class ContactAnalysis(Analysis):
     name = "contact"
     summary = ("The minimum of the total potential under non-penetration by IPOPT: contact forces from the "
                "multipliers, friction along a given motion, sensitivities")
 
-    def run(self, mech: Mechanism, request: AnalysisRequest) -> dict:
+    long = True
+    Options = ContactAnalysisOptions
+    Result = ContactReport
+
+    def report(self, mech: Mechanism, newton: NewtonOptions, given: ContactAnalysisOptions) -> dict:
         problem = problem_of(mech)
-        options = ContactOptions(request.get("penetrating_start", "approach"), request.options.time_limit)
+        options = ContactOptions(given.penetrating_start, newton.time_limit)
         p, mu = mech.p(), friction_coefficients(mech, problem)
-        motion = request.get("motion")
+        motion = given.motion
         try:
             rates = motion_rates(mech, motion, p) if motion else None
             state = solve_state(problem, p, mu, options=options, motion=rates)
@@ -68,13 +96,13 @@ class ContactAnalysis(Analysis):
             if pair["state"] == "sticking":
                 report["warnings"].append(f"pair '{name}' sticks along this motion: its friction force depends on "
                                           "the path that led here (run a contact path); none is applied")
-        sensitivities = request.get("sensitivities")
+        sensitivities = given.sensitivities
         if sensitivities is not None and state.converged:
-            found, notes = contact_sensitivities(mech, problem, state, sensitivities["parameters"],
-                                                 sensitivities["outputs"])
+            found, notes = contact_sensitivities(mech, problem, state, sensitivities.parameters,
+                                                 sensitivities.outputs)
             report["sensitivities"] = found.to_dict()
             report["warnings"] += notes
-        if request.get("thesis_recovery", False) and state.converged:
+        if given.thesis_recovery and state.converged:
             plain_state = state if not np.any(mu > 0) else solve_state(problem, p, 0 * mu, previous=state, options=options)
             report["thesis_recovery"] = recovered_forces(mech, state_report(mech, problem, plain_state), report)
         return plain(report)

@@ -4,10 +4,11 @@
 from __future__ import annotations
 
 import numpy as np
+from pydantic import Field
 
 from models import Mechanism, MechanismError
-from service.analyses.base import Analysis, AnalysisRequest
-from service.analyses.equilibrium import solution_report
+from service.analyses.base import Analysis, AnalysisOptions
+from service.analyses.equilibrium import EquilibriumReport, solution_report
 from service.energy import minimize_energy
 from service.equilibrium import EquilibriumResult
 from service.newton import NewtonOptions
@@ -15,19 +16,25 @@ from service.reports import plain, stiffness_dict
 from service.requests import under
 
 
+class EnergyOptions(AnalysisOptions):
+    stiffness: bool = Field(False, description="also return the tangent stiffness K_T at the minimum")
+
+
 class EnergyAnalysis(Analysis):
     name = "energy"
     summary = ("The minimum of the total potential (strain energy less the work of dead loads) under the "
                "joints' constraints, by IPOPT; the same report as equilibrium")
     sweepable = True
+    Options = EnergyOptions
+    Result = EquilibriumReport
 
-    def run(self, mech: Mechanism, request: AnalysisRequest) -> dict:
+    def report(self, mech: Mechanism, newton: NewtonOptions, options: EnergyOptions) -> dict:
         try:
-            result = minimize_energy(mech, request.options)
+            result = minimize_energy(mech, newton)
         except MechanismError as exc:
             raise under("/document", exc) from None
         report = solution_report(mech, result, self.name)
-        if request.get("stiffness", False) and result.converged:
+        if options.stiffness and result.converged:
             report["stiffness"] = stiffness_dict(mech, result.z)
         return plain(report)
 

@@ -5,8 +5,11 @@ from __future__ import annotations
 
 from typing import Any
 
+from pydantic import Field
+
 from models import Mechanism
-from service.analyses.base import Analysis, AnalysisRequest
+from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult
+from service.newton import NewtonOptions
 from service.inverse import inverse_wrenches
 from service.reports import plain
 
@@ -23,12 +26,25 @@ def inverse_report(mech: Mechanism, displacements: dict[str, Any]) -> dict:
     })
 
 
+class InverseOptions(AnalysisOptions):
+    displacements: dict[str, tuple[float, float, float]] = Field(
+        description="[dx, dy, rotation] of bodies (document units); bodies not named stay put",
+        examples=[{"input": [0.001, 0, 0]}])
+
+
+class InverseReport(AnalysisResult):
+    wrenches: dict[str, dict[str, float | None]] = Field(description="per body its Fx, Fy, M")
+    wrench_units: dict[str, str]
+
+
 class InverseAnalysis(Analysis):
     name = "inverse"
     summary = "The wrench each body needs to hold given body displacements (closed form, no iteration)"
+    Options = InverseOptions
+    Result = InverseReport
 
-    def run(self, mech: Mechanism, request: AnalysisRequest) -> dict:
-        return inverse_report(mech, request.get("displacements", {}))
+    def report(self, mech: Mechanism, newton: NewtonOptions, options: InverseOptions) -> dict:
+        return inverse_report(mech, options.displacements)
 
 
 INVERSE = InverseAnalysis()

@@ -3,10 +3,12 @@ they apply) at the equilibrium under the document's loads, or undeformed."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Literal
+
+from pydantic import Field
 
 from models import Mechanism, MechanismError
-from service.analyses.base import Analysis, AnalysisRequest
+from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult
 from service.equilibrium import solve_equilibrium
 from service.newton import NewtonOptions
 from service.reports import plain, stiffness_dict
@@ -34,12 +36,24 @@ def linearization_report(mech: Mechanism, options: NewtonOptions, at: str = "equ
     return plain(report)
 
 
+class LinearizationOptions(AnalysisOptions):
+    at: Literal["equilibrium", "undeformed"] = Field(
+        "equilibrium", description="the state: the equilibrium under the document's loads, or undeformed")
+
+
+class LinearizationReport(AnalysisResult):
+    at: str
+    stiffness: dict | None = Field(None, description="K_T, its terms, the units of its rows and columns")
+
+
 class LinearizationAnalysis(Analysis):
     name = "linearization"
     summary = "The tangent stiffness K_T at the equilibrium (or undeformed: at=undeformed), in document units"
+    Options = LinearizationOptions
+    Result = LinearizationReport
 
-    def run(self, mech: Mechanism, request: AnalysisRequest) -> dict:
-        return linearization_report(mech, request.options, request.get("at", "equilibrium"))
+    def report(self, mech: Mechanism, newton: NewtonOptions, options: LinearizationOptions) -> dict:
+        return linearization_report(mech, newton, options.at)
 
 
 LINEARIZATION = LinearizationAnalysis()

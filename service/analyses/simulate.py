@@ -4,12 +4,19 @@ response, so its steps are bounded (SYNC_STEPS)."""
 
 from __future__ import annotations
 
+import copy
+
+from pydantic import Field, create_model
+from pydantic.fields import FieldInfo
+
 from models import Mechanism
-from models.simulation_spec import IMPACT_SCHEMES
-from service.analyses.base import Analysis, AnalysisRequest
+from models.fields import StrictModel
+from models.simulation_spec import IMPACT_SCHEMES, SimulateSpec
+from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult
 from service.deadline import ends_after, passed
 from service.dynamics.run import run_simulation, simulation_spec
 from service.impacts.run import run_impacts
+from service.newton import NewtonOptions
 from service.reports import plain
 
 SYNC_STEPS = 20_000
@@ -18,15 +25,51 @@ SYNC_KEPT = 100_000  # states in one response (about 25 numbers each)
 SYNC_IMPACT_BYTES = 192 * 2**20  # the memory one run's states may take in a solver worker
 
 
+# Where the workbench's form starts a field from (the document's own section, else a drawing's need).
+FORM_STARTS = {"shapes": {"form_default": True}}
+
+
+def _overriding(name: str, info: FieldInfo) -> tuple:
+    """A field of the simulate section as an override: absent (None) unless given."""
+    field = copy.copy(info)
+    field.default, field.default_factory = None, None
+    field.json_schema_extra = FORM_STARTS.get(name)
+    return info.annotation | None, field
+
+
+SimulateOverrides = create_model(
+    "SimulateOverrides", __base__=StrictModel, __module__=__name__,
+    __doc__="Fields of the document's `simulate` section that override it (the merged section is checked as the "
+            "document's is)",
+    **{name: _overriding(name, info) for name, info in SimulateSpec.model_fields.items()})
+
+
+class SimulateOptions(AnalysisOptions):
+    simulate: SimulateOverrides | None = Field(  # type: ignore[valid-type]
+        None, description="fields of the document's `simulate` section that override it",
+        examples=[{"until": 0.1, "step": 0.001}], json_schema_extra={"document_default": "/simulate"})
+
+
+class SimulateReport(AnalysisResult):
+    times: list[float] = Field(default_factory=list, description="the kept times, s")
+    outputs: dict[str, list[float | None]] = Field(default_factory=dict, description="per output its kept values")
+    output_units: dict[str, str] = Field(default_factory=dict)
+
+
 class SimulateAnalysis(Analysis):
     name = "simulate"
     summary = ("Motion in time: Newmark or generalized-alpha steps of the links' and bodies' dynamics under loads "
                "and prescribed motions in time; outputs, constraint forces and the energy balance per step; rigid bodies with "
                "contact impacts and friction (event-driven or Moreau-Jean)")
 
-    def run(self, mech: Mechanism, request: AnalysisRequest) -> dict:
-        spec = simulation_spec(mech, request.get("simulate", {}))
-        limit = request.options.time_limit
+    long = True
+    Options = SimulateOptions
+    Result = SimulateReport
+
+    def report(self, mech: Mechanism, newton: NewtonOptions, options: SimulateOptions) -> dict:
+        given = options.simulate.model_dump(exclude_none=True) if options.simulate is not None else {}
+        spec = simulation_spec(mech, given)
+        limit = newton.time_limit
         end = ends_after(limit)
         stop = (lambda: passed(end)) if limit else None
         if spec.scheme in IMPACT_SCHEMES:

@@ -17,15 +17,15 @@ a path stopped by it is status "time_limit" with its points so far.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from pydantic import Field
 
 from models import Mechanism, MechanismError
 from models.units import quantity_to_si
-from service.analyses.base import Analysis, AnalysisRequest
+from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult
 from service.continuation import trace_path
 from service.deadline import ends_after, passed
 from service.drawing import state_frame
@@ -46,6 +46,28 @@ STATUSES = {"completed": "converged", "not_converged": "not_converged", "max_poi
 ASK = "give trace {path, stop, step} (on the command line: flexmech trace DOC --path --stop --step)"
 
 
+class TraceIn(AnalysisOptions):
+    """Follow the equilibrium path of numeric field `path` from its value in the document until
+    it passes `stop`, through limit points (pseudo-arc-length continuation)."""
+
+    path: str = Field(pattern=r"^/", max_length=256, description="JSON pointer of the numeric field followed",
+                      examples=["/loads/P/force/1"])
+    stop: float = Field(description="the field's last value, document units of the field")
+    step: float = Field(gt=0, description="the first arc-length step, document units of the field")
+    max_points: int = Field(DEFAULT_POINTS, ge=2, le=MAX_POINTS, description="points of the path at most")
+
+
+class TraceOptions(AnalysisOptions):
+    trace: TraceIn | None = Field(None, description="the path followed (default: the document's sweep section)")
+
+
+class TraceReport(AnalysisResult):
+    path: str | None = None
+    unit: str | None = None
+    values: list[float | None] = Field(default_factory=list, description="the field's value per point")
+    limit_points: list[dict] = Field(default_factory=list)
+
+
 @dataclass(frozen=True)
 class TraceSpec:
     path: str
@@ -54,15 +76,6 @@ class TraceSpec:
     max_points: int
     start: float | None = None  # from the sweep section: the field's first value; None: the document's
     source: str = "request"  # request | sweep
-
-
-def _number(given: dict, name: str) -> float:
-    if name not in given or given[name] is None:
-        raise MechanismError(f"/trace/{name}", f"missing: {ASK}")
-    value = given[name]
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise MechanismError(f"/trace/{name}", f"expected a finite number, got {value!r}")
-    return float(value)
 
 
 def _field_checked(mech: Mechanism, path: Any, pointer: str) -> str:
@@ -75,24 +88,9 @@ def _field_checked(mech: Mechanism, path: Any, pointer: str) -> str:
     return path
 
 
-def requested_spec(mech: Mechanism, given: dict) -> TraceSpec:
-    """The request's trace {path, stop, step, max_points}, each field checked by name."""
-    if not isinstance(given, dict):
-        raise MechanismError("/trace", f"expected an object: {ASK}")
-    unknown = sorted(set(given) - {"path", "stop", "step", "max_points"})
-    if unknown:
-        raise MechanismError(f"/trace/{unknown[0]}", "unknown field (fields: path, stop, step, max_points)")
-    if given.get("path") is None:
-        raise MechanismError("/trace/path", f"missing: {ASK}")
-    path = _field_checked(mech, given["path"], "/trace/path")
-    stop, step = _number(given, "stop"), _number(given, "step")
-    if not step > 0:
-        raise MechanismError("/trace/step", f"must be positive, got {step:g}")
-    points = given.get("max_points", DEFAULT_POINTS)
-    points = DEFAULT_POINTS if points is None else points
-    if isinstance(points, bool) or not isinstance(points, int) or not 2 <= points <= MAX_POINTS:
-        raise MechanismError("/trace/max_points", f"expected a whole number from 2 to {MAX_POINTS}, got {points!r}")
-    return TraceSpec(path, stop, step, points)
+def requested_spec(mech: Mechanism, given: TraceIn) -> TraceSpec:
+    """The request's trace, its field checked against the mechanism."""
+    return TraceSpec(_field_checked(mech, given.path, "/trace/path"), given.stop, given.step, given.max_points)
 
 
 def sweep_spec(mech: Mechanism) -> TraceSpec:
@@ -111,7 +109,7 @@ def sweep_spec(mech: Mechanism) -> TraceSpec:
     return TraceSpec(path, stop, abs(stop - start) / sweep.steps, DEFAULT_POINTS, start, "sweep")
 
 
-def trace_report(mech: Mechanism, options: NewtonOptions, given: dict | None = None) -> dict:
+def trace_report(mech: Mechanism, options: NewtonOptions, given: TraceIn | None = None) -> dict:
     """Follow the path (the request's trace, else the document's sweep section) and report it;
     errors name the request's field (/trace/..., /document/...)."""
     spec = sweep_spec(mech) if given is None else requested_spec(mech, given)
@@ -160,8 +158,12 @@ class TraceAnalysis(Analysis):
     summary = ("The equilibrium path of a load (any numeric field) through limit points by arc-length continuation, "
                "with each point's stability and the limit loads located exactly")
 
-    def run(self, mech: Mechanism, request: AnalysisRequest) -> dict:
-        return trace_report(mech, request.options, request.get("trace"))
+    long = True
+    Options = TraceOptions
+    Result = TraceReport
+
+    def report(self, mech: Mechanism, newton: NewtonOptions, options: TraceOptions) -> dict:
+        return trace_report(mech, newton, options.trace)
 
 
 TRACE = TraceAnalysis()

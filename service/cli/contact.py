@@ -86,7 +86,7 @@ def _single_state(out, mech, problem, options, json_out) -> bool:
     from service.analyses.contact import CONTACT
 
     try:
-        report = CONTACT.run(mech, AnalysisRequest(fields={"penetrating_start": options.penetrating_start}))
+        report = CONTACT.run(mech, AnalysisRequest(given={"penetrating_start": options.penetrating_start}))
     except MechanismError as exc:
         raise MechanismError(exc.pointer.removeprefix("/document"), exc.problem) from None
     out.print(f"[bold]{escape(mech.document.name)}[/bold]: {report['status']} in {report['iterations']} iterations, "

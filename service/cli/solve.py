@@ -51,7 +51,8 @@ def run_analysis(mech: Mechanism, analysis: Analysis, options: NewtonOptions,
     solver = SOLVERS.get(analysis.name)
     if solver is None:
         try:
-            return None, analysis.run(mech, AnalysisRequest(options, {"stiffness": stiffness}))
+            asked = {"stiffness": stiffness} if "stiffness" in analysis.Options.model_fields else {}
+            return None, analysis.run(mech, AnalysisRequest(options, asked))
         except MechanismError as exc:
             raise in_the_file(exc) from None
     result = solver(mech, options)

@@ -8,11 +8,15 @@ spec:
                 load path solved in order, each from the previous converged state, in tasks
                 of chunk_size points one after another; without it every point starts from
                 the undeformed state and chunks run in parallel
+  until         optional {output, equals}: one ranged parameter (start, steps) runs from start
+                to the value at which the output equals `equals` (solved for first, as the
+                equilibrium's target, when the job is created): that value is its stop
   outputs       optional output names to keep (default: all)
   analysis      the sweepable analysis of every point (default: equilibrium)
   model, options, overrides   as for /v1/solve
 
-Point index = position in the grid (row-major over `parameters`). Each stored point keeps its
+Point index = position in the grid (row-major over `parameters`); each task carries its points'
+values (the plan's, which hold the stop `until` found). Each stored point keeps its
 nondimensional state z, so a load path resumed after a restart starts from exactly the state
 an uninterrupted run would have used, and gives the same numbers.
 """
@@ -33,29 +37,33 @@ from service.requests import compile_request, newton_options
 from service.units import residual_report
 from service.analyses import ANALYSES
 from service.equilibrium import check_constrained
+from service.sweep import solve_for_target
 from service.jobs.base import Plan
 from service.jobs.control import TaskControl
 
 
-def value_count(parameter: dict, pointer: str) -> int:
-    """How many values a parameter takes, without making them."""
+def value_count(parameter: dict, pointer: str, until: bool = False) -> int:
+    """How many values a parameter takes, without making them (with `until`, no stop)."""
     if parameter.get("values") is not None:
         return len(parameter["values"])
-    missing = [k for k in ("start", "stop", "steps") if parameter.get(k) is None]
+    missing = [k for k in ("start", "steps", *(() if until else ("stop",))) if parameter.get(k) is None]
     if missing:
-        raise MechanismError(pointer, "give values, or start, stop and steps")
+        raise MechanismError(pointer, "give start and steps (the stop is found by until)" if until
+                             else "give values, or start, stop and steps")
     steps = parameter["steps"]
     if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
         raise MechanismError(f"{pointer}/steps", "must be a whole number of at least 1")
     return steps + 1
 
 
-def parameter_values(parameter: dict, pointer: str) -> list[float]:
+def parameter_values(parameter: dict, pointer: str, stop: float | None = None) -> list[float]:
+    """Its values; `stop` (found by until) over the parameter's own."""
     if parameter.get("values") is not None:
         values = [float(v) for v in parameter["values"]]
     else:
-        value_count(parameter, pointer)
-        values = np.linspace(float(parameter["start"]), float(parameter["stop"]), int(parameter["steps"]) + 1).tolist()
+        value_count(parameter, pointer, until=stop is not None)
+        last = float(parameter["stop"] if stop is None else stop)
+        values = np.linspace(float(parameter["start"]), last, int(parameter["steps"]) + 1).tolist()
     if not values:
         raise MechanismError(f"{pointer}/values", "no values")
     if not all(np.isfinite(values)):
@@ -65,7 +73,8 @@ def parameter_values(parameter: dict, pointer: str) -> list[float]:
 
 def grid_size(spec: dict, limits: Limits) -> int:
     """The number of points, checked against the limit before any value is made."""
-    counts = [value_count(p, f"/parameters/{k}") for k, p in enumerate(spec["parameters"])]
+    until = spec.get("until") is not None
+    counts = [value_count(p, f"/parameters/{k}", until) for k, p in enumerate(spec["parameters"])]
     if spec.get("grid", "cartesian") == "zip":
         if len(set(counts)) > 1:
             raise MechanismError("/parameters", f"a zip grid needs equally many values per parameter "
@@ -74,9 +83,10 @@ def grid_size(spec: dict, limits: Limits) -> int:
     return check_grid_size(counts, limits)
 
 
-def grid_shape(spec: dict) -> tuple[list[list[float]], tuple[int, ...]]:
-    """(values per parameter, grid shape); zip grids have shape (n,). Call grid_size first."""
-    values = [parameter_values(p, f"/parameters/{k}") for k, p in enumerate(spec["parameters"])]
+def grid_shape(spec: dict, stop: float | None = None) -> tuple[list[list[float]], tuple[int, ...]]:
+    """(values per parameter, grid shape); zip grids have shape (n,). Call grid_size first.
+    `stop`: the one parameter's stop, found by until."""
+    values = [parameter_values(p, f"/parameters/{k}", stop) for k, p in enumerate(spec["parameters"])]
     if spec.get("grid", "cartesian") == "zip":
         lengths = {len(v) for v in values}
         if len(lengths) > 1:
@@ -127,10 +137,38 @@ def mechanism_of(spec: dict) -> Mechanism:
                       json.dumps(spec.get("overrides") or {}, sort_keys=True))
 
 
-def _check_spec(spec: dict, limits: Limits) -> tuple[list[list[float]], tuple[int, ...], list[str]]:
+def until_stop(spec: dict, mech: Mechanism) -> tuple[float | None, dict | None]:
+    """(the stop `until` finds, what to report of it), or (None, None) without until. Its
+    output's value is reached by the one ranged parameter, solved for as the equilibrium's
+    target is (from the document's state); a target not reached is a 422 saying so."""
+    until = spec.get("until")
+    if until is None:
+        return None, None
+    parameters = spec["parameters"]
+    if len(parameters) != 1 or parameters[0].get("values") is not None:
+        raise MechanismError("/until", "until stops one ranged parameter (start and steps): give one")
+    if parameters[0].get("stop") is not None:
+        raise MechanismError("/parameters/0/stop", "until finds the stop: give stop or until, not both")
+    path = parameters[0]["path"]
+    try:
+        mech.parameter_index(path)
+    except MechanismError as exc:
+        raise MechanismError("/parameters/0/path", exc.problem) from None
+    if until["output"] not in mech.graphs.output_names:
+        raise MechanismError("/until/output", f"unknown output '{until['output']}'")
+    options = newton_options(spec.get("options"))
+    found = solve_for_target(mech, path, until["output"], float(until["equals"]), options)
+    if found.status != "converged":
+        raise MechanismError("/until", f"the value at which {until['output']} = {until['equals']:g} was not found "
+                                       f"({found.status}: {found.equilibrium.message})")
+    return found.value, {"output": until["output"], "equals": until["equals"], "path": path, "value": found.value,
+                         "unit": mech.doc_unit(mech.parameter_kind(path))}
+
+
+def _check_spec(spec: dict, limits: Limits, stop: float | None = None) -> tuple[list[list[float]], tuple[int, ...], list[str]]:
     """The grid (values per parameter, shape) and the swept paths of a valid spec."""
     grid_size(spec, limits)
-    values, shape = grid_shape(spec)
+    values, shape = grid_shape(spec, stop)
     paths = [p["path"] for p in spec["parameters"]]
     if len(set(paths)) != len(paths):
         raise MechanismError("/parameters", "a path is listed twice")
@@ -149,9 +187,11 @@ class SweepJob:
     paged = True
 
     def prepare(self, spec: dict, limits: Limits) -> Plan:
-        values, shape, paths = _check_spec(spec, limits)
+        grid_size(spec, limits)  # before any solve
         mech = compile_request(spec["document"], spec.get("model"), spec.get("overrides"), limits)
         newton_options(spec.get("options"))
+        stop, until = until_stop(spec, mech)
+        values, shape, paths = _check_spec(spec, limits, stop)
         units = []
         for k, path in enumerate(paths):
             try:
@@ -176,7 +216,7 @@ class SweepJob:
         meta = {"parameters": [{"path": p, "unit": u, "values": v} for p, u, v in zip(paths, units, values)],
                 "shape": list(shape), "output_units": {n: all_units[n] for n in wanted},
                 "force_unit": mech.doc_unit("force"), "moment_unit": mech.doc_unit("moment"),
-                "solve_time_limit": limits.solve_time_limit}
+                "solve_time_limit": limits.solve_time_limit, **({"until": until} if until else {})}
         return Plan(int(np.prod(shape)), meta)
 
     def failed(self, point: dict) -> bool:
@@ -194,14 +234,22 @@ class SweepJob:
                 task = self._next_on_line(line, number, finished, chunk_size)
                 if task is not None:
                     tasks.append(task)
-        return [t | {"time_limit": plan.get("solve_time_limit")} for t in tasks]
+        return [self._with_values(t, spec, plan) for t in tasks]
 
     def follow_up(self, spec, plan, task, finished, chunk_size):
         if task.get("line") is None:
             return []
         line = load_paths(spec, tuple(plan["shape"]))[task["line"]]
         nxt = self._next_on_line(line, task["line"], finished, chunk_size)
-        return [nxt | {"time_limit": plan.get("solve_time_limit")}] if nxt is not None else []
+        return [self._with_values(nxt, spec, plan)] if nxt is not None else []
+
+    @staticmethod
+    def _with_values(task: dict, spec: dict, plan: Mapping) -> dict:
+        """The task with its points' values (the plan's grid) and the solve time limit."""
+        values = [p["values"] for p in plan["parameters"]]
+        grid, shape = spec.get("grid", "cartesian"), tuple(plan["shape"])
+        return task | {"time_limit": plan.get("solve_time_limit"),
+                       "values": [point_values(values, shape, grid, i) for i in task["indices"]]}
 
     @staticmethod
     def _next_on_line(line: list[int], number: int, finished: Mapping[int, dict], chunk_size: int) -> dict | None:
@@ -221,8 +269,11 @@ class SweepJob:
         mech = mechanism_of(spec)
         analysis = ANALYSES.named(spec.get("analysis") or "equilibrium")
         control = TaskControl(task)
-        values, shape = grid_shape(spec)
-        grid = spec.get("grid", "cartesian")
+        if task.get("values") is not None:
+            at = dict(zip(task["indices"], task["values"]))
+        else:  # a task stored before tasks carried their values: the grid again (no until then)
+            values, shape = grid_shape(spec)
+            at = {i: point_values(values, shape, spec.get("grid", "cartesian"), i) for i in task["indices"]}
         slots = [mech.parameter_index(p["path"]) for p in spec["parameters"]]
         factors = [mech.nd_per_doc(mech.parameters[k].kind) for k in slots]
         names, kinds = mech.graphs.output_names, mech.graphs.output_kinds
@@ -237,7 +288,7 @@ class SweepJob:
             if control.should_stop():  # cancelled, or out of the job's time: the runner drops the rest
                 break
             options = newton_options(spec.get("options"), control.time_limit(task.get("time_limit")))
-            here = point_values(values, shape, grid, index)
+            here = at[index]
             p = p0.copy()
             p[slots] = np.asarray(here) * factors
             r = analysis.point(mech, p, z_prev if along_path else zero, options)
@@ -258,7 +309,8 @@ class SweepJob:
         return {"parameters": plan["parameters"], "grid": spec.get("grid", "cartesian"),
                 "continuation": spec.get("continuation"), "output_units": plan["output_units"],
                 "residual_unit": plan["force_unit"], "residual_moment_unit": plan.get("moment_unit"),
-                "analysis": spec.get("analysis") or "equilibrium", "points": points}
+                "analysis": spec.get("analysis") or "equilibrium", "points": points,
+                **({"until": plan["until"]} if plan.get("until") else {})}
 
 
 SWEEP = SweepJob()
