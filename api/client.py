@@ -24,6 +24,7 @@ import httpx
 from pydantic import BaseModel, TypeAdapter
 
 from api.schemas import (
+    AnalysisReport,
     ExampleSummary,
     HealthResponse,
     JobResultResponse,
@@ -34,6 +35,7 @@ from api.schemas import (
     SolveResponse,
     SweepRequest,
 )
+from api.analysis_methods import Analyses
 from api.drawing_schemas import DrawingRequest
 from api.impact_study_schemas import ImpactStudyRequest
 from api.simulation_schemas import SimulationRequest
@@ -78,7 +80,7 @@ def _parse(response: httpx.Response, model: type[T] | TypeAdapter) -> T:
     data = response.json()
     if isinstance(model, TypeAdapter):
         return model.validate_python(data)
-    if model is dict:
+    if model in (dict, list):
         return data
     return model.model_validate(data)
 
@@ -117,6 +119,7 @@ class Client:
     def __init__(self, base_url: str = DEFAULT_URL, api_key: str | None = None, timeout: float = 60.0,
                  transport: httpx.BaseTransport | None = None):
         self._http = httpx.Client(base_url=base_url, headers=_headers(api_key), timeout=timeout, transport=transport)
+        self._analyze: Analyses | None = None
 
     def __enter__(self) -> "Client":
         return self
@@ -137,8 +140,25 @@ class Client:
         return _parse(self._http.get(f"/v1/examples/{name}"), dict)
 
     def solve(self, request: SolveRequest | None = None, **fields: Any) -> SolveResponse:
-        """One analysis; fields as in SolveRequest (document or example, analysis, overrides, ...)."""
+        """One analysis; fields as in SolveRequest (document or example, analysis, overrides, ...)
+        and the analysis' own options (see `analyses()`, or call it as `analyze.<name>(...)`)."""
         return _parse(self._http.post("/v1/solve", json=_request_body(SolveRequest, request, fields)), SolveResponse)
+
+    def _report(self, **fields: Any) -> AnalysisReport:
+        return _parse(self._http.post("/v1/solve", json=_request_body(SolveRequest, None, fields)), AnalysisReport)
+
+    def analyses(self) -> list[dict]:
+        """The server's analyses: name, summary, sweepable, and their options' and results'
+        JSON schemas."""
+        return _parse(self._http.get("/v1/analyses"), list)
+
+    @property
+    def analyze(self) -> Analyses:
+        """A method per analysis of the server (`analyze.equilibrium(example="gripper",
+        stiffness=True)`), its options as keyword arguments, documented from its schema."""
+        if self._analyze is None:
+            self._analyze = Analyses(self.analyses, self._report)
+        return self._analyze
 
     def sweep(self, request: SweepRequest | None = None, **fields: Any) -> JobStatusResponse:
         """Start a sweep job; fields as in SweepRequest. Returns the new job's status."""
@@ -227,6 +247,21 @@ class AsyncClient:
     async def solve(self, request: SolveRequest | None = None, **fields: Any) -> SolveResponse:
         body = _request_body(SolveRequest, request, fields)
         return _parse(await self._http.post("/v1/solve", json=body), SolveResponse)
+
+    async def analyses(self) -> list[dict]:
+        """The server's analyses (as Client.analyses)."""
+        return _parse(await self._http.get("/v1/analyses"), list)
+
+    async def analyzer(self) -> Analyses:
+        """A method per analysis of the server, each returning a coroutine of its report:
+        `(await client.analyzer()).equilibrium(example="gripper")`."""
+        listing = await self.analyses()
+
+        async def report(**fields: Any) -> AnalysisReport:
+            body = _request_body(SolveRequest, None, fields)
+            return _parse(await self._http.post("/v1/solve", json=body), AnalysisReport)
+
+        return Analyses(lambda: listing, report)
 
     async def sweep(self, request: SweepRequest | None = None, **fields: Any) -> JobStatusResponse:
         body = _request_body(SweepRequest, request, fields)

@@ -213,6 +213,17 @@ class ContactPairOut(_Response):
     gap: float | None
 
 
+class AnalysisReport(_Response):
+    """Any analysis' report: what every report holds; its own fields are attributes too (the
+    server's GET /v1/analyses has each analysis' result schema)."""
+
+    analysis: str
+    name: str
+    status: str
+    message: str = ""
+    warnings: list[str] = Field(default_factory=list)
+
+
 class SolveResponse(_Response):
     analysis: str
     name: str

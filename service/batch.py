@@ -1,6 +1,7 @@
 """Batch runs for containers: every mechanism document in a folder run through the analysis it
 declares (its `optimize` section, else its `inverse` section, else its `sweep`, else the
-equilibrium under its loads), one result file per document and a summary.
+equilibrium under its loads), or through one analysis of the registry with its typed options
+for all of them; one result file per document and a summary.
 
 A document that cannot be read or modelled (not UTF-8, nested too deep, not a mapping, an
 invalid field) is one failed row; the others still run and the summary is still written.
@@ -14,9 +15,11 @@ import json
 import time
 from collections import Counter
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 from models import Mechanism, MechanismDocument, MechanismError, compile_mechanism, load_document
+from service.analyses import Analysis, AnalysisOptions, AnalysisRequest
 from service.analyses.equilibrium import equilibrium_report
 from service.design import design_problem
 from service.equilibrium import NewtonOptions
@@ -27,14 +30,18 @@ from service.sweep import document_sweep
 
 DOCUMENT_SUFFIXES = (".json", ".yaml", ".yml")
 SUMMARY = "summary.json"
-# The statuses that count as success, per analysis; any other status (and "error") is a failure.
+# The statuses that count as success, per declared analysis (a registry analysis: converged, or
+# a simulation finished); any other status (and "error") is a failure.
 SUCCESS = {"optimize": ("optimal", "acceptable"), "inverse": ("converged",), "sweep": ("converged",),
            "equilibrium": ("converged",)}
+REGISTRY_SUCCESS = ("converged", "finished")
 
 
 def succeeded(analysis: str | None, status: str) -> bool:
     """Whether a row of the summary (its analysis and status) is a success."""
-    return status in SUCCESS.get(analysis or "", ())
+    if analysis is None:
+        return False
+    return status in SUCCESS.get(analysis, REGISTRY_SUCCESS)
 
 
 def batch_documents(directory: Path) -> list[Path]:
@@ -104,16 +111,28 @@ ANALYSES: dict[str, Callable[[Mechanism, NewtonOptions], dict]] = {
     "equilibrium": equilibrium_report}
 
 
-def run_document(path: Path, options: NewtonOptions) -> dict:
-    """The result of one document, by the analysis it declares. Carries `analysis` (None when
-    the document could not be read or modelled), `status` (the analysis's own, or error) and
-    `message`."""
+@dataclass(frozen=True)
+class Chosen:
+    """One analysis of the registry for every document, with its typed options."""
+
+    analysis: Analysis
+    options: AnalysisOptions
+
+
+def run_document(path: Path, options: NewtonOptions, chosen: Chosen | None = None) -> dict:
+    """The result of one document, by the analysis it declares (or the one chosen). Carries
+    `analysis` (None when the document could not be read or modelled), `status` (the
+    analysis's own, or error) and `message`."""
     started = time.perf_counter()
     analysis = None
     try:
         mech = compile_mechanism(load_document(path))
-        analysis = declared_analysis(mech.document)
-        payload = ANALYSES[analysis](mech, options)
+        if chosen is not None:
+            analysis = chosen.analysis.name
+            payload = chosen.analysis.run(mech, AnalysisRequest(options, chosen.options))
+        else:
+            analysis = declared_analysis(mech.document)
+            payload = ANALYSES[analysis](mech, options)
     except MechanismError as exc:
         payload = {"analysis": analysis, "status": "error", "message": str(exc)}
     payload["seconds"] = time.perf_counter() - started
@@ -121,7 +140,7 @@ def run_document(path: Path, options: NewtonOptions) -> dict:
 
 
 def run_batch(directory: Path, out: Path, options: NewtonOptions = NewtonOptions(),
-              progress: Callable[[Path, dict], None] | None = None) -> dict:
+              progress: Callable[[Path, dict], None] | None = None, chosen: Chosen | None = None) -> dict:
     """Write out/<result name> for each document (see result_names) and out/summary.json;
     return the summary. ValueError if `out` is `directory` (the results would replace it)."""
     if same_folder(directory, out):
@@ -131,7 +150,7 @@ def run_batch(directory: Path, out: Path, options: NewtonOptions = NewtonOptions
     names = result_names(documents)
     rows = []
     for path in documents:
-        payload = run_document(path, options)
+        payload = run_document(path, options, chosen)
         result_file = out / names[path]
         result_file.write_text(json.dumps({"document": path.name, **payload}, indent=2))
         ok = succeeded(payload.get("analysis"), payload["status"])

@@ -29,7 +29,10 @@ def solve_router() -> APIRouter:
     router = APIRouter(prefix="/v1", tags=["solve"], route_class=ParsedBodyRoute)
     body = solve_request_type()
 
-    @router.post("/solve", operation_id="solve", response_model=SolveResponse, responses=ERRORS,
+    # The report is checked against its analysis' Result model (a plugin's fields need not fit
+    # SolveResponse); the OpenAPI document lists every Result model (api.analysis_requests).
+    @router.post("/solve", operation_id="solve", response_model=None,
+                 responses={**ERRORS, 200: {"model": SolveResponse, "description": "The analysis' report"}},
                  summary=f"Solve one mechanism: {', '.join(ANALYSES.names())}")
     async def solve(request: body, services: ServicesDep, _owner: OwnerDep) -> dict:  # type: ignore[valid-type]
         """Runs in a solver worker (api.solver_pool). Non-convergence is a 200 with `status` and
@@ -38,9 +41,11 @@ def solve_router() -> APIRouter:
         document = request_document(request, services)
         # the common fields travel as a plain DocumentRequest: the request's own class is made here
         common = DocumentRequest.model_construct(**{n: getattr(request, n) for n in DocumentRequest.model_fields})
-        return await services.solver.call(_solve, analysis.name, options_of(analysis, request), common, document,
-                                          services.limits, time_limit=services.limits.solve_time_limit,
-                                          large=analysis.long)
+        report = await services.solver.call(_solve, analysis.name, options_of(analysis, request), common, document,
+                                            services.limits, time_limit=services.limits.solve_time_limit,
+                                            large=analysis.long)
+        analysis.Result.model_validate(report)  # a report that does not fit its own model is a bug: a 500
+        return report
 
     @router.get("/analyses", operation_id="list_analyses", summary="The analyses /v1/solve runs, with their options")
     async def analyses() -> list[dict]:

@@ -34,12 +34,18 @@ function solveView(report) {
     v.tables.push({ caption: "Wrenches", columns: ["on", `Fx [${units.Fx || ""}]`, `Fy [${units.Fy || ""}]`, `M [${units.M || ""}]`],
                     rows: Object.entries(report.wrenches).map(([name, w]) => [name, w.Fx, w.Fy, w.M]) });
   }
-  if (report.stiffness) {
+  for (const [key, value] of Object.entries(report)) {  // an analysis' own numbers (a plugin's too)
+    if (typeof value === "number" && !SHOWN_NUMBERS.has(key)) v.summary.push([key.replace(/_/g, " "), `${value} ${report[`${key}_unit`] || ""}`.trim()]);
+  }
+  if (report.stiffness && report.stiffness.coordinates) {
     const k = report.stiffness;
     v.tables.push({ caption: "Tangent stiffness K_T", columns: ["", ...k.coordinates], rows: k.K.map((row, i) => [`${k.coordinates[i]} [${k.row_units[i]}]`, ...row]) });
   }
   return v;
 }
+
+// Numbers of a report the view shows in its own way (or not at all).
+const SHOWN_NUMBERS = new Set(["iterations", "residual_norm", "residual_moment", "solver_residual"]);
 
 export function simulationView(report, drawing) {
   const v = view();

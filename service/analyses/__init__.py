@@ -22,4 +22,9 @@ ANALYSES = Analyses([
     SIMULATE,
 ])
 
+# Last: a plugin module registers on ANALYSES, which exists by now.
+from service.plugins import load_plugins  # noqa: E402
+
+load_plugins()
+
 __all__ = ["ANALYSES", "Analysis", "AnalysisOptions", "AnalysisRequest", "AnalysisResult"]

@@ -2,6 +2,7 @@
 
     flexmech solve examples/gripper.json --set /loads/actuation/force/1=77 --stiffness
     flexmech solve examples/gripper.json --analysis linearization
+    flexmech linearization examples/gripper.json --at undeformed   (a command per analysis)
     flexmech sweep examples/gripper.json --compare-models --plot sweep.png
     flexmech optimize examples/grasper_shape.json
     flexmech trace examples/snap_through_arch.json --path /loads/P/force/1 --stop -300 --step 20
@@ -31,6 +32,9 @@ from service.cli import contact  # noqa: F401
 from service.cli import simulate  # noqa: F401
 from service.cli import build  # noqa: F401
 from service.cli import upgrade  # noqa: F401
+from service.cli import analysis_commands
 from service.cli.leaving import main
+
+analysis_commands.listen()  # last: a registered analysis without a command of its own gets one
 
 __all__ = ["app", "main"]

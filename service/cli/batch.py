@@ -16,7 +16,8 @@ from service.cli.options import JacobianOpt, LineSearchOpt, MaxIterOpt, newton_o
 from service.newton import NewtonOptions
 
 
-def run_with_progress(err: Console, directory: Path, out: Path, options: NewtonOptions, count: int) -> dict:
+def run_with_progress(err: Console, directory: Path, out: Path, options: NewtonOptions, count: int,
+                      chosen=None) -> dict:
     """service.batch.run_batch with a progress bar on stderr; its summary."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
@@ -29,7 +30,7 @@ def run_with_progress(err: Console, directory: Path, out: Path, options: NewtonO
         def advance(path: Path, payload: dict) -> None:
             bar.update(task, advance=1, description=path.name)
 
-        return run_batch(directory, out, options, advance)
+        return run_batch(directory, out, options, advance, chosen)
 
 
 def print_summary(console: Console, summary: dict, out: Path) -> None:
@@ -50,6 +51,32 @@ def print_summary(console: Console, summary: dict, out: Path) -> None:
     console.print(f"wrote {escape(str(out / 'summary.json'))}")
 
 
+def chosen_analysis(name: str | None, text: str | None):
+    """The analysis and its typed options the flags choose (None: each document's own)."""
+    if name is None:
+        if text is not None:
+            raise OptionError("--options", "options are those of an analysis: give --analysis too")
+        return None
+    import json
+
+    from models import MechanismError
+    from service.analyses import ANALYSES
+    from service.batch import Chosen
+
+    try:
+        analysis = ANALYSES.named(name)
+    except MechanismError as exc:
+        raise OptionError("--analysis", exc.problem) from None
+    try:
+        given = json.loads(text) if text is not None else {}
+    except json.JSONDecodeError as exc:
+        raise OptionError("--options", f"not JSON: {exc.msg}") from None
+    try:
+        return Chosen(analysis, analysis.options_of(given))
+    except MechanismError as exc:
+        raise OptionError(f"--options {exc.pointer}", exc.problem) from None
+
+
 @app.command()
 def batch(
     directory: Annotated[Path, typer.Argument(help="Folder of mechanism documents (JSON or YAML).", show_default=False)],
@@ -57,9 +84,16 @@ def batch(
     jacobian: JacobianOpt = "full",
     line_search: LineSearchOpt = True,
     max_iterations: MaxIterOpt = 50,
+    analysis: Annotated[str | None, typer.Option(
+        "--analysis", help="Run this analysis of every document instead of the one each declares "
+                           "(any of `flexmech solve --analysis`, a plugin's included).", show_default=False)] = None,
+    analysis_options: Annotated[str | None, typer.Option(
+        "--options", metavar="JSON", help="The analysis' options (its fields of POST /v1/solve), as a JSON object.",
+        show_default=False)] = None,
 ) -> None:
     """Run every document of a folder through the analysis it declares (its optimize section,
-    else its inverse section, else its sweep, else the equilibrium); write one result file per
+    else its inverse section, else its sweep, else the equilibrium), or through --analysis with
+    --options; write one result file per
     document (<stem>.json, or <file name>.json when stems clash) and summary.json. Exit 1 if
     any document failed; the others are still written. Exit 2 if --out is the input folder."""
     from service.batch import batch_documents, same_folder
@@ -69,6 +103,7 @@ def batch(
         if not directory.is_dir():
             raise OptionError("DIRECTORY", f"'{directory}' is not a folder")
         options = newton_options(jacobian, line_search, max_iterations)
+        chosen = chosen_analysis(analysis, analysis_options)
         documents = batch_documents(directory)
         if not documents:
             raise OptionError("DIRECTORY", f"no documents (*.json, *.yaml) in '{directory}'")
@@ -79,7 +114,7 @@ def batch(
             out.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise OptionError("--out", f"cannot create {out}: {exc.strerror}") from None
-        summary = run_with_progress(err, directory, out, options, len(documents))
+        summary = run_with_progress(err, directory, out, options, len(documents), chosen)
         print_summary(out_console, summary, out)
     if summary["failed"]:
         raise typer.Exit(EXIT_NOT_CONVERGED)

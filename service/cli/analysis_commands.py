@@ -1,0 +1,190 @@
+"""A command for every registered analysis that has no command of its own (`flexmech
+equilibrium DOC --stiffness`, `flexmech linearization DOC --at undeformed`, and any a plugin
+registers): its flags are the fields of the analysis' options model, each with the field's
+description (and unit) as its help; a field that is an object or a list takes JSON. The
+options are checked by the model, a problem named by its flag. It prints the report's status,
+its numbers and tables of its named numbers, and writes the report with --json, the same
+report POST /v1/solve answers."""
+
+from __future__ import annotations
+
+import inspect
+import json
+import types
+import typing
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+import typer
+from pydantic import ValidationError
+from rich.console import Console
+from rich.markup import escape
+
+from service.analyses import ANALYSES, Analysis, AnalysisRequest
+from service.cli.application import app
+from service.cli.common import EXIT_NOT_CONVERGED, OptionError, consoles, number, table_of, user_errors, write_json
+from service.cli.options import (DocArg, JacobianOpt, JsonOpt, LineSearchOpt, MaxIterOpt, ModelOpt, SetOpt, mechanism,
+                                 newton_options)
+from service.cli.report_tables import print_status
+
+FINE = ("converged", "finished")
+
+
+def flag(name: str) -> str:
+    return "--" + name.replace("_", "-")
+
+
+def _plain(annotation: Any) -> Any:
+    """The annotation without None (Optional)."""
+    if typing.get_origin(annotation) in (typing.Union, types.UnionType):
+        rest = [a for a in typing.get_args(annotation) if a is not type(None)]
+        return rest[0] if len(rest) == 1 else annotation
+    return annotation
+
+
+def _help(info, choices: tuple | None) -> str:
+    extra = info.json_schema_extra if isinstance(info.json_schema_extra, dict) else {}
+    text = (info.description or "").rstrip(".")
+    if extra.get("unit"):
+        text += f" [{extra['unit']}]"
+    if choices:
+        text += f" ({' | '.join(map(str, choices))})"
+    return text + "."
+
+
+def option_parameter(name: str, info) -> inspect.Parameter:
+    """The flag of one options field: a bool is --x/--no-x, a number or a word takes its value,
+    a choice names its choices, anything else takes JSON."""
+    kind = _plain(info.annotation)
+    choices = typing.get_args(kind) if typing.get_origin(kind) is Literal else None
+    if kind is bool:
+        annotation = Annotated[bool | None, typer.Option(f"{flag(name)}/--no-{name.replace('_', '-')}",
+                                                         help=_help(info, None), show_default=False)]
+    elif kind in (int, float, str) or choices:
+        python = str if choices else kind
+        annotation = Annotated[python | None, typer.Option(flag(name), help=_help(info, choices),
+                                                           show_default=False)]
+    else:
+        annotation = Annotated[str | None, typer.Option(flag(name), metavar="JSON", help=_help(info, None),
+                                                        show_default=False)]
+    return inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=None, annotation=annotation)
+
+
+COMMON = [("document", DocArg), ("model", ModelOpt), ("sets", SetOpt), ("jacobian", JacobianOpt),
+          ("line_search", LineSearchOpt), ("max_iterations", MaxIterOpt), ("json_out", JsonOpt)]
+COMMON_DEFAULTS = {"model": None, "sets": None, "jacobian": "full", "line_search": True, "max_iterations": 50,
+                   "json_out": None}
+
+
+def typed_options(analysis: Analysis, given: dict[str, Any]):
+    """The options model from the flags given (JSON flags parsed); OptionError names the flag."""
+    fields = {}
+    for name, value in given.items():
+        if value is None:
+            continue
+        kind = _plain(analysis.Options.model_fields[name].annotation)
+        if isinstance(value, str) and kind not in (str, int, float, bool) and typing.get_origin(kind) is not Literal:
+            try:
+                value = json.loads(value)
+            except json.JSONDecodeError as exc:
+                raise OptionError(flag(name), f"not JSON: {exc.msg}") from None
+        fields[name] = value
+    try:
+        return analysis.Options.model_validate(fields)
+    except ValidationError as exc:
+        first = exc.errors()[0]
+        inner = "/".join(str(p) for p in first["loc"][1:])
+        raise OptionError(flag(str(first["loc"][0])) + (f" /{inner}" if inner else ""), first["msg"]) from None
+
+
+SHOWN_ELSEWHERE = ("analysis", "name", "status", "message", "iterations", "seconds", "warnings")
+
+
+def _named_numbers(value: Any) -> bool:
+    return isinstance(value, dict) and bool(value) and all(
+        isinstance(v, (int, float)) and not isinstance(v, bool) or v is None for v in value.values())
+
+
+def print_report(out: Console, report: dict) -> None:
+    """The status; then each number, each quantity ({value, unit}) and a table per mapping of
+    named numbers (its units from the report's <key>_units); the rest is named as in --json."""
+    print_status(out, report)
+    rest = []
+    for key, value in report.items():
+        if key in SHOWN_ELSEWHERE or key.endswith(("units", "_unit")):
+            continue
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            unit = report.get(f"{key}_unit") or report.get(f"{key.rsplit('_', 1)[0]}_unit")
+            out.print(f"{escape(key)}: {number(value, unit if isinstance(unit, str) else None)}")
+        elif isinstance(value, str):
+            out.print(f"{escape(key)}: {escape(value)}")
+        elif isinstance(value, dict) and "value" in value and "unit" in value:
+            status = f" ({value['status']})" if "status" in value else ""
+            out.print(f"{escape(key)}: {number(value['value'], value['unit'])}{escape(status)}")
+        elif _named_numbers(value):
+            units = report.get(f"{key.removesuffix('s')}_units") or {}
+            table = table_of(key, "name", "value", "unit", text=1)
+            for name, v in value.items():
+                table.add_row(escape(name), number(v), escape(str(units.get(name, "") if isinstance(units, dict) else "")))
+            out.print(table)
+        elif value not in (None, [], {}):
+            rest.append(key)
+    for note in report.get("warnings", []):
+        out.print(f"[yellow]warning:[/yellow] {escape(note)}")
+    if rest:
+        out.print(f"also in the report (--json): {escape(', '.join(rest))}")
+
+
+def run_command(analysis: Analysis, document: Path, model: str | None, sets: list[str] | None, jacobian: str,
+                line_search: bool, max_iterations: int, json_out: Path | None, given: dict[str, Any]) -> None:
+    out, err = consoles()
+    with user_errors(err):
+        options = typed_options(analysis, given)
+        newton = newton_options(jacobian, line_search, max_iterations)
+        mech = mechanism(document, model, sets)
+        report = analysis.run(mech, AnalysisRequest(newton, options))
+        out.print(f"[bold]{escape(mech.document.name)}[/bold]  ({escape(str(document))}): {analysis.name}")
+        print_report(out, report)
+        if json_out is not None:
+            write_json(json_out, {"document": str(document), "model": model, **report})
+            out.print(f"wrote {escape(str(json_out))}")
+    if report.get("status") not in FINE:
+        raise typer.Exit(EXIT_NOT_CONVERGED)
+
+
+def command_of(analysis: Analysis):
+    """The command function, its signature made from the options model (typer reads it)."""
+    option_names = list(analysis.Options.model_fields)
+
+    def command(**kwargs: Any) -> None:
+        common = {name: kwargs.get(name, COMMON_DEFAULTS.get(name)) for name, _ in COMMON}
+        run_command(analysis, **common, given={name: kwargs.get(name) for name in option_names})
+
+    parameters = [inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, annotation=annotation,
+                                    default=COMMON_DEFAULTS.get(name, inspect.Parameter.empty))
+                  for name, annotation in COMMON]
+    parameters += [option_parameter(name, analysis.Options.model_fields[name]) for name in option_names
+                   if name not in COMMON_DEFAULTS and name != "document"]
+    command.__signature__ = inspect.Signature(parameters)  # type: ignore[attr-defined]
+    command.__annotations__ = {p.name: p.annotation for p in parameters}
+    command.__doc__ = f"{analysis.summary}. Its options are the flags below (as fields of POST /v1/solve)."
+    return command
+
+
+def _taken() -> set[str]:
+    return {c.name or c.callback.__name__ for c in app.registered_commands if c.callback is not None}
+
+
+def add_command(analysis: Analysis) -> None:
+    """Register the analysis' command unless a command has its name (a richer one of its own)."""
+    name = analysis.name.replace("_", "-")
+    if name in _taken():
+        return
+    command = command_of(analysis)
+    app.command(name=name, help=command.__doc__, short_help=analysis.summary)(command)
+
+
+def listen() -> None:
+    """Commands for every analysis, registered now and later (service.cli imports this last)."""
+    ANALYSES.listen(add_command)
+
