@@ -15,12 +15,12 @@ from fastapi import FastAPI
 from fastapi_offline import FastAPIOffline
 
 from api import body_parsing
+from api.analysis_requests import documented
 from api.errors import install_error_handlers
 from api.headers import SecurityHeaders
 from api.limits import BodySizeLimit
 from api.routers import contacts, drawings, examples, health, impact_studies, jobs, optimize, simulations, sweeps
 from api.routers.solve import solve_router
-from api.analysis_requests import documented
 from api.routers.workbench import mount_workbench
 from api.solver_pool import SolverPool
 from api.state import Services

@@ -23,21 +23,21 @@ from typing import Any, TypeVar
 import httpx
 from pydantic import BaseModel, TypeAdapter
 
+from api.analysis_methods import Analyses
+from api.drawing_schemas import DrawingRequest
+from api.impact_study_schemas import ImpactStudyRequest
 from api.schemas import (
     AnalysisReport,
+    ContactPathRequest,
     ExampleSummary,
     HealthResponse,
     JobResultResponse,
     JobStatusResponse,
-    ContactPathRequest,
     OptimizeRequest,
     SolveRequest,
     SolveResponse,
     SweepRequest,
 )
-from api.analysis_methods import Analyses
-from api.drawing_schemas import DrawingRequest
-from api.impact_study_schemas import ImpactStudyRequest
 from api.simulation_schemas import SimulationRequest
 
 T = TypeVar("T")
@@ -121,7 +121,7 @@ class Client:
         self._http = httpx.Client(base_url=base_url, headers=_headers(api_key), timeout=timeout, transport=transport)
         self._analyze: Analyses | None = None
 
-    def __enter__(self) -> "Client":
+    def __enter__(self) -> Client:
         return self
 
     def __exit__(self, *exc) -> None:
@@ -226,7 +226,7 @@ class AsyncClient:
         self._http = httpx.AsyncClient(base_url=base_url, headers=_headers(api_key), timeout=timeout,
                                        transport=transport)
 
-    async def __aenter__(self) -> "AsyncClient":
+    async def __aenter__(self) -> AsyncClient:
         return self
 
     async def __aexit__(self, *exc) -> None:

@@ -54,7 +54,7 @@ class BodySizeLimit:
         while True:
             try:
                 message = await asyncio.wait_for(receive(), max(deadline - time.monotonic(), 0.0))
-            except asyncio.TimeoutError:
+            except TimeoutError:
                 # the rest of the body may still come: the connection cannot carry another request
                 await error_response(408, "request_timeout", f"the request body did not arrive within "
                                      f"{self.read_timeout:g} s", headers=CLOSE)(scope, receive, send)

@@ -202,7 +202,7 @@ class SolverPool:
             worker.connection.send((fn, args, kwargs))
             wait = loop.run_in_executor(self._readers, worker.connection.recv)
             outcome = await self._within_limit(worker, wait, started, time_limit)
-        except asyncio.TimeoutError as late:
+        except TimeoutError as late:
             wait.add_done_callback(lambda f: f.exception())  # the killed worker's end of pipe: expected
             self._replace(index, f"still busy {late} (time limit {time_limit:g} s)")
             raise ApiError(503, "time_limit", f"the work did not end {late} and was stopped") from None
@@ -236,16 +236,16 @@ class SolverPool:
                 return wait.result()
             if loop.time() >= late and worker.deadline.value == deadline:
                 if deadline > 0:
-                    raise asyncio.TimeoutError(f"within {GRACE:g} s past its deadline, {deadline - started:.3g} s "
+                    raise TimeoutError(f"within {GRACE:g} s past its deadline, {deadline - started:.3g} s "
                                                f"after the call started (its time limit of {time_limit:g} s)")
-                raise asyncio.TimeoutError(f"within {late - started:g} s (its time limit of {time_limit:g} s, "
+                raise TimeoutError(f"within {late - started:g} s (its time limit of {time_limit:g} s, "
                                            f"{self.build_allowance:g} s of building and {GRACE:g} s of grace)")
 
     async def _drain(self, index: int, worker: _Worker, wait, started: float, time_limit: float | None) -> None:
         """Wait out the work of a call nobody waits for any more, then free its worker."""
         try:
             await self._within_limit(worker, wait, started, time_limit)
-        except asyncio.TimeoutError:
+        except TimeoutError:
             wait.add_done_callback(lambda f: f.exception())
             self._replace(index, "its work outlived its time limit after its caller went away")
         except (EOFError, OSError):

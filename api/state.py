@@ -6,12 +6,12 @@ import hashlib
 from dataclasses import dataclass
 
 from api.solver_pool import SolverPool
-from service.requests import Limits
 from service.examples import ExampleLibrary
 from service.jobs.executors import TaskExecutor
 from service.jobs.runner import JobRunner
-from service.kernels.queue import BuilderProcess
 from service.jobs.store import JobStore
+from service.kernels.queue import BuilderProcess
+from service.requests import Limits
 from service.settings import Settings
 
 

@@ -26,7 +26,6 @@ import statistics
 import time
 from pathlib import Path
 
-
 from benchmarks.thesis_slsqp import example_one_state
 from models import compile_mechanism, load_document
 from service.contact.path import follow, parameters_at, path_fields

@@ -44,9 +44,9 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
+from models.contact.laws.penalty import hertz_stiffness
 from models.curved_beam_closed_form import stiffness
 from models.document import MechanismDocument
-from models.contact.laws.penalty import hertz_stiffness
 from models.simulation_spec import SimulateSpec
 from service.impacts.run import model_of, run_impacts
 

@@ -6,9 +6,9 @@ Public surface:
     MechanismError: every problem with a document, naming the field by JSON pointer.
 """
 
-from models.errors import MechanismError
 from models.document import MechanismDocument, load_document
 from models.elements import COMPARED_MODELS, MODELS
+from models.errors import MechanismError
 from models.mechanism import Mechanism, compile_mechanism
 
 __all__ = [

@@ -12,7 +12,14 @@ import numpy as np
 
 from models.collector import Collector
 from models.contact.collect_contacts import collect_contacts
-from models.document import ForceLoad, MechanismDocument, MomentLoad, PointOutput, PrescribedDisplacement, ReactionOutput
+from models.document import (
+    ForceLoad,
+    MechanismDocument,
+    MomentLoad,
+    PointOutput,
+    PrescribedDisplacement,
+    ReactionOutput,
+)
 from models.elements import FAMILIES, MODELS
 from models.errors import MechanismError, pointer_of
 from models.sections import collect_section

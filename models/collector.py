@@ -11,7 +11,6 @@ from models.errors import MechanismError
 from models.structure import Parameter
 from models.units import document_unit, quantity_to_si, unit_factor
 
-
 # Numbers of any kind, in SI, lie within these magnitudes (or are zero): beyond them a
 # document holds a typo, and the solver's nondimensional numbers would overflow or vanish.
 LARGEST, SMALLEST = 1e30, 1e-30

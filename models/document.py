@@ -20,11 +20,11 @@ from pydantic import Field, ValidationError, field_validator, model_validator
 from models.contact.schema import OBJECT_TYPES, SITE_TYPES, Contacts
 from models.elements import FAMILIES
 from models.elements.link import SHAPE_TYPES
-from models.simulation_spec import SimulateSpec
 from models.errors import MechanismError, pointer_of
 from models.fields import MAX_QUANTITY_CHARS, Number, StrictModel, Vec2
 from models.reading import parse_json, parse_yaml
 from models.sections import Section
+from models.simulation_spec import SimulateSpec
 
 
 class Units(StrictModel):
@@ -61,7 +61,8 @@ class Body(StrictModel):
 def _element_union() -> Any:
     """A document element: the section of one registered family, told apart by its `type`."""
     schemas = FAMILIES.schemas()
-    return Annotated[Union[schemas], Field(discriminator="type")] if len(schemas) > 1 else schemas[0]
+    union = Union[schemas]  # noqa: UP007 (a union of a tuple: the registered families' schemas)
+    return Annotated[union, Field(discriminator="type")] if len(schemas) > 1 else schemas[0]
 
 
 Element = _element_union()
@@ -108,7 +109,7 @@ class PrescribedDisplacement(StrictModel):
         return self
 
 
-Load = Annotated[Union[ForceLoad, MomentLoad, PrescribedDisplacement], Field(discriminator="type")]
+Load = Annotated[ForceLoad | MomentLoad | PrescribedDisplacement, Field(discriminator="type")]
 
 
 class PointOutput(_PointOnBody):
@@ -120,7 +121,7 @@ class ReactionOutput(StrictModel):
     body: str
 
 
-Output = Annotated[Union[PointOutput, ReactionOutput], Field(discriminator="type")]
+Output = Annotated[PointOutput | ReactionOutput, Field(discriminator="type")]
 
 
 class SweepUntil(StrictModel):

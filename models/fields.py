@@ -6,14 +6,14 @@ quantity string with a unit of at most MAX_QUANTITY_CHARS characters (models.uni
 
 from __future__ import annotations
 
-from typing import Annotated, Union
+from typing import Annotated
 
 from pydantic import BaseModel, ConfigDict, Field, StringConstraints
 
 MAX_QUANTITY_CHARS = 100
 
-Number = Union[Annotated[float, Field(strict=True, allow_inf_nan=False)],
-               Annotated[str, StringConstraints(strict=True, max_length=MAX_QUANTITY_CHARS)]]
+Number = (Annotated[float, Field(strict=True, allow_inf_nan=False)]
+          | Annotated[str, StringConstraints(strict=True, max_length=MAX_QUANTITY_CHARS)])
 Vec2 = tuple[Number, Number]
 
 

@@ -168,7 +168,7 @@ class LinkElements:
             node_position.append(position)
         return LinkKinematics(node_u, node_psi, node_position, points, contact, energy, elongation)
 
-    def _element_step(self, shear: bool, axial: bool, positions_at_quadrature: bool) -> "_ElementStep":
+    def _element_step(self, shear: bool, axial: bool, positions_at_quadrature: bool) -> _ElementStep:
         """One element's kinematics as a Function, built once and called (inlined) on every
         element: the same expressions as writing them out element by element, built in a
         fraction of the time (a link's graph is mostly this)."""

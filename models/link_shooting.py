@@ -29,8 +29,9 @@ link is one SX graph with exact derivatives.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable, NamedTuple
+from typing import NamedTuple
 
 import casadi as ca
 

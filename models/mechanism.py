@@ -151,7 +151,7 @@ class Mechanism:
         check_value(where, si, param.check if own_checks else None, unit, self.doc_factor(param.kind), value)
         return si
 
-    def with_values(self, overrides: dict[str, float | str]) -> "Mechanism":
+    def with_values(self, overrides: dict[str, float | str]) -> Mechanism:
         """A copy with numeric fields replaced; values in document units (or quantity strings)."""
         si = self.si_values.copy()
         for pointer, value in overrides.items():

@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import casadi as ca
 
-from models.residual import held_wrenches
 from models.contact.elastic_pairs import contact_outputs
 from models.context import AssemblyContext
 from models.elements.base import Contribution
+from models.residual import held_wrenches
 
 REACTION_QUANTITIES = (("Fx", "force"), ("Fy", "force"), ("M", "moment"))
 

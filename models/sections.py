@@ -9,8 +9,9 @@ the fourth and second power, and c (the outer-fibre distance) for stresses.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Annotated, Callable, Literal, Union
+from typing import TYPE_CHECKING, Annotated, Literal
 
 import casadi as ca
 from pydantic import Discriminator, Field, Tag
@@ -49,8 +50,8 @@ class GeneralSection(StrictModel):
     length unit to the fourth and second power."""
 
     shape: Literal["general"]
-    I: Union[Number, SectionExpression]
-    A: Union[Number, SectionExpression, None] = None
+    I: Number | SectionExpression
+    A: Number | SectionExpression | None = None
     shear_factor: Number | None = None
     c: Number | None = Field(default=None, description="distance from the neutral axis to the outer fibre, for stresses")
 
@@ -61,9 +62,7 @@ def _section_shape(value) -> str:
     return getattr(value, "shape", "rectangle")
 
 
-Section = Annotated[Union[Annotated[RectangularSection, Tag("rectangle")],
-                          Annotated[TaperedRectangularSection, Tag("tapered_rectangle")],
-                          Annotated[GeneralSection, Tag("general")]],
+Section = Annotated[Annotated[RectangularSection, Tag("rectangle")] | Annotated[TaperedRectangularSection, Tag("tapered_rectangle")] | Annotated[GeneralSection, Tag("general")],
                     Discriminator(_section_shape)]
 
 
@@ -88,7 +87,7 @@ def section_topology(name: str, section) -> SectionTopology:
     return SectionTopology(name, section.shape)
 
 
-def collect_section(c: "Collector", name: str, section, needs_area: bool) -> None:
+def collect_section(c: Collector, name: str, section, needs_area: bool) -> None:
     """Add a used section's numbers to the parameters (checked: positive)."""
     base = f"/sections/{name}"
     if isinstance(section, RectangularSection):
@@ -124,7 +123,7 @@ class SectionProperties:
     half_thickness: Callable[[ca.SX], ca.SX] | None
 
 
-def section_properties(P: "Params", section: SectionTopology) -> SectionProperties:
+def section_properties(P: Params, section: SectionTopology) -> SectionProperties:
     base = f"/sections/{section.name}"
     if section.shape in ("rectangle", "tapered_rectangle"):
         b = P[f"{base}/b"]

@@ -19,11 +19,11 @@ import json
 import re
 import sys
 from collections import Counter
-from functools import lru_cache
+from functools import cache, lru_cache
 from pathlib import Path
 
-from models.errors import MechanismError
 from models.disk_cache import cache_dir
+from models.errors import MechanismError
 
 
 def pint_module():
@@ -197,7 +197,7 @@ def parse_unit(text: str) -> tuple[float, Dimension]:
     return size, tuple(sorted((k, v) for k, v in dims.items() if v))
 
 
-@lru_cache(maxsize=None)
+@cache
 def dimension_of(kind: str) -> Dimension:
     return parse_unit(SI_UNITS[kind] or "dimensionless")[1]
 

@@ -2,8 +2,8 @@
 
 from service.equilibrium import EquilibriumResult, NewtonOptions, solve_equilibrium
 from service.inverse import inverse_wrenches
-from service.sweep import SweepResult, solve_for_target, sweep
 from service.stiffness import tangent_stiffness
+from service.sweep import SweepResult, solve_for_target, sweep
 
 __all__ = [
     "EquilibriumResult",

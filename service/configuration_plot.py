@@ -28,7 +28,7 @@ _LABEL_FRACTIONS = (0.5, 0.3, 0.7, 0.15, 0.85)
 _LABEL_DISTANCES = (9.0, 16.0, 26.0)
 
 
-def configuration_figure(result: "EquilibriumResult") -> "Figure":
+def configuration_figure(result: EquilibriumResult) -> Figure:
     """The undeformed (dashed, light) and deformed (solid) mechanism of an equilibrium result.
 
     Flexures and links are drawn from their centre-line samples; bodies as skeletons joining
@@ -59,7 +59,7 @@ def configuration_figure(result: "EquilibriumResult") -> "Figure":
     return fig
 
 
-def plot_configuration(result: "EquilibriumResult", path: str | Path) -> Path:
+def plot_configuration(result: EquilibriumResult, path: str | Path) -> Path:
     """configuration_figure saved to `path` (.png or .svg). Returns the path written."""
     return save_figure(configuration_figure(result), check_plot_path(path))
 
@@ -154,7 +154,7 @@ def _draw_bodies_and_points(ax, mech, outputs: dict) -> list:
     return labels
 
 
-def load_point(mech: "Mechanism", name: str, outputs: dict) -> np.ndarray:
+def load_point(mech: Mechanism, name: str, outputs: dict) -> np.ndarray:
     """Where the load `name` acts (a moment: its body's reference point) in the deformed
     configuration of the solution whose outputs (document units) are given: (x, y)."""
     load = next(t for t in mech.structure.loads if t.name == name)
@@ -204,7 +204,7 @@ def _draw_loads(ax, mech, outputs: dict, span: float) -> list:
     return labels
 
 
-def _placeset_labels(fig: "Figure", ax: "Axes", labels: list) -> None:
+def _placeset_labels(fig: Figure, ax: Axes, labels: list) -> None:
     """Write each label (text, places, style), in turn, at the first of its places (a point
     and an offset in points to the text's centre) that lies inside the axes and covers no
     label written before, nor the legend, a line, a marker or an arrow; else at the place that
@@ -232,7 +232,7 @@ def _placeset_labels(fig: "Figure", ax: "Axes", labels: list) -> None:
         boxes.append(best[3])
 
 
-def _drawn_paths(ax: "Axes") -> list:
+def _drawn_paths(ax: Axes) -> list:
     """Every line, marker (a diagonal across it) and load arrow of the axes, display coordinates."""
     from matplotlib.path import Path as Polyline
 

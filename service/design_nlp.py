@@ -9,9 +9,9 @@ output scales) is an NLP parameter, so one solver serves every start and every v
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Callable
 
 import casadi as ca
 import numpy as np

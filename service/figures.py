@@ -37,7 +37,7 @@ def field_label(pointer: str) -> str:
     return " ".join(parts) if parts else pointer
 
 
-def output_unit(mech: "Mechanism", name: str) -> str:
+def output_unit(mech: Mechanism, name: str) -> str:
     """Document unit of the output `name`; KeyError if the mechanism has no such output."""
     names = mech.graphs.output_names
     if name not in names:
@@ -45,7 +45,7 @@ def output_unit(mech: "Mechanism", name: str) -> str:
     return mech.doc_unit(mech.graphs.output_kinds[names.index(name)])
 
 
-def new_figure(width: float, height: float) -> "Figure":
+def new_figure(width: float, height: float) -> Figure:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -54,13 +54,13 @@ def new_figure(width: float, height: float) -> "Figure":
     return fig
 
 
-def save_figure(fig: "Figure", path: Path) -> Path:
+def save_figure(fig: Figure, path: Path) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, format=path.suffix.lower().lstrip("."), dpi=150)
     return path
 
 
-def set_labels(ax: "Axes", xlabel: str, ylabel: str, title: str, legend: bool = True) -> None:
+def set_labels(ax: Axes, xlabel: str, ylabel: str, title: str, legend: bool = True) -> None:
     ax.set(xlabel=xlabel, ylabel=ylabel)
     ax.set_title(title, fontsize=10)
     ax.grid(True, linewidth=0.4, alpha=0.5)

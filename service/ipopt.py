@@ -11,8 +11,9 @@ from __future__ import annotations
 
 import time
 from collections import OrderedDict
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -80,7 +81,7 @@ def checked_options(options: dict[str, Any]) -> tuple[tuple[str, Any], ...]:
 
 
 _SOLVERS: OrderedDict[tuple, ca.Function] = OrderedDict()
-_WATCHES: dict[int, "_Watch"] = {}  # id(solver) -> its iteration hook
+_WATCHES: dict[int, _Watch] = {}  # id(solver) -> its iteration hook
 MAX_SOLVERS = 64  # the least recently used go first
 
 

@@ -12,8 +12,9 @@ adapter serves the small augmented systems (targets, continuation, the link inve
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable, Literal
+from typing import Literal
 
 import casadi as ca
 import numpy as np

@@ -15,8 +15,8 @@ from __future__ import annotations
 
 import re
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 
@@ -24,8 +24,8 @@ from models import Mechanism
 from service.contact.design import run_contact_start, uses_contact
 from service.design import DesignProblem, OutputRef
 from service.design_nlp import DesignNlp, design_nlp, least_violation, solver_for
-from service.ipopt import solve
 from service.equilibrium import newton
+from service.ipopt import solve
 from service.newton import NewtonOptions
 
 # A constraint counts as active within this (scaled) distance of its bound.

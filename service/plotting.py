@@ -16,7 +16,15 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from service.configuration_plot import configuration_figure, load_point, plot_configuration
-from service.figures import PLOT_SUFFIXES, check_plot_path, field_label, new_figure, output_unit, save_figure, set_labels
+from service.figures import (
+    PLOT_SUFFIXES,
+    check_plot_path,
+    field_label,
+    new_figure,
+    output_unit,
+    save_figure,
+    set_labels,
+)
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -29,8 +37,8 @@ __all__ = ["PLOT_SUFFIXES", "check_plot_path", "configuration_figure", "field_la
            "plot_configuration", "plot_sweeps", "plot_trace", "sweeps_figure", "trace_figure"]
 
 
-def sweeps_figure(curves: "list[tuple[str, SweepResult]]", x_output: str, y_output: str, field_path: str,
-                  secant: bool = False) -> "Figure":
+def sweeps_figure(curves: list[tuple[str, SweepResult]], x_output: str, y_output: str, field_path: str,
+                  secant: bool = False) -> Figure:
     """Two panels in the manner of Fig. 9 of the paper, a line per curve sweeping `field_path`.
     Left, y_output against x_output (a point's trajectory when they are its x and y). Right,
     the swept field against x_output, or with `secant` (the field a prescribed displacement,
@@ -76,13 +84,13 @@ def sweeps_figure(curves: "list[tuple[str, SweepResult]]", x_output: str, y_outp
     return fig
 
 
-def plot_sweeps(curves: "list[tuple[str, SweepResult]]", x_output: str, y_output: str,
+def plot_sweeps(curves: list[tuple[str, SweepResult]], x_output: str, y_output: str,
                 field_path: str, path: str | Path, secant: bool = False) -> Path:
     """sweeps_figure saved to `path` (.png or .svg). Returns the path written."""
     return save_figure(sweeps_figure(curves, x_output, y_output, field_path, secant), check_plot_path(path))
 
 
-def trace_figure(mech: "Mechanism", result: "PathResult", output: str) -> "Figure":
+def trace_figure(mech: Mechanism, result: PathResult, output: str) -> Figure:
     """The followed field (vertical) against `output` (horizontal) along a continuation path:
     stretches between stable points solid, the others (unstable, or singular) dashed, with the
     stability changing at the limit points, which are marked and labelled with their value."""
@@ -116,6 +124,6 @@ def trace_figure(mech: "Mechanism", result: "PathResult", output: str) -> "Figur
     return fig
 
 
-def plot_trace(mech: "Mechanism", result: "PathResult", output: str, path: str | Path) -> Path:
+def plot_trace(mech: Mechanism, result: PathResult, output: str, path: str | Path) -> Path:
     """trace_figure saved to `path` (.png or .svg). Returns the path written."""
     return save_figure(trace_figure(mech, result, output), check_plot_path(path))

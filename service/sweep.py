@@ -17,12 +17,12 @@ import casadi as ca
 import numpy as np
 
 from models import Mechanism, MechanismError
-from models.document import SweepSpec
 from models.assembly import Graphs
+from models.document import SweepSpec
 from models.units import quantity_to_si
 from service.equilibrium import EquilibriumResult, NewtonOptions, check_constrained, newton
-from service.units import residual_report
 from service.newton import iterate_dense
+from service.units import residual_report
 
 Start = Literal["previous", "undeformed"]
 

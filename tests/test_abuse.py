@@ -14,7 +14,6 @@ import time
 
 import httpx
 import pytest
-
 from abuse_cases import cases
 from conftest import EXAMPLES, Deployment
 

@@ -12,10 +12,10 @@ from pathlib import Path
 
 import pytest
 import yaml
+from conftest import EXAMPLES
 from rich.console import Console
 from typer.testing import CliRunner
 
-from conftest import EXAMPLES
 from models import load_document
 from service.batch import declared_analysis, result_names, run_batch, succeeded
 from service.cli import app

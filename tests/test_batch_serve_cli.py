@@ -9,10 +9,10 @@ import time
 
 import httpx
 import pytest
-from typer.testing import CliRunner
-
 from conftest import EXAMPLES
 from servers import Process, free_port
+from typer.testing import CliRunner
+
 from service.cli import app
 
 ENV = {"COLUMNS": "200", "NO_COLOR": "1"}

@@ -10,8 +10,8 @@ import subprocess
 import sys
 
 import pytest
-
 from conftest import EXAMPLES
+
 from service.cli.leaving import exit_code
 
 ROOT = EXAMPLES.parent

@@ -10,8 +10,8 @@ from collections import OrderedDict
 
 import numpy as np
 import pytest
-
 from conftest import EXAMPLES
+
 from models import compile_mechanism, load_document
 from service.dynamics import engine as engine_module
 from service.dynamics.histories import read_histories

@@ -5,13 +5,14 @@ contact analyses finds independently."""
 
 from __future__ import annotations
 
+from test_contact_example import example_one
+
 from models import compile_mechanism, load_document
 from models.document import parse_optimize_spec
 from service.analyses.base import AnalysisRequest
 from service.analyses.contact import CONTACT
 from service.design import design_problem
 from service.optimize import optimize
-from test_contact_example import example_one
 
 
 def normal_force(thickness: float) -> tuple[float, float]:

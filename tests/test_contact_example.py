@@ -11,8 +11,8 @@ from functools import lru_cache
 
 import numpy as np
 import pytest
-
 from conftest import EXAMPLES
+
 from models import compile_mechanism, load_document
 from service.contact.path import follow, path_fields
 from service.contact.problem import contact_problem

@@ -19,10 +19,10 @@ from functools import lru_cache
 
 import numpy as np
 import pytest
+from conftest import EXAMPLES
 from scipy.integrate import solve_ivp
 from scipy.optimize import fsolve
 
-from conftest import EXAMPLES
 from models import compile_mechanism, load_document
 from service.contact.kkt import split
 from service.contact.path import follow, path_fields

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from elastica_oracles import cantilever_tip
+
 from models import compile_mechanism, load_document
 from service.analyses.base import AnalysisRequest
 from service.analyses.contact import CONTACT

@@ -17,9 +17,9 @@ import time
 import httpx
 import numpy as np
 import pytest
+from conftest import EXAMPLES
 from typer.testing import CliRunner
 
-from conftest import EXAMPLES
 from models import MechanismError, compile_mechanism, load_document
 from service import NewtonOptions
 from service.analyses.base import AnalysisRequest

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from conftest import EXAMPLES
 from continuation_oracles import natural_limit
+
 from models import MechanismError, compile_mechanism, load_document
 from service.continuation import _path_graphs, body_stability, trace_path
 

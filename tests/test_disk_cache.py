@@ -7,8 +7,8 @@ from __future__ import annotations
 import os
 
 import numpy as np
-
 from conftest import EXAMPLES
+
 from models import compile_mechanism, graph_cache, load_document
 from models.assembly import FUNCTIONS, build_functions
 from models.disk_cache import bound, entries, touch

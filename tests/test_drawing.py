@@ -10,8 +10,8 @@ import re
 import httpx
 import numpy as np
 import pytest
-
 from conftest import EXAMPLES
+
 from models import compile_mechanism, load_document
 from service import solve_equilibrium
 from service.drawing import mechanism_drawing

@@ -9,8 +9,8 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 import pytest
-
 from conftest import EXAMPLES
+
 from models import compile_mechanism, load_document
 from models.kernels.link_chain import ChainSignature, jacobian_function, residual_function
 from service.dynamics.engine import Engine

@@ -7,12 +7,12 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 import pytest
-
 from conftest import EXAMPLES
+from test_joints import four_bar
+
 from models import MechanismError, compile_mechanism, load_document
 from service.energy import minimize_energy
 from service.equilibrium import NewtonOptions, solve_equilibrium
-from test_joints import four_bar
 
 TIGHT = NewtonOptions(tol_residual=1e-13, tol_step=1e-12)
 

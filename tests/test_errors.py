@@ -6,11 +6,10 @@ import copy
 import json
 
 import pytest
+from conftest import ACTUATION
 
 from models import MechanismError, compile_mechanism, load_document
 from service import NewtonOptions, solve_equilibrium
-
-from conftest import ACTUATION
 
 
 def compile_modified(gripper_dict, edit):

@@ -7,9 +7,9 @@ import json
 
 import numpy as np
 import pytest
+from conftest import ACTUATION, EXAMPLES
 
 import models
-from conftest import ACTUATION, EXAMPLES
 from service.equilibrium import solve_equilibrium
 from service.stiffness import tangent_stiffness
 from service.sweep import solve_for_target

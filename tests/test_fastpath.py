@@ -5,13 +5,12 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 import pytest
+from conftest import ACTUATION
 
 from benchmarks.numpy_peer import NumpyGripperResidual
 from models import MechanismError
 from service import NewtonOptions, solve_equilibrium, sweep
 from service.fastpath import FastPath
-
-from conftest import ACTUATION
 
 
 @pytest.fixture()

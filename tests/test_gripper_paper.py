@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import ACTUATION, EXAMPLES
 
 from models import compile_mechanism, load_document
 from service import NewtonOptions, inverse_wrenches, solve_equilibrium, solve_for_target, tangent_stiffness
 from service.inverse import configuration_of
-
-from conftest import ACTUATION, EXAMPLES
 
 # Table 2: K_T of the partial non-linear model, undeformed (uN/mm, uN, uN mm/rad); 0 = not coupled.
 TABLE_2 = np.array([

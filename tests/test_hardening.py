@@ -12,11 +12,11 @@ import time
 
 import httpx
 import pytest
+from abuse_cases import gripper
+from conftest import EXAMPLES, Deployment
 from typer.testing import CliRunner
 
-from abuse_cases import gripper
 from api.client import Client
-from conftest import EXAMPLES, Deployment
 from models import MechanismError, compile_mechanism, load_document
 
 

@@ -6,9 +6,9 @@ from __future__ import annotations
 import json
 
 import numpy as np
+from conftest import EXAMPLES
 from typer.testing import CliRunner
 
-from conftest import EXAMPLES
 from models import compile_mechanism, load_document
 from service.analyses import ANALYSES
 from service.analyses.base import AnalysisRequest

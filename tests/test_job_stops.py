@@ -9,10 +9,10 @@ import signal
 import time
 
 import pytest
-
-from api.client import Client
 from conftest import EXAMPLES, Deployment
 from servers import ApiServer
+
+from api.client import Client
 
 # Points that each run Newton for seconds: the gripper with exact flexures far past any
 # equilibrium, 1000 iterations of a line search that keeps halving.

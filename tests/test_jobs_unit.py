@@ -6,8 +6,8 @@ from __future__ import annotations
 import json
 
 import pytest
-
 from conftest import ACTUATION, EXAMPLES
+
 from models import MechanismError
 from models.assembly import graphs_for
 from service.analysis import Limits

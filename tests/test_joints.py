@@ -8,8 +8,8 @@ import math
 
 import numpy as np
 import pytest
-
 from conftest import EXAMPLES
+
 from models import compile_mechanism, load_document
 from service.equilibrium import NewtonOptions, solve_equilibrium
 

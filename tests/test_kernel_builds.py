@@ -14,12 +14,12 @@ from pathlib import Path
 import httpx
 import numpy as np
 import pytest
-
 from conftest import EXAMPLES
+from servers import ApiServer
+
 from models import compile_mechanism, load_document
 from models.kernels.chunks import chunks
 from models.kernels.link_chain import ChainSignature
-from servers import ApiServer
 from service.kernels.build import BuildLimits, Compiler
 from service.kernels.cache import abandoned, compiled_for, is_compiled
 from service.kernels.queue import Builder, accept_requests, build_chain, queue_dir, request_chain

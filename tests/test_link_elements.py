@@ -8,8 +8,8 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 import pytest
-
 from elastica_oracles import cantilever_tip
+
 from models import compile_mechanism, load_document
 from service.energy import minimize_energy
 from service.equilibrium import NewtonOptions, solve_equilibrium

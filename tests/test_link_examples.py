@@ -7,10 +7,10 @@ import math
 
 import numpy as np
 import pytest
-
-import models
 from conftest import EXAMPLES
 from elastica_oracles import cantilever_tip
+
+import models
 from service.equilibrium import NewtonOptions, solve_equilibrium
 from service.inverse_links import inverse_links
 from service.sweep import document_sweep

@@ -12,11 +12,11 @@ import math
 
 import numpy as np
 import pytest
+from elastica_oracles import cantilever_tip, circular_arc_tip, timoshenko_tip_deflection
 
 import models
 from models import curved_beam_closed_form as curved_beam
 from service.equilibrium import NewtonOptions, solve_equilibrium
-from elastica_oracles import cantilever_tip, circular_arc_tip, timoshenko_tip_deflection
 
 # The thesis cantilever (Sec. 2.5.1): EI = 0.08 N m^2, L = 101.6 mm, F = 15 N.
 EI, L, F = 0.08, 0.1016, 15.0

@@ -11,13 +11,13 @@ from pathlib import Path
 import httpx
 import numpy as np
 import pytest
+from conftest import EXAMPLES
+from test_energy_form import chain
 from typer.testing import CliRunner
 
 from api.client import Client
-from conftest import EXAMPLES
 from models import compile_mechanism, load_document
 from service.energy import minimize_energy
-from test_energy_form import chain
 
 ROOT = Path(__file__).resolve().parents[1]
 ENV = {"COLUMNS": "200", "FORCE_COLOR": None, "TTY_COMPATIBLE": None, "NO_COLOR": "1"}

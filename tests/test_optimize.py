@@ -8,8 +8,8 @@ import json
 
 import numpy as np
 import pytest
-
 from conftest import EXAMPLES
+
 from models import MechanismError, compile_mechanism
 from models.document import parse_document
 from service.design import design_problem

@@ -6,10 +6,10 @@ from __future__ import annotations
 import json
 
 import pytest
+from conftest import EXAMPLES
 from typer.testing import CliRunner
 
 from api.client import Client, FlexmechError
-from conftest import EXAMPLES
 from models import compile_mechanism, load_document
 from service.cli import app
 from service.design import design_problem

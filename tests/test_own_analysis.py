@@ -151,9 +151,8 @@ def test_it_runs_in_batch(tmp_path):
 
 
 def test_it_is_a_form_of_the_workbench(server):
-    from playwright.sync_api import sync_playwright
-
     from browser import CHROMIUM_FLAGS, chromium_path
+    from playwright.sync_api import sync_playwright
 
     with sync_playwright() as playwright:
         chromium = playwright.chromium.launch(executable_path=chromium_path(), headless=True, args=CHROMIUM_FLAGS)

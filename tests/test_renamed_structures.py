@@ -10,12 +10,12 @@ import json
 import httpx
 import numpy as np
 import pytest
-
 from conftest import EXAMPLES
+from servers import ApiServer
+
 from models import compile_mechanism, load_document
 from models.assembly import graphs_for
 from models.naming import anonymous
-from servers import ApiServer
 from service.equilibrium import solve_equilibrium
 from service.sweep import solve_for_target
 

@@ -10,10 +10,10 @@ from typing import get_args
 
 import numpy as np
 import pytest
+from conftest import ACTUATION, EXAMPLES
 from typer.testing import CliRunner
 
 from api.client import Client
-from conftest import ACTUATION, EXAMPLES
 from models import MODELS, compile_mechanism, load_document
 
 ROOT = Path(__file__).resolve().parents[1]

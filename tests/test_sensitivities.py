@@ -6,8 +6,8 @@ import copy
 import json
 
 import pytest
-
 from conftest import ACTUATION, EXAMPLES
+
 from models import compile_mechanism, load_document
 from models.document import parse_document
 from service.design import design_problem

@@ -8,9 +8,9 @@ import json
 import httpx
 import numpy as np
 import pytest
+from conftest import ACTUATION, EXAMPLES, Deployment
 
 from api.client import AsyncClient, Client, FlexmechError
-from conftest import ACTUATION, EXAMPLES, Deployment
 from models import compile_mechanism, load_document
 from service import inverse_wrenches, solve_equilibrium, solve_for_target, tangent_stiffness
 

@@ -12,9 +12,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import ACTUATION, EXAMPLES
 
 from api.client import Client
-from conftest import ACTUATION, EXAMPLES
 from models import compile_mechanism, load_document
 from service import sweep
 

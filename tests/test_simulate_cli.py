@@ -6,10 +6,10 @@ from __future__ import annotations
 import json
 
 import numpy as np
+from conftest import EXAMPLES
 from PIL import Image
 from typer.testing import CliRunner
 
-from conftest import EXAMPLES
 from service.cli import app
 
 ENV = {"COLUMNS": "200", "NO_COLOR": "1"}

@@ -9,8 +9,8 @@ import json
 
 import numpy as np
 import pytest
-
 from conftest import EXAMPLES
+
 from models import compile_mechanism, load_document
 from models.assembly import build_functions
 from service.dynamics.run import run_simulation, simulation_spec

@@ -8,8 +8,8 @@ import json
 
 import casadi as ca
 import numpy as np
-
 from conftest import EXAMPLES
+
 from models import compile_mechanism, load_document
 from models.assembly import _symbolic
 from models.residual import residual_of

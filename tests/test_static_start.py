@@ -9,8 +9,8 @@ import json
 
 import numpy as np
 import pytest
-
 from conftest import EXAMPLES
+
 from models import compile_mechanism, load_document
 from service.dynamics import static_start
 from service.dynamics.histories import read_histories

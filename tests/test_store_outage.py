@@ -12,9 +12,9 @@ import time
 from pathlib import Path
 
 import httpx
+from conftest import EXAMPLES, Deployment
 
 from api.client import Client
-from conftest import EXAMPLES, Deployment
 
 ACTUATION = "/loads/actuation/force/1"
 

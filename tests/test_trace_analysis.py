@@ -10,10 +10,10 @@ import json
 import httpx
 import numpy as np
 import pytest
-from typer.testing import CliRunner
-
 from conftest import EXAMPLES
 from continuation_oracles import natural_limit
+from typer.testing import CliRunner
+
 from models import compile_mechanism, load_document
 from service.continuation import trace_path
 

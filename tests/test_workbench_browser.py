@@ -9,9 +9,9 @@ import re
 from urllib.parse import urlsplit
 
 import pytest
-
 from browser import CHROMIUM_FLAGS, PageLog, chromium_path, screenshot
 from conftest import ACTUATION, EXAMPLES, Deployment
+
 from models import compile_mechanism, load_document
 from service import solve_for_target
 from service.continuation import trace_path

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from typing import Any
 
 from fastapi import APIRouter, Path, Query
@@ -22,7 +22,7 @@ JobId = Path(pattern=r"^[0-9a-f]{32}$", description="the id POST returned")
 
 
 def job_status(job: Job) -> JobStatusResponse:
-    end = job.finished_at or datetime.now(timezone.utc)
+    end = job.finished_at or datetime.now(UTC)
     elapsed = (end - job.started_at).total_seconds() if job.started_at else None
     return JobStatusResponse(
         id=job.id, kind=job.kind, status=job.status, error=job.error, restarts=job.restarts,

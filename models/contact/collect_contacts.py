@@ -7,13 +7,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from models.contact.schema import Contacts, FrictionFields, JawSite
 from models.contact.elastic_pairs import DAMPED_LAWS, ELASTIC_LAWS
-from models.contact.pair_forces import REGULARIZED
 from models.contact.laws import friction_law, normal_law
-from models.elements import FAMILIES
+from models.contact.pair_forces import REGULARIZED
 from models.contact.polygons import convex_pieces, self_intersection, signed_area
+from models.contact.schema import Contacts, FrictionFields, JawSite
 from models.contact.topology import ContactTopology, ObjectTopology, PairTopology, SiteTopology
+from models.elements import FAMILIES
 from models.errors import MechanismError
 from models.expression import compile_expression, finite_on
 from models.structure import ElementTopology

@@ -19,14 +19,20 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from models.context import AssemblyContext
-from models.contact.circle_contact import (against_circle, against_half_plane, against_hole, against_nearest,
-                                           closest_on_ellipse, closest_on_polygon)
+from models.contact.circle_contact import (
+    against_circle,
+    against_half_plane,
+    against_hole,
+    against_nearest,
+    closest_on_ellipse,
+    closest_on_polygon,
+)
 from models.contact.constraints import ContactGeometry
-from models.contact.schema import FrictionFields
 from models.contact.laws import FRICTION_LAWS, NORMAL_LAWS, check_law
 from models.contact.laws.penalty import elastic_power
+from models.contact.schema import FrictionFields
 from models.contact.topology import ContactTopology, PairTopology
+from models.context import AssemblyContext
 from models.errors import MechanismError
 from models.planar import rot
 

@@ -29,9 +29,9 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from models.context import AssemblyContext
 from models.contact.elastic_pairs import DAMPED_LAWS, ElasticPair, elastic_pairs, law_numbers
 from models.contact.laws import FRICTION_LAWS, NORMAL_LAWS
+from models.context import AssemblyContext
 from models.planar import cross
 
 REGULARIZED = ("ambrosio",)  # friction laws of the slip speed that link dynamics takes

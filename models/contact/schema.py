@@ -21,7 +21,7 @@ normal, or the centre line itself.
 
 from __future__ import annotations
 
-from typing import Annotated, Literal, Union
+from typing import Annotated, Literal
 
 from pydantic import Field
 
@@ -84,8 +84,7 @@ class ImplicitObject(_OnBody):
     angle: Number = 0.0
 
 
-ContactObject = Annotated[Union[CircleObject, HoleObject, EllipseObject, PolygonObject, HalfPlaneObject,
-                                ImplicitObject], Field(discriminator="type")]
+ContactObject = Annotated[CircleObject | HoleObject | EllipseObject | PolygonObject | HalfPlaneObject | ImplicitObject, Field(discriminator="type")]
 OBJECT_TYPES = ("circle", "hole", "ellipse", "polygon", "half_plane", "implicit")
 
 
@@ -121,7 +120,7 @@ class CircleSite(StrictModel):
     radius: Number
 
 
-ContactSite = Annotated[Union[JawSite, SurfaceSite, CircleSite], Field(discriminator="type")]
+ContactSite = Annotated[JawSite | SurfaceSite | CircleSite, Field(discriminator="type")]
 SITE_TYPES = ("jaw", "surface", "circle")
 
 

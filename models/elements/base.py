@@ -28,9 +28,9 @@ is then the gradient of the Lagrangian, which tests check.
 from __future__ import annotations
 
 import inspect
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Callable, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import casadi as ca
 from pydantic import Field
@@ -81,7 +81,7 @@ class EnergyTerms:
     inequalities: list[tuple[str, ca.SX]] = field(default_factory=list)  # g(d, q) >= 0
     variables: ca.SX | None = None  # q: the element's own symbols (zero: undeformed), or None
     surfaces: Any = None  # where contact can touch it (models.elements.surfaces.ElementSurfaces), or None
-    inertia: list["InertiaPoint"] = field(default_factory=list)  # its mass, lumped where quadrature puts it
+    inertia: list[InertiaPoint] = field(default_factory=list)  # its mass, lumped where quadrature puts it
 
 
 @dataclass
@@ -178,15 +178,15 @@ class ElementFamily(Protocol):
     type: str
     schema: type[TwoBodyElement] | None
 
-    def collect(self, c: "Collector", name: str, element: Any, i: int, j: int) -> ElementTopology: ...
+    def collect(self, c: Collector, name: str, element: Any, i: int, j: int) -> ElementTopology: ...
 
-    def contribute(self, ctx: "AssemblyContext", topology: Any, d: list[ca.SX], z: ca.SX) -> Contribution: ...
+    def contribute(self, ctx: AssemblyContext, topology: Any, d: list[ca.SX], z: ca.SX) -> Contribution: ...
 
     def unknowns(self, topology: Any) -> list[tuple[str, str]]: ...
 
-    def energy_terms(self, ctx: "AssemblyContext", topology: Any, d: list[ca.SX]) -> EnergyTerms: ...
+    def energy_terms(self, ctx: AssemblyContext, topology: Any, d: list[ca.SX]) -> EnergyTerms: ...
 
-    def kinetic_energy(self, ctx: "AssemblyContext", topology: Any, d: list[ca.SX],
+    def kinetic_energy(self, ctx: AssemblyContext, topology: Any, d: list[ca.SX],
                        v: list[ca.SX]) -> ca.SX | None: ...
 
     def scale_hint(self, topology: Any, values: SiValues) -> ScaleHint: ...
@@ -247,7 +247,7 @@ class Families:
         return tuple(family.schema for family in self if family.schema is not None)
 
 
-def constraint_wrenches(ctx: "AssemblyContext", bodies: tuple[int, ...], d: list[ca.SX], lam: ca.SX,
+def constraint_wrenches(ctx: AssemblyContext, bodies: tuple[int, ...], d: list[ca.SX], lam: ca.SX,
                         constraints: Callable[[list[ca.SX]], ca.SX]) -> dict[int, ca.SX]:
     """(dg/dd_b)^T lam for the listed bodies: the wrench each applies to a joint whose
     constraints g(d) = 0 have the multipliers lam (the joint's unknowns)."""

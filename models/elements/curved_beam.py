@@ -23,8 +23,17 @@ from pydantic import Field
 
 from models import curved_beam_closed_form as kernel
 from models.context import AssemblyContext
-from models.elements.base import (CentreLine, Contribution, Discretization, EnergyTerms, NoEnergyForm, ScaleHint,
-                                  SiValues, TwoBodyElement, beam_discretization)
+from models.elements.base import (
+    CentreLine,
+    Contribution,
+    Discretization,
+    EnergyTerms,
+    NoEnergyForm,
+    ScaleHint,
+    SiValues,
+    TwoBodyElement,
+    beam_discretization,
+)
 from models.errors import MechanismError
 from models.fields import Number, Vec2
 from models.planar import cross, rot
@@ -103,7 +112,7 @@ class CurvedBeamFamily:
     def model_name(self, el: CurvedBeam) -> str:
         return el.model
 
-    def split_contribution(self, ctx: AssemblyContext, t: "FlexureTopology", d_psi, d_N, d_T) -> Contribution:
+    def split_contribution(self, ctx: AssemblyContext, t: FlexureTopology, d_psi, d_N, d_T) -> Contribution:
         """The flexure's wrenches with its rotation, axial and transverse parts read from separate
         copies of the displacements: Cammarata et al.'s split of K_T into terms I-III
         (models.tangent_split), written for these flexures."""

@@ -16,11 +16,19 @@ import casadi as ca
 from pydantic import Field
 
 from models.context import AssemblyContext
-from models.elements.base import (Connector, Contribution, EnergyTerms, ScaleHint, SiValues, TwoBodyElement,
-                                  constraint_wrenches)
+from models.elements.base import (
+    Connector,
+    Contribution,
+    EnergyTerms,
+    ScaleHint,
+    SiValues,
+    TwoBodyElement,
+    constraint_wrenches,
+)
 from models.errors import MechanismError
 from models.fields import Vec2
 from models.structure import ElementTopology
+
 
 class RigidJoint(TwoBodyElement):
     at: Vec2 | None = Field(default=None, description="where the joint is (global, undeformed; default: "

@@ -17,14 +17,23 @@ mu(u) the mass from u = 0 (a sixth state, integrated with the others).
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
-from typing import Literal, Union
+from typing import Literal
 
 import casadi as ca
 from pydantic import Field
 
 from models.context import AssemblyContext
-from models.elements.base import (CentreLine, Contribution, Discretization, NoEnergyForm, NoMassForm, ScaleHint,
-                                  SiValues, TwoBodyElement, beam_discretization)
+from models.elements.base import (
+    CentreLine,
+    Contribution,
+    Discretization,
+    NoEnergyForm,
+    NoMassForm,
+    ScaleHint,
+    SiValues,
+    TwoBodyElement,
+    beam_discretization,
+)
 from models.errors import MechanismError
 from models.expression import compile_expression, finite_on
 from models.fields import Number, StrictModel, Vec2
@@ -75,7 +84,7 @@ class ExpressionShape(StrictModel):
     expression: str
 
 
-Shape = Union[StraightShape, ArcShape, PolynomialShape, FourierSineShape, ExpressionShape]
+Shape = StraightShape | ArcShape | PolynomialShape | FourierSineShape | ExpressionShape
 SHAPE_TYPES = ("straight", "arc", "polynomial", "fourier_sine", "expression")
 
 
@@ -115,7 +124,7 @@ class ShapeGeometry:
     omega: float | None
     located: str  # at | reference
 
-    def build(self, ctx: AssemblyContext, t: "LinkTopology"):
+    def build(self, ctx: AssemblyContext, t: LinkTopology):
         """(length, start point, eta(u)) of the link, nondimensional."""
         P = ctx.P
         base = f"/elements/{t.name}"
@@ -188,7 +197,7 @@ class LinkFamily:
     def discretization(self, el: Link, model: str | None) -> Discretization:
         return beam_discretization(el)
 
-    def check_simulated(self, t: "LinkTopology") -> None:
+    def check_simulated(self, t: LinkTopology) -> None:
         raise MechanismError(f"/elements/{t.name}/discretization", f"link '{t.name}' is discretized by shooting: "
                              "a simulation needs \"discretization\": \"elements\"")
 

@@ -16,10 +16,10 @@ import casadi as ca
 
 from models.context import AssemblyContext
 from models.elements.base import CentreLine, Contribution, EnergyTerms, InertiaPoint, NoMassForm, ScaleHint, SiValues
-from models.errors import MechanismError
 from models.elements.link import LINK, Link, LinkElementsTopology, link_properties
 from models.elements.surfaces import ElementSurfaces, SurfacePoint
 from models.elements.variational import variational_parts
+from models.errors import MechanismError
 from models.link_fe import LinkElements, LinkKinematics
 from models.planar import cross
 from models.sections import section_properties

@@ -38,7 +38,7 @@ class Body:
     drive: ca.SX | None = None  # a driven body's displacement [dx, dy, rotation] (a prescribed motion)
 
 
-def parameters_of(rb: "BodyCoordinates", mech, scaled: bool = True) -> ca.SX:
+def parameters_of(rb: BodyCoordinates, mech, scaled: bool = True) -> ca.SX:
     """The statics parameters of `mech` as the book's SI symbols, divided by their kinds' scales
     (the statics' nondimensional vector) unless `scaled` is False."""
     book = rb.book

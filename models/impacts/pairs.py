@@ -12,12 +12,18 @@ from dataclasses import dataclass, field
 
 import casadi as ca
 
-from models.errors import MechanismError
-from models.contact.circle_contact import (against_circle, against_half_plane, against_hole, against_nearest,
-                                           closest_on_ellipse, closest_on_polygon)
-from models.contact.schema import ContactPair, Contacts, FrictionFields, NormalLawFields
+from models.contact.circle_contact import (
+    against_circle,
+    against_half_plane,
+    against_hole,
+    against_nearest,
+    closest_on_ellipse,
+    closest_on_polygon,
+)
 from models.contact.laws import FRICTION_LAWS, FrictionLaw, NormalLaw, friction_law, normal_law
 from models.contact.laws.penalty import hertz_stiffness
+from models.contact.schema import ContactPair, Contacts, FrictionFields, NormalLawFields
+from models.errors import MechanismError
 from models.impacts.coordinates import BodyCoordinates
 from models.planar import rot
 

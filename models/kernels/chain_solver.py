@@ -40,7 +40,7 @@ element of a link: its F_{e+1} column is the border's lambda).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property, lru_cache
+from functools import cache, cached_property
 
 import casadi as ca
 import numpy as np
@@ -140,7 +140,7 @@ def lu_solve_transposed(LU: ca.SX, b: ca.SX) -> ca.SX:
     return ca.horzcat(*[solve(LU, b[:, c]) for c in range(b.shape[1])])
 
 
-@lru_cache(maxsize=None)
+@cache
 def _column_solver(n: int, transposed: bool) -> ca.Function:
     """(LU, b) -> D^-1 b (or D^-T b) for one column b: written out once and called (inlined)
     per column, the same expressions as writing out every column, built many times faster."""

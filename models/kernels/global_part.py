@@ -24,12 +24,12 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from models.contact.pair_forces import contact_forces
 from models.context import AssemblyContext
 from models.elements import FAMILIES
 from models.kernels.layout import KernelLayout
 from models.kernels.link_chain import data_layout
 from models.kernels.link_data import link_data
-from models.contact.pair_forces import contact_forces
 from models.loads import kinetic_energy, load_potential
 
 INPUTS = ("uG", "affine", "k", "starts", "ends", "p", "pdot", "pddot", "damping", "mask")

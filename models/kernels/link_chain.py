@@ -37,7 +37,7 @@ differentiating the graph would take ten.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property, lru_cache
+from functools import cache, cached_property
 
 import casadi as ca
 import numpy as np
@@ -168,7 +168,7 @@ def _lever_matrix(signature: ChainSignature, weights: np.ndarray, levers: list[t
     return _weighted_levers(signature)(ca.DM(weights), stacked)
 
 
-@lru_cache(maxsize=None)
+@cache
 def _weighted_levers(signature: ChainSignature) -> ca.Function:
     """(weights (ns), levers (2 x 3 ns): rotation, shear, axial per point) -> (2, n_c): written
     out once per signature and called (inlined) with each sum's weights. A zero weight's term

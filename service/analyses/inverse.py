@@ -9,8 +9,8 @@ from pydantic import Field
 
 from models import Mechanism
 from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult
-from service.newton import NewtonOptions
 from service.inverse import inverse_wrenches
+from service.newton import NewtonOptions
 from service.reports import plain
 
 

@@ -23,8 +23,17 @@ from rich.markup import escape
 from service.analyses import ANALYSES, Analysis, AnalysisRequest
 from service.cli.application import app
 from service.cli.common import EXIT_NOT_CONVERGED, OptionError, consoles, number, table_of, user_errors, write_json
-from service.cli.options import (DocArg, JacobianOpt, JsonOpt, LineSearchOpt, MaxIterOpt, ModelOpt, SetOpt, mechanism,
-                                 newton_options)
+from service.cli.options import (
+    DocArg,
+    JacobianOpt,
+    JsonOpt,
+    LineSearchOpt,
+    MaxIterOpt,
+    ModelOpt,
+    SetOpt,
+    mechanism,
+    newton_options,
+)
 from service.cli.report_tables import print_status
 
 FINE = ("converged", "finished")

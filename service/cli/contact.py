@@ -15,8 +15,16 @@ from rich.progress import Progress
 
 from models import MechanismError
 from service.cli.application import app
-from service.cli.common import (EXIT_NOT_CONVERGED, OptionError, check_plot_option, consoles, number, table_of,
-                                user_errors, write_json)
+from service.cli.common import (
+    EXIT_NOT_CONVERGED,
+    OptionError,
+    check_plot_option,
+    consoles,
+    number,
+    table_of,
+    user_errors,
+    write_json,
+)
 from service.cli.options import DocArg, JsonOpt, PlotOpt, SetOpt, choice, mechanism
 
 SHOWN_STATES = 8

@@ -27,7 +27,7 @@ class SimulationProgress:
                                 console=console, transient=True)
             self.task = self.bar.add_task(label, total=until, steps=0)
 
-    def __enter__(self) -> "SimulationProgress":
+    def __enter__(self) -> SimulationProgress:
         if self.bar is not None:
             self.bar.__enter__()
         return self

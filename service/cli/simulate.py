@@ -14,8 +14,16 @@ from rich.markup import escape
 
 from models.simulation_spec import IMPACT_SCHEMES
 from service.cli.application import app
-from service.cli.common import (EXIT_NOT_CONVERGED, OptionError, check_plot_option, consoles, number, table_of,
-                                user_errors, write_json)
+from service.cli.common import (
+    EXIT_NOT_CONVERGED,
+    OptionError,
+    check_plot_option,
+    consoles,
+    number,
+    table_of,
+    user_errors,
+    write_json,
+)
 from service.cli.options import DocArg, JsonOpt, PlotOpt, SetOpt, mechanism
 from service.cli.progress import SimulationProgress
 

@@ -15,11 +15,31 @@ from models import Mechanism, MechanismError
 from service.analyses import ANALYSES, Analysis, AnalysisRequest
 from service.analyses.equilibrium import solution_report
 from service.cli.application import app
-from service.cli.common import (EXIT_NOT_CONVERGED, OptionError, check_plot_option, consoles, number, save_plot,
-                                table_of, user_errors, write_json)
-from service.cli.options import (DocArg, JacobianOpt, JsonOpt, LineSearchOpt, MaxIterOpt, ModelOpt, PlotOpt, SetOpt,
-                                 mechanism, newton_options, overrides)
-from service.cli.report_tables import print_solution, print_stiffness, print_status, print_wrenches
+from service.cli.common import (
+    EXIT_NOT_CONVERGED,
+    OptionError,
+    check_plot_option,
+    consoles,
+    number,
+    save_plot,
+    table_of,
+    user_errors,
+    write_json,
+)
+from service.cli.options import (
+    DocArg,
+    JacobianOpt,
+    JsonOpt,
+    LineSearchOpt,
+    MaxIterOpt,
+    ModelOpt,
+    PlotOpt,
+    SetOpt,
+    mechanism,
+    newton_options,
+    overrides,
+)
+from service.cli.report_tables import print_solution, print_status, print_stiffness, print_wrenches
 from service.energy import minimize_energy
 from service.equilibrium import EquilibriumResult, solve_equilibrium
 from service.newton import NewtonOptions

@@ -17,11 +17,35 @@ from models.document import SweepSpec, SweepUntil
 from models.elements import FAMILIES
 from models.units import quantity_to_si
 from service.cli.application import app
-from service.cli.common import (EXIT_NOT_CONVERGED, OptionError, check_plot_option, consoles, default_xy,
-                                displacement_xy, number, output_hint, reaction_along, save_plot, table_of,
-                                user_errors, write_json)
-from service.cli.options import (RESTARTS, DocArg, JacobianOpt, JsonOpt, LineSearchOpt, MaxIterOpt, ModelOpt,
-                                 PlotOpt, SetOpt, choice, mechanism, newton_options)
+from service.cli.common import (
+    EXIT_NOT_CONVERGED,
+    OptionError,
+    check_plot_option,
+    consoles,
+    default_xy,
+    displacement_xy,
+    number,
+    output_hint,
+    reaction_along,
+    save_plot,
+    table_of,
+    user_errors,
+    write_json,
+)
+from service.cli.options import (
+    RESTARTS,
+    DocArg,
+    JacobianOpt,
+    JsonOpt,
+    LineSearchOpt,
+    MaxIterOpt,
+    ModelOpt,
+    PlotOpt,
+    SetOpt,
+    choice,
+    mechanism,
+    newton_options,
+)
 from service.newton import NewtonOptions
 from service.plotting import field_label, output_unit
 

@@ -12,8 +12,18 @@ from rich.markup import escape
 
 from models import Mechanism, MechanismError
 from service.cli.application import app
-from service.cli.common import (EXIT_NOT_CONVERGED, OptionError, check_plot_option, consoles, default_xy, number,
-                                save_plot, table_of, user_errors, write_json)
+from service.cli.common import (
+    EXIT_NOT_CONVERGED,
+    OptionError,
+    check_plot_option,
+    consoles,
+    default_xy,
+    number,
+    save_plot,
+    table_of,
+    user_errors,
+    write_json,
+)
 from service.cli.options import DocArg, JsonOpt, SetOpt, mechanism
 from service.plotting import output_unit
 

@@ -49,7 +49,7 @@ def path_fields(mech: Mechanism, parameters: list[dict], pointer: str = "/path")
         except MechanismError as exc:
             raise MechanismError(f"{pointer}/{k}/path", exc.problem) from None
         these = parameter_values(parameter, f"{pointer}/{k}")
-        for i, value in enumerate(these):
+        for value in these:
             mech.checked_si(parameter["path"], value, f"{pointer}/{k}")
         pointers.append(parameter["path"])
         values.append(tuple(these))

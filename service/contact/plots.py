@@ -22,8 +22,8 @@ ARROW_SPAN = 0.15  # the largest force's arrow, as a fraction of the drawing's s
 IMPLICIT_GRID = 201
 
 
-def states_figure(mech: "Mechanism", problem: "ContactProblem", states: "list[ContactState]",
-                  labels: list[str]) -> "Figure":
+def states_figure(mech: Mechanism, problem: ContactProblem, states: list[ContactState],
+                  labels: list[str]) -> Figure:
     from service.contact.kkt import split
     from service.contact.report import pair_values
 
@@ -155,7 +155,7 @@ def plot_states(mech, problem, states, labels, path: str | Path) -> Path:
 
 
 def path_figure(curves: list[tuple[str, np.ndarray, np.ndarray]], x_label: str, y_label: str,
-                title: str) -> "Figure":
+                title: str) -> Figure:
     """y against x, one curve per (label, x, y)."""
     fig = new_figure(7.0, 4.5)
     ax = fig.add_subplot()

@@ -29,11 +29,11 @@ import casadi as ca
 import numpy as np
 
 from models.assembly import graphs_for
-from models.contact.laws import FRICTION_LAWS, NORMAL_LAWS, check_law
 from models.contact.constraints import ContactGeometry, contact_constraints, substituted
+from models.contact.laws import FRICTION_LAWS, NORMAL_LAWS, check_law
 from models.errors import MechanismError
-from models.planar import rot
 from models.forms import symbolic_energy
+from models.planar import rot
 from models.structure import Structure
 from service.contact.outputs import PAIR_OUTPUTS
 from service.contact.wrenches import contact_wrenches, friction_force, with_contact_wrenches

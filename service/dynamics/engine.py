@@ -189,7 +189,7 @@ class Engine:
                            [Z[:self.n_x], Z[self.n_x:], ev.norm, st.monitor(ev, si)])
 
 
-_engines: "OrderedDict[tuple, Engine]" = OrderedDict()
+_engines: OrderedDict[tuple, Engine] = OrderedDict()
 _lock = threading.Lock()
 
 

@@ -4,8 +4,8 @@ in Z and the affine parts, and where their outputs go, padded to whole chunks.""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 

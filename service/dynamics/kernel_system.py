@@ -29,10 +29,10 @@ import casadi as ca
 import numpy as np
 
 from models.kernels.chain_solver import BORDER
+from models.kernels.chain_sweep import packed_size
 from models.kernels.chunks import CHUNK, Chunks, chunks
 from models.kernels.global_part import global_part, start_nodes
 from models.kernels.layout import layout_of
-from models.kernels.chain_sweep import packed_size
 from models.structure import Structure
 from service.dynamics.kernel_groups import UNSET_AFFINE, GroupIndex, group_index
 
@@ -64,7 +64,7 @@ class Evaluation:
         return [*self.y, self.rhs, self.all_rows, self.routed, self.energies, self.global_energies, self.norm]
 
     @classmethod
-    def of(cls, parts: list, groups: int) -> "Evaluation":
+    def of(cls, parts: list, groups: int) -> Evaluation:
         return cls(list(parts[:groups]), *parts[groups:groups + 6])
 
 
@@ -78,7 +78,7 @@ class Factors:
         return [*self.kept_reverse, *self.kept_forward, self.inverse]
 
     @classmethod
-    def of(cls, parts: list, groups: int) -> "Factors":
+    def of(cls, parts: list, groups: int) -> Factors:
         return cls(list(parts[:groups]), list(parts[groups:2 * groups]), parts[2 * groups])
 
 
@@ -272,7 +272,7 @@ class StepSystem:
         Zext = ca.vertcat(Z, 0)
         n_ch = len(L.chains)
         node0_F, ends, locals_ = [None] * n_ch, [None] * n_ch, []
-        for gr, g, (nxt, packed, en) in zip(self.groups, L.groups, sweeps):
+        for gr, g, (nxt, packed, _end) in zip(self.groups, L.groups, sweeps):
             n_c = g.signature.n_c
             kinematics = ca.horzcat(starts[:, gr.chains], nxt)[:, gr.node_columns]  # (6, blocks) in order
             lam_end = ca.horzcat(Zext[gr.end_of_block], Zext[[i + 1 if i < self.n_z else i for i in gr.end_of_block]]).T

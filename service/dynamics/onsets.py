@@ -15,9 +15,9 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from models.context import AssemblyContext
 from models.contact.elastic_pairs import DAMPED_LAWS, elastic_pairs
 from models.contact.pair_forces import contact_forces
+from models.context import AssemblyContext
 from models.structure import Structure
 from service.dynamics.engine import WINDOW_ACCEPTANCE
 

@@ -17,8 +17,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from models import MechanismError
-from models.structure import Structure
 from models.kernels.layout import layout_of
+from models.structure import Structure
 from service.buffered import BufferedCall
 from service.dynamics.engine import WINDOW_ACCEPTANCE, Engine, engine_for
 from service.dynamics.histories import Histories
@@ -50,7 +50,7 @@ class History:
     iterations: int = 0  # Newton iterations in all
     steps: int = 0
     seconds: float = 0.0
-    resume: "Resume | None" = None
+    resume: Resume | None = None
 
 
 @dataclass
@@ -72,7 +72,7 @@ class Resume:
                 "onset_speeds": self.onset_speeds}
 
     @classmethod
-    def from_json(cls, data: dict) -> "Resume":
+    def from_json(cls, data: dict) -> Resume:
         state, works, monitor = (np.array(data[k], dtype=float) for k in ("state", "works", "monitor"))
         if len(works) == 2:  # stored before the contacts' friction and damping had rows: none acted
             works, monitor = np.append(works, [0.0, 0.0]), np.insert(monitor, 4, [0.0, 0.0])

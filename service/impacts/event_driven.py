@@ -78,7 +78,7 @@ def rhs_function(model: ImpactModel) -> ca.Function:
     Q = model.force
     works = [ca.SX(0), ca.SX(0), ca.dot(model.extra, v), ca.dot(model.damping, v), model.load_power]
     switching = []
-    for k, (pair, (pen, rate, v_T, Dn, Dt), (F_N, F_T)) in enumerate(zip(model.pairs, geometry, forces)):
+    for k, (pair, (pen, _rate, v_T, Dn, Dt), (F_N, F_T)) in enumerate(zip(model.pairs, geometry, forces)):
         Q = Q + F_N * Dn + F_T * Dt
         works[0] += F_N * ca.dot(Dn, v)
         works[1] += F_T * ca.dot(Dt, v)

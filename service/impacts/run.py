@@ -10,15 +10,15 @@ from collections import OrderedDict
 import numpy as np
 
 from models import MechanismError
-from models.contact.schema import FrictionFields
 from models.contact.laws import FRICTION_LAWS, NORMAL_LAWS, check_law
+from models.contact.schema import FrictionFields
 from models.document import MechanismDocument
 from models.impacts.model import DAMPING, WORKS, ImpactModel, impact_model
 from models.simulation_spec import SimulateSpec
 from models.units import document_unit, quantity_to_si
 from service.dynamics.histories import history_expression
-from service.impacts.report import Histories, depth_function, histories, report
 from service.impacts.event_driven import EventLayout
+from service.impacts.report import Histories, depth_function, histories, report
 from service.impacts.state_sensitivity import check_fields, end_state_derivatives, parameter_directions
 from service.impacts.stepping import KEPT_EVENT_ROWS, Trace, run_events, run_moreau
 

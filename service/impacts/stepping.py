@@ -15,12 +15,12 @@ import numpy as np
 
 from models.elements import FAMILIES
 from models.impacts.model import WORKS, ImpactModel
-from service.kernels.queue import function_library, request_function
 from service.impacts.event_driven import EventLayout, event_step
 from service.impacts.kept_rows import KeptRows
 from service.impacts.moreau import moreau_step
 from service.impacts.native import NativeFunction
 from service.impacts.state_sensitivity import SensitivityChunk
+from service.kernels.queue import function_library, request_function
 
 EVENT_CHUNK = 2000  # trial steps per call
 MOREAU_CHUNK = 5000
@@ -39,9 +39,9 @@ def _code_version(family_sources: tuple[str, ...]) -> str:
 
     import models.contact.laws as laws
     import models.context as statics_context  # the statics energies of models.impacts.families read it
-    import models.loads as statics_loads  # the bodies' kinetic energy, gravity and loads (models.impacts.coordinates)
     import models.elements as families
     import models.impacts as built
+    import models.loads as statics_loads  # the bodies' kinetic energy, gravity and loads (models.impacts.coordinates)
 
     here = Path(__file__).parent
     folders = [Path(module.__file__).parent for module in (built, laws, families)]

@@ -15,7 +15,15 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from models import MechanismError
-from service.contact.path import default_outputs, follow, parameters_at, path_count, path_fields, resumed_state, state_record
+from service.contact.path import (
+    default_outputs,
+    follow,
+    parameters_at,
+    path_count,
+    path_fields,
+    resumed_state,
+    state_record,
+)
 from service.contact.problem import contact_problem
 from service.contact.report import penetration_error
 from service.contact.solve import ContactOptions, PenetratingStart

@@ -40,7 +40,7 @@ class TaskExecutor(ABC):
     @abstractmethod
     def executor(self) -> Executor: ...
 
-    def renew(self) -> None:
+    def renew(self) -> None:  # noqa: B027 (an optional hook: nothing to do by default)
         """Replace a broken executor (a process-pool worker died). A Dask cluster replaces
         lost workers itself, so by default there is nothing to do."""
 

@@ -18,12 +18,12 @@ import numpy as np
 
 from models import MechanismError
 from models.document import parse_optimize_spec
-from service.reports import plain
-from service.requests import Limits, compile_request, under
 from service.design import DesignProblem, design_problem
 from service.jobs.base import Plan
 from service.jobs.control import TaskControl
 from service.optimize import Prepared, StartResult, combine, prepare, run_start
+from service.reports import plain
+from service.requests import Limits, compile_request, under
 
 
 def problem_of(spec: dict) -> DesignProblem:

@@ -19,10 +19,24 @@ from models.simulation_spec import IMPACT_SCHEMES
 from service.costs import Limits, check_result_size
 from service.dynamics.histories import read_histories
 from service.dynamics.integrate import Resume, integrate
+from service.dynamics.run import (
+    MAX_STEPS,
+    check_masses,
+    check_scheme,
+    check_steps,
+    records,
+    scheme_of,
+    scheme_summary,
+    simulated,
+    simulation_spec,
+    start_shape,
+    step_limit,
+    tolerance_of,
+    units,
+    wanted_outputs,
+    with_balance,
+)
 from service.dynamics.stepping import WINDOW
-from service.dynamics.run import (MAX_STEPS, check_masses, check_scheme, check_steps, records, scheme_of, scheme_summary,
-                                  simulated, simulation_spec, start_shape, step_limit, tolerance_of, units,
-                                  wanted_outputs, with_balance)
 from service.jobs.base import InOrder, Plan
 from service.jobs.control import TaskControl
 from service.jobs.sweep import mechanism_of

@@ -31,15 +31,15 @@ from functools import lru_cache
 import numpy as np
 
 from models import Mechanism, MechanismError
-from service.reports import output_units, plain
-from service.costs import Limits, check_grid_size, check_result_size
-from service.requests import compile_request, newton_options
-from service.units import residual_report
 from service.analyses import ANALYSES
+from service.costs import Limits, check_grid_size, check_result_size
 from service.equilibrium import check_constrained
-from service.sweep import solve_for_target
 from service.jobs.base import Plan
 from service.jobs.control import TaskControl
+from service.reports import output_units, plain
+from service.requests import compile_request, newton_options
+from service.sweep import solve_for_target
+from service.units import residual_report
 
 
 def value_count(parameter: dict, pointer: str, until: bool = False) -> int:

@@ -23,7 +23,7 @@ from service.kernels.cache import KINDS, library
 from service.kernels.queue import function_library, request_function
 
 LOADED = 32  # compiled windows kept loaded per process (one per structure and window length)
-_loaded: "OrderedDict[str, ca.Function]" = OrderedDict()
+_loaded: OrderedDict[str, ca.Function] = OrderedDict()
 _lock = threading.Lock()
 
 

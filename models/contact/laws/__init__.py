@@ -4,8 +4,18 @@ law is a module defining it (a NormalLaw or FrictionLaw) and one registration li
 from models.contact.laws.friction import Ambrosio, Coulomb, NoFriction
 from models.contact.laws.impulsive import Restitution, Unilateral
 from models.contact.laws.penalty import Flores, Hertz, HuntCrossley, LankaraniNikravesh, LinearSpringDashpot, LnaEsdu
-from models.contact.laws.registry import (ANALYSES, FRICTION_LAWS, NORMAL_LAWS, FrictionLaw, NormalLaw, check_law,
-                                          friction_law, normal_law, register_friction_law, register_normal_law)
+from models.contact.laws.registry import (
+                                          ANALYSES,
+                                          FRICTION_LAWS,
+                                          NORMAL_LAWS,
+                                          FrictionLaw,
+                                          NormalLaw,
+                                          check_law,
+                                          friction_law,
+                                          normal_law,
+                                          register_friction_law,
+                                          register_normal_law,
+)
 
 register_normal_law(Unilateral())
 register_normal_law(Restitution())
