@@ -12,25 +12,32 @@ import inspect
 from collections.abc import Callable
 from typing import Any
 
+Schema = dict[str, Any]  # a JSON schema, or an analysis as GET /v1/analyses lists it
+
 # The fields of every request (the mechanism and how to solve it), before the analysis' own.
 COMMON = ("document", "example", "model", "overrides", "options")
 
 
-def _type_of(schema: dict) -> str:
+def _type_of(schema: Schema) -> str:
     options = schema.get("anyOf")
     if options:
         return " | ".join(_type_of(s) for s in options)
     if "$ref" in schema:
-        return schema["$ref"].rsplit("/", 1)[-1]
+        return str(schema["$ref"]).rsplit("/", 1)[-1]
     if "enum" in schema:
         return " | ".join(repr(v) for v in schema["enum"])
-    return schema.get("type", "any")
+    return str(schema.get("type", "any"))
 
 
-def docstring(analysis: dict) -> str:
+def docstring(analysis: Schema) -> str:
     """The analysis' summary, then one line per option: name (type, default): description."""
-    lines = [f"{analysis['summary']}.", "", "Common fields: document or example, model, overrides, options (Newton).",
-             "", "Options:" if analysis["options"].get("properties") else "No options of its own."]
+    lines = [
+        f"{analysis['summary']}.",
+        "",
+        "Common fields: document or example, model, overrides, options (Newton).",
+        "",
+        "Options:" if analysis["options"].get("properties") else "No options of its own.",
+    ]
     required = set(analysis["options"].get("required", ()))
     for name, field in analysis["options"].get("properties", {}).items():
         default = "required" if name in required else f"default {field.get('default')!r}"
@@ -40,7 +47,7 @@ def docstring(analysis: dict) -> str:
     return "\n".join(lines)
 
 
-def _signature(analysis: dict) -> inspect.Signature:
+def _signature(analysis: Schema) -> inspect.Signature:
     keyword = inspect.Parameter.KEYWORD_ONLY
     parameters = [inspect.Parameter(name, keyword, default=None) for name in COMMON]
     required = set(analysis["options"].get("required", ()))
@@ -50,7 +57,7 @@ def _signature(analysis: dict) -> inspect.Signature:
     return inspect.Signature(parameters)
 
 
-def method_of(analysis: dict, solve: Callable[..., Any]) -> Callable[..., Any]:
+def method_of(analysis: Schema, solve: Callable[..., Any]) -> Callable[..., Any]:
     """A function calling `solve` with the analysis named, documented by its schema."""
     name = analysis["name"]
 
@@ -66,7 +73,7 @@ def method_of(analysis: dict, solve: Callable[..., Any]) -> Callable[..., Any]:
 class Analyses:
     """The server's analyses as methods (read once, when first asked)."""
 
-    def __init__(self, listing: Callable[[], list[dict]], solve: Callable[..., Any]):
+    def __init__(self, listing: Callable[[], list[Schema]], solve: Callable[..., Any]):
         self._listing = listing
         self._solve = solve
         self._methods: dict[str, Callable[..., Any]] | None = None
@@ -75,7 +82,8 @@ class Analyses:
         if self._methods is None:
             self._methods = {a["name"]: method_of(a, self._solve) for a in self._listing()}
             self.__doc__ = "Analyses of this server:\n\n" + "\n\n".join(
-                f"{name}(...)\n{method.__doc__}" for name, method in self._methods.items())
+                f"{name}(...)\n{method.__doc__}" for name, method in self._methods.items()
+            )
         return self._methods
 
     def __getattr__(self, name: str) -> Callable[..., Any]:

@@ -24,18 +24,29 @@ _BAD_EXPRESSIONS = ("9**9**9", "1/0", "(-1)**0.5", "log(0)", "exp(1000)*0", "sqr
 
 
 def _rod(expression: str) -> dict:
-    return {"units": {"length": "m", "force": "N", "stress": "Pa", "angle": "rad"},
-            "materials": {"m": {"E": 2e11}}, "sections": {"s": {"b": 0.01, "h": 0.001}},
-            "bodies": {"wall": {"fixed": True, "position": [0, 0]}, "tip": {"position": [0.1, 0]}},
-            "elements": {"L": {"type": "link", "from": "wall", "to": "tip", "length": 0.1, "material": "m",
-                               "section": "s", "shape": {"type": "expression", "expression": expression}}}}
+    return {
+        "units": {"length": "m", "force": "N", "stress": "Pa", "angle": "rad"},
+        "materials": {"m": {"E": 2e11}},
+        "sections": {"s": {"b": 0.01, "h": 0.001}},
+        "bodies": {"wall": {"fixed": True, "position": [0, 0]}, "tip": {"position": [0.1, 0]}},
+        "elements": {
+            "L": {
+                "type": "link",
+                "from": "wall",
+                "to": "tip",
+                "length": 0.1,
+                "material": "m",
+                "section": "s",
+                "shape": {"type": "expression", "expression": expression},
+            }
+        },
+    }
 
 
 EXAMPLES: dict[str, list[dict[str, Any]]] = {
     "equilibrium": [
         {"example": "gripper", "overrides": {"/loads/actuation/force/1": 50}},
-        {"example": "gripper", "target": {"path": "/loads/actuation/force/1", "output": "end_effector.x",
-                                          "equals": 0}},
+        {"example": "gripper", "target": {"path": "/loads/actuation/force/1", "output": "end_effector.x", "equals": 0}},
         *({"example": "gripper", "overrides": {"/elements/a/radius": value}} for value in _BAD_LENGTHS),
         *({"document": _rod(text)} for text in _BAD_EXPRESSIONS),
     ],
@@ -88,8 +99,11 @@ def documented(schema: dict) -> dict:
     components = schema.setdefault("components", {}).setdefault("schemas", {})
     body = post["requestBody"]["content"]["application/json"]["schema"]
     mapping = {a.name: f"#/components/schemas/{_camel(a.name)}Solve" for a in ANALYSES}
-    components["SolveRequest"] = {**body, "title": "SolveRequest",
-                                  "discriminator": {"propertyName": "analysis", "mapping": mapping}}
+    components["SolveRequest"] = {
+        **body,
+        "title": "SolveRequest",
+        "discriminator": {"propertyName": "analysis", "mapping": mapping},
+    }
     post["requestBody"]["content"]["application/json"]["schema"] = {"$ref": "#/components/schemas/SolveRequest"}
     results = {}
     for a in ANALYSES:
@@ -99,7 +113,9 @@ def documented(schema: dict) -> dict:
         components[name] = {**result, "title": name}
         results[a.name] = f"#/components/schemas/{name}"
     answer = post["responses"]["200"]["content"]["application/json"]
-    answer["schema"] = {"anyOf": [answer["schema"], *({"$ref": ref} for ref in results.values())],
-                        "description": "the report of the analysis asked for (SolveResponse holds every field any "
-                                       "analysis reports; each analysis' Result model says what it reports)"}
+    answer["schema"] = {
+        "anyOf": [answer["schema"], *({"$ref": ref} for ref in results.values())],
+        "description": "the report of the analysis asked for (SolveResponse holds every field any "
+        "analysis reports; each analysis' Result model says what it reports)",
+    }
     return schema

@@ -59,8 +59,12 @@ def _builder(settings: Settings) -> BuilderProcess | None:
     """The build queue's process (service.kernels.queue), when kernels are built here."""
     if not settings.build_kernels or compiler() is None:
         return None
-    builder = BuilderProcess({"FLEXMECH_BUILD_SECONDS": str(settings.build_seconds),
-                              "FLEXMECH_BUILD_MEMORY_BYTES": str(int(settings.build_memory_mb * 2**20))})
+    builder = BuilderProcess(
+        {
+            "FLEXMECH_BUILD_SECONDS": str(settings.build_seconds),
+            "FLEXMECH_BUILD_MEMORY_BYTES": str(int(settings.build_memory_mb * 2**20)),
+        }
+    )
     builder.start()
     log.info("kernel builder started (pid %d)", builder.pid)
     return builder
@@ -79,8 +83,11 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         services.builder = builder
         app.state.services = services
         services.runner.start()
-        log.info("flexmech serving: store %s, %s", services.store.engine.url.render_as_string(hide_password=True),
-                 services.executor.description)
+        log.info(
+            "flexmech serving: store %s, %s",
+            services.store.engine.url.render_as_string(hide_password=True),
+            services.executor.description,
+        )
         try:
             yield
         finally:

@@ -26,18 +26,8 @@ from pydantic import BaseModel, TypeAdapter
 from api.analysis_methods import Analyses
 from api.drawing_schemas import DrawingRequest
 from api.impact_study_schemas import ImpactStudyRequest
-from api.schemas import (
-    AnalysisReport,
-    ContactPathRequest,
-    ExampleSummary,
-    HealthResponse,
-    JobResultResponse,
-    JobStatusResponse,
-    OptimizeRequest,
-    SolveRequest,
-    SolveResponse,
-    SweepRequest,
-)
+from api.job_schemas import ContactPathRequest, JobResultResponse, JobStatusResponse, OptimizeRequest, SweepRequest
+from api.schemas import AnalysisReport, ExampleSummary, HealthResponse, SolveRequest, SolveResponse
 from api.simulation_schemas import SimulationRequest
 
 T = TypeVar("T")
@@ -62,8 +52,10 @@ class JobTimeout(TimeoutError):
 
     def __init__(self, status: JobStatusResponse):
         self.status = status
-        super().__init__(f"job {status.id} still {status.status} after waiting "
-                         f"({status.progress.done} of {status.progress.total} points)")
+        super().__init__(
+            f"job {status.id} still {status.status} after waiting "
+            f"({status.progress.done} of {status.progress.total} points)"
+        )
 
 
 def _error_of(response: httpx.Response) -> FlexmechError:
@@ -116,8 +108,13 @@ def _headers(api_key: str | None) -> dict[str, str]:
 class Client:
     """Synchronous client. `transport` lets tests pass an httpx transport."""
 
-    def __init__(self, base_url: str = DEFAULT_URL, api_key: str | None = None, timeout: float = 60.0,
-                 transport: httpx.BaseTransport | None = None):
+    def __init__(
+        self,
+        base_url: str = DEFAULT_URL,
+        api_key: str | None = None,
+        timeout: float = 60.0,
+        transport: httpx.BaseTransport | None = None,
+    ):
         self._http = httpx.Client(base_url=base_url, headers=_headers(api_key), timeout=timeout, transport=transport)
         self._analyze: Analyses | None = None
 
@@ -162,28 +159,35 @@ class Client:
 
     def sweep(self, request: SweepRequest | None = None, **fields: Any) -> JobStatusResponse:
         """Start a sweep job; fields as in SweepRequest. Returns the new job's status."""
-        return _parse(self._http.post("/v1/sweeps", json=_request_body(SweepRequest, request, fields)),
-                      JobStatusResponse)
+        return _parse(
+            self._http.post("/v1/sweeps", json=_request_body(SweepRequest, request, fields)), JobStatusResponse
+        )
 
     def optimize(self, request: OptimizeRequest | None = None, **fields: Any) -> JobStatusResponse:
         """Start an optimization job; fields as in OptimizeRequest. Returns the new job's status."""
-        return _parse(self._http.post("/v1/optimize", json=_request_body(OptimizeRequest, request, fields)),
-                      JobStatusResponse)
+        return _parse(
+            self._http.post("/v1/optimize", json=_request_body(OptimizeRequest, request, fields)), JobStatusResponse
+        )
 
     def contact_path(self, request: ContactPathRequest | None = None, **fields: Any) -> JobStatusResponse:
         """Start a contact path job; fields as in ContactPathRequest. Returns the new job's status."""
-        return _parse(self._http.post("/v1/contacts", json=_request_body(ContactPathRequest, request, fields)),
-                      JobStatusResponse)
+        return _parse(
+            self._http.post("/v1/contacts", json=_request_body(ContactPathRequest, request, fields)), JobStatusResponse
+        )
 
     def simulation(self, request: SimulationRequest | None = None, **fields: Any) -> JobStatusResponse:
         """Start a simulation job; fields as in SimulationRequest. Returns the new job's status."""
-        return _parse(self._http.post("/v1/simulations", json=_request_body(SimulationRequest, request, fields)),
-                      JobStatusResponse)
+        return _parse(
+            self._http.post("/v1/simulations", json=_request_body(SimulationRequest, request, fields)),
+            JobStatusResponse,
+        )
 
     def impact_study(self, request: ImpactStudyRequest | None = None, **fields: Any) -> JobStatusResponse:
         """Start a parametric study of an impact simulation; fields as in ImpactStudyRequest."""
-        return _parse(self._http.post("/v1/impact-studies", json=_request_body(ImpactStudyRequest, request, fields)),
-                      JobStatusResponse)
+        return _parse(
+            self._http.post("/v1/impact-studies", json=_request_body(ImpactStudyRequest, request, fields)),
+            JobStatusResponse,
+        )
 
     def drawing(self, request: DrawingRequest | None = None, **fields: Any) -> dict:
         """The mechanism drawn to scale as data; fields as in DrawingRequest (state
@@ -208,8 +212,9 @@ class Client:
     def cancel(self, job_id: str) -> JobStatusResponse:
         return _parse(self._http.delete(f"/v1/jobs/{job_id}"), JobStatusResponse)
 
-    def wait(self, job_id: str, timeout: float | None = None, poll: float = 0.2,
-             progress: Progress | None = None) -> JobStatusResponse:
+    def wait(
+        self, job_id: str, timeout: float | None = None, poll: float = 0.2, progress: Progress | None = None
+    ) -> JobStatusResponse:
         """Poll until the job has finished (succeeded, failed or cancelled) and return its
         status. progress(status) is called after every poll. JobTimeout after `timeout` s."""
         deadline = None if timeout is None else time.monotonic() + timeout
@@ -221,10 +226,16 @@ class Client:
 class AsyncClient:
     """The same calls, awaitable."""
 
-    def __init__(self, base_url: str = DEFAULT_URL, api_key: str | None = None, timeout: float = 60.0,
-                 transport: httpx.AsyncBaseTransport | None = None):
-        self._http = httpx.AsyncClient(base_url=base_url, headers=_headers(api_key), timeout=timeout,
-                                       transport=transport)
+    def __init__(
+        self,
+        base_url: str = DEFAULT_URL,
+        api_key: str | None = None,
+        timeout: float = 60.0,
+        transport: httpx.AsyncBaseTransport | None = None,
+    ):
+        self._http = httpx.AsyncClient(
+            base_url=base_url, headers=_headers(api_key), timeout=timeout, transport=transport
+        )
 
     async def __aenter__(self) -> AsyncClient:
         return self
@@ -296,14 +307,14 @@ class AsyncClient:
         return _parse(await self._http.get(f"/v1/jobs/{job_id}/request"), dict)
 
     async def result(self, job_id: str, offset: int = 0, limit: int | None = None) -> JobResultResponse:
-        return _parse(await self._http.get(f"/v1/jobs/{job_id}/result", params=_page(offset, limit)),
-                      JobResultResponse)
+        return _parse(await self._http.get(f"/v1/jobs/{job_id}/result", params=_page(offset, limit)), JobResultResponse)
 
     async def cancel(self, job_id: str) -> JobStatusResponse:
         return _parse(await self._http.delete(f"/v1/jobs/{job_id}"), JobStatusResponse)
 
-    async def wait(self, job_id: str, timeout: float | None = None, poll: float = 0.2,
-                   progress: Progress | None = None) -> JobStatusResponse:
+    async def wait(
+        self, job_id: str, timeout: float | None = None, poll: float = 0.2, progress: Progress | None = None
+    ) -> JobStatusResponse:
         deadline = None if timeout is None else time.monotonic() + timeout
         while not _finished(status := await self.job(job_id), deadline, progress):
             await asyncio.sleep(poll)

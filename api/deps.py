@@ -11,8 +11,9 @@ from fastapi.security import APIKeyHeader
 from api.errors import ApiError
 from api.state import Services
 
-_api_key_header = APIKeyHeader(name="X-API-Key", auto_error=False,
-                               description="Required when the server has FLEXMECH_API_KEYS set")
+_api_key_header = APIKeyHeader(
+    name="X-API-Key", auto_error=False, description="Required when the server has FLEXMECH_API_KEYS set"
+)
 
 
 # Both dependencies are coroutines: FastAPI runs a plain function in its thread pool, a hand-off

@@ -13,6 +13,7 @@ def request_document(request: DocumentRequest, services: Services) -> dict:
     example = services.examples.get(request.example)
     if example is None:
         known = ", ".join(services.examples.names()) or "none"
-        raise ApiError(422, "invalid_input", f"/example: unknown example '{request.example}' (examples: {known})",
-                       "/example")
+        raise ApiError(
+            422, "invalid_input", f"/example: unknown example '{request.example}' (examples: {known})", "/example"
+        )
     return example.document

@@ -27,8 +27,10 @@ class DrawingRequest(DocumentRequest):
     value, each solved from the one before."""
 
     state: Literal["undeformed", "equilibrium", "path"] = Field(
-        "undeformed", description="equilibrium: also the deformed centre lines and every body's pose; "
-                                  "path: `frames`, one such state per value of `path`")
+        "undeformed",
+        description="equilibrium: also the deformed centre lines and every body's pose; "
+        "path: `frames`, one such state per value of `path`",
+    )
     path: DrawnPath | None = Field(None, description="state path: the field and its values")
 
     @model_validator(mode="after")

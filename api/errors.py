@@ -30,12 +30,13 @@ from pydantic import BaseModel
 from sqlalchemy.exc import SQLAlchemyError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
-from api import schemas
+from api import job_schemas, schemas
 from models import MechanismError
 from models.errors import pointer_of
 from service.analyses import ANALYSES
 
 log = logging.getLogger("flexmech.api")
+
 
 class ApiError(Exception):
     def __init__(self, status: int, code: str, message: str, pointer: str | None = None):
@@ -45,8 +46,10 @@ class ApiError(Exception):
         self.pointer = pointer
         super().__init__(message)
 
+
 def not_found(what: str) -> ApiError:
     return ApiError(404, "not_found", what)
+
 
 # An error names what the caller sent (a name, a path, a value) but never echoes a long one
 # whole: a run of more than LONG_WORD characters without a blank is cut to its start, and
@@ -60,28 +63,38 @@ def excerpt(text: str) -> str:
     return text if len(text) <= MAX_MESSAGE else text[:MAX_MESSAGE] + f"...({len(text)} characters)"
 
 
-def error_response(status: int, code: str, message: str, pointer: str | None = None,
-                   headers: dict | None = None) -> JSONResponse:
+def error_response(
+    status: int, code: str, message: str, pointer: str | None = None, headers: dict | None = None
+) -> JSONResponse:
     pointer = None if pointer is None else excerpt(pointer)
     body = {"error": {"status": status, "code": code, "message": excerpt(message), "pointer": pointer}}
     return JSONResponse(body, status_code=status, headers=headers)
+
 
 def _validation_pointer(loc: tuple) -> str:
     parts = list(loc)
     if parts and parts[0] in ("body", "query", "path", "header"):
         parts = parts[1:]
     # pydantic names union members and validator types in locations; they are not fields
-    parts = [p for p in parts if not (isinstance(p, str) and (p.startswith("function-") or "[" in p
-                                                              or p in ("float", "str", "int", "bool")))]
+    parts = [
+        p
+        for p in parts
+        if not (isinstance(p, str) and (p.startswith("function-") or "[" in p or p in ("float", "str", "int", "bool")))
+    ]
     return pointer_of(tuple(parts))
+
 
 # Top-level fields of a mechanism document: a body made of them is a document sent unwrapped.
 _DOCUMENT_FIELDS = {"schema_version", "units", "materials", "sections", "bodies", "elements", "loads", "outputs"}
 
 
 def _unwrapped_document(body) -> bool:
-    return isinstance(body, dict) and "document" not in body and "example" not in body and \
-        len(_DOCUMENT_FIELDS & set(body)) >= 2
+    return (
+        isinstance(body, dict)
+        and "document" not in body
+        and "example" not in body
+        and len(_DOCUMENT_FIELDS & set(body)) >= 2
+    )
 
 
 def _error_pointer(error: dict) -> str:
@@ -101,13 +114,21 @@ def _fields_of(models: list[type[BaseModel]]) -> dict[str, type[BaseModel]]:
         seen.add(model)
         for name, info in model.model_fields.items():
             names.setdefault(info.alias or name, model)
-            stack += [t for t in getattr(info.annotation, "__args__", (info.annotation,))
-                      if isinstance(t, type) and issubclass(t, BaseModel)]
+            stack += [
+                t
+                for t in getattr(info.annotation, "__args__", (info.annotation,))
+                if isinstance(t, type) and issubclass(t, BaseModel)
+            ]
     return names
 
 
 def _request_field_names() -> tuple[str, ...]:
-    models = [m for m in vars(schemas).values() if isinstance(m, type) and issubclass(m, BaseModel)]
+    models = [
+        m
+        for module in (schemas, job_schemas)
+        for m in vars(module).values()
+        if isinstance(m, type) and issubclass(m, BaseModel)
+    ]
     return tuple(sorted(_fields_of(models + [a.Options for a in ANALYSES])))
 
 
@@ -136,7 +157,7 @@ def _message(first: dict) -> str:
                 return f"unknown field '{key}' for the {analysis} analysis{taken}"
         close = difflib.get_close_matches(key, _request_field_names(), n=1, cutoff=0.75)
         return f"unknown field '{key}'" + (f" (did you mean '{close[0]}'?)" if close else "")
-    return message[len("Value error, "):] if message.startswith("Value error, ") else message
+    return message[len("Value error, ") :] if message.startswith("Value error, ") else message
 
 
 def _on_validation_error(_request: Request, exc: RequestValidationError) -> JSONResponse:
@@ -146,9 +167,13 @@ def _on_validation_error(_request: Request, exc: RequestValidationError) -> JSON
             detail = e.get("ctx", {}).get("error", "")
             return error_response(400, "malformed_json", f"the body is not valid JSON: {detail}".rstrip(": "))
     if _unwrapped_document(getattr(exc, "body", None)):
-        return error_response(422, "invalid_request", "body: this is a mechanism document itself: send it as "
-                              '{"document": <the document>} (or name one of GET /v1/examples as {"example": "<name>"})',
-                              "")
+        return error_response(
+            422,
+            "invalid_request",
+            "body: this is a mechanism document itself: send it as "
+            '{"document": <the document>} (or name one of GET /v1/examples as {"example": "<name>"})',
+            "",
+        )
     first = next((e for e in errors if e.get("type") == "extra_forbidden"), errors[0])
     pointer = _error_pointer(first)
     message = _message(first)
@@ -162,26 +187,36 @@ def _on_validation_error(_request: Request, exc: RequestValidationError) -> JSON
 def _on_mechanism_error(_request: Request, exc: MechanismError) -> JSONResponse:
     return error_response(422, "invalid_input", str(exc), exc.pointer)
 
+
 def _on_api_error(_request: Request, exc: ApiError) -> JSONResponse:
     headers = {"WWW-Authenticate": "ApiKey"} if exc.status == 401 else None
     return error_response(exc.status, exc.code, exc.message, exc.pointer, headers)
 
+
 _HTTP_CODES = {404: "not_found", 405: "method_not_allowed", 400: "bad_request", 413: "body_too_large"}
+
 
 def _on_http_error(_request: Request, exc: StarletteHTTPException) -> JSONResponse:
     code = _HTTP_CODES.get(exc.status_code, "http_error")
     message = exc.detail if isinstance(exc.detail, str) else "error"
     return error_response(exc.status_code, code, message, headers=getattr(exc, "headers", None))
 
+
 def _on_store_error(request: Request, exc: SQLAlchemyError) -> JSONResponse:
     log.error("job store unavailable on %s %s: %s", request.method, request.url.path, str(exc).splitlines()[0][:300])
-    return error_response(503, "store_unavailable", "the job store cannot be read or written just now (the "
-                          "database is locked or its disk is full): try again shortly", headers={"Retry-After": "5"})
+    return error_response(
+        503,
+        "store_unavailable",
+        "the job store cannot be read or written just now (the "
+        "database is locked or its disk is full): try again shortly",
+        headers={"Retry-After": "5"},
+    )
 
 
 def _on_unexpected(request: Request, exc: Exception) -> JSONResponse:
     log.exception("unhandled error on %s %s", request.method, request.url.path)
     return error_response(500, "internal_error", "internal error; it has been logged")
+
 
 def install_error_handlers(app: FastAPI) -> None:
     app.add_exception_handler(RequestValidationError, _on_validation_error)
@@ -190,4 +225,3 @@ def install_error_handlers(app: FastAPI) -> None:
     app.add_exception_handler(StarletteHTTPException, _on_http_error)
     app.add_exception_handler(SQLAlchemyError, _on_store_error)
     app.add_exception_handler(Exception, _on_unexpected)
-

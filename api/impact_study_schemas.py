@@ -20,18 +20,34 @@ class StudyField(_Strict):
 
 class ImpactStudy(_Strict):
     fields: list[StudyField] = Field(min_length=1, max_length=64)
-    tolerance: float = Field(0.05, gt=0, lt=1, description="a run departs from the nominal one when a quantity "
-                             "differs by more than this fraction of its nominal range")
+    tolerance: float = Field(
+        0.05,
+        gt=0,
+        lt=1,
+        description="a run departs from the nominal one when a quantity "
+        "differs by more than this fraction of its nominal range",
+    )
 
 
 class ImpactStudyRequest(DocumentRequest):
     """A job: seed 004's parametric study of an impact simulation, one field at a time."""
 
-    model_config = ConfigDict(json_schema_extra={"examples": [
-        {"example": "csfh", "simulate": {"until": 0.3},
-         "study": {"fields": [{"path": "/contacts/sites/pin/radius", "step": 0.001},
-                              {"path": "/bodies/hinge/mass", "step": 0.1}]}},
-    ]})
+    model_config = ConfigDict(
+        json_schema_extra={
+            "examples": [
+                {
+                    "example": "csfh",
+                    "simulate": {"until": 0.3},
+                    "study": {
+                        "fields": [
+                            {"path": "/contacts/sites/pin/radius", "step": 0.001},
+                            {"path": "/bodies/hinge/mass", "step": 0.1},
+                        ]
+                    },
+                },
+            ]
+        }
+    )
 
     simulate: dict[str, Any] | None = Field(None, description="fields of the document's `simulate` section over it")
     study: ImpactStudy

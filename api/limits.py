@@ -44,8 +44,12 @@ class BodySizeLimit:
         self.read_timeout = read_timeout
 
     def _too_large(self, size: str):
-        return error_response(413, "body_too_large",
-                              f"request body of {size} bytes is over the limit of {self.max_bytes} bytes", headers=CLOSE)
+        return error_response(
+            413,
+            "body_too_large",
+            f"request body of {size} bytes is over the limit of {self.max_bytes} bytes",
+            headers=CLOSE,
+        )
 
     async def _read(self, scope, receive, send) -> bytes | None:
         """The whole body, or None when an error was answered (or the client went away)."""
@@ -56,8 +60,12 @@ class BodySizeLimit:
                 message = await asyncio.wait_for(receive(), max(deadline - time.monotonic(), 0.0))
             except TimeoutError:
                 # the rest of the body may still come: the connection cannot carry another request
-                await error_response(408, "request_timeout", f"the request body did not arrive within "
-                                     f"{self.read_timeout:g} s", headers=CLOSE)(scope, receive, send)
+                await error_response(
+                    408,
+                    "request_timeout",
+                    f"the request body did not arrive within {self.read_timeout:g} s",
+                    headers=CLOSE,
+                )(scope, receive, send)
                 return None
             if message["type"] != "http.request":  # the client went away
                 return None
@@ -82,8 +90,9 @@ class BodySizeLimit:
         if body.strip() and scope.get("method") in _WITH_BODY and is_json(headers.get(b"content-type")):
             kind, value = await parse_body(body)
             if kind == "duplicate_key":
-                return await error_response(422, "duplicate_key", f"the body gives the key '{value}' twice in one "
-                                            "object")(scope, receive, send)
+                return await error_response(
+                    422, "duplicate_key", f"the body gives the key '{value}' twice in one object"
+                )(scope, receive, send)
             if kind == "malformed_json":
                 return await error_response(400, "malformed_json", value)(scope, receive, send)
             scope[PARSED_BODY] = value

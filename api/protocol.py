@@ -28,11 +28,22 @@ def header_seconds() -> float:
 
 
 def _late_answer(seconds: float) -> bytes:
-    body = json.dumps({"error": {"status": 408, "code": "request_timeout", "message": (
-        f"the request's headers did not arrive within {seconds:g} s (FLEXMECH_HEADER_READ_TIMEOUT)"),
-        "pointer": None}}).encode()
-    return (b"HTTP/1.1 408 Request Timeout\r\ncontent-type: application/json\r\nx-content-type-options: nosniff\r\n"
-            b"connection: close\r\ncontent-length: " + str(len(body)).encode() + b"\r\n\r\n" + body)
+    body = json.dumps(
+        {
+            "error": {
+                "status": 408,
+                "code": "request_timeout",
+                "message": (
+                    f"the request's headers did not arrive within {seconds:g} s (FLEXMECH_HEADER_READ_TIMEOUT)"
+                ),
+                "pointer": None,
+            }
+        }
+    ).encode()
+    return (
+        b"HTTP/1.1 408 Request Timeout\r\ncontent-type: application/json\r\nx-content-type-options: nosniff\r\n"
+        b"connection: close\r\ncontent-length: " + str(len(body)).encode() + b"\r\n\r\n" + body
+    )
 
 
 class HeaderTimeoutProtocol(AutoHTTPProtocol):  # type: ignore[misc, valid-type]

@@ -22,6 +22,9 @@ class SimulationRequest(DocumentRequest):
 
     model_config = ConfigDict(json_schema_extra={"examples": SIMULATION_EXAMPLES})
 
-    simulate: dict[str, Any] | None = Field(None, description="fields of the document's `simulate` section (until, "
-                                            "step, scheme, rho_inf, a1, a2, damping, start, histories, every, "
-                                            "outputs) that override it")
+    simulate: dict[str, Any] | None = Field(
+        None,
+        description="fields of the document's `simulate` section (until, "
+        "step, scheme, rho_inf, a1, a2, damping, start, histories, every, "
+        "outputs) that override it",
+    )

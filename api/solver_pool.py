@@ -121,8 +121,9 @@ class _Worker:
         self.name = name
         self.connection, theirs = context.Pipe()
         self.deadline = context.Value("d", 0.0, lock=False)  # its call's deadline (time.monotonic); 0: none yet
-        self.process = context.Process(target=_serve, args=(theirs, name, self.deadline), name=f"{name.decode()}-{index}",
-                                       daemon=True)
+        self.process = context.Process(
+            target=_serve, args=(theirs, name, self.deadline), name=f"{name.decode()}-{index}", daemon=True
+        )
         self.process.start()
         theirs.close()
 
@@ -135,8 +136,17 @@ class _Worker:
 
 
 # What the fork server imports once, so that no worker imports it again.
-PRELOAD = ["api.solver_pool", "api.routers.solve", "api.routers.drawings", "service.analyses", "service.jobs.contact",
-           "service.jobs.impact_study", "service.jobs.optimize", "service.jobs.simulation", "service.jobs.sweep"]
+PRELOAD = [
+    "api.solver_pool",
+    "api.routers.solve",
+    "api.routers.drawings",
+    "service.analyses",
+    "service.jobs.contact",
+    "service.jobs.impact_study",
+    "service.jobs.optimize",
+    "service.jobs.simulation",
+    "service.jobs.sweep",
+]
 
 
 class SolverPool:
@@ -213,8 +223,11 @@ class SolverPool:
         except (EOFError, OSError):
             code = worker.process.exitcode
             self._replace(index, f"it ended (exit code {code})")
-            raise ApiError(503, "solver_ended", f"the solver process ended during this request (exit code {code}); "
-                           f"retry in {RETRY_AFTER} s") from None
+            raise ApiError(
+                503,
+                "solver_ended",
+                f"the solver process ended during this request (exit code {code}); retry in {RETRY_AFTER} s",
+            ) from None
         finally:
             if give_back:
                 await self._give_back(index)
@@ -236,10 +249,14 @@ class SolverPool:
                 return wait.result()
             if loop.time() >= late and worker.deadline.value == deadline:
                 if deadline > 0:
-                    raise TimeoutError(f"within {GRACE:g} s past its deadline, {deadline - started:.3g} s "
-                                               f"after the call started (its time limit of {time_limit:g} s)")
-                raise TimeoutError(f"within {late - started:g} s (its time limit of {time_limit:g} s, "
-                                           f"{self.build_allowance:g} s of building and {GRACE:g} s of grace)")
+                    raise TimeoutError(
+                        f"within {GRACE:g} s past its deadline, {deadline - started:.3g} s "
+                        f"after the call started (its time limit of {time_limit:g} s)"
+                    )
+                raise TimeoutError(
+                    f"within {late - started:g} s (its time limit of {time_limit:g} s, "
+                    f"{self.build_allowance:g} s of building and {GRACE:g} s of grace)"
+                )
 
     async def _drain(self, index: int, worker: _Worker, wait, started: float, time_limit: float | None) -> None:
         """Wait out the work of a call nobody waits for any more, then free its worker."""

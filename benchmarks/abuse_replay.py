@@ -32,8 +32,11 @@ from tests.abuse_cases import cases as abuse_cases
 REPO = Path(__file__).resolve().parents[1]
 ANSWER_WITHIN = 2.0  # s
 GROWTH_UNDER = 200.0  # MB
-SETTINGS = {"FLEXMECH_HEADER_READ_TIMEOUT": "1", "FLEXMECH_REQUEST_READ_TIMEOUT": "1",
-            "FLEXMECH_EXAMPLES_DIR": str(REPO / "examples")}
+SETTINGS = {
+    "FLEXMECH_HEADER_READ_TIMEOUT": "1",
+    "FLEXMECH_REQUEST_READ_TIMEOUT": "1",
+    "FLEXMECH_EXAMPLES_DIR": str(REPO / "examples"),
+}
 
 
 @dataclass
@@ -50,6 +53,7 @@ def post(path: str, body=None, raw: bytes | None = None, media: str = "applicati
         else:
             r = httpx.post(url + path, json=body, timeout=60)
         return r.status_code, len(r.content), r
+
     return send
 
 
@@ -60,6 +64,7 @@ def run_until(example: str, route: str, **simulate) -> object:
 
 def socket_exchange(payload: bytes):
     """Send payload and read until the server closes the connection."""
+
     def send(url: str):
         host, port = url.removeprefix("http://").split(":")
         with socket.create_connection((host, int(port)), timeout=30) as s:
@@ -68,6 +73,7 @@ def socket_exchange(payload: bytes):
             while chunk := s.recv(65536):
                 answer += chunk
         return int(answer.split()[1]), len(answer), None
+
     return send
 
 
@@ -78,21 +84,28 @@ def page_headers(url: str):
 
 
 def long_name(url: str):
-    r = httpx.post(url + "/v1/solve", json={"example": "gripper", "overrides": {f"/elements/{'n' * 100_000}/radius": 1}},
-                   timeout=30)
+    r = httpx.post(
+        url + "/v1/solve",
+        json={"example": "gripper", "overrides": {f"/elements/{'n' * 100_000}/radius": 1}},
+        timeout=30,
+    )
     return (r.status_code if len(r.content) < 2000 else 599), len(r.content), r
 
 
 def moreau_second(url: str):
     """Not an abuse any more: a second of Moreau steps at 1e-5 s answers a bounded report."""
-    r = httpx.post(url + "/v1/solve", json={"example": "csfh", "analysis": "simulate",
-                                            "simulate": {"scheme": "moreau", "step": 1e-5, "until": 1.0}}, timeout=60)
+    r = httpx.post(
+        url + "/v1/solve",
+        json={"example": "csfh", "analysis": "simulate", "simulate": {"scheme": "moreau", "step": 1e-5, "until": 1.0}},
+        timeout=60,
+    )
     return (r.status_code if len(r.content) < 2_000_000 else 599), len(r.content), r
 
 
 def large_body(url: str):
-    r = httpx.post(url + "/v1/solve", content=long_description_body(), headers={"Content-Type": "application/json"},
-                   timeout=60)
+    r = httpx.post(
+        url + "/v1/solve", content=long_description_body(), headers={"Content-Type": "application/json"}, timeout=60
+    )
     return r.status_code, len(r.content), r
 
 
@@ -101,36 +114,56 @@ def locked_store(data_dir: Path):
         lock = sqlite3.connect(data_dir / "flexmech.db", timeout=60, isolation_level=None)
         lock.execute("BEGIN EXCLUSIVE")
         try:
-            r = httpx.post(url + "/v1/sweeps", json={"example": "gripper", "parameters": [
-                {"path": "/loads/actuation/force/1", "values": [1.0, 2.0]}]}, timeout=60)
+            r = httpx.post(
+                url + "/v1/sweeps",
+                json={"example": "gripper", "parameters": [{"path": "/loads/actuation/force/1", "values": [1.0, 2.0]}]},
+                timeout=60,
+            )
         finally:
             lock.execute("COMMIT")
             lock.close()
         return (r.status_code if "retry-after" in r.headers else 599), len(r.content), r
+
     return send
 
 
 def blank_keys() -> tuple[int, float, str]:
     """(exit code, seconds, last line) of `flexmech serve` with FLEXMECH_API_KEYS=" "."""
     started = time.perf_counter()
-    done = subprocess.run([sys.executable, "-m", "service.cli", "serve", "--port", "1"], capture_output=True, text=True,
-                          env={**os.environ, "FLEXMECH_API_KEYS": " "}, timeout=60, cwd=REPO)
+    done = subprocess.run(
+        [sys.executable, "-m", "service.cli", "serve", "--port", "1"],
+        capture_output=True,
+        text=True,
+        env={**os.environ, "FLEXMECH_API_KEYS": " "},
+        timeout=60,
+        cwd=REPO,
+    )
     return done.returncode, time.perf_counter() - started, done.stderr.strip().splitlines()[-1]
 
 
 def reproductions(data_dir: Path) -> list[Case]:
     dup = b'{"example": "gripper", "example": "gripper_nylon"}'
     return [
-        *[Case(f"until 1e300 step 1e-300: {example} {scheme or ''} {route}", 422,
-               run_until(example, route, until=1e300, step=1e-300, **({"scheme": scheme} if scheme else {})))
-          for example, scheme in (("rod_free_vibration", None), ("csfh", "moreau"), ("csfh", "event_driven"))
-          for route in ("/v1/solve", "/v1/simulations")],
+        *[
+            Case(
+                f"until 1e300 step 1e-300: {example} {scheme or ''} {route}",
+                422,
+                run_until(example, route, until=1e300, step=1e-300, **({"scheme": scheme} if scheme else {})),
+            )
+            for example, scheme in (("rod_free_vibration", None), ("csfh", "moreau"), ("csfh", "event_driven"))
+            for route in ("/v1/solve", "/v1/simulations")
+        ],
         Case("1 s of Moreau at 1e-5 s (report under 2 MB)", 200, moreau_second),
         Case("Application/JSON with a duplicate key", 422, post("/v1/solve", raw=dup, media="Application/JSON")),
         Case("/workbench/index.html carries CSP and nosniff", 200, page_headers),
         Case("headers never finished", 408, socket_exchange(b"POST /v1/solve HTTP/1.1\r\nHost: x\r\nContent-Ty")),
-        Case("a body shorter than its Content-Length", 408, socket_exchange(
-            b"POST /v1/solve HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\nContent-Length: 1000\r\n\r\n{")),
+        Case(
+            "a body shorter than its Content-Length",
+            408,
+            socket_exchange(
+                b"POST /v1/solve HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\nContent-Length: 1000\r\n\r\n{"
+            ),
+        ),
         Case("a 100,000-character name (answer under 2 kB)", 422, long_name),
         Case("a 0.9 MB body", 200, large_body),
         Case("a locked job store (503 with Retry-After)", 503, locked_store(data_dir)),
@@ -159,10 +192,14 @@ def tree_rss(pid: int) -> float:
 
 def warm(url: str) -> None:
     httpx.post(url + "/v1/solve", json={"example": "gripper"}, timeout=120).raise_for_status()
-    httpx.post(url + "/v1/solve", json={"example": "csfh", "analysis": "simulate", "simulate": {"until": 0.1}},
-               timeout=120).raise_for_status()
-    job = httpx.post(url + "/v1/sweeps", json={"example": "gripper", "parameters": [
-        {"path": "/loads/actuation/force/1", "values": [1.0, 2.0]}]}, timeout=120).json()
+    httpx.post(
+        url + "/v1/solve", json={"example": "csfh", "analysis": "simulate", "simulate": {"until": 0.1}}, timeout=120
+    ).raise_for_status()
+    job = httpx.post(
+        url + "/v1/sweeps",
+        json={"example": "gripper", "parameters": [{"path": "/loads/actuation/force/1", "values": [1.0, 2.0]}]},
+        timeout=120,
+    ).json()
     for _ in range(600):
         if httpx.get(f"{url}/v1/jobs/{job['id']}", timeout=30).json()["status"] in ("succeeded", "failed"):
             break
@@ -192,9 +229,11 @@ def main() -> None:
             print(f"{'case':<{width}}  status (expected)  seconds  RSS growth (MB)  answer (bytes)")
             for name, status, expected, seconds, growth, size in rows:
                 print(f"{name:<{width}}  {status} ({expected})        {seconds:7.3f}  {growth:15.1f}  {size:14d}")
-            print(f"{len(rows)} cases: {wrong} with another status, {slow} over {ANSWER_WITHIN:g} s (slowest "
-                  f"{max(r[3] for r in rows):.2f} s), {grown} growing over {GROWTH_UNDER:g} MB (largest "
-                  f"{max(r[4] for r in rows):.1f} MB); server tree {tree_rss(proc.pid):.0f} MB at the end")
+            print(
+                f"{len(rows)} cases: {wrong} with another status, {slow} over {ANSWER_WITHIN:g} s (slowest "
+                f"{max(r[3] for r in rows):.2f} s), {grown} growing over {GROWTH_UNDER:g} MB (largest "
+                f"{max(r[4] for r in rows):.1f} MB); server tree {tree_rss(proc.pid):.0f} MB at the end"
+            )
         finally:
             proc.terminate()
             proc.wait(15)

@@ -49,10 +49,17 @@ def start_server(data_dir: str, settings: dict[str, str] | None = None) -> tuple
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
-    env = {**os.environ, "FLEXMECH_DATA_DIR": data_dir, "FLEXMECH_WORKERS": "1", "FLEXMECH_API_KEYS": "",
-           "FLEXMECH_LOG_LEVEL": "warning", **(settings or {})}
-    proc = subprocess.Popen([sys.executable, "-m", "service.cli", "serve", "--host", "127.0.0.1", "--port", str(port)],
-                            cwd=REPO, env=env)
+    env = {
+        **os.environ,
+        "FLEXMECH_DATA_DIR": data_dir,
+        "FLEXMECH_WORKERS": "1",
+        "FLEXMECH_API_KEYS": "",
+        "FLEXMECH_LOG_LEVEL": "warning",
+        **(settings or {}),
+    }
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "service.cli", "serve", "--host", "127.0.0.1", "--port", str(port)], cwd=REPO, env=env
+    )
     url = f"http://127.0.0.1:{port}"
     for _ in range(600):
         try:
@@ -136,6 +143,7 @@ def throughput(url: str, body: dict, clients: int, per_client: int) -> tuple[flo
 def floor(url: str, clients: int, n: int, path: str = "/v1/no-such-path") -> tuple[float, float]:
     """(p50 s, requests/s with `clients`) of a request that does no work (GET of a path that
     does not exist: 404) through the same clients and server: what HTTP alone costs here."""
+
     def send(client):
         if client.get(path).status_code != 404:
             raise SystemExit("the empty request did not answer 404")
@@ -171,8 +179,23 @@ def framework_floor(clients: int, n: int) -> tuple[float, float]:
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
         s.close()
-        proc = subprocess.Popen([sys.executable, "-m", "uvicorn", "bare_app:app", "--port", str(port), "--log-level",
-                                 "warning", "--http", "httptools", "--loop", "uvloop"], cwd=folder)
+        proc = subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "uvicorn",
+                "bare_app:app",
+                "--port",
+                str(port),
+                "--log-level",
+                "warning",
+                "--http",
+                "httptools",
+                "--loop",
+                "uvloop",
+            ],
+            cwd=folder,
+        )
         url = f"http://127.0.0.1:{port}"
         try:
             for _ in range(300):
@@ -253,19 +276,29 @@ def main() -> None:
     ms = 1e3
     p50 = statistics.median(http) * ms
     print(f"POST /v1/solve, gripper at 50 uN, document inline, {args.requests} sequential requests over loopback")
-    print(f"  p50 {p50:.2f} ms   p99 {percentile(http, 99) * ms:.2f} ms   (target p50 <= {TARGET_P50_MS:g} ms: "
-          f"{'met' if p50 <= TARGET_P50_MS else 'NOT met'})")
+    print(
+        f"  p50 {p50:.2f} ms   p99 {percentile(http, 99) * ms:.2f} ms   (target p50 <= {TARGET_P50_MS:g} ms: "
+        f"{'met' if p50 <= TARGET_P50_MS else 'NOT met'})"
+    )
     print(f"  {args.clients} concurrent clients: {rps:.0f} requests/s ({failed} failed; target >= {TARGET_RPS:g})")
-    print(f"  a request that does no work (404), same clients and server: p50 {empty_p50 * ms:.2f} ms, "
-          f"{args.clients} clients {empty_rps:.0f} requests/s")
-    print(f"  the same 404 from a FastAPI app with nothing in it (no middleware, same uvicorn and clients): "
-          f"p50 {bare_p50 * ms:.2f} ms, {args.clients} clients {bare_rps:.0f} requests/s")
-    print(f"  while a simulation ran into the 10 s solve limit ({long_seconds:.2f} s wall, status {long_status}): "
-          f"{args.clients} clients' p50 {statistics.median(busy) * ms:.2f} ms  p99 {percentile(busy, 99) * ms:.2f} ms  "
-          f"max {max(busy) * ms:.1f} ms over {len(busy)} solves (target p99 < 100 ms)")
+    print(
+        f"  a request that does no work (404), same clients and server: p50 {empty_p50 * ms:.2f} ms, "
+        f"{args.clients} clients {empty_rps:.0f} requests/s"
+    )
+    print(
+        f"  the same 404 from a FastAPI app with nothing in it (no middleware, same uvicorn and clients): "
+        f"p50 {bare_p50 * ms:.2f} ms, {args.clients} clients {bare_rps:.0f} requests/s"
+    )
+    print(
+        f"  while a simulation ran into the 10 s solve limit ({long_seconds:.2f} s wall, status {long_status}): "
+        f"{args.clients} clients' p50 {statistics.median(busy) * ms:.2f} ms  p99 {percentile(busy, 99) * ms:.2f} ms  "
+        f"max {max(busy) * ms:.1f} ms over {len(busy)} solves (target p99 < 100 ms)"
+    )
     print("in-process Python API, same run:")
-    print(f"  parse + compile + solve: p50 {statistics.median(per_call) * ms:.2f} ms; "
-          f"solve of a compiled mechanism: p50 {statistics.median(compiled_once) * ms:.2f} ms")
+    print(
+        f"  parse + compile + solve: p50 {statistics.median(per_call) * ms:.2f} ms; "
+        f"solve of a compiled mechanism: p50 {statistics.median(compiled_once) * ms:.2f} ms"
+    )
     print(f"  HTTP p50 / in-process (parse + compile + solve) p50 = {p50 / (statistics.median(per_call) * ms):.2f}")
 
 

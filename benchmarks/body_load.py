@@ -80,9 +80,11 @@ def report(label: str, times: list[float], counts: list[int]) -> None:
     ms = np.array(times) * 1e3
     p99 = float(np.percentile(ms, 99))
     answers = ", ".join(f"{k}xx: {n}" for k, n in enumerate(counts) if n)
-    print(f"  {label:<34} health p50 {np.percentile(ms, 50):6.1f} ms  p99 {p99:6.1f} ms  max {ms.max():6.1f} ms"
-          f"  ({len(ms)} probes; {'met' if p99 < TARGET_P99_MS else 'NOT met'})" + (f"  bodies answered {answers}"
-                                                                                      if answers else ""))
+    print(
+        f"  {label:<34} health p50 {np.percentile(ms, 50):6.1f} ms  p99 {p99:6.1f} ms  max {ms.max():6.1f} ms"
+        f"  ({len(ms)} probes; {'met' if p99 < TARGET_P99_MS else 'NOT met'})"
+        + (f"  bodies answered {answers}" if answers else "")
+    )
 
 
 def main() -> None:
@@ -91,14 +93,16 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=10.0)
     parser.add_argument("--url", default=None, help="a running server (default: start one)")
     args = parser.parse_args()
-    bodies = {"0.9 MB description": long_description_body(),
-              "0.9 MB of materials": many_materials_body()}
+    bodies = {"0.9 MB description": long_description_body(), "0.9 MB of materials": many_materials_body()}
     with served(args.url) as url:
-        print(f"/v1/health every 20 ms for {args.seconds:g} s; {args.clients} clients posting bodies back to back "
-              f"(target p99 < {TARGET_P99_MS:g} ms)")
+        print(
+            f"/v1/health every 20 ms for {args.seconds:g} s; {args.clients} clients posting bodies back to back "
+            f"(target p99 < {TARGET_P99_MS:g} ms)"
+        )
         report("idle", *under_load(url, None, 0, args.seconds))
         for label, body in bodies.items():
             report(f"{label}, {len(body) / 1e6:.2f} MB", *under_load(url, body, args.clients, args.seconds))
+
 
 if __name__ == "__main__":
     main()

@@ -48,13 +48,15 @@ class Flexmech:
     def __init__(self, mu: float, intervals: int = 8):
         self.mech = compile_mechanism(load_document(example(mu, intervals)))
         self.problem = contact_problem(self.mech.structure)
-        self.fields = path_fields(self.mech, [p.model_dump(exclude_none=True)
-                                              for p in self.mech.document.contacts.path.parameters])
+        self.fields = path_fields(
+            self.mech, [p.model_dump(exclude_none=True) for p in self.mech.document.contacts.path.parameters]
+        )
 
     def sweep(self) -> tuple[float, list]:
         started = time.perf_counter()
-        states = list(follow(self.mech, self.problem, self.fields, list(range(self.fields.states)), None,
-                             ContactOptions()))
+        states = list(
+            follow(self.mech, self.problem, self.fields, list(range(self.fields.states)), None, ContactOptions())
+        )
         return time.perf_counter() - started, states
 
     def state_after(self, x_before: float, x: float):
@@ -84,9 +86,11 @@ def main() -> None:
         state = ours.state_after(BEFORE, STATE)[0]
         truth = reference.force_x(reference.state_after(BEFORE, STATE)[0])
         print(f"\nmu = {mu}: insertion force at x_o = {STATE} mm (16 cubic elements: {truth:.9f} N)")
-        print(f"  flexmech, 8 cubic elements: {ours.force_x(state):.9f} N (rel. error "
-              f"{abs(ours.force_x(state) / truth - 1):.1e}), one state warm {1e3 * statistics.median(times):.2f} ms "
-              f"(median of {repeats}); 101-state insertion {sweep_seconds:.3f} s ({converged} converged)")
+        print(
+            f"  flexmech, 8 cubic elements: {ours.force_x(state):.9f} N (rel. error "
+            f"{abs(ours.force_x(state) / truth - 1):.1e}), one state warm {1e3 * statistics.median(times):.2f} ms "
+            f"(median of {repeats}); 101-state insertion {sweep_seconds:.3f} s ({converged} converged)"
+        )
         if mu == 0.0:
             before = example_one_state(BEFORE, N=400, M=100)
             peer_times, peer = [], None
@@ -95,10 +99,12 @@ def main() -> None:
                 peer_times.append(peer["seconds"])
             peer_force = peer.get("multiplier_force_x", peer["force_x"])
             ratio = statistics.median(peer_times) / statistics.median(times)
-            print(f"  peer, thesis' method (SLSQP, N = 400, M = 100): {peer_force:.6f} N from its multipliers, "
-                  f"{peer['force_x']:.6f} N recovered from the clamp moment (Eq. 6.6) (rel. error "
-                  f"{abs(peer_force / truth - 1):.1e}), {1e3 * statistics.median(peer_times):.0f} ms, "
-                  f"{peer['iterations']} iterations, success {peer['success']}")
+            print(
+                f"  peer, thesis' method (SLSQP, N = 400, M = 100): {peer_force:.6f} N from its multipliers, "
+                f"{peer['force_x']:.6f} N recovered from the clamp moment (Eq. 6.6) (rel. error "
+                f"{abs(peer_force / truth - 1):.1e}), {1e3 * statistics.median(peer_times):.0f} ms, "
+                f"{peer['iterations']} iterations, success {peer['success']}"
+            )
             print(f"  ratio peer / flexmech (one state warm): {ratio:.0f}x")
 
 

@@ -97,14 +97,20 @@ def main() -> None:
             print(f"Exudyn, {n} elements: {exc}")
             theirs.append((float("nan"), float("nan")))
     print(f"Rod of Example I.1, {UNTIL:g} s in steps of 1 ms; bending, shear and axial strain on both sides")
-    print(f"  {'elements':>8s} {'flexmech ms/step':>17s} {'iterations/step':>16s} {'tip y at start, m':>18s} "
-          f"{'Exudyn ms/step':>15s} {'ratio':>7s}")
+    print(
+        f"  {'elements':>8s} {'flexmech ms/step':>17s} {'iterations/step':>16s} {'tip y at start, m':>18s} "
+        f"{'Exudyn ms/step':>15s} {'ratio':>7s}"
+    )
     for n, a, k, y, (b, y_peer) in zip(COUNTS, ours, iterations, heights, theirs):
-        print(f"  {n:8d} {a * 1e3:17.3f} {k:16.2f} {y:18.10f} {b * 1e3:15.3f} {a / b:7.2f}   (Exudyn's tip y at "
-              f"start {y_peer:.10f} m)")
+        print(
+            f"  {n:8d} {a * 1e3:17.3f} {k:16.2f} {y:18.10f} {b * 1e3:15.3f} {a / b:7.2f}   (Exudyn's tip y at "
+            f"start {y_peer:.10f} m)"
+        )
     ran = [n for n, (b, _) in zip(COUNTS, theirs) if np.isfinite(b)]
-    print(f"  fitted exponent (16 to 128 elements): flexmech {exponent(COUNTS, ours):.2f}; "
-          f"Exudyn (16 to {max(ran)}) {exponent(COUNTS, [b for b, _ in theirs]):.2f}")
+    print(
+        f"  fitted exponent (16 to 128 elements): flexmech {exponent(COUNTS, ours):.2f}; "
+        f"Exudyn (16 to {max(ran)}) {exponent(COUNTS, [b for b, _ in theirs]):.2f}"
+    )
     print("  the same structures, new to the process, on an empty graph cache: seconds of")
     print(f"  {'elements':>8s} {'the run report':>15s} {'first statics solve':>20s}")
     for n, r, f in zip(COUNTS, reports, statics):

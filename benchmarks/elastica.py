@@ -85,7 +85,9 @@ def main() -> None:
         return z
 
     z = flexmech_fast()
-    fast_tip = np.asarray(mech.graphs.outputs(z, p)).ravel()[[mech.graphs.output_names.index(n) for n in names]] * to_doc
+    fast_tip = (
+        np.asarray(mech.graphs.outputs(z, p)).ravel()[[mech.graphs.output_names.index(n) for n in names]] * to_doc
+    )
     options = NewtonOptions(tol_residual=1e-12)
     plain = solve_equilibrium(mech, options)
     out = plain.outputs()
@@ -95,16 +97,24 @@ def main() -> None:
     def error(tip):
         return float(np.max(np.abs(tip - exact) / np.abs(exact)))
 
-    rows = [("flexmech fast path (compiled)" if fast.compiled else "flexmech fast path (VM)", flexmech_fast,
-             error(fast_tip)),
-            ("flexmech service.solve_equilibrium", lambda: solve_equilibrium(mech, options, check=False),
-             error(plain_tip)),
-            ("scipy solve_bvp (tol 1e-9)", scipy_peer, error(peer_tip))]
-    times = {label: median_seconds(fn, args.repeats if "scipy" not in label else max(args.repeats // 4, 20))
-             for label, fn, _ in rows}
+    rows = [
+        (
+            "flexmech fast path (compiled)" if fast.compiled else "flexmech fast path (VM)",
+            flexmech_fast,
+            error(fast_tip),
+        ),
+        ("flexmech service.solve_equilibrium", lambda: solve_equilibrium(mech, options, check=False), error(plain_tip)),
+        ("scipy solve_bvp (tol 1e-9)", scipy_peer, error(peer_tip)),
+    ]
+    times = {
+        label: median_seconds(fn, args.repeats if "scipy" not in label else max(args.repeats // 4, 20))
+        for label, fn, _ in rows
+    }
     peer = times[rows[-1][0]]
-    print(f"cantilever EI={EI} N m^2, L={L} m, F={F} N; exact tip x={exact[0]:.12g} m, y={exact[1]:.12g} m, "
-          f"rotation={math.degrees(exact[2]):.12g} deg")
+    print(
+        f"cantilever EI={EI} N m^2, L={L} m, F={F} N; exact tip x={exact[0]:.12g} m, y={exact[1]:.12g} m, "
+        f"rotation={math.degrees(exact[2]):.12g} deg"
+    )
     print(f"{'solver':40s} {'max rel. error':>15s} {'median':>12s} {'peer / this':>12s}")
     for label, _, err in rows:
         print(f"{label:40s} {err:15.2e} {times[label] * 1e3:10.3f} ms {peer / times[label]:11.1f}x")

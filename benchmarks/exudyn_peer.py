@@ -63,20 +63,28 @@ class _Link:
         self.nodes = []
         for i, ref in enumerate(self.ref):
             q0 = [0.0, 0.0, 0.0] if init is None else list(init[i])
-            self.nodes.append(mbs.AddNode(eii.NodeRigidBody2D(
-                referenceCoordinates=list(ref), initialCoordinates=q0)))
+            self.nodes.append(mbs.AddNode(eii.NodeRigidBody2D(referenceCoordinates=list(ref), initialCoordinates=q0)))
         for a, b in zip(self.nodes[:-1], self.nodes[1:]):
-            mbs.AddObject(eii.ObjectBeamGeometricallyExact2D(
-                nodeNumbers=[a, b], length=self.length_e, massPerLength=self.rhoA,
-                crossSectionInertia=self.rhoJ, bendingStiffness=self.EI, axialStiffness=self.EA,
-                shearStiffness=self.GA))
+            mbs.AddObject(
+                eii.ObjectBeamGeometricallyExact2D(
+                    nodeNumbers=[a, b],
+                    length=self.length_e,
+                    massPerLength=self.rhoA,
+                    crossSectionInertia=self.rhoJ,
+                    bendingStiffness=self.EI,
+                    axialStiffness=self.EA,
+                    shearStiffness=self.GA,
+                )
+            )
 
     def add_sensors(self, mbs):
-        kw = {'writeToFile': False, 'storeInternal': True}
-        self.s_q = [mbs.AddSensor(eii.SensorNode(nodeNumber=n, outputVariableType=OV.Coordinates, **kw))
-                    for n in self.nodes]
-        self.s_v = [mbs.AddSensor(eii.SensorNode(nodeNumber=n, outputVariableType=OV.Coordinates_t, **kw))
-                    for n in self.nodes]
+        kw = {"writeToFile": False, "storeInternal": True}
+        self.s_q = [
+            mbs.AddSensor(eii.SensorNode(nodeNumber=n, outputVariableType=OV.Coordinates, **kw)) for n in self.nodes
+        ]
+        self.s_v = [
+            mbs.AddSensor(eii.SensorNode(nodeNumber=n, outputVariableType=OV.Coordinates_t, **kw)) for n in self.nodes
+        ]
 
     def histories(self, mbs):
         """(times, q, v) with q, v of shape (steps, nodes, 3): displacement coordinates and velocities."""
@@ -100,7 +108,7 @@ class _Link:
         g1 = c * rp[..., 0] + s * rp[..., 1] - 1.0
         g2 = -s * rp[..., 0] + c * rp[..., 1]
         k = (th[:, 1:] - th[:, :-1]) / L
-        U = 0.5 * L * np.sum(self.EA * g1 ** 2 + self.GA * g2 ** 2 + self.EI * k ** 2, axis=1)
+        U = 0.5 * L * np.sum(self.EA * g1**2 + self.GA * g2**2 + self.EI * k**2, axis=1)
         return T, U
 
 
@@ -150,15 +158,15 @@ def _solve_dynamic(mbs, settings):
 # ----------------------------------------------------------------------------------------------
 # Example I.1: free vibration of a clamped rod released from a statically bent shape
 
-ROD = {'L': 1.11, 'b': 0.0127, 'h': 0.0032, 'E': 200e9, 'G': 80e9, 'rho': 7850.0}
+ROD = {"L": 1.11, "b": 0.0127, "h": 0.0032, "E": 200e9, "G": 80e9, "rho": 7850.0}
 ROD_TIP_FORCE = (7.919276, 10.998155)
 
 
 def _rod_model(elements, init=None, tip_force=None):
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
-    A, I = ROD['b'] * ROD['h'], ROD['b'] * ROD['h'] ** 3 / 12
-    rod = _Link(mbs, (0.0, 0.0), (ROD['L'], 0.0), elements, ROD['E'], ROD['G'], ROD['rho'], A, I, init=init)
+    A, I = ROD["b"] * ROD["h"], ROD["b"] * ROD["h"] ** 3 / 12
+    rod = _Link(mbs, (0.0, 0.0), (ROD["L"], 0.0), elements, ROD["E"], ROD["G"], ROD["rho"], A, I, init=init)
     _clamp(mbs, rod.nodes[0], (0, 1, 2))
     if tip_force is not None:
         m_tip = mbs.AddMarker(eii.MarkerNodePosition(nodeNumber=rod.nodes[-1]))
@@ -192,17 +200,34 @@ def rod_free_vibration(elements: int = 16, step: float = 1e-3, until: float = 5.
     y = tip[:, 1]
     down = np.nonzero((y[:-1] > 0.0) & (y[1:] <= 0.0))[0]
     crossings = times[down] + (times[down + 1] - times[down]) * y[down] / (y[down] - y[down + 1])
-    period = float(np.mean(np.diff(crossings))) if len(crossings) > 1 else float('nan')
-    return {'times': times, 'tip_x': tip[:, 0], 'tip_y': tip[:, 1], 'kinetic': kinetic,
-            'potential': potential, 'wall_seconds': wall, 'setup_seconds': setup, 'period': period,
-            'energy_drift': float(np.max(np.abs(energy / energy[0] - 1.0)))}
+    period = float(np.mean(np.diff(crossings))) if len(crossings) > 1 else float("nan")
+    return {
+        "times": times,
+        "tip_x": tip[:, 0],
+        "tip_y": tip[:, 1],
+        "kinetic": kinetic,
+        "potential": potential,
+        "wall_seconds": wall,
+        "setup_seconds": setup,
+        "period": period,
+        "energy_drift": float(np.max(np.abs(energy / energy[0] - 1.0))),
+    }
 
 
 # ----------------------------------------------------------------------------------------------
 # Example II.2: flexible four-bar driven by a moment at the crank
 
-FOUR_BAR = {'r': 0.02, 'rho': 7847.0, 'E_stiff': 2.1e11, 'E_coupler': 2.1e8, 'kappa': 0.9,
-            'A': (0.0, 0.0), 'B': (0.5, 0.0), 'C': (0.75, 0.9682458366), 'D': (1.0, 0.0)}
+FOUR_BAR = {
+    "r": 0.02,
+    "rho": 7847.0,
+    "E_stiff": 2.1e11,
+    "E_coupler": 2.1e8,
+    "kappa": 0.9,
+    "A": (0.0, 0.0),
+    "B": (0.5, 0.0),
+    "C": (0.75, 0.9682458366),
+    "D": (1.0, 0.0),
+}
 
 
 def drive_moment(t):
@@ -221,23 +246,26 @@ def four_bar(elements=(8, 16, 16), step: float = 1e-3, until: float = 1.5, rho_i
     """Example II.2 (see module docstring); returns energies, input work, balance error, C and timings."""
     t_setup = time.perf_counter()
     fb = FOUR_BAR
-    A, I = np.pi * fb['r'] ** 2, np.pi * fb['r'] ** 4 / 4
+    A, I = np.pi * fb["r"] ** 2, np.pi * fb["r"] ** 4 / 4
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
     links = []
-    for (p0, p1), n, E in zip(((fb['A'], fb['B']), (fb['B'], fb['C']), (fb['D'], fb['C'])), elements,
-                              (fb['E_stiff'], fb['E_coupler'], fb['E_stiff'])):
-        links.append(_Link(mbs, p0, p1, n, E, E / 2.6, fb['rho'], A, I, kappa=fb['kappa']))
+    for (p0, p1), n, E in zip(
+        ((fb["A"], fb["B"]), (fb["B"], fb["C"]), (fb["D"], fb["C"])),
+        elements,
+        (fb["E_stiff"], fb["E_coupler"], fb["E_stiff"]),
+    ):
+        links.append(_Link(mbs, p0, p1, n, E, E / 2.6, fb["rho"], A, I, kappa=fb["kappa"]))
     crank, coupler, follower = links
-    _clamp(mbs, crank.nodes[0], (0, 1))       # pin A: rotation of the crank free
-    _clamp(mbs, follower.nodes[0], (0, 1))    # pin D
-    _pin(mbs, crank.nodes[-1], coupler.nodes[0])      # B
+    _clamp(mbs, crank.nodes[0], (0, 1))  # pin A: rotation of the crank free
+    _clamp(mbs, follower.nodes[0], (0, 1))  # pin D
+    _pin(mbs, crank.nodes[-1], coupler.nodes[0])  # B
     _pin(mbs, coupler.nodes[-1], follower.nodes[-1])  # C
     m_drive = mbs.AddMarker(eii.MarkerNodeCoordinate(nodeNumber=crank.nodes[0], coordinate=2))
     load = mbs.AddLoad(eii.LoadCoordinate(markerNumber=m_drive, load=0.0))
-    drive = CreateSymbolicUserFunction(mbs, _drive_moment_symbolic, 'loadUserFunction', load)
-    mbs.SetLoadParameter(load, 'loadUserFunction', drive)
-    mbs.variables['drive'] = drive  # keep the expression tree alive during the run
+    drive = CreateSymbolicUserFunction(mbs, _drive_moment_symbolic, "loadUserFunction", load)
+    mbs.SetLoadParameter(load, "loadUserFunction", drive)
+    mbs.variables["drive"] = drive  # keep the expression tree alive during the run
     for link in links:
         link.add_sensors(mbs)
     mbs.Assemble()
@@ -259,25 +287,38 @@ def four_bar(elements=(8, 16, 16), step: float = 1e-3, until: float = 1.5, rho_i
     power = drive_moment(times) * omega_A
     work = np.concatenate(([0.0], np.cumsum(0.5 * (power[1:] + power[:-1]) * np.diff(times))))
     balance = float(np.max(np.abs(kinetic + potential - work)) / np.max(work))
-    return {'times': times, 'kinetic': kinetic, 'potential': potential, 'input_work': work,
-            'balance_error': balance, 'wall_seconds': wall, 'setup_seconds': setup, 'C': C,
-            'omega_A': omega_A, 'crank_angle': crank_angle}
+    return {
+        "times": times,
+        "kinetic": kinetic,
+        "potential": potential,
+        "input_work": work,
+        "balance_error": balance,
+        "wall_seconds": wall,
+        "setup_seconds": setup,
+        "C": C,
+        "omega_A": omega_A,
+        "crank_angle": crank_angle,
+    }
 
 
 if __name__ == "__main__":
     print(f"exudyn {exu.__version__}")
     rod = rod_free_vibration()
-    span = rod['times'][-1] - rod['times'][0]
-    print(f"rod free vibration: tip start ({rod['tip_x'][0]:.4f}, {rod['tip_y'][0]:.4f}) m, "
-          f"period {rod['period']:.4f} s, energy drift {rod['energy_drift']:.2e}, "
-          f"wall {rod['wall_seconds']:.3f} s ({rod['wall_seconds'] / span:.3f} s per simulated s), "
-          f"setup {rod['setup_seconds']:.3f} s")
+    span = rod["times"][-1] - rod["times"][0]
+    print(
+        f"rod free vibration: tip start ({rod['tip_x'][0]:.4f}, {rod['tip_y'][0]:.4f}) m, "
+        f"period {rod['period']:.4f} s, energy drift {rod['energy_drift']:.2e}, "
+        f"wall {rod['wall_seconds']:.3f} s ({rod['wall_seconds'] / span:.3f} s per simulated s), "
+        f"setup {rod['setup_seconds']:.3f} s"
+    )
     fb = four_bar()
-    span = fb['times'][-1] - fb['times'][0]
-    w = fb['omega_A']
+    span = fb["times"][-1] - fb["times"][0]
+    w = fb["omega_A"]
     first = w[np.nonzero(np.abs(w) > 1e-6)[0][0]]
-    back = fb['times'][np.nonzero(w < 0.0)[0][0]] if first > 0 and np.any(w < 0.0) else float('nan')
-    print(f"four-bar: balance error {fb['balance_error']:.2e}, max input work {np.max(fb['input_work']):.3f} J, "
-          f"crank starts {'ccw' if first > 0 else 'cw'}, first turns back at t = {back:.3f} s, "
-          f"wall {fb['wall_seconds']:.3f} s ({fb['wall_seconds'] / span:.3f} s per simulated s), "
-          f"setup {fb['setup_seconds']:.3f} s")
+    back = fb["times"][np.nonzero(w < 0.0)[0][0]] if first > 0 and np.any(w < 0.0) else float("nan")
+    print(
+        f"four-bar: balance error {fb['balance_error']:.2e}, max input work {np.max(fb['input_work']):.3f} J, "
+        f"crank starts {'ccw' if first > 0 else 'cw'}, first turns back at t = {back:.3f} s, "
+        f"wall {fb['wall_seconds']:.3f} s ({fb['wall_seconds'] / span:.3f} s per simulated s), "
+        f"setup {fb['setup_seconds']:.3f} s"
+    )

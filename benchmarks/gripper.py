@@ -48,7 +48,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--model", default="partial_nonlinear", choices=["linear", "partial_nonlinear"])
     parser.add_argument("--repeats", type=int, default=200, help="timed single solves (x10 for the fast path)")
-    parser.add_argument("--sweep-repeats", type=int, default=None, help="timed sweeps (default: repeats / 20, at least 5)")
+    parser.add_argument(
+        "--sweep-repeats", type=int, default=None, help="timed sweeps (default: repeats / 20, at least 5)"
+    )
     args = parser.parse_args()
 
     mech = compile_mechanism(load_document(EXAMPLE), model=args.model).with_values({ACTUATION: 50.0})
@@ -78,9 +80,11 @@ def main() -> None:
     Z_fast, norms, _ = fast.sweep(P)
     Z_peer = peer_sweep()
     print(f"gripper ({args.model}), compiled: {fast.compiled}, closing force {closing:.4f} uN")
-    print(f"max |z_fast - z_api| = {np.abs(z_fast - z_api).max():.2e}, "
-          f"max |z_fast - z_scipy| = {np.abs(z_fast - z_peer).max():.2e} (nondim.), "
-          f"sweep: max |Z_fast - Z_scipy| = {np.abs(Z_fast.T - Z_peer).max():.2e}, max residual {norms.max():.1e}")
+    print(
+        f"max |z_fast - z_api| = {np.abs(z_fast - z_api).max():.2e}, "
+        f"max |z_fast - z_scipy| = {np.abs(z_fast - z_peer).max():.2e} (nondim.), "
+        f"sweep: max |Z_fast - Z_scipy| = {np.abs(Z_fast.T - Z_peer).max():.2e}, max residual {norms.max():.1e}"
+    )
 
     r = args.repeats
     rs = args.sweep_repeats if args.sweep_repeats is not None else max(5, r // 20)
@@ -95,8 +99,10 @@ def main() -> None:
         "scipy root (hybr, FD)": median_seconds(peer_sweep, rs),
     }
     peer_name = "scipy root (hybr, FD)"
-    for title, table, unit, scale in (("(a) warm single solve", single, "us", 1e6),
-                                      ("(b) 100-step opening-closing sweep", sweeps, "ms", 1e3)):
+    for title, table, unit, scale in (
+        ("(a) warm single solve", single, "us", 1e6),
+        ("(b) 100-step opening-closing sweep", sweeps, "ms", 1e3),
+    ):
         print(f"\n{title}")
         for name, seconds in table.items():
             ratio = table[peer_name] / seconds

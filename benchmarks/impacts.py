@@ -63,8 +63,11 @@ def document(name: str, **simulate) -> dict:
     if simulate.get("scheme") == "moreau":
         pair = doc["contacts"]["pairs"]["conjugate"]
         pair["normal"] = {"law": "restitution", "restitution": pair["normal"]["restitution"]}
-        pair["friction"] = {"law": "coulomb", "adherence": pair["friction"]["adherence"],
-                            "sliding": pair["friction"]["sliding"]}
+        pair["friction"] = {
+            "law": "coulomb",
+            "adherence": pair["friction"]["adherence"],
+            "sliding": pair["friction"]["sliding"],
+        }
     return doc
 
 
@@ -121,7 +124,9 @@ def energy_at(doc: dict, q: list[float], v: list[float], t: float) -> float:
     spec = SimulateSpec.model_validate(doc["simulate"])
     model = model_of(parsed, spec)
     values = np.array(model.book.values)
-    energy = ca.Function("energy", [model.q, model.v, model.t, model.p], [model.kinetic + model.elastic + model.gravity])
+    energy = ca.Function(
+        "energy", [model.q, model.v, model.t, model.p], [model.kinetic + model.elastic + model.gravity]
+    )
     return float(energy(q, v, t, model.book.parameter_vector(values)))
 
 
@@ -129,10 +134,12 @@ def si_state(report: dict, row: int) -> tuple[list[float], list[float]]:
     """(q, v) in SI of a report's kept state (its lengths in m, angles in deg)."""
     assert report["units"]["length"] == "m" and report["units"]["angle"] == "deg"
     scale = [1.0, 1.0, math.pi / 180]
-    return ([report["coordinates"][f"hinge.{c}"][row] * f for c, f in zip("xy", scale)] +
-            [report["coordinates"]["hinge.theta"][row] * scale[2]],
-            [report["velocities"][f"hinge.{c}"][row] * f for c, f in zip("xy", scale)] +
-            [report["velocities"]["hinge.theta"][row] * scale[2]])
+    return (
+        [report["coordinates"][f"hinge.{c}"][row] * f for c, f in zip("xy", scale)]
+        + [report["coordinates"]["hinge.theta"][row] * scale[2]],
+        [report["velocities"][f"hinge.{c}"][row] * f for c, f in zip("xy", scale)]
+        + [report["velocities"]["hinge.theta"][row] * scale[2]],
+    )
 
 
 def peer_model(doc: dict, mu: float) -> dict:
@@ -144,23 +151,37 @@ def peer_model(doc: dict, mu: float) -> dict:
         EI = doc["materials"][flexure["material"]]["E"] * 1e9 * section["b"] * section["h"] ** 3 / 12
         K = np.array(stiffness(flexure["radius"], math.radians(flexure["arc_angle"]), EI)).tolist()
         end = math.radians(flexure["start_angle"] + flexure["arc_angle"])
-        arm = [flexure["center"][0] + flexure["radius"] * math.cos(end),
-               flexure["center"][1] + flexure["radius"] * math.sin(end)]  # C1 - G1, G1 at the origin
+        arm = [
+            flexure["center"][0] + flexure["radius"] * math.cos(end),
+            flexure["center"][1] + flexure["radius"] * math.sin(end),
+        ]  # C1 - G1, G1 at the origin
         frame = end + math.pi / 2
     body, contacts = doc["bodies"]["hinge"], doc["contacts"]
     start = doc["simulate"]["initial"]["hinge"]
-    return {"mass": body["mass"], "inertia": body["inertia"], "gravity": doc["gravity"], "flexure_K": K,
-            "flexure_frame_angle": frame, "flexure_arm": arm, "pin_radius": contacts["sites"]["pin"]["radius"],
-            "hole_radius": contacts["objects"]["hole"]["radius"],
-            "restitution": contacts["pairs"]["conjugate"]["normal"]["restitution"], "mu": mu,
-            "step": doc["simulate"]["step"], "until": doc["simulate"]["until"],
-            "q0": start["displacement"][:2] + [math.radians(start["displacement"][2])], "v0": [0.0, 0.0, 0.0],
-            "at": [0.1, 0.5, doc["simulate"]["until"]]}
+    return {
+        "mass": body["mass"],
+        "inertia": body["inertia"],
+        "gravity": doc["gravity"],
+        "flexure_K": K,
+        "flexure_frame_angle": frame,
+        "flexure_arm": arm,
+        "pin_radius": contacts["sites"]["pin"]["radius"],
+        "hole_radius": contacts["objects"]["hole"]["radius"],
+        "restitution": contacts["pairs"]["conjugate"]["normal"]["restitution"],
+        "mu": mu,
+        "step": doc["simulate"]["step"],
+        "until": doc["simulate"]["until"],
+        "q0": start["displacement"][:2] + [math.radians(start["displacement"][2])],
+        "v0": [0.0, 0.0, 0.0],
+        "at": [0.1, 0.5, doc["simulate"]["until"]],
+    }
 
 
 def peer(model: dict) -> dict | None:
-    if not Path(PEER[0]).exists() or subprocess.run([PEER[0], "-c", "import siconos.kernel"],
-                                                    capture_output=True, check=False).returncode:
+    if (
+        not Path(PEER[0]).exists()
+        or subprocess.run([PEER[0], "-c", "import siconos.kernel"], capture_output=True, check=False).returncode
+    ):
         return None
     done = subprocess.run(PEER, input=json.dumps(model), capture_output=True, text=True, check=False, timeout=3600)
     if done.returncode:
@@ -195,10 +216,12 @@ def scipy_peer(doc: dict) -> dict:
 
 def print_side(label: str, figures: dict) -> None:
     report = figures["report"]
-    print(f"  {label}: cold {figures['cold'] / UNTIL:.3f} s/s (interpreted) + compile {figures['compile']:.2f} s; "
-          f"warm {figures['warm'] / UNTIL:.4f} s/s end to end (stepping {report['seconds'] / UNTIL:.4f}); "
-          f"{report['steps']} steps, {len(report['times'])} states kept, JSON {figures['bytes'] / 1e6:.2f} MB, "
-          f"balance error {report['energy_balance_error']:.1e}")
+    print(
+        f"  {label}: cold {figures['cold'] / UNTIL:.3f} s/s (interpreted) + compile {figures['compile']:.2f} s; "
+        f"warm {figures['warm'] / UNTIL:.4f} s/s end to end (stepping {report['seconds'] / UNTIL:.4f}); "
+        f"{report['steps']} steps, {len(report['times'])} states kept, JSON {figures['bytes'] / 1e6:.2f} MB, "
+        f"balance error {report['energy_balance_error']:.1e}"
+    )
 
 
 def main() -> None:
@@ -223,24 +246,34 @@ def main() -> None:
     if other is None:
         print("  Siconos: not installed (apt-get install python3-siconos)")
     else:
-        print(f"  Siconos 4.4 Moreau-Jean h = 1e-5, mu = 0.055: whole run {other['total'] / UNTIL:.3f} s/s, stepping "
-              f"{other['seconds'] / UNTIL:.3f} s/s ({other['steps']} steps, {other['seconds'] / other['steps'] * 1e6:.1f} "
-              "us per step)")
-        print(f"  Siconos' whole run / flexmech's warm whole run: {other['total'] / moreau['warm']:.0f}x; / flexmech's "
-              f"cold run: {other['total'] / moreau['cold']:.1f}x")
+        print(
+            f"  Siconos 4.4 Moreau-Jean h = 1e-5, mu = 0.055: whole run {other['total'] / UNTIL:.3f} s/s, stepping "
+            f"{other['seconds'] / UNTIL:.3f} s/s ({other['steps']} steps, {other['seconds'] / other['steps'] * 1e6:.1f} "
+            "us per step)"
+        )
+        print(
+            f"  Siconos' whole run / flexmech's warm whole run: {other['total'] / moreau['warm']:.0f}x; / flexmech's "
+            f"cold run: {other['total'] / moreau['cold']:.1f}x"
+        )
         ours = [round(hit["time"], 5) for hit in mine["impacts"][:3]]
         theirs = [round(hit["time"], 5) for hit in other["impacts"][:3]]
         print(f"  first impacts (s), flexmech {ours}, Siconos {theirs}")
         for t in (0.5,):
-            print(f"  q at {t:g} s: flexmech {np.round(state_at(mine, t), 6).tolist()} (m, m, deg), Siconos "
-                  f"{np.round(np.array(other['states'][repr(t)]) * [1, 1, 180 / math.pi], 6).tolist()}")
-        print(f"  energy at 1 s (J): flexmech {energy_at(same_mu, *si_state(mine, -1), UNTIL):.6f}, Siconos "
-              f"{energy_at(same_mu, other['final'], other['final_velocity'], UNTIL):.6f}")
+            print(
+                f"  q at {t:g} s: flexmech {np.round(state_at(mine, t), 6).tolist()} (m, m, deg), Siconos "
+                f"{np.round(np.array(other['states'][repr(t)]) * [1, 1, 180 / math.pi], 6).tolist()}"
+            )
+        print(
+            f"  energy at 1 s (J): flexmech {energy_at(same_mu, *si_state(mine, -1), UNTIL):.6f}, Siconos "
+            f"{energy_at(same_mu, other['final'], other['final_velocity'], UNTIL):.6f}"
+        )
     print_side("flexmech event-driven LN + Ambrosio, tol 1e-10", event)
     scipy = scipy_peer(event_doc)
     mine = event["report"]
-    print(f"  scipy solve_ivp RK45 + events, the same model and tolerances: {scipy['total'] / UNTIL:.3f} s/s "
-          f"({scipy['steps']} steps)")
+    print(
+        f"  scipy solve_ivp RK45 + events, the same model and tolerances: {scipy['total'] / UNTIL:.3f} s/s "
+        f"({scipy['steps']} steps)"
+    )
     print(f"  scipy's / flexmech's warm whole run: {scipy['total'] / event['warm']:.0f}x")
     ours = [round(hit["time"], 6) for hit in mine["impacts"][:4]]
     print(f"  first contact onsets (s), flexmech {ours}, scipy {[round(t, 6) for t, _ in scipy['onsets'][:4]]}")
@@ -248,26 +281,36 @@ def main() -> None:
     for t in (0.5, UNTIL):  # linear between each side's own steps
         theirs = [np.interp(t, scipy["times"], scipy["states"][:, k]) * f for k, f in enumerate([1, 1, 180 / math.pi])]
         ours = [np.interp(t, mine["times"], mine["coordinates"][f"hinge.{c}"]) for c in ("x", "y", "theta")]
-        print(f"  q at {t:g} s: flexmech {np.round(ours, 7).tolist()}, scipy {np.round(theirs, 7).tolist()} (m, m, deg)")
+        print(
+            f"  q at {t:g} s: flexmech {np.round(ours, 7).tolist()}, scipy {np.round(theirs, 7).tolist()} (m, m, deg)"
+        )
     final = scipy["states"][-1]
-    print(f"  energy at 1 s (J): flexmech {energy_at(event_doc, *si_state(mine, -1), UNTIL):.6f}, scipy "
-          f"{energy_at(event_doc, final[:n].tolist(), final[n:2 * n].tolist(), UNTIL):.6f}")
+    print(
+        f"  energy at 1 s (J): flexmech {energy_at(event_doc, *si_state(mine, -1), UNTIL):.6f}, scipy "
+        f"{energy_at(event_doc, final[:n].tolist(), final[n : 2 * n].tolist(), UNTIL):.6f}"
+    )
     paper = coulomb(document("csfh.json", until=0.5, scheme="moreau", step=1e-5), 0.11, 0.055)
     reference = run(paper, 1)[0]
     print("scenario 6.3, Moreau h = 1e-5, f_a = 0.11, f_d = 0.055:")
-    print("  first impacts at " + ", ".join(f"{hit['time']:.5f} s ({hit['impact_speed']:.4f} m/s)"
-                                              for hit in reference["impacts"][:3]))
+    print(
+        "  first impacts at "
+        + ", ".join(f"{hit['time']:.5f} s ({hit['impact_speed']:.4f} m/s)" for hit in reference["impacts"][:3])
+    )
     print(f"  q at 0.5 s: {np.round(state_at(reference, 0.5), 7).tolist()} (m, m, deg)")
     central = run(document("csfh_central_impact.json", until=1.0, scheme="moreau", step=1e-5), 1)[0]
     first = central["impacts"][0]
-    print(f"scenario 6.1, Moreau h = 1e-5: first impact at {first['time']:.5f} s, impulse {first['impulse']:.6f} N s, "
-          f"rebound ratio {first['rebound_ratio']:.9f}; y at 1 s: {state_at(central, 1.0)[1]:.7f} m")
+    print(
+        f"scenario 6.1, Moreau h = 1e-5: first impact at {first['time']:.5f} s, impulse {first['impulse']:.6f} N s, "
+        f"rebound ratio {first['rebound_ratio']:.9f}; y at 1 s: {state_at(central, 1.0)[1]:.7f} m"
+    )
     external = hertz_stiffness("spheres", 210e9, 0.3, 210e9, 0.3, 0.18, 0.20, "external", None)
     conformal = hertz_stiffness("spheres", 100e9, 0.3, 100e9, 0.3, 0.18, 0.20, "conformal", None)
     cylinders = hertz_stiffness("cylinders", 210e9, 0.3, 210e9, 0.3, 0.18, 0.20, "external", 0.025)
-    print(f"Table 2: K spheres {external / 1e9:.3f}e9 N/m^1.5 (E = 210 GPa, R1 R2 / (R1 + R2)); K cylinders "
-          f"{cylinders / 1e9:.4f}e9 N/m (E = 210 GPa, L = b); pin in hole, Table 1's E = 100 GPa, R1 R2 / (R2 - R1): "
-          f"{conformal / 1e9:.2f}e9 N/m^1.5")
+    print(
+        f"Table 2: K spheres {external / 1e9:.3f}e9 N/m^1.5 (E = 210 GPa, R1 R2 / (R1 + R2)); K cylinders "
+        f"{cylinders / 1e9:.4f}e9 N/m (E = 210 GPa, L = b); pin in hole, Table 1's E = 100 GPa, R1 R2 / (R2 - R1): "
+        f"{conformal / 1e9:.2f}e9 N/m^1.5"
+    )
 
 
 if __name__ == "__main__":

@@ -47,8 +47,10 @@ def main() -> None:
     from service.kernels.needs import builds_of, window_builds
 
     compiler = Compiler()
-    print(f"  {'example':34s} {'builds':>8s} {'C kB':>8s} {'largest C kB':>13s} {'window kB':>10s} "
-          f"{'compile s':>10s} {'peak MiB':>9s}")
+    print(
+        f"  {'example':34s} {'builds':>8s} {'C kB':>8s} {'largest C kB':>13s} {'window kB':>10s} "
+        f"{'compile s':>10s} {'peak MiB':>9s}"
+    )
     worst = [0, 0.0, 0]
     for path in sorted(EXAMPLES.glob("*.json")):
         mech = compile_mechanism(load_document(path))
@@ -61,11 +63,15 @@ def main() -> None:
             totals.compile(build, compiler)
         note = f" ({totals.shared} shared)" if totals.shared else ""
         window = f"{totals.window / 1e3:.0f}" if totals.window else "-"
-        print(f"  {path.name:34s} {totals.count:8d} {totals.size / 1e3:8.0f} {totals.largest / 1e3:13.0f} "
-              f"{window:>10s} {totals.seconds:10.1f} {totals.peak / 2**20:9.0f}{note}")
+        print(
+            f"  {path.name:34s} {totals.count:8d} {totals.size / 1e3:8.0f} {totals.largest / 1e3:13.0f} "
+            f"{window:>10s} {totals.seconds:10.1f} {totals.peak / 2**20:9.0f}{note}"
+        )
         worst = [max(worst[0], totals.size), max(worst[1], totals.seconds), max(worst[2], totals.peak)]
-    print(f"  largest per example: {worst[0] / 1e6:.2f} MB of C, {worst[1]:.1f} s of compiling, "
-          f"{worst[2] / 2**20:.0f} MiB peak")
+    print(
+        f"  largest per example: {worst[0] / 1e6:.2f} MB of C, {worst[1]:.1f} s of compiling, "
+        f"{worst[2] / 2**20:.0f} MiB peak"
+    )
 
 
 if __name__ == "__main__":

@@ -93,8 +93,10 @@ def main() -> None:
             cells = []
             for make in (lambda k: renamed(doc, k), lambda k: recounted(doc, k), lambda k: extended(doc, name, k)):
                 runs = [timed(client, variant) for variant in (make(k) for k in (1, 2, 3)) if variant]
-                cells.append(" ".join(f"{s:.2f}" for s, _ in runs) + (
-                    f" ({','.join(sorted({st for _, st in runs}))})" if runs else "n/a"))
+                cells.append(
+                    " ".join(f"{s:.2f}" for s, _ in runs)
+                    + (f" ({','.join(sorted({st for _, st in runs}))})" if runs else "n/a")
+                )
             print(f"{name:16s} {first[0]:8.2f} s   " + "  ".join(f"{c:>22s}" for c in cells))
 
 

@@ -29,30 +29,61 @@ class NumpyGripperResidual:
 
     def set_parameters(self, p: np.ndarray) -> None:
         s, idx = self.structure, self.structure.index
-        self.ref = [(np.array([p[idx[f"/bodies/{b}/position/0"]], p[idx[f"/bodies/{b}/position/1"]]]),
-                     p[idx[f"/bodies/{b}/angle"]]) for b in s.bodies]
+        self.ref = [
+            (
+                np.array([p[idx[f"/bodies/{b}/position/0"]], p[idx[f"/bodies/{b}/position/1"]]]),
+                p[idx[f"/bodies/{b}/angle"]],
+            )
+            for b in s.bodies
+        ]
         self.flexures = []
         for f in s.of_family("curved_beam"):
             base = f"/elements/{f.name}"
             r, th = p[idx[f"{base}/radius"]], p[idx[f"{base}/arc_angle"]]
             a0 = p[idx[f"{base}/start_angle"]] - (th if f.reversed else 0.0)
             O = np.array([p[idx[f"{base}/center/0"]], p[idx[f"{base}/center/1"]]])
-            EI = p[idx[f"/materials/{f.material}/E"]] * p[idx[f"/sections/{f.section}/b"]] * p[idx[f"/sections/{f.section}/h"]] ** 3 / 12
+            EI = (
+                p[idx[f"/materials/{f.material}/E"]]
+                * p[idx[f"/sections/{f.section}/b"]]
+                * p[idx[f"/sections/{f.section}/h"]] ** 3
+                / 12
+            )
             c, sn = np.cos(th), np.sin(th)
-            C = np.array([
-                [r**3 / 4 * (6 * th + np.sin(2 * th) - 8 * sn), r**3 / 2 * (c * c - 2 * c + 1), r**2 * (th - sn)],
-                [r**3 / 2 * (c * c - 2 * c + 1), r**3 / 4 * (2 * th - np.sin(2 * th)), r**2 * (1 - c)],
-                [r**2 * (th - sn), r**2 * (1 - c), r * th],
-            ]) / EI
+            C = (
+                np.array(
+                    [
+                        [
+                            r**3 / 4 * (6 * th + np.sin(2 * th) - 8 * sn),
+                            r**3 / 2 * (c * c - 2 * c + 1),
+                            r**2 * (th - sn),
+                        ],
+                        [r**3 / 2 * (c * c - 2 * c + 1), r**3 / 4 * (2 * th - np.sin(2 * th)), r**2 * (1 - c)],
+                        [r**2 * (th - sn), r**2 * (1 - c), r * th],
+                    ]
+                )
+                / EI
+            )
             Ps = O + r * np.array([np.cos(a0), np.sin(a0)])
             Pe = O + r * np.array([np.cos(a0 + th), np.sin(a0 + th)])
             i, j = f.start_body, f.end_body
             s_i = _rot(self.ref[i][1]).T @ (Ps - self.ref[i][0])
             s_j = _rot(self.ref[j][1]).T @ (Pe - self.ref[j][0])
             arm0 = _rot(th).T @ np.array([r * sn, r * (1 - c)])
-            self.flexures.append(dict(i=i, j=j, K=np.linalg.inv(C), s_i=s_i, s_j=s_j, p_hat=Pe - Ps,
-                                      b_s=a0 + np.pi / 2, b_e=a0 + np.pi / 2 + th, A_f=_rot(th), arm0=arm0,
-                                      nonlinear=f.model == "partial_nonlinear"))
+            self.flexures.append(
+                dict(
+                    i=i,
+                    j=j,
+                    K=np.linalg.inv(C),
+                    s_i=s_i,
+                    s_j=s_j,
+                    p_hat=Pe - Ps,
+                    b_s=a0 + np.pi / 2,
+                    b_e=a0 + np.pi / 2 + th,
+                    A_f=_rot(th),
+                    arm0=arm0,
+                    nonlinear=f.model == "partial_nonlinear",
+                )
+            )
         self.loads = []
         for load in s.loads:
             base = f"/loads/{load.name}"

@@ -55,13 +55,18 @@ class ShootingPeer:
         def rhs(u, s, Hf, V):
             theta, M, _, _ = s
             eta_prime = c1 * 2 * math.pi * math.cos(2 * math.pi * u)
-            return [eta_prime + L * M / EI, L * (-V * math.cos(theta) + Hf * math.sin(theta)),
-                    L * math.cos(theta), L * math.sin(theta)]
+            return [
+                eta_prime + L * M / EI,
+                L * (-V * math.cos(theta) + Hf * math.sin(theta)),
+                L * math.cos(theta),
+                L * math.sin(theta),
+            ]
 
         def mismatch(unknowns):
             Hf, V, M0 = unknowns
-            end = solve_ivp(rhs, (0, 1), [0.0, M0, 0.0, 0.0], args=(Hf, V), method="DOP853",
-                            rtol=1e-10, atol=1e-12).y[:, -1]
+            end = solve_ivp(rhs, (0, 1), [0.0, M0, 0.0, 0.0], args=(Hf, V), method="DOP853", rtol=1e-10, atol=1e-12).y[
+                :, -1
+            ]
             return [end[0], end[2] - x_target, end[3] - DY]
 
         self.guess = fsolve(mismatch, self.guess, xtol=1e-12)
@@ -69,8 +74,14 @@ class ShootingPeer:
 
     def optimize(self, start: np.ndarray):
         constraint = {"type": "eq", "fun": lambda d: self.undeformed_tip_x(*d) - X_TIP}
-        return minimize(self.tip_force, start, method="SLSQP", bounds=[(X_TIP, L_MAX), (0, 2)],
-                        constraints=[constraint], options={"ftol": 1e-10, "maxiter": 200})
+        return minimize(
+            self.tip_force,
+            start,
+            method="SLSQP",
+            bounds=[(X_TIP, L_MAX), (0, 2)],
+            constraints=[constraint],
+            options={"ftol": 1e-10, "maxiter": 200},
+        )
 
 
 def main() -> None:
@@ -100,17 +111,25 @@ def main() -> None:
 
     print("1-term grasper shape optimization (seed 002 Table 5.8: c1 = 1.3426, L on its bound 0.085 m)")
     print(f"{'solver':<46} {'L [m]':>10} {'c1':>10} {'F [N]':>10} {'median [s]':>11}")
-    print(f"{'flexmech (IPOPT, exact derivatives), warm':<46} {ours['/elements/link/length']:>10.6f} "
-          f"{ours['/elements/link/shape/coefficients/0']:>10.6f} {result.best.objective:>10.6f} "
-          f"{statistics.median(warm):>11.4f}")
+    print(
+        f"{'flexmech (IPOPT, exact derivatives), warm':<46} {ours['/elements/link/length']:>10.6f} "
+        f"{ours['/elements/link/shape/coefficients/0']:>10.6f} {result.best.objective:>10.6f} "
+        f"{statistics.median(warm):>11.4f}"
+    )
     print(f"{'flexmech, cold (graphs and NLP built)':<46} {'':>10} {'':>10} {'':>10} {cold:>11.4f}")
-    print(f"{'scipy SLSQP, FD gradients over shooting':<46} {peer.x[0]:>10.6f} {peer.x[1]:>10.6f} "
-          f"{peer.fun:>10.6f} {statistics.median(peer_times):>11.4f}")
+    print(
+        f"{'scipy SLSQP, FD gradients over shooting':<46} {peer.x[0]:>10.6f} {peer.x[1]:>10.6f} "
+        f"{peer.fun:>10.6f} {statistics.median(peer_times):>11.4f}"
+    )
     print(f"SLSQP: {peer.nfev} objective evaluations, {peer.nit} iterations, success {peer.success}")
-    print(f"speed-up, flexmech warm vs SLSQP: {statistics.median(peer_times) / statistics.median(warm):.1f}x; "
-          f"cold vs SLSQP: {statistics.median(peer_times) / cold:.2f}x")
-    print(f"difference in c1: {abs(peer.x[1] - ours['/elements/link/shape/coefficients/0']):.2e}, "
-          f"in F: {abs(peer.fun - result.best.objective) / result.best.objective:.2e} relative")
+    print(
+        f"speed-up, flexmech warm vs SLSQP: {statistics.median(peer_times) / statistics.median(warm):.1f}x; "
+        f"cold vs SLSQP: {statistics.median(peer_times) / cold:.2f}x"
+    )
+    print(
+        f"difference in c1: {abs(peer.x[1] - ours['/elements/link/shape/coefficients/0']):.2e}, "
+        f"in F: {abs(peer.fun - result.best.objective) / result.best.objective:.2e} relative"
+    )
 
 
 if __name__ == "__main__":

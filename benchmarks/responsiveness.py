@@ -28,8 +28,10 @@ def main() -> None:
             with httpx.Client(base_url=url, timeout=60) as client:
                 assert client.post("/v1/solve", json={"example": "gripper"}).status_code == 200
                 started = time.perf_counter()
-                job = client.post("/v1/simulations", json={"example": "four_bar_dynamics",
-                                                           "simulate": {"until": 1.0, "compiled": True}}).json()
+                job = client.post(
+                    "/v1/simulations",
+                    json={"example": "four_bar_dynamics", "simulate": {"until": 1.0, "compiled": True}},
+                ).json()
                 times, first_progress, built, seen_busy = [], None, None, False
                 while time.perf_counter() - started < 60:
                     t = time.perf_counter()
@@ -52,13 +54,21 @@ def main() -> None:
             proc.wait(30)
     times.sort()
     p99 = statistics.quantiles(times, n=100)[98]
-    print(f"small /v1/solve during a four-bar simulation job and its kernels' build: {len(times)} requests, "
-          f"p50 {statistics.median(times) * 1e3:.1f} ms, p99 {p99 * 1e3:.1f} ms, max {times[-1] * 1e3:.1f} ms")
+    print(
+        f"small /v1/solve during a four-bar simulation job and its kernels' build: {len(times)} requests, "
+        f"p50 {statistics.median(times) * 1e3:.1f} ms, p99 {p99 * 1e3:.1f} ms, max {times[-1] * 1e3:.1f} ms"
+    )
     if first_progress is None:
         raise SystemExit(f"the job showed no progress in {wall:.0f} s: {status}")
-    print(f"  job: first progress after {first_progress:.2f} s, {status['status']} "
-          f"({status['progress']['done']}/{status['progress']['total']} windows) after {wall:.1f} s; "
-          + (f"builder idle after {built:.1f} s" if built is not None else f"the builder still busy after 60 s: {builder}"))
+    print(
+        f"  job: first progress after {first_progress:.2f} s, {status['status']} "
+        f"({status['progress']['done']}/{status['progress']['total']} windows) after {wall:.1f} s; "
+        + (
+            f"builder idle after {built:.1f} s"
+            if built is not None
+            else f"the builder still busy after 60 s: {builder}"
+        )
+    )
 
 
 if __name__ == "__main__":

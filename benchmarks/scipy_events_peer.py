@@ -27,14 +27,18 @@ class ScipyEvents:
         rhs = rhs_function(model)
         y = ca.SX.sym("y", 2 * n + len(WORKS))
         t, flags = ca.SX.sym("t"), ca.SX.sym("flags", 4 * P)
-        contact, b0, b1, speed = (flags[k * P:(k + 1) * P] for k in range(4))
-        ydot, switching, _, _, rate, v_T, _ = rhs(y[:n], y[n:2 * n], t, contact, b0, b1, speed, model.p)
+        contact, b0, b1, speed = (flags[k * P : (k + 1) * P] for k in range(4))
+        ydot, switching, _, _, rate, v_T, _ = rhs(y[:n], y[n : 2 * n], t, contact, b0, b1, speed, model.p)
         self._f = ca.Function("f", [t, y, flags, model.p], [ydot])
-        self._g = ca.Function("g", [t, y, flags, model.p], [violations(model, switching, contact, b0, b1), rate,
-                                                             ca.fabs(v_T)])
+        self._g = ca.Function(
+            "g", [t, y, flags, model.p], [violations(model, switching, contact, b0, b1), rate, ca.fabs(v_T)]
+        )
         self.p = p
-        levels = ca.Function("levels", [model.p], [ca.vertcat(*[pair.v0 for pair in model.pairs]),
-                                                   ca.vertcat(*[pair.v1 for pair in model.pairs])])
+        levels = ca.Function(
+            "levels",
+            [model.p],
+            [ca.vertcat(*[pair.v0 for pair in model.pairs]), ca.vertcat(*[pair.v1 for pair in model.pairs])],
+        )
         self.v0, self.v1 = (np.asarray(x).ravel() for x in levels(p))  # Ambrosio's slip speeds
 
     def run(self, q0, v0, until: float, rtol: float, atol: np.ndarray, max_step: float) -> dict:
@@ -48,13 +52,16 @@ class ScipyEvents:
         times, states = [0.0], [y.copy()]
         began = time.perf_counter()
         while t < until * (1 - 1e-15):
+
             def fun(s, state, flags=flags):
                 return np.asarray(self._f(s, state, flags, self.p)).ravel()
 
             events = []
             for k in range(3 * P):
+
                 def event(s, state, k=k, flags=flags):
                     return float(self._g(s, state, flags, self.p)[0][k])
+
                 event.terminal, event.direction = True, 1
                 events.append(event)
             sol = solve_ivp(fun, (t, until), y, method="RK45", rtol=rtol, atol=tol, max_step=max_step, events=events)
@@ -82,5 +89,10 @@ class ScipyEvents:
                 else:
                     slot = (1 if kind == 1 else 2) * P + pair
                     flags[slot] = 1.0 - flags[slot]
-        return {"times": np.array(times), "states": np.array(states), "onsets": onsets, "steps": steps,
-                "seconds": time.perf_counter() - began}
+        return {
+            "times": np.array(times),
+            "states": np.array(states),
+            "onsets": onsets,
+            "steps": steps,
+            "seconds": time.perf_counter() - began,
+        }

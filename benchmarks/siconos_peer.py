@@ -98,8 +98,15 @@ def main():
             normal_before = H[0] @ v_before
             if normal_before < 0 and (not impacts or impacts[-1]["step"] != k - 1):
                 v_after = np.array(ds.velocity())
-                impacts.append({"time": (k - 1) * h, "impulse": float(lam[0]), "impact_speed": float(-normal_before),
-                                "exit_speed": float(H[0] @ v_after), "step": k})
+                impacts.append(
+                    {
+                        "time": (k - 1) * h,
+                        "impulse": float(lam[0]),
+                        "impact_speed": float(-normal_before),
+                        "exit_speed": float(H[0] @ v_after),
+                        "step": k,
+                    }
+                )
             elif impacts and impacts[-1]["step"] == k - 1:
                 impacts[-1]["step"] = k
         steps.nextStep()
@@ -107,9 +114,18 @@ def main():
         while wanted and t >= wanted[0] - 1e-12:
             states[repr(wanted.pop(0))] = list(np.array(ds.q()))
     seconds = time.perf_counter() - began
-    json.dump({"seconds": seconds, "total": time.perf_counter() - started, "steps": k, "impacts": impacts,
-               "states": states, "final": list(np.array(ds.q())), "final_velocity": list(np.array(ds.velocity()))},
-              sys.stdout)
+    json.dump(
+        {
+            "seconds": seconds,
+            "total": time.perf_counter() - started,
+            "steps": k,
+            "impacts": impacts,
+            "states": states,
+            "final": list(np.array(ds.q())),
+            "final_velocity": list(np.array(ds.velocity())),
+        },
+        sys.stdout,
+    )
 
 
 if __name__ == "__main__":

@@ -57,8 +57,14 @@ print(json.dumps({"imports": imported - started, "first": first - imported, "sta
 
 def probe(tree: Path, document: Path, cache: Path, repeats: int = 0) -> dict:
     env = {**os.environ, "PYTHONPATH": str(tree), "FLEXMECH_CACHE_DIR": str(cache)}
-    done = subprocess.run([sys.executable, "-c", PROBE, str(document), str(repeats)], cwd=tree, env=env,
-                          capture_output=True, text=True, timeout=900)
+    done = subprocess.run(
+        [sys.executable, "-c", PROBE, str(document), str(repeats)],
+        cwd=tree,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
     if done.returncode != 0:
         return {"error": done.stderr.strip().splitlines()[-1][:200] if done.stderr.strip() else "failed"}
     return json.loads(done.stdout.strip().splitlines()[-1])
@@ -67,8 +73,7 @@ def probe(tree: Path, document: Path, cache: Path, repeats: int = 0) -> dict:
 @contextmanager
 def worktree(rev: str):
     folder = Path(tempfile.mkdtemp(prefix="flexmech-before-"))
-    subprocess.run(["git", "worktree", "add", "--detach", str(folder), rev], cwd=ROOT, check=True,
-                   capture_output=True)
+    subprocess.run(["git", "worktree", "add", "--detach", str(folder), rev], cwd=ROOT, check=True, capture_output=True)
     try:
         yield folder
     finally:
@@ -135,11 +140,16 @@ def main() -> None:
     if row:
         (_, before_warm), (_, now_warm) = row.values()
         if before_warm and now_warm:
-            print(f"\n{REPEATED}: warm first solve now {now_warm * 1e3:.0f} ms, before {before_warm * 1e3:.0f} ms "
-                  f"(ratio {before_warm / now_warm:.1f}x)")
+            print(
+                f"\n{REPEATED}: warm first solve now {now_warm * 1e3:.0f} ms, before {before_warm * 1e3:.0f} ms "
+                f"(ratio {before_warm / now_warm:.1f}x)"
+            )
     (before_label, before_time), (_, now_time) = repeated.items()
-    print(f"repeated warm solve of {REPEATED}, both cores loaded by two other processes, median of {args.repeats}: "
-          f"before {before_time * 1e3:.2f} ms, now {now_time * 1e3:.2f} ms (ratio {before_time / now_time:.1f}x)")
+    print(
+        f"repeated warm solve of {REPEATED}, both cores loaded by two other processes, median of {args.repeats}: "
+        f"before {before_time * 1e3:.2f} ms, now {now_time * 1e3:.2f} ms (ratio {before_time / now_time:.1f}x)"
+    )
+
 
 if __name__ == "__main__":
     main()

@@ -30,14 +30,14 @@ import time
 import numpy as np
 from scipy.optimize import minimize
 
-E_MODULUS = 2.6e9                   # Pa
-THICKNESS = 3.2e-3                  # m, in-plane (bending) thickness w
-WIDTH = 9.5e-3                      # m, out-of-plane width b
-LENGTH = 57e-3                      # m
-JAW_NOSE = np.array([19e-3, 1.6e-3])        # a, tip-section frame
-JAW_CREST = np.array([0.0, 10.4598e-3])     # b, tip-section frame
-FIXTURE_RADIUS = 8.9e-3             # m
-FIXTURE_Y = 10.5e-3                 # m
+E_MODULUS = 2.6e9  # Pa
+THICKNESS = 3.2e-3  # m, in-plane (bending) thickness w
+WIDTH = 9.5e-3  # m, out-of-plane width b
+LENGTH = 57e-3  # m
+JAW_NOSE = np.array([19e-3, 1.6e-3])  # a, tip-section frame
+JAW_CREST = np.array([0.0, 10.4598e-3])  # b, tip-section frame
+FIXTURE_RADIUS = 8.9e-3  # m
+FIXTURE_Y = 10.5e-3  # m
 BENDING_STIFFNESS = E_MODULUS * WIDTH * THICKNESS**3 / 12.0
 
 
@@ -52,11 +52,11 @@ class ExampleOneProblem:
         self.N, self.h = N, LENGTH / N
         self.centre = np.array([x_o, FIXTURE_Y])
         self.scale = 1.0 / FIXTURE_RADIUS**2
-        self.ei_mid = np.full(N, BENDING_STIFFNESS)          # EI_{i+1/2}, uniform finger
-        self.weights = np.ones(N + 1)                        # trapezoidal weights (Eq. 6.15)
+        self.ei_mid = np.full(N, BENDING_STIFFNESS)  # EI_{i+1/2}, uniform finger
+        self.weights = np.ones(N + 1)  # trapezoidal weights (Eq. 6.15)
         self.weights[[0, -1]] = 0.5
         t = np.linspace(0.0, 1.0, M)[:, None]
-        self.face = JAW_NOSE + t * (JAW_CREST - JAW_NOSE)    # M points of face ab, jaw frame
+        self.face = JAW_NOSE + t * (JAW_CREST - JAW_NOSE)  # M points of face ab, jaw frame
 
     def full(self, z: np.ndarray) -> np.ndarray:
         """Nodal angles psi_0..psi_N with the clamp condition psi_0 = 0 (Eq. 6.14)."""
@@ -78,7 +78,7 @@ class ExampleOneProblem:
         wc, ws = self.weights * np.cos(psi), self.weights * np.sin(psi)
         tip = self.h * np.array([wc.sum(), ws.sum()])
         c, s = np.cos(psi[-1]), np.sin(psi[-1])
-        rotated = self.face @ np.array([[c, s], [-s, c]])    # rows R(+psi_N) p
+        rotated = self.face @ np.array([[c, s], [-s, c]])  # rows R(+psi_N) p
         return tip, rotated, tip + rotated, (wc, ws)
 
     def constraints(self, z: np.ndarray) -> np.ndarray:
@@ -90,10 +90,10 @@ class ExampleOneProblem:
     def constraints_jacobian(self, z: np.ndarray) -> np.ndarray:
         """d g_j / d psi_k (M x N): tip translation for all k, jaw rotation for k = N."""
         _, rotated, pts, (wc, ws) = self.face_points(z)
-        d = 2.0 * self.scale * (pts - self.centre)           # grad of scaled g at each point
-        dtip_x, dtip_y = -self.h * ws[1:], self.h * wc[1:]   # dX_N/dpsi_k, dY_N/dpsi_k
+        d = 2.0 * self.scale * (pts - self.centre)  # grad of scaled g at each point
+        dtip_x, dtip_y = -self.h * ws[1:], self.h * wc[1:]  # dX_N/dpsi_k, dY_N/dpsi_k
         jac = np.outer(d[:, 0], dtip_x) + np.outer(d[:, 1], dtip_y)
-        jac[:, -1] += d[:, 1] * rotated[:, 0] - d[:, 0] * rotated[:, 1]   # d(R p)/dpsi_N = J R p
+        jac[:, -1] += d[:, 1] * rotated[:, 0] - d[:, 0] * rotated[:, 1]  # d(R p)/dpsi_N = J R p
         return jac
 
 
@@ -106,7 +106,7 @@ def recover_force(problem: ExampleOneProblem, z: np.ndarray, contact: int):
     _, _, pts, _ = problem.face_points(z)
     moment = problem.ei_mid[0] * z[0] / problem.h
     p_c = pts[contact]
-    normal = p_c - problem.centre                            # parallel to grad g, Eq. 6.8
+    normal = p_c - problem.centre  # parallel to grad g, Eq. 6.8
     normal /= np.linalg.norm(normal)
     f = moment / (p_c[0] * normal[1] - p_c[1] * normal[0])
     return f * normal, moment, p_c
@@ -124,8 +124,7 @@ def _start_vector(psi_start: np.ndarray | None, N: int) -> np.ndarray:
     raise ValueError(f"psi_start has {psi_start.size} entries, expected {N + 1} or {N}")
 
 
-def example_one_state(x_o_mm: float, N: int = 400, M: int = 100,
-                      psi_start: np.ndarray | None = None) -> dict:
+def example_one_state(x_o_mm: float, N: int = 400, M: int = 100, psi_start: np.ndarray | None = None) -> dict:
     """Solve one frictionless contact state of Example I with the fixture centre at x_o_mm.
 
     Returns the contact force on the finger recovered by Eqs. 6.6/6.8 ("force_x",
@@ -138,19 +137,31 @@ def example_one_state(x_o_mm: float, N: int = 400, M: int = 100,
     z0 = _start_vector(psi_start, N)
     cons = [{"type": "ineq", "fun": problem.constraints, "jac": problem.constraints_jacobian}]
     t0 = time.perf_counter()
-    res = minimize(problem.energy, z0, jac=problem.energy_gradient, method="SLSQP",
-                   constraints=cons, options={"maxiter": 500, "ftol": 1e-12})
+    res = minimize(
+        problem.energy,
+        z0,
+        jac=problem.energy_gradient,
+        method="SLSQP",
+        constraints=cons,
+        options={"maxiter": 500, "ftol": 1e-12},
+    )
     seconds = time.perf_counter() - t0
     z = res.x
     lam = getattr(res, "multipliers", None)
     lam = None if lam is None else np.asarray(lam, dtype=float).ravel()
-    contact = int(np.argmax(lam)) if lam is not None and lam.size == M \
-        else int(np.argmin(problem.constraints(z)))
+    contact = int(np.argmax(lam)) if lam is not None and lam.size == M else int(np.argmin(problem.constraints(z)))
     force, moment, p_c = recover_force(problem, z, contact)
-    out = {"force_x": float(force[0]), "force_y": float(force[1]),
-           "clamp_moment": float(moment), "contact_point": (float(p_c[0]), float(p_c[1])),
-           "seconds": seconds, "iterations": int(res.nit), "success": bool(res.success),
-           "message": str(res.message), "psi": problem.full(z)}
+    out = {
+        "force_x": float(force[0]),
+        "force_y": float(force[1]),
+        "clamp_moment": float(moment),
+        "contact_point": (float(p_c[0]), float(p_c[1])),
+        "seconds": seconds,
+        "iterations": int(res.nit),
+        "success": bool(res.success),
+        "message": str(res.message),
+        "psi": problem.full(z),
+    }
     if lam is not None and lam.size == M:
         _, _, pts, _ = problem.face_points(z)
         f_mult = (lam * 2.0 * problem.scale)[:, None] * (pts - problem.centre)
@@ -162,13 +173,17 @@ def main() -> None:
     """Example I at x_o = 67.81 mm (the state of the thesis' Fig. 6.5) at two resolutions."""
     for N, M in ((100, 100), (400, 100)):
         r = example_one_state(67.81, N=N, M=M)
-        line = (f"N={N:4d} M={M:4d}  force_x={r['force_x']:+.5f} N  force_y={r['force_y']:+.5f} N"
-                f"  seconds={r['seconds']:.4f}  iterations={r['iterations']}")
+        line = (
+            f"N={N:4d} M={M:4d}  force_x={r['force_x']:+.5f} N  force_y={r['force_y']:+.5f} N"
+            f"  seconds={r['seconds']:.4f}  iterations={r['iterations']}"
+        )
         if "multiplier_force_x" in r:
             line += f"  (multipliers: {r['multiplier_force_x']:+.5f}, {r['multiplier_force_y']:+.5f} N)"
         print(line)
-        print(f"    contact point = ({r['contact_point'][0] * 1e3:.3f}, {r['contact_point'][1] * 1e3:.3f}) mm"
-              f"  clamp moment = {r['clamp_moment']:+.5f} N m  success={r['success']} ({r['message']})")
+        print(
+            f"    contact point = ({r['contact_point'][0] * 1e3:.3f}, {r['contact_point'][1] * 1e3:.3f}) mm"
+            f"  clamp moment = {r['clamp_moment']:+.5f} N m  success={r['success']} ({r['message']})"
+        )
 
 
 if __name__ == "__main__":

@@ -53,13 +53,25 @@ def material_curves(material: str, path: Path, steps: int, opening: float) -> li
             continue
         result = sweep(mech, ACTUATION, np.linspace(opening, target.value, steps + 1))
         unit = mech.doc_unit("force")
-        curves.append(Curve(material, model, target.value, result.outputs["end_effector.x"],
-                            result.outputs["end_effector.y"], result.values, mech.doc_unit("length"), unit))
+        curves.append(
+            Curve(
+                material,
+                model,
+                target.value,
+                result.outputs["end_effector.x"],
+                result.outputs["end_effector.y"],
+                result.values,
+                mech.doc_unit("length"),
+                unit,
+            )
+        )
         print(f"{material:8s} {model:18s} {target.value:11.4f} {unit}  {target.equilibrium.iterations:10d}")
     exact = [c.closing_force for c in curves if c.model == "exact"]
     for curve in curves if exact else []:
         if curve.model != "exact":
-            print(f"{'':8s} {curve.model:18s} differs from exact by {100 * (curve.closing_force / exact[0] - 1):+.2f} %")
+            print(
+                f"{'':8s} {curve.model:18s} differs from exact by {100 * (curve.closing_force / exact[0] - 1):+.2f} %"
+            )
     return curves
 
 
@@ -76,11 +88,14 @@ def models_figure(curves: dict[str, list[Curve]]):
         for c in lines:
             color, style = STYLES.get(c.model, ("C3", "-"))
             trajectory.plot(c.x, c.y, style, color=color, label=c.model)
-            force.plot(c.x, c.force, style, color=color, label=f"{c.model}: closes at {c.closing_force:.4g} {c.force_unit}")
+            force.plot(
+                c.x, c.force, style, color=color, label=f"{c.model}: closes at {c.closing_force:.4g} {c.force_unit}"
+            )
         unit, force_unit = (lines[0].length_unit, lines[0].force_unit) if lines else ("", "")
-        for ax, title, ylabel in ((trajectory, f"{material}: end-effector trajectory", f"end_effector.y [{unit}]"),
-                                  (force, f"{material}: actuation force against end-effector x",
-                                   f"actuation force [{force_unit}]")):
+        for ax, title, ylabel in (
+            (trajectory, f"{material}: end-effector trajectory", f"end_effector.y [{unit}]"),
+            (force, f"{material}: actuation force against end-effector x", f"actuation force [{force_unit}]"),
+        ):
             ax.set_title(title, fontsize=10)
             ax.set(xlabel=f"end_effector.x [{unit}]", ylabel=ylabel)
             ax.grid(True, linewidth=0.4, alpha=0.5)

@@ -29,17 +29,43 @@ HERE = Path(__file__).resolve().parent
 SCENARIOS = {"6.1": "csfh_central_impact.json", "6.2": "csfh_asymmetric_impact.json", "6.3": "csfh.json"}
 AMBROSIO = {"law": "ambrosio", "sliding": 0.055, "adherence": 0.11, "v0": 1e-4, "v1": 1e-2}
 MODELS = {
-    "LNA K spheres": ({"law": "lankarani_nikravesh", "restitution": 0.9, "exponent": 1.5,
-                       "stiffness": {"contact": "spheres", "radius": "external", "materials": ["table2", "table2"]}},
-                      AMBROSIO, {}),
-    "LNA K cylinders": ({"law": "lankarani_nikravesh", "restitution": 0.9, "exponent": 1.5,
-                         "stiffness": {"contact": "cylinders", "length": 0.025, "materials": ["table2", "table2"]}},
-                        AMBROSIO, {}),
-    "LNA-ESDU": ({"law": "lna_esdu", "restitution": 0.9, "exponent": 1.5, "length": 0.025, "materials": ["body", "body"],
-                  "stiffness": {"contact": "cylinders", "length": 0.025, "materials": ["body", "body"]}},
-                 AMBROSIO, {}),
-    "Moreau": ({"law": "restitution", "restitution": 0.9},
-               {"law": "coulomb", "adherence": 0.11, "sliding": 0.055}, {"scheme": "moreau", "step": 1e-5}),
+    "LNA K spheres": (
+        {
+            "law": "lankarani_nikravesh",
+            "restitution": 0.9,
+            "exponent": 1.5,
+            "stiffness": {"contact": "spheres", "radius": "external", "materials": ["table2", "table2"]},
+        },
+        AMBROSIO,
+        {},
+    ),
+    "LNA K cylinders": (
+        {
+            "law": "lankarani_nikravesh",
+            "restitution": 0.9,
+            "exponent": 1.5,
+            "stiffness": {"contact": "cylinders", "length": 0.025, "materials": ["table2", "table2"]},
+        },
+        AMBROSIO,
+        {},
+    ),
+    "LNA-ESDU": (
+        {
+            "law": "lna_esdu",
+            "restitution": 0.9,
+            "exponent": 1.5,
+            "length": 0.025,
+            "materials": ["body", "body"],
+            "stiffness": {"contact": "cylinders", "length": 0.025, "materials": ["body", "body"]},
+        },
+        AMBROSIO,
+        {},
+    ),
+    "Moreau": (
+        {"law": "restitution", "restitution": 0.9},
+        {"law": "coulomb", "adherence": 0.11, "sliding": 0.055},
+        {"scheme": "moreau", "step": 1e-5},
+    ),
 }
 
 
@@ -67,9 +93,11 @@ def main() -> None:
             reports.append(report)
             first = report["impacts"][0] if report["impacts"] else None
             peak = max(report["contacts"]["conjugate"]["normal_force"])
-            print(f"{scenario} {model:16s} {report['status']}: {report['steps']} steps in {report['seconds']:.3f} s; "
-                  + (f"first impact {first['time']:.6f} s at {first['impact_speed']:.6f} m/s; " if first else "")
-                  + f"peak F_N {peak:.4g} N; balance error {report['energy_balance_error']:.1e}")
+            print(
+                f"{scenario} {model:16s} {report['status']}: {report['steps']} steps in {report['seconds']:.3f} s; "
+                + (f"first impact {first['time']:.6f} s at {first['impact_speed']:.6f} m/s; " if first else "")
+                + f"peak F_N {peak:.4g} N; balance error {report['energy_balance_error']:.1e}"
+            )
         figure = out / f"csfh_{scenario}.png"
         plot_impacts(reports, figure, labels=list(MODELS))
         print(f"wrote {figure}")

@@ -89,11 +89,17 @@ def _body_wrenches(ctx: AssemblyContext) -> ca.Function:
     wrenches bodies apply to the elements that own no unknowns (their force follows from
     the body displacements alone)."""
     d_all = ca.SX.sym("d", 3 * ctx.n_bodies)
-    d = [d_all[3 * b:3 * b + 3] for b in range(ctx.n_bodies)]
+    d = [d_all[3 * b : 3 * b + 3] for b in range(ctx.n_bodies)]
     direct = [FAMILIES.of(t).contribute(ctx, t, d, ca.SX(0, 1)) for t in ctx.structure.elements if t.unknowns == 0]
     held = held_wrenches(ctx, direct)
-    return ca.Function("body_wrenches", [d_all, ctx.p], [ca.vertcat(*held), ca.vertcat(*applied_wrenches(ctx, d))],
-                       ["d", "p"], ["elastic", "applied"], dict(cse=True))
+    return ca.Function(
+        "body_wrenches",
+        [d_all, ctx.p],
+        [ca.vertcat(*held), ca.vertcat(*applied_wrenches(ctx, d))],
+        ["d", "p"],
+        ["elastic", "applied"],
+        dict(cse=True),
+    )
 
 
 class Graphs:

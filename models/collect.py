@@ -31,8 +31,9 @@ MAX_NAME = 64
 DOCUMENT_UNITS = (("length", "length"), ("force", "force"), ("stress", "stress"), ("angle", "angle"), ("mass", "mass"))
 
 
-def collect(doc: MechanismDocument, model_override: str | None,
-            grounded: bool = True) -> tuple[Structure, np.ndarray, list[str]]:
+def collect(
+    doc: MechanismDocument, model_override: str | None, grounded: bool = True
+) -> tuple[Structure, np.ndarray, list[str]]:
     """The structure, its parameter values (SI) and notes on inputs that are not used;
     `grounded` False leaves out the check that every body reaches ground (for a part of a
     document whose other parts hold the bodies: an impact model's, models.impacts.coordinates)."""
@@ -64,18 +65,28 @@ def collect(doc: MechanismDocument, model_override: str | None,
     loads = _collect_loads(c)
     points, reactions = _collect_outputs(c, prescribed)
     structure = Structure(
-        bodies=tuple(c.bodies), parameters=tuple(c.parameters), prescribed=tuple(tuple(row) for row in prescribed),
-        elements=tuple(elements), loads=tuple(loads), points=tuple(points), reactions=tuple(reactions),
-        masses=tuple(masses), gravity=doc.gravity is not None, contacts=contacts,
-        length_unit_si=unit_factor(document_unit(doc.units, "length"), "length", "/units/length"))
+        bodies=tuple(c.bodies),
+        parameters=tuple(c.parameters),
+        prescribed=tuple(tuple(row) for row in prescribed),
+        elements=tuple(elements),
+        loads=tuple(loads),
+        points=tuple(points),
+        reactions=tuple(reactions),
+        masses=tuple(masses),
+        gravity=doc.gravity is not None,
+        contacts=contacts,
+        length_unit_si=unit_factor(document_unit(doc.units, "length"), "length", "/units/length"),
+    )
     return structure, np.array(c.values, dtype=float), c.notes
 
 
 def _check_names(doc: MechanismDocument) -> None:
     """Names become parts of JSON pointers (/elements/<name>/radius): no '/' or '~' (RFC 6901
     would escape them, and every pointer would need it), no blanks, at most MAX_NAME characters."""
-    named = [((collection,), getattr(doc, collection))
-             for collection in ("materials", "sections", "bodies", "elements", "loads", "outputs")]
+    named = [
+        ((collection,), getattr(doc, collection))
+        for collection in ("materials", "sections", "bodies", "elements", "loads", "outputs")
+    ]
     if doc.contacts is not None:
         named += [(("contacts", part), getattr(doc.contacts, part)) for part in ("objects", "sites", "pairs")]
     for where, names in named:
@@ -123,11 +134,15 @@ def _collect_supports(c: Collector) -> list[list[str | None]]:
                 continue
             pointer = f"/loads/{name}/{field_name}"
             if prescribed[b][coord]:
-                raise MechanismError(pointer, f"{c.bodies[b]}.{COORDINATES[coord]} is already prescribed by {prescribed[b][coord]}")
+                raise MechanismError(
+                    pointer, f"{c.bodies[b]}.{COORDINATES[coord]} is already prescribed by {prescribed[b][coord]}"
+                )
             c.add(pointer, value, kind)
             prescribed[b][coord] = pointer
     if not any(all(v is not None for v in row) for row in prescribed):
-        raise MechanismError("/bodies", 'no fixed body: mark at least one body "fixed": true (or prescribe all its motions)')
+        raise MechanismError(
+            "/bodies", 'no fixed body: mark at least one body "fixed": true (or prescribe all its motions)'
+        )
     return prescribed
 
 
@@ -141,12 +156,16 @@ def _collect_materials(c: Collector) -> None:
             elif material.nu is not None:
                 c.add(f"/materials/{name}/nu", material.nu, "dimensionless", "poisson")
             else:
-                raise MechanismError(f"/materials/{name}/G", "a link with shear needs the shear modulus G or Poisson's ratio nu")
+                raise MechanismError(
+                    f"/materials/{name}/G", "a link with shear needs the shear modulus G or Poisson's ratio nu"
+                )
         if needs["density"]:
             c.add(f"/materials/{name}/density", material.density, "density", "nonnegative")
         elif material.density is not None:
-            c.notes.append(f"material '{name}': its density is not used: the elements made of it "
-                           "(curved beams with a constant-stiffness model) are massless")
+            c.notes.append(
+                f"material '{name}': its density is not used: the elements made of it "
+                "(curved beams with a constant-stiffness model) are massless"
+            )
 
 
 def _reduce_pinned_joints(c: Collector, prescribed) -> None:
@@ -159,8 +178,11 @@ def _reduce_pinned_joints(c: Collector, prescribed) -> None:
             if load.body != name:
                 continue
             if isinstance(load, MomentLoad) or (isinstance(load, ForceLoad) and (load.at or load.offset)):
-                raise MechanismError(f"/loads/{load_name}", f"joint '{name}' is held only by pins, so it "
-                                     "cannot take a moment: apply forces at the joint itself")
+                raise MechanismError(
+                    f"/loads/{load_name}",
+                    f"joint '{name}' is held only by pins, so it "
+                    "cannot take a moment: apply forces at the joint itself",
+                )
         prescribed[b][2] = ""
 
 
@@ -173,8 +195,14 @@ def _check_grounded(c: Collector, prescribed) -> None:
     links = [(el.from_, el.to) for el in c.doc.elements.values()]
     contacts = c.doc.contacts
     if contacts is not None:
-        ends = [(getattr(contacts.sites.get(pair.site), "body", None), getattr(contacts.objects.get(pair.object), "body", None))
-                for pair in contacts.pairs.values() if pair.site in contacts.sites and pair.object in contacts.objects]
+        ends = [
+            (
+                getattr(contacts.sites.get(pair.site), "body", None),
+                getattr(contacts.objects.get(pair.object), "body", None),
+            )
+            for pair in contacts.pairs.values()
+            if pair.site in contacts.sites and pair.object in contacts.objects
+        ]
         # a site without a body is on a link (its ends' bodies are the link's business), never ground
         links += [(a, b) for a, b in ends if a is not None and a in neighbours and b in neighbours and a != b]
     for a, b in links:
@@ -190,8 +218,11 @@ def _check_grounded(c: Collector, prescribed) -> None:
     for name in c.bodies:
         if name not in seen:
             what = "joint" if c.doc.bodies[name].joint else "body"
-            raise MechanismError(f"/bodies/{name}", f"floating {what} '{name}' has no path to a fixed body "
-                                 "through elements or impact pairs: connect it to ground by a link or a flexure, or fix it")
+            raise MechanismError(
+                f"/bodies/{name}",
+                f"floating {what} '{name}' has no path to a fixed body "
+                "through elements or impact pairs: connect it to ground by a link or a flexure, or fix it",
+            )
 
 
 def _collect_loads(c: Collector) -> list[LoadTopology]:
@@ -220,6 +251,9 @@ def _collect_outputs(c: Collector, prescribed) -> tuple[list[PointTopology], lis
             points.append(PointTopology(name, b, c.locate(base, out)))
         elif isinstance(out, ReactionOutput):
             if all(v is None for v in prescribed[b]):
-                raise MechanismError(f"{base}/body", f"body '{out.body}' is neither fixed nor has a prescribed motion, so it has no reaction")
+                raise MechanismError(
+                    f"{base}/body",
+                    f"body '{out.body}' is neither fixed nor has a prescribed motion, so it has no reaction",
+                )
             reactions.append((name, b))
     return points, reactions

@@ -20,8 +20,9 @@ def _in_range(value: float) -> bool:
     return value == 0 or SMALLEST <= abs(value) <= LARGEST
 
 
-def check_value(pointer: str, si: float, check: str | None, unit: str = "", factor: float = 1.0,
-                given: object = None) -> None:
+def check_value(
+    pointer: str, si: float, check: str | None, unit: str = "", factor: float = 1.0, given: object = None
+) -> None:
     """A numeric field's physical range. `si` in SI; `unit` and `factor` (SI per unit) say how
     the document states it, for the message; `given` is the number as written, when it was one."""
     shown = f"{si:g} (SI)" if factor == 1.0 or not unit else f"{si / factor:g} {unit}"
@@ -30,8 +31,9 @@ def check_value(pointer: str, si: float, check: str | None, unit: str = "", fact
         if not math.isfinite(given) or not _in_range(float(given)):
             si = float("inf")
     if not math.isfinite(si) or not _in_range(si):
-        raise MechanismError(pointer, f"{shown} is out of range: magnitudes from {SMALLEST:g} to {LARGEST:g} "
-                             "in SI units (or zero)")
+        raise MechanismError(
+            pointer, f"{shown} is out of range: magnitudes from {SMALLEST:g} to {LARGEST:g} in SI units (or zero)"
+        )
     if check == "positive" and si <= 0:
         raise MechanismError(pointer, f"must be positive, got {shown}")
     if check == "nonnegative" and si < 0:
@@ -87,13 +89,17 @@ class Collector:
 
     def use_material(self, name: str, pointer: str, shear: bool = False) -> None:
         if name not in self.doc.materials:
-            raise MechanismError(pointer, f"unknown material '{name}' (materials: {', '.join(self.doc.materials) or 'none'})")
+            raise MechanismError(
+                pointer, f"unknown material '{name}' (materials: {', '.join(self.doc.materials) or 'none'})"
+            )
         needs = self.materials.setdefault(name, {"shear": False, "density": False})
         needs["shear"] |= shear
 
     def use_section(self, name: str, pointer: str, needs_area: bool = False):
         if name not in self.doc.sections:
-            raise MechanismError(pointer, f"unknown section '{name}' (sections: {', '.join(self.doc.sections) or 'none'})")
+            raise MechanismError(
+                pointer, f"unknown section '{name}' (sections: {', '.join(self.doc.sections) or 'none'})"
+            )
         self.sections[name] = self.sections.get(name, False) or needs_area
         return self.doc.sections[name]
 

@@ -19,9 +19,10 @@ from pydantic import Field, ValidationError, field_validator, model_validator
 
 from models.contact.schema import OBJECT_TYPES, SITE_TYPES, Contacts
 from models.elements import FAMILIES
-from models.elements.link import SHAPE_TYPES
+from models.elements.link_schema import SHAPE_TYPES
 from models.errors import MechanismError, pointer_of
 from models.fields import MAX_QUANTITY_CHARS, Number, StrictModel, Vec2
+from models.optimize_spec import OptimizeSpec
 from models.reading import parse_json, parse_yaml
 from models.sections import Section
 from models.simulation_spec import SimulateSpec
@@ -41,21 +42,28 @@ class Material(StrictModel):
     E: Number = Field(description="Young's modulus")
     nu: Number | None = Field(default=None, description="Poisson's ratio")
     G: Number | None = Field(default=None, description="shear modulus (default E / (2 (1 + nu)))")
-    density: Number | None = Field(default=None, description="mass per volume: links made of it have mass "
-                                   "(and weight under gravity)")
+    density: Number | None = Field(
+        default=None, description="mass per volume: links made of it have mass (and weight under gravity)"
+    )
 
 
 class Body(StrictModel):
     fixed: bool = False
-    joint: bool = Field(default=False, description="a zero-size joint of a link network (Lan 2005): "
-                        "if every link attached to it is pinned, it has no rotation")
+    joint: bool = Field(
+        default=False,
+        description="a zero-size joint of a link network (Lan 2005): "
+        "if every link attached to it is pinned, it has no rotation",
+    )
     position: Vec2 = Field(description="reference point (e.g. mass centre), undeformed, global frame")
     angle: Number = 0.0
-    mass: Number | None = Field(default=None, description="in the document's mass unit: the mass matrix, "
-                                "and a weight at the mass centre under gravity")
+    mass: Number | None = Field(
+        default=None,
+        description="in the document's mass unit: the mass matrix, and a weight at the mass centre under gravity",
+    )
     inertia: Number | None = Field(default=None, description="about the reference point")
-    center_of_mass: Vec2 | None = Field(default=None, description="from the reference point, body axes "
-                                        "(default: the reference point)")
+    center_of_mass: Vec2 | None = Field(
+        default=None, description="from the reference point, body axes (default: the reference point)"
+    )
 
 
 def _element_union() -> Any:
@@ -156,59 +164,6 @@ class InverseSpec(StrictModel):
     unknown_loads: list[str] = []
 
 
-class DesignVariable(StrictModel):
-    """A numeric field of the document that the optimizer may change, in document units."""
-
-    path: str = Field(pattern=r"^/", max_length=256, description="JSON pointer of a numeric field")
-    lower: float | None = Field(default=None, description="lower bound, document units")
-    upper: float | None = Field(default=None, description="upper bound, document units")
-    scale: float | None = Field(default=None, gt=0, description="typical size (default: the start value)")
-
-
-class OptimizationObjective(StrictModel):
-    output: str = Field(description="an output name, as /v1/solve reports them (e.g. reactions.tip.Fy)")
-    case: str | None = Field(default=None, description="load case (required with more than one)")
-    sense: Literal["minimize", "maximize"] = "minimize"
-
-
-class OptimizationConstraint(StrictModel):
-    """lower <= output <= upper, or output = equals (document units)."""
-
-    output: str
-    case: str | None = None
-    lower: float | None = None
-    upper: float | None = None
-    equals: float | None = None
-
-    @model_validator(mode="after")
-    def _some_bound(self):
-        if self.equals is not None and (self.lower is not None or self.upper is not None):
-            raise ValueError("give equals, or lower and/or upper, not both")
-        if self.equals is None and self.lower is None and self.upper is None:
-            raise ValueError("give equals, lower or upper")
-        return self
-
-
-class LoadCase(StrictModel):
-    """The document with some numeric fields changed (document units)."""
-
-    overrides: dict[str, Number] = {}
-
-
-class OptimizeSpec(StrictModel):
-    """A design problem (Cammarata et al. 2022 Sec. 5.2, Lan 2005 Sec. 5.6): one NLP whose unknowns are the
-    design variables and the equilibrium state of every load case."""
-
-    design: list[DesignVariable] = Field(min_length=1, max_length=64)
-    objective: OptimizationObjective
-    constraints: list[OptimizationConstraint] = Field(default=[], max_length=256)
-    cases: dict[str, LoadCase] = Field(default={}, description="load cases (default: the document as it is)")
-    starts: int = Field(default=1, ge=1, le=64, description="multi-start: the document's values, then random points in the bounds")
-    seed: int = Field(default=0, ge=0, description="random seed of the extra starts")
-    max_iterations: int = Field(default=500, ge=1, le=100_000)
-    tolerance: float = Field(default=1e-9, gt=0, le=1e-2, description="IPOPT tol (scaled problem)")
-
-
 class MechanismDocument(StrictModel):
     schema_version: Literal[1] = 1
     name: str = "mechanism"
@@ -217,13 +172,16 @@ class MechanismDocument(StrictModel):
     materials: dict[str, Material] = {}
     sections: dict[str, Section] = {}
     bodies: dict[str, Body]
-    gravity: Vec2 | None = Field(default=None, description="acceleration of gravity (length unit / s^2): "
-                                 "body masses and links with a density weigh")
+    gravity: Vec2 | None = Field(
+        default=None,
+        description="acceleration of gravity (length unit / s^2): body masses and links with a density weigh",
+    )
     elements: dict[str, Element] = {}
     loads: dict[str, Load] = {}
     outputs: dict[str, Output] = {}
-    contacts: Contacts | None = Field(default=None, description="rigid objects, contact sites and pairs (the "
-                                      "contact analysis)")
+    contacts: Contacts | None = Field(
+        default=None, description="rigid objects, contact sites and pairs (the contact analysis)"
+    )
     impacts: Any = Field(default=None, description="replaced by `contacts`: `flexmech upgrade DOC` converts it")
     sweep: SweepSpec | None = None
     inverse: InverseSpec | None = None
@@ -251,9 +209,11 @@ def _families_changed() -> None:
 
 FAMILIES.on_change(_families_changed)
 
-UPGRADE_HINT = ("the `impacts` section is now part of `contacts` (its surfaces are sites and objects, its pairs "
-                "contact pairs with their laws): convert the document with `flexmech upgrade DOC` (or POST it to "
-                "/v1/documents/upgrade)")
+UPGRADE_HINT = (
+    "the `impacts` section is now part of `contacts` (its surfaces are sites and objects, its pairs "
+    "contact pairs with their laws): convert the document with `flexmech upgrade DOC` (or POST it to "
+    "/v1/documents/upgrade)"
+)
 
 # pydantic's error types when a value is not a number (a Number is a float or a quantity string)
 _NOT_A_NUMBER = {"float_type", "string_type", "float_parsing", "finite_number", "string_too_long", "bool_type"}
@@ -274,8 +234,10 @@ def _raise_first(exc: ValidationError) -> None:
     elif first["type"] in ("union_tag_invalid", "union_tag_not_found"):
         location, message = _tag_problem(first, location)
     elif all(e["type"] in _NOT_A_NUMBER for e in here):
-        message = (f"expected a number (or a quantity string like '25 um', at most {MAX_QUANTITY_CHARS} "
-                   f"characters), got {_shown(first.get('input'))}")
+        message = (
+            f"expected a number (or a quantity string like '25 um', at most {MAX_QUANTITY_CHARS} "
+            f"characters), got {_shown(first.get('input'))}"
+        )
     others = len({_field_location(e["loc"]) for e in errors} - {location, _field_location(first["loc"])})
     if others:
         message += f" (and {others} more field{'s' if others > 1 else ''} with problems)"
@@ -330,7 +292,7 @@ def _models_in(annotation: Any) -> list[type]:
 
 
 def unknown_field_message(key: str) -> str:
-    """"unknown field 'radious' (did you mean 'radius'?)"; a field that other kinds of object
+    """ "unknown field 'radious' (did you mean 'radius'?)"; a field that other kinds of object
     have (a rectangle section's 'A') is said to be theirs, not suggested as itself."""
     if key in _field_names():
         return f"unknown field '{key}' (other kinds of object have it, this one does not)"

@@ -82,28 +82,49 @@ def dynamics_form(structure: Structure, moving: tuple[int, ...] = ()) -> Dynamic
     G = ca.jacobian(g, x)
     R = inertia_x + ca.gradient(s.potential, x) + ca.mtimes(G.T, lam) + damping * mass_times_v
     drift = _rate(velocity(g), second)
-    if moving:
-        needed = inertia_p + ca.gradient(s.potential + ca.dot(lam, g), p)
-        Q = ca.vertcat(*[needed[index] for index in moving])
-    else:
-        Q = ca.SX(0, 1)
+    Q = _motion_forces(inertia_p, s.potential, lam, g, p, moving)
     M = ca.jacobian(mass_times_v, v)
-    grad_x = ca.gradient(s.potential, x)
-    power = -ca.dot(ca.jtimes(grad_x, p, mask * p), v)
-    held = s.potential - ca.dot(ca.gradient(s.potential, p), mask * p)
+    power, held = _load_terms(s.potential, x, v, p, mask)
     return DynamicsForm(
-        tuple(s.names), g.numel(), tuple(s.x_in_state), tuple(s.multipliers_in_state), tuple(moving),
-        ca.Function("equations", [x, v, a, lam, p, pdot, pddot, damping], [R],
-                    ["x", "v", "a", "lam", "p", "pdot", "pddot", "damping"], ["R"]),
+        tuple(s.names),
+        g.numel(),
+        tuple(s.x_in_state),
+        tuple(s.multipliers_in_state),
+        tuple(moving),
+        ca.Function(
+            "equations",
+            [x, v, a, lam, p, pdot, pddot, damping],
+            [R],
+            ["x", "v", "a", "lam", "p", "pdot", "pddot", "damping"],
+            ["R"],
+        ),
         ca.Function("constraints", [x, p], [g], ["x", "p"], ["g"]),
         ca.Function("constraint_jacobian", [x, p], [G], ["x", "p"], ["G"]),
         ca.Function("constraint_drift", [x, v, p, pdot, pddot], [drift], ["x", "v", "p", "pdot", "pddot"], ["drift"]),
         ca.Function("energies", [x, v, p, pdot], [T, s.potential], ["x", "v", "p", "pdot"], ["T", "V"]),
         ca.Function("mass", [x, p], [M], ["x", "p"], ["M"]),
-        ca.Function("motion_forces", [x, v, a, lam, p, pdot, pddot], [Q],
-                    ["x", "v", "a", "lam", "p", "pdot", "pddot"], ["Q"]),
+        ca.Function(
+            "motion_forces", [x, v, a, lam, p, pdot, pddot], [Q], ["x", "v", "a", "lam", "p", "pdot", "pddot"], ["Q"]
+        ),
         ca.Function("load_terms", [x, v, p, mask], [power, held], ["x", "v", "p", "mask"], ["power", "V_held"]),
-        bool(s.inertia) or bool(structure.masses))
+        bool(s.inertia) or bool(structure.masses),
+    )
+
+
+def _motion_forces(inertia_p: ca.SX, potential: ca.SX, lam: ca.SX, g: ca.SX, p: ca.SX, moving) -> ca.SX:
+    """Q: per moving parameter the generalized force its motion needs (its reaction)."""
+    if not moving:
+        return ca.SX(0, 1)
+    needed = inertia_p + ca.gradient(potential + ca.dot(lam, g), p)
+    return ca.vertcat(*[needed[index] for index in moving])
+
+
+def _load_terms(potential: ca.SX, x: ca.SX, v: ca.SX, p: ca.SX, mask: ca.SX) -> tuple[ca.SX, ca.SX]:
+    """(the power of the masked loads, V_held: V without them), V being linear in their parameters."""
+    grad_x = ca.gradient(potential, x)
+    power = -ca.dot(ca.jtimes(grad_x, p, mask * p), v)
+    held = potential - ca.dot(ca.gradient(potential, p), mask * p)
+    return power, held
 
 
 def _inertia(s, moving, v, a, pdot, velocity, acceleration, second):

@@ -18,21 +18,37 @@ import casadi as ca
 from models.errors import MechanismError
 
 FUNCTIONS: dict[str, Callable] = {
-    "sin": ca.sin, "cos": ca.cos, "tan": ca.tan,
-    "asin": ca.asin, "acos": ca.acos, "atan": ca.atan, "atan2": ca.atan2,
-    "sinh": ca.sinh, "cosh": ca.cosh, "tanh": ca.tanh,
-    "exp": ca.exp, "log": ca.log, "sqrt": ca.sqrt, "abs": ca.fabs,
+    "sin": ca.sin,
+    "cos": ca.cos,
+    "tan": ca.tan,
+    "asin": ca.asin,
+    "acos": ca.acos,
+    "atan": ca.atan,
+    "atan2": ca.atan2,
+    "sinh": ca.sinh,
+    "cosh": ca.cosh,
+    "tanh": ca.tanh,
+    "exp": ca.exp,
+    "log": ca.log,
+    "sqrt": ca.sqrt,
+    "abs": ca.fabs,
 }
 ARITY = {name: (2 if name == "atan2" else 1) for name in FUNCTIONS}
 CONSTANTS = {"pi": math.pi, "e": math.e}
-_OPERATORS = {ast.Add: lambda a, b: a + b, ast.Sub: lambda a, b: a - b, ast.Mult: lambda a, b: a * b,
-              ast.Div: lambda a, b: a / b, ast.Pow: lambda a, b: a**b}
+_OPERATORS = {
+    ast.Add: lambda a, b: a + b,
+    ast.Sub: lambda a, b: a - b,
+    ast.Mult: lambda a, b: a * b,
+    ast.Div: lambda a, b: a / b,
+    ast.Pow: lambda a, b: a**b,
+}
 MAX_LENGTH = 2000
 MAX_DEPTH = 50  # nesting of operations and calls; Python's own recursion would overflow far later
 
 
-def compile_expression(text: str, pointer: str, variable: str = "u",
-                       names: tuple[str, ...] = ()) -> Callable[..., ca.SX]:
+def compile_expression(
+    text: str, pointer: str, variable: str = "u", names: tuple[str, ...] = ()
+) -> Callable[..., ca.SX]:
     """Check `text` now and return a builder: given the variable's SX (and a dict of the
     named parameters' SX, when `names` are declared), the expression's SX.
 
@@ -62,8 +78,11 @@ def compile_expression(text: str, pointer: str, variable: str = "u",
 def _not_allowed(pointer: str, what: str, names: set[str]) -> MechanismError:
     functions = ", ".join(sorted(FUNCTIONS))
     variables = ", ".join(sorted(names))
-    return MechanismError(pointer, f"unsafe or unsupported expression: {what} is not allowed "
-                                   f"(use numbers, {variables}, pi, e, + - * / ** and the functions {functions})")
+    return MechanismError(
+        pointer,
+        f"unsafe or unsupported expression: {what} is not allowed "
+        f"(use numbers, {variables}, pi, e, + - * / ** and the functions {functions})",
+    )
 
 
 def _check(node: ast.AST, pointer: str, names: set[str]) -> int:
@@ -112,8 +131,9 @@ def _build(node: ast.AST, env: dict):
     return FUNCTIONS[node.func.id](*args)
 
 
-def finite_on(build, pointer: str, at: tuple[float, ...], what: str = "u", env: dict | None = None,
-              positive: bool = False) -> None:
+def finite_on(
+    build, pointer: str, at: tuple[float, ...], what: str = "u", env: dict | None = None, positive: bool = False
+) -> None:
     """Evaluate a compiled expression at the values `at` of its variable (named numbers from
     env): MechanismError(pointer) where it is not a finite number (or not positive)."""
     for value in at:
@@ -122,7 +142,10 @@ def finite_on(build, pointer: str, at: tuple[float, ...], what: str = "u", env: 
         except (RuntimeError, TypeError, ValueError, OverflowError):
             result = float("nan")
         if not math.isfinite(result):
-            raise MechanismError(pointer, f"the expression is not a finite number at {what} = {value:g} "
-                                 "(a division by zero, an overflow, or a root or logarithm of a negative number)")
+            raise MechanismError(
+                pointer,
+                f"the expression is not a finite number at {what} = {value:g} "
+                "(a division by zero, an overflow, or a root or logarithm of a negative number)",
+            )
         if positive and result <= 0:
             raise MechanismError(pointer, f"the expression must be positive, and is {result:g} at {what} = {value:g}")

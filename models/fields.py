@@ -12,8 +12,10 @@ from pydantic import BaseModel, ConfigDict, Field, StringConstraints
 
 MAX_QUANTITY_CHARS = 100
 
-Number = (Annotated[float, Field(strict=True, allow_inf_nan=False)]
-          | Annotated[str, StringConstraints(strict=True, max_length=MAX_QUANTITY_CHARS)])
+Number = (
+    Annotated[float, Field(strict=True, allow_inf_nan=False)]
+    | Annotated[str, StringConstraints(strict=True, max_length=MAX_QUANTITY_CHARS)]
+)
 Vec2 = tuple[Number, Number]
 
 

@@ -87,12 +87,15 @@ def symbolic_energy(structure: Structure, nudged: bool = False) -> SymbolicEnerg
         try:
             terms = family.energy_terms(ctx, t, d)
         except NoEnergyForm as reason:
-            raise MechanismError(f"/elements/{t.name}", f"element '{t.name}' ({family.type}) has no energy "
-                                 f"form: {reason}") from None
+            raise MechanismError(
+                f"/elements/{t.name}", f"element '{t.name}' ({family.type}) has no energy form: {reason}"
+            ) from None
         n_own = 0 if terms.variables is None else terms.variables.numel()
         if n_own + len(terms.equalities) != t.unknowns:
-            raise RuntimeError(f"family {family.type}: {t.unknowns} unknowns but {n_own} variables and "
-                               f"{len(terms.equalities)} equalities")
+            raise RuntimeError(
+                f"family {family.type}: {t.unknowns} unknowns but {n_own} variables and "
+                f"{len(terms.equalities)} equalities"
+            )
         if n_own:
             variables.append(terms.variables)
             own_names = family.unknowns(t)[:n_own]
@@ -105,8 +108,20 @@ def symbolic_energy(structure: Structure, nudged: bool = False) -> SymbolicEnerg
         V = V + terms.energy
         equalities += [(f"{t.name}.{name}", g) for name, g in terms.equalities]
         inequalities += [(f"{t.name}.{name}", h) for name, h in terms.inequalities]
-    return SymbolicEnergy(ctx, ca.vertcat(*variables), d, names, V, equalities, inequalities, surfaces,
-                          x_in_state, multipliers_in_state, nudge, inertia)
+    return SymbolicEnergy(
+        ctx,
+        ca.vertcat(*variables),
+        d,
+        names,
+        V,
+        equalities,
+        inequalities,
+        surfaces,
+        x_in_state,
+        multipliers_in_state,
+        nudge,
+        inertia,
+    )
 
 
 def energy_form(structure: Structure) -> EnergyForm:
@@ -117,10 +132,17 @@ def energy_form(structure: Structure) -> EnergyForm:
         value = ca.vertcat(*[row for _, row in rows]) if rows else ca.SX(0, 1)
         return ca.Function(name, [x, p], [value], ["x", "p"], [name[0]])
 
-    form = EnergyForm(tuple(s.names), ca.Function("potential", [x, p], [s.potential], ["x", "p"], ["V"]),
-                      function("g_equalities", s.equalities), tuple(name for name, _ in s.equalities),
-                      function("h_inequalities", s.inequalities), tuple(name for name, _ in s.inequalities),
-                      len(s.equalities), tuple(s.x_in_state), tuple(s.multipliers_in_state))
+    form = EnergyForm(
+        tuple(s.names),
+        ca.Function("potential", [x, p], [s.potential], ["x", "p"], ["V"]),
+        function("g_equalities", s.equalities),
+        tuple(name for name, _ in s.equalities),
+        function("h_inequalities", s.inequalities),
+        tuple(name for name, _ in s.inequalities),
+        len(s.equalities),
+        tuple(s.x_in_state),
+        tuple(s.multipliers_in_state),
+    )
     for fn in (form.potential, form.equalities, form.inequalities):
         if fn.has_free():
             raise RuntimeError(f"graph {fn.name()} has free symbols {fn.get_free()}")
@@ -142,8 +164,9 @@ def mass_matrix(structure: Structure) -> ca.Function:
         try:
             element = family.kinetic_energy(ctx, t, d, v)
         except NoMassForm as reason:
-            raise MechanismError(f"/elements/{t.name}", f"element '{t.name}' ({family.type}) has no mass "
-                                 f"form: {reason}") from None
+            raise MechanismError(
+                f"/elements/{t.name}", f"element '{t.name}' ({family.type}) has no mass form: {reason}"
+            ) from None
         if element is not None:
             T = T + element
     M = ca.hessian(T, rate)[0]
@@ -153,5 +176,7 @@ def mass_matrix(structure: Structure) -> ca.Function:
 def _body_rates(structure: Structure, rate: ca.SX) -> list[ca.SX]:
     """[vx, vy, omega] per body: the free coordinates' rates, zero where prescribed."""
     free_index = {bc: k for k, bc in enumerate(structure.free)}
-    return [ca.vertcat(*[rate[free_index[(b, c)]] if (b, c) in free_index else ca.SX(0) for c in range(3)])
-            for b in range(len(structure.bodies))]
+    return [
+        ca.vertcat(*[rate[free_index[(b, c)]] if (b, c) in free_index else ca.SX(0) for c in range(3)])
+        for b in range(len(structure.bodies))
+    ]

@@ -92,8 +92,9 @@ def write_atomically(target: Path, write) -> None:
 class GraphStore:
     """The Functions of one structure: from memory, else from disk, else built (and saved)."""
 
-    def __init__(self, structure: Structure, build: Callable[[Structure], tuple[dict[str, ca.Function], dict]],
-                 kind: str = ""):
+    def __init__(
+        self, structure: Structure, build: Callable[[Structure], tuple[dict[str, ca.Function], dict]], kind: str = ""
+    ):
         self.structure = structure
         self.build = build  # structure -> (Functions by name, their metadata)
         suffix = f"-{kind}" if kind else ""  # a store of a part of the Functions (its own build) has its own folder
@@ -161,8 +162,11 @@ class GraphStore:
         metadata (which marks the folder complete: available()) and the cache's bound."""
         writes = [lambda: self.folder.mkdir(parents=True, exist_ok=True)]
         for name, fn in functions.items():
-            writes.append(lambda name=name, fn=fn: write_atomically(self.folder / f"{name}.casadi",
-                                                                    lambda path: fn.save(str(path))))
+            writes.append(
+                lambda name=name, fn=fn: write_atomically(
+                    self.folder / f"{name}.casadi", lambda path: fn.save(str(path))
+                )
+            )
         text = json.dumps(meta)
         writes.append(lambda: write_atomically(self.folder / "meta.json", lambda path: path.write_text(text)))
         writes.append(bound)

@@ -41,7 +41,9 @@ def _lagrange(nodes: np.ndarray, xi: float) -> tuple[np.ndarray, np.ndarray]:
         others = [nodes[j] for j in range(n) if j != k]
         denominator = np.prod([nodes[k] - o for o in others])
         values[k] = np.prod([xi - o for o in others]) / denominator
-        slopes[k] = sum(np.prod([xi - o for i, o in enumerate(others) if i != m]) for m in range(len(others))) / denominator
+        slopes[k] = (
+            sum(np.prod([xi - o for i, o in enumerate(others) if i != m]) for m in range(len(others))) / denominator
+        )
     return values, slopes
 
 
@@ -92,12 +94,20 @@ def element_rule(degree: int) -> ElementRule:
         return np.array([_lagrange(strain_nodes, a)[0] for a in at])
 
     def partial(at: np.ndarray) -> PartialRule:
-        return PartialRule(at, rotation_basis(at)[0], strain_basis(at), xi, np.array([rotation_basis(a * xi)[0] for a in at]),
-                           np.array([strain_basis(a * xi) for a in at]), np.outer(at, weights))
+        return PartialRule(
+            at,
+            rotation_basis(at)[0],
+            strain_basis(at),
+            xi,
+            np.array([rotation_basis(a * xi)[0] for a in at]),
+            np.array([strain_basis(a * xi) for a in at]),
+            np.outer(at, weights),
+        )
 
     rotation, slope = rotation_basis(xi)
-    return ElementRule(degree, xi, weights, rotation, slope, strain_basis(xi), partial(xi), partial(strain_nodes),
-                       contact_weights)
+    return ElementRule(
+        degree, xi, weights, rotation, slope, strain_basis(xi), partial(xi), partial(strain_nodes), contact_weights
+    )
 
 
 @dataclass
@@ -141,8 +151,9 @@ class LinkElements:
         """Per strain field (shear, axial)."""
         return self.elements * self.degree
 
-    def kinematics(self, theta: ca.SX, gamma: ca.SX | None, eps: ca.SX | None, start: ca.SX,
-                   positions_at_quadrature: bool = False) -> LinkKinematics:
+    def kinematics(
+        self, theta: ca.SX, gamma: ca.SX | None, eps: ca.SX | None, start: ca.SX, positions_at_quadrature: bool = False
+    ) -> LinkKinematics:
         """theta: nodal rotations (n_rotations), gamma/eps: strain coefficients (n_strains, or
         None), start: position of u = 0."""
         P, rule, p = self.props, self.rule, self.degree
@@ -152,16 +163,31 @@ class LinkElements:
         position = start
         node_u, node_psi, node_position, points, contact = [0.0], [P.eta(ca.SX(0)) + theta[0]], [start], [], []
         for e in range(self.elements):
-            local = [theta[e * p:e * p + p + 1]]
-            local += [field[e * p:e * p + p] for field in (gamma, eps) if field is not None]
+            local = [theta[e * p : e * p + p + 1]]
+            local += [field[e * p : e * p + p] for field in (gamma, eps) if field is not None]
             at_end, energy, elongation, psi, normal, where, contact_psi, contact_normal, contact_where = step(
-                *local, position, energy, elongation, e * h)
+                *local, position, energy, elongation, e * h
+            )
             for q in range(len(rule.xi)):
-                points.append(LinkPoint(e * h + h * rule.xi[q], h * rule.weights[q], psi[q],
-                                        where[:, q] if positions_at_quadrature else None, normal[:, q]))
+                points.append(
+                    LinkPoint(
+                        e * h + h * rule.xi[q],
+                        h * rule.weights[q],
+                        psi[q],
+                        where[:, q] if positions_at_quadrature else None,
+                        normal[:, q],
+                    )
+                )
             for j in range(len(rule.at_contact.xi)):
-                contact.append(LinkPoint(e * h + h * rule.at_contact.xi[j], h * rule.contact_weights[j], contact_psi[j],
-                                         contact_where[:, j], contact_normal[:, j]))
+                contact.append(
+                    LinkPoint(
+                        e * h + h * rule.at_contact.xi[j],
+                        h * rule.contact_weights[j],
+                        contact_psi[j],
+                        contact_where[:, j],
+                        contact_normal[:, j],
+                    )
+                )
             position = at_end
             node_u.append(e * h + h)
             node_psi.append(P.eta(ca.SX(e * h + h)) + theta[e * p + p])
@@ -192,14 +218,19 @@ class _ElementStep:
         return self.function(*args, *self.free)
 
 
-def _element_step(props: LinkProperties, rule: ElementRule, h: float, shear: bool, axial: bool,
-                  positions_at_quadrature: bool) -> _ElementStep:
+def _element_step(
+    props: LinkProperties, rule: ElementRule, h: float, shear: bool, axial: bool, positions_at_quadrature: bool
+) -> _ElementStep:
     p = rule.degree
     theta = ca.SX.sym("theta", p + 1)
     gamma = ca.SX.sym("gamma", p) if shear else None
     eps = ca.SX.sym("eps", p) if axial else None
-    start, energy_in, elongation_in, u0 = (ca.SX.sym("start", 2), ca.SX.sym("energy"), ca.SX.sym("elongation"),
-                                           ca.SX.sym("u0"))
+    start, energy_in, elongation_in, u0 = (
+        ca.SX.sym("start", 2),
+        ca.SX.sym("energy"),
+        ca.SX.sym("elongation"),
+        ca.SX.sym("u0"),
+    )
     element = _Element(props, u0, h, theta, gamma, eps)
     energy, elongation = energy_in, elongation_in
     increment = ca.SX.zeros(2)
@@ -219,8 +250,17 @@ def _element_step(props: LinkProperties, rule: ElementRule, h: float, shear: boo
         contact_psi.append(psi)
         contact_normals.append(normal)
         contact_wheres.append(element.position(start, rule.at_contact, j))
-    outputs = [start + increment, energy, elongation, ca.vertcat(*psis), ca.horzcat(*normals), ca.horzcat(*wheres),
-               ca.vertcat(*contact_psi), ca.horzcat(*contact_normals), ca.horzcat(*contact_wheres)]
+    outputs = [
+        start + increment,
+        energy,
+        elongation,
+        ca.vertcat(*psis),
+        ca.horzcat(*normals),
+        ca.horzcat(*wheres),
+        ca.vertcat(*contact_psi),
+        ca.horzcat(*contact_normals),
+        ca.horzcat(*contact_wheres),
+    ]
     inputs = [theta] + [field for field in (gamma, eps) if field is not None] + [start, energy_in, elongation_in, u0]
     declared = {v.element_hash() for symbol in inputs for v in ca.symvar(symbol)}
     free = [v for v in ca.symvar(ca.vertcat(*[ca.vec(o) for o in outputs])) if v.element_hash() not in declared]
@@ -261,6 +301,10 @@ class _Element:
         out = start
         for k in range(partial.partial_weights.shape[1]):
             xi = partial.xi[j] * partial.quadrature_xi[k]
-            out = out + self.h * partial.partial_weights[j, k] * self.tangent(
-                xi, partial.partial_rotation[j, k], partial.partial_strain[j, k])[2]
+            out = (
+                out
+                + self.h
+                * partial.partial_weights[j, k]
+                * self.tangent(xi, partial.partial_rotation[j, k], partial.partial_strain[j, k])[2]
+            )
         return out

@@ -97,7 +97,7 @@ def _psi_builders(layout: InverseLayout, q: ca.SX) -> list:
     """psi(u) of every link, a Chebyshev series whose coefficients are linear in the data q."""
     builders, offset = [], 0
     for layout_k in layout.psi:
-        data = q[offset:offset + layout_k.size]
+        data = q[offset : offset + layout_k.size]
         offset += layout_k.size
         coefficients = ca.DM(layout_k.to_chebyshev()) @ data
         builders.append(lambda u, c=coefficients: chebyshev_series([c[i] for i in range(c.numel())], 2 * u - 1))
@@ -109,8 +109,14 @@ def _inverse_link(ctx: AssemblyContext, t: LinkTopology, psi, q: ca.SX, d, zl):
     wrenches its bodies apply to it, and its reported values."""
     forward = link_shooting(ctx, t)
     undeformed = forward.undeformed_nodes()
-    inverse = LinkShooting(forward.props, ctx.p, t.intervals, t.order,
-                           inverse_rhs_function(forward.props, psi, ctx.p, q), ca.vertcat(ctx.p, q))
+    inverse = LinkShooting(
+        forward.props,
+        ctx.p,
+        t.intervals,
+        t.order,
+        inverse_rhs_function(forward.props, psi, ctx.p, q),
+        ca.vertcat(ctx.p, q),
+    )
     i, j = t.start_body, t.end_body
     s_i, s_j = ctx.body_axes(i, undeformed[0][2:4]), ctx.body_axes(j, undeformed[-1][2:4])
     start_xy = ctx.reference(i)[0] + d[i][:2] + rot(ctx.reference(i)[1]) @ s_i  # undeformed: shifted, not rotated
@@ -124,11 +130,19 @@ def _inverse_link(ctx: AssemblyContext, t: LinkTopology, psi, q: ca.SX, d, zl):
     n = ca.vertcat(zl[0], zl[1])
     arm_i, arm_j = ctx.arm(i, s_i, d), ctx.arm(j, s_j, d)
     wrenches = {i: ca.vertcat(-n, -zl[3] + cross(arm_i, -n)), j: ca.vertcat(n, end[1] + cross(arm_j, n))}
-    values = [("h", "force", zl[0]), ("v", "force", zl[1]), ("M_start", "moment", zl[3]),
-              ("M_end", "moment", end[1]), ("energy", "energy", sol.energy)]
+    values = [
+        ("h", "force", zl[0]),
+        ("v", "force", zl[1]),
+        ("M_start", "moment", zl[3]),
+        ("M_end", "moment", end[1]),
+        ("energy", "energy", sol.energy),
+    ]
     for node, state in enumerate(sol.nodes):
-        values += [(f"eta.{node}", "angle", state[0]), (f"x0.{node}", "length", state[2]),
-                   (f"y0.{node}", "length", state[3])]
+        values += [
+            (f"eta.{node}", "angle", state[0]),
+            (f"x0.{node}", "length", state[2]),
+            (f"y0.{node}", "length", state[3]),
+        ]
     return Contribution(wrenches, rows, values)
 
 
@@ -154,7 +168,7 @@ def _build(structure: Structure, layout: InverseLayout) -> InverseGraphs:
     parts, names, kinds, values = [], [], [], []
     for t, offset in zip(structure.elements, structure.element_offsets):
         if _invertible(t):
-            part = _inverse_link(ctx, t, next(psi_builders), q, d, z[offset:offset + t.unknowns])
+            part = _inverse_link(ctx, t, next(psi_builders), q, d, z[offset : offset + t.unknowns])
             for quantity, kind, value in part.outputs:
                 names.append(f"elements.{t.name}.{quantity}")
                 kinds.append(kind)
@@ -164,16 +178,21 @@ def _build(structure: Structure, layout: InverseLayout) -> InverseGraphs:
             part = Contribution(part.from_bodies)
         parts.append(part)
     links = [k for k, t in enumerate(structure.elements) if _invertible(t)]
-    specified_values = q[layout.q_size - len(layout.specified):]
-    specified_rows = [z[structure.element_offsets[links[link]] + component] - specified_values[k]
-                      for k, (link, component) in enumerate(layout.specified)]
+    specified_values = q[layout.q_size - len(layout.specified) :]
+    specified_rows = [
+        z[structure.element_offsets[links[link]] + component] - specified_values[k]
+        for k, (link, component) in enumerate(layout.specified)
+    ]
     R = ca.vertcat(residual_of(ctx, parts, applied_wrenches(ctx, rotations)), *specified_rows)
     R = ca.substitute(R, ctx.p, p_eff)
     values = [ca.substitute(v, ctx.p, p_eff) for v in values]
     for b, body in enumerate(structure.bodies):
         r_hat, th_hat = ctx.reference(b)
-        for q_name, kind, value in (("x0", "length", r_hat[0] + d[b][0]), ("y0", "length", r_hat[1] + d[b][1]),
-                                    ("rotation", "angle", d[b][2])):
+        for q_name, kind, value in (
+            ("x0", "length", r_hat[0] + d[b][0]),
+            ("y0", "length", r_hat[1] + d[b][1]),
+            ("rotation", "angle", d[b][2]),
+        ):
             names.append(f"bodies.{body}.{q_name}")
             kinds.append(kind)
             values.append(value)

@@ -76,11 +76,14 @@ def rhs_function(props: LinkProperties, p: ca.SX, weighed: bool = True) -> Right
     links of one kind share one form of f (models.link_steps)."""
     u, s, n_start = ca.SX.sym("u"), ca.SX.sym("s", props.states), ca.SX.sym("n", 2)
     u_eta = ca.SX.sym("u_eta")
-    fields = {"L": props.length, "EI": props.EI(u),
-              "EA": props.EA(u) if props.EA is not None else None,
-              "kGA": props.kGA(u) if props.kGA is not None else None,
-              "slope": ca.substitute(ca.jacobian(ca.SX(props.eta(u_eta)), u_eta), u_eta, u),
-              "mass": props.line_mass(u) if props.line_mass is not None else None}
+    fields = {
+        "L": props.length,
+        "EI": props.EI(u),
+        "EA": props.EA(u) if props.EA is not None else None,
+        "kGA": props.kGA(u) if props.kGA is not None else None,
+        "slope": ca.substitute(ca.jacobian(ca.SX(props.eta(u_eta)), u_eta), u_eta, u),
+        "mass": props.line_mass(u) if props.line_mass is not None else None,
+    }
     given = {name: value for name, value in fields.items() if value is not None and not ca.SX(value).is_constant()}
     uniform = [name for name, value in given.items() if not ca.depends_on(value, u)]
     c = ca.SX.sym("c", len(uniform))
@@ -127,8 +130,13 @@ def inverse_rhs_function(props: LinkProperties, psi: Callable[[ca.SX], ca.SX], p
     angle = ca.substitute(psi_expr, u_psi, u)
     slope = ca.substitute(ca.jacobian(psi_expr, u_psi), u_psi, u)
     EI = props.EI(u)
-    ds = ca.vertcat(slope - L * m / EI, L * (h * ca.sin(angle) - v * ca.cos(angle)),
-                    L * ca.cos(eta), L * ca.sin(eta), L * m**2 / (2 * EI))
+    ds = ca.vertcat(
+        slope - L * m / EI,
+        L * (h * ca.sin(angle) - v * ca.cos(angle)),
+        L * ca.cos(eta),
+        L * ca.sin(eta),
+        L * m**2 / (2 * EI),
+    )
     return ca.Function("link_inverse_rhs", [u, s, n, ca.vertcat(p, q)], [ds], ["u", "s", "n", "p"], ["ds"])
 
 
@@ -146,8 +154,15 @@ class LinkSolution:
 class LinkShooting:
     """Multiple shooting of one link with K intervals: unknowns, residuals, samples."""
 
-    def __init__(self, props: LinkProperties, p: ca.SX, intervals: int, order: int,
-                 rhs: ca.Function | None = None, rhs_parameters: ca.SX | None = None):
+    def __init__(
+        self,
+        props: LinkProperties,
+        p: ca.SX,
+        intervals: int,
+        order: int,
+        rhs: ca.Function | None = None,
+        rhs_parameters: ca.SX | None = None,
+    ):
         self.props = props
         self.K = intervals
         self.order = order
@@ -199,10 +214,13 @@ class LinkShooting:
         """Deformed node states from the link's unknowns zl = [h, v, dpsi0, m0, (dpsi, m, dx,
         dy) at nodes 1..K-1] (deviations from `undeformed`), the start at `start_xy`."""
         n = zl[0:2]
-        nodes = [self._with_energy_reset(ca.vertcat(undeformed[0][0] + zl[2], zl[3], start_xy[0], start_xy[1]),
-                                         undeformed[0])]
+        nodes = [
+            self._with_energy_reset(
+                ca.vertcat(undeformed[0][0] + zl[2], zl[3], start_xy[0], start_xy[1]), undeformed[0]
+            )
+        ]
         for k in range(1, self.K):
-            block = zl[4 * k:4 * k + 4]
+            block = zl[4 * k : 4 * k + 4]
             head = undeformed[k][:4] + ca.vertcat(block[0], block[1], block[2], block[3])
             nodes.append(self._with_energy_reset(head, undeformed[k]))
         continuity, energy = [], ca.SX(0)

@@ -58,8 +58,13 @@ def general_step(form: LocalForm, order: int) -> ca.Function:
     f = form.local
     u0, s, n, q = (ca.SX.sym(name, f.sparsity_in(i)) for i, name in enumerate(("u0", "s", "n", "q")))
     H = ca.SX.sym("H")
-    step = ca.Function("link_general_step", [u0, s, n, q, H], [extrapolated_step(f, u0, s, H, order, n, q)],
-                       ["u0", "s", "n", "q", "H"], ["s_end"])
+    step = ca.Function(
+        "link_general_step",
+        [u0, s, n, q, H],
+        [extrapolated_step(f, u0, s, H, order, n, q)],
+        ["u0", "s", "n", "q", "H"],
+        ["s_end"],
+    )
     kept[key] = step
     while len(kept) > KEPT:
         kept.popitem(last=False)

@@ -42,9 +42,21 @@ class Scales:
     def _table(self) -> dict[str, float]:
         L, F = self.length, self.force
         return {
-            "length": L, "force": F, "moment": F * L, "energy": F * L, "stress": F / L**2, "angle": 1.0,
-            "stiffness": F / L, "rotational_stiffness": F * L, "area": L**2, "second_moment": L**4,
-            "dimensionless": 1.0, "mass": F / L, "inertia": F * L, "acceleration": L, "density": F / L**4,
+            "length": L,
+            "force": F,
+            "moment": F * L,
+            "energy": F * L,
+            "stress": F / L**2,
+            "angle": 1.0,
+            "stiffness": F / L,
+            "rotational_stiffness": F * L,
+            "area": L**2,
+            "second_moment": L**4,
+            "dimensionless": 1.0,
+            "mass": F / L,
+            "inertia": F * L,
+            "acceleration": L,
+            "density": F / L**4,
         }
 
 
@@ -171,5 +183,6 @@ def compile_mechanism(document: MechanismDocument, model: str | None = None, gro
     the check that every body reaches a fixed one (models.collect.collect).
     """
     structure, si, notes = collect(document, model, grounded)
-    return Mechanism(document=document, structure=structure, si_values=si, scales=_scales(structure, si),
-                     notes=tuple(notes))
+    return Mechanism(
+        document=document, structure=structure, si_values=si, scales=_scales(structure, si), notes=tuple(notes)
+    )

@@ -24,10 +24,21 @@ POINTER_FIELDS = frozenset({"pointer", "prescribed"})
 NAMED_SECTIONS = frozenset({"bodies", "elements", "loads", "outputs", "materials", "sections"})
 TOKEN = re.compile(r"⟨(\d+)⟩")
 # The collection of a `name` field, by the class that holds it (a class not listed: its own)
-NAME_OWNERS = {"LoadTopology": "loads", "PointTopology": "outputs", "SectionTopology": "sections",
-               "ObjectTopology": "contacts/objects", "SiteTopology": "contacts/sites", "PairTopology": "contacts/pairs"}
-FIELD_COLLECTIONS = {"material": "materials", "section": "sections", "bodies": "bodies", "element": "elements",
-                     "link": "elements"}
+NAME_OWNERS = {
+    "LoadTopology": "loads",
+    "PointTopology": "outputs",
+    "SectionTopology": "sections",
+    "ObjectTopology": "contacts/objects",
+    "SiteTopology": "contacts/sites",
+    "PairTopology": "contacts/pairs",
+}
+FIELD_COLLECTIONS = {
+    "material": "materials",
+    "section": "sections",
+    "bodies": "bodies",
+    "element": "elements",
+    "link": "elements",
+}
 # A name with these could be taken for a token ('/' and '~', which would split a pointer, are
 # refused by models.collect anyway): such a structure keeps its own names and graphs.
 UNSAFE = re.compile(r"[/~⟨⟩]")
@@ -49,7 +60,13 @@ class _Renamer:
 
     def pointer(self, pointer: str) -> str:
         parts = pointer.split("/")
-        at = 3 if len(parts) > 3 and parts[1] == "contacts" else 2 if len(parts) > 2 and parts[1] in NAMED_SECTIONS else 0
+        at = (
+            3
+            if len(parts) > 3 and parts[1] == "contacts"
+            else 2
+            if len(parts) > 2 and parts[1] in NAMED_SECTIONS
+            else 0
+        )
         if at:
             parts[at] = self.token(parts[at], "/".join(parts[1:at]))
         return "/".join(parts)
@@ -64,9 +81,14 @@ class _Renamer:
                 return tuple((self.token(name, "outputs"), body) for name, body in value)
             return tuple(self.value(item, role, collection) for item in value)
         if is_dataclass(value) and not isinstance(value, type):
-            return replace(value, **{f.name: self.value(getattr(value, f.name), _role(f.name),
-                                                        _collection(value, f.name))
-                                     for f in fields(value) if f.init})
+            return replace(
+                value,
+                **{
+                    f.name: self.value(getattr(value, f.name), _role(f.name), _collection(value, f.name))
+                    for f in fields(value)
+                    if f.init
+                },
+            )
         return value
 
 

@@ -17,8 +17,9 @@ from models.residual import held_wrenches
 REACTION_QUANTITIES = (("Fx", "force"), ("Fy", "force"), ("M", "moment"))
 
 
-def output_graph(ctx: AssemblyContext, z: ca.SX, d: list[ca.SX], parts: list[Contribution],
-                 applied: list[ca.SX]) -> tuple[ca.Function, list[str], list[str]]:
+def output_graph(
+    ctx: AssemblyContext, z: ca.SX, d: list[ca.SX], parts: list[Contribution], applied: list[ca.SX]
+) -> tuple[ca.Function, list[str], list[str]]:
     s = ctx.structure
     names: list[str] = []
     kinds: list[str] = []
@@ -80,6 +81,7 @@ def shape_graph(ctx: AssemblyContext, z: ca.SX, parts: list[Contribution]):
         undeformed.extend(line.undeformed)
     if not deformed:
         deformed = undeformed = [ca.SX.zeros(2, 0)]
-    shapes = ca.Function("shapes", [z, ctx.p], [ca.horzcat(*deformed), ca.horzcat(*undeformed)],
-                         ["z", "p"], ["deformed", "undeformed"])
+    shapes = ca.Function(
+        "shapes", [z, ctx.p], [ca.horzcat(*deformed), ca.horzcat(*undeformed)], ["z", "p"], ["deformed", "undeformed"]
+    )
     return shapes, segments

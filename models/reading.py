@@ -81,8 +81,9 @@ class _StrictLoader(yaml.SafeLoader):
         for key_node, _ in node.value:
             key = self.construct_object(key_node, deep=deep)
             if not isinstance(key, (str, int, float, bool)) and key is not None:
-                raise yaml.constructor.ConstructorError(None, None, "a mapping key must be a string",
-                                                        key_node.start_mark)
+                raise yaml.constructor.ConstructorError(
+                    None, None, "a mapping key must be a string", key_node.start_mark
+                )
             if key in keys:
                 raise DuplicateKey(str(key))
             keys.add(key)
@@ -96,8 +97,9 @@ class _NoAliasLoader(_StrictLoader):
     def compose_node(self, parent, index):
         if self.check_event(yaml.AliasEvent):
             mark = self.peek_event().start_mark
-            raise yaml.composer.ComposerError(None, None, "aliases (*name) are not accepted here: write the value "
-                                              "out", mark)
+            raise yaml.composer.ComposerError(
+                None, None, "aliases (*name) are not accepted here: write the value out", mark
+            )
         return super().compose_node(parent, index)
 
 

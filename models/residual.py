@@ -17,8 +17,10 @@ from models.structure import Structure
 def contributions(ctx: AssemblyContext, z: ca.SX, d: list[ca.SX]) -> list[Contribution]:
     """Every element's contribution for unknowns z and body displacements d, merged."""
     s = ctx.structure
-    return [merged(FAMILIES.of(t).contribute(ctx, t, d, z[offset:offset + t.unknowns]))
-            for t, offset in zip(s.elements, s.element_offsets)]
+    return [
+        merged(FAMILIES.of(t).contribute(ctx, t, d, z[offset : offset + t.unknowns]))
+        for t, offset in zip(s.elements, s.element_offsets)
+    ]
 
 
 def merged(part: Contribution) -> Contribution:

@@ -53,7 +53,9 @@ class GeneralSection(StrictModel):
     I: Number | SectionExpression
     A: Number | SectionExpression | None = None
     shear_factor: Number | None = None
-    c: Number | None = Field(default=None, description="distance from the neutral axis to the outer fibre, for stresses")
+    c: Number | None = Field(
+        default=None, description="distance from the neutral axis to the outer fibre, for stresses"
+    )
 
 
 def _section_shape(value) -> str:
@@ -62,8 +64,12 @@ def _section_shape(value) -> str:
     return getattr(value, "shape", "rectangle")
 
 
-Section = Annotated[Annotated[RectangularSection, Tag("rectangle")] | Annotated[TaperedRectangularSection, Tag("tapered_rectangle")] | Annotated[GeneralSection, Tag("general")],
-                    Discriminator(_section_shape)]
+Section = Annotated[
+    Annotated[RectangularSection, Tag("rectangle")]
+    | Annotated[TaperedRectangularSection, Tag("tapered_rectangle")]
+    | Annotated[GeneralSection, Tag("general")],
+    Discriminator(_section_shape),
+]
 
 
 ALONG = tuple(k / 16 for k in range(17))  # where a section expression must be positive
@@ -132,9 +138,12 @@ def section_properties(P: Params, section: SectionTopology) -> SectionProperties
         else:
             h0, h1 = P[f"{base}/h_start"], P[f"{base}/h_end"]
             thickness = lambda u: h0 + (h1 - h0) * u  # noqa: E731
-        return SectionProperties(I=lambda u: b * thickness(u) ** 3 / 12, A=lambda u: b * thickness(u),
-                                 fibre=lambda u: 6 / (b * thickness(u) ** 2),
-                                 half_thickness=lambda u: thickness(u) / 2)
+        return SectionProperties(
+            I=lambda u: b * thickness(u) ** 3 / 12,
+            A=lambda u: b * thickness(u),
+            fibre=lambda u: 6 / (b * thickness(u) ** 2),
+            half_thickness=lambda u: thickness(u) / 2,
+        )
     # General: numbers are parameters; expressions are in document length units, and the
     # parameter /units/length is one document length unit (nondimensional).
     to_nd = P["/units/length"] if "/units/length" in P else 1.0

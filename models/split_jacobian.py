@@ -32,11 +32,13 @@ def jacobian(R: ca.SX, z: ca.SX) -> ca.SX:
     sparse_columns = np.setdiff1d(np.arange(n), dense_columns)
     K = ca.SX(m, n)
     if len(sparse_rows) and len(sparse_columns):
-        K[sparse_rows.tolist(), sparse_columns.tolist()] = ca.jacobian(R[sparse_rows.tolist()],
-                                                                      z[sparse_columns.tolist()])
+        K[sparse_rows.tolist(), sparse_columns.tolist()] = ca.jacobian(
+            R[sparse_rows.tolist()], z[sparse_columns.tolist()]
+        )
     if len(sparse_rows) and len(dense_columns):
-        K[sparse_rows.tolist(), dense_columns.tolist()] = ca.jacobian(R[sparse_rows.tolist()],
-                                                                     z[dense_columns.tolist()])
+        K[sparse_rows.tolist(), dense_columns.tolist()] = ca.jacobian(
+            R[sparse_rows.tolist()], z[dense_columns.tolist()]
+        )
     if len(dense_rows):
         K[dense_rows.tolist(), :] = ca.jacobian(R[dense_rows.tolist()], z)
     return K

@@ -35,13 +35,12 @@ def tangent_terms(structure: Structure) -> ca.Function:
         if split is not None:
             parts.append(split(ctx, t, d["psi"], d["N"], d["T"]))
         else:
-            parts.append(FAMILIES.of(t).contribute(ctx, t, d["psi"], copies["psi"][offset:offset + t.unknowns]))
+            parts.append(FAMILIES.of(t).contribute(ctx, t, d["psi"], copies["psi"][offset : offset + t.unknowns]))
     R = residual_of(ctx, parts, applied_wrenches(ctx, d["load"]))
     every = ca.vertcat(*copies.values())
     same = ca.vertcat(*[z] * len(TERMS))
     terms = [ca.substitute(ca.jacobian(R, copies[k]), every, same) for k in TERMS]
-    fn = ca.Function("tangent_terms", [z, ctx.p], terms, ["z", "p"], ["K_I", "K_II", "K_III", "K_load"],
-                     dict(cse=True))
+    fn = ca.Function("tangent_terms", [z, ctx.p], terms, ["z", "p"], ["K_I", "K_II", "K_III", "K_load"], dict(cse=True))
     if fn.has_free():
         raise RuntimeError(f"graph {fn.name()} has free symbols {fn.get_free()}")
     return fn

@@ -33,6 +33,7 @@ def pint_module():
     for a name held as None in sys.modules, so pint sees no dask; the entry goes right after."""
     if "dask" in sys.modules or "pint" in sys.modules:
         import pint
+
         return pint
     sys.modules["dask"] = None  # type: ignore[assignment]
     try:
@@ -66,8 +67,24 @@ MAX_NUMBER_CHARS = 32
 MAX_UNIT_CHARS = 64
 MAX_UNIT_FACTORS = 8
 MAX_POWER = 4
-ANGLE_UNITS = {"rad", "radian", "radians", "deg", "degree", "degrees", "arcmin", "arcminute", "arcsec",
-               "arcsecond", "turn", "revolution", "grad", "gon", "mrad", "urad"}
+ANGLE_UNITS = {
+    "rad",
+    "radian",
+    "radians",
+    "deg",
+    "degree",
+    "degrees",
+    "arcmin",
+    "arcminute",
+    "arcsec",
+    "arcsecond",
+    "turn",
+    "revolution",
+    "grad",
+    "gon",
+    "mrad",
+    "urad",
+}
 _NUMBER = re.compile(r"\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d{1,3})?)\s*(.*?)\s*$", re.DOTALL)
 _TOKEN = re.compile(r"\s*(\*\*|\^|\*|/|\(|\)|[+-]?\d+|[^\W\d]\w*)")
 
@@ -99,8 +116,9 @@ def _known() -> dict[str, tuple[float, Dimension]]:
         table = json.loads(KNOWN_NAMES.read_text())
     except (OSError, ValueError):
         return {}
-    return {name: (float(size), tuple((str(d), int(p)) for d, p in dimension))
-            for name, (size, dimension) in table.items()}
+    return {
+        name: (float(size), tuple((str(d), int(p)) for d, p in dimension)) for name, (size, dimension) in table.items()
+    }
 
 
 @lru_cache(maxsize=512)
@@ -230,8 +248,11 @@ def _string_to_si(value: str, kind: str, default_unit: str, pointer: str) -> flo
     """A quantity string "<number> [unit]" in SI (without a unit: the document's unit)."""
     match = _NUMBER.match(value) if len(value) <= MAX_NUMBER_CHARS + MAX_UNIT_CHARS + 2 else None
     if match is None or len(match.group(1)) > MAX_NUMBER_CHARS:
-        raise MechanismError(pointer, f"cannot read {_shown(value)} as a quantity: expected a number "
-                             f"(at most {MAX_NUMBER_CHARS} characters) and a unit, like '25 um'")
+        raise MechanismError(
+            pointer,
+            f"cannot read {_shown(value)} as a quantity: expected a number "
+            f"(at most {MAX_NUMBER_CHARS} characters) and a unit, like '25 um'",
+        )
     number, unit = float(match.group(1)), match.group(2)
     if not unit:
         return number * unit_factor(default_unit, kind, pointer)

@@ -34,8 +34,11 @@ def upgraded(document: dict[str, Any]) -> tuple[dict[str, Any], list[str]]:
     if not isinstance(impacts, dict):
         raise MechanismError("/impacts", "the old `impacts` section must be an object of surfaces and pairs")
     # `contacts` where `impacts` was (or where it already is): the document reads as before
-    doc = {("contacts" if key == "impacts" else key): copy.deepcopy(value) for key, value in document.items()
-           if not (key == "impacts" and "contacts" in document)}
+    doc = {
+        ("contacts" if key == "impacts" else key): copy.deepcopy(value)
+        for key, value in document.items()
+        if not (key == "impacts" and "contacts" in document)
+    }
     contacts = doc["contacts"] if "contacts" in document else {}
     doc["contacts"] = contacts = contacts if isinstance(contacts, dict) else {}
     for key in ("sites", "objects", "pairs"):
@@ -47,10 +50,12 @@ def upgraded(document: dict[str, Any]) -> tuple[dict[str, Any], list[str]]:
     for name, pair in pairs.items():
         new_name = _free(contacts["pairs"], name)
         first, second = (pair.get("surfaces") or [None, None])[:2]
-        contacts["pairs"][new_name] = {"site": names["sites"].get(first, first),
-                                       "object": names["objects"].get(second, second),
-                                       "normal": _normal(pair.get("normal", {}), moreau),
-                                       "friction": _friction(pair.get("friction"), moreau)}
+        contacts["pairs"][new_name] = {
+            "site": names["sites"].get(first, first),
+            "object": names["objects"].get(second, second),
+            "normal": _normal(pair.get("normal", {}), moreau),
+            "friction": _friction(pair.get("friction"), moreau),
+        }
         changes.append(f"/impacts/pairs/{name} -> /contacts/pairs/{new_name}")
     stiffness = impacts.get("flexure_stiffness")
     if stiffness is not None and stiffness != "constant":
@@ -71,15 +76,18 @@ def _place_surfaces(contacts: dict, surfaces: dict, pairs: dict, changes: list[s
         as_object = name in seconds or (name not in firsts and kind != "circle")
         if as_site:
             if kind != "circle":
-                raise MechanismError(f"/impacts/surfaces/{name}/type", f"surface '{name}' is the first of a pair, so "
-                                     f"a circle; it is a {kind}")
+                raise MechanismError(
+                    f"/impacts/surfaces/{name}/type",
+                    f"surface '{name}' is the first of a pair, so a circle; it is a {kind}",
+                )
             new = names["sites"][name] = _free(contacts["sites"], name)
             contacts["sites"][new] = {key: value for key, value in surface.items()}
             changes.append(f"/impacts/surfaces/{name} -> /contacts/sites/{new}")
         if as_object:
             if kind not in OBJECT_TYPES:
-                raise MechanismError(f"/impacts/surfaces/{name}/type", f"unknown surface type '{kind}' (circle, "
-                                     "hole, line)")
+                raise MechanismError(
+                    f"/impacts/surfaces/{name}/type", f"unknown surface type '{kind}' (circle, hole, line)"
+                )
             new = names["objects"][name] = _free(contacts["objects"], name)
             placed = {**surface, "type": OBJECT_TYPES[kind]}
             if kind != "line":

@@ -13,10 +13,37 @@ import json
 import sys
 from pathlib import Path
 
-PREFIXED = {"m": ("n", "u", "m", "c", "k", ""), "N": ("n", "u", "m", "k", "M", ""), "Pa": ("k", "M", "G", ""),
-            "g": ("u", "m", "k", ""), "s": ("u", "m", ""), "J": ("u", "m", "k", ""), "W": ("m", "k", "")}
-OTHERS = ("rad", "mrad", "urad", "deg", "degree", "degrees", "radian", "radians", "arcmin", "arcsec", "turn",
-          "inch", "ft", "lbf", "psi", "percent", "Hz", "kHz", "min", "h")
+PREFIXED = {
+    "m": ("n", "u", "m", "c", "k", ""),
+    "N": ("n", "u", "m", "k", "M", ""),
+    "Pa": ("k", "M", "G", ""),
+    "g": ("u", "m", "k", ""),
+    "s": ("u", "m", ""),
+    "J": ("u", "m", "k", ""),
+    "W": ("m", "k", ""),
+}
+OTHERS = (
+    "rad",
+    "mrad",
+    "urad",
+    "deg",
+    "degree",
+    "degrees",
+    "radian",
+    "radians",
+    "arcmin",
+    "arcsec",
+    "turn",
+    "inch",
+    "ft",
+    "lbf",
+    "psi",
+    "percent",
+    "Hz",
+    "kHz",
+    "min",
+    "h",
+)
 TABLE = Path(__file__).resolve().parents[1] / "models" / "unit_names.json"
 
 

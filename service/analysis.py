@@ -21,13 +21,26 @@ from service.reports import coordinate_units, output_units, plain, stiffness_dic
 from service.requests import Limits, compile_request, escape_pointer_part, newton_options, under
 
 
-def run_analysis(mech: Mechanism, name: str, options: NewtonOptions,
-                 given: AnalysisOptions | Mapping[str, Any] | None = None) -> dict:
+def run_analysis(
+    mech: Mechanism, name: str, options: NewtonOptions, given: AnalysisOptions | Mapping[str, Any] | None = None
+) -> dict:
     """The report of analysis `name` (MechanismError at /analysis when there is none) under its
     options (typed, or a mapping checked into them)."""
     return ANALYSES.named(name).run(mech, AnalysisRequest(options, given))
 
 
-__all__ = ["Limits", "compile_request", "coordinate_units", "equilibrium_report", "escape_pointer_part",
-           "inverse_report", "linearization_report", "newton_options", "output_units", "plain", "run_analysis",
-           "stiffness_dict", "under"]
+__all__ = [
+    "Limits",
+    "compile_request",
+    "coordinate_units",
+    "equilibrium_report",
+    "escape_pointer_part",
+    "inverse_report",
+    "linearization_report",
+    "newton_options",
+    "output_units",
+    "plain",
+    "run_analysis",
+    "stiffness_dict",
+    "under",
+]

@@ -32,8 +32,12 @@ DOCUMENT_SUFFIXES = (".json", ".yaml", ".yml")
 SUMMARY = "summary.json"
 # The statuses that count as success, per declared analysis (a registry analysis: converged, or
 # a simulation finished); any other status (and "error") is a failure.
-SUCCESS = {"optimize": ("optimal", "acceptable"), "inverse": ("converged",), "sweep": ("converged",),
-           "equilibrium": ("converged",)}
+SUCCESS = {
+    "optimize": ("optimal", "acceptable"),
+    "inverse": ("converged",),
+    "sweep": ("converged",),
+    "equilibrium": ("converged",),
+}
 REGISTRY_SUCCESS = ("converged", "finished")
 
 
@@ -71,8 +75,9 @@ def result_names(documents: list[Path]) -> dict[Path, str]:
 
 def declared_analysis(document: MechanismDocument) -> str:
     """The analysis a document declares, by precedence: optimize, inverse, sweep, else equilibrium."""
-    return next((name for name in ("optimize", "inverse", "sweep") if getattr(document, name) is not None),
-                "equilibrium")
+    return next(
+        (name for name in ("optimize", "inverse", "sweep") if getattr(document, name) is not None), "equilibrium"
+    )
 
 
 def optimization_report(mech: Mechanism, options: NewtonOptions) -> dict:
@@ -84,9 +89,13 @@ def inverse_report(mech: Mechanism, options: NewtonOptions) -> dict:
     """The link inverse of the `inverse` section: unknown loads (document units), links, bodies."""
     spec = mech.document.inverse
     result = inverse_links(mech, spec.shapes, spec.internal_forces, spec.unknown_loads, options)
-    return {"analysis": "inverse", "name": mech.document.name, "internal_forces": spec.internal_forces,
-            **result.__dict__,
-            "load_units": {pointer: mech.doc_unit(mech.parameter_kind(pointer)) for pointer in result.loads}}
+    return {
+        "analysis": "inverse",
+        "name": mech.document.name,
+        "internal_forces": spec.internal_forces,
+        **result.__dict__,
+        "load_units": {pointer: mech.doc_unit(mech.parameter_kind(pointer)) for pointer in result.loads},
+    }
 
 
 def sweep_report(mech: Mechanism, options: NewtonOptions) -> dict:
@@ -94,21 +103,29 @@ def sweep_report(mech: Mechanism, options: NewtonOptions) -> dict:
     result, target = document_sweep(mech, options)
     payload = {"analysis": "sweep", "name": mech.document.name}
     if target is not None:
-        payload["target"] = {"status": target.status, "value": target.value,
-                             "unit": mech.doc_unit(mech.parameter_kind(mech.document.sweep.path))}
+        payload["target"] = {
+            "status": target.status,
+            "value": target.value,
+            "unit": mech.doc_unit(mech.parameter_kind(mech.document.sweep.path)),
+        }
     if result is None:
         payload.update(status=target.status, message="the sweep's target was not reached")
     else:
         failed = [s for s in result.status if s != "converged"]
-        payload.update(status="converged" if not failed else "not_converged",
-                       message=f"{len(failed)} of {len(result.status)} points did not converge" if failed else "",
-                       sweep=result.to_dict())
+        payload.update(
+            status="converged" if not failed else "not_converged",
+            message=f"{len(failed)} of {len(result.status)} points did not converge" if failed else "",
+            sweep=result.to_dict(),
+        )
     return payload
 
 
 ANALYSES: dict[str, Callable[[Mechanism, NewtonOptions], dict]] = {
-    "optimize": optimization_report, "inverse": inverse_report, "sweep": sweep_report,
-    "equilibrium": equilibrium_report}
+    "optimize": optimization_report,
+    "inverse": inverse_report,
+    "sweep": sweep_report,
+    "equilibrium": equilibrium_report,
+}
 
 
 @dataclass(frozen=True)
@@ -139,8 +156,13 @@ def run_document(path: Path, options: NewtonOptions, chosen: Chosen | None = Non
     return plain(payload)
 
 
-def run_batch(directory: Path, out: Path, options: NewtonOptions = NewtonOptions(),
-              progress: Callable[[Path, dict], None] | None = None, chosen: Chosen | None = None) -> dict:
+def run_batch(
+    directory: Path,
+    out: Path,
+    options: NewtonOptions = NewtonOptions(),
+    progress: Callable[[Path, dict], None] | None = None,
+    chosen: Chosen | None = None,
+) -> dict:
     """Write out/<result name> for each document (see result_names) and out/summary.json;
     return the summary. ValueError if `out` is `directory` (the results would replace it)."""
     if same_folder(directory, out):
@@ -154,12 +176,25 @@ def run_batch(directory: Path, out: Path, options: NewtonOptions = NewtonOptions
         result_file = out / names[path]
         result_file.write_text(json.dumps({"document": path.name, **payload}, indent=2))
         ok = succeeded(payload.get("analysis"), payload["status"])
-        rows.append({"document": path.name, "result": result_file.name, "analysis": payload.get("analysis"),
-                     "status": payload["status"], "succeeded": ok, "message": payload.get("message", ""),
-                     "seconds": payload["seconds"]})
+        rows.append(
+            {
+                "document": path.name,
+                "result": result_file.name,
+                "analysis": payload.get("analysis"),
+                "status": payload["status"],
+                "succeeded": ok,
+                "message": payload.get("message", ""),
+                "seconds": payload["seconds"],
+            }
+        )
         if progress is not None:
             progress(path, payload)
-    summary = {"directory": str(directory), "documents": len(rows), "succeeded": sum(r["succeeded"] for r in rows),
-               "failed": sum(not r["succeeded"] for r in rows), "results": rows}
+    summary = {
+        "directory": str(directory),
+        "documents": len(rows),
+        "succeeded": sum(r["succeeded"] for r in rows),
+        "failed": sum(not r["succeeded"] for r in rows),
+        "results": rows,
+    }
     (out / SUMMARY).write_text(json.dumps(summary, indent=2))
     return summary

@@ -14,8 +14,9 @@ class BufferedCall:
     """fn(*values) -> its outputs as numpy arrays (dense inputs and outputs: a window's are)."""
 
     def __init__(self, fn: ca.Function):
-        if not all(fn.sparsity_in(i).is_dense() for i in range(fn.n_in())) or \
-                not all(fn.sparsity_out(i).is_dense() for i in range(fn.n_out())):
+        if not all(fn.sparsity_in(i).is_dense() for i in range(fn.n_in())) or not all(
+            fn.sparsity_out(i).is_dense() for i in range(fn.n_out())
+        ):
             raise ValueError(f"{fn.name()} has a sparse input or output: its buffers hold nonzeros only")
         self.fn = fn
         self.buffer, self.evaluate = fn.buffer()

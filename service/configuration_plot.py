@@ -40,8 +40,9 @@ def configuration_figure(result: EquilibriumResult) -> Figure:
     """
     mech = result.mechanism
     # 2 x samples of every element, document units
-    deformed, undeformed = (np.asarray(a, dtype=float) / mech.nd_per_doc("length")
-                            for a in mech.graphs.shapes(result.z, mech.p()))
+    deformed, undeformed = (
+        np.asarray(a, dtype=float) / mech.nd_per_doc("length") for a in mech.graphs.shapes(result.z, mech.p())
+    )
     outputs = result.outputs()
     fig = new_figure(7.0, 6.5)
     ax = fig.add_subplot()
@@ -53,8 +54,9 @@ def configuration_figure(result: EquilibriumResult) -> Figure:
     ax.set_aspect("equal", adjustable="datalim")
     status = result.status if result.converged else f"{result.status} (last iterate, not an equilibrium)"
     title = f"{mech.document.name}\n{status}, {result.iterations} iterations"
-    set_labels(ax, *(f"{c} [{mech.doc_unit('length')}]" for c in "xy"), title,
-               legend=bool(ax.get_legend_handles_labels()[0]))  # a spring chain may have no labelled element
+    set_labels(
+        ax, *(f"{c} [{mech.doc_unit('length')}]" for c in "xy"), title, legend=bool(ax.get_legend_handles_labels()[0])
+    )  # a spring chain may have no labelled element
     _placeset_labels(fig, ax, loads + labels + elements)
     return fig
 
@@ -88,8 +90,10 @@ def _draw_skeletons(ax, mech, outputs: dict, deformed: np.ndarray, undeformed: n
         now = np.array([outputs[f"{point.name}.x"], outputs[f"{point.name}.y"]])
         attached_now[point.body].append(now)
         attached_then[point.body].append(now - np.array([outputs[f"{point.name}.dx"], outputs[f"{point.name}.dy"]]))
-    for refs, attached, style, label in ((ref_then, attached_then, _UNDEFORMED, "undeformed"),
-                                         (ref_now, attached_now, _BODY, "deformed bodies")):
+    for refs, attached, style, label in (
+        (ref_then, attached_then, _UNDEFORMED, "undeformed"),
+        (ref_now, attached_now, _BODY, "deformed bodies"),
+    ):
         for b in range(n_bodies):
             for q in attached[b]:
                 ax.plot([refs[b, 0], q[0]], [refs[b, 1], q[1]], **style, label=label)
@@ -102,8 +106,7 @@ def _draw_elements(ax, segments, deformed: np.ndarray, undeformed: np.ndarray) -
     for k, (name, first, count, _, _) in enumerate(segments):
         columns = slice(first, first + count)
         ax.plot(undeformed[0, columns], undeformed[1, columns], **_UNDEFORMED)
-        ax.plot(deformed[0, columns], deformed[1, columns], **_FLEXURE,
-                label="deformed elements" if k == 0 else None)
+        ax.plot(deformed[0, columns], deformed[1, columns], **_FLEXURE, label="deformed elements" if k == 0 else None)
         labels.append((name, _label_places(deformed[:, columns]), dict(color="C0", fontsize=9)))
     return labels
 
@@ -148,8 +151,9 @@ def _draw_bodies_and_points(ax, mech, outputs: dict) -> list:
         now = np.array([outputs[f"{point.name}.x"], outputs[f"{point.name}.y"]])
         then = now - np.array([outputs[f"{point.name}.dx"], outputs[f"{point.name}.dy"]])
         ax.plot(*then, marker="*", markersize=10, color="0.65", markerfacecolor="none", linestyle="none")
-        ax.plot(*now, marker="*", markersize=12, color="C3", linestyle="none",
-                label="point outputs" if i == 0 else None)
+        ax.plot(
+            *now, marker="*", markersize=12, color="C3", linestyle="none", label="point outputs" if i == 0 else None
+        )
         labels.append((point.name, _around(now, point.name), dict(color="C3", fontsize=9)))
     return labels
 
@@ -175,8 +179,9 @@ def _draw_loads(ax, mech, outputs: dict, span: float) -> list:
     """Force loads as arrows ending at their point of application, moments as circular arrows
     at the reference point of their body; returns their labels: (text, places, style)."""
     loads = mech.structure.loads
-    forces = {t.name: np.array([mech.value(f"/loads/{t.name}/force/{i}") for i in (0, 1)])
-              for t in loads if t.kind == "force"}
+    forces = {
+        t.name: np.array([mech.value(f"/loads/{t.name}/force/{i}") for i in (0, 1)]) for t in loads if t.kind == "force"
+    }
     largest = max((float(np.hypot(*f)) for f in forces.values()), default=0.0)
     labels = []
     for load in loads:
@@ -187,8 +192,12 @@ def _draw_loads(ax, mech, outputs: dict, span: float) -> list:
                 continue
             head = load_point(mech, load.name, outputs)
             tail = head - _ARROW_SPAN * span * force / largest
-            ax.annotate("", head, xytext=tail, arrowprops=dict(arrowstyle="-|>", color="C2", linewidth=1.8,
-                                                               mutation_scale=16, shrinkA=0, shrinkB=0))
+            ax.annotate(
+                "",
+                head,
+                xytext=tail,
+                arrowprops=dict(arrowstyle="-|>", color="C2", linewidth=1.8, mutation_scale=16, shrinkA=0, shrinkB=0),
+            )
             ax.update_datalim(np.array([head, tail]))
             text = f"{load.name} {size:.4g} {mech.doc_unit('force')}"
             beyond = (tail, (-force[0] / size * (2.6 * len(text) + 4), -force[1] / size * 10))  # past the tail
@@ -196,8 +205,13 @@ def _draw_loads(ax, mech, outputs: dict, span: float) -> list:
         else:
             ref = load_point(mech, load.name, outputs)
             moment = mech.value(f"/loads/{load.name}/moment")
-            ax.plot(*ref, marker=r"$\circlearrowleft$" if moment >= 0 else r"$\circlearrowright$",
-                    markersize=22, color="C2", linestyle="none")
+            ax.plot(
+                *ref,
+                marker=r"$\circlearrowleft$" if moment >= 0 else r"$\circlearrowright$",
+                markersize=22,
+                color="C2",
+                linestyle="none",
+            )
             text = f"{load.name} {moment:.4g} {mech.doc_unit('moment')}"
             labels.append((text, _around(ref, text)[1:], _LOAD))
     ax.autoscale_view()
@@ -215,15 +229,18 @@ def _placeset_labels(fig: Figure, ax: Axes, labels: list) -> None:
     boxes = [ax.get_legend().get_window_extent(renderer)] if ax.get_legend() else []
     drawn = _drawn_paths(ax)
     for text, places, style in labels:
-        note = ax.annotate(text, places[0][0], xytext=places[0][1], textcoords="offset points", ha="center",
-                           va="center", **style)
+        note = ax.annotate(
+            text, places[0][0], xytext=places[0][1], textcoords="offset points", ha="center", va="center", **style
+        )
         best = None
         for point, offset in places:
             note.xy, note.xyann = point, offset
             box = note.get_window_extent(renderer).padded(2.0 * fig.dpi / 72)
-            harm = (not (ax.bbox.contains(box.x0, box.y0) and ax.bbox.contains(box.x1, box.y1)),
-                    any(box.overlaps(other) for other in boxes),
-                    sum(path.intersects_bbox(box, filled=False) for path in drawn))
+            harm = (
+                not (ax.bbox.contains(box.x0, box.y0) and ax.bbox.contains(box.x1, box.y1)),
+                any(box.overlaps(other) for other in boxes),
+                sum(path.intersects_bbox(box, filled=False) for path in drawn),
+            )
             if best is None or harm < best[0]:
                 best = (harm, point, offset, box)
             if harm == (False, False, 0):
@@ -237,8 +254,11 @@ def _drawn_paths(ax: Axes) -> list:
     from matplotlib.path import Path as Polyline
 
     nothing = ("None", "none", "", " ", None)
-    paths = [Polyline(ax.transData.transform([note.xyann, note.xy])) for note in ax.texts
-             if getattr(note, "arrow_patch", None) is not None]
+    paths = [
+        Polyline(ax.transData.transform([note.xyann, note.xy]))
+        for note in ax.texts
+        if getattr(note, "arrow_patch", None) is not None
+    ]
     for line in ax.lines:
         xy, half = ax.transData.transform(line.get_xydata()), line.get_markersize() * ax.figure.dpi / 144
         if line.get_linestyle() not in nothing:

@@ -70,12 +70,33 @@ class PathResult:
         def pick(values):
             return {k: v for k, v in values.items() if outputs is None or k in outputs}
 
-        return {"status": self.status, "message": self.message, "path": self.path, "unit": self.unit,
-                "seconds": self.seconds,
-                "points": [{"value": p.value, "rising": p.tangent_value > 0, "stable": p.stability.stable,
-                            "eigenvalues": p.stability.eigenvalues, "outputs": pick(p.outputs)} for p in self.points],
-                "limit_points": [{"value": lp.value, "kind": lp.kind, "after_point": lp.after_point,
-                                  "residual": lp.residual, "outputs": pick(lp.outputs)} for lp in self.limit_points]}
+        return {
+            "status": self.status,
+            "message": self.message,
+            "path": self.path,
+            "unit": self.unit,
+            "seconds": self.seconds,
+            "points": [
+                {
+                    "value": p.value,
+                    "rising": p.tangent_value > 0,
+                    "stable": p.stability.stable,
+                    "eigenvalues": p.stability.eigenvalues,
+                    "outputs": pick(p.outputs),
+                }
+                for p in self.points
+            ],
+            "limit_points": [
+                {
+                    "value": lp.value,
+                    "kind": lp.kind,
+                    "after_point": lp.after_point,
+                    "residual": lp.residual,
+                    "outputs": pick(lp.outputs),
+                }
+                for lp in self.limit_points
+            ],
+        }
 
 
 @lru_cache(maxsize=16)
@@ -89,12 +110,19 @@ def _path_graphs(structure: Structure, slot: int) -> tuple[ca.Function, ca.Funct
     p_lam = ca.SX(p)
     p_lam[slot] = lam
     R, K = g.residual_and_tangent(z, p_lam)
-    path = ca.Function("path", [z, lam, p], [R, K, ca.jacobian(R, lam)], ["z", "lam", "p"], ["R", "K", "R_lam"],
-                       dict(cse=True))
+    path = ca.Function(
+        "path", [z, lam, p], [R, K, ca.jacobian(R, lam)], ["z", "lam", "p"], ["R", "K", "R_lam"], dict(cse=True)
+    )
     F = ca.vertcat(R, K @ phi, ca.dot(ell, phi) - 1)
     unknowns = ca.vertcat(z, lam, phi)
-    fold = ca.Function("limit_point", [z, lam, phi, ell, p], [F, ca.jacobian(F, unknowns)],
-                       ["z", "lam", "phi", "l", "p"], ["F", "J"], dict(cse=True))
+    fold = ca.Function(
+        "limit_point",
+        [z, lam, phi, ell, p],
+        [F, ca.jacobian(F, unknowns)],
+        ["z", "lam", "phi", "l", "p"],
+        ["F", "J"],
+        dict(cse=True),
+    )
     return path, fold
 
 
@@ -134,6 +162,7 @@ class _Trace:
         def evaluate(z):
             R, K, _ = self.path_fn(z, lam_value, self.p)
             return np.asarray(R).ravel(), np.asarray(K)
+
         return evaluate
 
 
@@ -147,13 +176,21 @@ def _trace(mech: Mechanism, path: str, stop: float, step: float) -> _Trace:
     target = stop * factor
     if target == float(p[slot]):
         raise MechanismError("/stop", f"the path starts at {stop:g} {unit}: give another stop value")
-    return _Trace(slot, factor, unit, p, target, 1.0 if target > p[slot] else -1.0,
-                  _path_graphs(mech.structure.unnamed, slot)[0])
+    return _Trace(
+        slot, factor, unit, p, target, 1.0 if target > p[slot] else -1.0, _path_graphs(mech.structure.unnamed, slot)[0]
+    )
 
 
-def trace_path(mech: Mechanism, path: str, stop: float, step: float, max_points: int = 400,
-               options: NewtonOptions = NewtonOptions(), max_step: float | None = None,
-               should_stop: Callable[[], bool] | None = None) -> PathResult:
+def trace_path(
+    mech: Mechanism,
+    path: str,
+    stop: float,
+    step: float,
+    max_points: int = 400,
+    options: NewtonOptions = NewtonOptions(),
+    max_step: float | None = None,
+    should_stop: Callable[[], bool] | None = None,
+) -> PathResult:
     """Follow the equilibrium path from the document's value of `path` until the field passes
     `stop` (document units), through any limit points. `step`: first arc-length step, in
     document units of the field (the arc length also counts the nondimensional state, so
@@ -166,8 +203,7 @@ def trace_path(mech: Mechanism, path: str, stop: float, step: float, max_points:
     n, lam = mech.n_free, float(t.p[t.slot])
     status, z, *_ = iterate_dense(t.evaluate_at(lam), np.zeros(n), options)
     if status != "converged":
-        return PathResult("not_converged", f"no equilibrium at the start value ({status})", path, unit, [], [],
-                          time.perf_counter() - started)
+        return _ended("not_converged", f"no equilibrium at the start value ({status})", path, unit, [], [], started)
     ds, ds_max = step * factor, (max_step if max_step is not None else 10 * step) * factor
     ds_min = ds * 1e-6
     tangent = _tangent(path_fn, z, lam, p, None, direction)
@@ -175,32 +211,59 @@ def trace_path(mech: Mechanism, path: str, stop: float, step: float, max_points:
     limits: list[LimitPoint] = []
     while len(points) < max_points:
         if should_stop is not None and should_stop():
-            return PathResult("stopped", f"stopped after {len(points)} points at {lam / factor:.6g} {unit}", path, unit,
-                              points, limits, time.perf_counter() - started)
+            message = f"stopped after {len(points)} points at {lam / factor:.6g} {unit}"
+            return _ended("stopped", message, path, unit, points, limits, started)
         x = np.append(z, lam)
         ok, x_new, iterations = _correct(path_fn, x + ds * tangent, tangent, p, options)
         if not ok:
             ds /= 2
             if ds < ds_min:
-                return PathResult("not_converged", f"the corrector failed at {lam / factor:.6g} {unit} even with "
-                                  "tiny steps", path, unit, points, limits, time.perf_counter() - started)
+                message = f"the corrector failed at {lam / factor:.6g} {unit} even with tiny steps"
+                return _ended("not_converged", message, path, unit, points, limits, started)
             continue
         new_tangent = _tangent(path_fn, x_new[:n], x_new[n], p, tangent, direction)
         if (x_new[n] - t.target) * direction >= 0 and new_tangent[n] * direction > 0:
             # Passed the stop value while rising: end exactly on it.
-            status, z_end, *_ = iterate_dense(t.evaluate_at(t.target), _interpolate(x, x_new, t.target, n), options)
-            if status == "converged":
-                if np.sign(new_tangent[n]) != np.sign(tangent[n]):
-                    limits.append(_limit(mech, x, x_new, tangent, len(points) - 1, p, slot, factor, options))
-                points.append(_point(mech, path_fn, z_end, t.target, p, slot, new_tangent, factor))
-                return PathResult("completed", "", path, unit, points, limits, time.perf_counter() - started)
+            if _end_on_stop(mech, t, x, x_new, tangent, new_tangent, points, limits, options):
+                return _ended("completed", "", path, unit, points, limits, started)
         if np.sign(new_tangent[n]) != np.sign(tangent[n]):
             limits.append(_limit(mech, x, x_new, tangent, len(points) - 1, p, slot, factor, options))
         z, lam, tangent = x_new[:n], float(x_new[n]), new_tangent
         points.append(_point(mech, path_fn, z, lam, p, slot, tangent, factor))
         ds = min(ds * 1.5, ds_max) if iterations <= 3 else (ds / 1.5 if iterations > 6 else ds)
-    return PathResult("max_points", f"stopped after {max_points} points at {lam / factor:.6g} {unit}", path, unit,
-                      points, limits, time.perf_counter() - started)
+    message = f"stopped after {max_points} points at {lam / factor:.6g} {unit}"
+    return _ended("max_points", message, path, unit, points, limits, started)
+
+
+def _ended(
+    status: str, message: str, path: str, unit: str, points: list[PathPoint], limits: list[LimitPoint], started: float
+) -> PathResult:
+    """The path as far as it went, and the seconds since `started`."""
+    return PathResult(status, message, path, unit, points, limits, time.perf_counter() - started)
+
+
+def _end_on_stop(
+    mech: Mechanism,
+    t: _Trace,
+    x: np.ndarray,
+    x_new: np.ndarray,
+    tangent: np.ndarray,
+    new_tangent: np.ndarray,
+    points: list[PathPoint],
+    limits: list[LimitPoint],
+    options: NewtonOptions,
+) -> bool:
+    """The last point exactly on the stop value, between path points x and x_new (and a limit
+    point between them, if the path turned), added to points and limits; False if Newton
+    does not converge there."""
+    n = mech.n_free
+    status, z_end, *_ = iterate_dense(t.evaluate_at(t.target), _interpolate(x, x_new, t.target, n), options)
+    if status != "converged":
+        return False
+    if np.sign(new_tangent[n]) != np.sign(tangent[n]):
+        limits.append(_limit(mech, x, x_new, tangent, len(points) - 1, t.p, t.slot, t.factor, options))
+    points.append(_point(mech, t.path_fn, z_end, t.target, t.p, t.slot, new_tangent, t.factor))
+    return True
 
 
 def _interpolate(x0: np.ndarray, x1: np.ndarray, lam: float, n: int) -> np.ndarray:
@@ -249,8 +312,13 @@ def _point(mech, path_fn, z, lam, p, slot, tangent, factor) -> PathPoint:
     _, K, _ = path_fn(z, lam, p)
     p_lam = p.copy()
     p_lam[slot] = lam
-    return PathPoint(lam / factor, z.copy(), float(tangent[-1]), body_stability(mech, np.asarray(K)),
-                     outputs_in_doc_units(mech, mech.graphs.outputs(z, p_lam)))
+    return PathPoint(
+        lam / factor,
+        z.copy(),
+        float(tangent[-1]),
+        body_stability(mech, np.asarray(K)),
+        outputs_in_doc_units(mech, mech.graphs.outputs(z, p_lam)),
+    )
 
 
 def _limit(mech, x0, x1, tangent0, index, p, slot, factor, options: NewtonOptions) -> LimitPoint:
@@ -264,15 +332,16 @@ def _limit(mech, x0, x1, tangent0, index, p, slot, factor, options: NewtonOption
     ell = vt[-1]
     w = np.concatenate([x, ell])
     for _ in range(50):
-        F, J = (np.asarray(a) for a in fold(w[:n], w[n], w[n + 1:], ell, p))
+        F, J = (np.asarray(a) for a in fold(w[:n], w[n], w[n + 1 :], ell, p))
         F = F.ravel()
         if np.abs(F).max() <= options.tol_residual:
             break
         w = w + np.linalg.solve(J, -F)
-    residual = float(np.abs(np.asarray(fold(w[:n], w[n], w[n + 1:], ell, p)[0])).max())
+    residual = float(np.abs(np.asarray(fold(w[:n], w[n], w[n + 1 :], ell, p)[0])).max())
     lam = float(w[n])
     kind = "maximum" if tangent0[n] > 0 else "minimum"
     p_lam = p.copy()
     p_lam[slot] = lam
-    return LimitPoint(lam / factor, index, w[:n].copy(), residual,
-                      outputs_in_doc_units(mech, mech.graphs.outputs(w[:n], p_lam)), kind)
+    return LimitPoint(
+        lam / factor, index, w[:n].copy(), residual, outputs_in_doc_units(mech, mech.graphs.outputs(w[:n], p_lam)), kind
+    )

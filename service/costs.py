@@ -62,10 +62,14 @@ def check_contact_rotations(doc: MechanismDocument, limits: Limits, prefix: str)
     for name, cost in discretizations(doc, None):
         total += cost.rotations
         if total > limits.max_contact_rotations:
-            raise MechanismError(f"{prefix}/elements/{name}/intervals", (
-                f"a contact problem's links have at most {limits.max_contact_rotations} rotations "
-                f"(intervals x degree, summed), these have more; use fewer elements (8 cubic ones "
-                "reach 1e-9 on a finger) or a lower degree"))
+            raise MechanismError(
+                f"{prefix}/elements/{name}/intervals",
+                (
+                    f"a contact problem's links have at most {limits.max_contact_rotations} rotations "
+                    f"(intervals x degree, summed), these have more; use fewer elements (8 cubic ones "
+                    "reach 1e-9 on a finger) or a lower degree"
+                ),
+            )
 
 
 def contact_rows(doc: MechanismDocument) -> list[tuple[str, int]]:
@@ -95,32 +99,48 @@ def contact_rows(doc: MechanismDocument) -> list[tuple[str, int]]:
 
 def check_document_cost(doc: MechanismDocument, model: str | None, limits: Limits, prefix: str = "/document") -> None:
     """MechanismError (under `prefix`) where the document exceeds a limit."""
-    for collection, limit in (("bodies", limits.max_bodies), ("elements", limits.max_elements),
-                              ("loads", limits.max_loads), ("outputs", limits.max_outputs)):
+    for collection, limit in (
+        ("bodies", limits.max_bodies),
+        ("elements", limits.max_elements),
+        ("loads", limits.max_loads),
+        ("outputs", limits.max_outputs),
+    ):
         count = len(getattr(doc, collection))
         if count > limit:
             raise MechanismError(f"{prefix}/{collection}", f"{count} {collection}: the limit is {limit}")
     for name, cost in discretizations(doc, model):
         if cost.elements > limits.max_link_elements:
-            raise MechanismError(f"{prefix}/elements/{name}/intervals", (
-                f"{cost.elements} elements: the service takes at most {limits.max_link_elements} in one link "
-                "(its statics graph is built in the request); use fewer elements or a higher degree"))
+            raise MechanismError(
+                f"{prefix}/elements/{name}/intervals",
+                (
+                    f"{cost.elements} elements: the service takes at most {limits.max_link_elements} in one link "
+                    "(its statics graph is built in the request); use fewer elements or a higher degree"
+                ),
+            )
     total = 0
     for name, work in link_work(doc, model):
         total += work
         if total > limits.max_link_work:
-            raise MechanismError(f"{prefix}/elements/{name}/intervals", (
-                f"the links need {sum(w for _, w in link_work(doc, model))} units of graph work (intervals x "
-                f"order^2, summed): the limit is {limits.max_link_work}; use fewer intervals or a lower order"))
+            raise MechanismError(
+                f"{prefix}/elements/{name}/intervals",
+                (
+                    f"the links need {sum(w for _, w in link_work(doc, model))} units of graph work (intervals x "
+                    f"order^2, summed): the limit is {limits.max_link_work}; use fewer intervals or a lower order"
+                ),
+            )
     if doc.contacts is not None:
         check_contact_rotations(doc, limits, prefix)
     total = 0
     for name, rows in contact_rows(doc):
         total += rows
         if total > limits.max_contact_rows:
-            raise MechanismError(f"{prefix}/contacts/pairs/{name}", (
-                f"the contact pairs need about {sum(r for _, r in contact_rows(doc))} non-penetration rows: the limit "
-                f"is {limits.max_contact_rows}; use fewer pairs, vertices or elements"))
+            raise MechanismError(
+                f"{prefix}/contacts/pairs/{name}",
+                (
+                    f"the contact pairs need about {sum(r for _, r in contact_rows(doc))} non-penetration rows: the limit "
+                    f"is {limits.max_contact_rows}; use fewer pairs, vertices or elements"
+                ),
+            )
 
 
 def check_grid_size(counts: list[int], limits: Limits, pointer: str = "/parameters") -> int:
@@ -136,5 +156,8 @@ def check_grid_size(counts: list[int], limits: Limits, pointer: str = "/paramete
 
 def check_result_size(points: int, per_point: int, limits: Limits, pointer: str = "/outputs") -> None:
     if points * per_point > limits.max_result_values:
-        raise MechanismError(pointer, f"{points} points x {per_point} stored values = {points * per_point}: the "
-                             f"limit is {limits.max_result_values}; keep fewer outputs or points")
+        raise MechanismError(
+            pointer,
+            f"{points} points x {per_point} stored values = {points * per_point}: the "
+            f"limit is {limits.max_result_values}; keep fewer outputs or points",
+        )

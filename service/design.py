@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from models import Mechanism, MechanismError
-from models.document import OptimizeSpec
+from models.optimize_spec import OptimizeSpec
 from models.structure import COORDINATES
 from service.contact.outputs import PAIR_OUTPUTS
 
@@ -103,10 +103,22 @@ def design_problem(mech: Mechanism, spec: OptimizeSpec, pointer: str = "/optimiz
         if lo > hi:
             raise MechanismError(f"{here}/lower", f"lower bound {lo:g} is above the upper bound {hi:g}")
         constraints.append(Bounded(ref, lo, hi, here))
-    return DesignProblem(mech, spec, tuple(paths), tuple(slots), np.array(factors), np.array(start),
-                         np.array(lower), np.array(upper), np.array(scale, dtype=float), case_names,
-                         case_p, objective, 1.0 if spec.objective.sense == "minimize" else -1.0,
-                         tuple(constraints))
+    return DesignProblem(
+        mech,
+        spec,
+        tuple(paths),
+        tuple(slots),
+        np.array(factors),
+        np.array(start),
+        np.array(lower),
+        np.array(upper),
+        np.array(scale, dtype=float),
+        case_names,
+        case_p,
+        objective,
+        1.0 if spec.objective.sense == "minimize" else -1.0,
+        tuple(constraints),
+    )
 
 
 def _typical(value: float, lo: float, hi: float) -> float:
@@ -156,13 +168,13 @@ def _output(mech: Mechanism, name: str, case: str | None, case_names: tuple[str,
     if name in g.output_names:
         k = g.output_names.index(name)
         return OutputRef(name, c, "output", k, g.output_kinds[k])
-    if name.startswith(STIFFNESS_PREFIX) and name[len(STIFFNESS_PREFIX):] in mech.free_coordinates:
-        k = mech.free_coordinates.index(name[len(STIFFNESS_PREFIX):])
+    if name.startswith(STIFFNESS_PREFIX) and name[len(STIFFNESS_PREFIX) :] in mech.free_coordinates:
+        k = mech.free_coordinates.index(name[len(STIFFNESS_PREFIX) :])
         coordinate = COORDINATES[mech.structure.free[k][1]]
         return OutputRef(name, c, "stiffness", k, _STIFFNESS_KINDS[coordinate])
     if name.startswith("contacts.") and mech.structure.contacts is not None:
         kinds = dict(PAIR_OUTPUTS)
-        pair, _, quantity = name[len("contacts."):].rpartition(".")
+        pair, _, quantity = name[len("contacts.") :].rpartition(".")
         if pair in [p.name for p in mech.structure.contacts.pairs] and quantity in kinds:
             return OutputRef(name, c, "contact", 0, kinds[quantity])
     if name.startswith("/"):

@@ -62,12 +62,12 @@ def _design_nlp(key: tuple) -> DesignNlp:
     d = ca.SX.sym("d", n_design)
     zs = [ca.SX.sym(f"z{c}", n_state) for c in range(n_cases)]
     P = ca.SX.sym("P", n_params * n_cases + n_design + 1 + len(refs) - 1)
-    design_scale = P[n_params * n_cases:n_params * n_cases + n_design]
+    design_scale = P[n_params * n_cases : n_params * n_cases + n_design]
     objective_scale = P[n_params * n_cases + n_design]
-    constraint_scales = P[n_params * n_cases + n_design + 1:]
+    constraint_scales = P[n_params * n_cases + n_design + 1 :]
     ps = []
     for c in range(n_cases):
-        pc = P[c * n_params:(c + 1) * n_params]
+        pc = P[c * n_params : (c + 1) * n_params]
         for k, slot in enumerate(slots):
             pc[slot] = d[k] * design_scale[k]
         ps.append(pc)
@@ -95,10 +95,14 @@ def _design_nlp(key: tuple) -> DesignNlp:
     lam = ca.SX.sym("lam_g", g.shape[0])
     lagrangian = f + ca.dot(lam, g)
     gradient = ca.gradient(lagrangian, x)
-    kkt = ca.Function("design_kkt", [x, P, lam],
-                      [ca.jacobian(gradient, x), ca.jacobian(gradient, P), ca.jacobian(g, x),
-                       ca.jacobian(g, P), ca.gradient(f, P)],
-                      ["x", "P", "lam_g"], ["H", "L_xp", "J", "g_p", "f_p"], dict(cse=True))
+    kkt = ca.Function(
+        "design_kkt",
+        [x, P, lam],
+        [ca.jacobian(gradient, x), ca.jacobian(gradient, P), ca.jacobian(g, x), ca.jacobian(g, P), ca.gradient(f, P)],
+        ["x", "P", "lam_g"],
+        ["H", "L_xp", "J", "g_p", "f_p"],
+        dict(cse=True),
+    )
     for fn in (evaluate, kkt):
         if fn.has_free():
             raise RuntimeError(f"graph {fn.name()} has free symbols {fn.get_free()}")
@@ -107,24 +111,40 @@ def _design_nlp(key: tuple) -> DesignNlp:
 
 def solver_for(nlp: DesignNlp, max_iterations: int, tolerance: float) -> ca.Function:
     """IPOPT on the design NLP (exact Hessian of the Lagrangian), one per setting."""
-    return nlp_solver("design", nlp.key, lambda: {"x": nlp.x, "p": nlp.P, "f": nlp.f, "g": nlp.g},
-                      {"tol": tolerance, "max_iter": max_iterations, "mu_strategy": "adaptive"})
+    return nlp_solver(
+        "design",
+        nlp.key,
+        lambda: {"x": nlp.x, "p": nlp.P, "f": nlp.f, "g": nlp.g},
+        {"tol": tolerance, "max_iter": max_iterations, "mu_strategy": "adaptive"},
+    )
 
 
 def _elastic_solver(nlp: DesignNlp, max_iterations: int) -> ca.Function:
     def problem() -> dict:
         n_con = nlp.g.shape[0] - nlp.n_residuals
         slack = ca.SX.sym("s", n_con)
-        residuals, constraints = nlp.g[:nlp.n_residuals], nlp.g[nlp.n_residuals:]
-        return {"x": ca.vertcat(nlp.x, slack), "p": nlp.P, "f": ca.sum1(slack),
-                "g": ca.vertcat(residuals, constraints - slack, constraints + slack)}
+        residuals, constraints = nlp.g[: nlp.n_residuals], nlp.g[nlp.n_residuals :]
+        return {
+            "x": ca.vertcat(nlp.x, slack),
+            "p": nlp.P,
+            "f": ca.sum1(slack),
+            "g": ca.vertcat(residuals, constraints - slack, constraints + slack),
+        }
 
     return nlp_solver("design_feasibility", nlp.key, problem, {"tol": 1e-10, "max_iter": max_iterations})
 
 
-def least_violation(nlp: DesignNlp, x0: np.ndarray, P: np.ndarray, lbx: np.ndarray, ubx: np.ndarray,
-                    lbg: np.ndarray, ubg: np.ndarray, max_iterations: int,
-                    stop: Callable[[], bool] | None = None) -> tuple[np.ndarray, float, str]:
+def least_violation(
+    nlp: DesignNlp,
+    x0: np.ndarray,
+    P: np.ndarray,
+    lbx: np.ndarray,
+    ubx: np.ndarray,
+    lbg: np.ndarray,
+    ubg: np.ndarray,
+    max_iterations: int,
+    stop: Callable[[], bool] | None = None,
+) -> tuple[np.ndarray, float, str]:
     """The point of least total constraint violation (in scaled units) with every case in
     equilibrium and the design within its bounds: minimize the sum of elastic slacks s >= 0
     with lower - s <= g <= upper + s. Returns (x, total violation, IPOPT status)."""
@@ -135,9 +155,15 @@ def least_violation(nlp: DesignNlp, x0: np.ndarray, P: np.ndarray, lbx: np.ndarr
     g = np.asarray(g).ravel()[n_res:]
     s0 = np.maximum(np.maximum(lower - g, g - upper), 0.0) + 1e-3
     n_con = len(lower)
-    outcome = solve(solver, stop=stop, x0=np.concatenate([x0, s0]), p=P,
-                    lbx=np.concatenate([lbx, np.zeros(n_con)]), ubx=np.concatenate([ubx, np.full(n_con, np.inf)]),
-                    lbg=np.concatenate([np.zeros(n_res), np.full(n_con, -np.inf), lower]),
-                    ubg=np.concatenate([np.zeros(n_res), upper, np.full(n_con, np.inf)]))
+    outcome = solve(
+        solver,
+        stop=stop,
+        x0=np.concatenate([x0, s0]),
+        p=P,
+        lbx=np.concatenate([lbx, np.zeros(n_con)]),
+        ubx=np.concatenate([ubx, np.full(n_con, np.inf)]),
+        lbg=np.concatenate([np.zeros(n_res), np.full(n_con, -np.inf), lower]),
+        ubg=np.concatenate([np.zeros(n_res), upper, np.full(n_con, np.inf)]),
+    )
     x = outcome.x
-    return x[:len(x0)], float(np.sum(x[len(x0):])), outcome.status
+    return x[: len(x0)], float(np.sum(x[len(x0) :])), outcome.status

@@ -28,7 +28,7 @@ def mechanism_drawing(mech: Mechanism, z: np.ndarray | None = None, outputs: dic
     bodies = _bodies(mech)
     elements = []
     for name, first, count, start, end in mech.graphs.shape_segments:
-        points = undeformed[:, first:first + count].T
+        points = undeformed[:, first : first + count].T
         ends = (mech.structure.bodies[start], mech.structure.bodies[end])
         for body, point in zip(ends, (points[0], points[-1])):
             bodies[body]["skeleton"].append(point.tolist())
@@ -37,8 +37,11 @@ def mechanism_drawing(mech: Mechanism, z: np.ndarray | None = None, outputs: dic
         "name": mech.document.name,
         "units": {kind: mech.doc_unit(kind) for kind in ("length", "force", "moment", "angle")},
         "radians_per_angle_unit": mech.doc_factor("angle"),
-        "bodies": bodies, "elements": elements, "connectors": _connectors(mech, bodies),
-        "points": _point_outputs(mech, bodies), "loads": _loads(mech, bodies),
+        "bodies": bodies,
+        "elements": elements,
+        "connectors": _connectors(mech, bodies),
+        "points": _point_outputs(mech, bodies),
+        "loads": _loads(mech, bodies),
     }
     for point in drawing["points"]:  # a point output is on its body: joined to its reference point
         bodies[point["body"]]["skeleton"].append(point["point"])
@@ -53,9 +56,13 @@ def state_frame(mech: Mechanism, z: np.ndarray, p: np.ndarray, outputs: dict) ->
     """A state of the mechanism as the page animates it: every element's deformed centre
     line and every body's pose (document units; outputs of the state in document units)."""
     deformed = np.asarray(mech.graphs.shapes(z, p)[0], dtype=float) / mech.nd_per_doc("length")
-    return {"elements": {name: deformed[:, first:first + count].T.tolist()
-                         for name, first, count, _, _ in mech.graphs.shape_segments},
-            "poses": poses_from_outputs(mech, outputs)}
+    return {
+        "elements": {
+            name: deformed[:, first : first + count].T.tolist()
+            for name, first, count, _, _ in mech.graphs.shape_segments
+        },
+        "poses": poses_from_outputs(mech, outputs),
+    }
 
 
 def poses_from_outputs(mech: Mechanism, outputs: dict) -> dict[str, list[float]]:
@@ -67,7 +74,11 @@ def poses_from_outputs(mech: Mechanism, outputs: dict) -> dict[str, list[float]]
         keys = [f"bodies.{name}.{c}" for c in ("x", "y", "angle")]
         if all(outputs.get(k) is not None for k in keys):
             x0, y0 = (mech.value(f"/bodies/{name}/position/{i}") for i in (0, 1))
-            poses[name] = [outputs[keys[0]] - x0, outputs[keys[1]] - y0, (outputs[keys[2]] - _angle_of(mech, name)) * rad]
+            poses[name] = [
+                outputs[keys[0]] - x0,
+                outputs[keys[1]] - y0,
+                (outputs[keys[2]] - _angle_of(mech, name)) * rad,
+            ]
     return poses
 
 
@@ -91,16 +102,29 @@ def _angle_of(mech: Mechanism, body: str) -> float:
 def _bodies(mech: Mechanism) -> dict[str, dict]:
     """Per body: reference point, angle (radians), mass centre, fixed, and the points its
     skeleton joins to its reference point (filled in by the drawing)."""
-    fixed = {mech.structure.bodies[b]: all(v is not None for v in row) for b, row in enumerate(mech.structure.prescribed)}
+    fixed = {
+        mech.structure.bodies[b]: all(v is not None for v in row) for b, row in enumerate(mech.structure.prescribed)
+    }
     bodies = {}
     for name, spec in mech.document.bodies.items():
         reference = np.array([mech.value(f"/bodies/{name}/position/{i}") for i in (0, 1)])
         angle = _angle_of(mech, name) * mech.doc_factor("angle")
         offset = getattr(spec, "center_of_mass", None)
-        centre = reference if offset is None else reference + turned(
-            [document_length(mech, v, f"/bodies/{name}/center_of_mass/{i}") for i, v in enumerate(offset)], angle)
-        bodies[name] = {"reference": reference.tolist(), "angle": angle, "centre": centre.tolist(),
-                        "fixed": fixed.get(name, bool(getattr(spec, "fixed", False))), "skeleton": []}
+        centre = (
+            reference
+            if offset is None
+            else reference
+            + turned(
+                [document_length(mech, v, f"/bodies/{name}/center_of_mass/{i}") for i, v in enumerate(offset)], angle
+            )
+        )
+        bodies[name] = {
+            "reference": reference.tolist(),
+            "angle": angle,
+            "centre": centre.tolist(),
+            "fixed": fixed.get(name, bool(getattr(spec, "fixed", False))),
+            "skeleton": [],
+        }
     return bodies
 
 
@@ -115,10 +139,18 @@ def _connectors(mech: Mechanism, bodies: dict) -> list[dict]:
         points = []
         for field, body in connector.points:
             where = getattr(spec, field)
-            points.append(bodies[body]["reference"] if where is None else
-                          [document_length(mech, v, f"{pointer}/{field}/{i}") for i, v in enumerate(where)])
-        entry = {"name": name, "type": spec.type, "glyph": connector.glyph, "bodies": [spec.from_, spec.to],
-                 "points": points}
+            points.append(
+                bodies[body]["reference"]
+                if where is None
+                else [document_length(mech, v, f"{pointer}/{field}/{i}") for i, v in enumerate(where)]
+            )
+        entry = {
+            "name": name,
+            "type": spec.type,
+            "glyph": connector.glyph,
+            "bodies": [spec.from_, spec.to],
+            "points": points,
+        }
         if connector.angle_field is not None:
             entry["angle"] = float(mech.value(f"{pointer}/{connector.angle_field}")) * mech.doc_factor("angle")
         if connector.kind is not None:
@@ -138,19 +170,31 @@ def _point_outputs(mech: Mechanism, bodies: dict) -> list[dict]:
         if at is not None:
             where = np.array([document_length(mech, v, f"{pointer}/at/{i}") for i, v in enumerate(at)])
         else:
-            where = in_body(bodies, body, [document_length(mech, v, f"{pointer}/offset/{i}") for i, v in enumerate(offset or (0, 0))])
+            where = in_body(
+                bodies,
+                body,
+                [document_length(mech, v, f"{pointer}/offset/{i}") for i, v in enumerate(offset or (0, 0))],
+            )
         points.append({"name": point.name, "body": body, "point": where.tolist()})
     return points
 
 
 def _loads(mech: Mechanism, bodies: dict) -> list[dict]:
     """Forces (vector at their point) and moments (at the body's reference point), undeformed."""
-    rest = {f"bodies.{name}.{c}": v for name, b in bodies.items()
-            for c, v in zip(("x", "y", "angle"), (*b["reference"], b["angle"] / mech.doc_factor("angle")))}
+    rest = {
+        f"bodies.{name}.{c}": v
+        for name, b in bodies.items()
+        for c, v in zip(("x", "y", "angle"), (*b["reference"], b["angle"] / mech.doc_factor("angle")))
+    }
     drawn = []
     for load in mech.structure.loads:
         body = mech.structure.bodies[load.body]
-        entry = {"name": load.name, "kind": load.kind, "body": body, "point": load_point(mech, load.name, rest).tolist()}
+        entry = {
+            "name": load.name,
+            "kind": load.kind,
+            "body": body,
+            "point": load_point(mech, load.name, rest).tolist(),
+        }
         if load.kind == "force":
             entry["vector"] = [mech.value(f"/loads/{load.name}/force/{i}") for i in (0, 1)]
         else:

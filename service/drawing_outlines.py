@@ -69,9 +69,18 @@ def contact_objects(mech: Mechanism, bodies: dict, span: float) -> list[dict]:
         points, closed = local
         if obj.body is not None:  # the pose is in the body's axes
             points = [in_body(bodies, obj.body, p).tolist() for p in points]
-        drawn.append({"name": name, "kind": "object", "type": obj.type, "body": obj.body, "points": points,
-                      "closed": closed, "solid": obj.type != "hole",
-                      **({"normal": _normal_of(obj, bodies)} if obj.type == "half_plane" else {})})
+        drawn.append(
+            {
+                "name": name,
+                "kind": "object",
+                "type": obj.type,
+                "body": obj.body,
+                "points": points,
+                "closed": closed,
+                "solid": obj.type != "hole",
+                **({"normal": _normal_of(obj, bodies)} if obj.type == "half_plane" else {}),
+            }
+        )
     return drawn
 
 
@@ -87,8 +96,10 @@ def _object_outline(obj, length, angle, span: float):
     if obj.type == "polygon":
         position = np.array([length(f"position/{i}", v) for i, v in enumerate(obj.position)])
         turn = angle(obj.angle, "angle") if hasattr(obj, "angle") else 0.0
-        points = [(position + turned([length(f"vertices/{k}/{i}", v) for i, v in enumerate(vertex)], turn)).tolist()
-                  for k, vertex in enumerate(obj.vertices)]
+        points = [
+            (position + turned([length(f"vertices/{k}/{i}", v) for i, v in enumerate(vertex)], turn)).tolist()
+            for k, vertex in enumerate(obj.vertices)
+        ]
         return points + points[:1], True
     if obj.type == "half_plane":
         point = [length(f"point/{i}", v) for i, v in enumerate(obj.point)]
@@ -111,9 +122,19 @@ def circle_sites(mech: Mechanism, bodies: dict) -> list[dict]:
         if site.type != "circle":
             continue
         pointer = f"/contacts/sites/{name}"
-        centre = in_body(bodies, site.body, [document_length(mech, v, f"{pointer}/centre/{i}")
-                                             for i, v in enumerate(site.centre)])
+        centre = in_body(
+            bodies, site.body, [document_length(mech, v, f"{pointer}/centre/{i}") for i, v in enumerate(site.centre)]
+        )
         r = document_length(mech, site.radius, f"{pointer}/radius")
-        drawn.append({"name": name, "kind": "site", "type": "circle", "body": site.body, "points": ellipse(centre, r, r),
-                      "closed": True, "solid": True})
+        drawn.append(
+            {
+                "name": name,
+                "kind": "site",
+                "type": "circle",
+                "body": site.body,
+                "points": ellipse(centre, r, r),
+                "closed": True,
+                "solid": True,
+            }
+        )
     return drawn

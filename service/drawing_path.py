@@ -36,6 +36,5 @@ def path_frames(mech: Mechanism, pointer: str, values: list[float], options: New
         result = newton(at, at.p(), guess, options)
         if result.converged:
             guess = result.z
-        frames.append({"value": value, "status": result.status,
-                       **state_frame(at, result.z, at.p(), result.outputs())})
+        frames.append({"value": value, "status": result.status, **state_frame(at, result.z, at.p(), result.outputs())})
     return frames

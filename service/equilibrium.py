@@ -26,6 +26,7 @@ from service.units import displacement_to_doc, outputs_in_doc_units, residual_re
 # Seed 000, Sec. 2: the constant-stiffness curved beam is faithful up to about +-20 deg.
 ROTATION_VALIDITY_DEG = 20.0
 
+
 @dataclass
 class EquilibriumResult:
     status: Status
@@ -72,8 +73,10 @@ class EquilibriumResult:
                 degrees = abs(value) * rad_per_unit * 180 / np.pi
                 if degrees > ROTATION_VALIDITY_DEG:
                     element = name.split(".")[1]
-                    notes.append(f"flexure {element} rotates {degrees:.1f} deg: the constant-stiffness "
-                                 f"curved-beam models hold to about {ROTATION_VALIDITY_DEG:.0f} deg (Cammarata et al. 2022)")
+                    notes.append(
+                        f"flexure {element} rotates {degrees:.1f} deg: the constant-stiffness "
+                        f"curved-beam models hold to about {ROTATION_VALIDITY_DEG:.0f} deg (Cammarata et al. 2022)"
+                    )
         return notes
 
     def displacements(self) -> dict[str, float]:
@@ -120,8 +123,11 @@ def check_constrained(mech: Mechanism, p: np.ndarray | None = None, again: bool 
             )
         # no body moves: the singular direction is in the elements' own unknowns, forces that
         # nothing determines (two inextensible links that hold the same distance, say)
-        undetermined = [name for (name, _), a in zip(element_unknowns(mech.structure), amplitude)
-                        if a > 1e-6 and name not in mech.free_coordinates]
+        undetermined = [
+            name
+            for (name, _), a in zip(element_unknowns(mech.structure), amplitude)
+            if a > 1e-6 and name not in mech.free_coordinates
+        ]
         shown = ", ".join(undetermined[:8]) + (f" and {len(undetermined) - 8} more" if len(undetermined) > 8 else "")
         raise MechanismError(
             "/elements",
@@ -137,8 +143,9 @@ def _newton_step(structure) -> ca.Function:
     return sparse_step(graphs_for(structure).residual_and_tangent)
 
 
-def newton(mech: Mechanism, p: np.ndarray, z0: np.ndarray, options: NewtonOptions,
-           frozen_tangent: np.ndarray | None = None) -> EquilibriumResult:
+def newton(
+    mech: Mechanism, p: np.ndarray, z0: np.ndarray, options: NewtonOptions, frozen_tangent: np.ndarray | None = None
+) -> EquilibriumResult:
     """Newton from z0 with the matrix options.jacobian chooses: the full K_T (factored
     sparsely), its first term K_T^I, or K_T frozen (at the undeformed state by default)."""
     g = mech.graphs
@@ -151,6 +158,7 @@ def newton(mech: Mechanism, p: np.ndarray, z0: np.ndarray, options: NewtonOption
     if options.jacobian == "full" and mech.n_free:
         direction = sparse_direction(_newton_step(mech.structure.unnamed), p)
     elif options.jacobian == "first_term":
+
         def direction(z, R):
             return dense_solve(np.asarray(g.tangent_terms(z, p)[0]), R)
     else:
@@ -159,13 +167,18 @@ def newton(mech: Mechanism, p: np.ndarray, z0: np.ndarray, options: NewtonOption
 
         def direction(z, R):
             return dense_solve(frozen_tangent, R)
+
     status, z, norm, k, history, message = iterate(residual, direction, z0, options)
     return EquilibriumResult(status, z, norm, k, history, time.perf_counter() - started, mech, message)
 
 
-def solve_equilibrium(mech: Mechanism, options: NewtonOptions = NewtonOptions(),
-                      guess: np.ndarray | None = None, frozen_tangent: np.ndarray | None = None,
-                      check: bool = True) -> EquilibriumResult:
+def solve_equilibrium(
+    mech: Mechanism,
+    options: NewtonOptions = NewtonOptions(),
+    guess: np.ndarray | None = None,
+    frozen_tangent: np.ndarray | None = None,
+    check: bool = True,
+) -> EquilibriumResult:
     """Equilibrium of `mech` under its loads. `guess`: nondimensional free displacements
     (default: the undeformed state)."""
     p = mech.p()
@@ -187,8 +200,12 @@ def unknown_names(mech: Mechanism) -> list[str]:
     return [name for name, _ in element_unknowns(mech.structure)]
 
 
-def solve_bounded(mech: Mechanism, bounds: dict[str, tuple[float | None, float | None]],
-                  options: NewtonOptions = NewtonOptions(), guess: np.ndarray | None = None) -> EquilibriumResult:
+def solve_bounded(
+    mech: Mechanism,
+    bounds: dict[str, tuple[float | None, float | None]],
+    options: NewtonOptions = NewtonOptions(),
+    guess: np.ndarray | None = None,
+) -> EquilibriumResult:
     """Equilibrium with bounds on unknowns (Lan 2005 Sec. 2.2.2, bounded Gauss-Newton): find
     R(z) = 0 inside the bounds with IPOPT and exact derivatives (a feasibility problem: the
     residuals are equality constraints; IPOPT's restoration phase reports an empty set).
@@ -198,10 +215,19 @@ def solve_bounded(mech: Mechanism, bounds: dict[str, tuple[float | None, float |
     lower, upper = _bounds(mech, bounds)
     p = mech.p()
     started = time.perf_counter()
-    z0 = _start_on_bounds(mech, p, np.zeros(mech.n_free) if guess is None else np.asarray(guess, dtype=float),
-                          lower, upper, options)
-    run = ipopt.solve(_bounded_solver(mech.structure, options), stop=ipopt.deadline(options.time_limit), x0=z0, p=p,
-                      lbx=lower, ubx=upper, lbg=0, ubg=0)
+    z0 = _start_on_bounds(
+        mech, p, np.zeros(mech.n_free) if guess is None else np.asarray(guess, dtype=float), lower, upper, options
+    )
+    run = ipopt.solve(
+        _bounded_solver(mech.structure, options),
+        stop=ipopt.deadline(options.time_limit),
+        x0=z0,
+        p=p,
+        lbx=lower,
+        ubx=upper,
+        lbg=0,
+        ubg=0,
+    )
     z = run.x
     norm = float(np.abs(np.asarray(mech.graphs.residual(z, p))).max())
     # Polish inside the bounds: Newton from the IPOPT point, kept only if it stays inside.
@@ -212,9 +238,16 @@ def solve_bounded(mech: Mechanism, bounds: dict[str, tuple[float | None, float |
     seconds = time.perf_counter() - started
     if norm <= options.tol_residual:
         return EquilibriumResult("converged", z, norm, run.iterations, [norm], seconds, mech)
-    return EquilibriumResult("not_converged", z, norm, run.iterations, [norm], seconds, mech,
-                             f"no equilibrium within the bounds: the least residual there is {norm:.3g} "
-                             f"(IPOPT: {run.return_status})")
+    return EquilibriumResult(
+        "not_converged",
+        z,
+        norm,
+        run.iterations,
+        [norm],
+        seconds,
+        mech,
+        f"no equilibrium within the bounds: the least residual there is {norm:.3g} (IPOPT: {run.return_status})",
+    )
 
 
 def _bounds(mech: Mechanism, bounds: dict) -> tuple[np.ndarray, np.ndarray]:
@@ -241,7 +274,7 @@ def _start_on_bounds(mech: Mechanism, p: np.ndarray, z0: np.ndarray, lower, uppe
     """A consistent start on the bounds: the bounded body coordinates held where the bounds
     put them (their balance rows dropped), the rest solved by Newton."""
     clipped = np.clip(z0, lower, upper)
-    held = np.flatnonzero((clipped != z0)[:mech.n_body_coordinates])
+    held = np.flatnonzero((clipped != z0)[: mech.n_body_coordinates])
     z0 = clipped
     if held.size:
         free = np.setdiff1d(np.arange(mech.n_free), held)
@@ -260,12 +293,16 @@ def _start_on_bounds(mech: Mechanism, p: np.ndarray, z0: np.ndarray, lower, uppe
 
 def _bounded_solver(structure, options: NewtonOptions):
     """IPOPT on R(z) = 0 within bounds (a feasibility problem), built once per structure."""
+
     def problem() -> dict:
         import casadi as ca
 
         z, p = ca.SX.sym("z", structure.n_unknowns), ca.SX.sym("p", len(structure.parameters))
         return {"x": z, "p": p, "f": 0, "g": graphs_for(structure).residual(z, p)}
 
-    return ipopt.nlp_solver("bounded_equilibrium", structure, problem,
-                            {"tol": 1e-12, "constr_viol_tol": options.tol_residual,
-                             "max_iter": max(options.max_iterations, 200)})
+    return ipopt.nlp_solver(
+        "bounded_equilibrium",
+        structure,
+        problem,
+        {"tol": 1e-12, "constr_viol_tol": options.tol_residual, "max_iter": max(options.max_iterations, 200)},
+    )

@@ -10,8 +10,11 @@ from pathlib import Path
 def examples_directory(configured: Path | None = None) -> Path | None:
     """`configured` if given, else examples/ of the current directory, else the one next to
     the package sources."""
-    candidates = [configured] if configured is not None else [
-        Path.cwd() / "examples", Path(__file__).resolve().parents[1] / "examples"]
+    candidates = (
+        [configured]
+        if configured is not None
+        else [Path.cwd() / "examples", Path(__file__).resolve().parents[1] / "examples"]
+    )
     for candidate in candidates:
         if candidate.is_dir():
             return candidate
@@ -40,8 +43,9 @@ class ExampleLibrary:
             except (OSError, json.JSONDecodeError):
                 continue  # not an example; `flexmech examples` reports unreadable files
             if isinstance(data, dict):
-                self._examples[file.stem] = Example(file.stem, str(data.get("name", file.stem)),
-                                                    str(data.get("description", "")), data)
+                self._examples[file.stem] = Example(
+                    file.stem, str(data.get("name", file.stem)), str(data.get("description", "")), data
+                )
 
     def names(self) -> list[str]:
         return list(self._examples)

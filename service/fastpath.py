@@ -59,8 +59,9 @@ def compiled_library(fn: ca.Function, key: str) -> Path | None:
             generator.add(fn)
             source = generator.generate(tmp + os.sep)
             partial = Path(tmp) / "lib.so"
-            done = subprocess.run([cc, "-O2", "-fPIC", "-shared", source, "-o", str(partial), "-lm"],
-                                  capture_output=True, text=True)
+            done = subprocess.run(
+                [cc, "-O2", "-fPIC", "-shared", source, "-o", str(partial), "-lm"], capture_output=True, text=True
+            )
             if done.returncode != 0:
                 return None
             # rename is atomic: concurrent processes never load a half-written library
@@ -80,8 +81,13 @@ class FastPath:
     Not thread-safe: give each thread its own FastPath.
     """
 
-    def __init__(self, mech: Mechanism, options: FastOptions = FastOptions(), compile: bool = True,
-                 outputs: tuple[str, ...] | None = None):
+    def __init__(
+        self,
+        mech: Mechanism,
+        options: FastOptions = FastOptions(),
+        compile: bool = True,
+        outputs: tuple[str, ...] | None = None,
+    ):
         self.mechanism = mech
         self.options = options
         self.compile = compile
@@ -92,12 +98,17 @@ class FastPath:
         if unknown:
             raise MechanismError("outputs", f"unknown output(s) {', '.join(unknown)}")
         selected = [names.index(n) for n in self.output_names]
-        rootfinder = ca.rootfinder("equilibrium_newton", "fast_newton", g.residual, {
-            "abstol": options.tol_residual,
-            "abstolStep": 1e-14,
-            "max_iter": options.max_iterations,
-            "error_on_fail": False,
-        })
+        rootfinder = ca.rootfinder(
+            "equilibrium_newton",
+            "fast_newton",
+            g.residual,
+            {
+                "abstol": options.tol_residual,
+                "abstolStep": 1e-14,
+                "max_iter": options.max_iterations,
+                "error_on_fail": False,
+            },
+        )
         z0 = ca.MX.sym("z0", mech.n_free)
         p = ca.MX.sym("p", len(mech.parameters))
         z = rootfinder(z0, p)
@@ -110,7 +121,8 @@ class FastPath:
         self._step = ca.Function("fast_step", [z0, p], [z, norm, y], ["z0", "p"], ["z", "residual_norm", "y"])
         self._key = f"{mech.structure.key}|{options}|{','.join(self.output_names)}"
         self.solve_function, self.compiled = self._build(
-            ca.Function("fast_solve", [z0, p], [z, norm], ["z0", "p"], ["z", "residual_norm"]))
+            ca.Function("fast_solve", [z0, p], [z, norm], ["z0", "p"], ["z", "residual_norm"])
+        )
         self._sweeps: dict[int, ca.Function] = {}
         self._solve_buffer: _Bound | None = None
         self._sweep_buffers: dict[int, _Bound] = {}
@@ -123,8 +135,9 @@ class FastPath:
     def solve(self, p: np.ndarray | None = None, z0: np.ndarray | None = None) -> tuple[np.ndarray, float]:
         p = self.mechanism.p() if p is None else p
         if self._solve_buffer is None:
-            self._solve_buffer = _Bound(self.solve_function, [(self.mechanism.n_free,), (len(p),)],
-                                        [(self.mechanism.n_free,), (1,)])
+            self._solve_buffer = _Bound(
+                self.solve_function, [(self.mechanism.n_free,), (len(p),)], [(self.mechanism.n_free,), (1,)]
+            )
         b = self._solve_buffer
         b.inputs[0][:] = 0.0 if z0 is None else z0
         b.inputs[1][:] = p
@@ -145,8 +158,9 @@ class FastPath:
         bound = self._sweep_buffers.get(points)
         if bound is None:
             # CasADi matrices are column-major: a (points, rows) C-array is a (rows, points) matrix
-            bound = _Bound(self.sweep_function(points), [(n,), (points, P.shape[0])],
-                           [(points, n), (points,), (points, ny)])
+            bound = _Bound(
+                self.sweep_function(points), [(n,), (points, P.shape[0])], [(points, n), (points,), (points, ny)]
+            )
             self._sweep_buffers[points] = bound
         bound.inputs[0][:] = 0.0 if z0 is None else z0
         bound.inputs[1][:] = P.T

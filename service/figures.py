@@ -20,8 +20,9 @@ def check_plot_path(path: str | Path) -> Path:
     """The path as a Path; ValueError unless its suffix is one of PLOT_SUFFIXES."""
     path = Path(path)
     if path.suffix.lower() not in PLOT_SUFFIXES:
-        raise ValueError(f"cannot tell the figure format of '{path}': use a name ending in "
-                         f"{' or '.join(PLOT_SUFFIXES)}")
+        raise ValueError(
+            f"cannot tell the figure format of '{path}': use a name ending in {' or '.join(PLOT_SUFFIXES)}"
+        )
     return path
 
 
@@ -29,8 +30,11 @@ def field_label(pointer: str) -> str:
     """A short reading of a numeric field's JSON pointer for axis labels:
     /loads/actuation/force/1 -> "actuation force y", /sections/flexure/h -> "flexure h"."""
     parts = [p for p in pointer.split("/") if p]
-    if len(parts) >= 2 and parts[-1] in ("0", "1") and parts[-2] in ("force", "position", "center",
-                                                                    "centre", "at", "offset", "point"):
+    if (
+        len(parts) >= 2
+        and parts[-1] in ("0", "1")
+        and parts[-2] in ("force", "position", "center", "centre", "at", "offset", "point")
+    ):
         parts[-1] = "xy"[int(parts[-1])]
     if len(parts) >= 3:
         parts = parts[1:]  # drop the collection: the name already says what it is

@@ -21,10 +21,13 @@ def inverse_wrenches(mech: Mechanism, displacements: dict[str, tuple[float, floa
     """
     owning = [t.name for t in mech.structure.elements if t.unknowns]
     if owning:
-        raise MechanismError("/displacements", "the closed-form inverse holds for elements whose forces follow "
-                             "from the body motions (curved beams with the linear or partial_nonlinear model, "
-                             f"springs); these elements have unknowns of their own: {', '.join(owning)} "
-                             "(links take the link inverse)")
+        raise MechanismError(
+            "/displacements",
+            "the closed-form inverse holds for elements whose forces follow "
+            "from the body motions (curved beams with the linear or partial_nonlinear model, "
+            f"springs); these elements have unknowns of their own: {', '.join(owning)} "
+            "(links take the link inverse)",
+        )
     bodies = mech.structure.bodies
     d = np.zeros(3 * len(bodies))
     for name, values in displacements.items():
@@ -35,7 +38,7 @@ def inverse_wrenches(mech: Mechanism, displacements: dict[str, tuple[float, floa
         if not all(np.isfinite(values)):
             raise MechanismError(f"/displacements/{name}", "displacements must be finite numbers")
         b = bodies.index(name)
-        d[3 * b:3 * b + 3] = [v * mech.nd_per_doc(k) for v, k in zip(values, _KINDS)]
+        d[3 * b : 3 * b + 3] = [v * mech.nd_per_doc(k) for v, k in zip(values, _KINDS)]
     elastic, _ = mech.graphs.body_wrenches(d, mech.p())
     w = wrench_to_doc(mech, np.asarray(elastic).ravel())
     return {name: w[b] for b, name in enumerate(bodies)}

@@ -37,7 +37,7 @@ def _sampler(structure: Structure, name: str, at: tuple[float, ...]) -> ca.Funct
     link, offset = structure.elements[index], structure.element_offsets[index]
     z = ca.SX.sym("z", structure.n_unknowns)
     shooting = link_shooting(ctx, link)
-    solution = attach(ctx, link, shooting, ctx.displacements(z), z[offset:offset + link.unknowns]).solution
+    solution = attach(ctx, link, shooting, ctx.displacements(z), z[offset : offset + link.unknowns]).solution
     states = []
     for u in at:
         k = min(int(u * link.intervals), link.intervals - 1)
@@ -59,8 +59,12 @@ def link_states(mech: Mechanism, z: np.ndarray, name: str, u) -> dict[str, np.nd
     if any(not 0.0 <= x <= 1.0 for x in at):
         raise MechanismError("/u", "positions along a link must lie in [0, 1]")
     states = np.asarray(_sampler(mech.structure, name, at)(z, mech.p()))
-    return {"psi": states[0], "m": states[1] / mech.nd_per_doc("moment"),
-            "x": states[2] / mech.nd_per_doc("length"), "y": states[3] / mech.nd_per_doc("length")}
+    return {
+        "psi": states[0],
+        "m": states[1] / mech.nd_per_doc("moment"),
+        "x": states[2] / mech.nd_per_doc("length"),
+        "y": states[3] / mech.nd_per_doc("length"),
+    }
 
 
 # --- inverse ---------------------------------------------------------------------------------
@@ -82,15 +86,18 @@ class LinkInverseResult:
 
 def _psi_layout(pointer: str, spec) -> tuple[PsiLayout, list[float]]:
     if not isinstance(spec, dict) or set(spec) not in ({"polynomial"}, {"samples", "u"}):
-        raise MechanismError(pointer, 'give {"polynomial": [c0, c1, ...]} or {"samples": [...], "u": [...]} '
-                             "(angles in radians)")
+        raise MechanismError(
+            pointer, 'give {"polynomial": [c0, c1, ...]} or {"samples": [...], "u": [...]} (angles in radians)'
+        )
     if "polynomial" in spec:
         values = _numbers(f"{pointer}/polynomial", spec["polynomial"])
         return PsiLayout("polynomial", len(values)), values
     values = _numbers(f"{pointer}/samples", spec["samples"])
     at = _numbers(f"{pointer}/u", spec["u"])
     if len(at) != len(values):
-        raise MechanismError(f"{pointer}/u", f"inconsistent inverse data: {len(at)} positions for {len(values)} samples")
+        raise MechanismError(
+            f"{pointer}/u", f"inconsistent inverse data: {len(at)} positions for {len(values)} samples"
+        )
     if len(values) < 2:
         raise MechanismError(f"{pointer}/samples", "inconsistent inverse data: at least two samples are needed")
     if any(not 0.0 <= x <= 1.0 for x in at) or len(set(at)) != len(at):
@@ -99,14 +106,22 @@ def _psi_layout(pointer: str, spec) -> tuple[PsiLayout, list[float]]:
 
 
 def _numbers(pointer: str, values) -> list[float]:
-    if not isinstance(values, (list, tuple)) or not values or not all(
-            isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v) for v in values):
+    if (
+        not isinstance(values, (list, tuple))
+        or not values
+        or not all(isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v) for v in values)
+    ):
         raise MechanismError(pointer, "expected a non-empty list of finite numbers")
     return [float(v) for v in values]
 
 
-def inverse_links(mech: Mechanism, shapes: dict, internal_forces: dict, unknown_loads: list[str],
-                  options: NewtonOptions = NewtonOptions()) -> LinkInverseResult:
+def inverse_links(
+    mech: Mechanism,
+    shapes: dict,
+    internal_forces: dict,
+    unknown_loads: list[str],
+    options: NewtonOptions = NewtonOptions(),
+) -> LinkInverseResult:
     """Initial shapes and unknown loads from deformed shapes and internal forces.
 
     shapes: {link: {"polynomial": [c0, ...]} or {"samples": [...], "u": [...]}}, psi in rad;
@@ -119,9 +134,13 @@ def inverse_links(mech: Mechanism, shapes: dict, internal_forces: dict, unknown_
     specified, specified_values = _specified_forces(mech, links, internal_forces)
     unknown_indices = _unknown_loads(mech, unknown_loads)
     if len(specified) != len(unknown_indices):
-        raise MechanismError("/internal_forces", (
-            f"inconsistent inverse data: {len(specified)} internal force component(s) given for "
-            f"{len(unknown_indices)} unknown load component(s); they must be equal (Lan 2005 Sec. 5.3.2)"))
+        raise MechanismError(
+            "/internal_forces",
+            (
+                f"inconsistent inverse data: {len(specified)} internal force component(s) given for "
+                f"{len(unknown_indices)} unknown load component(s); they must be equal (Lan 2005 Sec. 5.3.2)"
+            ),
+        )
     layout = InverseLayout(tuple(layouts), tuple(unknown_indices), tuple(specified))
     graphs = inverse_graphs_for(mech.structure, layout)
     p, q = mech.p(), np.array(data + specified_values)
@@ -151,17 +170,23 @@ def _invertible_links(mech: Mechanism) -> list:
         raise MechanismError("/shapes", "this mechanism has no links to invert")
     for name, load in mech.document.loads.items():
         if isinstance(load, PrescribedDisplacement):
-            raise MechanismError(f"/loads/{name}", "the link inverse takes forces and moments; prescribed "
-                                 "displacements belong to the forward problem")
+            raise MechanismError(
+                f"/loads/{name}",
+                "the link inverse takes forces and moments; prescribed displacements belong to the forward problem",
+            )
     for element in structure.elements:
         if not getattr(FAMILIES.of(element), "invertible", False) and element.unknowns:  # links by shooting
-            raise MechanismError(f"/elements/{element.name}", "the link inverse takes links and elements whose "
-                                 f"forces follow from the body motions; '{element.name}' ({element.family}) "
-                                 "has unknowns of its own")
+            raise MechanismError(
+                f"/elements/{element.name}",
+                "the link inverse takes links and elements whose "
+                f"forces follow from the body motions; '{element.name}' ({element.family}) "
+                "has unknowns of its own",
+            )
     for link in links:
         if link.shear or link.axial or link.weighs:
-            raise MechanismError(f"/elements/{link.name}", "the link inverse takes inextensible, massless links "
-                                 "without shear")
+            raise MechanismError(
+                f"/elements/{link.name}", "the link inverse takes inextensible, massless links without shear"
+            )
     return links
 
 
@@ -175,8 +200,9 @@ def _shape_data(links: list, shapes) -> tuple[list[PsiLayout], list[float]]:
     layouts, data = [], []
     for name in names:
         if name not in shapes:
-            raise MechanismError(f"/shapes/{name}", "inconsistent inverse data: the deformed shape of every link "
-                                 "is needed")
+            raise MechanismError(
+                f"/shapes/{name}", "inconsistent inverse data: the deformed shape of every link is needed"
+            )
         layout, values = _psi_layout(f"/shapes/{name}", shapes[name])
         layouts.append(layout)
         data.extend(values)

@@ -69,7 +69,9 @@ def checked_options(options: dict[str, Any]) -> tuple[tuple[str, Any], ...]:
     out = {"linear_solver": "mumps"}
     for name, value in options.items():
         if name not in ALLOWED_OPTIONS:
-            raise IpoptOptionError(name, f"not an IPOPT option flexmech sets (options: {', '.join(sorted(ALLOWED_OPTIONS))})")
+            raise IpoptOptionError(
+                name, f"not an IPOPT option flexmech sets (options: {', '.join(sorted(ALLOWED_OPTIONS))})"
+            )
         kind, check = ALLOWED_OPTIONS[name]
         if isinstance(value, bool) or not isinstance(value, (kind, int) if kind is float else kind):
             raise IpoptOptionError(name, f"expected a {kind.__name__}, got {value!r}")
@@ -130,10 +132,15 @@ def nlp_solver(name: str, key: Any, problem: Callable[[], dict], options: dict[s
     ipopt = {f"ipopt.{k}": v for k, v in settings}
     nlp = problem()
     p = nlp.get("p")
-    watch = _Watch(f"{name}_watch", nlp["x"].numel(), nlp["g"].numel() if "g" in nlp else 0,
-                   0 if p is None else p.numel())
-    solver = ca.nlpsol(name, "ipopt", nlp, {"print_time": False, "ipopt.sb": "yes", "ipopt.print_level": 0,
-                                            "iteration_callback": watch, **ipopt})
+    watch = _Watch(
+        f"{name}_watch", nlp["x"].numel(), nlp["g"].numel() if "g" in nlp else 0, 0 if p is None else p.numel()
+    )
+    solver = ca.nlpsol(
+        name,
+        "ipopt",
+        nlp,
+        {"print_time": False, "ipopt.sb": "yes", "ipopt.print_level": 0, "iteration_callback": watch, **ipopt},
+    )
     _SOLVERS[cache_key] = solver
     _WATCHES[id(solver)] = watch
     if len(_SOLVERS) > MAX_SOLVERS:
@@ -173,8 +180,9 @@ class IpoptResult:
         return self.status in ("optimal", "acceptable")
 
 
-def solve(solver: ca.Function, stop: Callable[[], bool] | None = None,
-          stop_status: str = "time_limit", **arguments) -> IpoptResult:
+def solve(
+    solver: ca.Function, stop: Callable[[], bool] | None = None, stop_status: str = "time_limit", **arguments
+) -> IpoptResult:
     """Run a solver (x0, p, lbx, ubx, lbg, ubg); the status is 'optimal' or 'acceptable' only
     when CasADi reports success. stop() is asked at every iteration: True ends the run with
     `stop_status`."""
@@ -198,6 +206,15 @@ def solve(solver: ca.Function, stop: Callable[[], bool] | None = None,
     def array(name: str) -> np.ndarray:
         return np.asarray(solution[name], dtype=float).ravel()
 
-    return IpoptResult(status, return_status, array("x"), float(solution["f"]), array("g"), array("lam_g"),
-                       array("lam_x"), int(stats.get("iter_count", 0)), time.perf_counter() - started,
-                       stats.get("iterations") or {})
+    return IpoptResult(
+        status,
+        return_status,
+        array("x"),
+        float(solution["f"]),
+        array("g"),
+        array("lam_g"),
+        array("lam_x"),
+        int(stats.get("iter_count", 0)),
+        time.perf_counter() - started,
+        stats.get("iterations") or {},
+    )

@@ -54,8 +54,9 @@ def _norm(R: np.ndarray) -> float:
     return float(np.abs(R).max()) if R.size else 0.0
 
 
-def iterate(residual: Residual, direction: Direction, z0: np.ndarray,
-            options: NewtonOptions) -> tuple[Status, np.ndarray, float, int, list[float], str]:
+def iterate(
+    residual: Residual, direction: Direction, z0: np.ndarray, options: NewtonOptions
+) -> tuple[Status, np.ndarray, float, int, list[float], str]:
     """Converged when |R|_inf <= tol_residual and the last step |dz|_inf <= tol_step (or the
     guess already satisfies the residual tolerance).
     Returns (status, z, |R|_inf, iterations, residual history, message)."""
@@ -90,8 +91,14 @@ def iterate(residual: Residual, direction: Direction, z0: np.ndarray,
                 norm_new = _norm(R_new)
         step_norm = float(np.abs(alpha * dz).max())
         z, R, norm = z_new, R_new, norm_new
-    return "not_converged", z, norm, options.max_iterations, history, (
-        f"no convergence in {options.max_iterations} iterations")
+    return (
+        "not_converged",
+        z,
+        norm,
+        options.max_iterations,
+        history,
+        (f"no convergence in {options.max_iterations} iterations"),
+    )
 
 
 def dense_solve(M: np.ndarray, R: np.ndarray) -> np.ndarray | None:
@@ -144,4 +151,5 @@ def sparse_direction(step: ca.Function, p: np.ndarray) -> Direction:
         except RuntimeError:  # CSparse: "factorization failed, check if Jacobian is singular"
             return None
         return dz if np.all(np.isfinite(dz)) else None
+
     return direction

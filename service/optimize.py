@@ -13,20 +13,17 @@ optimal objective by minus the multiplier.
 
 from __future__ import annotations
 
-import re
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from models import Mechanism
 from service.contact.design import run_contact_start, uses_contact
 from service.design import DesignProblem, OutputRef
 from service.design_nlp import DesignNlp, design_nlp, least_violation, solver_for
-from service.equilibrium import newton
+from service.design_states import case_outputs, case_params, equilibria, polished_states
 from service.ipopt import solve
-from service.newton import NewtonOptions
 
 # A constraint counts as active within this (scaled) distance of its bound.
 ACTIVE_TOLERANCE = 1e-7
@@ -81,15 +78,29 @@ class OptimizationResult:
 
     def summary(self) -> dict:
         best = self.best
-        report = {"analysis": "optimize", "name": self.problem.mechanism.document.name, "status": self.status,
-                  "message": self.message, "seconds": self.seconds,
-                  "units": design_units(self.problem)}
+        report = {
+            "analysis": "optimize",
+            "name": self.problem.mechanism.document.name,
+            "status": self.status,
+            "message": self.message,
+            "seconds": self.seconds,
+            "units": design_units(self.problem),
+        }
         if best is not None:
             report.update({k: v for k, v in best.summary().items() if k not in ("status", "message", "seconds")})
             report["outputs"] = self.outputs()
-        report["starts"] = [{"start": s.start, "status": s.status, "objective": s.objective,
-                             "iterations": s.iterations, "seconds": s.seconds, "design": s.design,
-                             "design_start": s.design_start} for s in self.starts]
+        report["starts"] = [
+            {
+                "start": s.start,
+                "status": s.status,
+                "objective": s.objective,
+                "iterations": s.iterations,
+                "seconds": s.seconds,
+                "design": s.design,
+                "design_start": s.design_start,
+            }
+            for s in self.starts
+        ]
         return report
 
 
@@ -115,51 +126,6 @@ def design_units(problem: DesignProblem) -> dict[str, str]:
     return units
 
 
-def case_params(problem: DesignProblem, design: np.ndarray) -> list[np.ndarray]:
-    """Nondimensional parameters of every case for a design (document units)."""
-    ps = []
-    for p in problem.case_p:
-        p = p.copy()
-        p[list(problem.slots)] = design * problem.nd_per_doc
-        ps.append(p)
-    return ps
-
-
-LOAD_MAGNITUDE = re.compile(r"^(/loads/[^/]+/(force/[01]|moment|dx|dy|rotation)|/gravity/[01])$")
-LOAD_STEPS = 8
-
-
-def _load_slots(mech: Mechanism) -> list[int]:
-    return [k for k, param in enumerate(mech.parameters) if LOAD_MAGNITUDE.match(param.pointer)]
-
-
-def loaded_state(mech: Mechanism, p: np.ndarray, steps: int = LOAD_STEPS,
-                 options: NewtonOptions = NewtonOptions(max_iterations=100)) -> tuple[str, np.ndarray]:
-    """The equilibrium the mechanism reaches when its loads (forces, moments, prescribed
-    motions) grow from zero in equal steps, each from the previous state: the branch a real
-    mechanism follows, where a single Newton solve (or an optimizer) may find another."""
-    slots = _load_slots(mech)
-    z = np.zeros(mech.n_free)
-    for k in range(1, steps + 1):
-        pk = p.copy()
-        pk[slots] = p[slots] * k / steps
-
-        result = newton(mech, pk, z, options)
-        z = result.z
-        if result.status != "converged":
-            return result.status, z
-    return "converged", z
-
-
-def equilibria(problem: DesignProblem, design: np.ndarray) -> list[tuple[str, np.ndarray]]:
-    """(status, z) of every case at a design (document units), reached by loading."""
-    return [loaded_state(problem.mechanism, p) for p in case_params(problem, design)]
-
-
-def same_state(a: np.ndarray, b: np.ndarray) -> bool:
-    return bool(np.abs(a - b).max(initial=0.0) <= 1e-6 * (1 + np.abs(b).max(initial=0.0)))
-
-
 def _value(problem: DesignProblem, ref: OutputRef, z: np.ndarray, p: np.ndarray) -> float:
     """An output's nondimensional value at a state."""
     g = problem.mechanism.graphs
@@ -175,7 +141,9 @@ def prepare(problem: DesignProblem) -> Prepared:
     """Scales from the document's design (its equilibria), the NLP and the bounds. A problem
     that names contact results is solved over its contact states instead (service.contact.design)."""
     if uses_contact(problem):
-        return Prepared(problem, None, np.zeros(0), 1.0, np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0))
+        return Prepared(
+            problem, None, np.zeros(0), 1.0, np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0)
+        )
     nlp = design_nlp(problem)
     states = equilibria(problem, problem.start)
     ps = case_params(problem, problem.start)
@@ -196,8 +164,12 @@ def prepare(problem: DesignProblem) -> Prepared:
     lbx = np.concatenate([problem.lower / problem.scale, np.full(n_z, -np.inf)])
     ubx = np.concatenate([problem.upper / problem.scale, np.full(n_z, np.inf)])
     factors = np.array([problem.output_factor(c.output) for c in problem.constraints])
-    lower = np.array([c.lower for c in problem.constraints]) * factors / constraint_scales if problem.constraints else []
-    upper = np.array([c.upper for c in problem.constraints]) * factors / constraint_scales if problem.constraints else []
+    lower = (
+        np.array([c.lower for c in problem.constraints]) * factors / constraint_scales if problem.constraints else []
+    )
+    upper = (
+        np.array([c.upper for c in problem.constraints]) * factors / constraint_scales if problem.constraints else []
+    )
     lbg = np.concatenate([np.zeros(nlp.n_residuals), lower])
     ubg = np.concatenate([np.zeros(nlp.n_residuals), upper])
     return Prepared(problem, nlp, P, objective_scale, constraint_scales, lbx, ubx, lbg, ubg)
@@ -222,30 +194,53 @@ def run_start(prepared: Prepared, start: int, stop: Callable[[], bool] | None = 
     spec = problem.spec
     started = time.perf_counter()
     design0 = start_design(problem, start)
-    guesses = [z if status == "converged" else np.zeros(nlp.n_state)
-               for status, z in equilibria(problem, design0)]
+    guesses = [z if status == "converged" else np.zeros(nlp.n_state) for status, z in equilibria(problem, design0)]
     x0 = np.concatenate([design0 / problem.scale, *guesses])
-    run = solve(solver_for(nlp, spec.max_iterations, spec.tolerance), stop=stop, x0=x0, p=prepared.P,
-                lbx=prepared.lbx, ubx=prepared.ubx, lbg=prepared.lbg, ubg=prepared.ubg)
+    run = solve(
+        solver_for(nlp, spec.max_iterations, spec.tolerance),
+        stop=stop,
+        x0=x0,
+        p=prepared.P,
+        lbx=prepared.lbx,
+        ubx=prepared.ubx,
+        lbg=prepared.lbg,
+        ubg=prepared.ubg,
+    )
     status, x, lam_g, lam_x, message = _judged(prepared, run, x0, stop)
     # IPOPT may end a hair outside the bounds (its bound relaxation): report the design inside.
-    design = np.clip(x[:nlp.n_design] * problem.scale, problem.lower, problem.upper)
-    zs, on_branch = _loaded_states(problem, design, np.split(x[nlp.n_design:], nlp.n_cases))
-    residual = max((float(np.abs(np.asarray(problem.mechanism.graphs.residual(z, p))).max(initial=0.0))
-                    for z, p in zip(zs, case_params(problem, design))), default=0.0)
+    design = np.clip(x[: nlp.n_design] * problem.scale, problem.lower, problem.upper)
+    zs, on_branch = polished_states(problem, design, np.split(x[nlp.n_design :], nlp.n_cases))
+    residual = max(
+        (
+            float(np.abs(np.asarray(problem.mechanism.graphs.residual(z, p))).max(initial=0.0))
+            for z, p in zip(zs, case_params(problem, design))
+        ),
+        default=0.0,
+    )
     x = np.concatenate([design / problem.scale, *zs])
     f, _ = nlp.evaluate(x, prepared.P)
     if status in ("optimal", "acceptable") and not on_branch:
         status = "off_branch"
-        message = ("the optimum's equilibrium is not the one the mechanism reaches when loaded at that "
-                   "design (another branch); try other starts or tighter bounds")
+        message = (
+            "the optimum's equilibrium is not the one the mechanism reaches when loaded at that "
+            "design (another branch); try other starts or tighter bounds"
+        )
     return StartResult(
-        start=start, status=status, message=message, ipopt_status=run.return_status,
-        iterations=run.iterations, seconds=time.perf_counter() - started,
-        x=x, lam_g=lam_g, lam_x=lam_x, objective=_objective_doc(prepared, float(f)),
+        start=start,
+        status=status,
+        message=message,
+        ipopt_status=run.return_status,
+        iterations=run.iterations,
+        seconds=time.perf_counter() - started,
+        x=x,
+        lam_g=lam_g,
+        lam_x=lam_x,
+        objective=_objective_doc(prepared, float(f)),
         design=dict(zip(problem.paths, design.tolist())),
         design_start=dict(zip(problem.paths, design0.tolist())),
-        history=_history(prepared, run.history), equilibrium_residual=residual, on_branch=on_branch,
+        history=_history(prepared, run.history),
+        equilibrium_residual=residual,
+        on_branch=on_branch,
         constraints=constraint_report(prepared, x, lam_g),
         multipliers=_multipliers(prepared, lam_g, lam_x),
     )
@@ -262,27 +257,35 @@ def _judged(prepared: Prepared, run, x0: np.ndarray, stop: Callable[[], bool] | 
     feasibility = ""
     if problem.constraints:
         x_least, violation, least_status = least_violation(
-            nlp, x0, prepared.P, prepared.lbx, prepared.ubx, prepared.lbg, prepared.ubg, problem.spec.max_iterations,
-            stop)
+            nlp,
+            x0,
+            prepared.P,
+            prepared.lbx,
+            prepared.ubx,
+            prepared.lbg,
+            prepared.ubg,
+            problem.spec.max_iterations,
+            stop,
+        )
         if least_status == "optimal" and violation > INFEASIBLE_VIOLATION:
-            return ("infeasible", x_least, np.zeros_like(run.lam_g), np.zeros_like(run.lam_x),
-                    "no design within the bounds meets the constraints: this is the point of least violation")
+            return (
+                "infeasible",
+                x_least,
+                np.zeros_like(run.lam_g),
+                np.zeros_like(run.lam_x),
+                "no design within the bounds meets the constraints: this is the point of least violation",
+            )
         if least_status == "optimal":
             feasibility = "; feasible designs exist (try other starts or more iterations)"
     if run.status == "infeasible":
-        return run.status, run.x, run.lam_g, run.lam_x, ("no design within the bounds meets the constraints: "
-                                                         "this is the point of least violation")
+        return (
+            run.status,
+            run.x,
+            run.lam_g,
+            run.lam_x,
+            ("no design within the bounds meets the constraints: this is the point of least violation"),
+        )
     return run.status, run.x, run.lam_g, run.lam_x, f"IPOPT: {run.return_status}{feasibility}"
-
-
-def _loaded_states(problem: DesignProblem, design: np.ndarray, zs: list[np.ndarray]):
-    """The states the NLP found, polished by Newton where they are the ones the mechanism
-    reaches when loaded at that design (an optimizer can land on another equilibrium branch,
-    e.g. a snapped-through shape), and whether every case's is."""
-    loaded = equilibria(problem, design)
-    on_branch = all(s == "converged" and same_state(z, zc) for (s, z), zc in zip(loaded, zs))
-    zs = [z if s == "converged" and same_state(z, zc) else zc for (s, z), zc in zip(loaded, zs)]
-    return zs, on_branch
 
 
 def _objective_doc(prepared: Prepared, f: float) -> float:
@@ -292,18 +295,27 @@ def _objective_doc(prepared: Prepared, f: float) -> float:
 
 def _history(prepared: Prepared, it: dict) -> list[dict]:
     objective = it.get("obj", [])
-    return [{"iteration": k, "objective": _objective_doc(prepared, float(objective[k])),
-             "constraint_violation": float(it["inf_pr"][k]), "dual_infeasibility": float(it["inf_du"][k])}
-            for k in range(len(objective))]
+    return [
+        {
+            "iteration": k,
+            "objective": _objective_doc(prepared, float(objective[k])),
+            "constraint_violation": float(it["inf_pr"][k]),
+            "dual_infeasibility": float(it["inf_du"][k]),
+        }
+        for k in range(len(objective))
+    ]
 
 
 def _multipliers(prepared: Prepared, lam_g: np.ndarray, lam_x: np.ndarray) -> dict[str, list[float]]:
     problem, nlp = prepared.problem, prepared.nlp
     per_objective = prepared.objective_scale / problem.output_factor(problem.objective)
-    constraints = [float(lam_g[nlp.n_residuals + k]) * per_objective
-                   / (prepared.constraint_scales[k] / problem.output_factor(c.output))
-                   for k, c in enumerate(problem.constraints)]
-    design = (lam_x[:nlp.n_design] * per_objective / problem.scale).tolist()
+    constraints = [
+        float(lam_g[nlp.n_residuals + k])
+        * per_objective
+        / (prepared.constraint_scales[k] / problem.output_factor(c.output))
+        for k, c in enumerate(problem.constraints)
+    ]
+    design = (lam_x[: nlp.n_design] * per_objective / problem.scale).tolist()
     return {"constraints": constraints, "design": design}
 
 
@@ -311,17 +323,25 @@ def constraint_report(prepared: Prepared, x: np.ndarray, lam_g: np.ndarray) -> l
     """Each constraint's value, bounds, violation and whether it is active (document units)."""
     problem, nlp = prepared.problem, prepared.nlp
     _, g = nlp.evaluate(x, prepared.P)
-    g = np.asarray(g).ravel()[nlp.n_residuals:]
+    g = np.asarray(g).ravel()[nlp.n_residuals :]
     multipliers = _multipliers(prepared, lam_g, np.zeros(nlp.n_design))["constraints"]
     rows = []
     for k, c in enumerate(problem.constraints):
         value = g[k] * prepared.constraint_scales[k] / problem.output_factor(c.output)
         violation = max(c.lower - value, value - c.upper, 0.0)
         scaled_gap = min(abs(g[k] - prepared.lbg[nlp.n_residuals + k]), abs(g[k] - prepared.ubg[nlp.n_residuals + k]))
-        rows.append({"output": c.output.name, "case": problem.case_names[c.output.case], "value": float(value),
-                     "lower": c.lower if np.isfinite(c.lower) else None,
-                     "upper": c.upper if np.isfinite(c.upper) else None, "violation": float(violation),
-                     "active": bool(scaled_gap <= ACTIVE_TOLERANCE), "multiplier": float(multipliers[k])})
+        rows.append(
+            {
+                "output": c.output.name,
+                "case": problem.case_names[c.output.case],
+                "value": float(value),
+                "lower": c.lower if np.isfinite(c.lower) else None,
+                "upper": c.upper if np.isfinite(c.upper) else None,
+                "violation": float(violation),
+                "active": bool(scaled_gap <= ACTIVE_TOLERANCE),
+                "multiplier": float(multipliers[k]),
+            }
+        )
     return rows
 
 
@@ -344,8 +364,10 @@ def combine(problem: DesignProblem, starts: list[StartResult], seconds: float) -
         detail = ""
         if worst is not None and worst["violation"] > 0:
             bounds = ", ".join("-" if b is None else f"{b:.6g}" for b in (worst["lower"], worst["upper"]))
-            detail = (f"; the closest point misses {worst['output']} ({worst['case']}) by {worst['violation']:.4g} "
-                      f"(value {worst['value']:.6g}, bounds [{bounds}])")
+            detail = (
+                f"; the closest point misses {worst['output']} ({worst['case']}) by {worst['violation']:.4g} "
+                f"(value {worst['value']:.6g}, bounds [{bounds}])"
+            )
         status, message = "infeasible", f"no design satisfies the constraints and bounds{detail}"
     else:
         status, message = best.status, best.message
@@ -362,14 +384,3 @@ def optimize(problem: DesignProblem, progress=None) -> OptimizationResult:
         if progress is not None:
             progress(k + 1, problem.spec.starts)
     return combine(problem, starts, time.perf_counter() - started)
-
-
-def case_outputs(problem: DesignProblem, x: np.ndarray) -> dict[str, dict[str, float]]:
-    from service.units import outputs_in_doc_units
-
-    mech: Mechanism = problem.mechanism
-    n_design = len(problem.slots)
-    zs = np.split(x[n_design:], len(problem.case_p))
-    ps = case_params(problem, x[:n_design] * problem.scale)
-    return {name: outputs_in_doc_units(mech, mech.graphs.outputs(z, p))
-            for name, z, p in zip(problem.case_names, zs, ps)}

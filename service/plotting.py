@@ -33,12 +33,24 @@ if TYPE_CHECKING:
     from service.continuation import PathResult
     from service.sweep import SweepResult
 
-__all__ = ["PLOT_SUFFIXES", "check_plot_path", "configuration_figure", "field_label", "load_point", "output_unit",
-           "plot_configuration", "plot_sweeps", "plot_trace", "sweeps_figure", "trace_figure"]
+__all__ = [
+    "PLOT_SUFFIXES",
+    "check_plot_path",
+    "configuration_figure",
+    "field_label",
+    "load_point",
+    "output_unit",
+    "plot_configuration",
+    "plot_sweeps",
+    "plot_trace",
+    "sweeps_figure",
+    "trace_figure",
+]
 
 
-def sweeps_figure(curves: list[tuple[str, SweepResult]], x_output: str, y_output: str, field_path: str,
-                  secant: bool = False) -> Figure:
+def sweeps_figure(
+    curves: list[tuple[str, SweepResult]], x_output: str, y_output: str, field_path: str, secant: bool = False
+) -> Figure:
     """Two panels in the manner of Fig. 9 of the paper, a line per curve sweeping `field_path`.
     Left, y_output against x_output (a point's trajectory when they are its x and y). Right,
     the swept field against x_output, or with `secant` (the field a prescribed displacement,
@@ -49,13 +61,17 @@ def sweeps_figure(curves: list[tuple[str, SweepResult]], x_output: str, y_output
         raise ValueError("sweeps_figure: no curves to plot")
     for label, result in curves:
         if result.path != field_path or not {x_output, y_output} <= set(result.outputs):
-            raise ValueError(f"sweeps_figure: curve '{label}' sweeps {result.path}, not {field_path}, "
-                             f"or lacks {x_output} or {y_output}")
+            raise ValueError(
+                f"sweeps_figure: curve '{label}' sweeps {result.path}, not {field_path}, "
+                f"or lacks {x_output} or {y_output}"
+            )
     mech = curves[0][1].mechanism
     field_unit = mech.doc_unit(mech.parameter_kind(field_path))
-    right_name, right_unit = ((f"secant stiffness {y_output} / {field_label(field_path)}",
-                               f"{output_unit(mech, y_output)}/{field_unit}") if secant
-                              else (field_label(field_path), field_unit))
+    right_name, right_unit = (
+        (f"secant stiffness {y_output} / {field_label(field_path)}", f"{output_unit(mech, y_output)}/{field_unit}")
+        if secant
+        else (field_label(field_path), field_unit)
+    )
 
     fig = new_figure(11.0, 4.6)
     left, right = fig.subplots(1, 2)
@@ -67,7 +83,7 @@ def sweeps_figure(curves: list[tuple[str, SweepResult]], x_output: str, y_output
         if secant:
             with np.errstate(divide="ignore", invalid="ignore"):
                 values = np.where(values != values[0], (y - y[0]) / (values - values[0]), np.nan)
-        line, = left.plot(x, y, label=label)
+        (line,) = left.plot(x, y, label=label)
         right.plot(x, values, label=label, color=line.get_color())
         if ok.any():  # the end of the path, e.g. the closed gripper
             last = np.flatnonzero(ok)[-1]
@@ -76,16 +92,30 @@ def sweeps_figure(curves: list[tuple[str, SweepResult]], x_output: str, y_output
 
     point, _, component = x_output.rpartition(".")
     trajectory = component == "x" and y_output == f"{point}.y"
-    set_labels(left, f"{x_output} [{output_unit(mech, x_output)}]", f"{y_output} [{output_unit(mech, y_output)}]",
-            f"trajectory of {point}" if trajectory else f"{y_output} against {x_output}")
-    set_labels(right, f"{x_output} [{output_unit(mech, x_output)}]", f"{right_name} [{right_unit}]",
-            f"{right_name} against {x_output}")
+    set_labels(
+        left,
+        f"{x_output} [{output_unit(mech, x_output)}]",
+        f"{y_output} [{output_unit(mech, y_output)}]",
+        f"trajectory of {point}" if trajectory else f"{y_output} against {x_output}",
+    )
+    set_labels(
+        right,
+        f"{x_output} [{output_unit(mech, x_output)}]",
+        f"{right_name} [{right_unit}]",
+        f"{right_name} against {x_output}",
+    )
     fig.suptitle(mech.document.name, fontsize=11)
     return fig
 
 
-def plot_sweeps(curves: list[tuple[str, SweepResult]], x_output: str, y_output: str,
-                field_path: str, path: str | Path, secant: bool = False) -> Path:
+def plot_sweeps(
+    curves: list[tuple[str, SweepResult]],
+    x_output: str,
+    y_output: str,
+    field_path: str,
+    path: str | Path,
+    secant: bool = False,
+) -> Path:
     """sweeps_figure saved to `path` (.png or .svg). Returns the path written."""
     return save_figure(sweeps_figure(curves, x_output, y_output, field_path, secant), check_plot_path(path))
 
@@ -109,18 +139,33 @@ def trace_figure(mech: Mechanism, result: PathResult, output: str) -> Figure:
     named = set()
     for a, b in zip(edges, edges[1:]):
         name = "stable" if flags[a] else "unstable"
-        ax.plot(xy[a:b + 1, 0], xy[a:b + 1, 1], "-" if flags[a] else "--", color="C0",
-                label=None if name in named else name)
+        ax.plot(
+            xy[a : b + 1, 0],
+            xy[a : b + 1, 1],
+            "-" if flags[a] else "--",
+            color="C0",
+            label=None if name in named else name,
+        )
         named.add(name)
     for k, lp in enumerate(result.limit_points):
         ax.plot(lp.outputs[output], lp.value, "o", color="C3", markersize=6, label="limit points" if k == 0 else None)
         side = -1 if lp.outputs[output] > np.mean(ax.get_xlim()) else 1  # write towards the middle
-        ax.annotate(f"{lp.kind} {lp.value:.6g} {result.unit}", (lp.outputs[output], lp.value), color="C3",
-                    fontsize=9, xytext=(8 * side, 6 if lp.kind == "maximum" else -12), textcoords="offset points",
-                    ha="left" if side > 0 else "right")
-    set_labels(ax, f"{output} [{output_unit(mech, output)}]", f"{field_label(result.path)} [{result.unit}]",
-            f"{mech.document.name}\n{field_label(result.path)} against {output}: {result.status}",
-            legend=bool(named))
+        ax.annotate(
+            f"{lp.kind} {lp.value:.6g} {result.unit}",
+            (lp.outputs[output], lp.value),
+            color="C3",
+            fontsize=9,
+            xytext=(8 * side, 6 if lp.kind == "maximum" else -12),
+            textcoords="offset points",
+            ha="left" if side > 0 else "right",
+        )
+    set_labels(
+        ax,
+        f"{output} [{output_unit(mech, output)}]",
+        f"{field_label(result.path)} [{result.unit}]",
+        f"{mech.document.name}\n{field_label(result.path)} against {output}: {result.status}",
+        legend=bool(named),
+    )
     return fig
 
 

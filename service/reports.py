@@ -31,8 +31,14 @@ def plain(obj: Any) -> Any:
 
 def stiffness_dict(mech: Mechanism, z) -> dict:
     kt = tangent_stiffness(mech, z)
-    return {"coordinates": kt.coordinates, "row_units": kt.row_units, "column_units": kt.column_units,
-            "K": kt.K, "terms": kt.terms, "symmetric": kt.symmetric}
+    return {
+        "coordinates": kt.coordinates,
+        "row_units": kt.row_units,
+        "column_units": kt.column_units,
+        "K": kt.K,
+        "terms": kt.terms,
+        "symmetric": kt.symmetric,
+    }
 
 
 def output_units(mech: Mechanism) -> dict[str, str]:

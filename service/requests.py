@@ -34,8 +34,9 @@ def newton_options(options: dict | None, time_limit: float | None = None, pointe
     known = {f.name for f in fields(NewtonOptions)}
     for name in options:
         if name not in known:
-            raise MechanismError(f"{pointer}/{escape_pointer_part(name)}",
-                                 f"unknown option (options: {', '.join(sorted(known))})")
+            raise MechanismError(
+                f"{pointer}/{escape_pointer_part(name)}", f"unknown option (options: {', '.join(sorted(known))})"
+            )
     asked = options.get("time_limit")
     if time_limit is not None:
         options["time_limit"] = time_limit if asked is None else min(float(asked), time_limit)
@@ -52,8 +53,9 @@ _COMPILED: OrderedDict[tuple, Mechanism] = OrderedDict()
 _LOCK = threading.Lock()  # threads share the dictionary, never a mechanism (its graphs are CasADi's)
 
 
-def compile_request(document: dict, model: str | None = None, overrides: dict[str, Any] | None = None,
-                    limits: Limits = Limits()) -> Mechanism:
+def compile_request(
+    document: dict, model: str | None = None, overrides: dict[str, Any] | None = None, limits: Limits = Limits()
+) -> Mechanism:
     """Validate and compile a request's document, with its model choice and overrides. The
     compiled mechanism of a document is kept (by its text, the model and the limits), so a
     design tool sending the same document with other overrides compiles it once."""

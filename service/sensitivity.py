@@ -31,9 +31,14 @@ def _derivatives(structure: Structure) -> ca.Function:
     p = ca.SX.sym("p", len(structure.parameters))
     R = g.residual(z, p)
     y = g.outputs(z, p)
-    return ca.Function("sensitivity_terms", [z, p], [ca.jacobian(R, z), ca.jacobian(R, p), ca.jacobian(y, z),
-                                                   ca.jacobian(y, p)], ["z", "p"], ["K", "R_p", "y_z", "y_p"],
-                       dict(cse=True))
+    return ca.Function(
+        "sensitivity_terms",
+        [z, p],
+        [ca.jacobian(R, z), ca.jacobian(R, p), ca.jacobian(y, z), ca.jacobian(y, p)],
+        ["z", "p"],
+        ["K", "R_p", "y_z", "y_p"],
+        dict(cse=True),
+    )
 
 
 def _slots(mech: Mechanism, paths: list[str], pointer: str) -> list[int]:
@@ -56,8 +61,9 @@ def _rows(mech: Mechanism, outputs: list[str], pointer: str) -> list[int]:
     return rows
 
 
-def equilibrium_sensitivities(mech: Mechanism, z: np.ndarray, parameters: list[str], outputs: list[str],
-                              target: tuple[str, str] | None = None) -> Sensitivities:
+def equilibrium_sensitivities(
+    mech: Mechanism, z: np.ndarray, parameters: list[str], outputs: list[str], target: tuple[str, str] | None = None
+) -> Sensitivities:
     """d(outputs)/d(parameters) at the equilibrium z of `mech` (nondimensional state).
 
     target = (path, output): the field `path` is not held but follows the parameters so that
@@ -80,8 +86,11 @@ def equilibrium_sensitivities(mech: Mechanism, z: np.ndarray, parameters: list[s
     try:
         dw = -np.linalg.solve(A, B)
     except np.linalg.LinAlgError:
-        raise MechanismError("/parameters", "the tangent stiffness is singular here (a limit point): "
-                                            "the state does not depend smoothly on the parameters") from None
+        raise MechanismError(
+            "/parameters",
+            "the tangent stiffness is singular here (a limit point): "
+            "the state does not depend smoothly on the parameters",
+        ) from None
     dz = dw[:n]
     dy = y_z[rows] @ dz + y_p[np.ix_(rows, slots)]
     if target is not None:
@@ -89,8 +98,11 @@ def equilibrium_sensitivities(mech: Mechanism, z: np.ndarray, parameters: list[s
         dy = dy + y_p[rows][:, [t]] * dt
     kinds = [mech.parameters[s].kind for s in slots]
     out_kinds = [mech.graphs.output_kinds[r] for r in rows]
-    matrix = dy * np.array([mech.nd_per_doc(k) for k in kinds])[None, :] / np.array(
-        [mech.nd_per_doc(k) for k in out_kinds])[:, None]
+    matrix = (
+        dy
+        * np.array([mech.nd_per_doc(k) for k in kinds])[None, :]
+        / np.array([mech.nd_per_doc(k) for k in out_kinds])[:, None]
+    )
     out_names = [names[r] for r in rows]
     units = [[f"{mech.doc_unit(ko)}/{mech.doc_unit(kp)}" for kp in kinds] for ko in out_kinds]
     if target is not None and target[0] in outputs:
@@ -129,8 +141,9 @@ def optimum_sensitivities(prepared: Prepared, result: StartResult, parameters: l
     at_bound = np.minimum(np.abs(x - prepared.lbx), np.abs(x - prepared.ubx)) <= ACTIVE_TOLERANCE
     free = np.flatnonzero(~at_bound)
     n_free, n_active = len(free), len(active)
-    kkt = np.block([[H[np.ix_(free, free)], J[np.ix_(active, free)].T],
-                    [J[np.ix_(active, free)], np.zeros((n_active, n_active))]])
+    kkt = np.block(
+        [[H[np.ix_(free, free)], J[np.ix_(active, free)].T], [J[np.ix_(active, free)], np.zeros((n_active, n_active))]]
+    )
     rhs = -np.vstack([L_xp[free] @ dP, g_p[active] @ dP])
     solution = np.linalg.lstsq(kkt, rhs, rcond=None)[0] if np.linalg.cond(kkt) > 1e14 else np.linalg.solve(kkt, rhs)
     dx = np.zeros((len(x), len(slots)))
@@ -140,7 +153,7 @@ def optimum_sensitivities(prepared: Prepared, result: StartResult, parameters: l
     df = f_p.ravel() @ dP + lam @ (g_p @ dP)
     kinds = [mech.parameters[s].kind for s in slots]
     # dP is per document unit of each parameter, so these rows are too.
-    design_rows = dx[:nlp.n_design] * problem.scale[:, None]
+    design_rows = dx[: nlp.n_design] * problem.scale[:, None]
     objective_row = df * prepared.objective_scale / problem.output_factor(problem.objective)
     matrix = np.vstack([design_rows, objective_row[None, :]])
     design_kinds = [mech.parameters[s].kind for s in problem.slots]

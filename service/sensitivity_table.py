@@ -17,10 +17,15 @@ class Sensitivities:
     not_differentiable: list[str] = field(default_factory=list)  # why no derivative is given (none: all are)
 
     def to_dict(self) -> dict:
-        out = {"parameters": self.parameters, "outputs": self.outputs,
-               "derivatives": {o: dict(zip(self.parameters, [None if np.isnan(x) else x for x in row.tolist()]))
-                               for o, row in zip(self.outputs, self.matrix)},
-               "units": {o: dict(zip(self.parameters, row)) for o, row in zip(self.outputs, self.units)}}
+        out = {
+            "parameters": self.parameters,
+            "outputs": self.outputs,
+            "derivatives": {
+                o: dict(zip(self.parameters, [None if np.isnan(x) else x for x in row.tolist()]))
+                for o, row in zip(self.outputs, self.matrix)
+            },
+            "units": {o: dict(zip(self.parameters, row)) for o, row in zip(self.outputs, self.units)},
+        }
         if self.not_differentiable:
             out["not_differentiable"] = self.not_differentiable
         return out

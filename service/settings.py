@@ -1,8 +1,8 @@
 """The service's settings: one class, read from FLEXMECH_* environment variables.
 
-    FLEXMECH_DATABASE_URL=postgresql+psycopg://user:pw@db/flexmech   (default: SQLite file)
-    FLEXMECH_DASK_ADDRESS=tcp://scheduler:8786                        (default: a process pool)
-    FLEXMECH_API_KEYS=key-one,key-two                                 (default: no keys, open)
+FLEXMECH_DATABASE_URL=postgresql+psycopg://user:pw@db/flexmech   (default: SQLite file)
+FLEXMECH_DASK_ADDRESS=tcp://scheduler:8786                        (default: a process pool)
+FLEXMECH_API_KEYS=key-one,key-two                                 (default: no keys, open)
 """
 
 from __future__ import annotations
@@ -32,8 +32,12 @@ class Settings(BaseSettings):
     database_url: str | None = None  # None: SQLite file data_dir/flexmech.db
     dask_address: str | None = None  # set: sweeps run on that Dask cluster
     workers: int = Field(default_factory=lambda: max(1, os.cpu_count() or 1), ge=1, le=256)
-    solver_workers: int = Field(default_factory=lambda: max(1, os.cpu_count() or 1), ge=1, le=64,
-                                description="processes that run /v1/solve, drawings and job preparation")
+    solver_workers: int = Field(
+        default_factory=lambda: max(1, os.cpu_count() or 1),
+        ge=1,
+        le=64,
+        description="processes that run /v1/solve, drawings and job preparation",
+    )
     examples_dir: Path | None = None  # None: ./examples, else the one beside the sources
 
     # Access: with keys set, every /v1 request but /v1/health needs X-API-Key.
@@ -42,8 +46,12 @@ class Settings(BaseSettings):
     # Limits (service.costs): every request is costed against them before anything is built
     max_request_bytes: int = Field(1_000_000, ge=1024)
     request_read_timeout: float = Field(10.0, gt=0, description="seconds to receive a request's body")
-    header_read_timeout: float = Field(10.0, gt=0, description="seconds a connection has to send a request's "
-                                       "headers, from connecting or from its first bytes after an answer")
+    header_read_timeout: float = Field(
+        10.0,
+        gt=0,
+        description="seconds a connection has to send a request's "
+        "headers, from connecting or from its first bytes after an answer",
+    )
     max_elements: int = Field(200, ge=1)
     max_bodies: int = Field(200, ge=1)
     max_loads: int = Field(500, ge=1)
@@ -58,12 +66,18 @@ class Settings(BaseSettings):
     solve_time_limit: float = Field(10.0, gt=0, description="seconds of Newton per /v1/solve")
     job_time_limit: float = Field(3600.0, gt=0, description="seconds of wall time per job")
     chunk_size: int = Field(8, ge=1, le=10_000, description="points per task sent to a worker")
-    build_kernels: bool = Field(True, description="compile kernels in a build queue beside the server (runs go "
-                                "on interpreted until a kernel is built)")
+    build_kernels: bool = Field(
+        True,
+        description="compile kernels in a build queue beside the server (runs go "
+        "on interpreted until a kernel is built)",
+    )
     build_seconds: float = Field(60.0, gt=0, description="time limit of one kernel compile")
     build_memory_mb: float = Field(1024.0, gt=64, description="memory limit (MiB) of one kernel compile")
-    cache_max_bytes: int | None = Field(None, ge=1_000_000, description="bound of the disk cache of graphs and "
-                                        "kernels (least recently used evicted); default 2 GiB")
+    cache_max_bytes: int | None = Field(
+        None,
+        ge=1_000_000,
+        description="bound of the disk cache of graphs and kernels (least recently used evicted); default 2 GiB",
+    )
     log_level: Literal["debug", "info", "warning", "error"] = "info"
 
     @field_validator("api_keys", mode="before")
@@ -85,13 +99,21 @@ class Settings(BaseSettings):
         return keys
 
     def limits(self) -> Limits:
-        return Limits(max_elements=self.max_elements, max_sweep_points=self.max_sweep_points,
-                      solve_time_limit=self.solve_time_limit, max_bodies=self.max_bodies, max_loads=self.max_loads,
-                      max_outputs=self.max_outputs, max_link_work=self.max_link_work,
-                      max_link_elements=self.max_link_elements,
-                      max_result_values=self.max_result_values, job_time_limit=self.job_time_limit,
-                      max_contact_rows=self.max_contact_rows, max_contact_rotations=self.max_contact_rotations,
-                      max_simulation_steps=self.max_simulation_steps)
+        return Limits(
+            max_elements=self.max_elements,
+            max_sweep_points=self.max_sweep_points,
+            solve_time_limit=self.solve_time_limit,
+            max_bodies=self.max_bodies,
+            max_loads=self.max_loads,
+            max_outputs=self.max_outputs,
+            max_link_work=self.max_link_work,
+            max_link_elements=self.max_link_elements,
+            max_result_values=self.max_result_values,
+            job_time_limit=self.job_time_limit,
+            max_contact_rows=self.max_contact_rows,
+            max_contact_rotations=self.max_contact_rotations,
+            max_simulation_steps=self.max_simulation_steps,
+        )
 
     def resolved_database_url(self) -> str:
         if self.database_url:

@@ -32,9 +32,12 @@ def condensed(K: np.ndarray, n_bodies: int) -> np.ndarray:
     compliance = np.linalg.inv(K)[:n_bodies, :n_bodies]
     singular = np.linalg.svd(compliance, compute_uv=False)
     if singular[-1] <= 1e-12 * singular[0]:
-        raise MechanismError("/elements", "the tangent stiffness is infinite in some direction: inextensible "
-                             "links or rigid joints (pins, sliders) make a motion of the bodies rigid; set "
-                             "\"axial\": true on the links for a finite stiffness")
+        raise MechanismError(
+            "/elements",
+            "the tangent stiffness is infinite in some direction: inextensible "
+            "links or rigid joints (pins, sliders) make a motion of the bodies rigid; set "
+            '"axial": true on the links for a finite stiffness',
+        )
     return np.linalg.inv(compliance)
 
 
@@ -56,5 +59,11 @@ def tangent_stiffness(mech: Mechanism, z: np.ndarray | None = None) -> TangentSt
     rows, cols = coordinate_kinds(mech)
     K = condensed(np.asarray(K), n_bodies)  # nondimensional: lengths and forces alike, angles in rad
     symmetric = bool(np.allclose(K, K.T, rtol=1e-9, atol=1e-12 * np.abs(K).max()))
-    return TangentStiffness(mech.free_coordinates, matrix_to_doc(mech, K), terms,
-                            [mech.doc_unit(k) for k in rows], [mech.doc_unit(k) for k in cols], symmetric)
+    return TangentStiffness(
+        mech.free_coordinates,
+        matrix_to_doc(mech, K),
+        terms,
+        [mech.doc_unit(k) for k in rows],
+        [mech.doc_unit(k) for k in cols],
+        symmetric,
+    )

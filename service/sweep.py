@@ -59,8 +59,14 @@ class SweepResult:
         }
 
 
-def sweep(mech: Mechanism, path: str, values, options: NewtonOptions = NewtonOptions(),
-          start: Start = "previous", progress=None) -> SweepResult:
+def sweep(
+    mech: Mechanism,
+    path: str,
+    values,
+    options: NewtonOptions = NewtonOptions(),
+    start: Start = "previous",
+    progress=None,
+) -> SweepResult:
     """Solve the equilibrium for each value of the numeric field `path` (document units).
 
     progress(done, total) is called after each point when given.
@@ -96,8 +102,7 @@ def sweep(mech: Mechanism, path: str, values, options: NewtonOptions = NewtonOpt
     Y = np.array(Y).reshape(len(values), -1)
     names, kinds = mech.graphs.output_names, mech.graphs.output_kinds
     outputs = {name: Y[:, j] / mech.nd_per_doc(kind) for j, (name, kind) in enumerate(zip(names, kinds))}
-    return SweepResult(path, values, status, iterations, norms, Z, outputs,
-                       time.perf_counter() - started, mech)
+    return SweepResult(path, values, status, iterations, norms, Z, outputs, time.perf_counter() - started, mech)
 
 
 @lru_cache(maxsize=32)
@@ -112,8 +117,9 @@ def _target_function(graphs: Graphs, parameter: int, output: int, n_free: int, n
     e[parameter] = 1
     p_mod = p + (lam - p[parameter]) * e
     G = ca.vertcat(graphs.residual(z, p_mod), graphs.outputs(z, p_mod)[output] - target)
-    return ca.Function("target_system", [x, p, target], [G, ca.jacobian(G, x)],
-                       ["x", "p", "target"], ["G", "J"], dict(cse=True))
+    return ca.Function(
+        "target_system", [x, p, target], [G, ca.jacobian(G, x)], ["x", "p", "target"], ["G", "J"], dict(cse=True)
+    )
 
 
 @dataclass
@@ -123,15 +129,19 @@ class TargetResult:
     equilibrium: EquilibriumResult
 
 
-def solve_for_target(mech: Mechanism, path: str, output: str, target: float,
-                     options: NewtonOptions = NewtonOptions()) -> TargetResult:
+def solve_for_target(
+    mech: Mechanism, path: str, output: str, target: float, options: NewtonOptions = NewtonOptions()
+) -> TargetResult:
     """Find the value of numeric field `path` for which `output` equals `target` (both in
     document units), e.g. the actuation force that closes the gripper. Newton on the
     equilibrium equations augmented with the output condition, from the current value."""
     names = mech.graphs.output_names
     if output not in names:
         named = ", ".join(n for n in names if not n.startswith(("elements.", "bodies.", "reactions.")))
-        raise MechanismError("output", f"unknown output '{output}' (named outputs: {named or 'none'}; also bodies.*, reactions.*, elements.*)")
+        raise MechanismError(
+            "output",
+            f"unknown output '{output}' (named outputs: {named or 'none'}; also bodies.*, reactions.*, elements.*)",
+        )
     k = mech.parameter_index(path)
     m = names.index(output)
     f = _target_function(mech.graphs, k, m, mech.n_free, len(mech.parameters))
@@ -162,8 +172,9 @@ def sweep_values(start: float, stop: float, steps: int) -> np.ndarray:
     return np.linspace(start, stop, steps + 1)
 
 
-def run_sweep_spec(mech: Mechanism, spec: SweepSpec, options: NewtonOptions = NewtonOptions(),
-                   start: Start = "previous", progress=None) -> tuple[SweepResult | None, TargetResult | None]:
+def run_sweep_spec(
+    mech: Mechanism, spec: SweepSpec, options: NewtonOptions = NewtonOptions(), start: Start = "previous", progress=None
+) -> tuple[SweepResult | None, TargetResult | None]:
     """Run a load path: `spec.path` from `spec.start` to `spec.stop`, or, with `spec.until`, to
     the value found by solve_for_target. A target that is not reached is a result too:
     (None, the unconverged TargetResult)."""
@@ -185,8 +196,9 @@ def run_sweep_spec(mech: Mechanism, spec: SweepSpec, options: NewtonOptions = Ne
     return sweep(mech, spec.path, values, options, start, progress), target
 
 
-def document_sweep(mech: Mechanism, options: NewtonOptions = NewtonOptions(), start: Start = "previous",
-                   progress=None) -> tuple[SweepResult | None, TargetResult | None]:
+def document_sweep(
+    mech: Mechanism, options: NewtonOptions = NewtonOptions(), start: Start = "previous", progress=None
+) -> tuple[SweepResult | None, TargetResult | None]:
     """Run the sweep declared in the document's `sweep` section (see run_sweep_spec)."""
     if mech.document.sweep is None:
         raise MechanismError("/sweep", "the document declares no sweep (give path, start and stop or until)")

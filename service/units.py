@@ -28,10 +28,13 @@ def residual_report(mech: Mechanism, z: np.ndarray, p: np.ndarray | None = None)
         rows = [abs(R[k]) for k, (_, c) in enumerate(free) if c in coordinates]
         return float(max(rows)) if rows else 0.0
 
-    return {"residual_norm": largest((0, 1)) / mech.nd_per_doc("force"), "residual_unit": mech.doc_unit("force"),
-            "residual_moment": largest((2,)) / mech.nd_per_doc("moment"),
-            "residual_moment_unit": mech.doc_unit("moment"),
-            "solver_residual": float(np.abs(R).max()) if R.size else 0.0}
+    return {
+        "residual_norm": largest((0, 1)) / mech.nd_per_doc("force"),
+        "residual_unit": mech.doc_unit("force"),
+        "residual_moment": largest((2,)) / mech.nd_per_doc("moment"),
+        "residual_moment_unit": mech.doc_unit("moment"),
+        "solver_residual": float(np.abs(R).max()) if R.size else 0.0,
+    }
 
 
 def coordinate_kinds(mech: Mechanism) -> tuple[list[str], list[str]]:

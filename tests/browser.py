@@ -12,9 +12,19 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 SCREENSHOTS = REPO / "out" / "workbench"
 # Without the background-networking flags Chromium calls Google's hosts at start (refused here).
-CHROMIUM_FLAGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run", "--disable-background-networking",
-                  "--disable-component-update", "--disable-sync", "--disable-default-apps", "--disable-extensions",
-                  "--metrics-recording-only", "--no-default-browser-check"]
+CHROMIUM_FLAGS = [
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--disable-default-apps",
+    "--disable-extensions",
+    "--metrics-recording-only",
+    "--no-default-browser-check",
+]
 
 
 def _installed_chromium() -> str | None:
@@ -32,8 +42,10 @@ def chromium_path() -> str:
         done = subprocess.run([str(REPO / "scripts" / "chromium-for-tests")], capture_output=True, text=True)
         found = _installed_chromium()
         if found is None:
-            raise RuntimeError("Chromium not found, and scripts/chromium-for-tests could not install the Debian "
-                               f"package 'chromium' (exit {done.returncode}): {done.stderr[-2000:]}")
+            raise RuntimeError(
+                "Chromium not found, and scripts/chromium-for-tests could not install the Debian "
+                f"package 'chromium' (exit {done.returncode}): {done.stderr[-2000:]}"
+            )
     return found
 
 
@@ -56,8 +68,11 @@ class PageLog:
         as an error ("Failed to load resource"); those of the statuses `answered` (a refusal
         the test provoked and the page shows) are not problems."""
         expected = tuple(f"the server responded with a status of {status} " for status in answered)
-        return [f"{kind}: {text}" for kind, text in self.console
-                if kind in ("error", "warning") and not any(e in text for e in expected)] + self.errors
+        return [
+            f"{kind}: {text}"
+            for kind, text in self.console
+            if kind in ("error", "warning") and not any(e in text for e in expected)
+        ] + self.errors
 
 
 def screenshot(page, name: str) -> Path:

@@ -94,8 +94,13 @@ class Deployment:
 
 
 def make_deployment(backend: str, request, tmp_dir: Path) -> Deployment:
-    env = {"FLEXMECH_DATA_DIR": str(tmp_dir / "data"), "FLEXMECH_WORKERS": "2", "FLEXMECH_CHUNK_SIZE": "4",
-           "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES), "FLEXMECH_API_KEYS": ""}
+    env = {
+        "FLEXMECH_DATA_DIR": str(tmp_dir / "data"),
+        "FLEXMECH_WORKERS": "2",
+        "FLEXMECH_CHUNK_SIZE": "4",
+        "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES),
+        "FLEXMECH_API_KEYS": "",
+    }
     if backend in ("postgresql", "dask"):
         from servers import fresh_database
 
@@ -116,9 +121,17 @@ def deployment(request, tmp_path) -> Deployment:
 def api_server(tmp_path_factory):
     """One server (SQLite, process pool, no keys) shared by a test module."""
     tmp = tmp_path_factory.mktemp("api")
-    server = Deployment("sqlite", {"FLEXMECH_DATA_DIR": str(tmp / "data"), "FLEXMECH_WORKERS": "2",
-                                   "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES), "FLEXMECH_API_KEYS": "",
-                                   "FLEXMECH_MAX_REQUEST_BYTES": "200000", "FLEXMECH_MAX_SWEEP_POINTS": "1000"},
-                        tmp).start()
+    server = Deployment(
+        "sqlite",
+        {
+            "FLEXMECH_DATA_DIR": str(tmp / "data"),
+            "FLEXMECH_WORKERS": "2",
+            "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES),
+            "FLEXMECH_API_KEYS": "",
+            "FLEXMECH_MAX_REQUEST_BYTES": "200000",
+            "FLEXMECH_MAX_SWEEP_POINTS": "1000",
+        },
+        tmp,
+    ).start()
     yield server
     server.stop()

@@ -17,15 +17,16 @@ def _accept(mech, p, z_from, slot, value, jump):
     q = p.copy()
     q[slot] = value
     result = newton(mech, q, z_from, OPTIONS)
-    moved = np.abs(result.z - z_from)[:mech.n_body_coordinates].max(initial=0.0)
+    moved = np.abs(result.z - z_from)[: mech.n_body_coordinates].max(initial=0.0)
     if not result.converged or moved > jump:
         return None
     K = np.asarray(mech.graphs.residual_and_tangent(result.z, q)[1])
     return result.z if body_stability(mech, K).stable else None
 
 
-def natural_limit(mech, path: str, start: float, step: float, z0=None, jump: float = 0.02,
-                  rel_tol: float = 1e-11) -> float:
+def natural_limit(
+    mech, path: str, start: float, step: float, z0=None, jump: float = 0.02, rel_tol: float = 1e-11
+) -> float:
     """The value of `path` (document units) where the stable branch through `start` ends when
     the field moves by `step` at a time: bisection between the last accepted and the first
     rejected value."""

@@ -112,9 +112,14 @@ def cantilever_tip_bvp(EI: float, L: float, F: float, tol: float = 1e-10) -> tup
     u = np.linspace(0.0, 1.0, 201)
     a = (math.pi / 2) * math.tanh(lam / math.pi)
     th = a * (2 * u - u**2)
-    guess = np.vstack([th, 2 * a * (1 - u),
-                       cumulative_trapezoid(np.cos(th), u, initial=0.0),
-                       cumulative_trapezoid(np.sin(th), u, initial=0.0)])
+    guess = np.vstack(
+        [
+            th,
+            2 * a * (1 - u),
+            cumulative_trapezoid(np.cos(th), u, initial=0.0),
+            cumulative_trapezoid(np.sin(th), u, initial=0.0),
+        ]
+    )
     sol = solve_bvp(rhs, bc, u, guess, tol=tol, bc_tol=tol, max_nodes=100_000)
     if not sol.success:
         raise RuntimeError(f"solve_bvp failed: {sol.message}")
@@ -122,8 +127,7 @@ def cantilever_tip_bvp(EI: float, L: float, F: float, tol: float = 1e-10) -> tup
     return float(L * x1), float(L * y1), float(th1)
 
 
-def timoshenko_tip_deflection(F: float, L: float, E: float, I: float, G: float, A: float,
-                              kappa: float) -> float:
+def timoshenko_tip_deflection(F: float, L: float, E: float, I: float, G: float, A: float, kappa: float) -> float:
     """Small-deflection tip deflection [m] of a Timoshenko cantilever under a tip force.
 
     Bending plus shear: F L^3 / (3 E I) + F L / (kappa G A), with F [N], L [m], E and G [Pa],

@@ -30,7 +30,10 @@ def as_moreau(pair: dict) -> dict:
     pair["normal"] = {"law": "restitution", "restitution": pair["normal"].get("restitution", 0.9)}
     friction = pair.get("friction")
     if isinstance(friction, dict) and friction.get("law") != "none":
-        pair["friction"] = {"law": "coulomb", **{key: friction[key] for key in ("sliding", "adherence") if key in friction}}
+        pair["friction"] = {
+            "law": "coulomb",
+            **{key: friction[key] for key in ("sliding", "adherence") if key in friction},
+        }
     return pair
 
 

@@ -33,8 +33,14 @@ class Process:
         self.args = args
         self.log = log
         self._log_file = open(log, "ab")
-        self.proc = subprocess.Popen(args, stdout=self._log_file, stderr=subprocess.STDOUT, cwd=REPO,
-                                     env={**os.environ, **(env or {})}, start_new_session=True)
+        self.proc = subprocess.Popen(
+            args,
+            stdout=self._log_file,
+            stderr=subprocess.STDOUT,
+            cwd=REPO,
+            env={**os.environ, **(env or {})},
+            start_new_session=True,
+        )
 
     def output(self, tail: int | None = 4000) -> str:
         text = self.log.read_text(errors="replace")
@@ -71,8 +77,11 @@ class ApiServer(Process):
         self.port = port or free_port()
         self.url = f"http://127.0.0.1:{self.port}"
         level = "info" if access_log else "warning"
-        super().__init__([sys.executable, "-m", "service.cli", "serve", "--host", "127.0.0.1", "--port", str(self.port)],
-                         log, {"FLEXMECH_LOG_LEVEL": level, **env})
+        super().__init__(
+            [sys.executable, "-m", "service.cli", "serve", "--host", "127.0.0.1", "--port", str(self.port)],
+            log,
+            {"FLEXMECH_LOG_LEVEL": level, **env},
+        )
         self.wait_ready()
 
     def wait_ready(self, timeout: float = 90.0) -> None:
@@ -108,8 +117,10 @@ class PostgresServer:
     def __init__(self, directory: Path, port: int | None = None):
         bindir = postgres_bin()
         if bindir is None:
-            raise RuntimeError("PostgreSQL server programs not found: install the Debian package "
-                               "'postgresql' (.ci/run does), or set FLEXMECH_TEST_POSTGRES_URL")
+            raise RuntimeError(
+                "PostgreSQL server programs not found: install the Debian package "
+                "'postgresql' (.ci/run does), or set FLEXMECH_TEST_POSTGRES_URL"
+            )
         self.port = port or free_port()
         self.directory = directory
         self.data = directory / "data"
@@ -122,8 +133,19 @@ class PostgresServer:
         self._prefix = prefix
         self._bindir = bindir
         self._run([str(bindir / "initdb"), "-D", str(self.data), "-U", self.user, "--auth=trust", "-E", "UTF8"])
-        self._run([str(bindir / "pg_ctl"), "-D", str(self.data), "-l", str(directory / "server.log"), "-w",
-                   "-o", f"-p {self.port} -k {directory} -c listen_addresses=127.0.0.1 -c fsync=off", "start"])
+        self._run(
+            [
+                str(bindir / "pg_ctl"),
+                "-D",
+                str(self.data),
+                "-l",
+                str(directory / "server.log"),
+                "-w",
+                "-o",
+                f"-p {self.port} -k {directory} -c listen_addresses=127.0.0.1 -c fsync=off",
+                "start",
+            ]
+        )
         self.url = f"postgresql+psycopg://{self.user}@127.0.0.1:{self.port}/postgres"
 
     def _run(self, args: list[str]) -> None:
@@ -157,13 +179,30 @@ class DaskCluster:
         port = free_port()
         self.address = f"tcp://127.0.0.1:{port}"
         dask = [sys.executable, "-m", "distributed.cli.dask_scheduler"]
-        self.scheduler = Process(dask + ["--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
-                                 directory / "scheduler.log")
+        self.scheduler = Process(
+            dask + ["--host", "127.0.0.1", "--port", str(port), "--no-dashboard"], directory / "scheduler.log"
+        )
         self.workers = [
-            Process([sys.executable, "-m", "distributed.cli.dask_worker", self.address, "--nthreads", "1",
-                     "--nworkers", "1", "--no-dashboard", "--host", "127.0.0.1",
-                     "--local-directory", str(directory / f"worker{k}")], directory / f"worker{k}.log")
-            for k in range(workers)]
+            Process(
+                [
+                    sys.executable,
+                    "-m",
+                    "distributed.cli.dask_worker",
+                    self.address,
+                    "--nthreads",
+                    "1",
+                    "--nworkers",
+                    "1",
+                    "--no-dashboard",
+                    "--host",
+                    "127.0.0.1",
+                    "--local-directory",
+                    str(directory / f"worker{k}"),
+                ],
+                directory / f"worker{k}.log",
+            )
+            for k in range(workers)
+        ]
         self._wait_for_workers(workers)
 
     def _wait_for_workers(self, n: int, timeout: float = 90.0) -> None:
@@ -177,8 +216,7 @@ class DaskCluster:
                     return
             except (OSError, TimeoutError):
                 time.sleep(0.5)
-        raise RuntimeError(f"the Dask cluster at {self.address} did not get {n} workers:\n"
-                           + self.scheduler.output())
+        raise RuntimeError(f"the Dask cluster at {self.address} did not get {n} workers:\n" + self.scheduler.output())
 
     def stop(self) -> None:
         for w in self.workers:

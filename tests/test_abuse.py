@@ -21,10 +21,18 @@ from conftest import EXAMPLES, Deployment
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("abuse")
-    server = Deployment("sqlite", {"FLEXMECH_DATA_DIR": str(tmp / "data"), "FLEXMECH_WORKERS": "1",
-                                   "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES), "FLEXMECH_API_KEYS": "",
-                                   "FLEXMECH_REQUEST_READ_TIMEOUT": "1", "FLEXMECH_SOLVE_TIME_LIMIT": "2"},
-                        tmp).start()
+    server = Deployment(
+        "sqlite",
+        {
+            "FLEXMECH_DATA_DIR": str(tmp / "data"),
+            "FLEXMECH_WORKERS": "1",
+            "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES),
+            "FLEXMECH_API_KEYS": "",
+            "FLEXMECH_REQUEST_READ_TIMEOUT": "1",
+            "FLEXMECH_SOLVE_TIME_LIMIT": "2",
+        },
+        tmp,
+    ).start()
     yield server
     server.stop()
 
@@ -54,8 +62,10 @@ def short_body(url: str) -> tuple[int, dict, float]:
     host, port = url.removeprefix("http://").split(":")
     started = time.perf_counter()
     with socket.create_connection((host, int(port)), timeout=10) as s:
-        s.sendall(b"POST /v1/solve HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
-                  b"Content-Length: 1000\r\n\r\n{\"example\"")
+        s.sendall(
+            b"POST /v1/solve HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+            b'Content-Length: 1000\r\n\r\n{"example"'
+        )
         answer = b""
         while b"\r\n\r\n" not in answer or not answer.rstrip().endswith(b"}"):
             chunk = s.recv(65536)
@@ -83,10 +93,17 @@ def test_abusive_requests_are_refused_while_small_solves_keep_answering(server):
                 else:
                     r = client.post(case.path, json=case.body)
                 seconds = time.perf_counter() - started
-                error = r.json().get("error", {}) if r.headers.get("content-type", "").startswith("application/json") else {}
+                error = (
+                    r.json().get("error", {})
+                    if r.headers.get("content-type", "").startswith("application/json")
+                    else {}
+                )
                 slowest = max(slowest, (case.name, seconds), key=lambda item: item[1])
-                if (r.status_code != case.status or case.message not in error.get("message", "")
-                        or (case.pointer is not None and error.get("pointer") != case.pointer)):
+                if (
+                    r.status_code != case.status
+                    or case.message not in error.get("message", "")
+                    or (case.pointer is not None and error.get("pointer") != case.pointer)
+                ):
                     wrong.append((case.name, r.status_code, error))
         status, body, seconds = short_body(server.url)
         if status != 408 or body["error"]["code"] != "request_timeout":
@@ -98,7 +115,9 @@ def test_abusive_requests_are_refused_while_small_solves_keep_answering(server):
     assert not wrong
     assert set(small.statuses) == {200} and len(small.times) >= 5
     p99 = statistics.quantiles(small.times, n=100)[98]
-    print(f"\n{len(cases()) + 1} abusive requests, the slowest {slowest[0]} in {slowest[1]:.2f} s (short body "
-          f"{seconds:.2f} s); small solve: {len(small.times)} requests, median "
-          f"{statistics.median(small.times) * 1e3:.1f} ms, p99 {p99 * 1e3:.1f} ms")
+    print(
+        f"\n{len(cases()) + 1} abusive requests, the slowest {slowest[0]} in {slowest[1]:.2f} s (short body "
+        f"{seconds:.2f} s); small solve: {len(small.times)} requests, median "
+        f"{statistics.median(small.times) * 1e3:.1f} ms, p99 {p99 * 1e3:.1f} ms"
+    )
     assert "Traceback" not in server.output(tail=None)

@@ -47,8 +47,12 @@ def test_batch_refuses_out_that_is_the_input_folder(tmp_path, cantilever, how):
     docs.mkdir()
     text = json.dumps(cantilever)
     (docs / "beam.json").write_text(text)
-    out = {"same path": docs, "dot": docs / ".", "symlink": tmp_path / "link",
-           "through a missing folder": docs / "missing" / ".."}[how]
+    out = {
+        "same path": docs,
+        "dot": docs / ".",
+        "symlink": tmp_path / "link",
+        "through a missing folder": docs / "missing" / "..",
+    }[how]
     if how == "symlink":
         out.symlink_to(docs, target_is_directory=True)
 
@@ -76,7 +80,8 @@ def test_batch_may_write_into_a_folder_inside_the_input_folder(tmp_path, cantile
     assert result.exit_code == 0, result.output
     assert sorted(p.name for p in (tmp_path / "results").iterdir()) == ["beam.json", "summary.json"]
     assert json.loads((tmp_path / "results" / "beam.json").read_text())["outputs"]["tip.x"] == pytest.approx(
-        85.9561617, abs=1e-4)
+        85.9561617, abs=1e-4
+    )
 
 
 # --- 2. result files never overwrite each other or the summary --------------------------------
@@ -93,12 +98,21 @@ def test_batch_names_results_by_file_name_when_stems_clash(tmp_path, cantilever)
 
     assert result.exit_code == 0, result.output
     assert sorted(p.name for p in out.iterdir()) == [
-        "a.json.json", "a.yaml.json", "b.json", "summary.json", "summary.json.json"]
+        "a.json.json",
+        "a.yaml.json",
+        "b.json",
+        "summary.json",
+        "summary.json.json",
+    ]
     summary = summary_of(out)
     assert (summary["documents"], summary["succeeded"], summary["failed"]) == (4, 4, 0)
     results = {row["document"]: row["result"] for row in summary["results"]}
-    assert results == {"a.json": "a.json.json", "a.yaml": "a.yaml.json", "b.json": "b.json",
-                       "summary.json": "summary.json.json"}
+    assert results == {
+        "a.json": "a.json.json",
+        "a.yaml": "a.yaml.json",
+        "b.json": "b.json",
+        "summary.json": "summary.json.json",
+    }
     names = {"a.json": "a from JSON", "a.yaml": "a from YAML", "b.json": "b", "summary.json": "called summary"}
     for document, file in results.items():
         written = json.loads((out / file).read_text())
@@ -108,10 +122,17 @@ def test_batch_names_results_by_file_name_when_stems_clash(tmp_path, cantilever)
 def test_result_names_stay_distinct_when_a_file_name_is_another_stem():
     names = result_names([Path(n) for n in ("a.json", "a.yaml", "a.yaml.json", "a.yaml.json.json", "b.yml")])
     assert {p.name: n for p, n in names.items()} == {
-        "a.json": "a.json.json", "a.yaml": "a.yaml.json", "a.yaml.json": "a.yaml.json.json",
-        "a.yaml.json.json": "a.yaml.json.json.json", "b.yml": "b.json"}
+        "a.json": "a.json.json",
+        "a.yaml": "a.yaml.json",
+        "a.yaml.json": "a.yaml.json.json",
+        "a.yaml.json.json": "a.yaml.json.json.json",
+        "b.yml": "b.json",
+    }
     assert {n for n in result_names([Path("A.json"), Path("a.yaml"), Path("Summary.yml")]).values()} == {
-        "A.json.json", "a.yaml.json", "Summary.yml.json"}
+        "A.json.json",
+        "a.yaml.json",
+        "Summary.yml.json",
+    }
 
 
 # --- 3. an unreadable document is one failed row -----------------------------------------------
@@ -156,8 +177,11 @@ def test_batch_runs_the_optimization_and_the_inverse_documents_declare(tmp_path,
     assert result.exit_code == 0, result.output
     summary = summary_of(out)
     rows = {row["document"]: (row["analysis"], row["status"]) for row in summary["results"]}
-    assert rows == {"beam.json": ("equilibrium", "converged"), "grasper_shape.json": ("optimize", "optimal"),
-                    "inverse_four_bar.json": ("inverse", "converged")}
+    assert rows == {
+        "beam.json": ("equilibrium", "converged"),
+        "grasper_shape.json": ("optimize", "optimal"),
+        "inverse_four_bar.json": ("inverse", "converged"),
+    }
     assert (summary["succeeded"], summary["failed"]) == (3, 0)
     optimum = json.loads((out / "grasper_shape.json").read_text())
     assert optimum["constraints"][0]["value"] == pytest.approx(0.0508, abs=1e-6)  # the ground's x, in m
@@ -188,10 +212,24 @@ def test_success_depends_on_the_analysis():
 
 
 def test_the_table_colours_an_optimal_optimization_green():
-    rows = [{"document": "o.json", "result": "o.json", "analysis": "optimize", "status": "optimal",
-             "message": "", "seconds": 1.0},
-            {"document": "e.json", "result": "e.json", "analysis": "equilibrium", "status": "not_converged",
-             "message": "no convergence", "seconds": 1.0}]
+    rows = [
+        {
+            "document": "o.json",
+            "result": "o.json",
+            "analysis": "optimize",
+            "status": "optimal",
+            "message": "",
+            "seconds": 1.0,
+        },
+        {
+            "document": "e.json",
+            "result": "e.json",
+            "analysis": "equilibrium",
+            "status": "not_converged",
+            "message": "no convergence",
+            "seconds": 1.0,
+        },
+    ]
     console = Console(file=io.StringIO(), force_terminal=True, color_system="standard", width=200)
 
     print_summary(console, {"documents": 2, "results": rows}, Path("out"))

@@ -106,8 +106,20 @@ def test_sweep_writes_a_plot_and_finds_the_closing_force(run, tmp_path):
 
 def test_sweep_along_a_path_until_an_output_value(run, tmp_path):
     out = tmp_path / "until.json"
-    result = run("sweep", GRIPPER, "--path", ACTUATION, "--start", "0", "--until", "end_effector.x=0.3",
-                 "--steps", "4", "--json", str(out))
+    result = run(
+        "sweep",
+        GRIPPER,
+        "--path",
+        ACTUATION,
+        "--start",
+        "0",
+        "--until",
+        "end_effector.x=0.3",
+        "--steps",
+        "4",
+        "--json",
+        str(out),
+    )
     assert result.exit_code == 0, result.output
     (curve,) = json.loads(out.read_text())["curves"]
     assert len(curve["sweep"]["values"]) == 5
@@ -136,8 +148,23 @@ def test_examples_lists_the_gripper(run):
 
 def test_compare_models_plots_both_curves(run, tmp_path):
     plot, out = tmp_path / "models.svg", tmp_path / "models.json"
-    result = run("sweep", GRIPPER, "--compare-models", "--steps", "10", "--path", ACTUATION, "--start", "-60",
-                 "--until", "end_effector.x=0", "--plot", str(plot), "--json", str(out))
+    result = run(
+        "sweep",
+        GRIPPER,
+        "--compare-models",
+        "--steps",
+        "10",
+        "--path",
+        ACTUATION,
+        "--start",
+        "-60",
+        "--until",
+        "end_effector.x=0",
+        "--plot",
+        str(plot),
+        "--json",
+        str(out),
+    )
     assert result.exit_code == 0, result.output
     assert plot.read_text().lstrip().startswith("<?xml")
     curves = {c["label"]: c for c in json.loads(out.read_text())["curves"]}
@@ -148,8 +175,20 @@ def test_compare_models_plots_both_curves(run, tmp_path):
 
 
 def test_unreachable_sweep_target_is_non_convergence_not_an_error(run):
-    result = run("sweep", GRIPPER, "--path", ACTUATION, "--start", "0", "--until", "end_effector.x=-50",
-                 "--steps", "5", "--model", "linear")
+    result = run(
+        "sweep",
+        GRIPPER,
+        "--path",
+        ACTUATION,
+        "--start",
+        "0",
+        "--until",
+        "end_effector.x=-50",
+        "--steps",
+        "5",
+        "--model",
+        "linear",
+    )
     assert result.exit_code == 1
     assert "target end_effector.x = -50 mm not reached: status not_converged" in result.output
 

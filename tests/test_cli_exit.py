@@ -18,8 +18,14 @@ ROOT = EXAMPLES.parent
 
 
 def _flexmech(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "service.cli", *args], capture_output=True, text=True, cwd=ROOT,
-                          timeout=300, env={**os.environ, "COLUMNS": "200", "NO_COLOR": "1"})
+    return subprocess.run(
+        [sys.executable, "-m", "service.cli", *args],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=300,
+        env={**os.environ, "COLUMNS": "200", "NO_COLOR": "1"},
+    )
 
 
 def test_a_command_leaves_everything_it_printed_and_wrote(tmp_path):
@@ -44,11 +50,14 @@ def test_what_a_command_printed_is_flushed_before_the_exit():
     """print() into a pipe is block-buffered (PYTHONUNBUFFERED, which some machines set, is
     unset for the child): without the flush the lines would be lost."""
     buffered = {k: v for k, v in os.environ.items() if k != "PYTHONUNBUFFERED"}
-    script = ("import sys, service.cli.leaving as leaving\n"
-              "def app():\n    print('\\n'.join(f'line {i}' for i in range(100)))\n    sys.exit(3)\n"
-              "leaving.app = app\nleaving.main()\n")
-    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, cwd=ROOT, timeout=120,
-                          env=buffered)
+    script = (
+        "import sys, service.cli.leaving as leaving\n"
+        "def app():\n    print('\\n'.join(f'line {i}' for i in range(100)))\n    sys.exit(3)\n"
+        "leaving.app = app\nleaving.main()\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, cwd=ROOT, timeout=120, env=buffered
+    )
     assert done.returncode == 3, done.stderr
     assert done.stdout.splitlines() == [f"line {i}" for i in range(100)]
 
@@ -60,9 +69,18 @@ def test_exit_codes_are_pythons(capsys):
 
 
 def test_pint_without_dask_leaves_dask_importable():
-    done = subprocess.run([sys.executable, "-c", "import sys; import models.units as u; pint = u.pint_module(); "
-                           "assert 'dask' not in sys.modules and not pint.compat.HAS_DASK; "
-                           "import dask.bag; print(u.parse_unit('N*m/rad')[0], dask.bag.__name__)"],
-                          capture_output=True, text=True, cwd=ROOT, timeout=120)
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            "import sys; import models.units as u; pint = u.pint_module(); "
+            "assert 'dask' not in sys.modules and not pint.compat.HAS_DASK; "
+            "import dask.bag; print(u.parse_unit('N*m/rad')[0], dask.bag.__name__)",
+        ],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=120,
+    )
     assert done.returncode == 0, done.stderr
     assert done.stdout.split() == ["1.0", "dask.bag"]

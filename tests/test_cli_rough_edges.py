@@ -108,11 +108,18 @@ def test_solve_stiffness_prints_the_nonzero_terms_of_the_tangent(run, tmp_path):
     K, terms = np.asarray(stiffness["K"]), {k: np.asarray(v) for k, v in stiffness["terms"].items()}
     np.testing.assert_allclose(sum(terms.values()), K, atol=1e-9 * np.abs(K).max())
     text = result.stdout
-    for title in ("term I of K_T (Cammarata et al. 2022", "term II of K_T (Cammarata et al. 2022",
-                  "term III of K_T (Cammarata et al. 2022"):
+    for title in (
+        "term I of K_T (Cammarata et al. 2022",
+        "term II of K_T (Cammarata et al. 2022",
+        "term III of K_T (Cammarata et al. 2022",
+    ):
         assert title in text
-    assert text.index("tangent stiffness K_T") < text.index("term I of K_T") < text.index("term II of K_T") \
+    assert (
+        text.index("tangent stiffness K_T")
+        < text.index("term I of K_T")
+        < text.index("term II of K_T")
         < text.index("term III of K_T")
+    )
     # the gripper's force acts at a reference point: no load term
     assert not terms["load"].any() and "zero term of K_T here: load" in text
     assert f"{terms['III'][2][0]:.6g}" in text.split("term III of K_T")[1]
@@ -169,8 +176,18 @@ def test_gripper_plot_labels_do_not_cover_each_other_and_the_load_has_an_arrow()
     ax = fig.axes[0]
     renderer = _renderer(fig)
     labels = {t.get_text(): t.get_window_extent(renderer) for t in ax.texts if t.get_text()}
-    assert {"a", "b", "c", "d", "frame (fixed)", "input", "coupler", "follower", "end_effector",
-            "actuation 50 uN"} <= set(labels)
+    assert {
+        "a",
+        "b",
+        "c",
+        "d",
+        "frame (fixed)",
+        "input",
+        "coupler",
+        "follower",
+        "end_effector",
+        "actuation 50 uN",
+    } <= set(labels)
     for (one, box), (other, other_box) in itertools.combinations(labels.items(), 2):
         assert not box.overlaps(other_box), (one, other)
     assert not labels["a"].overlaps(labels["frame (fixed)"])
@@ -191,8 +208,12 @@ def test_loads_off_the_reference_point_are_drawn_where_they_act_in_the_deformed_
     assert result.converged
     out = result.outputs()
     angle = math.radians(out["bodies.input.angle"])  # the document's angles are degrees
-    expected = np.array([out["bodies.input.x"] + 0.3 * math.cos(angle) - 0.1 * math.sin(angle),
-                         out["bodies.input.y"] + 0.3 * math.sin(angle) + 0.1 * math.cos(angle)])
+    expected = np.array(
+        [
+            out["bodies.input.x"] + 0.3 * math.cos(angle) - 0.1 * math.sin(angle),
+            out["bodies.input.y"] + 0.3 * math.sin(angle) + 0.1 * math.cos(angle),
+        ]
+    )
     np.testing.assert_allclose(load_point(mech, "actuation", out), expected, rtol=1e-12)
     ax = configuration_figure(result).axes[0]
     arrows = [t for t in ax.texts if getattr(t, "arrow_patch", None) is not None]
@@ -232,8 +253,10 @@ def test_compare_gripper_models_shows_silicon_and_nylon_apart(comparison_script)
     script = comparison_script
     E = {m: compile_mechanism(load_document(script.MATERIALS[m])).value(f"/materials/{m}/E") for m in script.MATERIALS}
     ratio = E["nylon"] / E["silicon"]
-    curves = {"silicon": script.material_curves("silicon", script.MATERIALS["silicon"], 4, -60.0),
-              "nylon": script.material_curves("nylon", script.MATERIALS["nylon"], 4, -60.0 * ratio)}
+    curves = {
+        "silicon": script.material_curves("silicon", script.MATERIALS["silicon"], 4, -60.0),
+        "nylon": script.material_curves("nylon", script.MATERIALS["nylon"], 4, -60.0 * ratio),
+    }
     # Under loads scaled with E, both materials move alike: one would hide the other on one axes.
     for silicon, nylon in zip(curves["silicon"], curves["nylon"]):
         assert nylon.closing_force / silicon.closing_force == pytest.approx(ratio, rel=1e-6)

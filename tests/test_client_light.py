@@ -34,14 +34,23 @@ def test_client_installs_and_runs_without_casadi_or_fastapi(tmp_path, api_server
     python = env_dir / "bin" / "python"
     source = tmp_path / "client-src"
     shutil.copytree(REPO_API, source, ignore=shutil.ignore_patterns("build", "*.egg-info", "__pycache__"))
-    install = subprocess.run([str(python), "-m", "pip", "install", "--quiet", "--disable-pip-version-check",
-                              str(source)], capture_output=True, text=True, timeout=600)
+    install = subprocess.run(
+        [str(python), "-m", "pip", "install", "--quiet", "--disable-pip-version-check", str(source)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert install.returncode == 0, install.stderr[-3000:]
     listed = subprocess.run([str(python), "-m", "pip", "list", "--format=freeze"], capture_output=True, text=True)
     names = {line.split("==")[0].lower() for line in listed.stdout.split()}
     assert {"httpx", "pydantic", "flexmech-client"} <= names and not {"casadi", "fastapi", "flexmech"} & names
-    run = subprocess.run([str(python), "-c", SCRIPT, api_server.url, ACTUATION], capture_output=True, text=True,
-                         timeout=120, cwd=tmp_path)
+    run = subprocess.run(
+        [str(python), "-c", SCRIPT, api_server.url, ACTUATION],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=tmp_path,
+    )
     assert run.returncode == 0, run.stderr[-3000:]
     value, missing = run.stdout.split()
     assert abs(float(value) - 77.0346) < 1e-3 and missing == "404"

@@ -21,6 +21,7 @@ def castigliano_compliance(r: float, theta: float) -> np.ndarray:
     """Tip compliance of a clamped circular arc (bending only) in its end frame: the moment
     at the section swept back by t from the tip is g(t) . [Fx, Fy, M] with
     g = [r (1 - cos t), r sin t, 1]; C_ij = int g_i g_j r dt / EI."""
+
     def g(t):
         return np.array([r * (1 - math.cos(t)), r * math.sin(t), 1.0])
 
@@ -36,20 +37,36 @@ def rot(a):
 
 
 def flexure(frm, to, center, radius, start_deg, arc_deg, model="partial_nonlinear", direction="ccw"):
-    return {"type": "curved_beam", "from": frm, "to": to, "center": list(center), "radius": radius,
-            "start_angle": start_deg, "arc_angle": arc_deg, "direction": direction,
-            "material": "steel", "section": "strip", "model": model}
+    return {
+        "type": "curved_beam",
+        "from": frm,
+        "to": to,
+        "center": list(center),
+        "radius": radius,
+        "start_angle": start_deg,
+        "arc_angle": arc_deg,
+        "direction": direction,
+        "material": "steel",
+        "section": "strip",
+        "model": model,
+    }
 
 
 def document(bodies, elements, loads):
-    return {"units": {"length": "m", "force": "N", "stress": "Pa", "angle": "deg"},
-            "materials": {"steel": {"E": E}}, "sections": {"strip": {"b": B, "h": H}},
-            "bodies": bodies, "elements": elements, "loads": loads}
+    return {
+        "units": {"length": "m", "force": "N", "stress": "Pa", "angle": "deg"},
+        "materials": {"steel": {"E": E}},
+        "sections": {"strip": {"b": B, "h": H}},
+        "bodies": bodies,
+        "elements": elements,
+        "loads": loads,
+    }
 
 
 @pytest.mark.parametrize("arc_deg", [60.0, 180.0, 300.0])
 def test_eq_2_equals_castigliano(arc_deg):
     from models.curved_beam_closed_form import compliance
+
     r, theta = 0.01, math.radians(arc_deg)
     C = np.array(compliance(r, theta, EI))
     np.testing.assert_allclose(C, castigliano_compliance(r, theta), rtol=1e-10)
@@ -66,8 +83,10 @@ def test_body_on_one_flexure_moves_by_C_f_w(model, direction):
     doc = document(
         {"ground": {"fixed": True, "position": [0.0, 0.0]}, "stage": {"position": tip.tolist()}},
         {"f": flexure("ground", "stage", center, r, start, arc, model, direction)},
-        {"push": {"type": "force", "body": "stage", "force": [0.0, 0.0]},
-         "twist": {"type": "moment", "body": "stage", "moment": 0.0}},
+        {
+            "push": {"type": "force", "body": "stage", "force": [0.0, 0.0]},
+            "twist": {"type": "moment", "body": "stage", "moment": 0.0},
+        },
     )
     mech = compile_mechanism(load_document(doc))
     # N, N, N m: rotations ~1e-7 rad, so geometric non-linearity stays below the tolerance
@@ -124,7 +143,9 @@ def test_two_flexure_parallel_guide():
     beta = math.radians(start + arc) + math.pi / 2
     K_closed = np.zeros((3, 3))
     for center_y in (0.0, gap):
-        tip = np.array([0.0, center_y]) + r * np.array([math.cos(math.radians(start + arc)), math.sin(math.radians(start + arc))])
+        tip = np.array([0.0, center_y]) + r * np.array(
+            [math.cos(math.radians(start + arc)), math.sin(math.radians(start + arc))]
+        )
         s = tip - np.array([0.0, gap / 2])  # from the stage reference point to the attachment
         Bf = np.zeros((3, 3))
         Bf[:2, :2] = rot(beta).T

@@ -73,24 +73,31 @@ def test_private_names_stay_in_their_module():
             elif isinstance(node, ast.ImportFrom) and node.module and f"{node.module}.{node.names[0].name}" in known:
                 aliases.update({(a.asname or a.name): f"{node.module}.{a.name}" for a in node.names})
         for node in ast.walk(tree):
-            if (isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.value.id in aliases
-                    and aliases[node.value.id] in known and node.attr.startswith("_")
-                    and not node.attr.startswith("__")):
+            if (
+                isinstance(node, ast.Attribute)
+                and isinstance(node.value, ast.Name)
+                and node.value.id in aliases
+                and aliases[node.value.id] in known
+                and node.attr.startswith("_")
+                and not node.attr.startswith("__")
+            ):
                 used.append(f"{name} uses {aliases[node.value.id]}.{node.attr}")
     assert not used
 
 
 def test_no_import_cycles():
     known = set(modules())
-    graph = {name: {module for module, _ in imported(name, tree, known) if module in known and module != name}
-             for name, tree in trees().items()}
+    graph = {
+        name: {module for module, _ in imported(name, tree, known) if module in known and module != name}
+        for name, tree in trees().items()
+    }
     cycles, state = [], {}
 
     def visit(node: str, path: list[str]) -> None:
         state[node] = "open"
         for nxt in sorted(graph[node]):
             if state.get(nxt) == "open":
-                cycles.append(" -> ".join(path[path.index(nxt):] + [node, nxt]) if nxt in path else f"{node} -> {nxt}")
+                cycles.append(" -> ".join(path[path.index(nxt) :] + [node, nxt]) if nxt in path else f"{node} -> {nxt}")
             elif nxt not in state:
                 visit(nxt, path + [node])
         state[node] = "done"
@@ -106,16 +113,24 @@ def element_types() -> set[str]:
     names = set()
     for path in (ROOT / "models" / "elements").glob("*.py"):
         for node in ast.walk(ast.parse(path.read_text())):
-            if (isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == "type" for t in node.targets)
-                    and isinstance(node.value, ast.Constant) and isinstance(node.value.value, str)):
+            if (
+                isinstance(node, ast.Assign)
+                and any(isinstance(t, ast.Name) and t.id == "type" for t in node.targets)
+                and isinstance(node.value, ast.Constant)
+                and isinstance(node.value.value, str)
+            ):
                 names.add(node.value.value)
     return names
 
 
 def element_classes() -> set[str]:
     """The classes models/elements defines (an element's schema, topology, family)."""
-    return {node.name for path in (ROOT / "models" / "elements").glob("*.py")
-            for node in ast.walk(ast.parse(path.read_text())) if isinstance(node, ast.ClassDef)}
+    return {
+        node.name
+        for path in (ROOT / "models" / "elements").glob("*.py")
+        for node in ast.walk(ast.parse(path.read_text()))
+        if isinstance(node, ast.ClassDef)
+    }
 
 
 def _names(node: ast.AST) -> set[str]:

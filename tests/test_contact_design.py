@@ -23,10 +23,13 @@ def normal_force(thickness: float) -> tuple[float, float]:
 
 
 def test_the_least_insertion_force_with_a_normal_force_bound():
-    spec = parse_optimize_spec({
-        "design": [{"path": "/sections/strip/h", "lower": 2.0, "upper": 4.0}],
-        "objective": {"output": "contacts.insertion.force_x", "sense": "maximize"},  # force_x < 0: the least push
-        "constraints": [{"output": "contacts.insertion.normal_force", "lower": 4.0}]})
+    spec = parse_optimize_spec(
+        {
+            "design": [{"path": "/sections/strip/h", "lower": 2.0, "upper": 4.0}],
+            "objective": {"output": "contacts.insertion.force_x", "sense": "maximize"},  # force_x < 0: the least push
+            "constraints": [{"output": "contacts.insertion.normal_force", "lower": 4.0}],
+        }
+    )
     result = optimize(design_problem(compile_mechanism(load_document(example_one(64.0))), spec)).summary()
     assert result["status"] == "optimal", result["message"]
     found = result["design"]["/sections/strip/h"]

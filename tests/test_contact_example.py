@@ -43,8 +43,13 @@ def insertion(mu: float, intervals: int = 8, values: tuple[float, ...] | None = 
     out = []
     for index, state in follow(mech, problem, fields, list(range(fields.states)), None, ContactOptions()):
         assert state.converged, (fields.at(index), state.message)
-        out.append({"x_o": fields.at(index)[0], "pair": pairs_report(mech, problem, state)["insertion"],
-                    "outputs": structure_outputs(mech, problem, state)})
+        out.append(
+            {
+                "x_o": fields.at(index)[0],
+                "pair": pairs_report(mech, problem, state)["insertion"],
+                "outputs": structure_outputs(mech, problem, state),
+            }
+        )
     return out
 
 

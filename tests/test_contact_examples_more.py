@@ -49,8 +49,15 @@ def _run(text: str) -> tuple:
     fields = path_fields(mech, parameters)
     states = []
     for index, state in follow(mech, problem, fields, list(range(fields.states)), None, ContactOptions()):
-        states.append({"values": fields.at(index), "converged": state.converged, "message": state.message,
-                       "state": state, "pairs": pairs_report(mech, problem, state)})
+        states.append(
+            {
+                "values": fields.at(index),
+                "converged": state.converged,
+                "message": state.message,
+                "state": state,
+                "pairs": pairs_report(mech, problem, state),
+            }
+        )
     return mech, problem, states
 
 
@@ -175,8 +182,12 @@ def _shooting_conditions(unknowns: np.ndarray, x_e: float, phi: float) -> list[f
     x, y, psi, M = _shoot(unknowns, phi)
     g = _ellipse_gradient(np.array([x, y]), x_e)
     size = np.hypot(*g)
-    return [M / 100.0, ((x - x_e) / SEMI_AXES[0]) ** 2 + ((y - Y_E) / SEMI_AXES[1]) ** 2 - 1,
-            (np.cos(psi) * g[0] + np.sin(psi) * g[1]) / size, (unknowns[1] * g[1] - unknowns[2] * g[0]) / size]
+    return [
+        M / 100.0,
+        ((x - x_e) / SEMI_AXES[0]) ** 2 + ((y - Y_E) / SEMI_AXES[1]) ** 2 - 1,
+        (np.cos(psi) * g[0] + np.sin(psi) * g[1]) / size,
+        (unknowns[1] * g[1] - unknowns[2] * g[0]) / size,
+    ]
 
 
 def _surface_u(intervals: int, degree: int) -> np.ndarray:
@@ -199,7 +210,7 @@ def centre_line_states():
 
 
 def _single_row(problem, state) -> bool:
-    rows = state.mode.active[problem.n_element_in:] > 0.5
+    rows = state.mode.active[problem.n_element_in :] > 0.5
     return int(rows.sum()) == 1
 
 
@@ -229,7 +240,7 @@ def test_the_finger_beyond_a_centre_line_contact_is_straight():
     finger = doc["elements"]["finger"]
     n, degree = finger["intervals"], finger["degree"]
     u = _surface_u(n, degree)
-    (name, count), = problem.drawn_links
+    ((name, count),) = problem.drawn_links
     assert name == "finger" and count == len(u)
     checked = 0
     for s in states:

@@ -20,13 +20,18 @@ W, K, MU = 10.0, 100.0, 0.52
 BLOCK_ON_FLOOR = {
     "units": {"length": "m", "force": "N", "angle": "rad"},
     "bodies": {"ground": {"fixed": True, "position": [0, 0]}, "block": {"position": [0, 0]}},
-    "elements": {"drag": {"type": "spring", "from": "ground", "to": "block", "from_at": [-1, 0], "to_at": [0, 0],
-                          "stiffness": K}},
-    "loads": {"upright": {"type": "displacement", "body": "block", "rotation": 0},
-              "weight": {"type": "force", "body": "block", "force": [0, -W]}},
-    "contacts": {"objects": {"floor": {"type": "half_plane", "point": [0, 0], "normal": [0, 1]}},
-                 "sites": {"foot": {"type": "jaw", "body": "block", "vertices": [[0, 0]]}},
-                 "pairs": {"rub": {"site": "foot", "object": "floor", "friction": MU}}},
+    "elements": {
+        "drag": {"type": "spring", "from": "ground", "to": "block", "from_at": [-1, 0], "to_at": [0, 0], "stiffness": K}
+    },
+    "loads": {
+        "upright": {"type": "displacement", "body": "block", "rotation": 0},
+        "weight": {"type": "force", "body": "block", "force": [0, -W]},
+    },
+    "contacts": {
+        "objects": {"floor": {"type": "half_plane", "point": [0, 0], "normal": [0, 1]}},
+        "sites": {"foot": {"type": "jaw", "body": "block", "vertices": [[0, 0]]}},
+        "pairs": {"rub": {"site": "foot", "object": "floor", "friction": MU}},
+    },
 }
 
 

@@ -63,9 +63,14 @@ def _thrown(normal: dict) -> dict:
     return doc
 
 
-@pytest.mark.parametrize("normal", [{"law": "pure_spring", "stiffness": STIFFNESS, "exponent": 1},
-                                    {"law": "linear", "stiffness": STIFFNESS, "damping": 0}],
-                         ids=["registered_here", "linear_undamped"])
+@pytest.mark.parametrize(
+    "normal",
+    [
+        {"law": "pure_spring", "stiffness": STIFFNESS, "exponent": 1},
+        {"law": "linear", "stiffness": STIFFNESS, "damping": 0},
+    ],
+    ids=["registered_here", "linear_undamped"],
+)
 def test_a_linear_spring_holds_the_body_for_half_its_period_and_returns_its_speed(own_law, normal):
     """F = K q on a translating mass: the contact lasts pi sqrt(m / K) exactly and the body
     leaves at the speed it came (its own law registered by this test, and the built-in
@@ -84,8 +89,10 @@ def test_a_law_of_ones_own_is_listed_and_refused_where_it_does_not_belong(own_la
     with pytest.raises(MechanismError) as caught:
         run_impacts(*parsed(doc))
     assert caught.value.pointer == "/contacts/pairs/conjugate/normal/law"
-    assert caught.value.problem == ("a moreau simulation does not take the normal law 'pure_spring' (it is for an "
-                                    "event_driven simulation); it takes restitution")
+    assert caught.value.problem == (
+        "a moreau simulation does not take the normal law 'pure_spring' (it is for an "
+        "event_driven simulation); it takes restitution"
+    )
     doc["contacts"]["pairs"]["conjugate"]["normal"]["law"] = "pure_sprung"
     with pytest.raises(MechanismError, match="unknown normal law 'pure_sprung'; the normal laws are .*pure_spring"):
         run_impacts(*parsed(doc))
@@ -148,8 +155,11 @@ def test_the_service_refuses_an_old_document_with_the_upgrade_command(api_server
     with Client(api_server.url) as client:
         answer = client.upgrade_document(old)
     assert answer == {"document": upgraded(copy.deepcopy(old))[0], "changes": upgraded(old)[1]}
-    r = httpx.post(f"{api_server.url}/v1/solve", json={"document": answer["document"], "analysis": "simulate",
-                                                        "simulate": {"until": 0.1}}, timeout=60)
+    r = httpx.post(
+        f"{api_server.url}/v1/solve",
+        json={"document": answer["document"], "analysis": "simulate", "simulate": {"until": 0.1}},
+        timeout=60,
+    )
     assert r.status_code == 200, r.text
     broken = {**old, "impacts": {**old["impacts"], "surfaces": {"pin": {"type": "square", "body": "hinge"}}}}
     error = httpx.post(f"{api_server.url}/v1/documents/upgrade", json={"document": broken}, timeout=60).json()["error"]

@@ -23,16 +23,33 @@ E, B, H, L = 2e11, 0.01, 0.001, 0.1
 EI = E * B * H**3 / 12
 
 
-def strip(intervals: int = 16, degree: int = 3, contacts: dict | None = None, loads: dict | None = None,
-          discretization: str = "elements") -> dict:
+def strip(
+    intervals: int = 16,
+    degree: int = 3,
+    contacts: dict | None = None,
+    loads: dict | None = None,
+    discretization: str = "elements",
+) -> dict:
     """A steel strip clamped at the origin along +x, its end a free body "tip"."""
-    link = {"type": "link", "from": "ground", "to": "tip", "length": L, "material": "steel", "section": "strip",
-            "discretization": discretization, "intervals": intervals}
+    link = {
+        "type": "link",
+        "from": "ground",
+        "to": "tip",
+        "length": L,
+        "material": "steel",
+        "section": "strip",
+        "discretization": discretization,
+        "intervals": intervals,
+    }
     link.update({"degree": degree} if discretization == "elements" else {"order": 12})
-    doc = {"units": {"length": "m", "force": "N", "angle": "rad"},
-           "materials": {"steel": {"E": E, "nu": 0.3}}, "sections": {"strip": {"b": B, "h": H}},
-           "bodies": {"ground": {"fixed": True, "position": [0, 0]}, "tip": {"position": [L, 0]}},
-           "elements": {"L": link}, "loads": loads or {}}
+    doc = {
+        "units": {"length": "m", "force": "N", "angle": "rad"},
+        "materials": {"steel": {"E": E, "nu": 0.3}},
+        "sections": {"strip": {"b": B, "h": H}},
+        "bodies": {"ground": {"fixed": True, "position": [0, 0]}, "tip": {"position": [L, 0]}},
+        "elements": {"L": link},
+        "loads": loads or {},
+    }
     if contacts is not None:
         doc["contacts"] = contacts
     return doc
@@ -40,8 +57,11 @@ def strip(intervals: int = 16, degree: int = 3, contacts: dict | None = None, lo
 
 def tip_point_against(obj: dict) -> dict:
     """The link's end point (a one-vertex jaw on the tip body) against one object."""
-    return {"objects": {"obstacle": obj}, "sites": {"tip_point": {"type": "jaw", "body": "tip", "vertices": [[0, 0]]}},
-            "pairs": {"touch": {"site": "tip_point", "object": "obstacle"}}}
+    return {
+        "objects": {"obstacle": obj},
+        "sites": {"tip_point": {"type": "jaw", "body": "tip", "vertices": [[0, 0]]}},
+        "pairs": {"touch": {"site": "tip_point", "object": "obstacle"}},
+    }
 
 
 def contact_report(doc: dict) -> dict:
@@ -55,8 +75,9 @@ def test_a_tip_on_a_frictionless_half_plane_is_frisch_fays_cantilever():
     and approached from outside): the contact force is vertical and the tip sits where
     Frisch-Fay's elastica under that force puts it, to 1e-8 of L."""
     depth = 0.4 * L
-    report = contact_report(strip(contacts=tip_point_against(
-        {"type": "half_plane", "point": [0, -depth], "normal": [0, -1]})))
+    report = contact_report(
+        strip(contacts=tip_point_against({"type": "half_plane", "point": [0, -depth], "normal": [0, -1]}))
+    )
     pair = report["pairs"]["touch"]
     force = -pair["force"][1]  # downward on the tip
     assert abs(pair["force"][0]) < 1e-9 * force
@@ -72,8 +93,9 @@ def test_a_small_indentation_by_a_circle_is_linear_beam_theory():
     falls as d^2 (the order over d = L/100, L/200, L/400 is 2 within 0.1)."""
     errors = []
     for d in (L / 100, L / 200, L / 400):
-        report = contact_report(strip(8, contacts=tip_point_against(
-            {"type": "circle", "centre": [L, L - d], "radius": L})))
+        report = contact_report(
+            strip(8, contacts=tip_point_against({"type": "circle", "centre": [L, L - d], "radius": L}))
+        )
         force = np.linalg.norm(report["pairs"]["touch"]["force"])
         errors.append(abs(force / (3 * EI * d / L**3) - 1))
     orders = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
@@ -87,11 +109,14 @@ def test_a_cantilever_wrapped_onto_a_cylinder_has_its_curvature():
     point's neighbour (at the lift-off a concentrated force acts inside an element, whose
     error decays over the next elements); the wrapped part covers at least three elements."""
     radius, intervals = 0.05, 20
-    contacts = {"objects": {"drum": {"type": "circle", "centre": [0, -radius - H / 2], "radius": radius}},
-                "sites": {"underside": {"type": "surface", "link": "L", "side": "right"}},
-                "pairs": {"wrap": {"site": "underside", "object": "drum"}}}
-    mech = compile_mechanism(load_document(strip(intervals, 3, contacts, {"F": {"type": "force", "body": "tip",
-                                                                                 "force": [0, -100.0]}})))
+    contacts = {
+        "objects": {"drum": {"type": "circle", "centre": [0, -radius - H / 2], "radius": radius}},
+        "sites": {"underside": {"type": "surface", "link": "L", "side": "right"}},
+        "pairs": {"wrap": {"site": "underside", "object": "drum"}},
+    }
+    mech = compile_mechanism(
+        load_document(strip(intervals, 3, contacts, {"F": {"type": "force", "body": "tip", "force": [0, -100.0]}}))
+    )
     problem = contact_problem(mech.structure)
     state = solve_state(problem, mech.p(), np.zeros(1))
     assert state.converged, state.message
@@ -101,7 +126,7 @@ def test_a_cantilever_wrapped_onto_a_cylinder_has_its_curvature():
     node_spacing = L / (3 * intervals)  # m between the nodes of cubic elements
     curvature = np.diff(theta) / node_spacing  # 1/m, from the nondimensional rotations (radians)
     on_drum = np.abs(np.asarray(problem.rows(w, mech.p())[0]).ravel()) < 1e-10
-    wrapped = [e for e in range(intervals) if on_drum[3 * e:3 * e + 3].all()]
+    wrapped = [e for e in range(intervals) if on_drum[3 * e : 3 * e + 3].all()]
     assert wrapped[:3] == [0, 1, 2] and len(wrapped) >= 4
     clear = wrapped[:-1]  # the last wrapped element neighbours the lift-off
     errors = [abs(curvature[k] * (radius + H / 2) + 1) for e in clear for k in range(3 * e, 3 * e + 3)]
@@ -115,8 +140,10 @@ def test_a_contact_free_state_is_the_shooting_solution():
     far = tip_point_against({"type": "circle", "centre": [0.0, -0.2], "radius": 0.05})
     report = contact_report(strip(16, 3, far, loads))
     assert report["pairs"]["touch"]["state"] == "open"
-    shooting = solve_equilibrium(compile_mechanism(load_document(strip(16, loads=loads, discretization="shooting"))),
-                                 NewtonOptions(tol_residual=1e-13, tol_step=1e-13)).outputs()
+    shooting = solve_equilibrium(
+        compile_mechanism(load_document(strip(16, loads=loads, discretization="shooting"))),
+        NewtonOptions(tol_residual=1e-13, tol_step=1e-13),
+    ).outputs()
     for name in ("elements.L.x_end", "elements.L.y_end"):
         assert abs(report["outputs"][name] - shooting[name]) < 1e-8 * L
     assert abs(report["outputs"]["elements.L.angle_end"] - shooting["elements.L.angle_end"]) < 1e-8

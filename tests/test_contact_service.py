@@ -102,6 +102,7 @@ def _unknown_object(doc):
 def _radius(value):
     def change(doc):
         doc["contacts"]["objects"]["fixture"]["radius"] = value
+
     return change
 
 
@@ -110,8 +111,11 @@ def _flat_ellipse(doc):
 
 
 def _bow_tie_object(doc):
-    doc["contacts"]["objects"]["fixture"] = {"type": "polygon", "vertices": [[0, 0], [4, 4], [4, 0], [0, 4]],
-                                             "position": [80, 4]}
+    doc["contacts"]["objects"]["fixture"] = {
+        "type": "polygon",
+        "vertices": [[0, 0], [4, 4], [4, 0], [0, 4]],
+        "position": [80, 4],
+    }
 
 
 def _crossed_jaw(doc):
@@ -131,6 +135,7 @@ def _thin_surface(doc):
 def _implicit(expression):
     def change(doc):
         doc["contacts"]["objects"]["fixture"] = {"type": "implicit", "expression": expression, "position": [80, 10]}
+
     return change
 
 
@@ -141,32 +146,56 @@ def _misspelt(doc):
 UNSAFE = "unsafe or unsupported expression"
 # (id, change to Example I, the pointer into the document, words of the message)
 BAD_DOCUMENTS = [
-    ("unknown-site", _unknown_site, "/contacts/pairs/insertion/site",
-     ["unknown site 'jaww'", "jaw", "nose"]),
-    ("unknown-object", _unknown_object, "/contacts/pairs/insertion/object",
-     ["unknown object 'fixtur'", "fixture", "anvil"]),
+    ("unknown-site", _unknown_site, "/contacts/pairs/insertion/site", ["unknown site 'jaww'", "jaw", "nose"]),
+    (
+        "unknown-object",
+        _unknown_object,
+        "/contacts/pairs/insertion/object",
+        ["unknown object 'fixtur'", "fixture", "anvil"],
+    ),
     ("zero-radius", _radius(0), "/contacts/objects/fixture/radius", ["must be positive", "got 0 mm"]),
     ("negative-radius", _radius(-1), "/contacts/objects/fixture/radius", ["must be positive", "got -1 mm"]),
     ("zero-semi-axis", _flat_ellipse, "/contacts/objects/fixture/semi_axes/0", ["must be positive", "got 0 mm"]),
-    ("bow-tie-object", _bow_tie_object, "/contacts/objects/fixture/vertices",
-     ["intersects itself", "edge 0-1 meets edge 2-3"]),
+    (
+        "bow-tie-object",
+        _bow_tie_object,
+        "/contacts/objects/fixture/vertices",
+        ["intersects itself", "edge 0-1 meets edge 2-3"],
+    ),
     ("crossed-jaw", _crossed_jaw, "/contacts/sites/jaw/vertices", ["intersects itself", "edge 0-1 meets edge 2-3"]),
     ("negative-friction", _negative_friction, "/contacts/pairs/insertion/friction", ["must not be negative", "-0.1"]),
-    ("surface-without-thickness", _thin_surface, "/contacts/sites/skin/side",
-     ["link 'finger' has no thickness", "section 'strip'", "centre_line"]),
-    ("implicit-import", _implicit("__import__('os')"), "/contacts/objects/fixture/expression",
-     [UNSAFE, "'__import__'", "not allowed"]),
+    (
+        "surface-without-thickness",
+        _thin_surface,
+        "/contacts/sites/skin/side",
+        ["link 'finger' has no thickness", "section 'strip'", "centre_line"],
+    ),
+    (
+        "implicit-import",
+        _implicit("__import__('os')"),
+        "/contacts/objects/fixture/expression",
+        [UNSAFE, "'__import__'", "not allowed"],
+    ),
     ("implicit-attribute", _implicit("x.real"), "/contacts/objects/fixture/expression", [UNSAFE, "not allowed"]),
     ("implicit-open", _implicit("open"), "/contacts/objects/fixture/expression", [UNSAFE, "'open'", "not allowed"]),
-    ("implicit-not-finite", _implicit("1/(x-x)"), "/contacts/objects/fixture/expression",
-     ["not a finite number", "division by zero"]),
-    ("misspelt-radius", _misspelt, "/contacts/objects/fixture/raduis",
-     ["unknown field 'raduis'", "did you mean 'radius'"]),
+    (
+        "implicit-not-finite",
+        _implicit("1/(x-x)"),
+        "/contacts/objects/fixture/expression",
+        ["not a finite number", "division by zero"],
+    ),
+    (
+        "misspelt-radius",
+        _misspelt,
+        "/contacts/objects/fixture/raduis",
+        ["unknown field 'raduis'", "did you mean 'radius'"],
+    ),
 ]
 
 
-@pytest.mark.parametrize("change, pointer, words", [case[1:] for case in BAD_DOCUMENTS],
-                         ids=[case[0] for case in BAD_DOCUMENTS])
+@pytest.mark.parametrize(
+    "change, pointer, words", [case[1:] for case in BAD_DOCUMENTS], ids=[case[0] for case in BAD_DOCUMENTS]
+)
 def test_bad_contacts_are_refused_by_the_python_api(change, pointer, words):
     doc = example()
     change(doc)
@@ -175,8 +204,9 @@ def test_bad_contacts_are_refused_by_the_python_api(change, pointer, words):
     assert_words(error.problem, words)
 
 
-@pytest.mark.parametrize("change, pointer, words", [case[1:] for case in BAD_DOCUMENTS],
-                         ids=[case[0] for case in BAD_DOCUMENTS])
+@pytest.mark.parametrize(
+    "change, pointer, words", [case[1:] for case in BAD_DOCUMENTS], ids=[case[0] for case in BAD_DOCUMENTS]
+)
 def test_bad_contacts_are_422_over_http_naming_the_field(api_server, change, pointer, words):
     doc = example()
     change(doc)
@@ -277,10 +307,13 @@ def _squeezed() -> dict:
     """The tip point between two half-planes with no room: free space y >= 1 and y <= -1."""
     doc = example()
     doc["contacts"] = {
-        "objects": {"above": {"type": "half_plane", "point": [0, 1], "normal": [0, 1]},
-                    "below": {"type": "half_plane", "point": [0, -1], "normal": [0, -1]}},
+        "objects": {
+            "above": {"type": "half_plane", "point": [0, 1], "normal": [0, 1]},
+            "below": {"type": "half_plane", "point": [0, -1], "normal": [0, -1]},
+        },
         "sites": {"point": {"type": "jaw", "body": "tip", "vertices": [[0, 0]]}},
-        "pairs": {"up": {"site": "point", "object": "above"}, "down": {"site": "point", "object": "below"}}}
+        "pairs": {"up": {"site": "point", "object": "above"}, "down": {"site": "point", "object": "below"}},
+    }
     return doc
 
 
@@ -340,8 +373,9 @@ def test_contact_path_job_over_http_equals_single_states(api_server):
         assert p["values"] == [pytest.approx(78 - k, abs=1e-12)]
         assert p["status"] == "converged", p["message"]
         assert set(p["pairs"]) == {"insertion"} and "contacts.insertion.force_x" in p["outputs"]
-        assert p["outputs"]["contacts.insertion.force_x"] == pytest.approx(p["pairs"]["insertion"]["force"][0],
-                                                                           rel=1e-12, abs=1e-12)
+        assert p["outputs"]["contacts.insertion.force_x"] == pytest.approx(
+            p["pairs"]["insertion"]["force"][0], rel=1e-12, abs=1e-12
+        )
     at_64 = points[14]
     assert at_64["values"] == [pytest.approx(64.0)] and at_64["pairs"]["insertion"]["state"] == "frictionless"
     single = solved(api_server, example="gripper_jaw_contact", overrides={X_O: 64})
@@ -382,8 +416,11 @@ STEPS = {X_O: 1e-4, H: 1e-5}  # mm
 def _values(answer: dict) -> dict[str, float]:
     assert answer["status"] == "converged", answer["message"]
     pair = answer["pairs"]["insertion"]
-    return {"contacts.insertion.force_x": pair["force"][0], "contacts.insertion.normal_force": pair["normal_force"],
-            "elements.finger.y_end": answer["outputs"]["elements.finger.y_end"]}
+    return {
+        "contacts.insertion.force_x": pair["force"][0],
+        "contacts.insertion.normal_force": pair["normal_force"],
+        "elements.finger.y_end": answer["outputs"]["elements.finger.y_end"],
+    }
 
 
 @pytest.mark.parametrize("mu, motion", [(0.0, None), (0.5, {X_O: -1})], ids=["frictionless", "slipping"])
@@ -394,8 +431,13 @@ def test_sensitivities_equal_central_differences(api_server, mu, motion):
     base = {X_O: 67.81, MU: mu, H: 3.2}
     extra = {"motion": motion} if motion else {}
     steps = {**STEPS, MU: 1e-5} if motion else STEPS
-    answer = solved(api_server, example="gripper_jaw_contact", overrides=base, **extra,
-                    sensitivities={"parameters": list(steps), "outputs": OUTPUTS})
+    answer = solved(
+        api_server,
+        example="gripper_jaw_contact",
+        overrides=base,
+        **extra,
+        sensitivities={"parameters": list(steps), "outputs": OUTPUTS},
+    )
     assert answer["status"] == "converged"
     if motion:
         assert answer["pairs"]["insertion"]["state"] == "slipping"
@@ -403,10 +445,22 @@ def test_sensitivities_equal_central_differences(api_server, mu, motion):
     assert answer["sensitivities"]["units"]["contacts.insertion.force_x"][X_O] == "N/mm"
     differences = {}
     for parameter, step in steps.items():
-        up = _values(solved(api_server, example="gripper_jaw_contact", overrides={**base, parameter: base[parameter] + step},
-                            **extra))
-        down = _values(solved(api_server, example="gripper_jaw_contact",
-                              overrides={**base, parameter: base[parameter] - step}, **extra))
+        up = _values(
+            solved(
+                api_server,
+                example="gripper_jaw_contact",
+                overrides={**base, parameter: base[parameter] + step},
+                **extra,
+            )
+        )
+        down = _values(
+            solved(
+                api_server,
+                example="gripper_jaw_contact",
+                overrides={**base, parameter: base[parameter] - step},
+                **extra,
+            )
+        )
         differences[parameter] = {name: (up[name] - down[name]) / (2 * step) for name in OUTPUTS}
     for name in OUTPUTS:
         # relative to the output's largest derivative: y_end does not depend on h (a single
@@ -457,8 +511,9 @@ def test_no_derivative_is_given_where_the_contact_is_about_to_change_state():
     given, and the answer names the pair and why; clear of it, an open pair's forces have
     derivative 0 (not norm_2's 0/0) and a touching one numbers."""
     asked = {"parameters": [X_O], "outputs": OUTPUTS}
-    for x_o, why in zip(_onset(), ("touches with a vanishing force (about to open)",
-                                   "is apart by a vanishing gap (about to touch)")):
+    for x_o, why in zip(
+        _onset(), ("touches with a vanishing force (about to open)", "is apart by a vanishing gap (about to touch)")
+    ):
         found = run_contact(example(x_o), sensitivities=asked)["sensitivities"]
         assert all(row[X_O] is None for row in found["derivatives"].values()), found
         assert found["not_differentiable"] == [f"pair 'insertion' {why}: the derivatives are one-sided, none is given"]
@@ -516,11 +571,12 @@ def test_cli_bad_at_is_a_one_line_error(run, tmp_path):
 def test_the_python_client_runs_a_contact_path_and_reads_it_typed(api_server):
     """api.client: contact_path, wait, result parsed as a ContactPathResult (pairs typed)."""
     from api.client import Client
-    from api.schemas import ContactPathResult
+    from api.job_schemas import ContactPathResult
 
     with Client(api_server.url) as client:
-        job = client.contact_path(example="gripper_jaw_contact",
-                                  path=[{"path": X_O, "start": 70, "stop": 66, "steps": 4}])
+        job = client.contact_path(
+            example="gripper_jaw_contact", path=[{"path": X_O, "start": 70, "stop": 66, "steps": 4}]
+        )
         assert client.wait(job.id, timeout=120).status == "succeeded"
         result = client.result(job.id).result
     assert isinstance(result, ContactPathResult) and len(result.points) == 5
@@ -535,8 +591,12 @@ def test_a_contact_problem_too_large_to_build_is_refused_before_building(api_ser
     doc = example()
     square = [[0, 0], [1, 0], [1, 1], [0, 1]]
     doc["contacts"]["objects"]["block"] = {"type": "polygon", "vertices": square * 16, "position": [200, 200]}
-    doc["contacts"]["sites"]["saw"] = {"type": "jaw", "body": "tip", "closed": False,
-                                       "vertices": [[k, (k % 2) * 0.5] for k in range(64)]}
+    doc["contacts"]["sites"]["saw"] = {
+        "type": "jaw",
+        "body": "tip",
+        "closed": False,
+        "vertices": [[k, (k % 2) * 0.5] for k in range(64)],
+    }
     doc["contacts"]["pairs"] = {f"p{k}": {"site": "saw", "object": "block"} for k in range(3)}
     r = httpx.post(api_server.url + "/v1/solve", json={"document": doc, "analysis": "contact"})
     error = _error(r)
@@ -557,8 +617,26 @@ def test_cli_compares_frictionless_and_frictional_runs(run, tmp_path):
     """--friction 0 --friction 0.5: two runs of the path, both in the JSON and on the plot;
     friction makes the insertion harder at every touching state of the face."""
     out, plot = tmp_path / "runs.json", tmp_path / "runs.svg"
-    result = run("contact", EXAMPLE, "--path", X_O, "--start", 78, "--stop", 64, "--steps", 14,
-                 "--friction", 0, "--friction", 0.5, "--json", out, "--plot", plot)
+    result = run(
+        "contact",
+        EXAMPLE,
+        "--path",
+        X_O,
+        "--start",
+        78,
+        "--stop",
+        64,
+        "--steps",
+        14,
+        "--friction",
+        0,
+        "--friction",
+        0.5,
+        "--json",
+        out,
+        "--plot",
+        plot,
+    )
     assert result.exit_code == 0, result.output
     assert "mu = 0:" in result.output and "mu = 0.5:" in result.output
     runs = json.loads(out.read_text())["runs"]

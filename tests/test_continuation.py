@@ -44,8 +44,9 @@ def test_limit_loads_equal_bisection_on_natural_continuation(arch, path):
 
 
 def test_stability_changes_exactly_at_the_limit_points(arch, path):
-    changes = [i for i in range(len(path.points) - 1)
-               if path.points[i].stability.stable != path.points[i + 1].stability.stable]
+    changes = [
+        i for i in range(len(path.points) - 1) if path.points[i].stability.stable != path.points[i + 1].stability.stable
+    ]
     assert changes == [lp.after_point for lp in path.limit_points]
     assert all(p.stability.symmetric for p in path.points)
     slot = arch.parameter_index(LOAD)

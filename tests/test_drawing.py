@@ -38,13 +38,17 @@ def test_the_gripper_flexures_are_drawn_on_their_arcs_and_their_ends_move_with_t
         assert radii == pytest.approx(spec["radius"], rel=1e-9)  # the undeformed arc
         a, b = (math.radians(spec["start_angle"] + t) for t in (0.0, spec["arc_angle"]))
         ends = {tuple(np.round(p, 9)) for p in points[[0, -1]]}
-        arc_ends = {tuple(np.round(np.add(spec["center"], spec["radius"] * np.array([math.cos(t), math.sin(t)])), 9))
-                    for t in (a, b)}
+        arc_ends = {
+            tuple(np.round(np.add(spec["center"], spec["radius"] * np.array([math.cos(t), math.sin(t)])), 9))
+            for t in (a, b)
+        }
         assert ends == arc_ends
         deformed = np.asarray(drawing["deformed"]["elements"][element["name"]])
         poses = drawing["deformed"]["poses"]
-        for body, undeformed_end, deformed_end in ((element["from"], points[0], deformed[0]),
-                                                   (element["to"], points[-1], deformed[-1])):
+        for body, undeformed_end, deformed_end in (
+            (element["from"], points[0], deformed[0]),
+            (element["to"], points[-1], deformed[-1]),
+        ):
             # a flexure is clamped to its bodies: its ends move rigidly with them
             assert placed(drawing, poses[body], body, undeformed_end) == pytest.approx(deformed_end, abs=1e-9)
     outputs = result.outputs()
@@ -65,20 +69,28 @@ def test_objects_and_impact_surfaces_are_drawn_at_their_size():
 def test_drawings_and_document_text_over_http(api_server, gripper_dict):
     url = api_server.url
     answer = httpx.post(f"{url}/v1/drawings", json={"example": "gripper", "state": "equilibrium"}, timeout=60).json()
-    assert answer["status"] == "converged" and set(answer["deformed"]["poses"]) == {"frame", "input", "coupler", "follower"}
+    assert answer["status"] == "converged" and set(answer["deformed"]["poses"]) == {
+        "frame",
+        "input",
+        "coupler",
+        "follower",
+    }
     broken = json.loads(json.dumps(gripper_dict))
     broken["elements"]["c"]["to"] = "folower"
     error = httpx.post(f"{url}/v1/drawings", json={"document": broken}, timeout=60).json()["error"]
     assert error["pointer"] == "/document/elements/c/to" and "unknown body 'folower'" in error["message"]
     yaml_text = "name: two bodies\nbodies:\n  ground: {fixed: true, position: [0, 0]}\n"
     parsed = httpx.post(f"{url}/v1/documents/parse", json={"text": yaml_text}, timeout=30).json()
-    assert parsed == {"document": {"name": "two bodies", "bodies": {"ground": {"fixed": True, "position": [0, 0]}}},
-                      "format": "yaml"}
+    assert parsed == {
+        "document": {"name": "two bodies", "bodies": {"ground": {"fixed": True, "position": [0, 0]}}},
+        "format": "yaml",
+    }
     error = httpx.post(f"{url}/v1/documents/parse", json={"text": "bodies: [1, 2\n"}, timeout=30).json()["error"]
     assert error["status"] == 422 and error["pointer"] == "/text" and "not valid YAML" in error["message"]
     assert "line 2" in error["message"]
     laughs = "a: &a [1, 1, 1, 1, 1, 1, 1, 1, 1]\n" + "".join(
-        f"{b}: &{b} [{', '.join(['*' + a] * 9)}]\n" for a, b in zip("abcdefgh", "bcdefghi"))  # 9^9 ones
+        f"{b}: &{b} [{', '.join(['*' + a] * 9)}]\n" for a, b in zip("abcdefgh", "bcdefghi")
+    )  # 9^9 ones
     error = httpx.post(f"{url}/v1/documents/parse", json={"text": laughs}, timeout=30).json()["error"]
     assert error["pointer"] == "/text" and "aliases (*name) are not accepted here" in error["message"]
 
@@ -109,8 +121,11 @@ def test_a_load_path_is_drawn_state_by_state(api_server, gripper_dict):
     alone = mechanism_drawing(mech, (result := solve_equilibrium(mech)).z, result.outputs())["deformed"]
     for body_name, pose in alone["poses"].items():
         assert answer["frames"][2]["poses"][body_name] == pytest.approx(pose, abs=1e-9)
-    hurried = {**body, "options": {"time_limit": 1e-6}, "path": {"path": "/loads/actuation/force/1",
-                                                                  "values": list(range(300))}}
+    hurried = {
+        **body,
+        "options": {"time_limit": 1e-6},
+        "path": {"path": "/loads/actuation/force/1", "values": list(range(300))},
+    }
     answer = httpx.post(f"{api_server.url}/v1/drawings", json=hurried, timeout=60).json()
     assert answer["status"] == "time_limit" and 1 <= len(answer["frames"]) < 300
     assert answer["message"] == f"{len(answer['frames'])} of 300 states drawn in the time limit"
@@ -142,18 +157,34 @@ def test_each_connector_is_drawn_by_the_glyph_and_points_its_family_gives():
     """Pins, sliders and springs come to the page with their family's glyph (models.elements:
     connector()), their points where the document puts them (the body's reference point where
     it leaves them out), a slider's axis in rad and a spring's kind."""
-    doc = {"units": {"length": "mm", "force": "N", "angle": "deg"},
-           "bodies": {"ground": {"fixed": True, "position": [0, 0]}, "carriage": {"position": [10, 2]},
-                      "arm": {"position": [20, 2]}},
-           "elements": {"rail": {"type": "slider", "from": "ground", "to": "carriage", "angle": 30},
-                        "hinge": {"type": "pin", "from": "carriage", "to": "arm", "at": [15, 2]},
-                        "coil": {"type": "spring", "from": "ground", "to": "arm", "stiffness": 1.0,
-                                 "from_at": [0, 5], "to_at": [20, 5]},
-                        "twist": {"type": "spring", "kind": "torsional", "from": "carriage", "to": "arm",
-                                  "stiffness": 1.0}}}
+    doc = {
+        "units": {"length": "mm", "force": "N", "angle": "deg"},
+        "bodies": {
+            "ground": {"fixed": True, "position": [0, 0]},
+            "carriage": {"position": [10, 2]},
+            "arm": {"position": [20, 2]},
+        },
+        "elements": {
+            "rail": {"type": "slider", "from": "ground", "to": "carriage", "angle": 30},
+            "hinge": {"type": "pin", "from": "carriage", "to": "arm", "at": [15, 2]},
+            "coil": {
+                "type": "spring",
+                "from": "ground",
+                "to": "arm",
+                "stiffness": 1.0,
+                "from_at": [0, 5],
+                "to_at": [20, 5],
+            },
+            "twist": {"type": "spring", "kind": "torsional", "from": "carriage", "to": "arm", "stiffness": 1.0},
+        },
+    }
     drawn = {c["name"]: c for c in mechanism_drawing(compile_mechanism(load_document(doc)))["connectors"]}
-    assert {name: c["glyph"] for name, c in drawn.items()} == {"rail": "slider", "hinge": "pin", "coil": "zigzag",
-                                                               "twist": "zigzag"}
+    assert {name: c["glyph"] for name, c in drawn.items()} == {
+        "rail": "slider",
+        "hinge": "pin",
+        "coil": "zigzag",
+        "twist": "zigzag",
+    }
     assert drawn["rail"]["points"] == [[10, 2]] and drawn["rail"]["angle"] == pytest.approx(math.pi / 6)
     assert drawn["hinge"]["points"] == [[15, 2]] and drawn["hinge"]["bodies"] == ["carriage", "arm"]
     assert drawn["coil"]["points"] == [[0, 5], [20, 5]] and drawn["coil"]["kind"] == "translational"

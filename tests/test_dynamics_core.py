@@ -22,12 +22,25 @@ PERIOD = 2 * np.pi / (1.8751**2 * np.sqrt(EI / (RHO_A * L**4)))  # 0.4722 s
 
 
 def rod(intervals: int = 4, force: float = 0.0) -> dict:
-    return {"units": {"length": "m", "force": "N", "angle": "rad", "mass": "kg"},
-            "materials": {"steel": {"E": E, "G": 8e10, "density": RHO}}, "sections": {"rod": {"b": B, "h": H}},
-            "bodies": {"clamp": {"fixed": True, "position": [0, 0]}, "tip": {"position": [L, 0]}},
-            "elements": {"rod": {"type": "link", "from": "clamp", "to": "tip", "length": L, "material": "steel",
-                                 "section": "rod", "discretization": "elements", "intervals": intervals}},
-            "loads": {"hold": {"type": "force", "body": "tip", "force": [0, force]}}}
+    return {
+        "units": {"length": "m", "force": "N", "angle": "rad", "mass": "kg"},
+        "materials": {"steel": {"E": E, "G": 8e10, "density": RHO}},
+        "sections": {"rod": {"b": B, "h": H}},
+        "bodies": {"clamp": {"fixed": True, "position": [0, 0]}, "tip": {"position": [L, 0]}},
+        "elements": {
+            "rod": {
+                "type": "link",
+                "from": "clamp",
+                "to": "tip",
+                "length": L,
+                "material": "steel",
+                "section": "rod",
+                "discretization": "elements",
+                "intervals": intervals,
+            }
+        },
+        "loads": {"hold": {"type": "force", "body": "tip", "force": [0, force]}},
+    }
 
 
 def first_mode(mech, amplitude: float) -> np.ndarray:
@@ -42,8 +55,13 @@ def tip_y(history) -> np.ndarray:
 
 
 def down_crossings(times: np.ndarray, y: np.ndarray) -> np.ndarray:
-    return np.array([times[i] - y[i] * (times[i + 1] - times[i]) / (y[i + 1] - y[i])
-                     for i in range(len(y) - 1) if y[i] > 0 >= y[i + 1]])
+    return np.array(
+        [
+            times[i] - y[i] * (times[i + 1] - times[i]) / (y[i + 1] - y[i])
+            for i in range(len(y) - 1)
+            if y[i] > 0 >= y[i + 1]
+        ]
+    )
 
 
 def test_the_first_period_is_euler_bernoullis():
@@ -51,8 +69,15 @@ def test_the_first_period_is_euler_bernoullis():
     n, m = len(mech.graphs.energy_form.unknowns), mech.graphs.energy_form.n_multipliers
     omega = natural_modes(mech.structure, mech.p(), np.zeros(n), np.zeros(m)).omegas[0]
     assert abs(2 * np.pi / omega / PERIOD - 1) < 1e-4
-    history = integrate(mech.structure, mech.p(), first_mode(mech, 1e-4), np.zeros(n), 2.2 * PERIOD, PERIOD / 200,
-                        generalized_alpha(0.9))
+    history = integrate(
+        mech.structure,
+        mech.p(),
+        first_mode(mech, 1e-4),
+        np.zeros(n),
+        2.2 * PERIOD,
+        PERIOD / 200,
+        generalized_alpha(0.9),
+    )
     assert history.status == "finished"
     periods = np.diff(down_crossings(np.array(history.times), tip_y(history)))
     assert len(periods) == 1 and abs(periods[0] / PERIOD - 1) < 1e-3
@@ -93,8 +118,9 @@ def test_a_damped_rod_settles_to_the_static_equilibrium():
     mech = compile_mechanism(load_document(rod(4, force=2.0)))
     static = mech.graphs.energy_form.x_of_state(minimize_energy(mech).z)
     n = len(static)
-    history = integrate(mech.structure, mech.p(), np.zeros(n), np.zeros(n), 3.0, 0.01, generalized_alpha(0.8),
-                        damping=40.0)
+    history = integrate(
+        mech.structure, mech.p(), np.zeros(n), np.zeros(n), 3.0, 0.01, generalized_alpha(0.8), damping=40.0
+    )
     assert history.status == "finished"
     assert np.abs(history.x[-1] - static).max() < 1e-6 * np.abs(static).max()
 
@@ -103,6 +129,7 @@ def test_a_damped_rod_settles_to_the_static_equilibrium():
 def test_the_first_frequency_converges_at_twice_the_degree_in_space(degree, intervals):
     """Rotation elements of degree p (mass lumped at their quadrature points): the first
     natural frequency's error against 16 elements of degree 4 falls as h^(2p)."""
+
     def first_omega(count: int, p: int) -> float:
         document = rod(count)
         document["elements"]["rod"]["degree"] = p

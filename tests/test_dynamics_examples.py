@@ -27,8 +27,10 @@ def simulate(name: str, document_edit=None, **fields) -> dict:
     return ANALYSES.named("simulate").run(mech, AnalysisRequest(given={"simulate": fields}))
 
 
-@pytest.mark.parametrize("case, L, rho, E, omega, exact", [
-    (1, 8.0, 2767.77, 6.895e10, 2.0, 2.7403e-5), (2, 10.0, 3000.0, 7e10, 6.0, 5.1432e-4)])
+@pytest.mark.parametrize(
+    "case, L, rho, E, omega, exact",
+    [(1, 8.0, 2767.77, 6.895e10, 2.0, 2.7403e-5), (2, 10.0, 3000.0, 7e10, 6.0, 5.1432e-4)],
+)
 def test_the_spinning_rods_steady_extension_is_the_closed_form(case, L, rho, E, omega, exact):
     """After the spin-up of Eq. 4.1 (15 s), the elongation along the arc, averaged over 7 s of
     steady spin, equals L (tan(aL)/(aL) - 1) to 1e-4; the printed values to 5 digits."""
@@ -57,8 +59,9 @@ def test_the_released_rod_rings_with_the_large_amplitude_period():
     assert report["status"] == "finished", report["message"]
     t, y = np.array(report["times"]), np.array(report["outputs"]["bodies.tip.y"])
     assert abs(y[0] - 0.4061) < 1e-6
-    crossings = np.array([t[i] - y[i] * (t[i + 1] - t[i]) / (y[i + 1] - y[i])
-                          for i in range(len(y) - 1) if y[i] > 0 >= y[i + 1]])
+    crossings = np.array(
+        [t[i] - y[i] * (t[i + 1] - t[i]) / (y[i + 1] - y[i]) for i in range(len(y) - 1) if y[i] > 0 >= y[i + 1]]
+    )
     periods = np.diff(crossings)
     assert len(periods) >= 2 and np.all(np.abs(periods / 0.470 - 1) < 5e-3), periods
     assert np.all(periods < 0.4722)
@@ -79,31 +82,69 @@ def test_the_four_bars_energy_is_the_work_of_its_input_torque():
     assert report["outputs"]["elements.crank.angle_start"][-1] > 90  # degrees, counter-clockwise
 
 
-@pytest.mark.parametrize("edit, fields, pointer, message", [
-    (lambda d: d["materials"]["rod"].pop("density"), {}, "/materials/rod/density",
-     "link 'rod' has no mass: give its material 'rod' a density"),
-    (None, {"step": 0}, "/simulate/step", "Input should be greater than 0"),
-    (None, {"step": -0.01}, "/simulate/step", "Input should be greater than 0"),
-    (None, {"until": 0}, "/simulate/until", "Input should be greater than 0"),
-    (None, {"scheme": "newmark", "a1": 0.6, "a2": 0.55}, "/simulate/a2",
-     "Newmark a1 = 0.6, a2 = 0.55 is only conditionally stable (unconditional stability needs a2 >= a1): its "
-     "critical step is 6.325 / omega_max"),
-    (None, {"until": 100.0, "step": 1e-5}, "/simulate/step",
-     "the run needs 10000000 steps of 1e-05 s, over the limit of 20000: take a longer step or a shorter run"),
-    (None, {"histories": {"/loads/spin/rotation": "__import__('os')"}}, "/simulate/histories/loads~1spin~1rotation",
-     "unsafe or unsupported expression: a call of '__import__' is not allowed"),
-    (None, {"histories": {"/loads/spin/rotation": "1/(t - 1)"}}, "/simulate/histories/loads~1spin~1rotation",
-     "the history is not a finite number at t = 1 s"),
-    (lambda d: d["loads"].update({"torque": {"type": "moment", "body": "hub", "moment": 1}}), {},
-     "/simulate/histories/loads~1spin~1rotation",
-     "hub.angle is prescribed in time by '/loads/spin/rotation' and also loaded by /loads/torque"),
-    (None, {"histories": {"/loads/spin/rotation": {"table": [[0, 0], [1, 1]]}}},
-     "/simulate/histories/loads~1spin~1rotation/table", "a prescribed motion needs an acceleration"),
-    (None, {"histories": {"/elements/rod/length": "1 + t"}}, "/simulate/histories/elements~1rod~1length",
-     "cannot change in time"),
-    (lambda d: d["elements"]["rod"].update(end="pinned"), {}, "/bodies",
-     "the motion is undetermined: a coordinate that is free carries no mass (tip.angle)"),
-])
+@pytest.mark.parametrize(
+    "edit, fields, pointer, message",
+    [
+        (
+            lambda d: d["materials"]["rod"].pop("density"),
+            {},
+            "/materials/rod/density",
+            "link 'rod' has no mass: give its material 'rod' a density",
+        ),
+        (None, {"step": 0}, "/simulate/step", "Input should be greater than 0"),
+        (None, {"step": -0.01}, "/simulate/step", "Input should be greater than 0"),
+        (None, {"until": 0}, "/simulate/until", "Input should be greater than 0"),
+        (
+            None,
+            {"scheme": "newmark", "a1": 0.6, "a2": 0.55},
+            "/simulate/a2",
+            "Newmark a1 = 0.6, a2 = 0.55 is only conditionally stable (unconditional stability needs a2 >= a1): its "
+            "critical step is 6.325 / omega_max",
+        ),
+        (
+            None,
+            {"until": 100.0, "step": 1e-5},
+            "/simulate/step",
+            "the run needs 10000000 steps of 1e-05 s, over the limit of 20000: take a longer step or a shorter run",
+        ),
+        (
+            None,
+            {"histories": {"/loads/spin/rotation": "__import__('os')"}},
+            "/simulate/histories/loads~1spin~1rotation",
+            "unsafe or unsupported expression: a call of '__import__' is not allowed",
+        ),
+        (
+            None,
+            {"histories": {"/loads/spin/rotation": "1/(t - 1)"}},
+            "/simulate/histories/loads~1spin~1rotation",
+            "the history is not a finite number at t = 1 s",
+        ),
+        (
+            lambda d: d["loads"].update({"torque": {"type": "moment", "body": "hub", "moment": 1}}),
+            {},
+            "/simulate/histories/loads~1spin~1rotation",
+            "hub.angle is prescribed in time by '/loads/spin/rotation' and also loaded by /loads/torque",
+        ),
+        (
+            None,
+            {"histories": {"/loads/spin/rotation": {"table": [[0, 0], [1, 1]]}}},
+            "/simulate/histories/loads~1spin~1rotation/table",
+            "a prescribed motion needs an acceleration",
+        ),
+        (
+            None,
+            {"histories": {"/elements/rod/length": "1 + t"}},
+            "/simulate/histories/elements~1rod~1length",
+            "cannot change in time",
+        ),
+        (
+            lambda d: d["elements"]["rod"].update(end="pinned"),
+            {},
+            "/bodies",
+            "the motion is undetermined: a coordinate that is free carries no mass (tip.angle)",
+        ),
+    ],
+)
 def test_bad_input_names_the_field(edit, fields, pointer, message):
     with pytest.raises(MechanismError) as error:
         simulate("spinning_rod_case1.json", edit, **{"until": 1.0, **fields})
@@ -114,14 +155,21 @@ def test_bad_input_names_the_field(edit, fields, pointer, message):
 def test_a_step_that_does_not_converge_ends_the_run_with_its_results():
     """A step far too long for the torque (0.2 s against the coupler's ms dynamics) stops the
     run with a status, the time reached and the states so far: no exception."""
-    report = simulate("four_bar_dynamics.json", until=3.0, step=0.3, every=1, adaptive=False,
-                      histories={"/loads/drive/moment": "1e6*t"})
+    report = simulate(
+        "four_bar_dynamics.json",
+        until=3.0,
+        step=0.3,
+        every=1,
+        adaptive=False,
+        histories={"/loads/drive/moment": "1e6*t"},
+    )
     assert report["status"] == "not_converged"
     assert "did not converge" in report["message"] and "try a smaller step" in report["message"]
     assert report["time_reached"] < 3.0
     assert len(report["times"]) == report["steps"] + 1
-    adaptive = simulate("four_bar_dynamics.json", until=3.0, step=0.3, adaptive=True,
-                        histories={"/loads/drive/moment": "1e9*t"})
+    adaptive = simulate(
+        "four_bar_dynamics.json", until=3.0, step=0.3, adaptive=True, histories={"/loads/drive/moment": "1e9*t"}
+    )
     assert adaptive["status"] == "not_converged" and "rejected 12 times in a row" in adaptive["message"]
 
 
@@ -137,8 +185,12 @@ def rigid_slider_crank(times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     theta = ca.SX.sym("theta")
     phi = ca.asin(-L1 * ca.sin(theta) / L2)  # the rod's angle: the slider stays on the x axis
     centre = L1 * ca.vertcat(ca.cos(theta), ca.sin(theta)) + L2 / 2 * ca.vertcat(ca.cos(phi), ca.sin(phi))
-    J = (m1 * L1**2 / 3 + rho * I * L1 + m2 * ca.sumsqr(ca.jacobian(centre, theta))
-         + (m2 * L2**2 / 12 + rho * I * L2) * ca.jacobian(phi, theta) ** 2)
+    J = (
+        m1 * L1**2 / 3
+        + rho * I * L1
+        + m2 * ca.sumsqr(ca.jacobian(centre, theta))
+        + (m2 * L2**2 / 12 + rho * I * L2) * ca.jacobian(phi, theta) ** 2
+    )
     terms = ca.Function("terms", [theta], [J, ca.jacobian(J, theta), L1 * ca.cos(theta) + L2 * ca.cos(phi)])
 
     def moment(t):
@@ -148,14 +200,16 @@ def rigid_slider_crank(times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         J_value, J_slope, _ = (float(q) for q in terms(y[0]))
         return [y[1], (moment(t) - 0.5 * J_slope * y[1] ** 2) / J_value]
 
-    solution = solve_ivp(rates, (0, times[-1]), [0.0, 0.0], t_eval=times, rtol=1e-11, atol=1e-13, method="DOP853",
-                         max_step=0.01)
+    solution = solve_ivp(
+        rates, (0, times[-1]), [0.0, 0.0], t_eval=times, rtol=1e-11, atol=1e-13, method="DOP853", max_step=0.01
+    )
     return solution.y[0], np.array([float(terms(angle)[2]) for angle in solution.y[0]])
 
 
 def test_a_stiff_slider_crank_moves_like_the_rigid_one():
     """Example II.1 with both moduli 1e4 times larger: the crank angle (it turns 455 deg in
     2 s) and the slider's position follow the rigid mechanism's equation of motion."""
+
     def stiffen(document):
         for material in document["materials"].values():
             material["E"] *= 1e4
@@ -165,8 +219,10 @@ def test_a_stiff_slider_crank_moves_like_the_rigid_one():
     times = np.arange(0, 2.0001, 0.01)
     angle, slider = rigid_slider_crank(times)
     assert np.degrees(angle[-1]) > 450
-    ours = {name: np.interp(times, report["times"], report["outputs"][name])
-            for name in ("bodies.pivot.angle", "bodies.slider.x")}
+    ours = {
+        name: np.interp(times, report["times"], report["outputs"][name])
+        for name in ("bodies.pivot.angle", "bodies.slider.x")
+    }
     assert np.abs(ours["bodies.pivot.angle"] - np.degrees(angle)).max() < 0.04  # degrees
     assert np.abs(ours["bodies.slider.x"] - slider).max() < 8e-5  # m
 

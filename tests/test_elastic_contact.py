@@ -24,17 +24,30 @@ SPRING, HERTZ, EXPONENT, GAP, PAD, PUSH = 400.0, 2e6, 1.5, 0.01, 0.02, 10.0  # N
 def block_against_a_stop(**fields) -> dict:
     """A 2 kg block on a spring and a slider along x, a pad of radius 20 mm on it, a stop 10 mm
     beyond the pad, pushed by 10 N."""
-    return {"units": {"length": "m", "force": "N", "angle": "rad", "mass": "kg"},
-            "bodies": {"wall": {"fixed": True, "position": [0, 0]},
-                       "block": {"position": [0.5, 0], "mass": 2.0, "inertia": 0.01}},
-            "elements": {"spring": {"type": "spring", "from": "wall", "to": "block", "stiffness": SPRING},
-                         "rail": {"type": "slider", "from": "wall", "to": "block", "angle": 0}},
-            "loads": {"push": {"type": "force", "body": "block", "force": [PUSH, 0]}},
-            "contacts": {"sites": {"pad": {"type": "circle", "body": "block", "centre": [0, 0], "radius": PAD}},
-                         "objects": {"stop": {"type": "half_plane", "point": [0.5 + PAD + GAP, 0], "normal": [-1, 0]}},
-                         "pairs": {"touch": {"site": "pad", "object": "stop",
-                                             "normal": {"law": "hertz", "stiffness": HERTZ, "exponent": EXPONENT}}}},
-            **fields}
+    return {
+        "units": {"length": "m", "force": "N", "angle": "rad", "mass": "kg"},
+        "bodies": {
+            "wall": {"fixed": True, "position": [0, 0]},
+            "block": {"position": [0.5, 0], "mass": 2.0, "inertia": 0.01},
+        },
+        "elements": {
+            "spring": {"type": "spring", "from": "wall", "to": "block", "stiffness": SPRING},
+            "rail": {"type": "slider", "from": "wall", "to": "block", "angle": 0},
+        },
+        "loads": {"push": {"type": "force", "body": "block", "force": [PUSH, 0]}},
+        "contacts": {
+            "sites": {"pad": {"type": "circle", "body": "block", "centre": [0, 0], "radius": PAD}},
+            "objects": {"stop": {"type": "half_plane", "point": [0.5 + PAD + GAP, 0], "normal": [-1, 0]}},
+            "pairs": {
+                "touch": {
+                    "site": "pad",
+                    "object": "stop",
+                    "normal": {"law": "hertz", "stiffness": HERTZ, "exponent": EXPONENT},
+                }
+            },
+        },
+        **fields,
+    }
 
 
 def analysed(doc: dict, analysis: str) -> dict:
@@ -58,8 +71,12 @@ def test_an_undamped_run_reaches_the_indentation_where_the_pushs_work_is_stored(
     doc = block_against_a_stop(simulate={"until": 0.6, "step": 1e-4, "scheme": "newmark", "a1": 0.5, "a2": 0.5})
     report = analysed(doc, "simulate")
     assert report["status"] == "finished", report["message"]
-    deepest = brentq(lambda q: PUSH * (GAP + q) - SPRING * (GAP + q) ** 2 / 2 - HERTZ * q ** (EXPONENT + 1) / (
-        EXPONENT + 1), 1e-9, 0.05, xtol=1e-16)
+    deepest = brentq(
+        lambda q: PUSH * (GAP + q) - SPRING * (GAP + q) ** 2 / 2 - HERTZ * q ** (EXPONENT + 1) / (EXPONENT + 1),
+        1e-9,
+        0.05,
+        xtol=1e-16,
+    )
     indentation = np.array(report["outputs"]["contacts.touch.indentation"])
     assert indentation.max() == pytest.approx(deepest, rel=1e-4)
     assert indentation[0] == pytest.approx(-GAP, rel=1e-12)  # a gap is a negative indentation
@@ -80,10 +97,13 @@ def test_a_compliant_rod_bent_against_a_stop_settles_on_the_equilibrium_solve():
     contact force (to 1e-6; 3.9e-8 measured)."""
     doc = json.loads((EXAMPLES / "rod_free_vibration.json").read_text())
     doc["loads"]["hold"]["force"] = [0.0, 3.0]
-    doc["contacts"] = {"sites": {"pad": {"type": "circle", "body": "tip", "centre": [0, 0], "radius": 0.01}},
-                       "objects": {"stop": {"type": "half_plane", "point": [1.11, 0.15], "normal": [0, -1]}},
-                       "pairs": {"touch": {"site": "pad", "object": "stop",
-                                           "normal": {"law": "hertz", "stiffness": 1e6, "exponent": 1.5}}}}
+    doc["contacts"] = {
+        "sites": {"pad": {"type": "circle", "body": "tip", "centre": [0, 0], "radius": 0.01}},
+        "objects": {"stop": {"type": "half_plane", "point": [1.11, 0.15], "normal": [0, -1]}},
+        "pairs": {
+            "touch": {"site": "pad", "object": "stop", "normal": {"law": "hertz", "stiffness": 1e6, "exponent": 1.5}}
+        },
+    }
     doc["simulate"] = {"until": 4.0, "step": 1e-3, "damping": 40.0}
     static = analysed(doc, "equilibrium")
     force = static["outputs"]["contacts.touch.normal_force"]
@@ -94,25 +114,41 @@ def test_a_compliant_rod_bent_against_a_stop_settles_on_the_equilibrium_solve():
     assert forces[-1] == pytest.approx(force, rel=1e-6)
 
 
-@pytest.mark.parametrize("change, pointer, problem", [
-    ({"normal": {"law": "lna_esdu", "length": 0.01, "materials": ["steel", "steel"]}},
-     "/contacts/pairs/touch/normal/law",
-     "a newmark or generalized_alpha simulation (and the equilibrium solve) does not take the normal law "
-     "'lna_esdu' (it is for an event_driven simulation); it takes hertz or hunt_crossley or lankarani_nikravesh or "
-     "flores"),
-    ({"normal": {"law": "hertz", "stiffness": {"contact": "spheres", "materials": ["steel", "steel"]}}},
-     "/contacts/pairs/touch/normal/stiffness",
-     "a newmark or generalized_alpha simulation takes the hertz law's stiffness K as a number (force / "
-     "length^exponent in the document's units), not computed from the materials"),
-    ({"friction": 0.3}, "/contacts/pairs/touch/friction",
-     "a newmark or generalized_alpha simulation takes a regularized friction law of the slip speed ({\"law\": "
-     "\"ambrosio\", \"sliding\": f_d, \"v0\": ..., \"v1\": ...}), not Coulomb's coefficient: give the law, or 0"),
-    ({"friction": {"law": "coulomb", "sliding": 0.3}}, "/contacts/pairs/touch/friction/law",
-     "a newmark or generalized_alpha simulation (and the equilibrium solve) does not take the friction law 'coulomb' "
-     "(it is for a quasi-static contact solve, a moreau simulation); it takes none or ambrosio"),
-    ({"friction": {"law": "ambrosio", "sliding": 0.3, "v0": 0.01, "v1": 0.01}}, "/contacts/pairs/touch/friction/v1",
-     "must exceed v0 (0.01 m/s): the law ramps the friction up between them"),
-])
+@pytest.mark.parametrize(
+    "change, pointer, problem",
+    [
+        (
+            {"normal": {"law": "lna_esdu", "length": 0.01, "materials": ["steel", "steel"]}},
+            "/contacts/pairs/touch/normal/law",
+            "a newmark or generalized_alpha simulation (and the equilibrium solve) does not take the normal law "
+            "'lna_esdu' (it is for an event_driven simulation); it takes hertz or hunt_crossley or lankarani_nikravesh or "
+            "flores",
+        ),
+        (
+            {"normal": {"law": "hertz", "stiffness": {"contact": "spheres", "materials": ["steel", "steel"]}}},
+            "/contacts/pairs/touch/normal/stiffness",
+            "a newmark or generalized_alpha simulation takes the hertz law's stiffness K as a number (force / "
+            "length^exponent in the document's units), not computed from the materials",
+        ),
+        (
+            {"friction": 0.3},
+            "/contacts/pairs/touch/friction",
+            'a newmark or generalized_alpha simulation takes a regularized friction law of the slip speed ({"law": '
+            '"ambrosio", "sliding": f_d, "v0": ..., "v1": ...}), not Coulomb\'s coefficient: give the law, or 0',
+        ),
+        (
+            {"friction": {"law": "coulomb", "sliding": 0.3}},
+            "/contacts/pairs/touch/friction/law",
+            "a newmark or generalized_alpha simulation (and the equilibrium solve) does not take the friction law 'coulomb' "
+            "(it is for a quasi-static contact solve, a moreau simulation); it takes none or ambrosio",
+        ),
+        (
+            {"friction": {"law": "ambrosio", "sliding": 0.3, "v0": 0.01, "v1": 0.01}},
+            "/contacts/pairs/touch/friction/v1",
+            "must exceed v0 (0.01 m/s): the law ramps the friction up between them",
+        ),
+    ],
+)
 def test_link_dynamics_refuses_a_pair_it_does_not_model(change, pointer, problem):
     doc = block_against_a_stop(simulate={"until": 0.1})
     doc["contacts"]["pairs"]["touch"].update(change)
@@ -127,6 +163,8 @@ def test_link_dynamics_refuses_a_jaw_site_and_the_equilibrium_solve_leaves_it_to
     with pytest.raises(MechanismError) as caught:
         analysed(doc, "simulate")
     assert (caught.value.pointer, caught.value.problem) == (
-        "/contacts/pairs/touch/site", "a newmark or generalized_alpha simulation takes a pair's site as a circle on a "
-        "body (a pin, a roller, a pad); 'pad' is a jaw")
+        "/contacts/pairs/touch/site",
+        "a newmark or generalized_alpha simulation takes a pair's site as a circle on a "
+        "body (a pin, a roller, a pad); 'pad' is a jaw",
+    )
     assert "contacts.touch.normal_force" not in analysed(doc, "equilibrium")["outputs"]

@@ -12,7 +12,8 @@ import pytest
 from conftest import EXAMPLES
 
 from models import compile_mechanism, load_document
-from models.kernels.link_chain import ChainSignature, jacobian_function, residual_function
+from models.kernels.chain_signature import ChainSignature
+from models.kernels.link_chain import jacobian_function, residual_function
 from service.dynamics.engine import Engine
 from service.dynamics.histories import read_histories
 from service.dynamics.kernel_system import NEWTON_TOLERANCE
@@ -21,9 +22,16 @@ from service.dynamics.run import scheme_of, simulation_spec, start_shape
 from service.dynamics.stepping import start_of
 
 
-@pytest.mark.parametrize("signature", [ChainSignature(3, True, True), ChainSignature(2, True, False),
-                                       ChainSignature(1, False, False), ChainSignature(3, True, True, "partial")],
-                         ids=lambda s: s.key)
+@pytest.mark.parametrize(
+    "signature",
+    [
+        ChainSignature(3, True, True),
+        ChainSignature(2, True, False),
+        ChainSignature(1, False, False),
+        ChainSignature(3, True, True, "partial"),
+    ],
+    ids=lambda s: s.key,
+)
 def test_the_element_jacobian_is_the_derivative_of_its_residual(signature):
     residual, jacobian = residual_function(signature), jacobian_function(signature)
     u = ca.SX.sym("u", signature.n_local)
@@ -32,8 +40,14 @@ def test_the_element_jacobian_is_the_derivative_of_its_residual(signature):
     rng = np.random.default_rng(7)
     data = np.abs(rng.standard_normal(signature.n_data)) + 0.5  # lengths, moduli, densities: positive
     for _ in range(3):
-        args = [rng.standard_normal(signature.n_local), rng.standard_normal(3 * signature.n_c),
-                np.r_[rng.uniform(0.1, 1.0, 3), 0.3], 0.2, rng.standard_normal(2), data]
+        args = [
+            rng.standard_normal(signature.n_local),
+            rng.standard_normal(3 * signature.n_c),
+            np.r_[rng.uniform(0.1, 1.0, 3), 0.3],
+            0.2,
+            rng.standard_normal(2),
+            data,
+        ]
         rows, J = jacobian(*args)
         np.testing.assert_allclose(np.asarray(rows), np.asarray(residual(*args)[0]), rtol=1e-13, atol=1e-13)
         exact = np.asarray(differentiated(*args))
@@ -53,7 +67,7 @@ def _dense_step_residual(mech, histories, scheme, state, h, t1, damping):
     """The step equations of the dense form at the unknowns u = [qdd1; lam1] (a Function of u)."""
     form = form_of(mech.structure, histories.moving)
     n = len(form.unknowns)
-    x, v, a, qdd = (state[i * n:(i + 1) * n] for i in range(4))
+    x, v, a, qdd = (state[i * n : (i + 1) * n] for i in range(4))
     p1, pdot1, pddot1 = histories.at(mech.p(), t1)
     u = ca.SX.sym("u", n + form.n_equalities)
     s = scheme
@@ -80,15 +94,17 @@ def test_a_step_on_the_kernels_solves_the_dense_step_equations(example):
     h = 1e-3
     p1, pdot1, pddot1 = histories.at(mech.p(), h)
     mask = histories.load_mask(len(mech.p()))
-    state, _, norm = (np.asarray(q, dtype=float).ravel() for q in engine.rescue(
-        start.state, h, p1, pdot1, pddot1, 0.0, mask, *engine.data(p1)))
+    state, _, norm = (
+        np.asarray(q, dtype=float).ravel()
+        for q in engine.rescue(start.state, h, p1, pdot1, pddot1, 0.0, mask, *engine.data(p1))
+    )
     assert norm[0] < NEWTON_TOLERANCE
     dense, n = _dense_step_residual(mech, histories, scheme, start.state, h, h, 0.0)
-    u = np.concatenate([start.state[3 * n:4 * n], start.state[4 * n:]])
+    u = np.concatenate([start.state[3 * n : 4 * n], start.state[4 * n :]])
     for _ in range(20):
         F, J = (np.asarray(q, dtype=float) for q in dense(u))
         u = u - np.linalg.solve(J, F.ravel())
-    kernel_u = np.concatenate([state[3 * n:4 * n], state[4 * n:]])
+    kernel_u = np.concatenate([state[3 * n : 4 * n], state[4 * n :]])
     scale = np.abs(u).max()
     np.testing.assert_allclose(kernel_u, u, rtol=0, atol=1e-8 * scale)
 
@@ -109,8 +125,9 @@ def test_newton_on_the_kernels_converges_quadratically():
     factors = system.factorize(Z, si)
     one = ca.MX(1)
     ev = system.evaluate(Z, one, si, factors.kept_reverse)
-    newton = ca.Function("newton", [Z, state, h, p, pdot, pddot, damping, mask, *data],
-                         [Z - system.solve(ev, one, factors), ev.norm])
+    newton = ca.Function(
+        "newton", [Z, state, h, p, pdot, pddot, damping, mask, *data], [Z - system.solve(ev, one, factors), ev.norm]
+    )
     p1, pdot1, pddot1 = histories.at(mech.p(), 0.1)
     args = [start.state, 0.1, p1, pdot1, pddot1, 0.0, histories.load_mask(len(p1)), *engine.data(p1)]
     z = np.random.default_rng(5).standard_normal(system.n_z)  # far from the step: every row of order 1
@@ -142,8 +159,10 @@ def test_the_expanded_window_steps_as_the_window_of_calls_does(example):
         assert engine.stepper.expanded  # no compiled kernels: they run interpreted, expanded
         engine.stepper.expanded = expanded
         window = engine.glue_window(steps)
-        windows[expanded] = [np.asarray(q, dtype=float) for q in window(
-            start.state, h, P, PD, PDD, 0.0, mask, steps, *engine.data(P[:, 0]))]
+        windows[expanded] = [
+            np.asarray(q, dtype=float)
+            for q in window(start.state, h, P, PD, PDD, 0.0, mask, steps, *engine.data(P[:, 0]))
+        ]
     S, monitors, norms, iterations = windows[True]
     assert np.all(norms <= 10 * NEWTON_TOLERANCE) and iterations.sum() >= 2 * steps, (norms, iterations)
     np.testing.assert_array_equal(iterations, windows[False][3])

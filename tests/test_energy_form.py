@@ -24,21 +24,43 @@ def chain() -> dict:
     return {
         "units": {"length": "m", "force": "N", "angle": "rad", "mass": "kg"},
         "gravity": [0.0, -9.81],
-        "bodies": {"ground": {"fixed": True, "position": [0, 0]},
-                   "b1": {"position": [1.0, 0.0], "mass": 0.2, "center_of_mass": [0.1, 0.05]},
-                   "b2": {"position": [2.0, 0.2], "angle": 0.3, "mass": 0.1}},
+        "bodies": {
+            "ground": {"fixed": True, "position": [0, 0]},
+            "b1": {"position": [1.0, 0.0], "mass": 0.2, "center_of_mass": [0.1, 0.05]},
+            "b2": {"position": [2.0, 0.2], "angle": 0.3, "mass": 0.1},
+        },
         "elements": {
-            "s1": {"type": "spring", "from": "ground", "to": "b1", "from_at": [0, 0.3], "to_at": [0.9, 0.2],
-                   "stiffness": 40.0},
-            "s2": {"type": "spring", "from": "ground", "to": "b1", "from_at": [0.5, -0.6], "stiffness": 25.0,
-                   "rest": 0.9},
-            "s3": {"type": "spring", "from": "b1", "to": "b2", "to_at": [2.0, 0.4],
-                   "law": "k * x + c * x**3", "parameters": {"k": 30.0, "c": 400.0}},
+            "s1": {
+                "type": "spring",
+                "from": "ground",
+                "to": "b1",
+                "from_at": [0, 0.3],
+                "to_at": [0.9, 0.2],
+                "stiffness": 40.0,
+            },
+            "s2": {
+                "type": "spring",
+                "from": "ground",
+                "to": "b1",
+                "from_at": [0.5, -0.6],
+                "stiffness": 25.0,
+                "rest": 0.9,
+            },
+            "s3": {
+                "type": "spring",
+                "from": "b1",
+                "to": "b2",
+                "to_at": [2.0, 0.4],
+                "law": "k * x + c * x**3",
+                "parameters": {"k": 30.0, "c": 400.0},
+            },
             "s4": {"type": "spring", "kind": "torsional", "from": "b1", "to": "b2", "stiffness": 2.0},
             "s5": {"type": "spring", "from": "ground", "to": "b2", "from_at": [2.5, -0.5], "stiffness": 15.0},
         },
-        "loads": {"pull": {"type": "force", "body": "b1", "offset": [0.2, -0.1], "force": [2.0, 1.0]},
-                  "tilt": {"type": "displacement", "body": "b2", "rotation": 0.05}},
+        "loads": {
+            "pull": {"type": "force", "body": "b1", "offset": [0.2, -0.1], "force": [2.0, 1.0]},
+            "tilt": {"type": "displacement", "body": "b2", "rotation": 0.05},
+        },
     }
 
 
@@ -50,8 +72,11 @@ def test_the_gradient_of_the_potential_is_the_residual(document):
     assert n + m == mech.n_free
     p = mech.p()
     x = ca.SX.sym("x", n)
-    stationarity = ca.Function("stationarity", [x], [ca.gradient(form.potential(x, p), x),
-                                                     ca.jacobian(form.equalities(x, p), x), form.equalities(x, p)])
+    stationarity = ca.Function(
+        "stationarity",
+        [x],
+        [ca.gradient(form.potential(x, p), x), ca.jacobian(form.equalities(x, p), x), form.equalities(x, p)],
+    )
     rng = np.random.default_rng(11)
     for _ in range(3):  # deformed states that are no equilibria, with arbitrary multipliers
         x0, lam = rng.normal(scale=0.1, size=n), rng.normal(scale=2.0, size=m)
@@ -72,8 +97,9 @@ def test_the_minimum_of_the_potential_is_the_newton_equilibrium(document):
     assert minimum.solver_residual < 1e-8
 
 
-@pytest.mark.parametrize("example, element, family", [("gripper.json", "a", "curved_beam"),
-                                                      ("cantilever.json", "beam", "link")])
+@pytest.mark.parametrize(
+    "example, element, family", [("gripper.json", "a", "curved_beam"), ("cantilever.json", "beam", "link")]
+)
 def test_elements_without_an_energy_form_are_refused_by_name(example, element, family):
     mech = compile_mechanism(load_document(EXAMPLES / example))
     with pytest.raises(MechanismError) as info:

@@ -29,37 +29,50 @@ def expect_error(gripper_dict, edit, pointer, *phrases):
 
 
 def test_unknown_body_is_named(gripper_dict):
-    err = expect_error(gripper_dict, lambda d: d["elements"]["c"].update(to="folower"),
-                       "/elements/c/to", "unknown body 'folower'")
+    err = expect_error(
+        gripper_dict, lambda d: d["elements"]["c"].update(to="folower"), "/elements/c/to", "unknown body 'folower'"
+    )
     assert "follower" in err.problem  # the message lists the bodies that exist
 
 
 def test_load_on_unknown_body(gripper_dict):
-    expect_error(gripper_dict, lambda d: d["loads"]["actuation"].update(body="nobody"),
-                 "/loads/actuation/body", "unknown body 'nobody'")
+    expect_error(
+        gripper_dict,
+        lambda d: d["loads"]["actuation"].update(body="nobody"),
+        "/loads/actuation/body",
+        "unknown body 'nobody'",
+    )
 
 
 @pytest.mark.parametrize("radius", [0.0, -0.2, "-200 um"])
 def test_non_positive_radius(gripper_dict, radius):
-    expect_error(gripper_dict, lambda d: d["elements"]["b"].update(radius=radius),
-                 "/elements/b/radius", "must be positive")
+    expect_error(
+        gripper_dict, lambda d: d["elements"]["b"].update(radius=radius), "/elements/b/radius", "must be positive"
+    )
 
 
 @pytest.mark.parametrize("field, value", [("h", 0), ("b", "-25 um")])
 def test_non_positive_section(gripper_dict, field, value):
-    expect_error(gripper_dict, lambda d: d["sections"]["flexure"].update({field: value}),
-                 f"/sections/flexure/{field}", "must be positive")
+    expect_error(
+        gripper_dict,
+        lambda d: d["sections"]["flexure"].update({field: value}),
+        f"/sections/flexure/{field}",
+        "must be positive",
+    )
 
 
 @pytest.mark.parametrize("angle", [0, 360, 400, -30, "7 rad"])
 def test_arc_angle_outside_0_360(gripper_dict, angle):
-    expect_error(gripper_dict, lambda d: d["elements"]["a"].update(arc_angle=angle),
-                 "/elements/a/arc_angle", "arc angle must lie in (0, 360) deg")
+    expect_error(
+        gripper_dict,
+        lambda d: d["elements"]["a"].update(arc_angle=angle),
+        "/elements/a/arc_angle",
+        "arc angle must lie in (0, 360) deg",
+    )
 
 
 def test_no_fixed_body(gripper_dict):
-    expect_error(gripper_dict, lambda d: d["bodies"]["frame"].update(fixed=False),
-                 "/bodies", "no fixed body")
+    expect_error(gripper_dict, lambda d: d["bodies"]["frame"].update(fixed=False), "/bodies", "no fixed body")
 
 
 def test_a_body_with_no_path_to_ground_is_named(gripper_dict):
@@ -81,31 +94,50 @@ def test_under_constrained_by_missing_flexure(gripper_dict):
 
 
 def test_unit_of_the_wrong_kind(gripper_dict):
-    expect_error(gripper_dict, lambda d: d["sections"]["flexure"].update(h="5 uN"),
-                 "/sections/flexure/h", "is not a length")
+    expect_error(
+        gripper_dict, lambda d: d["sections"]["flexure"].update(h="5 uN"), "/sections/flexure/h", "is not a length"
+    )
 
 
 def test_unreadable_quantity(gripper_dict):
-    expect_error(gripper_dict, lambda d: d["sections"]["flexure"].update(h="five microns"),
-                 "/sections/flexure/h", "cannot read")
+    expect_error(
+        gripper_dict, lambda d: d["sections"]["flexure"].update(h="five microns"), "/sections/flexure/h", "cannot read"
+    )
 
 
 def test_schema_violations_name_the_field(gripper_dict):
-    expect_error(gripper_dict, lambda d: d["elements"]["a"].pop("radius"),
-                 "/elements/a/radius", "required field is missing")
-    expect_error(gripper_dict, lambda d: d["elements"]["a"].update(radious=0.2),
-                 "/elements/a/radious", "unknown field")
-    expect_error(gripper_dict, lambda d: d["elements"]["a"].update(type="hinge"),
-                 "/elements/a/type", "unknown type 'hinge' (types: curved_beam, link, spring, pin, slider)")
-    expect_error(gripper_dict, lambda d: d["elements"]["a"].update(type="curved_bem"),
-                 "/elements/a/type", "unknown type 'curved_bem' (did you mean 'curved_beam'? types: ")
-    expect_error(gripper_dict, lambda d: d["elements"]["a"].pop("type"), "/elements/a/type", "required field is missing")
-    expect_error(gripper_dict, lambda d: d["loads"]["actuation"].update(force=[1.0]),
-                 "/loads/actuation/force/1", "required field is missing")
-    expect_error(gripper_dict, lambda d: d["materials"]["silicon"].update(E=[100]),
-                 "/materials/silicon/E", "")
-    expect_error(gripper_dict, lambda d: d["loads"]["actuation"].update(at=[0, 0], offset=[0, 0]),
-                 "/loads/actuation", "either 'at' or 'offset'")
+    expect_error(
+        gripper_dict, lambda d: d["elements"]["a"].pop("radius"), "/elements/a/radius", "required field is missing"
+    )
+    expect_error(gripper_dict, lambda d: d["elements"]["a"].update(radious=0.2), "/elements/a/radious", "unknown field")
+    expect_error(
+        gripper_dict,
+        lambda d: d["elements"]["a"].update(type="hinge"),
+        "/elements/a/type",
+        "unknown type 'hinge' (types: curved_beam, link, spring, pin, slider)",
+    )
+    expect_error(
+        gripper_dict,
+        lambda d: d["elements"]["a"].update(type="curved_bem"),
+        "/elements/a/type",
+        "unknown type 'curved_bem' (did you mean 'curved_beam'? types: ",
+    )
+    expect_error(
+        gripper_dict, lambda d: d["elements"]["a"].pop("type"), "/elements/a/type", "required field is missing"
+    )
+    expect_error(
+        gripper_dict,
+        lambda d: d["loads"]["actuation"].update(force=[1.0]),
+        "/loads/actuation/force/1",
+        "required field is missing",
+    )
+    expect_error(gripper_dict, lambda d: d["materials"]["silicon"].update(E=[100]), "/materials/silicon/E", "")
+    expect_error(
+        gripper_dict,
+        lambda d: d["loads"]["actuation"].update(at=[0, 0], offset=[0, 0]),
+        "/loads/actuation",
+        "either 'at' or 'offset'",
+    )
 
 
 def test_not_json(tmp_path):

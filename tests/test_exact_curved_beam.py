@@ -25,8 +25,9 @@ def motion(mech, force: float) -> np.ndarray:
     result = solve_equilibrium(mech.with_values({ACTUATION: force}))
     assert result.converged, result.message
     out = result.outputs()
-    return np.array([out["end_effector.dx"], out["end_effector.dy"],
-                     out["bodies.input.y"] - mech.value("/bodies/input/position/1")])
+    return np.array(
+        [out["end_effector.dx"], out["end_effector.dy"], out["bodies.input.y"] - mech.value("/bodies/input/position/1")]
+    )
 
 
 def test_exact_and_partial_nonlinear_share_the_undeformed_tangent_stiffness(gripper_models):

@@ -80,8 +80,9 @@ def test_residual_matches_an_independent_numpy_implementation(gripper):
     rng = np.random.default_rng(7)
     for _ in range(5):
         z = rng.normal(scale=0.3, size=mech.n_free)
-        np.testing.assert_allclose(np.asarray(mech.graphs.residual(z, mech.p())).ravel(), peer(z),
-                                   rtol=1e-12, atol=1e-13)
+        np.testing.assert_allclose(
+            np.asarray(mech.graphs.residual(z, mech.p())).ravel(), peer(z), rtol=1e-12, atol=1e-13
+        )
 
 
 def test_graphs_are_closed_serializable_and_map_like_a_loop(gripper_pnl):

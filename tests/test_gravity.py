@@ -21,8 +21,17 @@ def hanging_strip(section: dict | None = None, **link) -> dict:
         "materials": {"steel": {"E": E, "density": RHO}},
         "sections": {"strip": section or {"b": B, "h": H}},
         "bodies": {"wall": {"fixed": True, "position": [0, 0]}, "tip": {"joint": True, "position": [L, 0]}},
-        "elements": {"strip": {"type": "link", "from": "wall", "to": "tip", "length": L, "material": "steel",
-                               "section": "strip", **link}},
+        "elements": {
+            "strip": {
+                "type": "link",
+                "from": "wall",
+                "to": "tip",
+                "length": L,
+                "material": "steel",
+                "section": "strip",
+                **link,
+            }
+        },
         "outputs": {"wall": {"type": "reaction", "body": "wall"}},
     }
 
@@ -30,6 +39,7 @@ def hanging_strip(section: dict | None = None, **link) -> dict:
 def self_weight_tip(w: float, EI: float) -> tuple[float, float]:
     """The tip of a horizontal cantilever sagging under its weight w per length: with theta
     the tangent angle, EI theta'' = w (L - s) cos(theta), theta(0) = 0, theta'(L) = 0."""
+
     def rhs(s, y):
         theta, kappa, _, _ = y
         return np.vstack([kappa, w * (L - s) * np.cos(theta) / EI, np.cos(theta), np.sin(theta)])
@@ -61,8 +71,9 @@ def test_a_strip_sags_under_its_own_weight_as_the_distributed_elastica():
 
 def test_a_tapered_strip_has_the_mass_of_its_section():
     h0, h1 = 0.002, 0.001
-    mech = compile_mechanism(load_document(hanging_strip({"shape": "tapered_rectangle", "b": B, "h_start": h0,
-                                                          "h_end": h1})))
+    mech = compile_mechanism(
+        load_document(hanging_strip({"shape": "tapered_rectangle", "b": B, "h_start": h0, "h_end": h1}))
+    )
     out = solve_equilibrium(mech, TIGHT).outputs()
     assert out["elements.strip.mass"] == pytest.approx(RHO * B * (h0 + h1) / 2 * L, rel=1e-12)
     assert out["wall.Fy"] == pytest.approx(RHO * B * (h0 + h1) / 2 * L * G, rel=1e-12)

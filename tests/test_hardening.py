@@ -23,10 +23,19 @@ from models import MechanismError, compile_mechanism, load_document
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("hardening")
-    server = Deployment("sqlite", {"FLEXMECH_DATA_DIR": str(tmp / "data"), "FLEXMECH_WORKERS": "1",
-                                   "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES), "FLEXMECH_API_KEYS": "",
-                                   "FLEXMECH_MAX_RESULT_VALUES": "5000", "FLEXMECH_MAX_LOADS": "3",
-                                   "FLEXMECH_HEADER_READ_TIMEOUT": "1"}, tmp).start()
+    server = Deployment(
+        "sqlite",
+        {
+            "FLEXMECH_DATA_DIR": str(tmp / "data"),
+            "FLEXMECH_WORKERS": "1",
+            "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES),
+            "FLEXMECH_API_KEYS": "",
+            "FLEXMECH_MAX_RESULT_VALUES": "5000",
+            "FLEXMECH_MAX_LOADS": "3",
+            "FLEXMECH_HEADER_READ_TIMEOUT": "1",
+        },
+        tmp,
+    ).start()
     yield server
     server.stop()
 
@@ -71,8 +80,11 @@ def test_a_connection_that_does_not_finish_its_headers_is_answered_408_and_close
     """The header deadline (FLEXMECH_HEADER_READ_TIMEOUT, 1 s here): nothing sent; half a
     request line and a header; a second request's first bytes after an answered one."""
     health = b"GET /v1/health HTTP/1.1\r\nHost: x\r\n\r\n"
-    for parts, answered in (([b""], 0), ([b"POST /v1/solve HTTP/1.1\r\nHost: x\r\nContent-Type: appl"], 0),
-                            ([health, b"GET /v1/hea"], 1)):
+    for parts, answered in (
+        ([b""], 0),
+        ([b"POST /v1/solve HTTP/1.1\r\nHost: x\r\nContent-Type: appl"], 0),
+        ([health, b"GET /v1/hea"], 1),
+    ):
         answers = raw_exchange(server.url, parts, answer_each=True)
         assert len(answers) == answered + 1, answers
         assert all(a.startswith(b"HTTP/1.1 200") for a in answers[:answered])
@@ -84,21 +96,32 @@ def test_a_connection_that_does_not_finish_its_headers_is_answered_408_and_close
 
 
 def test_headers_sent_in_pieces_within_the_deadline_are_served(server):
-    answers = raw_exchange(server.url, [b"GET /v1/health HTTP/1.1\r\nHo", b"st: x\r\nConnection: close\r\n\r\n"],
-                           pause=0.3)
+    answers = raw_exchange(
+        server.url, [b"GET /v1/health HTTP/1.1\r\nHo", b"st: x\r\nConnection: close\r\n\r\n"], pause=0.3
+    )
     assert len(answers) == 1 and answers[0].startswith(b"HTTP/1.1 200"), answers
 
 
 # --- 1. bounded work and results -----------------------------------------------------------
 def test_stored_results_are_bounded_and_paged(server):
-    r = httpx.post(server.url + "/v1/sweeps", json={"example": "gripper", "parameters": [
-        {"path": "/loads/actuation/force/1", "start": 0, "stop": 50, "steps": 99}]})
+    r = httpx.post(
+        server.url + "/v1/sweeps",
+        json={
+            "example": "gripper",
+            "parameters": [{"path": "/loads/actuation/force/1", "start": 0, "stop": 50, "steps": 99}],
+        },
+    )
     assert r.status_code == 422 and error(r)["pointer"] == "/outputs"
-    assert re.match(r"/outputs: 100 points x \d+ stored values = \d+: the limit is 5000; keep fewer outputs or points",
-                    error(r)["message"])
+    assert re.match(
+        r"/outputs: 100 points x \d+ stored values = \d+: the limit is 5000; keep fewer outputs or points",
+        error(r)["message"],
+    )
     with Client(server.url) as client:
-        job = client.sweep(example="gripper", outputs=["end_effector.x"],
-                           parameters=[{"path": "/loads/actuation/force/1", "start": 0, "stop": 50, "steps": 99}])
+        job = client.sweep(
+            example="gripper",
+            outputs=["end_effector.x"],
+            parameters=[{"path": "/loads/actuation/force/1", "start": 0, "stop": 50, "steps": 99}],
+        )
         assert client.wait(job.id, timeout=120).status == "succeeded"
         whole = client.result(job.id)
         page = client.result(job.id, offset=30, limit=25)
@@ -116,13 +139,16 @@ def test_counts_of_a_document_are_bounded(server):
 
 
 # --- 2. strict reading -------------------------------------------------------------------
-@pytest.mark.parametrize("text, suffix, message", [
-    ('{"bodies": {}, "bodies": {"a": {"position": [0, 0]}}}', ".json", "duplicate key 'bodies'"),
-    ("bodies: {}\nbodies: {}\n", ".yaml", "duplicate key 'bodies'"),
-    ("[" * 100_000, ".json", "nests deeper than 64 levels"),
-    (b"\xff\xfe{}", ".json", "is not UTF-8 text"),
-    ('{"bodies": {"a": {"position": [' + "1" * 5000 + ', 0]}}}', ".json", "is not valid JSON"),
-])
+@pytest.mark.parametrize(
+    "text, suffix, message",
+    [
+        ('{"bodies": {}, "bodies": {"a": {"position": [0, 0]}}}', ".json", "duplicate key 'bodies'"),
+        ("bodies: {}\nbodies: {}\n", ".yaml", "duplicate key 'bodies'"),
+        ("[" * 100_000, ".json", "nests deeper than 64 levels"),
+        (b"\xff\xfe{}", ".json", "is not UTF-8 text"),
+        ('{"bodies": {"a": {"position": [' + "1" * 5000 + ", 0]}}}", ".json", "is not valid JSON"),
+    ],
+)
 def test_files_are_read_strictly(tmp_path, text, suffix, message):
     path = tmp_path / f"doc{suffix}"
     path.write_bytes(text if isinstance(text, bytes) else text.encode())
@@ -131,10 +157,13 @@ def test_files_are_read_strictly(tmp_path, text, suffix, message):
     assert message in info.value.problem
 
 
-@pytest.mark.parametrize("units, pointer, message", [
-    ({"length": "uN/0"}, "/units/length", "'uN/0' is not a unit of length: expected a unit name, got '0'"),
-    ({"force": "mm"}, "/units/force", "'mm' is not a unit of force (like N)"),
-])
+@pytest.mark.parametrize(
+    "units, pointer, message",
+    [
+        ({"length": "uN/0"}, "/units/length", "'uN/0' is not a unit of length: expected a unit name, got '0'"),
+        ({"force": "mm"}, "/units/force", "'mm' is not a unit of force (like N)"),
+    ],
+)
 def test_a_bad_unit_is_blamed_on_itself(units, pointer, message):
     document = gripper()
     document["units"].update(units)
@@ -151,13 +180,26 @@ def test_a_negative_radius_is_reported_in_the_document_unit():
 
 
 # --- 5. field checks on design bounds --------------------------------------------------------
-@pytest.mark.parametrize("variable, pointer, message", [
-    ({"path": "/sections/flexure/h", "lower": -1, "upper": 8}, "/problem/design/0/lower", "must be positive, got -1 mm"),
-    ({"path": "/sections/flexure/h", "lower": 1, "upper": 8, "scale": 1e-320}, "/problem/design/0/scale",
-     "out of range"),
-    ({"path": "/elements/a/arc_angle", "lower": 10, "upper": 400}, "/problem/design/0/upper",
-     "arc angle must lie in (0, 360) deg"),
-])
+@pytest.mark.parametrize(
+    "variable, pointer, message",
+    [
+        (
+            {"path": "/sections/flexure/h", "lower": -1, "upper": 8},
+            "/problem/design/0/lower",
+            "must be positive, got -1 mm",
+        ),
+        (
+            {"path": "/sections/flexure/h", "lower": 1, "upper": 8, "scale": 1e-320},
+            "/problem/design/0/scale",
+            "out of range",
+        ),
+        (
+            {"path": "/elements/a/arc_angle", "lower": 10, "upper": 400},
+            "/problem/design/0/upper",
+            "arc angle must lie in (0, 360) deg",
+        ),
+    ],
+)
 def test_design_bounds_pass_the_field_checks(server, variable, pointer, message):
     problem = {"design": [variable], "objective": {"output": "end_effector.x"}}
     r = httpx.post(server.url + "/v1/optimize", json={"example": "gripper", "problem": problem})
@@ -165,8 +207,10 @@ def test_design_bounds_pass_the_field_checks(server, variable, pointer, message)
 
 
 def test_nan_bounds_are_refused_at_post(server):
-    body = b'{"example": "gripper", "problem": {"design": [{"path": "/sections/flexure/h", "lower": NaN}], ' \
-           b'"objective": {"output": "end_effector.x"}}}'
+    body = (
+        b'{"example": "gripper", "problem": {"design": [{"path": "/sections/flexure/h", "lower": NaN}], '
+        b'"objective": {"output": "end_effector.x"}}}'
+    )
     r = httpx.post(server.url + "/v1/optimize", content=body, headers={"Content-Type": "application/json"})
     assert r.status_code == 422 and error(r)["pointer"] == "/problem/design/0/lower"
 
@@ -178,8 +222,10 @@ def test_api_keys_that_list_no_key_refuse_to_start(keys):
 
     result = CliRunner().invoke(app, ["serve"], env={"FLEXMECH_API_KEYS": keys, "NO_COLOR": "1"})
     assert result.exit_code == 2
-    assert ("error: FLEXMECH_API_KEYS: Value error, lists no key, only blanks or commas (leave it empty to run "
-            "without keys)") in result.stderr
+    assert (
+        "error: FLEXMECH_API_KEYS: Value error, lists no key, only blanks or commas (leave it empty to run "
+        "without keys)"
+    ) in result.stderr
 
 
 def test_an_empty_key_list_runs_without_keys():
@@ -202,11 +248,21 @@ def test_a_large_body_is_read_as_strictly_in_the_parser_process(server):
     from api.body_parsing import LARGE_BODY
 
     pad = b'"' + b"x" * LARGE_BODY + b'"'
-    cases = [(b'{"description": ' + pad + b', "example": "gripper", "example": "gripper_nylon"}', 422, "duplicate_key",
-              "the body gives the key 'example' twice in one object"),
-             (b'{"description": ' + pad + b', "example": "gripper",}', 400, "malformed_json", "the body is not valid JSON"),
-             (b'{"description": ' + pad + b', "example": "gripper", "o": ' + b"[" * 100 + b"]" * 100 + b"}", 400,
-              "malformed_json", "the body nests deeper than 64 levels")]
+    cases = [
+        (
+            b'{"description": ' + pad + b', "example": "gripper", "example": "gripper_nylon"}',
+            422,
+            "duplicate_key",
+            "the body gives the key 'example' twice in one object",
+        ),
+        (b'{"description": ' + pad + b', "example": "gripper",}', 400, "malformed_json", "the body is not valid JSON"),
+        (
+            b'{"description": ' + pad + b', "example": "gripper", "o": ' + b"[" * 100 + b"]" * 100 + b"}",
+            400,
+            "malformed_json",
+            "the body nests deeper than 64 levels",
+        ),
+    ]
     for body, status, code, message in cases:
         assert len(body) >= LARGE_BODY
         r = httpx.post(server.url + "/v1/solve", content=body, headers={"Content-Type": "application/json"}, timeout=60)
@@ -232,9 +288,16 @@ def test_the_page_and_its_files_carry_the_content_security_policy(server, path):
     assert r.headers["x-content-type-options"] == "nosniff"
 
 
-@pytest.mark.parametrize("method, path, body", [("GET", "/v1/health", None), ("GET", "/v1/examples", None),
-                                                ("POST", "/v1/solve", b"{"), ("GET", "/v1/jobs/none", None),
-                                                ("POST", "/v1/solve", b'{"example": "gripper"}')])
+@pytest.mark.parametrize(
+    "method, path, body",
+    [
+        ("GET", "/v1/health", None),
+        ("GET", "/v1/examples", None),
+        ("POST", "/v1/solve", b"{"),
+        ("GET", "/v1/jobs/none", None),
+        ("POST", "/v1/solve", b'{"example": "gripper"}'),
+    ],
+)
 def test_every_answer_carries_nosniff(server, method, path, body):
     r = httpx.request(method, server.url + path, content=body, headers={"Content-Type": "application/json"})
     assert r.headers["x-content-type-options"] == "nosniff", (path, r.status_code)
@@ -250,11 +313,15 @@ def test_an_error_echoes_only_an_excerpt_of_a_long_name(server):
     assert "n" * 101 not in r.text
 
 
-@pytest.mark.parametrize("route, body", [
-    ("/v1/solve", {"example": "rod_free_vibration", "analysis": "simulate"}),
-    ("/v1/simulations", {"example": "rod_free_vibration"}),
-    ("/v1/solve", {"example": "csfh", "analysis": "simulate", "simulate": {"scheme": "moreau"}}),
-    ("/v1/simulations", {"example": "csfh", "simulate": {"scheme": "event_driven"}})])
+@pytest.mark.parametrize(
+    "route, body",
+    [
+        ("/v1/solve", {"example": "rod_free_vibration", "analysis": "simulate"}),
+        ("/v1/simulations", {"example": "rod_free_vibration"}),
+        ("/v1/solve", {"example": "csfh", "analysis": "simulate", "simulate": {"scheme": "moreau"}}),
+        ("/v1/simulations", {"example": "csfh", "simulate": {"scheme": "event_driven"}}),
+    ],
+)
 def test_a_run_of_uncountably_many_steps_is_refused(server, route, body):
     body = {**body, "simulate": {**body.get("simulate", {}), "until": 1e300, "step": 1e-300}}
     r = httpx.post(server.url + route, json=body)
@@ -314,7 +381,9 @@ def test_a_misspelled_key_is_named(server):
     with pytest.raises(MechanismError) as info:
         load_document(document)
     assert (info.value.pointer, info.value.problem) == (
-        "/sections/flexure/A", "unknown field 'A' (other kinds of object have it, this one does not)")
+        "/sections/flexure/A",
+        "unknown field 'A' (other kinds of object have it, this one does not)",
+    )
 
 
 def test_documents_read_from_files_keep_their_meaning(tmp_path):

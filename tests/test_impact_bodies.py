@@ -20,8 +20,10 @@ def _model():
     doc = csfh("6.1")
     doc["bodies"]["hinge"].update(mass=M, inertia=I_REF, center_of_mass=C.tolist(), angle=ANGLE)
     doc["units"]["angle"] = "rad"
-    doc["loads"] = {"push": {"type": "force", "body": "hinge", "force": F.tolist(), "offset": OFFSET.tolist()},
-                    "turn": {"type": "moment", "body": "hinge", "moment": MOMENT}}
+    doc["loads"] = {
+        "push": {"type": "force", "body": "hinge", "force": F.tolist(), "offset": OFFSET.tolist()},
+        "turn": {"type": "moment", "body": "hinge", "moment": MOMENT},
+    }
     return impact_model(parsed(doc)[0])
 
 
@@ -45,8 +47,11 @@ def test_the_kinetic_energy_is_the_rigid_bodys_at_any_pose():
         q, v = rng.normal(size=3) * [0.01, 0.01, 1.0], rng.normal(size=3)
         arm = _rot(ANGLE + q[2]) @ C  # reference point to mass centre
         v_reference = v[:2] - v[2] * np.array([-arm[1], arm[0]])
-        by_hand = (0.5 * M * v_reference @ v_reference + M * v[2] * (arm[0] * v_reference[1] - arm[1] * v_reference[0])
-                   + 0.5 * I_REF * v[2] ** 2)
+        by_hand = (
+            0.5 * M * v_reference @ v_reference
+            + M * v[2] * (arm[0] * v_reference[1] - arm[1] * v_reference[0])
+            + 0.5 * I_REF * v[2] ** 2
+        )
         assert float(kinetic(q, v, p)) == pytest.approx(by_hand, rel=1e-12)
 
 
@@ -72,8 +77,14 @@ def test_a_driven_bodys_weight_works_through_its_drive_and_leaves_the_motion_alo
     A, w, until, mass = 0.03, 10.0, 0.15, 5.0
     reports = []
     for frame_mass in (None, mass):
-        doc = csfh("6.1", until=until, scheme="event_driven", step=1e-4, histories={"/loads/shake/dy": f"{A}*sin({w}*t)"},
-                   initial={"hinge": {"displacement": [0, 0, 0]}})
+        doc = csfh(
+            "6.1",
+            until=until,
+            scheme="event_driven",
+            step=1e-4,
+            histories={"/loads/shake/dy": f"{A}*sin({w}*t)"},
+            initial={"hinge": {"displacement": [0, 0, 0]}},
+        )
         doc["loads"] = {"shake": {"type": "displacement", "body": "frame", "dx": 0, "dy": 0, "rotation": 0}}
         if frame_mass is not None:
             doc["bodies"]["frame"].update(mass=frame_mass, inertia=1.0)

@@ -53,14 +53,17 @@ def test_an_element_without_a_finite_stiffness_at_its_end_is_refused_saying_why(
     doc = csfh("6.1", until=0.01)
     doc["materials"]["steel"] = {"E": 210, "nu": 0.3}
     doc["sections"] = {"strip": {"b": 0.01, "h": 0.001}}
-    doc["elements"] = {"arm": {"type": "link", "from": "frame", "to": "hinge", "length": 0.1, "material": "steel",
-                               "section": "strip"}}
+    doc["elements"] = {
+        "arm": {"type": "link", "from": "frame", "to": "hinge", "length": 0.1, "material": "steel", "section": "strip"}
+    }
     with pytest.raises(MechanismError) as caught:
         run_impacts(*parsed(doc))
     assert caught.value.pointer == "/elements/arm/type"
-    assert caught.value.problem == ("the element's stiffness at body 'hinge' is not finite and positive in every "
-                                    "direction, and an impact simulation takes an element by that stiffness: an "
-                                    "inextensible straight link is rigid along itself (give it \"axial\": true), a "
-                                    "pinned end leaves its body free to turn (clamp it)")
+    assert caught.value.problem == (
+        "the element's stiffness at body 'hinge' is not finite and positive in every "
+        "direction, and an impact simulation takes an element by that stiffness: an "
+        'inextensible straight link is rigid along itself (give it "axial": true), a '
+        "pinned end leaves its body free to turn (clamp it)"
+    )
     doc["elements"]["arm"]["axial"] = True
     assert run_impacts(*parsed(doc))[1]["status"] == "finished"

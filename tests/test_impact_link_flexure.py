@@ -21,9 +21,17 @@ ARC = 0.144 * math.radians(300)  # the example's flexure: radius 0.144 m, 300 de
 
 
 def as_link(doc: dict, **fields) -> dict:
-    doc["elements"]["flexure"] = {"type": "link", "from": "frame", "to": "hinge", "at": [0.364, 0.1], "length": ARC,
-                                  "shape": {"type": "arc", "angle": 90, "sweep": 300}, "material": "hinge",
-                                  "section": "flexure", **fields}
+    doc["elements"]["flexure"] = {
+        "type": "link",
+        "from": "frame",
+        "to": "hinge",
+        "at": [0.364, 0.1],
+        "length": ARC,
+        "shape": {"type": "arc", "angle": 90, "sweep": 300},
+        "material": "hinge",
+        "section": "flexure",
+        **fields,
+    }
     return doc
 
 
@@ -86,7 +94,8 @@ def test_a_curved_beams_exact_model_enters_by_its_own_stiffness():
     exact_doc["elements"]["flexure"]["model"] = "exact"
     exact = run_impacts(*parsed(exact_doc))[1]
     np.testing.assert_allclose(impact_times(exact), impact_times(closed), rtol=1e-8)
-    np.testing.assert_allclose(end_state(exact), end_state(closed), rtol=1e-6,
-                               atol=1e-6 * np.abs(end_state(closed)).max())
+    np.testing.assert_allclose(
+        end_state(exact), end_state(closed), rtol=1e-6, atol=1e-6 * np.abs(end_state(closed)).max()
+    )
     exact_doc["simulate"]["sensitivities"] = ["/materials/hinge/E"]  # its numbers are the run's parameters
     assert run_impacts(*parsed(exact_doc))[1]["sensitivities"]["fields"]["/materials/hinge/E"]["unit"] == "GPa"

@@ -27,8 +27,9 @@ def simulated(doc: dict) -> dict:
 
 def falling_on_a_block(scheme: str, start_x: float) -> dict:
     doc = csfh("6.1", scheme=scheme, until=0.25, step=1e-5 if scheme == "moreau" else 1e-4)
-    doc["contacts"]["objects"] = {"block": {"type": "polygon", "vertices": [[-1, -1], [0, -1], [0, 0], [-1, 0]],
-                                            "position": [CORNER, TOP]}}
+    doc["contacts"]["objects"] = {
+        "block": {"type": "polygon", "vertices": [[-1, -1], [0, -1], [0, 0], [-1, 0]], "position": [CORNER, TOP]}
+    }
     doc["contacts"]["pairs"]["conjugate"]["object"] = "block"
     doc["simulate"]["initial"]["hinge"] = {"displacement": [start_x, 0, 0]}
     return doc
@@ -68,8 +69,9 @@ ELLIPSE_CENTRE = (0.0, -0.45)
 
 def falling_on_an_ellipse(start_x: float, tilt: float = 0.0, until: float = 0.25) -> dict:
     doc = csfh("6.1", until=until)
-    doc["contacts"]["objects"] = {"egg": {"type": "ellipse", "centre": list(ELLIPSE_CENTRE),
-                                          "semi_axes": list(SEMI_AXES), "angle": tilt}}
+    doc["contacts"]["objects"] = {
+        "egg": {"type": "ellipse", "centre": list(ELLIPSE_CENTRE), "semi_axes": list(SEMI_AXES), "angle": tilt}
+    }
     doc["contacts"]["pairs"]["conjugate"]["object"] = "egg"
     doc["simulate"]["initial"]["hinge"] = {"displacement": [start_x, 0, 0]}
     return doc
@@ -80,7 +82,8 @@ def distance_to_ellipse(point, tilt: float) -> float:
     of the simulation's foot point)."""
     turn = math.radians(tilt)
     local = np.array([[math.cos(turn), math.sin(turn)], [-math.sin(turn), math.cos(turn)]]) @ (
-        np.asarray(point) - ELLIPSE_CENTRE)
+        np.asarray(point) - ELLIPSE_CENTRE
+    )
     a, b = SEMI_AXES
 
     def squared(t):
@@ -88,8 +91,7 @@ def distance_to_ellipse(point, tilt: float) -> float:
 
     ts = np.linspace(-math.pi, math.pi, 3601)
     start = ts[np.argmin([squared(t) for t in ts])]
-    found = minimize_scalar(squared, bounds=(start - 0.002, start + 0.002), method="bounded",
-                            options={"xatol": 1e-13})
+    found = minimize_scalar(squared, bounds=(start - 0.002, start + 0.002), method="bounded", options={"xatol": 1e-13})
     return math.sqrt(found.fun)
 
 
@@ -140,6 +142,8 @@ def test_a_quasi_static_contact_solve_refuses_a_circle_against_a_polygon_naming_
     with pytest.raises(MechanismError) as caught:
         run_analysis(compile_mechanism(load_document(doc)), "contact", NewtonOptions())
     assert caught.value.pointer == "/document/contacts/pairs/conjugate/object"
-    assert caught.value.problem == ("a quasi-static contact solve takes a circle site against circles, holes and "
-                                    "half-planes; the polygon 'block' touches a circle in simulations (event_driven, "
-                                    "moreau)")
+    assert caught.value.problem == (
+        "a quasi-static contact solve takes a circle site against circles, holes and "
+        "half-planes; the polygon 'block' touches a circle in simulations (event_driven, "
+        "moreau)"
+    )

@@ -23,8 +23,13 @@ PAIR = "/contacts/pairs/conjugate"
 STIFFNESS = f"{PAIR}/normal/stiffness"
 # scenario 6.3 (a flexure, Lankarani-Nikravesh impacts, Ambrosio friction) over its first three
 # contacts: the law's stiffness and restitution, the friction, a mass and the flexure's modulus
-FIELDS = [STIFFNESS, f"{PAIR}/normal/restitution", f"{PAIR}/friction/sliding", "/bodies/hinge/mass",
-          "/materials/hinge/E"]
+FIELDS = [
+    STIFFNESS,
+    f"{PAIR}/normal/restitution",
+    f"{PAIR}/friction/sliding",
+    "/bodies/hinge/mass",
+    "/materials/hinge/E",
+]
 RELATIVE_STEP = 1e-5  # of each field: the differences agree to 6e-7 here (7.7e-6 at 1e-4, their truncation)
 
 
@@ -79,8 +84,9 @@ def test_end_state_derivatives_equal_central_differences_of_the_document():
 def test_a_grazing_contact_is_named_as_one_whose_time_has_no_derivative():
     """The pin starts touching the hole's bottom at rest: gravity begins a contact at zero speed."""
     doc = json.loads((EXAMPLES / "csfh_central_impact.json").read_text())
-    doc["simulate"].update(until=0.02, sensitivities=["/bodies/hinge/mass"],
-                           initial={"hinge": {"displacement": [0, -0.02, 0]}})
+    doc["simulate"].update(
+        until=0.02, sensitivities=["/bodies/hinge/mass"], initial={"hinge": {"displacement": [0, -0.02, 0]}}
+    )
     warnings = _run(doc)["sensitivities"]["warnings"]
     assert len(warnings) == 1 and "pair 'conjugate'" in warnings[0] and "begins grazing" in warnings[0]
 
@@ -97,8 +103,19 @@ def test_sensitivities_of_other_schemes_and_unknown_fields_are_refused_by_name()
 
 def test_the_command_line_prints_the_derivatives_it_writes(tmp_path):
     out = tmp_path / "run.json"
-    result = CliRunner().invoke(app, ["simulate", str(EXAMPLES / "csfh_central_impact.json"), "--until", "0.1",
-                                      "--sensitivity", f"{PAIR}/normal/restitution", "--json", str(out)])
+    result = CliRunner().invoke(
+        app,
+        [
+            "simulate",
+            str(EXAMPLES / "csfh_central_impact.json"),
+            "--until",
+            "0.1",
+            "--sensitivity",
+            f"{PAIR}/normal/restitution",
+            "--json",
+            str(out),
+        ],
+    )
     assert result.exit_code == 0, result.output
     written = json.loads(out.read_text())["sensitivities"]["fields"][f"{PAIR}/normal/restitution"]
     assert written["coordinates"]["hinge.y"] > 0  # a livelier rebound ends higher
@@ -108,15 +125,21 @@ def test_the_command_line_prints_the_derivatives_it_writes(tmp_path):
 
 def test_the_service_answers_sensitivities_and_refuses_them_for_moreau_with_422(api_server):
     doc = json.loads((EXAMPLES / "csfh_central_impact.json").read_text())
-    local = run_impacts(MechanismDocument.model_validate(doc), SimulateSpec.model_validate(
-        {**doc["simulate"], "until": 0.1, "sensitivities": ["/bodies/hinge/mass"]}))[1]["sensitivities"]
+    local = run_impacts(
+        MechanismDocument.model_validate(doc),
+        SimulateSpec.model_validate({**doc["simulate"], "until": 0.1, "sensitivities": ["/bodies/hinge/mass"]}),
+    )[1]["sensitivities"]
     asked = {"until": 0.1, "sensitivities": ["/bodies/hinge/mass"]}
-    r = httpx.post(f"{api_server.url}/v1/solve", json={"document": doc, "analysis": "simulate", "simulate": asked},
-                   timeout=120)
+    r = httpx.post(
+        f"{api_server.url}/v1/solve", json={"document": doc, "analysis": "simulate", "simulate": asked}, timeout=120
+    )
     assert r.status_code == 200, r.text
     assert r.json()["sensitivities"]["fields"] == local["fields"]
-    r = httpx.post(f"{api_server.url}/v1/solve", json={"document": doc, "analysis": "simulate",
-                                                        "simulate": {**asked, "scheme": "moreau"}}, timeout=120)
+    r = httpx.post(
+        f"{api_server.url}/v1/solve",
+        json={"document": doc, "analysis": "simulate", "simulate": {**asked, "scheme": "moreau"}},
+        timeout=120,
+    )
     assert r.status_code == 422, r.text
     error = r.json()["error"]
     assert error["pointer"] == "/simulate/sensitivities" and "event_driven" in error["message"], error

@@ -75,12 +75,22 @@ def test_a_job_resumed_across_versions_answers_with_the_points_it_can_compare():
     only) cannot be compared: its influence is empty, and the result is still made."""
     from service.jobs.impact_study import IMPACT_STUDY
 
-    plan = {"runs": [{"path": None, "change": 0.0}, {"path": "/a", "change": 1.0}, {"path": "/a", "change": -1.0}],
-            "until": 3.0, "tolerance": 0.1, "scheme": "moreau"}
+    plan = {
+        "runs": [{"path": None, "change": 0.0}, {"path": "/a", "change": 1.0}, {"path": "/a", "change": -1.0}],
+        "until": 3.0,
+        "tolerance": 0.1,
+        "scheme": "moreau",
+    }
     nominal = {"status": "finished", "impacts": 3, "seconds": 0.1, "contacts": {}}
     old = {"path": "/a", "change": 1.0, "status": "finished", "impacts": 3, "series": {"a": [0.0, 1.0]}}
-    new = {"path": "/a", "change": -1.0, "status": "finished", "impacts": 2, "contacts": {},
-           "influence": {"a": {"departure": 1.0, "rms": 0.2, "max": 0.5}}}
+    new = {
+        "path": "/a",
+        "change": -1.0,
+        "status": "finished",
+        "impacts": 2,
+        "contacts": {},
+        "influence": {"a": {"departure": 1.0, "rms": 0.2, "max": 0.5}},
+    }
     result = IMPACT_STUDY.result({}, plan, {0: nominal, 1: old, 2: new})
     assert result["fields"]["/a"]["+"]["influence"] == {}
     assert result["fields"]["/a"]["-"]["influence"] == new["influence"]

@@ -46,15 +46,15 @@ def test_moreau_rebounds_with_exactly_its_restitution_at_every_impact():
 
 def _one_dof_rebound(d: float) -> float:
     """An independent quadrature: x'' = -x^1.5 (1 + d x' / 1) from x = 0, x' = 1, to x = 0."""
+
     def rhs(t, y):
-        return [y[1], -max(y[0], 0.0) ** 1.5 * (1 + d * y[1])]
+        return [y[1], -(max(y[0], 0.0) ** 1.5) * (1 + d * y[1])]
 
     def out(t, y):
         return y[0]
 
     out.terminal, out.direction = True, -1
-    sol = solve_ivp(rhs, (0, 50), [0.0, 1.0], events=out, rtol=1e-12, atol=1e-14, method="DOP853",
-                    first_step=1e-6)
+    sol = solve_ivp(rhs, (0, 50), [0.0, 1.0], events=out, rtol=1e-12, atol=1e-14, method="DOP853", first_step=1e-6)
     return -sol.y_events[0][-1][1]
 
 
@@ -87,7 +87,7 @@ def test_energy_is_conserved_between_impacts_and_the_balance_closes():
             start = k
         if (not free[k] or k == len(total) - 1) and start is not None:
             stop = k if free[k] else k - 1
-            segment = total[start:stop + 1]
+            segment = total[start : stop + 1]
             drift = max(drift, float(np.ptp(segment)) / scale)
             assert np.all(np.diff(segment) <= 1e-9 * scale)  # never increases
             segments += 1
@@ -115,8 +115,16 @@ def _paper_flexure_force(q: np.ndarray, turning: bool) -> np.ndarray:
     r, t = 0.144, math.radians(300)
     EI = 100e9 * 0.025 * 0.005**3 / 12
     c, s = math.cos(t), math.sin(t)
-    C = np.array([[r**3 / 4 * (6 * t + math.sin(2 * t) - 8 * s), r**3 / 2 * (c * c - 2 * c + 1), r * r * (t - s)],
-                  [0, r**3 / 4 * (2 * t - math.sin(2 * t)), r * r * (1 - c)], [0, 0, r * t]]) / EI
+    C = (
+        np.array(
+            [
+                [r**3 / 4 * (6 * t + math.sin(2 * t) - 8 * s), r**3 / 2 * (c * c - 2 * c + 1), r * r * (t - s)],
+                [0, r**3 / 4 * (2 * t - math.sin(2 * t)), r * r * (1 - c)],
+                [0, 0, r * t],
+            ]
+        )
+        / EI
+    )
     C = np.triu(C) + np.triu(C, 1).T
     K_hat = np.linalg.inv(C)
 
@@ -157,8 +165,13 @@ def test_a_load_that_grows_in_time_drives_the_body_to_the_surface(scheme):
     surface 0.03 m lower, at t = (6 m 0.03 / c)^(1/3) with speed c t^2 / (2 m); the work of the
     load closes the energy balance."""
     c, m = 1000.0, 10.0
-    doc = csfh("6.1", until=0.2, scheme=scheme, step=1e-5 if scheme == "moreau" else 1e-4,
-               histories={"/loads/push/force/1": f"-{c}*t"})
+    doc = csfh(
+        "6.1",
+        until=0.2,
+        scheme=scheme,
+        step=1e-5 if scheme == "moreau" else 1e-4,
+        histories={"/loads/push/force/1": f"-{c}*t"},
+    )
     doc["gravity"] = [0, 0]
     doc["loads"] = {"push": {"type": "force", "body": "hinge", "force": [0, 0]}}
     report = run(doc)
@@ -206,9 +219,14 @@ def test_a_shaken_frame_meets_the_resting_pin_at_the_kinematic_time_and_speed(sc
     its centre without gravity: they meet when A sin(w t) = 0.02, at the hole's speed
     A w cos(w t). Moreau's impact law holds on the relative normal velocity."""
     A, w = 0.03, 10.0
-    doc = csfh("6.1", until=0.15, scheme=scheme, step=1e-5 if scheme == "moreau" else 1e-4,
-               histories={"/loads/shake/dy": f"{A}*sin({w}*t)"},
-               initial={"hinge": {"displacement": [0, 0, 0]}})
+    doc = csfh(
+        "6.1",
+        until=0.15,
+        scheme=scheme,
+        step=1e-5 if scheme == "moreau" else 1e-4,
+        histories={"/loads/shake/dy": f"{A}*sin({w}*t)"},
+        initial={"hinge": {"displacement": [0, 0, 0]}},
+    )
     doc["gravity"] = [0, 0]
     doc["loads"] = {"shake": {"type": "displacement", "body": "frame", "dx": 0, "dy": 0, "rotation": 0}}
     report = run(doc)
@@ -232,9 +250,11 @@ def test_table_2_stiffnesses_follow_from_e_210_gpa_and_the_external_radius():
     from models.contact.laws.penalty import hertz_stiffness
 
     assert hertz_stiffness("spheres", 210e9, 0.3, 210e9, 0.3, 0.18, 0.20, "external", None) == pytest.approx(
-        47.353e9, rel=1e-4)
+        47.353e9, rel=1e-4
+    )
     assert hertz_stiffness("cylinders", 210e9, 0.3, 210e9, 0.3, 0.18, 0.20, "external", 0.025) == pytest.approx(
-        2.2656e9, rel=1e-4)
+        2.2656e9, rel=1e-4
+    )
     sigma = 2 * (1 - 0.3**2) / 100e9
     conformal = 4 / (3 * sigma) * math.sqrt(0.18 * 0.20 / 0.02)
     assert hertz_stiffness("spheres", 100e9, 0.3, 100e9, 0.3, 0.18, 0.20, "conformal", None) == pytest.approx(conformal)
@@ -267,21 +287,47 @@ def _laws(scheme: str, pair: dict) -> dict:
 def _ball(surface: dict, until: float, scheme: str, friction: dict, velocity=(0.0, 0.0, 0.0), drop=0.0) -> dict:
     """A disk (m = 1 kg, R = 0.1 m, I = m R^2 / 2) centred at the origin, `drop` above the
     surface `surface` of the fixed ground."""
-    return {"units": {"length": "m", "force": "N", "angle": "rad", "mass": "kg"}, "gravity": [0, -9.81],
-            "bodies": {"ground": {"fixed": True, "position": [0, 0]},
-                       "ball": {"position": [0, 0], "mass": 1.0, "inertia": 0.005}},
-            "contacts": {"sites": {"rim": {"type": "circle", "body": "ball", "radius": 0.1}}, "objects": {"other": surface},
-                         "pairs": {"touch": _laws(scheme, {"site": "rim", "object": "other", "friction": friction,
-                                                           "normal": {"law": "lankarani_nikravesh", "restitution": 0.9,
-                                                                      "stiffness": 1e9, "exponent": 1.5}})}},
-            "simulate": {"scheme": scheme, "until": until, "step": 1e-4, "tolerance": 1e-10,
-                         "initial": {"ball": {"displacement": [0, drop, 0], "velocity": list(velocity)}}}}
+    return {
+        "units": {"length": "m", "force": "N", "angle": "rad", "mass": "kg"},
+        "gravity": [0, -9.81],
+        "bodies": {
+            "ground": {"fixed": True, "position": [0, 0]},
+            "ball": {"position": [0, 0], "mass": 1.0, "inertia": 0.005},
+        },
+        "contacts": {
+            "sites": {"rim": {"type": "circle", "body": "ball", "radius": 0.1}},
+            "objects": {"other": surface},
+            "pairs": {
+                "touch": _laws(
+                    scheme,
+                    {
+                        "site": "rim",
+                        "object": "other",
+                        "friction": friction,
+                        "normal": {"law": "lankarani_nikravesh", "restitution": 0.9, "stiffness": 1e9, "exponent": 1.5},
+                    },
+                )
+            },
+        },
+        "simulate": {
+            "scheme": scheme,
+            "until": until,
+            "step": 1e-4,
+            "tolerance": 1e-10,
+            "initial": {"ball": {"displacement": [0, drop, 0], "velocity": list(velocity)}},
+        },
+    }
 
 
-@pytest.mark.parametrize("surface", [{"type": "half_plane", "body": "ground", "point": [0, -0.1], "normal": [0, 1]},
-                                     {"type": "circle", "body": "ground", "centre": [0, -0.35], "radius": 0.25},
-                                     {"type": "half_plane", "point": [0, -0.1], "normal": [0, 1]}],
-                         ids=["line", "circle", "line_of_no_body"])  # an object without a body is fixed in global axes
+@pytest.mark.parametrize(
+    "surface",
+    [
+        {"type": "half_plane", "body": "ground", "point": [0, -0.1], "normal": [0, 1]},
+        {"type": "circle", "body": "ground", "centre": [0, -0.35], "radius": 0.25},
+        {"type": "half_plane", "point": [0, -0.1], "normal": [0, 1]},
+    ],
+    ids=["line", "circle", "line_of_no_body"],
+)  # an object without a body is fixed in global axes
 def test_a_disk_dropped_on_a_line_or_a_circle_lands_at_the_free_fall_time(surface):
     report = run(_ball(surface, 0.2, "event_driven", {"law": "none"}, drop=0.05))
     assert report["impacts"][0]["time"] == pytest.approx(math.sqrt(2 * 0.05 / G), rel=1e-9)
@@ -293,8 +339,9 @@ def test_friction_at_the_contact_point_spins_a_sliding_disk_up_to_rolling():
     a disk launched sliding at 1 m/s without spin ends rolling at m R^2 / (I + m R^2) = 2/3
     of it, with omega = -v / R (angular momentum about the contact point is conserved)."""
     floor = {"type": "half_plane", "body": "ground", "point": [0, -0.1], "normal": [0, 1]}
-    report = run(_ball(floor, 0.3, "moreau", {"law": "coulomb", "adherence": 0.3, "sliding": 0.3},
-                       velocity=(1.0, 0.0, 0.0)))
+    report = run(
+        _ball(floor, 0.3, "moreau", {"law": "coulomb", "adherence": 0.3, "sliding": 0.3}, velocity=(1.0, 0.0, 0.0))
+    )
     v, w = report["velocities"]["ball.x"][-1], report["velocities"]["ball.theta"][-1]
     assert v == pytest.approx(2 / 3, rel=1e-9)
     assert w == pytest.approx(-v / 0.1, rel=1e-9)
@@ -318,18 +365,42 @@ def _pendulum(scheme: str, phi0: float) -> tuple[dict, float, float, float]:
     """A bob (m = 1 kg, I_G = 0.01 kg m^2) pinned 0.5 m above its mass centre, released at phi0
     left of the vertical; a disk of radius 0.05 m at its centre meets a wall when it hangs."""
     m, I_G, l, r = 1.0, 0.01, 0.5, 0.05
-    doc = {"units": {"length": "m", "force": "N", "angle": "rad", "mass": "kg"}, "gravity": [0, -9.81],
-           "bodies": {"ground": {"fixed": True, "position": [0, 0]},
-                      "bob": {"position": [0, -l], "mass": m, "inertia": I_G}},
-           "elements": {"hinge": {"type": "pin", "from": "ground", "to": "bob", "at": [0, 0]}},
-           "contacts": {"sites": {"disk": {"type": "circle", "body": "bob", "radius": r}},
-                        "objects": {"wall": {"type": "half_plane", "body": "ground", "point": [r, 0], "normal": [-1, 0]}},
-                        "pairs": {"stop": _laws(scheme, {"site": "disk", "object": "wall", "friction": {"law": "none"},
-                                                         "normal": {"law": "lankarani_nikravesh", "restitution": 0.9,
-                                                                    "stiffness": 1e10, "exponent": 1.5}})}},
-           "simulate": {"scheme": scheme, "until": 0.6, "step": 1e-5 if scheme == "moreau" else 1e-4,
-                        "tolerance": 1e-10, "initial": {"bob": {"displacement": [
-                            l * math.sin(phi0), l * (1 - math.cos(phi0)), phi0]}}}}
+    doc = {
+        "units": {"length": "m", "force": "N", "angle": "rad", "mass": "kg"},
+        "gravity": [0, -9.81],
+        "bodies": {
+            "ground": {"fixed": True, "position": [0, 0]},
+            "bob": {"position": [0, -l], "mass": m, "inertia": I_G},
+        },
+        "elements": {"hinge": {"type": "pin", "from": "ground", "to": "bob", "at": [0, 0]}},
+        "contacts": {
+            "sites": {"disk": {"type": "circle", "body": "bob", "radius": r}},
+            "objects": {"wall": {"type": "half_plane", "body": "ground", "point": [r, 0], "normal": [-1, 0]}},
+            "pairs": {
+                "stop": _laws(
+                    scheme,
+                    {
+                        "site": "disk",
+                        "object": "wall",
+                        "friction": {"law": "none"},
+                        "normal": {
+                            "law": "lankarani_nikravesh",
+                            "restitution": 0.9,
+                            "stiffness": 1e10,
+                            "exponent": 1.5,
+                        },
+                    },
+                )
+            },
+        },
+        "simulate": {
+            "scheme": scheme,
+            "until": 0.6,
+            "step": 1e-5 if scheme == "moreau" else 1e-4,
+            "tolerance": 1e-10,
+            "initial": {"bob": {"displacement": [l * math.sin(phi0), l * (1 - math.cos(phi0)), phi0]}},
+        },
+    }
     I_O = I_G + m * l * l
     quarter = math.sqrt(I_O / (m * G * l)) * ellipk(math.sin(abs(phi0) / 2) ** 2)  # from phi0 to the vertical
     omega = math.sqrt(2 * m * G * l * (1 - math.cos(phi0)) / I_O)

@@ -29,31 +29,64 @@ def _pair(doc):
 
 BAD = [
     (lambda d: d["bodies"]["hinge"].pop("mass"), "/bodies/hinge/mass", "moves and has no mass"),
-    (lambda d: d["simulate"]["initial"].update(hinge={"displacement": [0, -0.03, 0]}), "/simulate/initial/hinge",
-     "the start state penetrates: pair 'conjugate' overlaps by 0.01 m"),
-    (lambda d: _pair(d)["normal"].update(restitution=1.2), "/contacts/pairs/conjugate/normal/restitution",
-     "must be in (0, 1], got 1.2"),
-    (lambda d: _pair(d)["normal"].update(restitution=0.0), "/contacts/pairs/conjugate/normal/restitution",
-     "must be in (0, 1], got 0"),
-    (lambda d: _pair(d)["friction"].update(sliding=-0.05), "/contacts/pairs/conjugate/friction/sliding",
-     "a friction coefficient must not be negative, got -0.05"),
-    (lambda d: _pair(d).update(object="hol"), "/contacts/pairs/conjugate/object",
-     "unknown object 'hol' (objects: hole)"),
-    (lambda d: d["contacts"]["objects"]["hole"].update(radius=0.18), "/contacts/objects/hole/radius",
-     "the clearance of pair 'conjugate' (hole radius 0.18 m minus pin radius 0.18 m) must be positive, got 0 m"),
-    (lambda d: _pair(d)["friction"].update(law="coulomb"), "/contacts/pairs/conjugate/friction/law",
-     "an event_driven simulation does not take the friction law 'coulomb' (it is for a quasi-static contact solve, "
-     "a moreau simulation); it takes none or ambrosio"),
-    (lambda d: _pair(d)["normal"].update(law="unilateral"), "/contacts/pairs/conjugate/normal/law",
-     "an event_driven simulation does not take the normal law 'unilateral' (it is for a quasi-static contact "
-     "solve); it takes hertz or hunt_crossley or lankarani_nikravesh or flores or lna_esdu or linear"),
-    (lambda d: d["simulate"].update(scheme="moreau", step=1e-5), "/contacts/pairs/conjugate/normal/law",
-     "a moreau simulation does not take the normal law 'lankarani_nikravesh' (it is for an event_driven "
-     "simulation, a newmark or generalized_alpha simulation (and the equilibrium solve)); it takes restitution"),
-    (lambda d: _pair(d)["normal"].update(law="lankarani_nikravsh"), "/contacts/pairs/conjugate/normal/law",
-     "unknown normal law 'lankarani_nikravsh'; the normal laws are unilateral, restitution, hertz"),
-    (lambda d: d["simulate"]["initial"].update(frame={"displacement": [0, 0.001, 0]}), "/simulate/initial/frame",
-     "body 'frame' is fixed"),
+    (
+        lambda d: d["simulate"]["initial"].update(hinge={"displacement": [0, -0.03, 0]}),
+        "/simulate/initial/hinge",
+        "the start state penetrates: pair 'conjugate' overlaps by 0.01 m",
+    ),
+    (
+        lambda d: _pair(d)["normal"].update(restitution=1.2),
+        "/contacts/pairs/conjugate/normal/restitution",
+        "must be in (0, 1], got 1.2",
+    ),
+    (
+        lambda d: _pair(d)["normal"].update(restitution=0.0),
+        "/contacts/pairs/conjugate/normal/restitution",
+        "must be in (0, 1], got 0",
+    ),
+    (
+        lambda d: _pair(d)["friction"].update(sliding=-0.05),
+        "/contacts/pairs/conjugate/friction/sliding",
+        "a friction coefficient must not be negative, got -0.05",
+    ),
+    (
+        lambda d: _pair(d).update(object="hol"),
+        "/contacts/pairs/conjugate/object",
+        "unknown object 'hol' (objects: hole)",
+    ),
+    (
+        lambda d: d["contacts"]["objects"]["hole"].update(radius=0.18),
+        "/contacts/objects/hole/radius",
+        "the clearance of pair 'conjugate' (hole radius 0.18 m minus pin radius 0.18 m) must be positive, got 0 m",
+    ),
+    (
+        lambda d: _pair(d)["friction"].update(law="coulomb"),
+        "/contacts/pairs/conjugate/friction/law",
+        "an event_driven simulation does not take the friction law 'coulomb' (it is for a quasi-static contact solve, "
+        "a moreau simulation); it takes none or ambrosio",
+    ),
+    (
+        lambda d: _pair(d)["normal"].update(law="unilateral"),
+        "/contacts/pairs/conjugate/normal/law",
+        "an event_driven simulation does not take the normal law 'unilateral' (it is for a quasi-static contact "
+        "solve); it takes hertz or hunt_crossley or lankarani_nikravesh or flores or lna_esdu or linear",
+    ),
+    (
+        lambda d: d["simulate"].update(scheme="moreau", step=1e-5),
+        "/contacts/pairs/conjugate/normal/law",
+        "a moreau simulation does not take the normal law 'lankarani_nikravesh' (it is for an event_driven "
+        "simulation, a newmark or generalized_alpha simulation (and the equilibrium solve)); it takes restitution",
+    ),
+    (
+        lambda d: _pair(d)["normal"].update(law="lankarani_nikravsh"),
+        "/contacts/pairs/conjugate/normal/law",
+        "unknown normal law 'lankarani_nikravsh'; the normal laws are unilateral, restitution, hertz",
+    ),
+    (
+        lambda d: d["simulate"]["initial"].update(frame={"displacement": [0, 0.001, 0]}),
+        "/simulate/initial/frame",
+        "body 'frame' is fixed",
+    ),
 ]
 
 
@@ -67,14 +100,16 @@ def test_bad_impact_input_names_the_field(change, pointer, words):
 
 
 def test_the_simulate_analysis_answers_impacts_over_http_and_refuses_bad_fields_with_422(api_server):
-    r = httpx.post(f"{api_server.url}/v1/solve", json={"document": csfh("6.1", until=0.1), "analysis": "simulate"},
-                   timeout=120)
+    r = httpx.post(
+        f"{api_server.url}/v1/solve", json={"document": csfh("6.1", until=0.1), "analysis": "simulate"}, timeout=120
+    )
     assert r.status_code == 200, r.text
     first = r.json()["impacts"][0]
     assert first["time"] == pytest.approx(math.sqrt(2 * 0.03 / 9.81), rel=1e-9)
     for change, pointer, words in BAD[1:3]:
-        r = httpx.post(f"{api_server.url}/v1/solve", json={"document": _broken(change), "analysis": "simulate"},
-                       timeout=120)
+        r = httpx.post(
+            f"{api_server.url}/v1/solve", json={"document": _broken(change), "analysis": "simulate"}, timeout=120
+        )
         assert r.status_code == 422, r.text
         error = r.json()["error"]
         assert error["pointer"] == pointer and words in error["message"], error
@@ -103,8 +138,16 @@ def test_the_impact_study_ranks_the_clearance_above_the_inertia(api_server):
     from api.client import Client
 
     with Client(api_server.url) as client:
-        job = client.impact_study(example="csfh", simulate={"until": 0.3}, study={"fields": [
-            {"path": "/contacts/sites/pin/radius", "step": 0.001}, {"path": "/bodies/hinge/inertia", "step": 0.001}]})
+        job = client.impact_study(
+            example="csfh",
+            simulate={"until": 0.3},
+            study={
+                "fields": [
+                    {"path": "/contacts/sites/pin/radius", "step": 0.001},
+                    {"path": "/bodies/hinge/inertia", "step": 0.001},
+                ]
+            },
+        )
         assert job.progress.total == 5
         final = client.wait(job.id, timeout=300)
         assert final.status == "succeeded", final
@@ -116,8 +159,10 @@ def test_the_impact_study_ranks_the_clearance_above_the_inertia(api_server):
     early = radius["+"]["influence"]["hinge.y"]["departure"]
     assert early is not None and early < 0.08
     assert inertia["+"]["influence"]["hinge.y"]["rms"] < radius["+"]["influence"]["hinge.y"]["rms"] / 10
-    bad = httpx.post(f"{api_server.url}/v1/impact-studies", json={"example": "csfh", "study": {"fields": [
-        {"path": "/contacts/sites/pin/colour", "step": 1}]}})
+    bad = httpx.post(
+        f"{api_server.url}/v1/impact-studies",
+        json={"example": "csfh", "study": {"fields": [{"path": "/contacts/sites/pin/colour", "step": 1}]}},
+    )
     assert bad.status_code == 422 and bad.json()["error"]["pointer"] == "/study/fields/0/path", bad.text
 
 
@@ -165,13 +210,21 @@ def test_a_moreau_run_whose_states_would_not_fit_is_refused_before_it_starts():
     with pytest.raises(MechanismError) as caught:
         run_impacts(document, spec, max_bytes=SYNC_IMPACT_BYTES)
     assert caught.value.pointer == "/simulate/until"
-    assert caught.value.problem.startswith(f"20 s of moreau steps of 1e-05 s would hold about {needed / 2**20:.0f} MiB of "
-                                           "states, over the 192 MiB one run may take")
+    assert caught.value.problem.startswith(
+        f"20 s of moreau steps of 1e-05 s would hold about {needed / 2**20:.0f} MiB of "
+        "states, over the 192 MiB one run may take"
+    )
 
 
 def test_an_impact_study_is_costed_before_it_runs(api_server):
     fields = [{"path": "/bodies/hinge/mass", "step": 0.001 * (k + 1)} for k in range(8)]
-    r = httpx.post(f"{api_server.url}/v1/impact-studies", json={
-        "example": "csfh", "simulate": {"scheme": "moreau", "step": 1e-9, "until": 10.0}, "study": {"fields": fields}})
+    r = httpx.post(
+        f"{api_server.url}/v1/impact-studies",
+        json={
+            "example": "csfh",
+            "simulate": {"scheme": "moreau", "step": 1e-9, "until": 10.0},
+            "study": {"fields": fields},
+        },
+    )
     assert r.status_code == 422, r.text
     assert r.json()["error"]["pointer"] == "/simulate/step" and "over the limit" in r.json()["error"]["message"]

@@ -23,8 +23,9 @@ def _resting_document() -> dict:
     pair = doc["contacts"]["pairs"]["conjugate"]
     pair["normal"] = {"law": "hertz", "stiffness": 1e13, "exponent": 1.5}  # stiff: 4e-8 m of indentation at rest
     pair["friction"] = {"law": "none"}
-    doc["simulate"].update(until=2.5, damping=30.0, tolerance=1e-9,
-                           initial={"hinge": {"displacement": [0.0, 0.0, 0.0]}})
+    doc["simulate"].update(
+        until=2.5, damping=30.0, tolerance=1e-9, initial={"hinge": {"displacement": [0.0, 0.0, 0.0]}}
+    )
     return doc
 
 

@@ -59,12 +59,14 @@ def test_an_adaptive_run_stops_at_its_shortest_step():
 
 
 def test_the_command_line_applies_the_services_step_limit():
-    result = CliRunner().invoke(app, ["simulate", str(ROD), "--until", "2000", "--step", "0.001"],
-                                env={"COLUMNS": "200", "NO_COLOR": "1"})
+    result = CliRunner().invoke(
+        app, ["simulate", str(ROD), "--until", "2000", "--step", "0.001"], env={"COLUMNS": "200", "NO_COLOR": "1"}
+    )
     assert result.exit_code == 2
     assert f"over the limit of {MAX_STEPS}" in result.output
-    result = CliRunner().invoke(app, ["simulate", str(ROD), "--until", "0.1", "--max-steps", "50"],
-                                env={"COLUMNS": "200", "NO_COLOR": "1"})
+    result = CliRunner().invoke(
+        app, ["simulate", str(ROD), "--until", "0.1", "--max-steps", "50"], env={"COLUMNS": "200", "NO_COLOR": "1"}
+    )
     assert result.exit_code == 2 and "100 steps of 0.001 s, over the limit of 50" in result.output
 
 
@@ -72,11 +74,14 @@ def test_an_impact_run_is_costed_before_it_starts_and_max_steps_raises_the_limit
     """Issue 24's `csfh.json --until 1e6` (event-driven: costed at its first step, 1e10 steps)
     is refused at once; under a lowered service limit, --max-steps raises it for a local run."""
     env = {"COLUMNS": "200", "NO_COLOR": "1"}
-    result = CliRunner().invoke(app, ["simulate", str(EXAMPLES / "csfh_asymmetric_impact.json"), "--until", "1e6"],
-                                env=env)
+    result = CliRunner().invoke(
+        app, ["simulate", str(EXAMPLES / "csfh_asymmetric_impact.json"), "--until", "1e6"], env=env
+    )
     assert result.exit_code == 2, result.output
-    assert (f"/simulate/until: 1e+06 s from a first step of 0.0001 s is costed at 1e+10 steps, over the limit of "
-            f"{MAX_STEPS}") in " ".join(result.output.split())
+    assert (
+        f"/simulate/until: 1e+06 s from a first step of 0.0001 s is costed at 1e+10 steps, over the limit of "
+        f"{MAX_STEPS}"
+    ) in " ".join(result.output.split())
     import service.dynamics.run as run
 
     monkeypatch.setattr(run, "MAX_STEPS", 100)
@@ -93,8 +98,9 @@ def test_an_impact_run_is_costed_before_it_starts_and_max_steps_raises_the_limit
 def test_a_run_of_uncountably_many_steps_is_refused_on_the_command_line():
     for document, scheme in ((ROD, None), (EXAMPLES / "csfh.json", "moreau"), (EXAMPLES / "csfh.json", "event_driven")):
         args = ["simulate", str(document), "--until", "1e300", "--step", "1e-300"]
-        result = CliRunner().invoke(app, args + (["--scheme", scheme] if scheme else []),
-                                    env={"COLUMNS": "200", "NO_COLOR": "1"})
+        result = CliRunner().invoke(
+            app, args + (["--scheme", scheme] if scheme else []), env={"COLUMNS": "200", "NO_COLOR": "1"}
+        )
         assert result.exit_code == 2, (document, scheme, result.output)
         assert "1e+300 s in steps of 1e-300 s would be more than 1e+12 steps" in result.output
 

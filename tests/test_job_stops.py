@@ -16,8 +16,11 @@ from api.client import Client
 
 # Points that each run Newton for seconds: the gripper with exact flexures far past any
 # equilibrium, 1000 iterations of a line search that keeps halving.
-SLOW = {"example": "gripper_exact", "options": {"max_iterations": 1000},
-        "parameters": [{"path": "/loads/actuation/force/1", "values": [1e7 + k for k in range(8)]}]}
+SLOW = {
+    "example": "gripper_exact",
+    "options": {"max_iterations": 1000},
+    "parameters": [{"path": "/loads/actuation/force/1", "values": [1e7 + k for k in range(8)]}],
+}
 QUICK = {"example": "gripper", "parameters": [{"path": "/loads/actuation/force/1", "values": [0, 10, 20]}]}
 
 
@@ -30,9 +33,18 @@ def slow_point_seconds(client: Client) -> float:
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("stops")
-    server = Deployment("sqlite", {"FLEXMECH_DATA_DIR": str(tmp / "data"), "FLEXMECH_WORKERS": "2",
-                                   "FLEXMECH_CHUNK_SIZE": "8", "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES),
-                                   "FLEXMECH_API_KEYS": "", "FLEXMECH_SOLVE_TIME_LIMIT": "60"}, tmp).start()
+    server = Deployment(
+        "sqlite",
+        {
+            "FLEXMECH_DATA_DIR": str(tmp / "data"),
+            "FLEXMECH_WORKERS": "2",
+            "FLEXMECH_CHUNK_SIZE": "8",
+            "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES),
+            "FLEXMECH_API_KEYS": "",
+            "FLEXMECH_SOLVE_TIME_LIMIT": "60",
+        },
+        tmp,
+    ).start()
     yield server
     server.stop()
 
@@ -74,9 +86,18 @@ def test_the_job_time_limit_ends_running_tasks(tmp_path):
     second here, longer on a slower machine) cannot end within the 10 s limit, and the quick
     sweep, about a second here, can (on a machine ten times slower too). The quick one needs the
     only worker, so it succeeds only if the slow job's task ended at its deadline."""
-    server = Deployment("sqlite", {"FLEXMECH_DATA_DIR": str(tmp_path / "data"), "FLEXMECH_WORKERS": "1",
-                                   "FLEXMECH_CHUNK_SIZE": "8", "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES),
-                                   "FLEXMECH_API_KEYS": "", "FLEXMECH_JOB_TIME_LIMIT": "10"}, tmp_path).start()
+    server = Deployment(
+        "sqlite",
+        {
+            "FLEXMECH_DATA_DIR": str(tmp_path / "data"),
+            "FLEXMECH_WORKERS": "1",
+            "FLEXMECH_CHUNK_SIZE": "8",
+            "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES),
+            "FLEXMECH_API_KEYS": "",
+            "FLEXMECH_JOB_TIME_LIMIT": "10",
+        },
+        tmp_path,
+    ).start()
     longer = {**SLOW, "parameters": [{"path": "/loads/actuation/force/1", "values": [1e7 + k for k in range(32)]}]}
     try:
         with Client(server.url) as client:
@@ -106,8 +127,12 @@ def test_ipopt_stops_at_its_next_iteration_when_asked():
 
 
 def test_a_stopped_server_leaves_no_worker_behind(tmp_path):
-    env = {"FLEXMECH_DATA_DIR": str(tmp_path / "data"), "FLEXMECH_WORKERS": "2", "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES),
-           "FLEXMECH_API_KEYS": ""}
+    env = {
+        "FLEXMECH_DATA_DIR": str(tmp_path / "data"),
+        "FLEXMECH_WORKERS": "2",
+        "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES),
+        "FLEXMECH_API_KEYS": "",
+    }
     server = ApiServer(env, tmp_path / "server.log")
     group = server.proc.pid
     with Client(server.url) as client:

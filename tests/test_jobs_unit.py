@@ -20,9 +20,12 @@ H = "/sections/flexure/h"
 
 @pytest.fixture
 def spec():
-    return {"document": json.loads((EXAMPLES / "gripper.json").read_text()),
-            "parameters": [{"path": H, "values": [0.004, 0.005]}, {"path": ACTUATION, "values": [0, 10, 20]}],
-            "continuation": ACTUATION, "outputs": ["end_effector.x"]}
+    return {
+        "document": json.loads((EXAMPLES / "gripper.json").read_text()),
+        "parameters": [{"path": H, "values": [0.004, 0.005]}, {"path": ACTUATION, "values": [0, 10, 20]}],
+        "continuation": ACTUATION,
+        "outputs": ["end_effector.x"],
+    }
 
 
 def test_cartesian_load_paths_run_along_the_continuation_axis(spec):
@@ -37,8 +40,11 @@ def test_cartesian_load_paths_run_along_the_continuation_axis(spec):
 def test_resumed_load_path_starts_from_the_last_converged_stored_state(spec):
     kind = kind_named("sweep")
     plan = kind.prepare(spec, Limits()).meta
-    finished = {0: {"status": "converged", "z": [1.0]}, 1: {"status": "not_converged", "z": [9.0]},
-                3: {"status": "converged", "z": [2.0]}}
+    finished = {
+        0: {"status": "converged", "z": [1.0]},
+        1: {"status": "not_converged", "z": [9.0]},
+        3: {"status": "converged", "z": [2.0]},
+    }
     tasks = kind.tasks(spec, plan, finished, chunk_size=8)
     assert [(t["indices"], t["guess"], t["line"]) for t in tasks] == [([2], [1.0], 0), ([4, 5], [2.0], 1)]
 
@@ -55,14 +61,25 @@ def test_a_task_in_a_worker_reuses_its_mechanism_and_functions(spec):
     assert [i for i, _ in points] == [0, 1, 2] and all(p["status"] == "converged" for _, p in points)
 
 
-@pytest.mark.parametrize("change, pointer, message", [
-    (lambda s: s.update(grid="zip"), "/parameters", "a zip grid needs equally many values per parameter (got 2, 3)"),
-    (lambda s: s.update(continuation="/loads/other"), "/continuation", "'/loads/other' is not one of the swept paths"),
-    (lambda s: s["parameters"].append({"path": H, "values": [1]}), "/parameters", "a path is listed twice"),
-    (lambda s: s["parameters"][0].update(path="/sections/flexure/q"), "/parameters/0/path", "not a numeric field"),
-    (lambda s: s.update(outputs=["jaw.x"]), "/outputs/0", "unknown output 'jaw.x'"),
-    (lambda s: s["parameters"][1].update(values=[float("nan")]), "/parameters/1/values", "values must be finite"),
-])
+@pytest.mark.parametrize(
+    "change, pointer, message",
+    [
+        (
+            lambda s: s.update(grid="zip"),
+            "/parameters",
+            "a zip grid needs equally many values per parameter (got 2, 3)",
+        ),
+        (
+            lambda s: s.update(continuation="/loads/other"),
+            "/continuation",
+            "'/loads/other' is not one of the swept paths",
+        ),
+        (lambda s: s["parameters"].append({"path": H, "values": [1]}), "/parameters", "a path is listed twice"),
+        (lambda s: s["parameters"][0].update(path="/sections/flexure/q"), "/parameters/0/path", "not a numeric field"),
+        (lambda s: s.update(outputs=["jaw.x"]), "/outputs/0", "unknown output 'jaw.x'"),
+        (lambda s: s["parameters"][1].update(values=[float("nan")]), "/parameters/1/values", "values must be finite"),
+    ],
+)
 def test_bad_sweep_specs_name_the_field(spec, change, pointer, message):
     change(spec)
     with pytest.raises(MechanismError) as info:

@@ -56,8 +56,10 @@ def test_a_slider_carries_the_normal_force_and_the_spring_the_axial_one():
     document = {
         "units": {"length": "m", "force": "N", "angle": "rad"},
         "bodies": {"ground": {"fixed": True, "position": [0, 0]}, "block": {"position": [axis[0], axis[1]]}},
-        "elements": {"guide": {"type": "slider", "from": "ground", "to": "block", "angle": angle},
-                     "spring": {"type": "spring", "from": "ground", "to": "block", "stiffness": k}},
+        "elements": {
+            "guide": {"type": "slider", "from": "ground", "to": "block", "angle": angle},
+            "spring": {"type": "spring", "from": "ground", "to": "block", "stiffness": k},
+        },
         "loads": {"push": {"type": "force", "body": "block", "force": force.tolist()}},
     }
     result = solve_equilibrium(compile_mechanism(load_document(document)), TIGHT)
@@ -83,8 +85,9 @@ def test_pins_and_springs_close_a_loop_and_the_ground_balances_the_loads():
     assert out["ground.Fy"] == pytest.approx(-Fy, abs=1e-12)
     assert out["ground.M"] == pytest.approx(-(out["P.x"] * Fy - out["P.y"] * Fx + M), abs=1e-12)
     # Each pin passes equal and opposite forces: the coupler's pins balance its load.
-    assert out["elements.B.Fx"] - out["elements.C.Fx"] + Fx + out["elements.pull.F"] * _pull_direction(out)[0] \
-        == pytest.approx(0.0, abs=1e-12)
+    assert out["elements.B.Fx"] - out["elements.C.Fx"] + Fx + out["elements.pull.F"] * _pull_direction(out)[
+        0
+    ] == pytest.approx(0.0, abs=1e-12)
 
 
 def _pull_direction(out: dict) -> np.ndarray:
@@ -100,23 +103,43 @@ def four_bar() -> dict:
     (units: m, N, rad)."""
     return {
         "units": {"length": "m", "force": "N", "angle": "rad"},
-        "bodies": {"ground": {"fixed": True, "position": [0, 0]},
-                   "crank": {"position": [0, 0.5]}, "coupler": {"position": [0.6, 1.0]},
-                   "rocker": {"position": [1.2, 0.5]}},
+        "bodies": {
+            "ground": {"fixed": True, "position": [0, 0]},
+            "crank": {"position": [0, 0.5]},
+            "coupler": {"position": [0.6, 1.0]},
+            "rocker": {"position": [1.2, 0.5]},
+        },
         "elements": {
             "A": {"type": "pin", "from": "ground", "to": "crank", "at": [0, 0]},
             "B": {"type": "pin", "from": "crank", "to": "coupler", "at": [0, 1.0]},
             "C": {"type": "pin", "from": "coupler", "to": "rocker", "at": [1.2, 1.0]},
             "D": {"type": "pin", "from": "ground", "to": "rocker", "at": [1.2, 0]},
             "kA": {"type": "spring", "kind": "torsional", "from": "ground", "to": "crank", "stiffness": 4.0},
-            "kD": {"type": "spring", "kind": "torsional", "from": "ground", "to": "rocker",
-                   "law": "k * x + c * x**3", "parameters": {"k": 2.0, "c": 30.0}},
-            "pull": {"type": "spring", "from": "ground", "to": "coupler", "from_at": [0.6, -0.4],
-                     "to_at": [0.6, 1.0], "law": "s * tanh(x / w)", "parameters": {"s": 3.0, "w": 0.2}},
+            "kD": {
+                "type": "spring",
+                "kind": "torsional",
+                "from": "ground",
+                "to": "rocker",
+                "law": "k * x + c * x**3",
+                "parameters": {"k": 2.0, "c": 30.0},
+            },
+            "pull": {
+                "type": "spring",
+                "from": "ground",
+                "to": "coupler",
+                "from_at": [0.6, -0.4],
+                "to_at": [0.6, 1.0],
+                "law": "s * tanh(x / w)",
+                "parameters": {"s": 3.0, "w": 0.2},
+            },
         },
-        "loads": {"push": {"type": "force", "body": "coupler", "at": [0.3, 1.0], "force": [1.5, -2.0]},
-                  "turn": {"type": "moment", "body": "rocker", "moment": 0.4}},
-        "outputs": {"ground": {"type": "reaction", "body": "ground"},
-                    "P": {"type": "point", "body": "coupler", "at": [0.3, 1.0]},
-                    "Q": {"type": "point", "body": "coupler", "at": [0.6, 1.0]}},
+        "loads": {
+            "push": {"type": "force", "body": "coupler", "at": [0.3, 1.0], "force": [1.5, -2.0]},
+            "turn": {"type": "moment", "body": "rocker", "moment": 0.4},
+        },
+        "outputs": {
+            "ground": {"type": "reaction", "body": "ground"},
+            "P": {"type": "point", "body": "coupler", "at": [0.3, 1.0]},
+            "Q": {"type": "point", "body": "coupler", "at": [0.6, 1.0]},
+        },
     }

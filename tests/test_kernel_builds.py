@@ -18,8 +18,8 @@ from conftest import EXAMPLES
 from servers import ApiServer
 
 from models import compile_mechanism, load_document
+from models.kernels.chain_signature import ChainSignature
 from models.kernels.chunks import chunks
-from models.kernels.link_chain import ChainSignature
 from service.kernels.build import BuildLimits, Compiler
 from service.kernels.cache import abandoned, compiled_for, is_compiled
 from service.kernels.queue import Builder, accept_requests, build_chain, queue_dir, request_chain
@@ -43,8 +43,9 @@ def test_a_compile_over_its_time_limit_is_killed_and_noted(cache):
 
 
 def test_a_compile_over_its_memory_limit_fails_and_is_noted(cache):
-    outcome = Compiler().build(chunks(ChainSignature(3, True, True)).factor, cache / "factor.so",
-                               BuildLimits(memory_bytes=120 * 2**20))
+    outcome = Compiler().build(
+        chunks(ChainSignature(3, True, True)).factor, cache / "factor.so", BuildLimits(memory_bytes=120 * 2**20)
+    )
     assert not outcome.ok and "memory limit of 120 MiB" in outcome.message
     assert not (cache / "factor.so").exists()
 
@@ -101,8 +102,8 @@ def _descendants(root: int) -> dict[int, str]:
             stat = (entry / "stat").read_text()
         except OSError:
             continue
-        name = stat[stat.index("(") + 1:stat.rindex(")")]
-        ppid = int(stat[stat.rindex(")") + 2:].split()[1])
+        name = stat[stat.index("(") + 1 : stat.rindex(")")]
+        ppid = int(stat[stat.rindex(")") + 2 :].split()[1])
         parents.setdefault(ppid, []).append(int(entry.name))
         names[int(entry.name)] = name
     out, todo = {}, [root]
@@ -124,11 +125,19 @@ def _alive(pid: int) -> bool:
 def _server_compiling(tmp_path: Path) -> tuple[ApiServer, dict[int, str]]:
     """A server on an empty cache, its builder compiling the four-bar's kernels (asked for by
     a simulation with the old `compiled: true`), a simulation job running on a worker."""
-    env = {"FLEXMECH_DATA_DIR": str(tmp_path / "data"), "FLEXMECH_WORKERS": "1", "FLEXMECH_API_KEYS": "",
-           "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES), "FLEXMECH_CACHE_DIR": str(tmp_path / "cache")}
+    env = {
+        "FLEXMECH_DATA_DIR": str(tmp_path / "data"),
+        "FLEXMECH_WORKERS": "1",
+        "FLEXMECH_API_KEYS": "",
+        "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES),
+        "FLEXMECH_CACHE_DIR": str(tmp_path / "cache"),
+    }
     server = ApiServer(env, tmp_path / "server.log")
-    job = httpx.post(f"{server.url}/v1/simulations", json={"example": "four_bar_dynamics",
-                                                          "simulate": {"until": 1.0, "compiled": True}}, timeout=30)
+    job = httpx.post(
+        f"{server.url}/v1/simulations",
+        json={"example": "four_bar_dynamics", "simulate": {"until": 1.0, "compiled": True}},
+        timeout=30,
+    )
     assert job.status_code == 202, job.text
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline:

@@ -19,19 +19,38 @@ MASS, HERTZ, PAD, GAP, KICK, KICK_TIME = 2.0, 2e6, 0.02, 0.03, 10.0, 0.1  # kg, 
 
 
 def kicked_block(law: str, step: float = 2e-5, **simulate) -> dict:
-    return {"units": {"length": "m", "force": "N", "angle": "rad", "mass": "kg"},
-            "bodies": {"wall": {"fixed": True, "position": [0, 0]},
-                       "block": {"position": [0.5, 0], "mass": MASS, "inertia": 0.01}},
-            "elements": {"rail": {"type": "slider", "from": "wall", "to": "block", "angle": 0}},
-            "loads": {"kick": {"type": "force", "body": "block", "force": [KICK, 0]}},
-            "contacts": {"sites": {"pad": {"type": "circle", "body": "block", "centre": [0, 0], "radius": PAD}},
-                         "objects": {"stop": {"type": "half_plane", "point": [0.5 + PAD + GAP, 0], "normal": [-1, 0]}},
-                         "pairs": {"touch": {"site": "pad", "object": "stop", "normal": {
-                             "law": law, "stiffness": HERTZ, "exponent": 1.5, "restitution": 0.9}}}},
-            "simulate": {"until": 0.15, "step": step, "scheme": "newmark", "a1": 0.5, "a2": 0.5, "start": "rest",
-                         "histories": {"/loads/kick/force/0": {"table": [[0, KICK], [KICK_TIME, KICK],
-                                                                         [KICK_TIME + 1e-9, 0], [1, 0]]}},
-                         **simulate}}
+    return {
+        "units": {"length": "m", "force": "N", "angle": "rad", "mass": "kg"},
+        "bodies": {
+            "wall": {"fixed": True, "position": [0, 0]},
+            "block": {"position": [0.5, 0], "mass": MASS, "inertia": 0.01},
+        },
+        "elements": {"rail": {"type": "slider", "from": "wall", "to": "block", "angle": 0}},
+        "loads": {"kick": {"type": "force", "body": "block", "force": [KICK, 0]}},
+        "contacts": {
+            "sites": {"pad": {"type": "circle", "body": "block", "centre": [0, 0], "radius": PAD}},
+            "objects": {"stop": {"type": "half_plane", "point": [0.5 + PAD + GAP, 0], "normal": [-1, 0]}},
+            "pairs": {
+                "touch": {
+                    "site": "pad",
+                    "object": "stop",
+                    "normal": {"law": law, "stiffness": HERTZ, "exponent": 1.5, "restitution": 0.9},
+                }
+            },
+        },
+        "simulate": {
+            "until": 0.15,
+            "step": step,
+            "scheme": "newmark",
+            "a1": 0.5,
+            "a2": 0.5,
+            "start": "rest",
+            "histories": {
+                "/loads/kick/force/0": {"table": [[0, KICK], [KICK_TIME, KICK], [KICK_TIME + 1e-9, 0], [1, 0]]}
+            },
+            **simulate,
+        },
+    }
 
 
 def simulated(doc: dict) -> dict:

@@ -25,16 +25,28 @@ V0, V1, UNTIL = 1e-6, 1e-4, 0.4
 
 def pushed_disk(friction) -> dict:
     indentation = (MASS * G / HERTZ) ** (1 / EXPONENT)
-    return {"units": {"length": "m", "force": "N", "angle": "rad", "mass": "kg"},
-            "gravity": [0, -G],
-            "bodies": {"ground": {"fixed": True, "position": [0, 0]},
-                       "disk": {"position": [0, RADIUS], "mass": MASS, "inertia": MASS * RADIUS ** 2 / 2}},
-            "loads": {"push": {"type": "force", "body": "disk", "force": [PUSH, 0]}},
-            "contacts": {"sites": {"rim": {"type": "circle", "body": "disk", "centre": [0, 0], "radius": RADIUS}},
-                         "objects": {"floor": {"type": "half_plane", "point": [0, indentation], "normal": [0, 1]}},
-                         "pairs": {"rolling": {"site": "rim", "object": "floor", "friction": friction,
-                                               "normal": {"law": "hertz", "stiffness": HERTZ, "exponent": EXPONENT}}}},
-            "simulate": {"until": UNTIL, "step": 1e-3, "scheme": "newmark", "a1": 0.5, "a2": 0.5, "start": "rest"}}
+    return {
+        "units": {"length": "m", "force": "N", "angle": "rad", "mass": "kg"},
+        "gravity": [0, -G],
+        "bodies": {
+            "ground": {"fixed": True, "position": [0, 0]},
+            "disk": {"position": [0, RADIUS], "mass": MASS, "inertia": MASS * RADIUS**2 / 2},
+        },
+        "loads": {"push": {"type": "force", "body": "disk", "force": [PUSH, 0]}},
+        "contacts": {
+            "sites": {"rim": {"type": "circle", "body": "disk", "centre": [0, 0], "radius": RADIUS}},
+            "objects": {"floor": {"type": "half_plane", "point": [0, indentation], "normal": [0, 1]}},
+            "pairs": {
+                "rolling": {
+                    "site": "rim",
+                    "object": "floor",
+                    "friction": friction,
+                    "normal": {"law": "hertz", "stiffness": HERTZ, "exponent": EXPONENT},
+                }
+            },
+        },
+        "simulate": {"until": UNTIL, "step": 1e-3, "scheme": "newmark", "a1": 0.5, "a2": 0.5, "start": "rest"},
+    }
 
 
 def simulated(friction) -> dict:
@@ -65,7 +77,7 @@ def test_a_pushed_disk_slips_and_spins_up_as_rigid_body_mechanics_says():
 def test_without_friction_the_disk_slides_without_turning_and_no_work_is_lost():
     report = simulated({"law": "none"})
     t = np.array(report["times"])
-    assert report["outputs"]["bodies.disk.x"] == pytest.approx(0.5 * PUSH / MASS * t ** 2, rel=1e-9, abs=1e-12)
+    assert report["outputs"]["bodies.disk.x"] == pytest.approx(0.5 * PUSH / MASS * t**2, rel=1e-9, abs=1e-12)
     assert np.abs(report["outputs"]["bodies.disk.angle"]).max() < 1e-12
     assert np.abs(report["energies"]["friction_work"]).max() == 0.0
     assert report["energy_balance_error"] < 1e-6
@@ -77,8 +89,14 @@ def test_a_run_stored_before_friction_had_its_row_resumes_with_none():
     at zero, the prescribed motions' forces where they were."""
     from service.dynamics.stepping import Resume
 
-    stored = {"step": 7, "state": [0.1, 0.2], "works": [3.0, 4.0], "monitor": [1.0, 2.0, 5.0, 6.0, 42.0],
-              "time": 0.007, "h": None}
+    stored = {
+        "step": 7,
+        "state": [0.1, 0.2],
+        "works": [3.0, 4.0],
+        "monitor": [1.0, 2.0, 5.0, 6.0, 42.0],
+        "time": 0.007,
+        "h": None,
+    }
     at = Resume.from_json(stored)
     assert at.works.tolist() == [3.0, 4.0, 0.0, 0.0]
     assert at.monitor.tolist() == [1.0, 2.0, 5.0, 6.0, 0.0, 0.0, 42.0]

@@ -21,14 +21,26 @@ EI = E * B * H**3 / 12
 
 def cantilever(discretization: str, intervals: int, degree: int = 3, force=(0.0, 60.0), **link) -> dict:
     """A straight steel strip clamped at the origin, its free end a body under a dead force."""
-    element = {"type": "link", "from": "ground", "to": "tip", "length": LENGTH, "material": "steel",
-               "section": "strip", "discretization": discretization, "intervals": intervals, **link}
+    element = {
+        "type": "link",
+        "from": "ground",
+        "to": "tip",
+        "length": LENGTH,
+        "material": "steel",
+        "section": "strip",
+        "discretization": discretization,
+        "intervals": intervals,
+        **link,
+    }
     element.update({"degree": degree} if discretization == "elements" else {"order": 12})
-    return {"units": {"length": "m", "force": "N", "angle": "rad"},
-            "materials": {"steel": {"E": E, "nu": 0.3}}, "sections": {"strip": {"b": B, "h": H}},
-            "bodies": {"ground": {"fixed": True, "position": [0, 0]}, "tip": {"position": [LENGTH, 0]}},
-            "elements": {"L": element},
-            "loads": {"F": {"type": "force", "body": "tip", "force": list(force)}}}
+    return {
+        "units": {"length": "m", "force": "N", "angle": "rad"},
+        "materials": {"steel": {"E": E, "nu": 0.3}},
+        "sections": {"strip": {"b": B, "h": H}},
+        "bodies": {"ground": {"fixed": True, "position": [0, 0]}, "tip": {"position": [LENGTH, 0]}},
+        "elements": {"L": element},
+        "loads": {"F": {"type": "force", "body": "tip", "force": list(force)}},
+    }
 
 
 def tip(document: dict, energy: bool = False) -> np.ndarray:
@@ -51,7 +63,12 @@ def test_the_error_falls_as_h_to_twice_the_degree(degree):
         assert errors[-1] < 1e-10
 
 
-THICK = {"E": 2.6e9, "b": 0.0095, "h": 0.012, "L": 0.057}  # a short thick nylon finger: shear is 3 % of the tip deflection
+THICK = {
+    "E": 2.6e9,
+    "b": 0.0095,
+    "h": 0.012,
+    "L": 0.057,
+}  # a short thick nylon finger: shear is 3 % of the tip deflection
 
 
 def thick_finger(discretization: str, intervals: int, shape=None, start="clamped", **link) -> dict:
@@ -103,8 +120,11 @@ def test_the_gradient_of_the_potential_is_the_residual_of_a_link_by_elements():
     n, m = len(form.unknowns), form.n_multipliers
     assert n + m == mech.n_free
     x = ca.SX.sym("x", n)
-    lagrangian_parts = ca.Function("parts", [x], [ca.gradient(form.potential(x, p), x),
-                                                  ca.jacobian(form.equalities(x, p), x), form.equalities(x, p)])
+    lagrangian_parts = ca.Function(
+        "parts",
+        [x],
+        [ca.gradient(form.potential(x, p), x), ca.jacobian(form.equalities(x, p), x), form.equalities(x, p)],
+    )
     rng = np.random.default_rng(5)
     x0, lam = rng.normal(scale=0.05, size=n), rng.normal(scale=0.5, size=m)
     gradient, J, g = (np.asarray(a) for a in lagrangian_parts(x0))

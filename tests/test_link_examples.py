@@ -15,8 +15,16 @@ from service.equilibrium import NewtonOptions, solve_equilibrium
 from service.inverse_links import inverse_links
 from service.sweep import document_sweep
 
-LINK_EXAMPLES = ["cantilever", "compliant_slider", "parallel_mechanism", "planar_spring", "curved_indexer",
-                 "six_bar", "inverse_four_bar", "gripper_exact"]
+LINK_EXAMPLES = [
+    "cantilever",
+    "compliant_slider",
+    "parallel_mechanism",
+    "planar_spring",
+    "curved_indexer",
+    "six_bar",
+    "inverse_four_bar",
+    "gripper_exact",
+]
 TIGHT = NewtonOptions(tol_residual=1e-13, tol_step=1e-12)
 
 

@@ -24,8 +24,15 @@ def network(bodies: dict, links: dict, loads: dict, *, E=2e11, b=0.01, h=0.002) 
         element = {"type": "link", "material": "steel", "section": "strip"}
         element.update(spec)
         elements[name] = element
-    return {"name": "network", "units": SI, "materials": {"steel": {"E": E}},
-            "sections": {"strip": {"b": b, "h": h}}, "bodies": bodies, "elements": elements, "loads": loads}
+    return {
+        "name": "network",
+        "units": SI,
+        "materials": {"steel": {"E": E}},
+        "sections": {"strip": {"b": b, "h": h}},
+        "bodies": bodies,
+        "elements": elements,
+        "loads": loads,
+    }
 
 
 def solve(document, options=TIGHT):
@@ -39,15 +46,28 @@ def test_a_cantilever_split_at_a_clamped_floating_joint_is_still_the_elastica():
     """Two links clamped to a floating joint (Eqs. 5.2-5.3) behave as one link."""
     EI, L, F = 0.08, 0.1016, 15.0
     document = {
-        "name": "split cantilever", "units": SI,
-        "materials": {"m": {"E": EI / 1e-9}}, "sections": {"s": {"shape": "general", "I": 1e-9}},
-        "bodies": {"ground": {"fixed": True, "position": [0, 0]},
-                   "J": {"joint": True, "position": [0.4 * L, 0]},
-                   "tip": {"joint": True, "position": [L, 0]}},
-        "elements": {"L1": {"type": "link", "from": "ground", "to": "J", "length": 0.4 * L, "material": "m", "section": "s"},
-                     # the second link runs backwards (u from the tip to the joint)
-                     "L2": {"type": "link", "from": "tip", "to": "J", "length": 0.6 * L, "material": "m", "section": "s",
-                            "shape": {"type": "straight", "angle": math.pi}}},
+        "name": "split cantilever",
+        "units": SI,
+        "materials": {"m": {"E": EI / 1e-9}},
+        "sections": {"s": {"shape": "general", "I": 1e-9}},
+        "bodies": {
+            "ground": {"fixed": True, "position": [0, 0]},
+            "J": {"joint": True, "position": [0.4 * L, 0]},
+            "tip": {"joint": True, "position": [L, 0]},
+        },
+        "elements": {
+            "L1": {"type": "link", "from": "ground", "to": "J", "length": 0.4 * L, "material": "m", "section": "s"},
+            # the second link runs backwards (u from the tip to the joint)
+            "L2": {
+                "type": "link",
+                "from": "tip",
+                "to": "J",
+                "length": 0.6 * L,
+                "material": "m",
+                "section": "s",
+                "shape": {"type": "straight", "angle": math.pi},
+            },
+        },
         "loads": {"F": {"type": "force", "body": "tip", "force": [0, F]}},
     }
     _, out = solve(document)
@@ -75,8 +95,15 @@ def test_a_pinned_star_matches_the_linear_truss():
         length = float(np.hypot(*d))
         n = d / length
         K += EA / length * np.outer(n, n)
-        links[f"to_{name}"] = {"from": name, "to": "J", "length": length, "start": "pinned", "end": "pinned",
-                               "axial": True, "shape": {"type": "straight", "angle": math.atan2(d[1], d[0])}}
+        links[f"to_{name}"] = {
+            "from": name,
+            "to": "J",
+            "length": length,
+            "start": "pinned",
+            "end": "pinned",
+            "axial": True,
+            "shape": {"type": "straight", "angle": math.atan2(d[1], d[0])},
+        }
     P = np.array([30.0, -50.0])  # N: strains ~1e-5, so the truss is linear to ~1e-5
     mech, out = solve(network(bodies, links, {"P": {"type": "force", "body": "J", "force": list(P)}}))
     assert "J.angle" not in mech.free_coordinates  # a pin joint has no rotation
@@ -102,7 +129,11 @@ def test_the_exact_curved_beam_equals_a_link_with_the_same_arc(gripper_dict):
     radius = float(beam["radius"])
     center = [float(c) for c in beam["center"]]
     mixed["elements"]["a"] = {
-        "type": "link", "from": start_body, "to": end_body, "material": beam["material"], "section": beam["section"],
+        "type": "link",
+        "from": start_body,
+        "to": end_body,
+        "material": beam["material"],
+        "section": beam["section"],
         "at": [center[0] + radius * math.cos(math.radians(start)), center[1] + radius * math.sin(math.radians(start))],
         "length": radius * math.radians(arc),
         "shape": {"type": "arc", "angle": start + 90, "sweep": arc},
@@ -114,21 +145,32 @@ def test_the_exact_curved_beam_equals_a_link_with_the_same_arc(gripper_dict):
 
 
 def test_a_floating_joint_with_no_path_to_ground_is_named():
-    bodies = {"A": {"fixed": True, "position": [0, 0]}, "J": {"joint": True, "position": [1, 0]},
-              "K": {"joint": True, "position": [3, 0]}, "M": {"joint": True, "position": [4, 0]}}
+    bodies = {
+        "A": {"fixed": True, "position": [0, 0]},
+        "J": {"joint": True, "position": [1, 0]},
+        "K": {"joint": True, "position": [3, 0]},
+        "M": {"joint": True, "position": [4, 0]},
+    }
     links = {"L1": {"from": "A", "to": "J", "length": 1.0}, "L2": {"from": "K", "to": "M", "length": 1.0}}
     with pytest.raises(MechanismError) as info:
         models.compile_mechanism(models.load_document(network(bodies, links, {})))
-    assert str(info.value) == ("/bodies/K: floating joint 'K' has no path to a fixed body through elements or "
-                               "impact pairs: connect it to ground by a link or a flexure, or fix it")
+    assert str(info.value) == (
+        "/bodies/K: floating joint 'K' has no path to a fixed body through elements or "
+        "impact pairs: connect it to ground by a link or a flexure, or fix it"
+    )
 
 
 def test_a_body_held_only_by_pins_must_be_a_joint():
     """A rigid body on pins alone is free to spin: the solver names the motion."""
-    bodies = {"A": {"fixed": True, "position": [0, 0]}, "B": {"fixed": True, "position": [2, 0]},
-              "J": {"position": [1, 0]}}
-    links = {"L1": {"from": "A", "to": "J", "length": 1.0, "end": "pinned"},
-             "L2": {"from": "J", "to": "B", "length": 1.0, "start": "pinned"}}
+    bodies = {
+        "A": {"fixed": True, "position": [0, 0]},
+        "B": {"fixed": True, "position": [2, 0]},
+        "J": {"position": [1, 0]},
+    }
+    links = {
+        "L1": {"from": "A", "to": "J", "length": 1.0, "end": "pinned"},
+        "L2": {"from": "J", "to": "B", "length": 1.0, "start": "pinned"},
+    }
     mech = models.compile_mechanism(models.load_document(network(bodies, links, {})))
     with pytest.raises(MechanismError, match="nothing resists a motion of J.angle"):
         solve_equilibrium(mech)
@@ -139,8 +181,9 @@ def test_an_undetermined_force_is_named_when_no_body_moves():
     force is not determined (the distance is held twice). The message names the unknown, not
     an empty list of moving coordinates."""
     bodies = {"A": {"fixed": True, "position": [0, 0]}, "B": {"fixed": True, "position": [1, 0]}}
-    mech = models.compile_mechanism(models.load_document(network(bodies, {"L1": {"from": "A", "to": "B",
-                                                                                 "length": 1.0}}, {})))
+    mech = models.compile_mechanism(
+        models.load_document(network(bodies, {"L1": {"from": "A", "to": "B", "length": 1.0}}, {}))
+    )
     with pytest.raises(MechanismError) as info:
         solve_equilibrium(mech)
     assert info.value.pointer == "/elements"
@@ -153,29 +196,56 @@ def test_a_moment_on_a_pin_joint_is_refused():
     bodies = {"A": {"fixed": True, "position": [0, 0]}, "J": {"joint": True, "position": [1, 0]}}
     links = {"L1": {"from": "A", "to": "J", "length": 1.0, "end": "pinned"}}
     with pytest.raises(MechanismError) as info:
-        models.compile_mechanism(models.load_document(
-            network(bodies, links, {"M": {"type": "moment", "body": "J", "moment": 1.0}})))
-    assert str(info.value) == ("/loads/M: joint 'J' is held only by pins, so it cannot take a moment: "
-                               "apply forces at the joint itself")
+        models.compile_mechanism(
+            models.load_document(network(bodies, links, {"M": {"type": "moment", "body": "J", "moment": 1.0}}))
+        )
+    assert str(info.value) == (
+        "/loads/M: joint 'J' is held only by pins, so it cannot take a moment: apply forces at the joint itself"
+    )
 
 
-@pytest.mark.parametrize("change, pointer, message", [
-    (lambda e: e.update(length=0), "/elements/L1/length", "must be positive, got 0 (SI)"),
-    (lambda e: e.update(shape={"type": "expression", "expression": "__import__('os').system('true')"}),
-     "/elements/L1/shape/expression", "unsafe or unsupported expression: a call of a computed function is not allowed"),
-    (lambda e: e.update(shape={"type": "expression", "expression": "__import__('os')"}),
-     "/elements/L1/shape/expression", "unsafe or unsupported expression: a call of '__import__' is not allowed"),
-    (lambda e: e.update(shape={"type": "expression", "expression": "u.__class__"}),
-     "/elements/L1/shape/expression", "unsafe or unsupported expression: an Attribute expression is not allowed"),
-    (lambda e: e.update(shape={"type": "expression", "expression": "0.3 * sin(2 * pi * u"}),
-     "/elements/L1/shape/expression", "cannot parse expression '0.3 * sin(2 * pi * u': '(' was never closed"),
-    (lambda e: e.update(shape={"type": "expression", "expression": "x + 1"}),
-     "/elements/L1/shape/expression", "unsafe or unsupported expression: the name 'x' is not allowed"),
-    (lambda e: e.update(shape={"type": "expression", "expression": "-" * 1900 + "u"}),
-     "/elements/L1/shape/expression", "expression nested too deeply"),
-    (lambda e: e.update(order=5), "/elements/L1/order", "the integration order must be even, got 5"),
-    (lambda e: e.update(shear=True), "/materials/steel/G", "a link with shear needs the shear modulus G or Poisson's ratio nu"),
-])
+@pytest.mark.parametrize(
+    "change, pointer, message",
+    [
+        (lambda e: e.update(length=0), "/elements/L1/length", "must be positive, got 0 (SI)"),
+        (
+            lambda e: e.update(shape={"type": "expression", "expression": "__import__('os').system('true')"}),
+            "/elements/L1/shape/expression",
+            "unsafe or unsupported expression: a call of a computed function is not allowed",
+        ),
+        (
+            lambda e: e.update(shape={"type": "expression", "expression": "__import__('os')"}),
+            "/elements/L1/shape/expression",
+            "unsafe or unsupported expression: a call of '__import__' is not allowed",
+        ),
+        (
+            lambda e: e.update(shape={"type": "expression", "expression": "u.__class__"}),
+            "/elements/L1/shape/expression",
+            "unsafe or unsupported expression: an Attribute expression is not allowed",
+        ),
+        (
+            lambda e: e.update(shape={"type": "expression", "expression": "0.3 * sin(2 * pi * u"}),
+            "/elements/L1/shape/expression",
+            "cannot parse expression '0.3 * sin(2 * pi * u': '(' was never closed",
+        ),
+        (
+            lambda e: e.update(shape={"type": "expression", "expression": "x + 1"}),
+            "/elements/L1/shape/expression",
+            "unsafe or unsupported expression: the name 'x' is not allowed",
+        ),
+        (
+            lambda e: e.update(shape={"type": "expression", "expression": "-" * 1900 + "u"}),
+            "/elements/L1/shape/expression",
+            "expression nested too deeply",
+        ),
+        (lambda e: e.update(order=5), "/elements/L1/order", "the integration order must be even, got 5"),
+        (
+            lambda e: e.update(shear=True),
+            "/materials/steel/G",
+            "a link with shear needs the shear modulus G or Poisson's ratio nu",
+        ),
+    ],
+)
 def test_bad_links_are_named(change, pointer, message):
     bodies = {"A": {"fixed": True, "position": [0, 0]}, "J": {"joint": True, "position": [1, 0]}}
     document = network(bodies, {"L1": {"from": "A", "to": "J", "length": 1.0}}, {})
@@ -190,10 +260,30 @@ def test_expressions_are_built_not_evaluated():
     """The expression shape equals the same function given as a polynomial."""
     bodies = {"A": {"fixed": True, "position": [0, 0]}, "J": {"joint": True, "position": [1, 0]}}
     load = {"P": {"type": "force", "body": "J", "force": [0.0, 2.0]}}
-    as_text = network(bodies, {"L1": {"from": "A", "to": "J", "length": 1.0,
-                                      "shape": {"type": "expression", "expression": "0.2 - 0.5*u + 0.3*u**2"}}}, load)
-    as_polynomial = network(bodies, {"L1": {"from": "A", "to": "J", "length": 1.0,
-                                            "shape": {"type": "polynomial", "coefficients": [0.2, -0.5, 0.3]}}}, load)
+    as_text = network(
+        bodies,
+        {
+            "L1": {
+                "from": "A",
+                "to": "J",
+                "length": 1.0,
+                "shape": {"type": "expression", "expression": "0.2 - 0.5*u + 0.3*u**2"},
+            }
+        },
+        load,
+    )
+    as_polynomial = network(
+        bodies,
+        {
+            "L1": {
+                "from": "A",
+                "to": "J",
+                "length": 1.0,
+                "shape": {"type": "polynomial", "coefficients": [0.2, -0.5, 0.3]},
+            }
+        },
+        load,
+    )
     _, a = solve(as_text)
     _, b = solve(as_polynomial)
     assert a["elements.L1.x_end"] == pytest.approx(b["elements.L1.x_end"], rel=1e-14)
@@ -206,10 +296,14 @@ def test_a_rigid_body_with_offset_attachment_and_load_point_rotates_consistently
     beam still sees a plain dead tip force: the elliptic-integral cantilever."""
     EI, L, F = 0.08, 0.1016, 15.0
     document = {
-        "name": "offset tip body", "units": SI,
-        "materials": {"m": {"E": EI / 1e-9}}, "sections": {"s": {"shape": "general", "I": 1e-9}},
+        "name": "offset tip body",
+        "units": SI,
+        "materials": {"m": {"E": EI / 1e-9}},
+        "sections": {"s": {"shape": "general", "I": 1e-9}},
         "bodies": {"ground": {"fixed": True, "position": [0, 0]}, "tip": {"position": [L + 0.03, -0.02], "angle": 0.4}},
-        "elements": {"beam": {"type": "link", "from": "ground", "to": "tip", "length": L, "material": "m", "section": "s"}},
+        "elements": {
+            "beam": {"type": "link", "from": "ground", "to": "tip", "length": L, "material": "m", "section": "s"}
+        },
         "loads": {"F": {"type": "force", "body": "tip", "at": [L, 0], "force": [0, F]}},
         "outputs": {"end": {"type": "point", "body": "tip", "at": [L, 0]}},
     }

@@ -128,12 +128,18 @@ def test_small_loads_match_linear_euler_bernoulli():
 def test_initially_circular_link_matches_the_curved_beam_compliance_of_seed_000():
     radius, arc = 0.05, 2.0  # rad
     E, b, h = 2e11, 0.01, 0.001
-    document = link_document(shape={"type": "arc", "angle": 0.0, "sweep": arc}, length=radius * arc,
-                             section={"b": b, "h": h}, material={"E": E})
+    document = link_document(
+        shape={"type": "arc", "angle": 0.0, "sweep": arc},
+        length=radius * arc,
+        section={"b": b, "h": h},
+        material={"E": E},
+    )
     end = [radius * math.sin(arc), radius * (1 - math.cos(arc))]
     document["bodies"]["tip"]["position"] = end
-    document["loads"] = {"F": {"type": "force", "body": "tip", "force": [0.0, 0.0]},
-                         "M": {"type": "moment", "body": "tip", "moment": 0.0}}
+    document["loads"] = {
+        "F": {"type": "force", "body": "tip", "force": [0.0, 0.0]},
+        "M": {"type": "moment", "body": "tip", "moment": 0.0},
+    }
     mech = models.compile_mechanism(models.load_document(document))
     C = np.array(curved_beam.compliance(radius, arc, E * b * h**3 / 12))
     A = np.array([[math.cos(arc), -math.sin(arc)], [math.sin(arc), math.cos(arc)]])  # S_fj axes
@@ -153,8 +159,9 @@ def test_shear_on_a_short_thick_cantilever_matches_timoshenko():
     length, b, h, E, nu = 0.02, 0.01, 0.008, 2e11, 0.3
     G = E / (2 * (1 + nu))
     I, A = b * h**3 / 12, b * h
-    document = link_document(length=length, section={"b": b, "h": h}, material={"E": E, "nu": nu},
-                             shear=True, load=(0, 1.0))
+    document = link_document(
+        length=length, section={"b": b, "h": h}, material={"E": E, "nu": nu}, shear=True, load=(0, 1.0)
+    )
     document["bodies"]["tip"]["position"] = [length, 0]
     mech = models.compile_mechanism(models.load_document(document))
     dz, _ = linear_response(mech, "/loads/F/force/1")
@@ -174,17 +181,29 @@ def test_axial_strain_stretches_a_straight_link_by_FL_over_EA():
 
 
 def test_link_tangent_stiffness_equals_finite_differences_of_the_residual():
-    mech = models.compile_mechanism(models.load_document(
-        link_document(load=(3.0, F), shape={"type": "polynomial", "coefficients": [0.1, 0.4, -0.3]},
-                      section={"shape": "tapered_rectangle", "b": 0.01, "h_start": 0.002, "h_end": 0.001},
-                      material={"E": 2e11, "nu": 0.3}, shear=True, axial=True, intervals=3)))
+    mech = models.compile_mechanism(
+        models.load_document(
+            link_document(
+                load=(3.0, F),
+                shape={"type": "polynomial", "coefficients": [0.1, 0.4, -0.3]},
+                section={"shape": "tapered_rectangle", "b": 0.01, "h_start": 0.002, "h_end": 0.001},
+                material={"E": 2e11, "nu": 0.3},
+                shear=True,
+                axial=True,
+                intervals=3,
+            )
+        )
+    )
     rng = np.random.default_rng(7)
     z = 1e-2 * rng.standard_normal(mech.n_free)
     p = mech.p()
     _, K = mech.graphs.residual_and_tangent(z, p)
     step = 1e-6
-    columns = [(np.asarray(mech.graphs.residual(z + step * e, p)) - np.asarray(mech.graphs.residual(z - step * e, p))).ravel()
-               / (2 * step) for e in np.eye(mech.n_free)]
+    columns = [
+        (np.asarray(mech.graphs.residual(z + step * e, p)) - np.asarray(mech.graphs.residual(z - step * e, p))).ravel()
+        / (2 * step)
+        for e in np.eye(mech.n_free)
+    ]
     assert np.allclose(np.asarray(K), np.array(columns).T, rtol=1e-6, atol=1e-7)
 
 
@@ -194,8 +213,9 @@ def test_condensed_tangent_stiffness_of_a_link_is_the_beam_element_stiffness():
     from service.stiffness import tangent_stiffness
 
     A = 1e-4
-    mech = models.compile_mechanism(models.load_document(
-        link_document(load=(0, 0), axial=True, section={"shape": "general", "I": 1e-9, "A": A})))
+    mech = models.compile_mechanism(
+        models.load_document(link_document(load=(0, 0), axial=True, section={"shape": "general", "I": 1e-9, "A": A}))
+    )
     kt = tangent_stiffness(mech)
     E = EI / 1e-9
     expected = np.array([[E * A / L, 0, 0], [0, 12 * EI / L**3, -6 * EI / L**2], [0, -6 * EI / L**2, 4 * EI / L]])

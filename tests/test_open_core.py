@@ -37,9 +37,14 @@ print(json.dumps({"built": len(built), "status": result.status, "outputs": resul
 
 
 def _fresh_process(cache: Path) -> dict:
-    done = subprocess.run([sys.executable, "-c", PROBE, str(EXAMPLES / "gripper_exact.json")], cwd=ROOT,
-                          env={"PATH": "/usr/bin:/bin", "FLEXMECH_CACHE_DIR": str(cache), "HOME": str(cache)},
-                          capture_output=True, text=True, timeout=300)
+    done = subprocess.run(
+        [sys.executable, "-c", PROBE, str(EXAMPLES / "gripper_exact.json")],
+        cwd=ROOT,
+        env={"PATH": "/usr/bin:/bin", "FLEXMECH_CACHE_DIR": str(cache), "HOME": str(cache)},
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert done.returncode == 0, done.stderr[-2000:]
     return json.loads(done.stdout.strip().splitlines()[-1])
 
@@ -60,8 +65,11 @@ def test_a_new_process_loads_the_graphs_it_built_before(tmp_path):
 def test_ipopt_options_are_allowlisted_and_solvers_built_once():
     from service import ipopt
 
-    with pytest.raises(ipopt.IpoptOptionError, match="linear_solver: value 'ma57' is not allowed "
-                                                     r"\(the wheel's IPOPT has mumps and spral\)"):
+    with pytest.raises(
+        ipopt.IpoptOptionError,
+        match="linear_solver: value 'ma57' is not allowed "
+        r"\(the wheel's IPOPT has mumps and spral\)",
+    ):
         ipopt.checked_options({"linear_solver": "ma57"})
     with pytest.raises(ipopt.IpoptOptionError, match="^derivative_test: not an IPOPT option flexmech sets"):
         ipopt.checked_options({"derivative_test": "second-order"})
@@ -114,11 +122,20 @@ def test_an_unknown_analysis_names_the_field_and_the_choices(api_server):
     assert r.status_code == 422
     error = r.json()["error"]
     assert error["pointer"] == "/analysis"
-    assert error["message"] == ("/analysis: unknown analysis 'simulation' (analyses: equilibrium, linearization, "
-                                "trace, inverse, energy, contact, simulate)")
+    assert error["message"] == (
+        "/analysis: unknown analysis 'simulation' (analyses: equilibrium, linearization, "
+        "trace, inverse, energy, contact, simulate)"
+    )
     schema = httpx.get(api_server.url + "/openapi.json").json()["components"]["schemas"]
-    assert list(schema["SolveRequest"]["discriminator"]["mapping"]) == ["equilibrium", "linearization", "trace",
-                                                                       "inverse", "energy", "contact", "simulate"]
+    assert list(schema["SolveRequest"]["discriminator"]["mapping"]) == [
+        "equilibrium",
+        "linearization",
+        "trace",
+        "inverse",
+        "energy",
+        "contact",
+        "simulate",
+    ]
     assert schema["TraceSolve"]["properties"]["analysis"]["const"] == "trace"
     assert "trace" in schema["TraceSolve"]["properties"] and "trace" not in schema["EquilibriumSolve"]["properties"]
     assert schema["SweepRequest"]["properties"]["analysis"]["enum"] == ["equilibrium", "energy"]
@@ -126,8 +143,13 @@ def test_an_unknown_analysis_names_the_field_and_the_choices(api_server):
 
 def test_a_sweep_of_energy_minima_follows_newton(client):
     values = [0.0, 1.0, 2.0]
-    job = client.sweep(document=chain(), analysis="energy", continuation="/loads/pull/force/0",
-                       parameters=[{"path": "/loads/pull/force/0", "values": values}], outputs=["bodies.b1.x"])
+    job = client.sweep(
+        document=chain(),
+        analysis="energy",
+        continuation="/loads/pull/force/0",
+        parameters=[{"path": "/loads/pull/force/0", "values": values}],
+        outputs=["bodies.b1.x"],
+    )
     assert client.wait(job.id, timeout=120).status == "succeeded"
     result = client.result(job.id).result
     assert result.analysis == "energy"

@@ -26,7 +26,8 @@ def grasper(terms: int, **changes) -> dict:
     data = copy.deepcopy(GRASPER)
     data["elements"]["link"]["shape"]["coefficients"] = [1.2] + [0.0] * (terms - 1)
     data["optimize"]["design"] = data["optimize"]["design"][:1] + [
-        {"path": f"/elements/link/shape/coefficients/{k}", "lower": 0, "upper": 2} for k in range(terms)]
+        {"path": f"/elements/link/shape/coefficients/{k}", "lower": 0, "upper": 2} for k in range(terms)
+    ]
     data["optimize"].update(changes)
     return data
 
@@ -127,18 +128,36 @@ def test_an_infeasible_problem_returns_status_infeasible_with_the_least_violatio
     assert violated
 
 
-@pytest.mark.parametrize("change, pointer, message", [
-    (lambda o: o["design"][0].update(path="/sections/nope/h"), "/optimize/design/0/path",
-     "'/sections/nope/h' is not a numeric field of this mechanism"),
-    (lambda o: o["design"][0].update(path="/elements/link/material"), "/optimize/design/0/path",
-     "'/elements/link/material' is not a numeric field of this mechanism"),
-    (lambda o: o["design"][1].update(lower=1.5, upper=0.5), "/optimize/design/1/lower",
-     "lower bound 1.5 is above the upper bound 0.5"),
-    (lambda o: o["objective"].update(output="reactions.tip.Fz"), "/optimize/objective/output",
-     "unknown output 'reactions.tip.Fz' (outputs like it: reactions.base.Fx"),
-    (lambda o: o["constraints"][0].update(case="hot"), "/optimize/constraints/0/case",
-     "unknown load case 'hot' (cases: nominal)"),
-])
+@pytest.mark.parametrize(
+    "change, pointer, message",
+    [
+        (
+            lambda o: o["design"][0].update(path="/sections/nope/h"),
+            "/optimize/design/0/path",
+            "'/sections/nope/h' is not a numeric field of this mechanism",
+        ),
+        (
+            lambda o: o["design"][0].update(path="/elements/link/material"),
+            "/optimize/design/0/path",
+            "'/elements/link/material' is not a numeric field of this mechanism",
+        ),
+        (
+            lambda o: o["design"][1].update(lower=1.5, upper=0.5),
+            "/optimize/design/1/lower",
+            "lower bound 1.5 is above the upper bound 0.5",
+        ),
+        (
+            lambda o: o["objective"].update(output="reactions.tip.Fz"),
+            "/optimize/objective/output",
+            "unknown output 'reactions.tip.Fz' (outputs like it: reactions.base.Fx",
+        ),
+        (
+            lambda o: o["constraints"][0].update(case="hot"),
+            "/optimize/constraints/0/case",
+            "unknown load case 'hot' (cases: nominal)",
+        ),
+    ],
+)
 def test_bad_design_problems_name_the_field(change, pointer, message):
     data = grasper(1)
     change(data["optimize"])
@@ -164,9 +183,11 @@ def test_a_stiffness_constraint_is_the_condensed_tangent_stiffness():
 
     data = json.loads((EXAMPLES / "gripper.json").read_text())
     data.pop("sweep")
-    data["optimize"] = {"design": [{"path": "/sections/flexure/h", "lower": 0.002, "upper": 0.02}],
-                        "objective": {"output": "/sections/flexure/h"},
-                        "constraints": [{"output": "stiffness.input.y", "lower": 1000.0}]}
+    data["optimize"] = {
+        "design": [{"path": "/sections/flexure/h", "lower": 0.002, "upper": 0.02}],
+        "objective": {"output": "/sections/flexure/h"},
+        "constraints": [{"output": "stiffness.input.y", "lower": 1000.0}],
+    }
     result = solve(data)
     assert result.status == "optimal"
     mech = compile_mechanism(parse_document(data)).with_values(result.best.design)

@@ -32,8 +32,7 @@ def core_optimum():
 
 
 def test_optimize_job_over_http_equals_the_core(client, core_optimum):
-    job = client.optimize(example="grasper_shape", problem={
-        **json.loads(GRASPER.read_text())["optimize"], "starts": 2})
+    job = client.optimize(example="grasper_shape", problem={**json.loads(GRASPER.read_text())["optimize"], "starts": 2})
     assert job.kind == "optimize" and job.progress.total == 2
     final = client.wait(job.id, timeout=300)
     assert final.status == "succeeded"
@@ -45,17 +44,27 @@ def test_optimize_job_over_http_equals_the_core(client, core_optimum):
     assert [s["start"] for s in result["starts"]] == [0, 1]
     assert result["units"]["objective"] == "N"
     assert result["multipliers"]["constraints"][0] == pytest.approx(
-        core_optimum.best.multipliers["constraints"][0], rel=1e-6)
+        core_optimum.best.multipliers["constraints"][0], rel=1e-6
+    )
     assert len(result["history"]) == result["iterations"] + 1
 
 
-@pytest.mark.parametrize("problem_change, pointer, message", [
-    ({"design": [{"path": "/elements/link/colour", "lower": 0, "upper": 1}]}, "/problem/design/0/path",
-     "'/elements/link/colour' is not a numeric field of this mechanism"),
-    ({"design": [{"path": "/elements/link/length", "lower": 0.09, "upper": 0.085}]}, "/problem/design/0/lower",
-     "lower bound 0.09 is above the upper bound 0.085"),
-    ({"objective": {"output": "tip.force"}}, "/problem/objective/output", "unknown output 'tip.force'"),
-])
+@pytest.mark.parametrize(
+    "problem_change, pointer, message",
+    [
+        (
+            {"design": [{"path": "/elements/link/colour", "lower": 0, "upper": 1}]},
+            "/problem/design/0/path",
+            "'/elements/link/colour' is not a numeric field of this mechanism",
+        ),
+        (
+            {"design": [{"path": "/elements/link/length", "lower": 0.09, "upper": 0.085}]},
+            "/problem/design/0/lower",
+            "lower bound 0.09 is above the upper bound 0.085",
+        ),
+        ({"objective": {"output": "tip.force"}}, "/problem/objective/output", "unknown output 'tip.force'"),
+    ],
+)
 def test_bad_problems_are_422_naming_the_field(client, problem_change, pointer, message):
     problem = {**json.loads(GRASPER.read_text())["optimize"], **problem_change}
     with pytest.raises(FlexmechError) as info:
@@ -102,15 +111,26 @@ def test_cli_optimize_errors_are_one_line_with_exit_code_2(tmp_path):
 
 def test_cli_trace_reports_the_limit_points(tmp_path):
     out = tmp_path / "path.json"
-    result = run("trace", str(EXAMPLES / "snap_through_arch.json"), "--path", "/loads/P/force/1", "--stop", "-300",
-                 "--step", "20", "--json", str(out))
+    result = run(
+        "trace",
+        str(EXAMPLES / "snap_through_arch.json"),
+        "--path",
+        "/loads/P/force/1",
+        "--stop",
+        "-300",
+        "--step",
+        "20",
+        "--json",
+        str(out),
+    )
     assert result.exit_code == 0, result.output
     data = json.loads(out.read_text())
     assert [lp["kind"] for lp in data["limit_points"]] == ["minimum", "maximum"]
     for lp in data["limit_points"]:
         assert f"{lp['value']:.6g}" in result.output
-    bad = run("trace", str(EXAMPLES / "snap_through_arch.json"), "--path", "/loads/Q/force/1", "--stop", "-3",
-              "--step", "1")
+    bad = run(
+        "trace", str(EXAMPLES / "snap_through_arch.json"), "--path", "/loads/Q/force/1", "--stop", "-3", "--step", "1"
+    )
     assert bad.exit_code == 2 and "--path: not a numeric field" in bad.output
 
 
@@ -119,14 +139,23 @@ def test_solve_returns_closing_force_sensitivities_equal_to_the_core(client):
     from service.sweep import solve_for_target
 
     actuation = "/loads/actuation/force/1"
-    answer = client.solve(example="gripper", target={"path": actuation, "output": "end_effector.x", "equals": 0},
-                          sensitivities={"parameters": ["/sections/flexure/h"], "outputs": [actuation]})
+    answer = client.solve(
+        example="gripper",
+        target={"path": actuation, "output": "end_effector.x", "equals": 0},
+        sensitivities={"parameters": ["/sections/flexure/h"], "outputs": [actuation]},
+    )
     mech = compile_mechanism(load_document(EXAMPLES / "gripper.json"))
     found = solve_for_target(mech, actuation, "end_effector.x", 0.0)
-    core = equilibrium_sensitivities(found.equilibrium.mechanism, found.equilibrium.z, ["/sections/flexure/h"],
-                                     [actuation], target=(actuation, "end_effector.x"))
+    core = equilibrium_sensitivities(
+        found.equilibrium.mechanism,
+        found.equilibrium.z,
+        ["/sections/flexure/h"],
+        [actuation],
+        target=(actuation, "end_effector.x"),
+    )
     assert answer.sensitivities["derivatives"][actuation]["/sections/flexure/h"] == pytest.approx(
-        core.matrix[0, 0], rel=1e-9)
+        core.matrix[0, 0], rel=1e-9
+    )
     assert answer.sensitivities["units"][actuation]["/sections/flexure/h"] == "uN/mm"
     with pytest.raises(FlexmechError) as info:
         client.solve(example="gripper", sensitivities={"parameters": ["/sections/flexure/q"], "outputs": ["x"]})

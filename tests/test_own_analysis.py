@@ -50,23 +50,41 @@ class BodyStiffness(Analysis):
         kt = tangent_stiffness(mech, None)
         coordinate = f"{options.body}.{options.direction}"
         if coordinate not in kt.coordinates:
-            raise MechanismError("/body", f"'{options.body}' has no free coordinate {options.direction} "
-                                          f"(free: {', '.join(kt.coordinates)})")
+            raise MechanismError(
+                "/body",
+                f"'{options.body}' has no free coordinate {options.direction} (free: {', '.join(kt.coordinates)})",
+            )
         k = kt.coordinates.index(coordinate)
         compliance = np.linalg.inv(np.asarray(kt.K, dtype=float))
-        return {"analysis": self.name, "name": mech.document.name, "status": "converged", "message": "",
-                "stiffness": float(1 / compliance[k, k]),
-                "stiffness_unit": f"{mech.doc_unit('force')}/{mech.doc_unit('length')}"}
+        return {
+            "analysis": self.name,
+            "name": mech.document.name,
+            "status": "converged",
+            "message": "",
+            "stiffness": float(1 / compliance[k, k]),
+            "stiffness_unit": f"{mech.doc_unit('force')}/{mech.doc_unit('length')}",
+        }
 
 
 ANALYSES.register(BodyStiffness())
 
 CLAMPED_LINK = {
-    "name": "clamped link", "units": {"length": "m", "force": "N", "stress": "Pa", "angle": "rad"},
-    "materials": {"steel": {"E": E}}, "sections": {"strip": {"b": B, "h": H}},
+    "name": "clamped link",
+    "units": {"length": "m", "force": "N", "stress": "Pa", "angle": "rad"},
+    "materials": {"steel": {"E": E}},
+    "sections": {"strip": {"b": B, "h": H}},
     "bodies": {"wall": {"fixed": True, "position": [0, 0]}, "tip": {"position": [L, 0]}},
-    "elements": {"link": {"type": "link", "from": "wall", "to": "tip", "length": L, "material": "steel",
-                          "section": "strip", "axial": True}},
+    "elements": {
+        "link": {
+            "type": "link",
+            "from": "wall",
+            "to": "tip",
+            "length": L,
+            "material": "steel",
+            "section": "strip",
+            "axial": True,
+        }
+    },
 }
 PLUGIN = {"FLEXMECH_PLUGINS": "tests.test_own_analysis"}
 
@@ -76,8 +94,13 @@ def server(tmp_path_factory):
     from conftest import EXAMPLES, Deployment
 
     tmp = tmp_path_factory.mktemp("own-analysis")
-    env = {"FLEXMECH_DATA_DIR": str(tmp / "data"), "FLEXMECH_WORKERS": "1", "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES),
-           "FLEXMECH_API_KEYS": "", **PLUGIN}
+    env = {
+        "FLEXMECH_DATA_DIR": str(tmp / "data"),
+        "FLEXMECH_WORKERS": "1",
+        "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES),
+        "FLEXMECH_API_KEYS": "",
+        **PLUGIN,
+    }
     server = Deployment("sqlite", env, tmp).start()
     yield server
     server.stop()
@@ -112,8 +135,10 @@ def test_it_runs_through_the_client_as_a_documented_method(server):
         with pytest.raises(FlexmechError) as wrong:
             client.solve(document=CLAMPED_LINK, analysis="body_stiffness", body="tip", stiffness=True)
         assert wrong.value.pointer == "/stiffness"
-        assert "unknown field 'stiffness' for the body_stiffness analysis (the equilibrium and energy analysis" \
+        assert (
+            "unknown field 'stiffness' for the body_stiffness analysis (the equilibrium and energy analysis"
             in wrong.value.message
+        )
 
 
 def test_it_is_a_command_with_its_flags(tmp_path):
@@ -128,8 +153,11 @@ def test_it_is_a_command_with_its_flags(tmp_path):
     flags = CliRunner().invoke(app, ["body-stiffness", "--help"], env={"COLUMNS": "200"})
     assert "--body" in flags.output and "the body the force pushes" in flags.output and "(x | y)" in flags.output
     out = tmp_path / "report.json"
-    ran = CliRunner().invoke(app, ["body-stiffness", str(document), "--body", "tip", "--direction", "x",
-                                   "--json", str(out)], env={"COLUMNS": "200"})
+    ran = CliRunner().invoke(
+        app,
+        ["body-stiffness", str(document), "--body", "tip", "--direction", "x", "--json", str(out)],
+        env={"COLUMNS": "200"},
+    )
     assert ran.exit_code == 0, ran.output
     assert json.loads(out.read_text())["stiffness"] == pytest.approx(ALONG, rel=1e-6)
     assert "stiffness: 2e+07 N/m" in ran.output
@@ -166,8 +194,10 @@ def test_it_is_a_form_of_the_workbench(server):
         assert page.input_value("#option-direction") == "y"
         page.fill("#option-body", "tip")
         page.click("#run")
-        page.wait_for_function("() => document.getElementById('run-state').textContent.includes('body_stiffness: "
-                               "converged')", timeout=60_000)
+        page.wait_for_function(
+            "() => document.getElementById('run-state').textContent.includes('body_stiffness: converged')",
+            timeout=60_000,
+        )
         report = json.loads(page.text_content("#raw"))
         chromium.close()
     assert report["stiffness"] == pytest.approx(ACROSS, rel=1e-6)

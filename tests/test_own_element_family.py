@@ -58,8 +58,10 @@ class BushingFamily:
         on_from = ctx.body_axes(i, ctx.reference(j)[0])  # `to`'s reference point, carried by `from`
         gap = ctx.place(j, ca.SX.zeros(2), d) - ctx.place(i, on_from, d)
         base = f"/elements/{t.name}"
-        return 0.5 * ctx.P[f"{base}/stiffness"] * ca.sumsqr(gap) + \
-            0.5 * ctx.P[f"{base}/rotational_stiffness"] * (d[j][2] - d[i][2]) ** 2
+        return (
+            0.5 * ctx.P[f"{base}/stiffness"] * ca.sumsqr(gap)
+            + 0.5 * ctx.P[f"{base}/rotational_stiffness"] * (d[j][2] - d[i][2]) ** 2
+        )
 
     def contribute(self, ctx, t: BushingTopology, d, z) -> Contribution:
         ends = (t.start_body, t.end_body)
@@ -67,8 +69,9 @@ class BushingFamily:
         energy = self._energy(ctx, t, local)
         stacked, actual = ca.vertcat(*[local[b] for b in ends]), ca.vertcat(*[d[b] for b in ends])
         wrenches = {b: ca.substitute(ca.gradient(energy, local[b]), stacked, actual) for b in ends}
-        return Contribution(wrenches, outputs=[("energy", "energy", self._energy(ctx, t, d))],
-                            energy=self._energy(ctx, t, d))
+        return Contribution(
+            wrenches, outputs=[("energy", "energy", self._energy(ctx, t, d))], energy=self._energy(ctx, t, d)
+        )
 
     def unknowns(self, t) -> list:
         return []
@@ -91,12 +94,17 @@ def bushing():
 
 
 def block_on_a_bushing(**fields) -> dict:
-    return {"units": {"length": "m", "force": "N", "angle": "rad", "mass": "kg"},
-            "bodies": {"wall": {"fixed": True, "position": [0, 0]},
-                       "block": {"position": [0.5, 0.2], "mass": MASS, "inertia": INERTIA}},
-            "elements": {"mount": {"type": "bushing", "from": "wall", "to": "block", "stiffness": K,
-                                   "rotational_stiffness": KT}},
-            **fields}
+    return {
+        "units": {"length": "m", "force": "N", "angle": "rad", "mass": "kg"},
+        "bodies": {
+            "wall": {"fixed": True, "position": [0, 0]},
+            "block": {"position": [0.5, 0.2], "mass": MASS, "inertia": INERTIA},
+        },
+        "elements": {
+            "mount": {"type": "bushing", "from": "wall", "to": "block", "stiffness": K, "rotational_stiffness": KT}
+        },
+        **fields,
+    }
 
 
 def test_a_document_names_an_unregistered_family_as_an_unknown_type():
@@ -111,13 +119,18 @@ def test_a_registered_family_is_among_the_types_a_document_is_told_of(bushing):
     doc["elements"]["mount"]["type"] = "bushin"
     with pytest.raises(MechanismError) as caught:
         load_document(doc)
-    assert caught.value.problem == ("unknown type 'bushin' (did you mean 'bushing'? types: curved_beam, link, spring, "
-                                    "pin, slider, bushing)")
+    assert caught.value.problem == (
+        "unknown type 'bushin' (did you mean 'bushing'? types: curved_beam, link, spring, pin, slider, bushing)"
+    )
 
 
 def test_statics_deflects_the_block_by_load_over_stiffness(bushing):
-    doc = block_on_a_bushing(loads={"push": {"type": "force", "body": "block", "force": [3.0, -4.0]},
-                                    "twist": {"type": "moment", "body": "block", "moment": 2.0}})
+    doc = block_on_a_bushing(
+        loads={
+            "push": {"type": "force", "body": "block", "force": [3.0, -4.0]},
+            "twist": {"type": "moment", "body": "block", "moment": 2.0},
+        }
+    )
     report = run_analysis(compile_mechanism(load_document(doc)), "equilibrium", NewtonOptions())
     assert report["status"] == "converged"
     moved = report["displacements"]
@@ -133,9 +146,18 @@ def test_link_dynamics_follows_newmarks_discrete_circle(bushing):
     atan(w h / 2) the average-acceleration rule's phase per step (w = sqrt(k / m)): exact for
     a linear oscillator, so any error in its mass, force or energy shows."""
     step, force = 1e-3, 4.0
-    doc = block_on_a_bushing(loads={"hold": {"type": "force", "body": "block", "force": [force, 0.0]}},
-                             simulate={"until": 0.5, "step": step, "scheme": "newmark", "a1": 0.5, "a2": 0.5,
-                                       "start": "equilibrium", "histories": {"/loads/hold/force/0": 0}})
+    doc = block_on_a_bushing(
+        loads={"hold": {"type": "force", "body": "block", "force": [force, 0.0]}},
+        simulate={
+            "until": 0.5,
+            "step": step,
+            "scheme": "newmark",
+            "a1": 0.5,
+            "a2": 0.5,
+            "start": "equilibrium",
+            "histories": {"/loads/hold/force/0": 0},
+        },
+    )
     report = run_analysis(compile_mechanism(load_document(doc)), "simulate", NewtonOptions())
     assert report["status"] == "finished", report["message"]
     times, x = np.array(report["times"]), np.array(report["outputs"]["bodies.block.x"]) - 0.5
@@ -154,8 +176,9 @@ def test_an_impact_run_meets_the_hole_when_the_harmonic_motion_reaches_the_clear
     v0, clearance = 0.3, 0.02
     doc = csfh("6.1", scheme=scheme, until=0.1, step=1e-5 if scheme == "moreau" else 1e-4)
     doc["gravity"], doc["units"]["angle"] = None, "rad"
-    doc["elements"] = {"mount": {"type": "bushing", "from": "frame", "to": "hinge", "stiffness": K,
-                                 "rotational_stiffness": KT}}
+    doc["elements"] = {
+        "mount": {"type": "bushing", "from": "frame", "to": "hinge", "stiffness": K, "rotational_stiffness": KT}
+    }
     doc["simulate"]["initial"]["hinge"] = {"displacement": [0, 0, 0], "velocity": [v0, 0, 0]}
     report = run_analysis(compile_mechanism(load_document(doc)), "simulate", NewtonOptions())
     w = math.sqrt(K / MASS)

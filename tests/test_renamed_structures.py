@@ -40,8 +40,23 @@ def renamed(doc: dict, rename) -> dict:
 def test_a_renamed_gripper_shares_the_graphs_and_reaches_the_same_closing_force(gripper_dict):
     original = compile_mechanism(load_document(renamed(gripper_dict, lambda n: n)))
     # names that are also words of the structure's vocabulary (models, locations, kinds)
-    vocabulary = iter(["exact", "linear", "reference", "at", "force", "moment", "x", "pinned", "clamped", "end",
-                       "start", "offset", "point"])
+    vocabulary = iter(
+        [
+            "exact",
+            "linear",
+            "reference",
+            "at",
+            "force",
+            "moment",
+            "x",
+            "pinned",
+            "clamped",
+            "end",
+            "start",
+            "offset",
+            "point",
+        ]
+    )
     words: dict[str, str] = {}
 
     def word(name: str) -> str:
@@ -112,15 +127,32 @@ def _rss_mb(pid: int) -> float:
 
 def test_a_server_sent_ever_new_names_keeps_its_memory_and_cache_flat(gripper_dict, tmp_path):
     cache = tmp_path / "cache"
-    server = ApiServer({"FLEXMECH_DATA_DIR": str(tmp_path / "data"), "FLEXMECH_CACHE_DIR": str(cache),
-                        "FLEXMECH_API_KEYS": "", "FLEXMECH_WORKERS": "1", "FLEXMECH_BUILD_KERNELS": "0"},
-                       tmp_path / "server.log")
+    server = ApiServer(
+        {
+            "FLEXMECH_DATA_DIR": str(tmp_path / "data"),
+            "FLEXMECH_CACHE_DIR": str(cache),
+            "FLEXMECH_API_KEYS": "",
+            "FLEXMECH_WORKERS": "1",
+            "FLEXMECH_BUILD_KERNELS": "0",
+        },
+        tmp_path / "server.log",
+    )
     try:
         with httpx.Client(base_url=server.url, timeout=60) as client:
+
             def solve(k: int) -> float:
                 doc = renamed(gripper_dict, lambda n: f"{n}_{k}")
-                answer = client.post("/v1/solve", json={"document": doc, "target": {
-                    "path": f"/loads/actuation_{k}/force/1", "output": f"end_effector_{k}.x", "equals": 0}})
+                answer = client.post(
+                    "/v1/solve",
+                    json={
+                        "document": doc,
+                        "target": {
+                            "path": f"/loads/actuation_{k}/force/1",
+                            "output": f"end_effector_{k}.x",
+                            "equals": 0,
+                        },
+                    },
+                )
                 assert answer.status_code == 200, answer.text
                 return answer.json()["target"]["value"]
 

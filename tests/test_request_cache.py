@@ -56,6 +56,7 @@ def test_another_document_model_or_limits_compiles_again(compiles, gripper_dict)
     assert len(compiles) == 4
     base = requests.compile_request(document, overrides={ACTUATION: 50.0})
     assert len(compiles) == 4  # the first one, kept
+
     def travel(mech):  # the jaw's travel under 50 uN
         return closing_x(mech) - closing_x(mech.with_values({ACTUATION: 0.0}))
 

@@ -44,8 +44,9 @@ def test_the_exact_model_over_http_and_one_list_of_models(client):
     from api.schemas import Model
 
     assert tuple(get_args(Model)) == MODELS
-    answer = client.solve(example="gripper", model="exact",
-                          target={"path": ACTUATION, "output": "end_effector.x", "equals": 0})
+    answer = client.solve(
+        example="gripper", model="exact", target={"path": ACTUATION, "output": "end_effector.x", "equals": 0}
+    )
     assert answer.target.status == "converged"
     assert answer.target.value == pytest.approx(69.857, abs=1e-3)  # README: exact 69.86 uN
 
@@ -62,8 +63,12 @@ def test_residual_norm_means_one_thing_in_a_solve_and_in_a_sweep_point():
     mech = compile_request(document, overrides={ACTUATION: 400.0})
     report = equilibrium_report(mech, newton_options(options))
     assert report["status"] == "not_converged"
-    spec = {"document": document, "options": options, "overrides": {},
-            "parameters": [{"path": ACTUATION, "values": [400.0]}]}
+    spec = {
+        "document": document,
+        "options": options,
+        "overrides": {},
+        "parameters": [{"path": ACTUATION, "values": [400.0]}],
+    }
     kind = kind_named("sweep")
     plan = kind.prepare(spec, Limits()).meta
     [(_, point)] = kind.run(spec, kind.tasks(spec, plan, {}, chunk_size=8)[0])
@@ -78,12 +83,14 @@ def test_body_mass_and_inertia_are_not_ignored():
     document = {
         "units": {"length": "m", "force": "N", "mass": "kg"},
         "gravity": [0, -9.81],
-        "bodies": {"ground": {"fixed": True, "position": [0, 0]},
-                   "block": {"position": [0.5, 0], "mass": 2.0, "inertia": 0.25,
-                             "center_of_mass": [0.1, 0.0]}},
-        "elements": {"k": {"type": "spring", "kind": "torsional", "from": "ground", "to": "block",
-                           "stiffness": 1e6},
-                     "pin": {"type": "pin", "from": "ground", "to": "block", "at": [0.5, 0]}},
+        "bodies": {
+            "ground": {"fixed": True, "position": [0, 0]},
+            "block": {"position": [0.5, 0], "mass": 2.0, "inertia": 0.25, "center_of_mass": [0.1, 0.0]},
+        },
+        "elements": {
+            "k": {"type": "spring", "kind": "torsional", "from": "ground", "to": "block", "stiffness": 1e6},
+            "pin": {"type": "pin", "from": "ground", "to": "block", "at": [0.5, 0]},
+        },
         "outputs": {"support": {"type": "reaction", "body": "ground"}},
     }
     mech = compile_mechanism(load_document(document))
@@ -112,8 +119,9 @@ def test_material_density_is_not_ignored():
         "materials": {"steel": {"E": E, "density": rho}},
         "sections": {"strip": {"b": b, "h": h}},
         "bodies": {"wall": {"fixed": True, "position": [0, 0]}, "tip": {"position": [L, 0]}},
-        "elements": {"beam": {"type": "link", "from": "wall", "to": "tip", "length": L,
-                              "material": "steel", "section": "strip"}},
+        "elements": {
+            "beam": {"type": "link", "from": "wall", "to": "tip", "length": L, "material": "steel", "section": "strip"}
+        },
     }
     mech = compile_mechanism(load_document(document))
     from service.equilibrium import solve_equilibrium
@@ -133,8 +141,9 @@ def test_cli_stiffness_json_is_the_service_report(tmp_path):
     from service.cli import app
 
     out = tmp_path / "k.json"
-    result = CliRunner().invoke(app, ["solve", str(EXAMPLES / "gripper.json"), "--stiffness", "--json", str(out)],
-                                env=ENV)
+    result = CliRunner().invoke(
+        app, ["solve", str(EXAMPLES / "gripper.json"), "--stiffness", "--json", str(out)], env=ENV
+    )
     assert result.exit_code == 0, result.output
     cli = json.loads(out.read_text())["stiffness"]
     mech = compile_request(json.loads((EXAMPLES / "gripper.json").read_text()))
@@ -147,8 +156,13 @@ def test_cli_stiffness_json_is_the_service_report(tmp_path):
 def test_the_gripper_benchmark_runs_as_the_readme_says():
     """`python3 benchmarks/gripper.py` failed with an ImportError: benchmarks/service.py, on
     sys.path first when run as a script, hid the service package."""
-    done = subprocess.run([sys.executable, "benchmarks/gripper.py", "--repeats", "1", "--sweep-repeats", "1"],
-                          cwd=ROOT, capture_output=True, text=True, timeout=600)
+    done = subprocess.run(
+        [sys.executable, "benchmarks/gripper.py", "--repeats", "1", "--sweep-repeats", "1"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert done.returncode == 0, done.stderr[-2000:]
     assert "ImportError" not in done.stderr
     assert "scipy/this" in done.stdout

@@ -16,18 +16,47 @@ MIN_REQUESTS = 500
 
 
 def test_no_generated_request_gets_a_5xx(tmp_path):
-    server = Deployment("sqlite", {"FLEXMECH_DATA_DIR": str(tmp_path / "data"), "FLEXMECH_WORKERS": "2",
-                                   "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES), "FLEXMECH_API_KEYS": "",
-                                   "FLEXMECH_SOLVE_TIME_LIMIT": "2", "FLEXMECH_MAX_SWEEP_POINTS": "2000"},
-                        tmp_path).start(access_log=True)
+    server = Deployment(
+        "sqlite",
+        {
+            "FLEXMECH_DATA_DIR": str(tmp_path / "data"),
+            "FLEXMECH_WORKERS": "2",
+            "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES),
+            "FLEXMECH_API_KEYS": "",
+            "FLEXMECH_SOLVE_TIME_LIMIT": "2",
+            "FLEXMECH_MAX_SWEEP_POINTS": "2000",
+        },
+        tmp_path,
+    ).start(access_log=True)
     report = tmp_path / "schemathesis.json"
     st = shutil.which("schemathesis") or str(Path(sys.executable).parent / "schemathesis")
     try:
         run = subprocess.run(
-            [st, "run", f"{server.url}/openapi.json", "--checks", "not_a_server_error", "--max-examples", "100",
-             "--seed", "20261121", "--generation-database", "none", "--no-color", "--report", "json",
-             "--report-json-path", str(report), "--request-timeout", "30"],
-            capture_output=True, text=True, timeout=600, cwd=tmp_path)
+            [
+                st,
+                "run",
+                f"{server.url}/openapi.json",
+                "--checks",
+                "not_a_server_error",
+                "--max-examples",
+                "100",
+                "--seed",
+                "20261121",
+                "--generation-database",
+                "none",
+                "--no-color",
+                "--report",
+                "json",
+                "--report-json-path",
+                str(report),
+                "--request-timeout",
+                "30",
+            ],
+            capture_output=True,
+            text=True,
+            timeout=600,
+            cwd=tmp_path,
+        )
         served = server.output(tail=None)
     finally:
         server.stop()
@@ -39,5 +68,7 @@ def test_no_generated_request_gets_a_5xx(tmp_path):
     assert len(statuses) >= MIN_REQUESTS
     assert not [s for s in statuses if s >= 500]
     assert "Traceback" not in served
-    print(f"schemathesis: {summary['test_cases']['generated']} test cases, {len(statuses)} requests served, "
-          f"statuses {sorted(set(statuses))}")
+    print(
+        f"schemathesis: {summary['test_cases']['generated']} test cases, {len(statuses)} requests served, "
+        f"statuses {sorted(set(statuses))}"
+    )

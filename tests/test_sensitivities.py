@@ -32,8 +32,13 @@ def test_closing_force_sensitivities_to_h_and_E_match_finite_differences(gripper
     mech = gripper_pnl_mech
     found = solve_for_target(mech, ACTUATION, "end_effector.x", 0.0)
     closed = found.equilibrium.mechanism
-    sens = equilibrium_sensitivities(closed, found.equilibrium.z, [H_PATH, E_PATH], [ACTUATION, "end_effector.y"],
-                                     target=(ACTUATION, "end_effector.x"))
+    sens = equilibrium_sensitivities(
+        closed,
+        found.equilibrium.z,
+        [H_PATH, E_PATH],
+        [ACTUATION, "end_effector.y"],
+        target=(ACTUATION, "end_effector.x"),
+    )
     assert sens.outputs == [ACTUATION, "end_effector.y"]
     assert sens.units[0] == ["uN/mm", "uN/GPa"]
 
@@ -60,6 +65,7 @@ def test_link_tip_position_sensitivities_to_shape_coefficients_match_finite_diff
         def f(v):
             r = solve_equilibrium(mech.with_values({path: v}), guess=result.z)
             return r.outputs()[name]
+
         return f
 
     for j, path in enumerate(paths):

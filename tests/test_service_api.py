@@ -90,8 +90,9 @@ def _error(response: httpx.Response) -> dict:
 
 
 def test_malformed_json_is_400(api_server):
-    r = httpx.post(api_server.url + "/v1/solve", content=b'{"example": "gripper",',
-                   headers={"Content-Type": "application/json"})
+    r = httpx.post(
+        api_server.url + "/v1/solve", content=b'{"example": "gripper",', headers={"Content-Type": "application/json"}
+    )
     error = _error(r)
     assert r.status_code == 400 and error["code"] == "malformed_json"
     assert error["message"].startswith("the body is not valid JSON")
@@ -142,10 +143,14 @@ def test_chunked_body_over_the_size_limit_is_413(api_server):
 
 def test_too_many_sweep_points_is_422(client):
     with pytest.raises(FlexmechError) as info:
-        client.sweep(example="gripper", parameters=[
-            {"path": ACTUATION, "start": 0, "stop": 10, "steps": 40},
-            {"path": "/sections/flexure/h", "values": [0.004, 0.0045, 0.005, 0.0055, 0.006]},
-            {"path": "/sections/flexure/b", "values": [0.02, 0.025, 0.03, 0.035, 0.04]}])
+        client.sweep(
+            example="gripper",
+            parameters=[
+                {"path": ACTUATION, "start": 0, "stop": 10, "steps": 40},
+                {"path": "/sections/flexure/h", "values": [0.004, 0.0045, 0.005, 0.0055, 0.006]},
+                {"path": "/sections/flexure/b", "values": [0.02, 0.025, 0.03, 0.035, 0.04]},
+            ],
+        )
     assert info.value.status == 422 and info.value.pointer == "/parameters"
     assert info.value.message == "/parameters: 1025 sweep points: the limit is 1000"
 
@@ -160,10 +165,25 @@ def test_unknown_route_and_example_have_the_same_shape(api_server):
 def test_openapi_operation_ids_are_stable(api_server):
     spec = httpx.get(api_server.url + "/openapi.json").json()
     ids = {op["operationId"] for path in spec["paths"].values() for op in path.values()}
-    assert ids == {"solve", "create_sweep", "create_optimization", "create_contact_path", "create_simulation",
-                   "create_impact_study", "draw", "parse_document", "upgrade_document",
-                   "get_job", "get_job_result", "get_job_request", "cancel_job", "list_examples", "get_example", "health",
-                   "list_analyses"}
+    assert ids == {
+        "solve",
+        "create_sweep",
+        "create_optimization",
+        "create_contact_path",
+        "create_simulation",
+        "create_impact_study",
+        "draw",
+        "parse_document",
+        "upgrade_document",
+        "get_job",
+        "get_job_result",
+        "get_job_request",
+        "cancel_job",
+        "list_examples",
+        "get_example",
+        "health",
+        "list_analyses",
+    }
 
 
 # --- API keys -------------------------------------------------------------------------------
@@ -173,16 +193,25 @@ KEY_A, KEY_B = "alpha-key-0123456789", "bravo-key-0123456789"
 @pytest.fixture(scope="module")
 def keyed_server(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("keyed")
-    server = Deployment("sqlite", {"FLEXMECH_DATA_DIR": str(tmp / "data"), "FLEXMECH_WORKERS": "1",
-                                   "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES),
-                                   "FLEXMECH_API_KEYS": f"{KEY_A},{KEY_B}"}, tmp).start()
+    server = Deployment(
+        "sqlite",
+        {
+            "FLEXMECH_DATA_DIR": str(tmp / "data"),
+            "FLEXMECH_WORKERS": "1",
+            "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES),
+            "FLEXMECH_API_KEYS": f"{KEY_A},{KEY_B}",
+        },
+        tmp,
+    ).start()
     yield server
     server.stop()
 
 
 def test_missing_or_wrong_key_is_401(keyed_server):
-    for headers, message in (({}, "missing API key: send it in the X-API-Key header"),
-                             ({"X-API-Key": "not-a-key-of-this-server"}, "API key not recognized")):
+    for headers, message in (
+        ({}, "missing API key: send it in the X-API-Key header"),
+        ({"X-API-Key": "not-a-key-of-this-server"}, "API key not recognized"),
+    ):
         r = httpx.post(keyed_server.url + "/v1/solve", json={"example": "gripper"}, headers=headers)
         assert r.status_code == 401 and _error(r)["message"] == message
     assert httpx.get(keyed_server.url + "/v1/health").status_code == 200  # health needs no key
@@ -213,10 +242,20 @@ class SolveRequestUnchecked:
 @pytest.fixture(scope="module")
 def tight_server(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("tight")
-    server = Deployment("sqlite", {"FLEXMECH_DATA_DIR": str(tmp / "data"), "FLEXMECH_WORKERS": "1",
-                                   "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES), "FLEXMECH_API_KEYS": "",
-                                   "FLEXMECH_SOLVE_TIME_LIMIT": "1e-6", "FLEXMECH_JOB_TIME_LIMIT": "1",
-                                   "FLEXMECH_CHUNK_SIZE": "1", "FLEXMECH_MAX_ELEMENTS": "3"}, tmp).start()
+    server = Deployment(
+        "sqlite",
+        {
+            "FLEXMECH_DATA_DIR": str(tmp / "data"),
+            "FLEXMECH_WORKERS": "1",
+            "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES),
+            "FLEXMECH_API_KEYS": "",
+            "FLEXMECH_SOLVE_TIME_LIMIT": "1e-6",
+            "FLEXMECH_JOB_TIME_LIMIT": "1",
+            "FLEXMECH_CHUNK_SIZE": "1",
+            "FLEXMECH_MAX_ELEMENTS": "3",
+        },
+        tmp,
+    ).start()
     yield server
     server.stop()
 
@@ -243,8 +282,12 @@ def test_job_time_limit_fails_the_job_and_keeps_its_points(tight_server, gripper
     del small["elements"]["d"]
     small["bodies"]["follower"]["fixed"] = True
     with Client(tight_server.url) as c:
-        job = c.sweep(document=small, parameters=[{"path": ACTUATION, "start": 0, "stop": 50, "steps": 19_999}],
-                      continuation=ACTUATION, outputs=["end_effector.x"])
+        job = c.sweep(
+            document=small,
+            parameters=[{"path": ACTUATION, "start": 0, "stop": 50, "steps": 19_999}],
+            continuation=ACTUATION,
+            outputs=["end_effector.x"],
+        )
         final = c.wait(job.id, timeout=60)
         stored = c.result(job.id)
     assert final.status == "failed"

@@ -38,8 +38,12 @@ def test_200_point_sweep_job_progress_and_result(deployment):
             health = client.health()
             assert health.database == ("sqlite" if deployment.name == "sqlite" else "postgresql")
             assert health.executor.startswith("Dask cluster" if deployment.name == "dask" else "process pool")
-            job = client.sweep(example="gripper", parameters=[LOAD_PATH], continuation=ACTUATION,
-                               outputs=["end_effector.x", "end_effector.y", "anchor.Fx"])
+            job = client.sweep(
+                example="gripper",
+                parameters=[LOAD_PATH],
+                continuation=ACTUATION,
+                outputs=["end_effector.x", "end_effector.y", "anchor.Fx"],
+            )
             assert job.status == "queued" and job.progress.total == 200
             seen = []
             final = client.wait(job.id, timeout=180, poll=0.01, progress=seen.append)
@@ -68,9 +72,14 @@ def test_independent_points_over_a_cartesian_grid(deployment):
     server = deployment.start()
     try:
         with Client(server.url) as client:
-            job = client.sweep(example="gripper", outputs=["end_effector.x"], parameters=[
-                {"path": ACTUATION, "values": [-20, 0, 20, 40]},
-                {"path": "/sections/flexure/h", "values": [0.004, 0.005, 0.006]}])
+            job = client.sweep(
+                example="gripper",
+                outputs=["end_effector.x"],
+                parameters=[
+                    {"path": ACTUATION, "values": [-20, 0, 20, 40]},
+                    {"path": "/sections/flexure/h", "values": [0.004, 0.005, 0.006]},
+                ],
+            )
             assert client.wait(job.id, timeout=180).status == "succeeded"
             points = client.result(job.id).result.points
     finally:
@@ -90,8 +99,12 @@ def test_cancel_a_running_job(deployment):
     server = deployment.start()
     try:
         with Client(server.url) as client:
-            job = client.sweep(example="gripper", continuation=ACTUATION, outputs=["end_effector.x"],
-                               parameters=[{"path": ACTUATION, "start": -60, "stop": 60, "steps": 19_999}])
+            job = client.sweep(
+                example="gripper",
+                continuation=ACTUATION,
+                outputs=["end_effector.x"],
+                parameters=[{"path": ACTUATION, "start": -60, "stop": 60, "steps": 19_999}],
+            )
             _wait_until(lambda: client.job(job.id).progress.done > 0, 120, "the first points")
             cancelled = client.cancel(job.id)
             assert cancelled.status == "cancelled" and cancelled.error == "cancelled by the caller"
@@ -114,8 +127,12 @@ def test_killed_server_resumes_the_job_and_keeps_every_finished_point(deployment
     spec_path = {"path": ACTUATION, "start": -60.0, "stop": 60.0, "steps": 1499}
     server = deployment.start(FLEXMECH_CHUNK_SIZE="2")
     with Client(server.url) as client:
-        job = client.sweep(example="gripper", parameters=[spec_path], continuation=ACTUATION,
-                           outputs=["end_effector.x", "end_effector.y"])
+        job = client.sweep(
+            example="gripper",
+            parameters=[spec_path],
+            continuation=ACTUATION,
+            outputs=["end_effector.x", "end_effector.y"],
+        )
         _wait_until(lambda: client.job(job.id).progress.done >= 100, 120, "100 points")
         before = client.result(job.id)
         server.kill()
@@ -135,8 +152,12 @@ def test_killed_server_resumes_the_job_and_keeps_every_finished_point(deployment
     for p in before.result.points:
         assert after[p.index] == p
 
-    spec = {"document": json.loads((EXAMPLES / "gripper.json").read_text()), "parameters": [spec_path],
-            "continuation": ACTUATION, "outputs": ["end_effector.x", "end_effector.y"]}
+    spec = {
+        "document": json.loads((EXAMPLES / "gripper.json").read_text()),
+        "parameters": [spec_path],
+        "continuation": ACTUATION,
+        "outputs": ["end_effector.x", "end_effector.y"],
+    }
     uninterrupted = _sweep_in_a_fresh_process(spec, list(range(1500)))
     for i, p in after.items():
         assert p.outputs == uninterrupted[i]["outputs"]
@@ -150,11 +171,19 @@ def _sweep_in_a_fresh_process(spec: dict, indices: list[int]) -> dict[int, dict]
     import subprocess
     import sys
 
-    script = ("import json, sys; from service.jobs.kinds import kind_named; spec = json.load(sys.stdin); "
-              "points = kind_named('sweep').run(spec, {'indices': spec.pop('indices'), 'guess': None, 'line': 0}); "
-              "json.dump([[i, p] for i, p in points], sys.stdout)")
-    done = subprocess.run([sys.executable, "-c", script], input=json.dumps({**spec, "indices": indices}),
-                          capture_output=True, text=True, check=True, timeout=600)
+    script = (
+        "import json, sys; from service.jobs.kinds import kind_named; spec = json.load(sys.stdin); "
+        "points = kind_named('sweep').run(spec, {'indices': spec.pop('indices'), 'guess': None, 'line': 0}); "
+        "json.dump([[i, p] for i, p in points], sys.stdout)"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", script],
+        input=json.dumps({**spec, "indices": indices}),
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=600,
+    )
     return {i: p for i, p in json.loads(done.stdout)}
 
 
@@ -184,8 +213,11 @@ def test_a_dead_pool_worker_does_not_lose_the_job(tmp_path, request):
     server = make_deployment("sqlite", request, tmp_path).start(FLEXMECH_CHUNK_SIZE="2")
     try:
         with Client(server.url) as client:
-            job = client.sweep(example="gripper", outputs=["end_effector.x"],
-                               parameters=[{"path": ACTUATION, "start": -60, "stop": 60, "steps": 2999}])
+            job = client.sweep(
+                example="gripper",
+                outputs=["end_effector.x"],
+                parameters=[{"path": ACTUATION, "start": -60, "stop": 60, "steps": 2999}],
+            )
             _wait_until(lambda: client.job(job.id).progress.done >= 50, 120, "50 points")
             workers = _pool_workers(server.proc.pid)
             assert workers, "no pool worker found"
@@ -211,15 +243,21 @@ def test_seed_004s_study_runs_on_dask_with_contact_laws_among_its_factors(reques
     try:
         with Client(server.url) as client:
             assert client.health().executor.startswith("Dask cluster")
-            job = client.impact_study(example="csfh", simulate={"until": 0.2}, study={"fields": [
-                {"path": restitution, "step": 0.05}, {"path": radius, "step": 0.001}]})
+            job = client.impact_study(
+                example="csfh",
+                simulate={"until": 0.2},
+                study={"fields": [{"path": restitution, "step": 0.05}, {"path": radius, "step": 0.001}]},
+            )
             final = client.wait(job.id, timeout=300)
             assert final.status == "succeeded", final.error
             result = client.result(job.id).result
     finally:
         server.stop()
-    departure = {(path, side): result["fields"][path][side]["influence"]["hinge.y"]["departure"]
-                 for path in (restitution, radius) for side in "+-"}
+    departure = {
+        (path, side): result["fields"][path][side]["influence"]["hinge.y"]["departure"]
+        for path in (restitution, radius)
+        for side in "+-"
+    }
     # the clearance moves the first contact (0.0717 s): the runs part there; the restitution
     # acts through the rebound alone, so they part well after it
     assert max(departure[radius, side] for side in "+-") < 0.08

@@ -18,10 +18,26 @@ SPIN = str(EXAMPLES / "spinning_rod_case2.json")
 
 def test_simulate_prints_writes_and_draws(tmp_path):
     out = tmp_path / "run.json"
-    result = CliRunner().invoke(app, ["simulate", SPIN, "--until", "2", "--step", "0.01", "--json", str(out),
-                                      "--plot", str(tmp_path / "run.png"), "--animation", str(tmp_path / "run.gif"),
-                                      "--snapshots", str(tmp_path / "shapes.svg")],
-                                env=ENV)
+    result = CliRunner().invoke(
+        app,
+        [
+            "simulate",
+            SPIN,
+            "--until",
+            "2",
+            "--step",
+            "0.01",
+            "--json",
+            str(out),
+            "--plot",
+            str(tmp_path / "run.png"),
+            "--animation",
+            str(tmp_path / "run.gif"),
+            "--snapshots",
+            str(tmp_path / "shapes.svg"),
+        ],
+        env=ENV,
+    )
     assert result.exit_code == 0, result.output
     assert "finished at t = 2 s, 200 steps" in result.output and "elements.rod.elongation" in result.output
     report = json.loads(out.read_text())
@@ -43,7 +59,10 @@ def test_simulate_refuses_bad_options_naming_them(tmp_path):
         (["--snapshots", str(tmp_path / "a.txt")], "--snapshots: cannot tell the figure format of"),
         (["--step", "-1"], "/simulate/step: Input should be greater than 0"),
         (["--until", "0"], "/simulate/until: Input should be greater than 0"),
-        (["--scheme", "euler"], "/simulate/scheme: Input should be 'generalized_alpha', 'newmark', 'event_driven' or 'moreau'"),
+        (
+            ["--scheme", "euler"],
+            "/simulate/scheme: Input should be 'generalized_alpha', 'newmark', 'event_driven' or 'moreau'",
+        ),
     ]:
         result = CliRunner().invoke(app, ["simulate", SPIN, *arguments], env=ENV)
         assert result.exit_code == 2, result.output

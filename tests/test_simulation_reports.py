@@ -25,8 +25,9 @@ def _rod(intervals: int):
 
 
 def _kinds(cache) -> list[str]:
-    return sorted("reporting" if folder.name.endswith("-reporting") else "whole"
-                  for folder in (cache / "graphs").iterdir())
+    return sorted(
+        "reporting" if folder.name.endswith("-reporting") else "whole" for folder in (cache / "graphs").iterdir()
+    )
 
 
 def test_a_simulation_reports_from_the_outputs_graphs_alone(tmp_path, monkeypatch):
@@ -44,8 +45,9 @@ def test_a_simulation_reports_from_the_outputs_graphs_alone(tmp_path, monkeypatc
     expected = np.asarray(whole["outputs"](z, history.p[-1])).ravel()
     for name in wanted:
         unit = mech.nd_per_doc(meta["output_kinds"][meta["output_names"].index(name)])
-        assert report["outputs"][name][-1] == pytest.approx(expected[meta["output_names"].index(name)] / unit,
-                                                             rel=1e-12, abs=1e-15)
+        assert report["outputs"][name][-1] == pytest.approx(
+            expected[meta["output_names"].index(name)] / unit, rel=1e-12, abs=1e-15
+        )
     line = np.asarray(whole["shapes"](z, history.p[-1])[0]) / mech.nd_per_doc("length")
     assert np.allclose(np.array(report["shapes"][-1]["rod"]), line, rtol=1e-12, atol=1e-15)
 
@@ -66,8 +68,16 @@ def test_statics_after_a_simulation_builds_the_whole_form(tmp_path, monkeypatch)
         assert report["outputs"][name][0] == pytest.approx(y[names.index(name)] / mech.nd_per_doc(kind), rel=1e-9)
 
 
-@pytest.mark.parametrize("example", ["rod_free_vibration.json", "four_bar_dynamics.json", "slider_crank_dynamics.json",
-                                     "rod_tip_mass_gravity.json", "spinning_rod_case1.json"])
+@pytest.mark.parametrize(
+    "example",
+    [
+        "rod_free_vibration.json",
+        "four_bar_dynamics.json",
+        "slider_crank_dynamics.json",
+        "rod_tip_mass_gravity.json",
+        "spinning_rod_case1.json",
+    ],
+)
 def test_the_state_map_is_the_energy_forms(example):
     """A report places the kernels' state in z by service.dynamics.state_map, from element counts;
     the energy form places it by building every element's terms: they must agree."""

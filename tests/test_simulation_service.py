@@ -24,8 +24,9 @@ def _wait_until(condition, timeout: float, what: str) -> None:
 
 
 def solved_in_one(server, example: str, simulate: dict) -> dict:
-    r = httpx.post(f"{server.url}/v1/solve", json={"example": example, "analysis": "simulate", "simulate": simulate},
-                   timeout=300)
+    r = httpx.post(
+        f"{server.url}/v1/solve", json={"example": example, "analysis": "simulate", "simulate": simulate}, timeout=300
+    )
     assert r.status_code == 200, r.text
     return r.json()
 
@@ -52,8 +53,11 @@ def test_a_simulation_job_equals_the_simulate_analysis(api_server):
 def test_bad_simulation_fields_are_422_naming_them(api_server):
     for simulate, pointer, words in [
         ({"step": -0.01}, "/simulate/step", "greater than 0"),
-        ({"until": 1.0, "histories": {"/loads/spin/rotation": "open('x')"}},
-         "/simulate/histories/loads~1spin~1rotation", "a call of 'open' is not allowed"),
+        (
+            {"until": 1.0, "histories": {"/loads/spin/rotation": "open('x')"}},
+            "/simulate/histories/loads~1spin~1rotation",
+            "a call of 'open' is not allowed",
+        ),
         ({"until": 1e3, "step": 1e-6}, "/simulate/step", "over the limit of 1000000"),
         ({"until": 1e9, "step": 1e-6}, "/simulate/step", "1e+09 s in steps of 1e-06 s would be more than 1e+12 steps"),
     ]:
@@ -80,7 +84,9 @@ def test_a_simulation_job_carries_a_located_contact_onset_across_its_windows(api
     indentation = np.array(result["outputs"]["contacts.grip.indentation"])
     assert np.abs(indentation).min() < 1e-12  # the onset's own state, stored by its window
     force = np.array(one["outputs"]["contacts.grip.normal_force"])
-    np.testing.assert_allclose(result["outputs"]["contacts.grip.normal_force"], force, rtol=1e-6, atol=1e-9 * force.max())
+    np.testing.assert_allclose(
+        result["outputs"]["contacts.grip.normal_force"], force, rtol=1e-6, atol=1e-9 * force.max()
+    )
 
 
 def test_a_simulation_job_refuses_a_contact_law_link_dynamics_does_not_take(api_server):

@@ -64,8 +64,9 @@ def test_a_call_past_its_time_limit_ends_its_worker_and_a_new_one_serves():
 
     first, late, serving, listed = _run(scenario())
     assert (late.status, late.code) == (503, "time_limit")
-    assert late.message == ("the work did not end within 1.2 s (its time limit of 0.2 s, 0 s of building and "
-                            "1 s of grace) and was stopped")
+    assert late.message == (
+        "the work did not end within 1.2 s (its time limit of 0.2 s, 0 s of building and 1 s of grace) and was stopped"
+    )
     assert not _alive(first)
     assert serving == listed != first
 
@@ -80,6 +81,7 @@ def _a_loop_that_hangs(limit: float) -> None:
 def test_a_worker_past_its_loops_deadline_is_replaced_without_the_build_allowance():
     """Once a call's first loop has started its clock (service.deadline), the worker is
     replaced one second past that deadline: the minute of build allowance no longer applies."""
+
     async def scenario():
         pool = SolverPool(1, build_allowance=60.0)
         try:
@@ -92,8 +94,11 @@ def test_a_worker_past_its_loops_deadline_is_replaced_without_the_build_allowanc
 
     first, late, serving = _run(scenario())
     assert (late.status, late.code) == (503, "time_limit")
-    assert re.fullmatch(r"the work did not end within 1 s past its deadline, [0-9.]+ s after the call started "
-                        r"\(its time limit of 10 s\) and was stopped", late.message), late.message
+    assert re.fullmatch(
+        r"the work did not end within 1 s past its deadline, [0-9.]+ s after the call started "
+        r"\(its time limit of 10 s\) and was stopped",
+        late.message,
+    ), late.message
     assert not _alive(first) and serving != first
 
 
@@ -120,6 +125,7 @@ def test_loops_of_one_call_share_the_first_deadline():
 def test_a_call_whose_caller_went_away_keeps_its_worker_until_its_work_ends():
     """A cancelled call (a client that disconnected) does not kill its worker (its caches stay
     warm): the next call waits for the work to end and runs on the same process."""
+
     async def scenario():
         pool = SolverPool(1)
         try:
@@ -138,6 +144,7 @@ def test_a_call_whose_caller_went_away_keeps_its_worker_until_its_work_ends():
 def test_a_small_call_is_not_held_behind_large_ones():
     """Two workers: both large calls may not take worker 0, so the second waits while a small
     call passes both."""
+
     async def scenario():
         pool = SolverPool(2)
         try:
@@ -166,9 +173,17 @@ def server(tmp_path_factory):
     from servers import ApiServer
 
     tmp = tmp_path_factory.mktemp("solvers")
-    server = ApiServer({"FLEXMECH_DATA_DIR": str(tmp / "data"), "FLEXMECH_WORKERS": "1", "FLEXMECH_SOLVER_WORKERS": "2",
-                        "FLEXMECH_SOLVE_TIME_LIMIT": "3", "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES),
-                        "FLEXMECH_API_KEYS": ""}, tmp / "server.log")
+    server = ApiServer(
+        {
+            "FLEXMECH_DATA_DIR": str(tmp / "data"),
+            "FLEXMECH_WORKERS": "1",
+            "FLEXMECH_SOLVER_WORKERS": "2",
+            "FLEXMECH_SOLVE_TIME_LIMIT": "3",
+            "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES),
+            "FLEXMECH_API_KEYS": "",
+        },
+        tmp / "server.log",
+    )
     yield server
     server.stop()
 
@@ -176,7 +191,11 @@ def server(tmp_path_factory):
 def test_small_solves_answer_while_a_long_simulation_runs(server):
     """Over HTTP: a simulation through /v1/solve runs to the 3 s limit on one worker; gripper
     solves sent meanwhile are answered before it ends, and it ends with status time_limit."""
-    rod = {"example": "rod_free_vibration", "analysis": "simulate", "simulate": {"until": 2, "step": 1e-4}}  # 20000 steps
+    rod = {
+        "example": "rod_free_vibration",
+        "analysis": "simulate",
+        "simulate": {"until": 2, "step": 1e-4},
+    }  # 20000 steps
     gripper = {"example": "gripper", "overrides": {"/loads/actuation/force/1": 50}}
     with httpx.Client(base_url=server.url, timeout=120) as client:
         client.post("/v1/solve", json=gripper).raise_for_status()  # a warm worker 0
@@ -227,7 +246,11 @@ def test_a_killed_server_leaves_no_solver_worker(server):
 
     from api.body_parsing import LARGE_BODY, PARSER_NAME
 
-    large = {"example": "gripper", "overrides": {"/loads/actuation/force/1": 50.0}, "pad": ["x" * 100] * (LARGE_BODY // 90)}
+    large = {
+        "example": "gripper",
+        "overrides": {"/loads/actuation/force/1": 50.0},
+        "pad": ["x" * 100] * (LARGE_BODY // 90),
+    }
     assert httpx.post(server.url + "/v1/solve", json=large, timeout=60).status_code == 422  # parsed, then refused
     workers = _solver_workers(server.proc.pid, (WORKER_NAME, PARSER_NAME))
     assert len(_solver_workers(server.proc.pid, (PARSER_NAME,))) == 1

@@ -51,6 +51,8 @@ def test_a_long_links_tangent_equals_finite_differences_of_its_residual():
     for j in range(z.numel()):
         e = np.zeros(z.numel())
         e[j] = step
-        columns.append((np.asarray(residual(at + e, params)) - np.asarray(residual(at - e, params))).ravel() / (2 * step))
+        columns.append(
+            (np.asarray(residual(at + e, params)) - np.asarray(residual(at - e, params))).ravel() / (2 * step)
+        )
     central = np.column_stack(columns)
     assert np.abs(exact - central).max() <= 1e-6 * np.abs(exact).max()

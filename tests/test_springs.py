@@ -20,8 +20,10 @@ def _torsion_document(law: dict, moment: float) -> dict:
         "units": {"length": "m", "force": "N", "angle": "rad"},
         "bodies": {"ground": {"fixed": True, "position": [0, 0]}, "arm": {"position": [0, 0]}},
         "elements": {"coil": {"type": "spring", "kind": "torsional", "from": "ground", "to": "arm", **law}},
-        "loads": {"twist": {"type": "moment", "body": "arm", "moment": moment},
-                  "axle": {"type": "displacement", "body": "arm", "dx": 0, "dy": 0}},
+        "loads": {
+            "twist": {"type": "moment", "body": "arm", "moment": moment},
+            "axle": {"type": "displacement", "body": "arm", "dx": 0, "dy": 0},
+        },
     }
 
 
@@ -57,12 +59,15 @@ def test_the_law_parameters_are_numeric_fields():
     assert PARAMETERS_4["k"] * x + PARAMETERS_4["c"] * math.sinh(x / PARAMETERS_4["a"]) == pytest.approx(3.0, rel=1e-12)
 
 
-@pytest.mark.parametrize("law, pointer, message", [
-    ({"law": "k * x + y", "parameters": {"k": 1}}, "/elements/coil/law", "the name 'y' is not allowed"),
-    ({"law": "x", "parameters": {"pi": 1}}, "/elements/coil/parameters/pi", "'pi' cannot name a parameter"),
-    ({"law": "x", "stiffness": 3}, "/elements/coil", "give either 'stiffness' or 'law'"),
-    ({"stiffness": -1}, "/elements/coil/stiffness", "must not be negative"),
-])
+@pytest.mark.parametrize(
+    "law, pointer, message",
+    [
+        ({"law": "k * x + y", "parameters": {"k": 1}}, "/elements/coil/law", "the name 'y' is not allowed"),
+        ({"law": "x", "parameters": {"pi": 1}}, "/elements/coil/parameters/pi", "'pi' cannot name a parameter"),
+        ({"law": "x", "stiffness": 3}, "/elements/coil", "give either 'stiffness' or 'law'"),
+        ({"stiffness": -1}, "/elements/coil/stiffness", "must not be negative"),
+    ],
+)
 def test_bad_spring_laws_name_the_field(law, pointer, message):
     with pytest.raises(MechanismError) as info:
         compile_mechanism(load_document(_torsion_document(law, 1.0)))

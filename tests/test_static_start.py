@@ -36,8 +36,15 @@ def _twice_the_hold(doc):
     doc["loads"]["hold"]["force"] = [2 * f for f in doc["loads"]["hold"]["force"]]
 
 
-@pytest.mark.parametrize("example, change", [("rod_free_vibration.json", None), ("rod_free_vibration.json", _twice_the_hold),
-                                             ("rod_tip_mass_gravity.json", None)], ids=["rod", "rod, twice the hold", "tip mass"])
+@pytest.mark.parametrize(
+    "example, change",
+    [
+        ("rod_free_vibration.json", None),
+        ("rod_free_vibration.json", _twice_the_hold),
+        ("rod_tip_mass_gravity.json", None),
+    ],
+    ids=["rod", "rod, twice the hold", "tip mass"],
+)
 def test_the_kernel_start_is_the_minimum_of_the_energy(example, change):
     mech = _mechanism(example, change)
     kernel = static_start.static_shape(_engine(mech), mech.p())

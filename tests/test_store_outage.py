@@ -20,14 +20,21 @@ ACTUATION = "/loads/actuation/force/1"
 
 
 def sweep_of(points: int, example: str, outputs: list[str] | None) -> dict:
-    body = {"example": example, "parameters": [{"path": ACTUATION, "values": [k * 80.0 / points for k in range(points)]}]}
+    body = {
+        "example": example,
+        "parameters": [{"path": ACTUATION, "values": [k * 80.0 / points for k in range(points)]}],
+    }
     return body | ({"outputs": outputs} if outputs else {})
 
 
 def stored_indices(database: Path, job_id: str) -> list[int]:
     with sqlite3.connect(database) as connection:
-        return [i for (i,) in connection.execute(
-            'SELECT "index" FROM flexmech_job_points WHERE job_id = ? ORDER BY "index"', (job_id,))]
+        return [
+            i
+            for (i,) in connection.execute(
+                'SELECT "index" FROM flexmech_job_points WHERE job_id = ? ORDER BY "index"', (job_id,)
+            )
+        ]
 
 
 def wait_for(predicate, timeout: float, what: str) -> None:
@@ -38,8 +45,17 @@ def wait_for(predicate, timeout: float, what: str) -> None:
 
 
 def server_on(data: Path, tmp: Path):
-    return Deployment("sqlite", {"FLEXMECH_DATA_DIR": str(data), "FLEXMECH_WORKERS": "2", "FLEXMECH_CHUNK_SIZE": "4",
-                                 "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES), "FLEXMECH_API_KEYS": ""}, tmp).start()
+    return Deployment(
+        "sqlite",
+        {
+            "FLEXMECH_DATA_DIR": str(data),
+            "FLEXMECH_WORKERS": "2",
+            "FLEXMECH_CHUNK_SIZE": "4",
+            "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES),
+            "FLEXMECH_API_KEYS": "",
+        },
+        tmp,
+    ).start()
 
 
 def test_a_store_locked_for_15_s_loses_no_point(tmp_path):
@@ -73,8 +89,10 @@ def test_a_store_locked_for_15_s_loses_no_point(tmp_path):
 
 def _mount_small_tmpfs(folder: Path) -> bool:
     folder.mkdir()
-    return subprocess.run(["mount", "-t", "tmpfs", "-o", "size=3m", "tmpfs", str(folder)],
-                          capture_output=True).returncode == 0
+    return (
+        subprocess.run(["mount", "-t", "tmpfs", "-o", "size=3m", "tmpfs", str(folder)], capture_output=True).returncode
+        == 0
+    )
 
 
 def test_a_full_data_folder_loses_no_point(tmp_path):
@@ -85,6 +103,7 @@ def test_a_full_data_folder_loses_no_point(tmp_path):
     try:
         with Client(server.url, timeout=120) as client:
             job = client.sweep(**sweep_of(3000, "gripper", None))  # every output: about 6 MB of points
+
             def stalled() -> bool:
                 # the disk is full once the store says so (progress that merely paused for two
                 # seconds on a loaded machine once passed for it); it had made progress first
@@ -126,8 +145,11 @@ def _store_failing_on_purpose(tmp_path: Path) -> None:
             return super().add_points(*args, **kwargs)
 
     store = FullDisk(f"sqlite:///{tmp_path / 'jobs.db'}")
-    spec = {"document": json.loads((EXAMPLES / "gripper.json").read_text()),
-            "parameters": [{"path": ACTUATION, "values": [k * 0.1 for k in range(400)]}], "outputs": ["end_effector.x"]}
+    spec = {
+        "document": json.loads((EXAMPLES / "gripper.json").read_text()),
+        "parameters": [{"path": ACTUATION, "values": [k * 0.1 for k in range(400)]}],
+        "outputs": ["end_effector.x"],
+    }
     plan = kind_named("sweep").prepare(spec, Limits())
     job = store.create("sweep", "", spec, plan.meta, plan.total)
     runner = JobRunner(store, ProcessPool(2), chunk_size=4)

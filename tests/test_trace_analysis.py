@@ -31,8 +31,14 @@ def post(server, body: dict) -> httpx.Response:
 
 
 def traced(server, step: float, **fields) -> dict:
-    r = post(server, {"example": "snap_through_arch", "analysis": "trace",
-                      "trace": {"path": LOAD, "stop": STOP, "step": step, **fields}})
+    r = post(
+        server,
+        {
+            "example": "snap_through_arch",
+            "analysis": "trace",
+            "trace": {"path": LOAD, "stop": STOP, "step": step, **fields},
+        },
+    )
     assert r.status_code == 200, r.text
     return r.json()
 
@@ -77,13 +83,14 @@ def test_limit_loads_are_where_the_load_displacement_slope_changes_sign(answers,
     assert len(flips) == 2
     for lp, flip in zip(answer["limit_points"], flips, strict=True):
         k = flip + 1  # the sampled extremum
-        a, b, c = np.polyfit(dy[k - 1:k + 2], P[k - 1:k + 2], 2)
+        a, b, c = np.polyfit(dy[k - 1 : k + 2], P[k - 1 : k + 2], 2)
         assert c - b * b / (4 * a) == pytest.approx(lp["value"], rel=SLOPE_TOLERANCE[step])
         before, after = answer["points"][lp["after_point"]], answer["points"][lp["after_point"] + 1]
         assert before["stable"] != after["stable"]
         assert before["eigenvalues"][0] * after["eigenvalues"][0] < 0
-    assert [p["stable"] for p in answer["points"]].count(False) == answer["limit_points"][1]["after_point"] - \
-        answer["limit_points"][0]["after_point"]
+    assert [p["stable"] for p in answer["points"]].count(False) == answer["limit_points"][1]["after_point"] - answer[
+        "limit_points"
+    ][0]["after_point"]
 
 
 def test_the_first_limit_load_is_where_natural_continuation_ends(arch, answers):
@@ -99,8 +106,15 @@ def test_a_path_cut_short_is_a_status_not_an_error(api_server):
 
 
 def test_the_time_limit_stops_a_path_with_its_points_so_far(api_server):
-    r = post(api_server, {"example": "snap_through_arch", "analysis": "trace", "options": {"time_limit": 0.5},
-                          "trace": {"path": LOAD, "stop": STOP, "step": 1e-4, "max_points": 100_000}})
+    r = post(
+        api_server,
+        {
+            "example": "snap_through_arch",
+            "analysis": "trace",
+            "options": {"time_limit": 0.5},
+            "trace": {"path": LOAD, "stop": STOP, "step": 1e-4, "max_points": 100_000},
+        },
+    )
     answer = r.json()
     assert r.status_code == 200 and answer["status"] == "time_limit" and answer["path_status"] == "stopped"
     assert answer["message"].startswith("stopped after ") and 1 <= len(answer["values"]) < 100_000
@@ -119,13 +133,19 @@ def test_without_trace_the_sweep_section_is_followed(api_server, answers):
     assert answer["values"] == answers[5.0]["values"]
 
 
-@pytest.mark.parametrize("trace, pointer, message", [
-    ({"path": "/loads/P/force/7", "stop": STOP, "step": 5}, "/trace/path",
-     "/trace/path: not a numeric field of this mechanism"),
-    ({"path": "loads/P/force/1", "stop": STOP, "step": 5}, "/trace/path", "/trace/path: "),
-    ({"path": LOAD, "stop": STOP, "step": 0}, "/trace/step", "/trace/step: "),
-    ({"path": LOAD, "stop": 0, "step": 5}, "/trace/stop", "/trace/stop: the path starts at 0 N"),
-])
+@pytest.mark.parametrize(
+    "trace, pointer, message",
+    [
+        (
+            {"path": "/loads/P/force/7", "stop": STOP, "step": 5},
+            "/trace/path",
+            "/trace/path: not a numeric field of this mechanism",
+        ),
+        ({"path": "loads/P/force/1", "stop": STOP, "step": 5}, "/trace/path", "/trace/path: "),
+        ({"path": LOAD, "stop": STOP, "step": 0}, "/trace/step", "/trace/step: "),
+        ({"path": LOAD, "stop": 0, "step": 5}, "/trace/stop", "/trace/stop: the path starts at 0 N"),
+    ],
+)
 def test_bad_trace_fields_are_422_naming_the_field(api_server, trace, pointer, message):
     r = post(api_server, {"example": "snap_through_arch", "analysis": "trace", "trace": trace})
     assert r.status_code == 422
@@ -143,8 +163,9 @@ def test_the_cli_solve_command_runs_the_trace(tmp_path):
     doc["sweep"] = {"path": LOAD, "start": 0, "stop": STOP, "steps": 15}
     path = tmp_path / "arch.json"
     path.write_text(json.dumps(doc))
-    result = CliRunner().invoke(app, ["solve", str(path), "--analysis", "trace", "--json", str(tmp_path / "t.json")],
-                                env=ENV)
+    result = CliRunner().invoke(
+        app, ["solve", str(path), "--analysis", "trace", "--json", str(tmp_path / "t.json")], env=ENV
+    )
     assert result.exit_code == 0, result.output
     report = json.loads((tmp_path / "t.json").read_text())
     assert report["analysis"] == "trace" and len(report["limit_points"]) == 2

@@ -29,8 +29,13 @@ def closing_force() -> float:
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("workbench")
-    env = {"FLEXMECH_DATA_DIR": str(tmp / "data"), "FLEXMECH_WORKERS": "2", "FLEXMECH_CHUNK_SIZE": "2",
-           "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES), "FLEXMECH_API_KEYS": KEY}
+    env = {
+        "FLEXMECH_DATA_DIR": str(tmp / "data"),
+        "FLEXMECH_WORKERS": "2",
+        "FLEXMECH_CHUNK_SIZE": "2",
+        "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES),
+        "FLEXMECH_API_KEYS": KEY,
+    }
     server = Deployment("sqlite", env, tmp).start()
     yield server
     server.stop()
@@ -80,8 +85,9 @@ def choose(page, analysis: str) -> None:
 
 def run_and_wait(page, text: str, timeout: float = 120_000) -> None:
     page.click("#run")
-    page.wait_for_function("t => document.getElementById('run-state').textContent.includes(t)", arg=text,
-                           timeout=timeout)
+    page.wait_for_function(
+        "t => document.getElementById('run-state').textContent.includes(t)", arg=text, timeout=timeout
+    )
 
 
 def open_example(page, name: str) -> None:
@@ -125,8 +131,10 @@ def test_the_page_asks_for_the_key_then_paints_the_gripper_within_a_second(brows
     paint = page.evaluate("performance.getEntriesByName('first-contentful-paint')[0].startTime")
     drawn = page.evaluate("performance.getEntriesByName('flexmech-drawn')[0].startTime")
     with capsys.disabled():  # printed in every run, not only when the test fails
-        print(f"\nworkbench on loopback: first contentful paint {paint:.0f} ms, gripper drawn {drawn:.0f} ms "
-              f"(the first visit drew it {first:.0f} ms after opening, the key typed and the graphs built)")
+        print(
+            f"\nworkbench on loopback: first contentful paint {paint:.0f} ms, gripper drawn {drawn:.0f} ms "
+            f"(the first visit drew it {first:.0f} ms after opening, the key typed and the graphs built)"
+        )
     assert paint < 1000 and drawn < 1000
     assert page.get_attribute("#drawing svg", "aria-label").endswith("drawn to scale in mm")
     assert {"x [mm]", "y [mm]"} <= set(page.locator("#drawing .axis-label").all_text_contents())
@@ -145,7 +153,9 @@ def test_the_gripper_closing_force_is_read_from_the_page(page, closing_force):
     assert shown.startswith("77.03") and float(shown) == pytest.approx(closing_force, abs=1e-3)
     assert "uN" in page.text_content("#target")
     page.wait_for_function("() => document.getElementById('drawing-caption').textContent.startsWith('Deformed')")
-    undeformed = json.loads(page.evaluate("JSON.stringify(document.querySelector('#drawing [data-element=a]').getAttribute('d'))"))
+    undeformed = json.loads(
+        page.evaluate("JSON.stringify(document.querySelector('#drawing [data-element=a]').getAttribute('d'))")
+    )
     assert undeformed  # the deformed centre line is drawn over the dashed undeformed one
     row = page.locator('#panel-table tr[data-name="end_effector.x"] td').all_text_contents()
     assert abs(float(row[0])) < 1e-6 and row[1] == "mm"  # closed: the end effector at x = 0
@@ -188,11 +198,13 @@ def test_a_sweep_shows_its_progress_up_to_100_percent_and_its_curve_with_hover(p
         }).observe(document.getElementById('progress-text'), {childList: true, characterData: true, subtree: true});
     }""")
     page.click("#run")
-    page.wait_for_function("() => document.getElementById('progress-text').textContent.includes('running')",
-                           timeout=60_000)
+    page.wait_for_function(
+        "() => document.getElementById('progress-text').textContent.includes('running')", timeout=60_000
+    )
     screenshot(page, "04-sweep-running")
-    page.wait_for_function("() => document.getElementById('progress-text').textContent.includes('succeeded: 100 %')",
-                           timeout=120_000)
+    page.wait_for_function(
+        "() => document.getElementById('progress-text').textContent.includes('succeeded: 100 %')", timeout=120_000
+    )
     assert "(601 of 601)" in page.text_content("#progress-text")
     assert page.get_attribute("#progress", "value") == "100"
     seen = page.evaluate("window.progressSeen")
@@ -231,8 +243,10 @@ def test_an_unknown_body_is_shown_at_its_pointer(page, log):
     problem.wait_for(timeout=30_000)
     assert "unknown body 'folower'" in problem.text_content()
     problem.locator("button").click()  # selects the field in the text
-    selected = page.evaluate("(() => { const e = document.getElementById('editor'); "
-                             "return e.value.slice(e.selectionStart, e.selectionEnd); })()")
+    selected = page.evaluate(
+        "(() => { const e = document.getElementById('editor'); "
+        "return e.value.slice(e.selectionStart, e.selectionEnd); })()"
+    )
     assert selected == '"folower"'
     screenshot(page, "06-unknown-body")
 
@@ -298,17 +312,23 @@ def test_a_running_job_is_cancelled_from_the_page(page):
     page.fill("#option-simulate-until", "30")  # minutes of work
     page.uncheck("#option-simulate-shapes")
     page.click("#run")
-    page.wait_for_function("() => document.getElementById('progress-text').textContent.includes('running')", timeout=60_000)
+    page.wait_for_function(
+        "() => document.getElementById('progress-text').textContent.includes('running')", timeout=60_000
+    )
     screenshot(page, "12-job-running")
     page.click("#cancel")
-    page.wait_for_function("() => document.getElementById('progress-text').textContent.includes('cancelled')", timeout=60_000)
+    page.wait_for_function(
+        "() => document.getElementById('progress-text').textContent.includes('cancelled')", timeout=60_000
+    )
     assert page.is_disabled("#cancel")
     page.wait_for_function("() => document.getElementById('run-state').textContent.includes('job cancelled')")
     job_page = page.get_attribute("#job-link", "href")
     assert re.fullmatch(r"/jobs/[0-9a-f]{32}", job_page)
     screenshot(page, "13-job-cancelled")
     page.goto(page.url.rstrip("/") + job_page)  # the job's own page, for a design tool to link to
-    page.wait_for_function("() => document.getElementById('progress-text').textContent.includes('cancelled')", timeout=60_000)
+    page.wait_for_function(
+        "() => document.getElementById('progress-text').textContent.includes('cancelled')", timeout=60_000
+    )
     assert "four-bar" in page.text_content("#mechanism-name")
     screenshot(page, "14-job-page")
 
@@ -325,7 +345,9 @@ def test_the_page_fits_a_narrow_window_and_is_reached_by_keyboard(page):
             break
     assert "example-select" in reached and "editor" in reached and reached[-1] == "run"
     page.keyboard.press("Enter")  # runs the equilibrium from the keyboard
-    page.wait_for_function("() => document.getElementById('run-state').textContent.includes('converged')", timeout=60_000)
+    page.wait_for_function(
+        "() => document.getElementById('run-state').textContent.includes('converged')", timeout=60_000
+    )
     unnamed = page.evaluate("""() => [...document.querySelectorAll('button, input, select, textarea, [tabindex]')]
         .filter((e) => !(e.labels && e.labels.length) && !e.getAttribute('aria-label') && !e.textContent.trim()
                        && !e.closest('label') && !e.hasAttribute('hidden'))
@@ -346,7 +368,9 @@ def test_a_trace_passes_the_arch_limit_points(page):
     assert rows.count() == 2
     kinds = [rows.nth(k).locator("th").text_content() for k in range(2)]
     loads = [float(rows.nth(k).locator("td").first.get_attribute("title")) for k in range(2)]
-    core = trace_path(compile_mechanism(load_document(EXAMPLES / "snap_through_arch.json")), "/loads/P/force/1", -300, 5)
+    core = trace_path(
+        compile_mechanism(load_document(EXAMPLES / "snap_through_arch.json")), "/loads/P/force/1", -300, 5
+    )
     assert kinds == [lp.kind for lp in core.limit_points]
     assert loads == pytest.approx([lp.value for lp in core.limit_points], rel=1e-9)
     page.click("#tab-curves")

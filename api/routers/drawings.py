@@ -35,23 +35,36 @@ def _drawing(request: DrawingRequest, document: dict, limits: Limits) -> dict:
         frames = path_frames(mech, request.path.path, request.path.values, options)
         unit = mech.doc_unit(mech.parameter_kind(request.path.path))
         cut = len(frames) < len(request.path.values)
-        return plain({"status": "time_limit" if cut else "path", **mechanism_drawing(mech), "path": request.path.path,
-                      "unit": unit, "frames": frames,
-                      "message": f"{len(frames)} of {len(request.path.values)} states drawn in the time limit" if cut else ""})
+        return plain(
+            {
+                "status": "time_limit" if cut else "path",
+                **mechanism_drawing(mech),
+                "path": request.path.path,
+                "unit": unit,
+                "frames": frames,
+                "message": f"{len(frames)} of {len(request.path.values)} states drawn in the time limit" if cut else "",
+            }
+        )
     result, _ = solve_state(mech, options, None)
     drawing = mechanism_drawing(result.mechanism, result.z, result.outputs())
     return plain({"status": result.status, **drawing})
 
 
-@router.post("/drawings", operation_id="draw", response_model=dict[str, Any], responses=ERRORS,
-             summary="The mechanism drawn to scale: centre lines, bodies, joints, objects, loads (document units)")
+@router.post(
+    "/drawings",
+    operation_id="draw",
+    response_model=dict[str, Any],
+    responses=ERRORS,
+    summary="The mechanism drawn to scale: centre lines, bodies, joints, objects, loads (document units)",
+)
 async def draw(request: DrawingRequest, services: ServicesDep, _owner: OwnerDep) -> dict:
     """Outlines a body carries are drawn undeformed with its name; a pose [dx, dy, rotation
     (rad)] about the body's reference point moves them. With state "equilibrium", `deformed`
     holds the deformed centre lines and every body's pose, and `status` the solve's."""
     document = request_document(request, services)
-    return await services.solver.call(_drawing, request, document, services.limits,
-                                      time_limit=services.limits.solve_time_limit)
+    return await services.solver.call(
+        _drawing, request, document, services.limits, time_limit=services.limits.solve_time_limit
+    )
 
 
 def _parsed(request: DocumentText) -> dict:
@@ -63,8 +76,13 @@ def _parsed(request: DocumentText) -> dict:
     return {"document": document, "format": "json" if as_json else "yaml"}
 
 
-@router.post("/documents/parse", operation_id="parse_document", response_model=dict[str, Any], responses=ERRORS,
-             summary="Document text (JSON or YAML) read into a document")
+@router.post(
+    "/documents/parse",
+    operation_id="parse_document",
+    response_model=dict[str, Any],
+    responses=ERRORS,
+    summary="Document text (JSON or YAML) read into a document",
+)
 async def parse_document(request: DocumentText, _owner: OwnerDep) -> dict:
     try:
         return await run_in_threadpool(_parsed, request)
@@ -72,8 +90,13 @@ async def parse_document(request: DocumentText, _owner: OwnerDep) -> dict:
         raise MechanismError("/text", exc.problem) from None
 
 
-@router.post("/documents/upgrade", operation_id="upgrade_document", response_model=dict[str, Any], responses=ERRORS,
-             summary="A document of an older shape in today's, and what changed (as `flexmech upgrade`)")
+@router.post(
+    "/documents/upgrade",
+    operation_id="upgrade_document",
+    response_model=dict[str, Any],
+    responses=ERRORS,
+    summary="A document of an older shape in today's, and what changed (as `flexmech upgrade`)",
+)
 async def upgrade_document(request: DocumentUpgrade, _owner: OwnerDep) -> dict:
     try:
         document, changes = await run_in_threadpool(upgraded, request.document)

@@ -26,6 +26,11 @@ async def health(services: ServicesDep) -> HealthResponse:
     active = await run_in_threadpool(services.store.active)
     b = services.builder
     builder = {"pid": b.pid, "running": b.running(), "queued": b.queued()} if b is not None else None
-    return HealthResponse(status="ok", version=_version(),
-                          database=make_url(services.store.url).get_backend_name(),
-                          executor=services.executor.description, active_jobs=len(active), builder=builder)
+    return HealthResponse(
+        status="ok",
+        version=_version(),
+        database=make_url(services.store.url).get_backend_name(),
+        executor=services.executor.description,
+        active_jobs=len(active),
+        builder=builder,
+    )

@@ -10,8 +10,8 @@ from fastapi.concurrency import run_in_threadpool
 
 from api.deps import OwnerDep, ServicesDep
 from api.errors import ApiError, not_found
+from api.job_schemas import JobResultResponse, JobStatusResponse
 from api.responses import errors
-from api.schemas import JobResultResponse, JobStatusResponse
 from service.jobs.kinds import kind_named
 from service.jobs.store import FINAL, Job
 
@@ -25,11 +25,23 @@ def job_status(job: Job) -> JobStatusResponse:
     end = job.finished_at or datetime.now(UTC)
     elapsed = (end - job.started_at).total_seconds() if job.started_at else None
     return JobStatusResponse(
-        id=job.id, kind=job.kind, status=job.status, error=job.error, restarts=job.restarts,
-        progress={"done": job.done, "total": job.total, "failed_points": job.failed_points,
-                  "fraction": job.done / job.total if job.total else 1.0},
-        timings={"created_at": job.created_at, "started_at": job.started_at, "finished_at": job.finished_at,
-                 "elapsed_seconds": elapsed},
+        id=job.id,
+        kind=job.kind,
+        status=job.status,
+        error=job.error,
+        restarts=job.restarts,
+        progress={
+            "done": job.done,
+            "total": job.total,
+            "failed_points": job.failed_points,
+            "fraction": job.done / job.total if job.total else 1.0,
+        },
+        timings={
+            "created_at": job.created_at,
+            "started_at": job.started_at,
+            "finished_at": job.finished_at,
+            "elapsed_seconds": elapsed,
+        },
         links={"self": f"/v1/jobs/{job.id}", "result": f"/v1/jobs/{job.id}/result"},
     )
 
@@ -43,8 +55,13 @@ def _owned(services, job_id: str, owner: str) -> Job:
     return job
 
 
-@router.get("/{job_id}", operation_id="get_job", response_model=JobStatusResponse,
-            responses=errors(401, 404), summary="Status, progress and timings of a job")
+@router.get(
+    "/{job_id}",
+    operation_id="get_job",
+    response_model=JobStatusResponse,
+    responses=errors(401, 404),
+    summary="Status, progress and timings of a job",
+)
 async def get_job(services: ServicesDep, owner: OwnerDep, job_id: str = JobId) -> JobStatusResponse:
     return job_status(await run_in_threadpool(_owned, services, job_id, owner))
 
@@ -52,28 +69,52 @@ async def get_job(services: ServicesDep, owner: OwnerDep, job_id: str = JobId) -
 def _result(services, job: Job, offset: int, limit: int) -> JobResultResponse:
     kind = kind_named(job.kind)
     if not kind.paged:
-        return JobResultResponse(id=job.id, kind=job.kind, status=job.status, complete=job.done == job.total,
-                                 result=kind.result(job.spec, job.plan, services.store.points(job.id)))
+        return JobResultResponse(
+            id=job.id,
+            kind=job.kind,
+            status=job.status,
+            complete=job.done == job.total,
+            result=kind.result(job.spec, job.plan, services.store.points(job.id)),
+        )
     points = services.store.points(job.id, offset, limit)
     page = {"offset": offset, "limit": limit, "returned": len(points), "total": job.done}
-    return JobResultResponse(id=job.id, kind=job.kind, status=job.status, complete=job.done == job.total,
-                             page=page, result=kind.result(job.spec, job.plan, points))
+    return JobResultResponse(
+        id=job.id,
+        kind=job.kind,
+        status=job.status,
+        complete=job.done == job.total,
+        page=page,
+        result=kind.result(job.spec, job.plan, points),
+    )
 
 
-@router.get("/{job_id}/result", operation_id="get_job_result", response_model=JobResultResponse,
-            responses=errors(401, 404), summary="The job's result (the points so far while it runs), a page at a time")
-async def get_job_result(services: ServicesDep, owner: OwnerDep, job_id: str = JobId,
-                         offset: int = Query(0, ge=0, le=10**9, description="points to skip (in index order)"),
-                         limit: int = Query(PAGE, ge=1, le=MAX_PAGE, description="points in the page")
-                         ) -> JobResultResponse:
+@router.get(
+    "/{job_id}/result",
+    operation_id="get_job_result",
+    response_model=JobResultResponse,
+    responses=errors(401, 404),
+    summary="The job's result (the points so far while it runs), a page at a time",
+)
+async def get_job_result(
+    services: ServicesDep,
+    owner: OwnerDep,
+    job_id: str = JobId,
+    offset: int = Query(0, ge=0, le=10**9, description="points to skip (in index order)"),
+    limit: int = Query(PAGE, ge=1, le=MAX_PAGE, description="points in the page"),
+) -> JobResultResponse:
     """A sweep's points come a page at a time (`page` says which; ask again with offset +
     limit while page.returned == limit); an optimization's result is whole."""
     job = await run_in_threadpool(_owned, services, job_id, owner)
     return await run_in_threadpool(_result, services, job, offset, limit)
 
 
-@router.get("/{job_id}/request", operation_id="get_job_request", response_model=dict[str, Any],
-            responses=errors(401, 404), summary="What the job was asked: its document and the fields it runs with")
+@router.get(
+    "/{job_id}/request",
+    operation_id="get_job_request",
+    response_model=dict[str, Any],
+    responses=errors(401, 404),
+    summary="What the job was asked: its document and the fields it runs with",
+)
 async def get_job_request(services: ServicesDep, owner: OwnerDep, job_id: str = JobId) -> dict[str, Any]:
     """The job's stored specification (the document, model, overrides and the kind's own
     fields), so a page or a tool can show the mechanism of a job it did not start."""
@@ -81,13 +122,19 @@ async def get_job_request(services: ServicesDep, owner: OwnerDep, job_id: str = 
     return {"id": job.id, "kind": job.kind, **job.spec}
 
 
-@router.delete("/{job_id}", operation_id="cancel_job", response_model=JobStatusResponse,
-               responses=errors(401, 404, 409), summary="Cancel a queued or running job")
+@router.delete(
+    "/{job_id}",
+    operation_id="cancel_job",
+    response_model=JobStatusResponse,
+    responses=errors(401, 404, 409),
+    summary="Cancel a queued or running job",
+)
 async def cancel_job(services: ServicesDep, owner: OwnerDep, job_id: str = JobId) -> JobStatusResponse:
     """Stored points are kept and stay readable at /result."""
     job = await run_in_threadpool(_owned, services, job_id, owner)
     cancelled = job.status not in FINAL and await run_in_threadpool(
-        services.store.finish, job.id, "cancelled", "cancelled by the caller")
+        services.store.finish, job.id, "cancelled", "cancelled by the caller"
+    )
     job = await run_in_threadpool(services.store.get, job_id)
     if not cancelled:
         raise ApiError(409, "conflict", f"job '{job_id}' has already {job.status}")

@@ -31,9 +31,13 @@ def solve_router() -> APIRouter:
 
     # The report is checked against its analysis' Result model (a plugin's fields need not fit
     # SolveResponse); the OpenAPI document lists every Result model (api.analysis_requests).
-    @router.post("/solve", operation_id="solve", response_model=None,
-                 responses={**ERRORS, 200: {"model": SolveResponse, "description": "The analysis' report"}},
-                 summary=f"Solve one mechanism: {', '.join(ANALYSES.names())}")
+    @router.post(
+        "/solve",
+        operation_id="solve",
+        response_model=None,
+        responses={**ERRORS, 200: {"model": SolveResponse, "description": "The analysis' report"}},
+        summary=f"Solve one mechanism: {', '.join(ANALYSES.names())}",
+    )
     async def solve(request: body, services: ServicesDep, _owner: OwnerDep) -> dict:  # type: ignore[valid-type]
         """Runs in a solver worker (api.solver_pool). Non-convergence is a 200 with `status` and
         diagnostics; a document that cannot be modelled is a 422 naming the field."""
@@ -41,9 +45,16 @@ def solve_router() -> APIRouter:
         document = request_document(request, services)
         # the common fields travel as a plain DocumentRequest: the request's own class is made here
         common = DocumentRequest.model_construct(**{n: getattr(request, n) for n in DocumentRequest.model_fields})
-        report = await services.solver.call(_solve, analysis.name, options_of(analysis, request), common, document,
-                                            services.limits, time_limit=services.limits.solve_time_limit,
-                                            large=analysis.long)
+        report = await services.solver.call(
+            _solve,
+            analysis.name,
+            options_of(analysis, request),
+            common,
+            document,
+            services.limits,
+            time_limit=services.limits.solve_time_limit,
+            large=analysis.long,
+        )
         analysis.Result.model_validate(report)  # a report that does not fit its own model is a bug: a 500
         return report
 

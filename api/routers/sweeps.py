@@ -7,9 +7,9 @@ from fastapi import APIRouter, Response
 from api.deps import OwnerDep, ServicesDep
 from api.documents import request_document
 from api.job_creation import JOB_LINKS, create_job
+from api.job_schemas import JobStatusResponse, SweepRequest
 from api.parsed_route import ParsedBodyRoute
 from api.responses import ERRORS
-from api.schemas import JobStatusResponse, SweepRequest
 
 router = APIRouter(prefix="/v1", tags=["jobs"], route_class=ParsedBodyRoute)
 
@@ -29,11 +29,17 @@ def sweep_spec(request: SweepRequest, document: dict) -> dict:
     }
 
 
-@router.post("/sweeps", operation_id="create_sweep", status_code=202, response_model=JobStatusResponse,
-             responses={**ERRORS, 202: {"description": "The job, queued", "links": JOB_LINKS}},
-             summary="Start a sweep job")
-async def create_sweep(request: SweepRequest, services: ServicesDep, owner: OwnerDep,
-                       response: Response) -> JobStatusResponse:
+@router.post(
+    "/sweeps",
+    operation_id="create_sweep",
+    status_code=202,
+    response_model=JobStatusResponse,
+    responses={**ERRORS, 202: {"description": "The job, queued", "links": JOB_LINKS}},
+    summary="Start a sweep job",
+)
+async def create_sweep(
+    request: SweepRequest, services: ServicesDep, owner: OwnerDep, response: Response
+) -> JobStatusResponse:
     """Every point is stored as soon as its task finishes; follow the job at /v1/jobs/{id} and
     read the points at /v1/jobs/{id}/result (also while it runs)."""
     document = request_document(request, services)

@@ -12,8 +12,10 @@ from fastapi.staticfiles import StaticFiles
 
 WEB = Path(__file__).resolve().parents[1] / "web"
 # The page loads nothing from elsewhere: the browser refuses any other origin.
-POLICY = ("default-src 'self'; img-src 'self' data: blob:; style-src 'self' 'unsafe-inline'; "
-          "script-src 'self'; connect-src 'self'; object-src 'none'; base-uri 'none'; frame-ancestors 'self'")
+POLICY = (
+    "default-src 'self'; img-src 'self' data: blob:; style-src 'self' 'unsafe-inline'; "
+    "script-src 'self'; connect-src 'self'; object-src 'none'; base-uri 'none'; frame-ancestors 'self'"
+)
 HEADERS = {"Content-Security-Policy": POLICY, "Cache-Control": "no-cache"}
 
 router = APIRouter(include_in_schema=False)

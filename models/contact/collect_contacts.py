@@ -30,41 +30,62 @@ def collect_contacts(c, contacts: Contacts | None, elements: list[ElementTopolog
     objects = tuple(_collect_object(c, name, obj) for name, obj in contacts.objects.items())
     links = {t.name: t for t in elements if getattr(FAMILIES.of(t), "centre_line_sites", False)}
     sites = tuple(_collect_site(c, name, site, links) for name, site in contacts.sites.items())
-    object_names, site_names = [o.name for o in objects], [s.name for s in sites]
-    pairs = []
-    for name, pair in contacts.pairs.items():
-        base = f"/contacts/pairs/{name}"
-        if pair.site not in site_names:
-            raise MechanismError(f"{base}/site", f"unknown site '{pair.site}' (sites: {', '.join(site_names) or 'none'})")
-        if pair.object not in object_names:
-            raise MechanismError(f"{base}/object", f"unknown object '{pair.object}' "
-                                 f"(objects: {', '.join(object_names) or 'none'})")
-        site, obj = sites[site_names.index(pair.site)], objects[object_names.index(pair.object)]
-        if site.type == "circle" and obj.type not in CIRCLE_TOUCHES:
-            raise MechanismError(f"{base}/object", f"a circle site touches circles, holes, half-planes, polygons and "
-                                 f"ellipses, not the {obj.type} '{obj.name}'")
-        if site.type == "surface" and obj.type == "polygon":
-            raise MechanismError(f"{base}/object", f"a link surface cannot touch the polygon '{obj.name}': polygons "
-                                 "touch jaws (give the link a jaw, or describe the object as an implicit curve)")
-        normal_law(pair.normal.law, f"{base}/normal/law")
-        potential = pair.normal.law in ELASTIC_LAWS and site.type == "circle" and isinstance(
-            pair.normal.stiffness, (int, float))
-        if potential:
-            _collect_elastic(c, base, pair)
-            if isinstance(pair.friction, FrictionFields) and pair.friction.law in REGULARIZED:
-                if pair.friction.v1 <= pair.friction.v0:
-                    raise MechanismError(f"{base}/friction/v1", f"must exceed v0 ({pair.friction.v0:g} m/s): the law "
-                                         "ramps the friction up between them")
-                for speed in ("v0", "v1"):  # m/s (models.contact.pair_forces)
-                    c.add(f"{base}/friction/{speed}", getattr(pair.friction, speed), "dimensionless", "positive")
-        if isinstance(pair.friction, FrictionFields):
-            friction_law(pair.friction.law, f"{base}/friction/law")
-        friction = pair.friction_pointer(base)
-        c.add(friction, pair.friction_coefficient(), "dimensionless", "nonnegative")
-        law = pair.friction.law if isinstance(pair.friction, FrictionFields) else "coulomb"
-        pairs.append(PairTopology(name, site_names.index(pair.site), object_names.index(pair.object), friction,
-                                  pair.normal.law, law, potential))
+    pairs = [_collect_pair(c, name, pair, sites, objects) for name, pair in contacts.pairs.items()]
     return ContactTopology(objects, sites, tuple(pairs))
+
+
+def _collect_pair(
+    c, name: str, pair, sites: tuple[SiteTopology, ...], objects: tuple[ObjectTopology, ...]
+) -> PairTopology:
+    """One pair's parameters (its friction coefficient, an elastic law's numbers) and topology."""
+    base = f"/contacts/pairs/{name}"
+    site_index, object_index = _pair_indices(base, pair, sites, objects)
+    site = sites[site_index]
+    normal_law(pair.normal.law, f"{base}/normal/law")
+    potential = (
+        pair.normal.law in ELASTIC_LAWS and site.type == "circle" and isinstance(pair.normal.stiffness, (int, float))
+    )
+    if potential:
+        _collect_elastic(c, base, pair)
+        if isinstance(pair.friction, FrictionFields) and pair.friction.law in REGULARIZED:
+            if pair.friction.v1 <= pair.friction.v0:
+                raise MechanismError(
+                    f"{base}/friction/v1",
+                    f"must exceed v0 ({pair.friction.v0:g} m/s): the law ramps the friction up between them",
+                )
+            for speed in ("v0", "v1"):  # m/s (models.contact.pair_forces)
+                c.add(f"{base}/friction/{speed}", getattr(pair.friction, speed), "dimensionless", "positive")
+    if isinstance(pair.friction, FrictionFields):
+        friction_law(pair.friction.law, f"{base}/friction/law")
+    friction = pair.friction_pointer(base)
+    c.add(friction, pair.friction_coefficient(), "dimensionless", "nonnegative")
+    law = pair.friction.law if isinstance(pair.friction, FrictionFields) else "coulomb"
+    return PairTopology(name, site_index, object_index, friction, pair.normal.law, law, potential)
+
+
+def _pair_indices(base: str, pair, sites, objects) -> tuple[int, int]:
+    """The indices of the pair's site and object, which must exist and be able to touch."""
+    object_names, site_names = [o.name for o in objects], [s.name for s in sites]
+    if pair.site not in site_names:
+        raise MechanismError(f"{base}/site", f"unknown site '{pair.site}' (sites: {', '.join(site_names) or 'none'})")
+    if pair.object not in object_names:
+        raise MechanismError(
+            f"{base}/object", f"unknown object '{pair.object}' (objects: {', '.join(object_names) or 'none'})"
+        )
+    site, obj = sites[site_names.index(pair.site)], objects[object_names.index(pair.object)]
+    if site.type == "circle" and obj.type not in CIRCLE_TOUCHES:
+        raise MechanismError(
+            f"{base}/object",
+            f"a circle site touches circles, holes, half-planes, polygons and "
+            f"ellipses, not the {obj.type} '{obj.name}'",
+        )
+    if site.type == "surface" and obj.type == "polygon":
+        raise MechanismError(
+            f"{base}/object",
+            f"a link surface cannot touch the polygon '{obj.name}': polygons "
+            "touch jaws (give the link a jaw, or describe the object as an implicit curve)",
+        )
+    return site_names.index(pair.site), object_names.index(pair.object)
 
 
 def _collect_elastic(c, base: str, pair) -> None:
@@ -119,8 +140,9 @@ def _collect_object(c, name: str, obj) -> ObjectTopology:
     c.add_vec(f"{base}/position", obj.position, "length")
     c.add(f"{base}/angle", obj.angle, "angle")
     if obj.type == "polygon":
-        return ObjectTopology(name, "polygon", body, _polygon_pieces(_vertices(c, f"{base}/vertices", obj.vertices),
-                                                                    f"{base}/vertices"))
+        return ObjectTopology(
+            name, "polygon", body, _polygon_pieces(_vertices(c, f"{base}/vertices", obj.vertices), f"{base}/vertices")
+        )
     pointer = f"{base}/expression"
     build = compile_expression(obj.expression, pointer, variable="x", names=("y",))
     for x, y in IMPLICIT_PROBES:
@@ -134,8 +156,9 @@ def _polygon_pieces(vertices: np.ndarray, pointer: str) -> tuple[tuple[int, ...]
     if crossing is not None:
         i, j = crossing
         n = len(vertices)
-        raise MechanismError(pointer, f"the polygon intersects itself: edge {i}-{(i + 1) % n} meets edge "
-                             f"{j}-{(j + 1) % n}")
+        raise MechanismError(
+            pointer, f"the polygon intersects itself: edge {i}-{(i + 1) % n} meets edge {j}-{(j + 1) % n}"
+        )
     if abs(signed_area(vertices)) <= 1e-12 * max(1e-300, float(np.ptp(vertices, axis=0).max()) ** 2):
         raise MechanismError(pointer, "the polygon has no area")
     return convex_pieces(vertices)
@@ -146,9 +169,12 @@ def _collect_site(c, name: str, site, links: dict[str, ElementTopology]) -> Site
     if site.type == "surface":
         link = _link(site.link, f"{base}/link", links)
         if site.side != "centre_line" and not _has_thickness(c, link):
-            raise MechanismError(f"{base}/side", f"link '{site.link}' has no thickness (section "
-                                 f"'{link.section.name}' gives no c): a surface needs one; use side 'centre_line' "
-                                 "or give the section c")
+            raise MechanismError(
+                f"{base}/side",
+                f"link '{site.link}' has no thickness (section "
+                f"'{link.section.name}' gives no c): a surface needs one; use side 'centre_line' "
+                "or give the section c",
+            )
         return SiteTopology(name, "surface", link=site.link, side=site.side)
     if site.type == "circle":
         body = _body(c, f"{base}/body", site.body)
@@ -176,8 +202,9 @@ def _collect_jaw(c, base: str, name: str, site: JawSite, links) -> SiteTopology:
             k = int(np.argmin(lengths))
             raise MechanismError(f"{base}/vertices/{k + 1}", f"vertex {k + 1} repeats vertex {k}")
         pieces = tuple((k, k + 1) for k in range(len(vertices) - 1)) or ((0,),)
-    return SiteTopology(name, "jaw", body=body, link=site.link, end=site.end, n_vertices=len(vertices),
-                        closed=closed, pieces=pieces)
+    return SiteTopology(
+        name, "jaw", body=body, link=site.link, end=site.end, n_vertices=len(vertices), closed=closed, pieces=pieces
+    )
 
 
 def _link(name: str, pointer: str, links: dict[str, ElementTopology]) -> ElementTopology:

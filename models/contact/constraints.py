@@ -71,7 +71,8 @@ class ContactGeometry:
     def object_frame(self, obj: ObjectTopology) -> ObjectFrame:
         base, P = obj.pointer, self.P
         origin_field = {"circle": "centre", "hole": "centre", "ellipse": "centre", "half_plane": "point"}.get(
-            obj.type, "position")
+            obj.type, "position"
+        )
         local = P.vec(f"{base}/{origin_field}")
         own_angle = P[f"{base}/angle"] if obj.type in ("ellipse", "polygon", "implicit") else ca.SX(0)
         if obj.body is None:
@@ -159,14 +160,18 @@ class ContactGeometry:
 
 def substituted(constraints: ContactConstraints, old: ca.SX, new: ca.SX) -> ContactConstraints:
     """The same constraints with `old` replaced by `new` in every expression."""
+
     def fix(e):
         return None if e is None else ca.substitute(e, old, new)
 
-    rows = [ContactRow(r.pair, fix(r.value), fix(r.point), fix(r.normal), fix(r.site_parameter), r.axis, r.carrier)
-            for r in constraints.rows]
+    rows = [
+        ContactRow(r.pair, fix(r.value), fix(r.point), fix(r.normal), fix(r.site_parameter), r.axis, r.carrier)
+        for r in constraints.rows
+    ]
     frames = [ObjectFrame(fix(f.origin), fix(f.angle)) for f in constraints.object_frames]
-    return ContactConstraints(constraints.axes, fix(constraints.axes_guess), constraints.axis_pairs, rows, frames,
-                              constraints.pair_objects)
+    return ContactConstraints(
+        constraints.axes, fix(constraints.axes_guess), constraints.axis_pairs, rows, frames, constraints.pair_objects
+    )
 
 
 def contact_constraints(geometry: ContactGeometry) -> ContactConstraints:
@@ -178,15 +183,19 @@ def contact_constraints(geometry: ContactGeometry) -> ContactConstraints:
         frame = frames[pair.object]
         first = len(rows)
         if site.type == "surface":
-            rows += [_pointwise_row(geometry, k, obj, frame, point, along)
-                     for point, along in geometry.surface_points(site)]
+            rows += [
+                _pointwise_row(geometry, k, obj, frame, point, along) for point, along in geometry.surface_points(site)
+            ]
             _carried(rows, first, site.link)
             continue
         if site.type == "circle":
             if obj.type not in QUASI_STATIC_CIRCLE_TOUCHES:
-                raise MechanismError(f"{pair.pointer}/object", f"a quasi-static contact solve takes a circle site "
-                                     f"against circles, holes and half-planes; the {obj.type} '{obj.name}' touches "
-                                     "a circle in simulations (event_driven, moreau)")
+                raise MechanismError(
+                    f"{pair.pointer}/object",
+                    f"a quasi-static contact solve takes a circle site "
+                    f"against circles, holes and half-planes; the {obj.type} '{obj.name}' touches "
+                    "a circle in simulations (event_driven, moreau)",
+                )
             rows.append(_circle_row(geometry, k, site, obj, frame))
             continue
         vertices, along = geometry.jaw_vertices(site)
@@ -199,17 +208,30 @@ def contact_constraints(geometry: ContactGeometry) -> ContactConstraints:
                 if len(piece) == 1:
                     rows.append(_pointwise_row(geometry, k, obj, frame, vertices[piece[0]], along[piece[0]]))
                     continue
-                for object_piece in (obj.pieces or ((),)):
+                for object_piece in obj.pieces or ((),):
                     axis = ca.SX.sym(f"axis_{pair.name}_{len(axes)}", 2)
                     axes.append(axis)
                     axis_pairs.append(k)
-                    rows += _axis_rows(geometry, k, obj, frame, axis, [(vertices[i], along[i]) for i in piece], object_piece,
-                                       len(axes) - 1)
+                    rows += _axis_rows(
+                        geometry,
+                        k,
+                        obj,
+                        frame,
+                        axis,
+                        [(vertices[i], along[i]) for i in piece],
+                        object_piece,
+                        len(axes) - 1,
+                    )
                     guesses.append(_axis_guess(geometry, obj, frame, [vertices[i] for i in piece], object_piece))
         _carried(rows, first, site.link)
-    return ContactConstraints(ca.vertcat(*axes) if axes else ca.SX(0, 1),
-                              ca.vertcat(*guesses) if guesses else ca.SX(0, 1), axis_pairs, rows, frames,
-                              [pair.object for pair in topology.pairs])
+    return ContactConstraints(
+        ca.vertcat(*axes) if axes else ca.SX(0, 1),
+        ca.vertcat(*guesses) if guesses else ca.SX(0, 1),
+        axis_pairs,
+        rows,
+        frames,
+        [pair.object for pair in topology.pairs],
+    )
 
 
 def _carried(rows: list[ContactRow], first: int, link: str | None) -> None:

@@ -73,18 +73,27 @@ def check_link_dynamics(document) -> None:
         check_law(NORMAL_LAWS, "normal", pair.normal.law, "link_dynamics", f"{base}/normal/law")
         site = document.contacts.sites.get(pair.site)
         if site is not None and site.type != "circle":
-            raise MechanismError(f"{base}/site", "a newmark or generalized_alpha simulation takes a pair's site as a "
-                                 f"circle on a body (a pin, a roller, a pad); '{pair.site}' is a {site.type}")
+            raise MechanismError(
+                f"{base}/site",
+                "a newmark or generalized_alpha simulation takes a pair's site as a "
+                f"circle on a body (a pin, a roller, a pad); '{pair.site}' is a {site.type}",
+            )
         if not isinstance(pair.normal.stiffness, (int, float)):
-            raise MechanismError(f"{base}/normal/stiffness", "a newmark or generalized_alpha simulation takes the "
-                                 f"{pair.normal.law} law's stiffness K as a number (force / length^exponent in the "
-                                 "document's units), not computed from the materials")
+            raise MechanismError(
+                f"{base}/normal/stiffness",
+                "a newmark or generalized_alpha simulation takes the "
+                f"{pair.normal.law} law's stiffness K as a number (force / length^exponent in the "
+                "document's units), not computed from the materials",
+            )
         if isinstance(pair.friction, FrictionFields):
             check_law(FRICTION_LAWS, "friction", pair.friction.law, "link_dynamics", f"{base}/friction/law")
         elif pair.friction != 0:
-            raise MechanismError(f"{base}/friction", "a newmark or generalized_alpha simulation takes a "
-                                 "regularized friction law of the slip speed ({\"law\": \"ambrosio\", \"sliding\": "
-                                 "f_d, \"v0\": ..., \"v1\": ...}), not Coulomb's coefficient: give the law, or 0")
+            raise MechanismError(
+                f"{base}/friction",
+                "a newmark or generalized_alpha simulation takes a "
+                'regularized friction law of the slip speed ({"law": "ambrosio", "sliding": '
+                'f_d, "v0": ..., "v1": ...}), not Coulomb\'s coefficient: give the law, or 0',
+            )
 
 
 def elastic(topology: ContactTopology | None) -> list[PairTopology]:
@@ -126,8 +135,10 @@ def contact_wrenches(ctx: AssemblyContext, d: list[ca.SX]) -> list[ca.SX]:
         return [ca.SX.zeros(3) for _ in range(ctx.n_bodies)]
     symbols = [ca.SX.sym(f"d{b}", 3) for b in range(ctx.n_bodies)]
     potential = contact_potential(ctx, symbols)
-    return [ca.substitute(-ca.gradient(potential, symbols[b]), ca.vertcat(*symbols), ca.vertcat(*d))
-            for b in range(ctx.n_bodies)]
+    return [
+        ca.substitute(-ca.gradient(potential, symbols[b]), ca.vertcat(*symbols), ca.vertcat(*d))
+        for b in range(ctx.n_bodies)
+    ]
 
 
 def contact_outputs(ctx: AssemblyContext, d: list[ca.SX]) -> list[tuple[str, str, ca.SX]]:
@@ -156,11 +167,15 @@ def _indentation(geometry: ContactGeometry, obj, centre: ca.SX, radius: ca.SX) -
         corners = [frame.origin + rot(frame.angle) @ P.vec(f"{base}/vertices/{k}") for k in range(count)]
         return against_nearest(centre, radius, closest_on_polygon(corners, centre))
     if obj.type == "ellipse":
-        nearest = closest_on_ellipse(frame.origin, rot(frame.angle), P[f"{base}/semi_axes/0"],
-                                     P[f"{base}/semi_axes/1"], centre)
+        nearest = closest_on_ellipse(
+            frame.origin, rot(frame.angle), P[f"{base}/semi_axes/0"], P[f"{base}/semi_axes/1"], centre
+        )
         return against_nearest(centre, radius, nearest)
-    raise MechanismError(f"{base}/type", f"an elastic contact pair takes circles, holes, half-planes, polygons and "
-                         f"ellipses, not the {obj.type} '{obj.name}'")
+    raise MechanismError(
+        f"{base}/type",
+        f"an elastic contact pair takes circles, holes, half-planes, polygons and "
+        f"ellipses, not the {obj.type} '{obj.name}'",
+    )
 
 
 def _numbers(ctx: AssemblyContext, pair: PairTopology) -> tuple[ca.SX, ca.SX]:

@@ -83,8 +83,12 @@ def contact_forces(ctx: AssemblyContext, d: list[ca.SX], rates: list[ca.SX]) -> 
         if topology.normal_law in DAMPED_LAWS:
             qdot = -ca.dot(pair.normal, dv) / unit_length  # document length per second
             law = NORMAL_LAWS[topology.normal_law]
-            whole = law.force(law_numbers(ctx, topology), ca.fmax(pair.indentation, 0.0), qdot,
-                              ctx.P[f"{topology.pointer}/normal/onset_speed"])
+            whole = law.force(
+                law_numbers(ctx, topology),
+                ca.fmax(pair.indentation, 0.0),
+                qdot,
+                ctx.P[f"{topology.pointer}/normal/onset_speed"],
+            )
             extra = (whole - pair.force) * unit_force
             force = force + extra * pair.normal
             out.damping_power = out.damping_power - extra * qdot * unit_length
@@ -105,8 +109,9 @@ def _friction(ctx: AssemblyContext, pair: ElasticPair, slip: ca.SX, normal_force
     topology = pair.topology
     per_metre_per_second = ctx.unit("length") / ctx.structure.length_unit_si
     base = f"{topology.pointer}/friction"
-    numbers = FrictionNumbers(ctx.P[f"{base}/sliding"], ctx.P[f"{base}/v0"] * per_metre_per_second,
-                              ctx.P[f"{base}/v1"] * per_metre_per_second)
+    numbers = FrictionNumbers(
+        ctx.P[f"{base}/sliding"], ctx.P[f"{base}/v0"] * per_metre_per_second, ctx.P[f"{base}/v1"] * per_metre_per_second
+    )
     speed = ca.fabs(slip)
     law = FRICTION_LAWS[topology.friction_law]
     return law.force(numbers, slip, normal_force, speed > numbers.v0, speed > numbers.v1), slip

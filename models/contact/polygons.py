@@ -61,8 +61,11 @@ def convex_pieces(vertices: np.ndarray) -> tuple[tuple[int, ...], ...]:
             a, b, c = order[k - 1], order[k], order[(k + 1) % len(order)]
             if _cross(vertices[a], vertices[b], vertices[c]) <= 0:
                 continue  # a reflex corner is no ear
-            inside = any(_inside_triangle(vertices[m], vertices[a], vertices[b], vertices[c])
-                         for m in order if m not in (a, b, c))
+            inside = any(
+                _inside_triangle(vertices[m], vertices[a], vertices[b], vertices[c])
+                for m in order
+                if m not in (a, b, c)
+            )
             if not inside:
                 triangles.append((a, b, c))
                 order.pop(k)

@@ -31,8 +31,9 @@ MAX_VERTICES = 64
 
 
 class _OnBody(StrictModel):
-    body: str | None = Field(default=None, description="the pose is in this body's axes and moves with it "
-                             "(default: fixed, global)")
+    body: str | None = Field(
+        default=None, description="the pose is in this body's axes and moves with it (default: fixed, global)"
+    )
 
 
 class CircleObject(_OnBody):
@@ -84,7 +85,10 @@ class ImplicitObject(_OnBody):
     angle: Number = 0.0
 
 
-ContactObject = Annotated[CircleObject | HoleObject | EllipseObject | PolygonObject | HalfPlaneObject | ImplicitObject, Field(discriminator="type")]
+ContactObject = Annotated[
+    CircleObject | HoleObject | EllipseObject | PolygonObject | HalfPlaneObject | ImplicitObject,
+    Field(discriminator="type"),
+]
 OBJECT_TYPES = ("circle", "hole", "ellipse", "polygon", "half_plane", "implicit")
 
 
@@ -97,8 +101,9 @@ class JawSite(StrictModel):
     link: str | None = None
     end: Literal["start", "end"] = Field(default="end", description="which end section of `link` carries it")
     vertices: list[Vec2] = Field(min_length=1, max_length=MAX_VERTICES)
-    closed: bool | None = Field(default=None, description="a polygon (default with 3 or more vertices) or an "
-                                "open polyline")
+    closed: bool | None = Field(
+        default=None, description="a polygon (default with 3 or more vertices) or an open polyline"
+    )
 
 
 class SurfaceSite(StrictModel):
@@ -132,7 +137,8 @@ class ComputedStiffness(StrictModel):
     contact: Literal["spheres", "cylinders"]
     materials: tuple[str, str] = Field(description="the two bodies' materials (E and nu)")
     radius: Literal["external", "conformal"] = Field(
-        default="conformal", description="spheres: which effective radius (Table 2 of seed 004 uses external)")
+        default="conformal", description="spheres: which effective radius (Table 2 of seed 004 uses external)"
+    )
     length: Number | None = Field(default=None, description="cylinders: the contact length")
 
 
@@ -165,8 +171,10 @@ class FrictionFields(StrictModel):
 class ContactPair(StrictModel):
     site: str
     object: str
-    normal: NormalLawFields = Field(default_factory=NormalLawFields, description="the normal law (default: "
-                                    "unilateral, the exact contact of quasi-static solves)")
+    normal: NormalLawFields = Field(
+        default_factory=NormalLawFields,
+        description="the normal law (default: unilateral, the exact contact of quasi-static solves)",
+    )
     friction: Number | FrictionFields = Field(default=0.0, description="Coulomb's coefficient mu, or a friction law")
 
     def friction_pointer(self, base: str) -> str:
@@ -194,8 +202,12 @@ class ContactPath(StrictModel):
     solved from the one before (`flexmech contact`, POST /v1/contacts)."""
 
     parameters: list[PathParameter] = Field(min_length=1, max_length=8)
-    outputs: list[str] | None = Field(default=None, min_length=1, max_length=256,
-                                      description="outputs to keep per state (default: every pair's results)")
+    outputs: list[str] | None = Field(
+        default=None,
+        min_length=1,
+        max_length=256,
+        description="outputs to keep per state (default: every pair's results)",
+    )
 
 
 class Contacts(StrictModel):

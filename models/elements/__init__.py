@@ -13,13 +13,15 @@ from models.elements.pin import PIN
 from models.elements.slider import SLIDER
 from models.elements.spring import SPRING
 
-FAMILIES = Families([
-    CURVED_BEAM,
-    LINK,
-    LINK_ELEMENTS,
-    SPRING,
-    PIN,
-    SLIDER,
-])
+FAMILIES = Families(
+    [
+        CURVED_BEAM,
+        LINK,
+        LINK_ELEMENTS,
+        SPRING,
+        PIN,
+        SLIDER,
+    ]
+)
 
 __all__ = ["COMPARED_MODELS", "FAMILIES", "MODELS"]

@@ -27,6 +27,7 @@ is then the gradient of the Lagrangian, which tests check.
 
 from __future__ import annotations
 
+import builtins
 import inspect
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
@@ -154,12 +155,13 @@ class Connector:
     kind: str | None = None
 
 
-def beam_discretization(element) -> Discretization:
+def beam_discretization(element: Any) -> Discretization:
     """A beam discretized by shooting or by elements (its `discretization`, `intervals`,
     `order` and `degree` fields)."""
     if element.discretization == "elements":
-        return Discretization(element.intervals * (element.degree + 2) ** 2, element.intervals * element.degree,
-                              element.intervals)
+        return Discretization(
+            element.intervals * (element.degree + 2) ** 2, element.intervals * element.degree, element.intervals
+        )
     return Discretization(element.intervals * element.order**2)
 
 
@@ -176,7 +178,7 @@ class ElementFamily(Protocol):
     impact_flexure, impact_constraint, impact_by_statics (models.impacts.families)."""
 
     type: str
-    schema: type[TwoBodyElement] | None
+    schema: builtins.type[TwoBodyElement] | None  # builtins': `type` is the family's name here
 
     def collect(self, c: Collector, name: str, element: Any, i: int, j: int) -> ElementTopology: ...
 
@@ -186,8 +188,7 @@ class ElementFamily(Protocol):
 
     def energy_terms(self, ctx: AssemblyContext, topology: Any, d: list[ca.SX]) -> EnergyTerms: ...
 
-    def kinetic_energy(self, ctx: AssemblyContext, topology: Any, d: list[ca.SX],
-                       v: list[ca.SX]) -> ca.SX | None: ...
+    def kinetic_energy(self, ctx: AssemblyContext, topology: Any, d: list[ca.SX], v: list[ca.SX]) -> ca.SX | None: ...
 
     def scale_hint(self, topology: Any, values: SiValues) -> ScaleHint: ...
 
@@ -219,7 +220,7 @@ class Families:
     def sources(self) -> tuple[str, ...]:
         """The files the families are written in (a registered family's too): what a cache of
         graphs built from them must be keyed by."""
-        return tuple(sorted({inspect.getsourcefile(type(family)) for family in self}))
+        return tuple(sorted({inspect.getsourcefile(type(family)) or "" for family in self}))
 
     def on_change(self, listener: Callable[[], None]) -> None:
         """`listener()` runs after every register and unregister."""
@@ -244,11 +245,16 @@ class Families:
     def schemas(self) -> tuple[type[TwoBodyElement], ...]:
         """The document sections (a family with no schema of its own is reached through
         another's: a link with discretization 'elements')."""
-        return tuple(family.schema for family in self if family.schema is not None)
+        return tuple(schema for family in self if (schema := family.schema) is not None)
 
 
-def constraint_wrenches(ctx: AssemblyContext, bodies: tuple[int, ...], d: list[ca.SX], lam: ca.SX,
-                        constraints: Callable[[list[ca.SX]], ca.SX]) -> dict[int, ca.SX]:
+def constraint_wrenches(
+    ctx: AssemblyContext,
+    bodies: tuple[int, ...],
+    d: list[ca.SX],
+    lam: ca.SX,
+    constraints: Callable[[list[ca.SX]], ca.SX],
+) -> dict[int, ca.SX]:
     """(dg/dd_b)^T lam for the listed bodies: the wrench each applies to a joint whose
     constraints g(d) = 0 have the multipliers lam (the joint's unknowns)."""
     symbols = {b: ca.SX.sym(f"d{b}", 3) for b in bodies}

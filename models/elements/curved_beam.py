@@ -63,8 +63,10 @@ class CurvedBeam(TwoBodyElement):
     intervals: int = Field(default=8, ge=1, le=64, description="shooting intervals, or elements (exact model)")
     order: int = Field(default=8, ge=2, le=12, description="integration order, even (exact model by shooting)")
     discretization: Literal["shooting", "elements"] = Field(
-        default="shooting", description="the exact model's: shooting, or elements (an energy and a mass: needed "
-        "for minimum energy, contact and simulations)")
+        default="shooting",
+        description="the exact model's: shooting, or elements (an energy and a mass: needed "
+        "for minimum energy, contact and simulations)",
+    )
     degree: int = Field(default=3, ge=1, le=6, description="exact model by elements: polynomial degree of the rotation")
 
 
@@ -159,7 +161,9 @@ class CurvedBeamFamily:
         c.use_material(el.material, f"{base}/material")
         section = c.use_section(el.section, f"{base}/section")
         if not isinstance(section, RectangularSection):
-            raise MechanismError(f"{base}/section", f"a curved beam needs a rectangle section ('{el.section}' is {section.shape})")
+            raise MechanismError(
+                f"{base}/section", f"a curved beam needs a rectangle section ('{el.section}' is {section.shape})"
+            )
         c.add_vec(f"{base}/center", el.center, "length")
         c.add(f"{base}/radius", el.radius, "length", "positive")
         c.add(f"{base}/start_angle", el.start_angle, "angle")
@@ -172,7 +176,9 @@ class CurvedBeamFamily:
         if model == "exact":
             from models.elements.link import exact_arc  # the exact model is a link
 
-            return exact_arc(c, name, el, start, end, ArcGeometry(name, reversed_), SectionTopology(el.section, "rectangle"))
+            return exact_arc(
+                c, name, el, start, end, ArcGeometry(name, reversed_), SectionTopology(el.section, "rectangle")
+            )
         return FlexureTopology(name, self.type, start, end, reversed_, model, el.material, el.section)
 
     def contribute(self, ctx: AssemblyContext, t: FlexureTopology, d, z) -> Contribution:
@@ -180,8 +186,12 @@ class CurvedBeamFamily:
             on_i, on_j, state = conservative_wrenches(ctx, t, d)
         else:
             on_i, on_j, state = flexure_wrenches(ctx, t, d, d, d)
-        return Contribution({t.start_body: on_i, t.end_body: on_j}, outputs=_outputs(state),
-                            energy=state["energy"], centre_line=_centre_line(ctx, t, state, d))
+        return Contribution(
+            {t.start_body: on_i, t.end_body: on_j},
+            outputs=_outputs(state),
+            energy=state["energy"],
+            centre_line=_centre_line(ctx, t, state, d),
+        )
 
     def unknowns(self, t: FlexureTopology) -> list[tuple[str, str]]:
         return []
@@ -189,9 +199,11 @@ class CurvedBeamFamily:
     def energy_terms(self, ctx, t: FlexureTopology, d):
         if t.model == "conservative":
             return EnergyTerms(flexure_wrenches(ctx, t, d, d, d)[2]["energy"])
-        raise NoEnergyForm(f"the {t.model} curved-beam model balances a constant stiffness in frames that "
-                           "do not turn with the bodies: its tangent stiffness is unsymmetric once deformed, "
-                           "so it is not the gradient of an energy (the exact model is a link)")
+        raise NoEnergyForm(
+            f"the {t.model} curved-beam model balances a constant stiffness in frames that "
+            "do not turn with the bodies: its tangent stiffness is unsymmetric once deformed, "
+            "so it is not the gradient of an energy (the exact model is a link)"
+        )
 
     def kinetic_energy(self, ctx, t: FlexureTopology, d, v) -> None:
         return None  # the constant-stiffness flexure is massless (seed 000, seed 004)
@@ -199,7 +211,9 @@ class CurvedBeamFamily:
     def scale_hint(self, t: FlexureTopology, values: SiValues) -> ScaleHint:
         E = values[f"/materials/{t.material}/E"]
         section = SectionTopology(t.section, "rectangle")
-        return ScaleHint(length=values[f"/elements/{t.name}/radius"], EI=nominal_EI(values, section, E, values.length_unit_si))
+        return ScaleHint(
+            length=values[f"/elements/{t.name}/radius"], EI=nominal_EI(values, section, E, values.length_unit_si)
+        )
 
 
 def flexure_wrenches(ctx: AssemblyContext, f: FlexureTopology, d_psi, d_N, d_T):
@@ -221,8 +235,7 @@ def flexure_wrenches(ctx: AssemblyContext, f: FlexureTopology, d_psi, d_N, d_T):
     s_j = rot(thj_hat).T @ (arc.end_point - rj_hat)  # s-bar_jf, body j axes
 
     def deformation(d):
-        p_f = (rj_hat + d[j][:2] + rot(thj_hat + d[j][2]) @ s_j
-               - ri_hat - d[i][:2] - rot(thi_hat + d[i][2]) @ s_i)
+        p_f = rj_hat + d[j][:2] + rot(thj_hat + d[j][2]) @ s_j - ri_hat - d[i][:2] - rot(thi_hat + d[i][2]) @ s_i
         x_prime = rot(-d[i][2]) @ p_f - (arc.end_point - arc.start_point)  # Eq. 5
         return ca.vertcat(rot(arc.end_frame_angle).T @ x_prime, d[j][2] - d[i][2])  # Eqs. 6-8
 
@@ -240,8 +253,9 @@ def flexure_wrenches(ctx: AssemblyContext, f: FlexureTopology, d_psi, d_N, d_T):
 
     on_i = on_body(i, s_i, arc.start_frame_angle, thi_hat, w_start)
     on_j = on_body(j, s_j, arc.end_frame_angle, thj_hat, w)
-    state = dict(psi=psi, w=w, w_start=w_start, r=r, theta_f=theta_f, b=b_w, h=h, arc=arc,
-                 energy=0.5 * ca.dot(psi, K @ psi))
+    state = dict(
+        psi=psi, w=w, w_start=w_start, r=r, theta_f=theta_f, b=b_w, h=h, arc=arc, energy=0.5 * ca.dot(psi, K @ psi)
+    )
     return on_i, on_j, state
 
 
@@ -267,11 +281,17 @@ def _outputs(st: dict) -> list[tuple[str, str, ca.SX]]:
     peak = ca.fabs(w_start[2])
     for k in range(ARC_SAMPLES):
         peak = ca.fmax(peak, ca.fabs(kernel.internal_moment(st["r"], st["theta_f"] * k / (ARC_SAMPLES - 1), w)))
-    return [("Fx", "force", w[0]), ("Fy", "force", w[1]), ("M", "moment", w[2]),
-            ("rotation", "angle", st["psi"][2]), ("length", "length", st["r"] * st["theta_f"]),
-            ("stress_start", "stress", modulus * ca.fabs(w_start[2])),
-            ("stress_end", "stress", modulus * ca.fabs(w[2])), ("stress_max", "stress", modulus * peak),
-            ("energy", "energy", st["energy"])]
+    return [
+        ("Fx", "force", w[0]),
+        ("Fy", "force", w[1]),
+        ("M", "moment", w[2]),
+        ("rotation", "angle", st["psi"][2]),
+        ("length", "length", st["r"] * st["theta_f"]),
+        ("stress_start", "stress", modulus * ca.fabs(w_start[2])),
+        ("stress_end", "stress", modulus * ca.fabs(w[2])),
+        ("stress_max", "stress", modulus * peak),
+        ("energy", "energy", st["energy"]),
+    ]
 
 
 def _centre_line(ctx: AssemblyContext, f: FlexureTopology, st: dict, d) -> CentreLine:
@@ -287,8 +307,7 @@ def _centre_line(ctx: AssemblyContext, f: FlexureTopology, st: dict, d) -> Centr
     points = ca.repmat(center, 1, ARC_SAMPLES) + st["r"] * ca.vertcat(ca.cos(a), ca.sin(a))
     ends = [ctx.place(b, ctx.body_axes(b, points), d) for b in (f.start_body, f.end_body)]
     blend = [3 * t**2 - 2 * t**3 for t in ts]
-    deformed = (ca.repmat(ca.DM([1 - q for q in blend]).T, 2, 1) * ends[0]
-                + ca.repmat(ca.DM(blend).T, 2, 1) * ends[1])
+    deformed = ca.repmat(ca.DM([1 - q for q in blend]).T, 2, 1) * ends[0] + ca.repmat(ca.DM(blend).T, 2, 1) * ends[1]
     return CentreLine(ca.horzsplit(deformed), ca.horzsplit(points), [st["h"] / 2] * ARC_SAMPLES)
 
 

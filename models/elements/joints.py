@@ -31,8 +31,9 @@ from models.structure import ElementTopology
 
 
 class RigidJoint(TwoBodyElement):
-    at: Vec2 | None = Field(default=None, description="where the joint is (global, undeformed; default: "
-                            "the `to` body's reference point)")
+    at: Vec2 | None = Field(
+        default=None, description="where the joint is (global, undeformed; default: the `to` body's reference point)"
+    )
 
 
 @dataclass(frozen=True)
@@ -78,8 +79,9 @@ class JointFamily(ABC):
         return collect_joint(c, self.type, name, el, i, j)
 
     def contribute(self, ctx: AssemblyContext, t: JointTopology, d, z) -> Contribution:
-        wrenches = constraint_wrenches(ctx, (t.start_body, t.end_body), d, z,
-                                       lambda local: self.constraints(ctx, t, local))
+        wrenches = constraint_wrenches(
+            ctx, (t.start_body, t.end_body), d, z, lambda local: self.constraints(ctx, t, local)
+        )
         return Contribution(wrenches, self.constraints(ctx, t, d), self.joint_outputs(ctx, t, d, z))
 
     def unknowns(self, t: JointTopology) -> list[tuple[str, str]]:

@@ -17,10 +17,8 @@ mu(u) the mass from u = 0 (a sixth state, integrated with the others).
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
-from typing import Literal
 
 import casadi as ca
-from pydantic import Field
 
 from models.context import AssemblyContext
 from models.elements.base import (
@@ -31,12 +29,11 @@ from models.elements.base import (
     NoMassForm,
     ScaleHint,
     SiValues,
-    TwoBodyElement,
     beam_discretization,
 )
+from models.elements.link_schema import Link
 from models.errors import MechanismError
 from models.expression import compile_expression, finite_on
-from models.fields import Number, StrictModel, Vec2
 from models.link_shooting import LinkProperties, LinkShooting, LinkSolution
 from models.planar import cross
 from models.sections import GeneralSection, SectionTopology, nominal_EI, section_properties, section_topology
@@ -45,73 +42,6 @@ from models.structure import ElementTopology
 # Samples per shooting interval of a link, for stresses and drawing.
 SAMPLES_PER_INTERVAL = 4
 ALONG = tuple(k / 16 for k in range(17))  # where a shape expression must be a finite number
-
-
-class StraightShape(StrictModel):
-    type: Literal["straight"]
-    angle: Number = Field(default=0.0, description="direction from the start point")
-
-
-class ArcShape(StrictModel):
-    """eta(u) = angle + sweep * u: a circular arc of radius length / |sweep|."""
-
-    type: Literal["arc"]
-    angle: Number = 0.0
-    sweep: Number
-
-
-class PolynomialShape(StrictModel):
-    """eta(u) = sum coefficients[k] * u**k, in radians."""
-
-    type: Literal["polynomial"]
-    coefficients: list[Number] = Field(min_length=1, max_length=32)
-
-
-class FourierSineShape(StrictModel):
-    """eta(u) = angle + sum over i = 1.. of coefficients[i-1] * sin(i * omega * u); the
-    coefficients in radians, omega (default 2 pi, as in Lan 2005 Sec. 5.6) in rad."""
-
-    type: Literal["fourier_sine"]
-    angle: Number = 0.0
-    coefficients: list[Number] = Field(min_length=1, max_length=32)
-    omega: float = 2 * 3.141592653589793
-
-
-class ExpressionShape(StrictModel):
-    """eta(u), radians, as a safe math expression in u."""
-
-    type: Literal["expression"]
-    expression: str
-
-
-Shape = StraightShape | ArcShape | PolynomialShape | FourierSineShape | ExpressionShape
-SHAPE_TYPES = ("straight", "arc", "polynomial", "fourier_sine", "expression")
-
-
-class Link(TwoBodyElement):
-    """A distributed elastica (Lan 2005) from body `from` (u = 0) to body `to` (u = 1).
-
-    It starts at `at` (default: the `from` body's reference point) with the initial tangent
-    angle eta(u) of `shape` (global frame) and ends where that shape ends; both ends are
-    attached to their bodies there, clamped or pinned.
-    """
-
-    type: Literal["link"]
-    at: Vec2 | None = None
-    length: Number
-    shape: Shape = Field(default=StraightShape(type="straight"), discriminator="type")
-    material: str
-    section: str
-    start: Literal["clamped", "pinned"] = "clamped"
-    end: Literal["clamped", "pinned"] = "clamped"
-    shear: bool = Field(default=False, description="Timoshenko shear strain (Lan 2005 Eq. 5.1)")
-    axial: bool = Field(default=False, description="axial strain (Lan 2005 App. A.1)")
-    discretization: Literal["shooting", "elements"] = Field(
-        default="shooting", description="multiple shooting (mixes forces and displacements), or displacement-based "
-        "elements (an energy: needed for minimum energy and contact)")
-    intervals: int = Field(default=8, ge=1, le=128, description="shooting intervals, or elements")
-    order: int = Field(default=8, ge=2, le=12, description="shooting: integration order (even), 2 x extrapolation levels")
-    degree: int = Field(default=3, ge=1, le=6, description="elements: polynomial degree of the rotation")
 
 
 @dataclass(frozen=True)
@@ -140,8 +70,10 @@ class ShapeGeometry:
         if self.shape == "polynomial":
             return lambda u: sum((c * u**k for k, c in enumerate(coefficients)), ca.SX(0))
         if self.shape == "fourier_sine":
-            return lambda u: P[f"{base}/angle"] + sum(
-                (c * ca.sin((i + 1) * self.omega * u) for i, c in enumerate(coefficients)), ca.SX(0))
+            return lambda u: (
+                P[f"{base}/angle"]
+                + sum((c * ca.sin((i + 1) * self.omega * u) for i, c in enumerate(coefficients)), ca.SX(0))
+            )
         build = compile_expression(self.expression, f"{base}/expression")
         return lambda u: ca.SX(build(u))
 
@@ -198,8 +130,10 @@ class LinkFamily:
         return beam_discretization(el)
 
     def check_simulated(self, t: LinkTopology) -> None:
-        raise MechanismError(f"/elements/{t.name}/discretization", f"link '{t.name}' is discretized by shooting: "
-                             "a simulation needs \"discretization\": \"elements\"")
+        raise MechanismError(
+            f"/elements/{t.name}/discretization",
+            f'link \'{t.name}\' is discretized by shooting: a simulation needs "discretization": "elements"',
+        )
 
     def collect(self, c, name: str, el: Link, i: int, j: int) -> LinkTopology:
         base = f"/elements/{name}"
@@ -211,21 +145,40 @@ class LinkFamily:
         located = "reference"
         if el.at is not None:
             if c.doc.bodies[el.from_].joint:
-                raise MechanismError(f"{base}/at", f"a link starts at its joint's position: leave 'at' out for joint '{el.from_}'")
+                raise MechanismError(
+                    f"{base}/at", f"a link starts at its joint's position: leave 'at' out for joint '{el.from_}'"
+                )
             c.add_vec(f"{base}/at", el.at, "length")
             located = "at"
         geometry = _collect_shape(c, f"{base}/shape", el.shape, located)
         weighs = c.has_density(el.material, needs_area=True, section=el.section)
         if (el.shear or el.axial or weighs) and isinstance(section, GeneralSection) and section.A is None:
-            why = "shear strain" if el.shear else ("axial strain" if el.axial else f"mass (material '{el.material}' "
-                                                                                  "has a density)")
+            why = (
+                "shear strain"
+                if el.shear
+                else ("axial strain" if el.axial else f"mass (material '{el.material}' has a density)")
+            )
             raise MechanismError(f"/sections/{el.section}/A", f"the area is required: link '{name}' has {why}")
         if el.start == "clamped":
             c.holds_rotation(i)
         if el.end == "clamped":
             c.holds_rotation(j)
-        topology = LinkTopology(name, self.type, i, j, el.start, el.end, geometry, el.material,
-                                section_topology(el.section, section), el.shear, el.axial, el.intervals, el.order, weighs)
+        topology = LinkTopology(
+            name,
+            self.type,
+            i,
+            j,
+            el.start,
+            el.end,
+            geometry,
+            el.material,
+            section_topology(el.section, section),
+            el.shear,
+            el.axial,
+            el.intervals,
+            el.order,
+            weighs,
+        )
         if el.discretization == "elements":
             return as_elements(topology, el.degree)
         return topology
@@ -235,15 +188,21 @@ class LinkFamily:
         attached = attach(ctx, t, shooting, d, z)
         sol = attached.solution
         samples = shooting.samples(sol, SAMPLES_PER_INTERVAL)
-        outputs = [("h", "force", sol.n[0]), ("v", "force", sol.n[1]),
-                   ("M_start", "moment", sol.nodes[0][1]), ("M_end", "moment", sol.nodes[-1][1]),
-                   ("x_end", "length", sol.nodes[-1][2]), ("y_end", "length", sol.nodes[-1][3]),
-                   ("angle_start", "angle", sol.nodes[0][0]), ("angle_end", "angle", sol.nodes[-1][0]),
-                   ("rotation_start", "angle", sol.nodes[0][0] - sol.undeformed[0][0]),
-                   ("rotation_end", "angle", sol.nodes[-1][0] - sol.undeformed[-1][0]),
-                   ("length", "length", shooting.props.length),
-                   ("x_end_undeformed", "length", sol.undeformed[-1][2]),
-                   ("y_end_undeformed", "length", sol.undeformed[-1][3])]
+        outputs = [
+            ("h", "force", sol.n[0]),
+            ("v", "force", sol.n[1]),
+            ("M_start", "moment", sol.nodes[0][1]),
+            ("M_end", "moment", sol.nodes[-1][1]),
+            ("x_end", "length", sol.nodes[-1][2]),
+            ("y_end", "length", sol.nodes[-1][3]),
+            ("angle_start", "angle", sol.nodes[0][0]),
+            ("angle_end", "angle", sol.nodes[-1][0]),
+            ("rotation_start", "angle", sol.nodes[0][0] - sol.undeformed[0][0]),
+            ("rotation_end", "angle", sol.nodes[-1][0] - sol.undeformed[-1][0]),
+            ("length", "length", shooting.props.length),
+            ("x_end_undeformed", "length", sol.undeformed[-1][2]),
+            ("y_end_undeformed", "length", sol.undeformed[-1][3]),
+        ]
         if shooting.props.fibre is not None:
             peak = ca.SX(0)
             for k, sample in enumerate(samples):
@@ -253,31 +212,45 @@ class LinkFamily:
         outputs.append(("discretization_error", "dimensionless", shooting.error_estimate(sol)))
         if t.weighs:
             outputs.append(("mass", "mass", sol.undeformed[-1][5]))
-        return Contribution({t.start_body: attached.on_start, t.end_body: attached.on_end}, attached.rows,
-                            outputs, sol.energy, _centre_line(shooting, sol, samples), merged=shooting.uniform)
+        return Contribution(
+            {t.start_body: attached.on_start, t.end_body: attached.on_end},
+            attached.rows,
+            outputs,
+            sol.energy,
+            _centre_line(shooting, sol, samples),
+            merged=shooting.uniform,
+        )
 
     def unknowns(self, t: LinkTopology) -> list[tuple[str, str]]:
         """h, v, rotation_start, M_start, then nodeK.psi, .m, .dx, .dy of the inner nodes."""
         names = [("h", "force"), ("v", "force"), ("rotation_start", "angle"), ("M_start", "moment")]
         for k in range(1, t.intervals):
-            names += [(f"node{k}.{q}", kind) for q, kind in (("psi", "angle"), ("m", "moment"), ("dx", "length"),
-                                                             ("dy", "length"))]
+            names += [
+                (f"node{k}.{q}", kind)
+                for q, kind in (("psi", "angle"), ("m", "moment"), ("dx", "length"), ("dy", "length"))
+            ]
         return names
 
     def energy_terms(self, ctx, t: LinkTopology, d):
-        raise NoEnergyForm("the shooting unknowns of a link mix internal forces and displacements, so its "
-                           "balance is not the gradient of an energy in them; give the link \"discretization\": "
-                           "\"elements\" for minimum energy and contact")
+        raise NoEnergyForm(
+            "the shooting unknowns of a link mix internal forces and displacements, so its "
+            'balance is not the gradient of an energy in them; give the link "discretization": '
+            '"elements" for minimum energy and contact'
+        )
 
     def kinetic_energy(self, ctx, t: LinkTopology, d, v) -> None:
         if t.weighs:
-            raise NoMassForm("it has mass (its material's density), but its shooting unknowns have no mass "
-                             "matrix: time simulation of links needs the dynamic link model")
+            raise NoMassForm(
+                "it has mass (its material's density), but its shooting unknowns have no mass "
+                "matrix: time simulation of links needs the dynamic link model"
+            )
         return None
 
     def scale_hint(self, t: LinkTopology, values: SiValues) -> ScaleHint:
         E = values[f"/materials/{t.material}/E"]
-        return ScaleHint(length=t.geometry.size(values, t.name), EI=nominal_EI(values, t.section, E, values.length_unit_si))
+        return ScaleHint(
+            length=t.geometry.size(values, t.name), EI=nominal_EI(values, t.section, E, values.length_unit_si)
+        )
 
 
 def _collect_shape(c, base: str, shape, located: str) -> ShapeGeometry:
@@ -302,9 +275,22 @@ def exact_arc(c, name: str, el, start: int, end: int, geometry, section: Section
     """The exact model of a curved beam: a clamped-clamped link along its arc."""
     if el.order % 2:
         raise MechanismError(f"/elements/{name}/order", f"the integration order must be even, got {el.order}")
-    topology = LinkTopology(name, "link", start, end, "clamped", "clamped", geometry, el.material, section,
-                            False, False, el.intervals, el.order,
-                            c.has_density(el.material, needs_area=False, section=el.section))
+    topology = LinkTopology(
+        name,
+        "link",
+        start,
+        end,
+        "clamped",
+        "clamped",
+        geometry,
+        el.material,
+        section,
+        False,
+        False,
+        el.intervals,
+        el.order,
+        c.has_density(el.material, needs_area=False, section=el.section),
+    )
     return as_elements(topology, el.degree) if el.discretization == "elements" else topology
 
 
@@ -331,8 +317,9 @@ def link_properties(ctx: AssemblyContext, t: LinkTopology) -> LinkProperties:
         rho = P[f"/materials/{t.material}/density"]
         line_mass = lambda u: length * rho * A(u)  # noqa: E731
         gravity = P.vec("/gravity") if "/gravity/0" in P else None
-    return LinkProperties(length, eta, start_point, EI, EA, kGA, section.fibre, section.half_thickness,
-                          line_mass, gravity)
+    return LinkProperties(
+        length, eta, start_point, EI, EA, kGA, section.fibre, section.half_thickness, line_mass, gravity
+    )
 
 
 def link_shooting(ctx: AssemblyContext, t: LinkTopology) -> LinkShooting:

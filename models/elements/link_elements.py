@@ -16,7 +16,8 @@ import casadi as ca
 
 from models.context import AssemblyContext
 from models.elements.base import CentreLine, Contribution, EnergyTerms, InertiaPoint, NoMassForm, ScaleHint, SiValues
-from models.elements.link import LINK, Link, LinkElementsTopology, link_properties
+from models.elements.link import LINK, LinkElementsTopology, link_properties
+from models.elements.link_schema import Link
 from models.elements.surfaces import ElementSurfaces, SurfacePoint
 from models.elements.variational import variational_parts
 from models.errors import MechanismError
@@ -48,8 +49,10 @@ class LinkElementsFamily:
 
     def check_simulated(self, t: LinkElementsTopology) -> None:
         if not t.weighs:
-            raise MechanismError(f"/materials/{t.material}/density", f"link '{t.name}' has no mass: give its "
-                                 f"material '{t.material}' a density")
+            raise MechanismError(
+                f"/materials/{t.material}/density",
+                f"link '{t.name}' has no mass: give its material '{t.material}' a density",
+            )
 
     def collect(self, c, name: str, el: Link, i: int, j: int) -> LinkElementsTopology:
         raise RuntimeError("links by elements are collected by the link family")
@@ -71,11 +74,14 @@ class LinkElementsFamily:
         arm_j = ctx.arm(j, ctx.body_axes(j, undeformed.node_position[-1]), d)
         start = ctx.reference(i)[0] + d[i][:2] + arm_i
         weighs = props.line_mass is not None and props.gravity is not None
-        kin = disc.kinematics(theta, strains.get("gamma"), strains.get("eps"), start,
-                              positions_at_quadrature=props.line_mass is not None)
+        kin = disc.kinematics(
+            theta, strains.get("gamma"), strains.get("eps"), start, positions_at_quadrature=props.line_mass is not None
+        )
         end_target = ctx.reference(j)[0] + d[j][:2] + arm_j
-        equalities = [("end.x", kin.node_position[-1][0] - end_target[0]),
-                      ("end.y", kin.node_position[-1][1] - end_target[1])]
+        equalities = [
+            ("end.x", kin.node_position[-1][0] - end_target[0]),
+            ("end.y", kin.node_position[-1][1] - end_target[1]),
+        ]
         if t.end == "clamped":
             equalities.append(("end.rotation", kin.node_psi[-1] - undeformed.node_psi[-1] - d[j][2]))
         energy = kin.strain_energy
@@ -84,17 +90,28 @@ class LinkElementsFamily:
                 energy = energy - point.weight * props.line_mass(ca.SX(point.u)) * ca.dot(props.gravity, point.position)
         half = props.half_thickness
         surface = [SurfacePoint(0.0, start, _normal(kin.node_psi[0]), half(ca.SX(0.0)) if half else None)]
-        surface += [SurfacePoint(q.u, q.position, q.normal, half(ca.SX(q.u)) if half else None, q.weight)
-                    for q in kin.contact_points]
-        surface.append(SurfacePoint(1.0, kin.node_position[-1], _normal(kin.node_psi[-1]),
-                                    half(ca.SX(1.0)) if half else None))
-        surfaces = ElementSurfaces({"start": (start, kin.node_psi[0]), "end": (kin.node_position[-1], kin.node_psi[-1])},
-                                   surface)
+        surface += [
+            SurfacePoint(q.u, q.position, q.normal, half(ca.SX(q.u)) if half else None, q.weight)
+            for q in kin.contact_points
+        ]
+        surface.append(
+            SurfacePoint(1.0, kin.node_position[-1], _normal(kin.node_psi[-1]), half(ca.SX(1.0)) if half else None)
+        )
+        surfaces = ElementSurfaces(
+            {"start": (start, kin.node_psi[0]), "end": (kin.node_position[-1], kin.node_psi[-1])}, surface
+        )
         inertia = []
         if props.line_mass is not None:  # its mass and the rotary inertia of its sections (rho I)
             density, second_moment = _density_and_I(ctx, t)
-            inertia = [InertiaPoint(q.position, q.weight * props.line_mass(ca.SX(q.u)), q.psi,
-                                    q.weight * props.length * density * second_moment(ca.SX(q.u))) for q in kin.points]
+            inertia = [
+                InertiaPoint(
+                    q.position,
+                    q.weight * props.line_mass(ca.SX(q.u)),
+                    q.psi,
+                    q.weight * props.length * density * second_moment(ca.SX(q.u)),
+                )
+                for q in kin.points
+            ]
         terms = EnergyTerms(energy, equalities, [], ca.vertcat(*parts), surfaces, inertia)
         return _Stated(terms, kin, undeformed, (arm_i, arm_j))
 
@@ -108,40 +125,56 @@ class LinkElementsFamily:
         def build(local):
             stated["s"] = s = self._state(ctx, t, local)
             kin = s.kinematics
-            extras = [kin.node_position[-1], kin.node_psi[0], kin.node_psi[-1], *kin.node_position,
-                      *[q.position for q in kin.contact_points], kin.elongation, *s.arms]
+            extras = [
+                kin.node_position[-1],
+                kin.node_psi[0],
+                kin.node_psi[-1],
+                *kin.node_position,
+                *[q.position for q in kin.contact_points],
+                kin.elongation,
+                *s.arms,
+            ]
             return s.terms, extras
 
         wrenches, rows, energy, extras = variational_parts((i, j), ctx.n_bodies, d, z, build)
         s = stated["s"]
         n_nodes, n_points = len(s.kinematics.node_position), len(s.kinematics.contact_points)
         end, psi_start, psi_end = extras[0], extras[1], extras[2]
-        nodes = extras[3:3 + n_nodes]
-        points = extras[3 + n_nodes:3 + n_nodes + n_points]
+        nodes = extras[3 : 3 + n_nodes]
+        points = extras[3 + n_nodes : 3 + n_nodes + n_points]
         elongation, arm_i, arm_j = extras[-3:]
         on_start, on_end = wrenches[i], wrenches[j]
         n_start = -on_start[:2]  # the internal force at u = 0 (what the part beyond exerts on the start)
         m_start = -(on_start[2] - cross(arm_i, on_start[:2]))
         m_end = on_end[2] - cross(arm_j, on_end[:2])
         und = s.undeformed
-        outputs = [("h", "force", n_start[0]), ("v", "force", n_start[1]),
-                   ("M_start", "moment", m_start), ("M_end", "moment", m_end),
-                   ("x_end", "length", end[0]), ("y_end", "length", end[1]),
-                   ("x_start", "length", nodes[0][0]), ("y_start", "length", nodes[0][1]),
-                   ("angle_start", "angle", psi_start), ("angle_end", "angle", psi_end),
-                   ("rotation_start", "angle", psi_start - und.node_psi[0]),
-                   ("rotation_end", "angle", psi_end - und.node_psi[-1]),
-                   ("length", "length", link_properties(ctx, t).length),
-                   ("x_end_undeformed", "length", und.node_position[-1][0]),
-                   ("y_end_undeformed", "length", und.node_position[-1][1]),
-                   ("energy", "energy", energy)]
+        outputs = [
+            ("h", "force", n_start[0]),
+            ("v", "force", n_start[1]),
+            ("M_start", "moment", m_start),
+            ("M_end", "moment", m_end),
+            ("x_end", "length", end[0]),
+            ("y_end", "length", end[1]),
+            ("x_start", "length", nodes[0][0]),
+            ("y_start", "length", nodes[0][1]),
+            ("angle_start", "angle", psi_start),
+            ("angle_end", "angle", psi_end),
+            ("rotation_start", "angle", psi_start - und.node_psi[0]),
+            ("rotation_end", "angle", psi_end - und.node_psi[-1]),
+            ("length", "length", link_properties(ctx, t).length),
+            ("x_end_undeformed", "length", und.node_position[-1][0]),
+            ("y_end_undeformed", "length", und.node_position[-1][1]),
+            ("energy", "energy", energy),
+        ]
         if t.axial:
             outputs.append(("elongation", "length", elongation))
         deformed = _ordered(nodes, points, s.kinematics)
         undeformed = _ordered(und.node_position, [q.position for q in und.contact_points], und)
         half = link_properties(ctx, t).half_thickness
         thickness = [half(ca.SX(u)) for u in _ordered_u(s.kinematics)] if half is not None else None
-        return Contribution({i: on_start, j: on_end}, rows, outputs, energy, CentreLine(deformed, undeformed, thickness))
+        return Contribution(
+            {i: on_start, j: on_end}, rows, outputs, energy, CentreLine(deformed, undeformed, thickness)
+        )
 
     def unknowns(self, t: LinkElementsTopology) -> list[tuple[str, str]]:
         first = 0 if t.start == "pinned" else 1
@@ -156,8 +189,10 @@ class LinkElementsFamily:
 
     def kinetic_energy(self, ctx, t: LinkElementsTopology, d, v):
         if t.weighs:
-            raise NoMassForm("its mass moves with its own variables, which the residual form's mass matrix does not "
-                             "see: the dynamics form (models.dynamics) carries it")
+            raise NoMassForm(
+                "its mass moves with its own variables, which the residual form's mass matrix does not "
+                "see: the dynamics form (models.dynamics) carries it"
+            )
         return None
 
     def scale_hint(self, t: LinkElementsTopology, values: SiValues) -> ScaleHint:

@@ -37,9 +37,13 @@ class PinFamily(JointFamily):
     def joint_outputs(self, ctx, t: JointTopology, d, lam):
         _, b, _, _ = joint_points(ctx, t, d)
         # The `to` body applies lam to the pin, so the pin (and through it `from`) applies -lam to `to`.
-        return [("Fx", "force", -lam[0]), ("Fy", "force", -lam[1]),
-                ("rotation", "angle", d[t.end_body][2] - d[t.start_body][2]),
-                ("x", "length", b[0]), ("y", "length", b[1])]
+        return [
+            ("Fx", "force", -lam[0]),
+            ("Fy", "force", -lam[1]),
+            ("rotation", "angle", d[t.end_body][2] - d[t.start_body][2]),
+            ("x", "length", b[0]),
+            ("y", "length", b[1]),
+        ]
 
 
 PIN = PinFamily()

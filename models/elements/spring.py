@@ -43,15 +43,21 @@ class Spring(TwoBodyElement):
 
     type: Literal["spring"]
     kind: Literal["translational", "torsional"] = "translational"
-    from_at: Vec2 | None = Field(default=None, description="translational: the point on `from` (global, "
-                                 "undeformed; default its reference point)")
+    from_at: Vec2 | None = Field(
+        default=None, description="translational: the point on `from` (global, undeformed; default its reference point)"
+    )
     to_at: Vec2 | None = Field(default=None, description="translational: the point on `to`")
     stiffness: Number | None = Field(default=None, description="force per length, or moment per angle")
-    law: str | None = Field(default=None, max_length=2000, description="force (moment) as a safe expression "
-                            "in x, the extension (rotation) in document units")
+    law: str | None = Field(
+        default=None,
+        max_length=2000,
+        description="force (moment) as a safe expression in x, the extension (rotation) in document units",
+    )
     parameters: dict[str, Number] = Field(default={}, description="named numbers of the law")
-    rest: Number | None = Field(default=None, description="rest length (translational, default: as drawn) or "
-                                "rest rotation (torsional, default 0)")
+    rest: Number | None = Field(
+        default=None,
+        description="rest length (translational, default: as drawn) or rest rotation (torsional, default 0)",
+    )
 
     @model_validator(mode="after")
     def _one_law(self):
@@ -87,15 +93,21 @@ class SpringFamily:
         for field_name, body in (("from_at", el.from_), ("to_at", el.to)):
             point = getattr(el, field_name)
             if point is not None and c.doc.bodies[body].joint:
-                raise MechanismError(f"{base}/{field_name}", f"a spring attaches to joint '{body}' at the joint "
-                                     f"itself: leave '{field_name}' out")
+                raise MechanismError(
+                    f"{base}/{field_name}",
+                    f"a spring attaches to joint '{body}' at the joint itself: leave '{field_name}' out",
+                )
             if point is not None:
                 c.add_vec(f"{base}/{field_name}", point, "length")
             locations.append("at" if point is not None else "reference")
         deflection = "length" if translational else "angle"
         if el.stiffness is not None:
-            c.add(f"{base}/stiffness", el.stiffness, "stiffness" if translational else "rotational_stiffness",
-                  "nonnegative")
+            c.add(
+                f"{base}/stiffness",
+                el.stiffness,
+                "stiffness" if translational else "rotational_stiffness",
+                "nonnegative",
+            )
         else:
             _collect_law(c, base, el)
             for kind in (deflection, "force", "length"):  # the law is written in document units
@@ -105,8 +117,9 @@ class SpringFamily:
         if not translational:
             c.holds_rotation(i)
             c.holds_rotation(j)
-        return SpringTopology(name, self.type, i, j, el.kind, *locations, el.law, tuple(el.parameters),
-                              el.rest is not None)
+        return SpringTopology(
+            name, self.type, i, j, el.kind, *locations, el.law, tuple(el.parameters), el.rest is not None
+        )
 
     def contribute(self, ctx: AssemblyContext, t: SpringTopology, d, z) -> Contribution:
         x, geometry = _deflection(ctx, t, d)
@@ -114,15 +127,23 @@ class SpringFamily:
         energy = _energy(ctx, t, x)
         i, j = t.start_body, t.end_body
         if t.kind == "torsional":
-            return Contribution({i: ca.vertcat(0, 0, -F), j: ca.vertcat(0, 0, F)},
-                                outputs=[("M", "moment", F), ("rotation", "angle", x), ("energy", "energy", energy)],
-                                energy=energy)
+            return Contribution(
+                {i: ca.vertcat(0, 0, -F), j: ca.vertcat(0, 0, F)},
+                outputs=[("M", "moment", F), ("rotation", "angle", x), ("energy", "energy", energy)],
+                energy=energy,
+            )
         a, b, arm_a, arm_b, length = geometry
         pull = F * (b - a) / length  # the force body `to` applies to the spring at b (tension: away from a)
-        return Contribution({i: ca.vertcat(-pull, cross(arm_a, -pull)), j: ca.vertcat(pull, cross(arm_b, pull))},
-                            outputs=[("F", "force", F), ("extension", "length", x), ("length", "length", length),
-                                     ("energy", "energy", energy)],
-                            energy=energy)
+        return Contribution(
+            {i: ca.vertcat(-pull, cross(arm_a, -pull)), j: ca.vertcat(pull, cross(arm_b, pull))},
+            outputs=[
+                ("F", "force", F),
+                ("extension", "length", x),
+                ("length", "length", length),
+                ("energy", "energy", energy),
+            ],
+            energy=energy,
+        )
 
     def unknowns(self, t: SpringTopology) -> list[tuple[str, str]]:
         return []
@@ -146,8 +167,10 @@ def _collect_law(c, base: str, el: Spring) -> None:
     env = {}
     for key, value in el.parameters.items():
         if not key.isidentifier() or key in reserved:
-            raise MechanismError(f"{base}/parameters/{key}", f"'{key}' cannot name a parameter (use a name like k3, "
-                                 f"not x, pi, e or a function name)")
+            raise MechanismError(
+                f"{base}/parameters/{key}",
+                f"'{key}' cannot name a parameter (use a name like k3, not x, pi, e or a function name)",
+            )
         c.add(f"{base}/parameters/{key}", value, "dimensionless")
         env[key] = c.values[-1]
     build = compile_expression(el.law, f"{base}/law", "x", tuple(el.parameters))

@@ -55,8 +55,11 @@ class ParameterBook:
         """A stand-in for an expression of the numbers alone (a stiffness matrix, a drawn point
         in body axes): computed once per run, not at every step."""
         if self._derived:  # in the numbers alone, so that p evaluates in one pass
-            expression = ca.substitute(expression, ca.vertcat(*[ca.vec(s) for s, _ in self._derived]),
-                                       ca.vertcat(*[ca.vec(e) for _, e in self._derived]))
+            expression = ca.substitute(
+                expression,
+                ca.vertcat(*[ca.vec(s) for s, _ in self._derived]),
+                ca.vertcat(*[ca.vec(e) for _, e in self._derived]),
+            )
         symbol = ca.SX.sym(f"derived{len(self._derived)}", expression.shape)
         self._derived.append((symbol, expression))
         return symbol
@@ -77,8 +80,11 @@ class ParameterBook:
     def symbols(self) -> ca.SX:
         """The numbers, then the hoisted expressions, then the computed blocks: the graphs'
         parameter vector p."""
-        base = list(self._symbols) + [ca.vec(symbol) for symbol, _ in self._derived] + [
-            ca.vec(symbol) for symbol, _, _ in self._computed]
+        base = (
+            list(self._symbols)
+            + [ca.vec(symbol) for symbol, _ in self._derived]
+            + [ca.vec(symbol) for symbol, _, _ in self._computed]
+        )
         return ca.vertcat(*base) if base else ca.SX(0, 1)
 
     def _beyond_numbers(self) -> ca.Function | None:
@@ -89,8 +95,11 @@ class ParameterBook:
         x = ca.MX.sym("numbers", numbers.numel())
         computed = [function(ca.Function("inputs", [numbers], [inputs])(x)) for _, function, inputs in self._computed]
         # hoisted expressions may hold computed blocks (a point where a computed end lies)
-        hoisted = ca.Function("hoisted", [numbers, *[symbol for symbol, _, _ in self._computed]],
-                              [ca.vertcat(*[ca.vec(e) for _, e in self._derived])])
+        hoisted = ca.Function(
+            "hoisted",
+            [numbers, *[symbol for symbol, _, _ in self._computed]],
+            [ca.vertcat(*[ca.vec(e) for _, e in self._derived])],
+        )
         return ca.Function("beyond_numbers", [x], [ca.vertcat(hoisted(x, *computed), *[ca.vec(c) for c in computed])])
 
     def parameter_vector(self, values=None) -> np.ndarray:

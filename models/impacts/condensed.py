@@ -36,14 +36,25 @@ def condensed_flexure(rb: BodyCoordinates, name: str) -> tuple[ca.SX, ca.SX, ca.
     doc, base = rb.book.document, f"/elements/{name}"
     element = doc.elements[name]
     i, j = rb.body(element.from_, f"{base}/from"), rb.body(element.to, f"{base}/to")
-    alone = doc.model_copy(update={**NOT_SECTIONS, "elements": {name: element}, "gravity": None, "bodies": {
-        element.from_: doc.bodies[element.from_].model_copy(update={"fixed": True}),
-        element.to: doc.bodies[element.to].model_copy(update={"fixed": False})}})
+    alone = doc.model_copy(
+        update={
+            **NOT_SECTIONS,
+            "elements": {name: element},
+            "gravity": None,
+            "bodies": {
+                element.from_: doc.bodies[element.from_].model_copy(update={"fixed": True}),
+                element.to: doc.bodies[element.to].model_copy(update={"fixed": False}),
+            },
+        }
+    )
     mech = compile_mechanism(alone)
     free = mech.structure.free
     if len(free) != 3:
-        raise MechanismError(f"{base}/to", f"body '{element.to}' is not free in the element's own statics: an "
-                             "impact simulation condenses the element onto its end body")
+        raise MechanismError(
+            f"{base}/to",
+            f"body '{element.to}' is not free in the element's own statics: an "
+            "impact simulation condenses the element onto its end body",
+        )
     _check_unloaded(mech, base)
     numbers = parameters_of(rb, mech, scaled=False)
     stiffness, end = _stiffness_function(mech, name)
@@ -58,9 +69,12 @@ def condensed_flexure(rb: BodyCoordinates, name: str) -> tuple[ca.SX, ca.SX, ca.
 def _check_unloaded(mech, base: str) -> None:
     residual = np.asarray(mech.graphs.residual(np.zeros(mech.n_free), mech.p())).ravel()
     if np.abs(residual).max() > UNDEFORMED_TOLERANCE:
-        raise MechanismError(f"{base}/type", "this element is loaded in its drawn state (its undeformed unknowns "
-                             "are not an equilibrium), and impact simulations take it by its stiffness about that "
-                             "state")
+        raise MechanismError(
+            f"{base}/type",
+            "this element is loaded in its drawn state (its undeformed unknowns "
+            "are not an equilibrium), and impact simulations take it by its stiffness about that "
+            "state",
+        )
 
 
 def _check_holds(stiffness: ca.Function, mech, base: str, body: str) -> None:
@@ -69,10 +83,13 @@ def _check_holds(stiffness: ca.Function, mech, base: str, body: str) -> None:
     except RuntimeError:  # a singular solve: some motion of the end body meets no stiffness
         K = np.full((3, 3), np.nan)
     if not np.all(np.isfinite(K)) or np.linalg.cond(K) > 1e12:
-        raise MechanismError(f"{base}/type", f"the element's stiffness at body '{body}' is not finite and positive "
-                             "in every direction, and an impact simulation takes an element by that stiffness: an "
-                             "inextensible straight link is rigid along itself (give it \"axial\": true), a pinned "
-                             "end leaves its body free to turn (clamp it)")
+        raise MechanismError(
+            f"{base}/type",
+            f"the element's stiffness at body '{body}' is not finite and positive "
+            "in every direction, and an impact simulation takes an element by that stiffness: an "
+            'inextensible straight link is rigid along itself (give it "axial": true), a pinned '
+            "end leaves its body free to turn (clamp it)",
+        )
 
 
 def _stiffness_function(mech, name: str) -> tuple[ca.Function, ca.Function]:
@@ -103,5 +120,4 @@ def _stiffness_function(mech, name: str) -> tuple[ca.Function, ca.Function]:
     to_reference = ca.MX.eye(3)
     to_reference[0, 2], to_reference[1, 2] = arm[1], -arm[0]
     K = to_reference.T @ at_reference @ to_reference
-    return (ca.Function("condensed_stiffness", [numbers], [K]),
-            ca.Function("condensed_end", [numbers], [end * L]))
+    return (ca.Function("condensed_stiffness", [numbers], [K]), ca.Function("condensed_end", [numbers], [end * L]))

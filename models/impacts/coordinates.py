@@ -24,8 +24,15 @@ from models.impacts.book import ParameterBook
 from models.loads import kinetic_energy, load_potential
 from models.planar import rot
 
-NOT_SECTIONS = {"loads": {}, "outputs": {}, "contacts": None, "simulate": None, "sweep": None, "inverse": None,
-                "optimize": None}  # what the elements' energies never read
+NOT_SECTIONS = {
+    "loads": {},
+    "outputs": {},
+    "contacts": None,
+    "simulate": None,
+    "sweep": None,
+    "inverse": None,
+    "optimize": None,
+}  # what the elements' energies never read
 
 
 @dataclass
@@ -94,7 +101,7 @@ class BodyCoordinates:
         if b.drive is not None:
             return b.position + b.drive[:2] + rot(b.angle + b.drive[2]) @ b.centre_offset
         drawn = b.position + rot(b.angle) @ b.centre_offset
-        return drawn if b.first is None else drawn + self.q[b.first:b.first + 2]
+        return drawn if b.first is None else drawn + self.q[b.first : b.first + 2]
 
     def turn(self, b: Body) -> ca.SX:
         return b.angle + self.rotation(b)
@@ -123,7 +130,7 @@ class BodyCoordinates:
         Q = ca.SX.zeros(self.size)
         if b.first is not None:
             arm = at - self.centre(b)
-            Q[b.first:b.first + 2] = force
+            Q[b.first : b.first + 2] = force
             Q[b.first + 2] = arm[0] * force[1] - arm[1] * force[0]
         return Q
 
@@ -169,11 +176,15 @@ class BodyCoordinates:
 def _check_inertia(book: ParameterBook, name: str, body) -> None:
     base = f"/bodies/{name}"
     if body.mass is None:
-        raise MechanismError(f"{base}/mass", f"body '{name}' moves and has no mass: an impact simulation needs every "
-                             "free body's mass and inertia")
+        raise MechanismError(
+            f"{base}/mass",
+            f"body '{name}' moves and has no mass: an impact simulation needs every free body's mass and inertia",
+        )
     if body.inertia is None:
-        raise MechanismError(f"{base}/inertia", f"body '{name}' moves and has no inertia: give its moment of inertia "
-                             "about its reference point")
+        raise MechanismError(
+            f"{base}/inertia",
+            f"body '{name}' moves and has no inertia: give its moment of inertia about its reference point",
+        )
     book.number(f"{base}/mass", body.mass, "mass", "positive")
     book.number(f"{base}/inertia", body.inertia, "inertia", "positive")
 

@@ -12,6 +12,7 @@ the histories enter as expressions of the time symbol t."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import casadi as ca
@@ -73,32 +74,44 @@ class ImpactModel:
         return G, g_t, gamma
 
     def coordinate_names(self) -> list[str]:
-        return [f"{b.name}.{c}" for b in self.bodies.bodies.values() if b.first is not None for c in ("x", "y", "theta")]
+        return [
+            f"{b.name}.{c}" for b in self.bodies.bodies.values() if b.first is not None for c in ("x", "y", "theta")
+        ]
 
     def structure_key(self) -> str:
         """What decides the graphs (not the numbers)."""
         doc = self.book.document
-        parts = [str(self.turning), ",".join(self.book.pointers),
-                 str(self.book.symbols.numel())]
+        parts = [str(self.turning), ",".join(self.book.pointers), str(self.book.symbols.numel())]
         parts += [f"{b.name}:{b.first}" for b in self.bodies.bodies.values()]
-        parts += [f"{e.type}:{getattr(e, 'kind', '')}:{getattr(e, 'direction', '')}:{getattr(e, 'at', 0) is None}"
-                  for e in doc.elements.values()]
-        parts += [f"{k}:{getattr(v, 'type', '')}:{getattr(v, 'offset', None) is None}:{getattr(v, 'at', None) is None}"
-                  for k, v in doc.loads.items()]
+        parts += [
+            f"{e.type}:{getattr(e, 'kind', '')}:{getattr(e, 'direction', '')}:{getattr(e, 'at', 0) is None}"
+            for e in doc.elements.values()
+        ]
+        parts += [
+            f"{k}:{getattr(v, 'type', '')}:{getattr(v, 'offset', None) is None}:{getattr(v, 'at', None) is None}"
+            for k, v in doc.loads.items()
+        ]
         parts += [f"{p.name}:{p.law}:{p.friction}:{p.esdu is None}" for p in self.pairs]
-        parts += [f"{k}:{s.type}:{getattr(s, 'body', None)}:{len(getattr(s, 'vertices', ()))}"
-                  for group in (doc.contacts.sites, doc.contacts.objects) for k, s in group.items()]
+        parts += [
+            f"{k}:{s.type}:{getattr(s, 'body', None)}:{len(getattr(s, 'vertices', ()))}"
+            for group in (doc.contacts.sites, doc.contacts.objects)
+            for k, s in group.items()
+        ]
         return "|".join(parts + [self.history_key, self.element_key])
 
 
-def impact_model(document: MechanismDocument, histories: list[tuple[str, str, object]] = (),
-                 history_key: str = "") -> ImpactModel:
+def impact_model(
+    document: MechanismDocument, histories: list[tuple[str, str, object]] = (), history_key: str = ""
+) -> ImpactModel:
     """`histories`: (field pointer, where the history is given, t -> SI value as an SX) for
     the loads, gravity and prescribed displacements that change in time; `history_key` says
     what they are (they shape the graphs)."""
     if document.contacts is None or not document.contacts.pairs:
-        raise MechanismError("/contacts/pairs", "an impact simulation needs contact pairs: give the `contacts` section "
-                             "its sites (circles on bodies), objects and pairs")
+        raise MechanismError(
+            "/contacts/pairs",
+            "an impact simulation needs contact pairs: give the `contacts` section "
+            "its sites (circles on bodies), objects and pairs",
+        )
     book = ParameterBook(document)
     rb = BodyCoordinates(book)
     turning = document.simulate is not None and document.simulate.flexure_stiffness == "turning"
@@ -114,12 +127,7 @@ def impact_model(document: MechanismDocument, histories: list[tuple[str, str, ob
     alpha = document.simulate.damping if document.simulate is not None else 0.0
     damping = -book.add(DAMPING, alpha, "nonnegative", ("1/s", 1.0)) * mass * v
     loads, motions = _split(book, rb, histories, t)
-    moving_symbols = ca.vertcat(*[symbol for symbol, _ in motions]) if motions else ca.SX(0, 1)
-    moving_values = ca.vertcat(*[value for _, value in motions]) if motions else ca.SX(0, 1)
-
-    def driven(expr):  # the prescribed motions, in time
-        return ca.substitute(expr, moving_symbols, moving_values) if motions else expr
-
+    driven = _driver(motions)
     elastic, gravity, extra = driven(elastic), driven(gravity), driven(extra)
     for pair in pairs:
         _drive_pair(rb, pair, driven, t)
@@ -129,22 +137,57 @@ def impact_model(document: MechanismDocument, histories: list[tuple[str, str, ob
     V = elastic + held
     power = -ca.dot(ca.gradient(acting, q), v) + ca.jacobian(V, t)  # timed loads; moving supports
     g, joints, labels = joint_constraints(rb)
-    return ImpactModel(book, rb, pairs, mass, -ca.gradient(V + acting, q) + extra + damping, extra, damping,
-                       power, 0.5 * ca.dot(mass * v, v), elastic, held, turning, t, history_key, driven(g),
-                       tuple(joints), tuple(labels), element_key)
+    return ImpactModel(
+        book,
+        rb,
+        pairs,
+        mass,
+        -ca.gradient(V + acting, q) + extra + damping,
+        extra,
+        damping,
+        power,
+        0.5 * ca.dot(mass * v, v),
+        elastic,
+        held,
+        turning,
+        t,
+        history_key,
+        driven(g),
+        tuple(joints),
+        tuple(labels),
+        element_key,
+    )
 
 
 def _split(book: ParameterBook, rb: BodyCoordinates, histories, t) -> tuple[list, list]:
     """The histories' (symbol, value in t) pairs: loads and gravity, and prescribed motions."""
-    motions = {f"/loads/{name}/{part}" for name, load in book.document.loads.items() if load.type == "displacement"
-               for part in ("dx", "dy", "rotation")}
+    motions = {
+        f"/loads/{name}/{part}"
+        for name, load in book.document.loads.items()
+        if load.type == "displacement"
+        for part in ("dx", "dy", "rotation")
+    }
     loads, moving = [], []
     for pointer, where, history in histories:
         if not pointer.startswith(TIMED) or pointer not in book.pointers:
-            raise MechanismError(where, f"{pointer} cannot change in time in an impact simulation: histories take "
-                                 "the loads' force and moment components, gravity and prescribed displacements")
+            raise MechanismError(
+                where,
+                f"{pointer} cannot change in time in an impact simulation: histories take "
+                "the loads' force and moment components, gravity and prescribed displacements",
+            )
         (moving if pointer in motions else loads).append((book.add(pointer, 0.0), history(t)))
     return loads, moving
+
+
+def _driver(motions: list) -> Callable[[ca.SX], ca.SX]:
+    """The substitution of the prescribed motions' (symbol, value in t) pairs into an expression."""
+    moving_symbols = ca.vertcat(*[symbol for symbol, _ in motions]) if motions else ca.SX(0, 1)
+    moving_values = ca.vertcat(*[value for _, value in motions]) if motions else ca.SX(0, 1)
+
+    def driven(expr):  # the prescribed motions, in time
+        return ca.substitute(expr, moving_symbols, moving_values) if motions else expr
+
+    return driven
 
 
 def _drive_pair(rb: BodyCoordinates, pair: PairModel, driven, t) -> None:

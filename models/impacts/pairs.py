@@ -82,31 +82,59 @@ def pair_model(rb: BodyCoordinates, name: str, pair: ContactPair) -> PairModel:
     K, esdu = _stiffness(rb, base, law, normal, R1_si, R2_si, clearance, obj.type)
     c_r = book.add(f"{base}/normal/restitution", law.restitution, unit=ONE)
     if not 0 < law.restitution <= 1:
-        raise MechanismError(f"{base}/normal/restitution", f"the coefficient of restitution c_r must be in (0, 1], "
-                             f"got {law.restitution:g}")
+        raise MechanismError(
+            f"{base}/normal/restitution",
+            f"the coefficient of restitution c_r must be in (0, 1], got {law.restitution:g}",
+        )
     exponent = book.add(f"{base}/normal/exponent", law.exponent, "positive", ONE)
     friction, sliding, adherence, v0, v1 = _friction(book, base, pair)
     return PairModel(
-        name, law.law, friction.name, indentation, direction(n_c), direction(t_c), K, exponent, c_r, sliding, adherence,
-        v0, v1, esdu, scale, normal, friction, _damping(rb, base, law, normal), point=C, bodies=(body1, body2),
-        normal=n_c)
+        name,
+        law.law,
+        friction.name,
+        indentation,
+        direction(n_c),
+        direction(t_c),
+        K,
+        exponent,
+        c_r,
+        sliding,
+        adherence,
+        v0,
+        v1,
+        esdu,
+        scale,
+        normal,
+        friction,
+        _damping(rb, base, law, normal),
+        point=C,
+        bodies=(body1, body2),
+        normal=n_c,
+    )
 
 
 def _surfaces(contacts: Contacts, base: str, pair: ContactPair):
     """(the site, the object) of a pair, checked for an impact simulation."""
     if pair.site not in contacts.sites:
-        raise MechanismError(f"{base}/site", f"unknown site '{pair.site}' (sites: "
-                             f"{', '.join(contacts.sites) or 'none'})")
+        raise MechanismError(
+            f"{base}/site", f"unknown site '{pair.site}' (sites: {', '.join(contacts.sites) or 'none'})"
+        )
     if pair.object not in contacts.objects:
-        raise MechanismError(f"{base}/object", f"unknown object '{pair.object}' (objects: "
-                             f"{', '.join(contacts.objects) or 'none'})")
+        raise MechanismError(
+            f"{base}/object", f"unknown object '{pair.object}' (objects: {', '.join(contacts.objects) or 'none'})"
+        )
     site, obj = contacts.sites[pair.site], contacts.objects[pair.object]
     if site.type != "circle":
-        raise MechanismError(f"{base}/site", f"in a simulation a pair's site is a circle on a body (a pin, a roller); "
-                             f"'{pair.site}' is a {site.type}")
+        raise MechanismError(
+            f"{base}/site",
+            f"in a simulation a pair's site is a circle on a body (a pin, a roller); '{pair.site}' is a {site.type}",
+        )
     if obj.type not in IMPACT_OBJECTS:
-        raise MechanismError(f"{base}/object", f"in a simulation a circle touches a circle, a hole, a half_plane, a "
-                             f"polygon or an ellipse; '{pair.object}' is a {obj.type}")
+        raise MechanismError(
+            f"{base}/object",
+            f"in a simulation a circle touches a circle, a hole, a half_plane, a "
+            f"polygon or an ellipse; '{pair.object}' is a {obj.type}",
+        )
     return site, obj
 
 
@@ -116,23 +144,29 @@ def _friction(book, base: str, pair: ContactPair):
     if not isinstance(friction, FrictionFields):
         mu = book.number(f"{base}/friction", friction, "dimensionless")
         if book.value(f"{base}/friction") < 0:
-            raise MechanismError(f"{base}/friction", "a friction coefficient must not be negative, got "
-                                 f"{book.value(f'{base}/friction'):g}")
+            raise MechanismError(
+                f"{base}/friction",
+                f"a friction coefficient must not be negative, got {book.value(f'{base}/friction'):g}",
+            )
         law = FRICTION_LAWS["coulomb" if book.value(f"{base}/friction") > 0 else "none"]
         return law, mu, mu, DEFAULT_V0, DEFAULT_V1
     law = friction_law(friction.law, f"{base}/friction/law")
     for key in ("sliding", "adherence"):
         value = getattr(friction, key)
         if value is not None and value < 0:
-            raise MechanismError(f"{base}/friction/{key}", "a friction coefficient must not be negative, got "
-                                 f"{value:g}")
+            raise MechanismError(
+                f"{base}/friction/{key}", f"a friction coefficient must not be negative, got {value:g}"
+            )
     if law.speed_events and friction.v1 <= friction.v0:
         raise MechanismError(f"{base}/friction/v1", f"v1 ({friction.v1:g}) must exceed v0 ({friction.v0:g})")
     adherence = friction.adherence if friction.adherence is not None else friction.sliding
-    return (law, book.add(f"{base}/friction/sliding", friction.sliding, unit=ONE),
-            book.add(f"{base}/friction/adherence", adherence, unit=ONE),
-            book.add(f"{base}/friction/v0", friction.v0, "positive", SPEED),
-            book.add(f"{base}/friction/v1", friction.v1, "positive", SPEED))
+    return (
+        law,
+        book.add(f"{base}/friction/sliding", friction.sliding, unit=ONE),
+        book.add(f"{base}/friction/adherence", adherence, unit=ONE),
+        book.add(f"{base}/friction/v0", friction.v0, "positive", SPEED),
+        book.add(f"{base}/friction/v1", friction.v1, "positive", SPEED),
+    )
 
 
 def _geometry(rb: BodyCoordinates, name: str, pair: ContactPair, site, obj, body1, body2):
@@ -158,8 +192,11 @@ def _geometry(rb: BodyCoordinates, name: str, pair: ContactPair, site, obj, body
     if obj.type == "hole":
         clearance = R2_si - R1_si
         if clearance <= 0:
-            raise MechanismError(f"{s2}/radius", f"the clearance of pair '{name}' (hole radius {R2_si:g} m minus "
-                                 f"pin radius {R1_si:g} m) must be positive, got {clearance:g} m")
+            raise MechanismError(
+                f"{s2}/radius",
+                f"the clearance of pair '{name}' (hole radius {R2_si:g} m minus "
+                f"pin radius {R1_si:g} m) must be positive, got {clearance:g} m",
+            )
         return R1, O1, *against_hole(O1, R1, O2, R2), clearance, R2_si, clearance
     return R1, O1, *against_circle(O1, R1, O2, R2), min(R1_si, R2_si), R2_si, None
 
@@ -168,8 +205,10 @@ def _polygon_nearest(rb: BodyCoordinates, body, pointer: str, obj, O1: ca.SX) ->
     book = rb.book
     position = book.vector(f"{pointer}/position", obj.position, "length")
     turn = rot(book.number(f"{pointer}/angle", obj.angle, "angle"))
-    corners = [rb.point(body, position + turn @ book.vector(f"{pointer}/vertices/{k}", vertex, "length"))
-               for k, vertex in enumerate(obj.vertices)]
+    corners = [
+        rb.point(body, position + turn @ book.vector(f"{pointer}/vertices/{k}", vertex, "length"))
+        for k, vertex in enumerate(obj.vertices)
+    ]
     return closest_on_polygon(corners, O1)
 
 
@@ -204,14 +243,23 @@ def _materials(rb: BodyCoordinates, pointer: str, names) -> list[tuple[float, fl
             raise MechanismError(f"{pointer}/{k}", f"unknown material '{name}' (materials: {', '.join(doc.materials)})")
         material = doc.materials[name]
         if material.nu is None:
-            raise MechanismError(f"/materials/{name}/nu", f"material '{name}' needs Poisson's ratio nu for the "
-                                 "contact stiffness")
+            raise MechanismError(
+                f"/materials/{name}/nu", f"material '{name}' needs Poisson's ratio nu for the contact stiffness"
+            )
         out.append((rb.book.si(material.E, "stress", f"/materials/{name}/E"), float(material.nu)))
     return out
 
 
-def _stiffness(rb: BodyCoordinates, base: str, law: NormalLawFields, normal: NormalLaw, R1: float, R2: float | None,
-               clearance: float | None, kind: str):
+def _stiffness(
+    rb: BodyCoordinates,
+    base: str,
+    law: NormalLawFields,
+    normal: NormalLaw,
+    R1: float,
+    R2: float | None,
+    clearance: float | None,
+    kind: str,
+):
     """(K symbol, ESDU numbers or None). A computed stiffness is a value of the book too; a
     law that needs none has K = 0."""
     book = rb.book
@@ -221,17 +269,25 @@ def _stiffness(rb: BodyCoordinates, base: str, law: NormalLawFields, normal: Nor
         if kind != "hole":
             raise MechanismError(f"{base}/normal/law", "the ESDU law (Eq. 18) is for a pin in a hole")
         if law.length is None or law.materials is None:
-            raise MechanismError(f"{base}/normal/length", "the lna_esdu law needs the contact `length` and the two "
-                                 "`materials`")
+            raise MechanismError(
+                f"{base}/normal/length", "the lna_esdu law needs the contact `length` and the two `materials`"
+            )
         (E1, nu1), (E2, nu2) = _materials(rb, f"{base}/normal/materials", law.materials)
-        sigma = book.add(f"{base}/normal/compliance_sum", (1 - nu1**2) / E1 + (1 - nu2**2) / E2, "positive",
-                         ("1/Pa", 1.0))
-        esdu = (sigma, book.number(f"{base}/normal/length", law.length, "length", "positive"),
-                book.add(f"{base}/clearance", clearance, "positive", ("m", 1.0)))
+        sigma = book.add(
+            f"{base}/normal/compliance_sum", (1 - nu1**2) / E1 + (1 - nu2**2) / E2, "positive", ("1/Pa", 1.0)
+        )
+        esdu = (
+            sigma,
+            book.number(f"{base}/normal/length", law.length, "length", "positive"),
+            book.add(f"{base}/clearance", clearance, "positive", ("m", 1.0)),
+        )
     if law.stiffness is None:
         if "stiffness" in normal.needs:
-            raise MechanismError(pointer, f"the {normal.name} law needs the stiffness K (a number in the document's "
-                                 "force / length^exponent, or computed from the materials)")
+            raise MechanismError(
+                pointer,
+                f"the {normal.name} law needs the stiffness K (a number in the document's "
+                "force / length^exponent, or computed from the materials)",
+            )
         return ca.SX(0), esdu
     if isinstance(law.stiffness, str):
         raise MechanismError(pointer, "give K as a number, in the document's force / length^exponent")
@@ -239,8 +295,9 @@ def _stiffness(rb: BodyCoordinates, base: str, law: NormalLawFields, normal: Nor
         exponent = law.exponent if "exponent" in normal.needs else 1.0
         per = book.si(1.0, "force", pointer) / book.si(1.0, "length", pointer) ** exponent
         units = book.document.units
-        return book.add(pointer, float(law.stiffness) * per, "positive",
-                        (f"{units.force}/{units.length}^{exponent:g}", per)), esdu
+        return book.add(
+            pointer, float(law.stiffness) * per, "positive", (f"{units.force}/{units.length}^{exponent:g}", per)
+        ), esdu
     spec = law.stiffness
     (E1, nu1), (E2, nu2) = _materials(rb, f"{pointer}/materials", spec.materials)
     length = None

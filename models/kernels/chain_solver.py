@@ -45,7 +45,7 @@ from functools import cache, cached_property
 import casadi as ca
 import numpy as np
 
-from models.kernels.link_chain import NODE, ChainSignature
+from models.kernels.chain_signature import NODE, ChainSignature
 
 BORDER = 6
 FLAGS = ("first", "last")  # per block: the chain's first block (B_0), its last (B_N)
@@ -102,7 +102,7 @@ class BlockLayout:
     def row_slots(self) -> list[tuple[int, int]]:
         """(block, row slot) of each of an element's n_rows rows: gen by its coordinate's
         slot, F_j's rows in B_j, rho, v, a of node j+1 in B_{j+1}."""
-        rows = self.unknown_slots[:self.signature.n_c]
+        rows = self.unknown_slots[: self.signature.n_c]
         rows += [(0, self.aux(6)), (0, self.aux(7))]
         rows += [(1, self.aux(j)) for j in range(6)]
         return rows
@@ -123,8 +123,8 @@ def _lu(D: ca.SX) -> ca.SX:
     quantities' definitions), or 1 (dummies): no pivoting is needed."""
     A = ca.SX(D)
     for k in range(D.shape[0] - 1):  # a column and a rank-one update per pivot, as matrix operations
-        A[k + 1:, k] = A[k + 1:, k] / A[k, k]
-        A[k + 1:, k + 1:] = A[k + 1:, k + 1:] - ca.mtimes(A[k + 1:, k], A[k, k + 1:])
+        A[k + 1 :, k] = A[k + 1 :, k] / A[k, k]
+        A[k + 1 :, k + 1 :] = A[k + 1 :, k + 1 :] - ca.mtimes(A[k + 1 :, k], A[k, k + 1 :])
     return A
 
 
@@ -178,7 +178,7 @@ class _Split:
         theta_out = np.zeros(layout.size)
         theta_out[layout.theta] = 1.0
         force_out = np.zeros(layout.size)
-        force_out[layout.aux(6):layout.aux(8)] = 1.0
+        force_out[layout.aux(6) : layout.aux(8)] = 1.0
         R0, R1 = (ca.DM(layout.selection(b, "rows")) for b in (0, 1))
         C0, C1 = (ca.DM(layout.selection(b, "unknowns")) for b in (0, 1))
         keep0 = 1 - clamped * ca.DM(theta_out)  # B_j slots that stay (rows and columns)
@@ -215,7 +215,7 @@ class SolverFunctions:
 def _unpack(k: ca.SX, sizes: list[tuple[int, int]]) -> list[ca.SX]:
     parts, o = [], 0
     for rows, cols in sizes:
-        parts.append(ca.reshape(k[o:o + rows * cols], rows, cols))
+        parts.append(ca.reshape(k[o : o + rows * cols], rows, cols))
         o += rows * cols
     return parts
 
@@ -223,8 +223,12 @@ def _unpack(k: ca.SX, sizes: list[tuple[int, int]]) -> list[ca.SX]:
 def solver_functions(signature: ChainSignature) -> SolverFunctions:
     layout = BlockLayout(signature)
     factor, kept_size = _factor_function(signature, layout)
-    return SolverFunctions(factor, _backward_function(signature, layout, kept_size),
-                           _substitute_function(signature, layout, kept_size), kept_size)
+    return SolverFunctions(
+        factor,
+        _backward_function(signature, layout, kept_size),
+        _substitute_function(signature, layout, kept_size),
+        kept_size,
+    )
 
 
 def _kept(layout: BlockLayout, k: ca.SX) -> list[ca.SX]:
@@ -269,11 +273,22 @@ def _factor_function(signature: ChainSignature, layout: BlockLayout) -> tuple[ca
     kept = ca.vertcat(ca.vec(LU), ca.vec(Y_L), ca.vec(Y_C), ca.vec(WY), ca.vec(U))
     factor = ca.Function(
         f"{signature.key}_factor",
-        [ca.vertcat(ca.vec(carry_D), ca.vec(carry_C), ca.vec(carry_W), ca.vec(carry_S)), J_this, f_this, J_prev,
-         f_prev, extra_D, extra_C, extra_W, flags],
+        [
+            ca.vertcat(ca.vec(carry_D), ca.vec(carry_C), ca.vec(carry_W), ca.vec(carry_S)),
+            J_this,
+            f_this,
+            J_prev,
+            f_prev,
+            extra_D,
+            extra_C,
+            extra_W,
+            flags,
+        ],
         [ca.vertcat(ca.vec(next_D), ca.vec(next_C), ca.vec(next_W), ca.vec(next_S)), kept],
         ["carry", "J", "element", "J_prev", "element_prev", "extra_D", "extra_C", "extra_W", "flags"],
-        ["next", "kept"], {"cse": True})
+        ["next", "kept"],
+        {"cse": True},
+    )
     return factor, kept.numel()
 
 
@@ -289,9 +304,9 @@ def _backward_function(signature: ChainSignature, layout: BlockLayout, kept_size
     LU_k, _, _, WY_k, U_k = _kept(layout, k)
     # element outputs of the forward sweep, packed: gen rows without the end force, f, lever dDelta/dc
     packed_this, packed_prev = ca.SX.sym("packed", 3 * n_c + 2), ca.SX.sym("packed_prev", 3 * n_c + 2)
-    gen_this, force_this = packed_this[:n_c], packed_this[n_c:n_c + 2]
-    lever_this = ca.reshape(packed_this[n_c + 2:], 2, n_c)
-    gen_prev, lever_prev = packed_prev[:n_c], ca.reshape(packed_prev[n_c + 2:], 2, n_c)
+    gen_this, force_this = packed_this[:n_c], packed_this[n_c : n_c + 2]
+    lever_this = ca.reshape(packed_this[n_c + 2 :], 2, n_c)
+    gen_prev, lever_prev = packed_prev[:n_c], ca.reshape(packed_prev[n_c + 2 :], 2, n_c)
     # lambda_end (x, y) and lambda_rot at a chain's last block (zeros elsewhere)
     end = ca.SX.sym("end", 3)
     extra_b = ca.SX.zeros(n)
@@ -318,7 +333,9 @@ def _backward_function(signature: ChainSignature, layout: BlockLayout, kept_size
         [ca.vertcat(carry_F, carry_b, carry_border), k, packed_this, f_this, packed_prev, f_prev, end, flags],
         [ca.vertcat(F_j, next_b, border_rows), y, ca.vertcat(F_j, routed, ca.mmax(ca.fabs(b)))],
         ["carry", "kept", "packed", "element", "packed_prev", "element_prev", "end", "flags"],
-        ["next", "y", "node"], {"cse": True})
+        ["next", "y", "node"],
+        {"cse": True},
+    )
 
 
 def _substitute_function(signature: ChainSignature, layout: BlockLayout, kept_size: int) -> ca.Function:
@@ -329,5 +346,11 @@ def _substitute_function(signature: ChainSignature, layout: BlockLayout, kept_si
     _, Y_L_k, Y_C_k, _, _ = _kept(layout, k)
     x_prev, x_border, y_in = ca.SX.sym("x_prev", n), ca.SX.sym("x_border", nb), ca.SX.sym("y", n)
     x = y_in - ca.mtimes(Y_L_k, (1 - flags[0]) * x_prev[node]) - ca.mtimes(Y_C_k, x_border)
-    return ca.Function(f"{signature.key}_substitute", [x_prev, k, y_in, x_border, flags], [x, x],
-                       ["carry", "kept", "y", "x_border", "flags"], ["next", "x"], {"cse": True})
+    return ca.Function(
+        f"{signature.key}_substitute",
+        [x_prev, k, y_in, x_border, flags],
+        [x, x],
+        ["carry", "kept", "y", "x_border", "flags"],
+        ["next", "x"],
+        {"cse": True},
+    )

@@ -7,7 +7,8 @@ from __future__ import annotations
 
 import casadi as ca
 
-from models.kernels.link_chain import NODE, ChainSignature, ElementEquations, ElementSymbols, element_symbols
+from models.kernels.chain_signature import NODE, ChainSignature
+from models.kernels.link_chain import ElementEquations, ElementSymbols, element_symbols
 
 SWEEP_INPUTS = ["node", "u", "affine", "k", "damping", "gravity", "data", "start", "start_node"]
 SWEEP_OUTPUTS = ["next", "packed", "energies"]

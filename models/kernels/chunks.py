@@ -20,9 +20,10 @@ from functools import lru_cache
 
 import casadi as ca
 
+from models.kernels.chain_signature import ChainSignature
 from models.kernels.chain_solver import solver_functions
 from models.kernels.chain_sweep import sweep_function
-from models.kernels.link_chain import ChainSignature, jacobian_function
+from models.kernels.link_chain import jacobian_function
 
 CHUNK = 8
 
@@ -50,8 +51,9 @@ def chunk_of(kernel: ca.Function, carried: bool, size: int = CHUNK) -> ca.Functi
     steps = gated.mapaccum(f"{kernel.name()}_steps", size, [1], [0])
     inputs = [ca.MX.sym(f"i{i}", steps.sparsity_in(i)) for i in range(steps.n_in())]
     outputs = steps(*inputs)
-    return ca.Function(name, inputs, [outputs[0][:, -1], *outputs],
-                       ["go", *kernel.name_in()], ["last", *kernel.name_out()])
+    return ca.Function(
+        name, inputs, [outputs[0][:, -1], *outputs], ["go", *kernel.name_in()], ["last", *kernel.name_out()]
+    )
 
 
 @dataclass(frozen=True)
@@ -66,13 +68,23 @@ class Chunks:
     factor_size: int
 
     def functions(self) -> dict[str, ca.Function]:
-        return {"sweep": self.sweep, "jacobian": self.jacobian, "factor": self.factor, "backward": self.backward,
-                "substitute": self.substitute}
+        return {
+            "sweep": self.sweep,
+            "jacobian": self.jacobian,
+            "factor": self.factor,
+            "backward": self.backward,
+            "substitute": self.substitute,
+        }
 
 
 @lru_cache(maxsize=16)
 def chunks(signature: ChainSignature) -> Chunks:
     solver = solver_functions(signature)
-    return Chunks(chunk_of(sweep_function(signature), True), chunk_of(jacobian_function(signature), False),
-                  chunk_of(solver.factor, True), chunk_of(solver.backward, True), chunk_of(solver.substitute, True),
-                  solver.factor_size)
+    return Chunks(
+        chunk_of(sweep_function(signature), True),
+        chunk_of(jacobian_function(signature), False),
+        chunk_of(solver.factor, True),
+        chunk_of(solver.backward, True),
+        chunk_of(solver.substitute, True),
+        solver.factor_size,
+    )

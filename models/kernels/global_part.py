@@ -27,8 +27,8 @@ import numpy as np
 from models.contact.pair_forces import contact_forces
 from models.context import AssemblyContext
 from models.elements import FAMILIES
+from models.kernels.chain_signature import data_layout
 from models.kernels.layout import KernelLayout
-from models.kernels.link_chain import data_layout
 from models.kernels.link_data import link_data
 from models.loads import kinetic_energy, load_potential
 
@@ -63,18 +63,19 @@ def global_part(layout: KernelLayout, moving: tuple[int, ...], level: str = "pos
     # value: rows of prescribed coordinates too
     n_own = n_xg - len(s.free)
     Q, Qd, Qdd = (ca.SX.sym(name, 3 * n_b + n_own) for name in ("Q", "Qd", "Qdd"))
-    D, Dd = Q[:3 * n_b], Qd[:3 * n_b]
-    d = [D[3 * b:3 * b + 3] for b in range(n_b)]
-    potential, lagrangian, own_rows, equalities = _elements(ctx, layout, d, Q[3 * n_b:], lam)
+    D, Dd = Q[: 3 * n_b], Qd[: 3 * n_b]
+    d = [D[3 * b : 3 * b + 3] for b in range(n_b)]
+    potential, lagrangian, own_rows, equalities = _elements(ctx, layout, d, Q[3 * n_b :], lam)
     caps, start_rows, end_theta = _chain_ends(ctx, layout, d, lam, starts, ends, (Q, Qd, Qdd), k, level, equalities)
     equality_rows = [_held(row, level, kx, Q, Qd, Qdd) for row in equalities]
-    kinetic = kinetic_energy(ctx, d, [Dd[3 * b:3 * b + 3] for b in range(n_b)])
-    momentum = ca.gradient(kinetic, Qd)
-    mass = ca.jacobian(momentum, Qd)
-    inertia = ca.mtimes(mass, Qdd) + ca.jtimes(momentum, Q, Qd) - ca.gradient(kinetic, Q)
-    pairs = contact_forces(ctx, d, [Dd[3 * b:3 * b + 3] for b in range(n_b)])
-    q_rows = (inertia + damping * ca.mtimes(mass, Qd) + ca.gradient(lagrangian + caps, Q)
-              - ca.vertcat(*pairs.wrenches, ca.SX.zeros(n_own)))
+    kinetic, mass, inertia = _body_inertia(ctx, d, [Dd[3 * b : 3 * b + 3] for b in range(n_b)], Q, Qd, Qdd)
+    pairs = contact_forces(ctx, d, [Dd[3 * b : 3 * b + 3] for b in range(n_b)])
+    q_rows = (
+        inertia
+        + damping * ca.mtimes(mass, Qd)
+        + ca.gradient(lagrangian + caps, Q)
+        - ca.vertcat(*pairs.wrenches, ca.SX.zeros(n_own))
+    )
     # the varying loads: V enters linearly in them; their power through the free coordinates
     free = np.zeros(3 * n_b + n_own)
     free[[3 * b + c for b, c in s.free]] = 1.0
@@ -83,20 +84,46 @@ def global_part(layout: KernelLayout, moving: tuple[int, ...], level: str = "pos
     rows = ca.vertcat(q_rows, ca.vertcat(*equality_rows) if equality_rows else ca.SX(0, 1))
     values, rates, accelerations = _body_values(ctx, moving, X, V, A, pdot, pddot)
     old = ca.vertcat(Q, Qd, Qdd)
-    new = ca.vertcat(values, X[len(s.free):], rates, V[len(s.free):], accelerations, A[len(s.free):])
+    new = ca.vertcat(values, X[len(s.free) :], rates, V[len(s.free) :], accelerations, A[len(s.free) :])
     starts_rows = ca.vertcat(*start_rows) if start_rows else ca.SX(0, 1)
     rows, starts_rows, kinetic, potential, held, power, friction_power, contact_damping_power = ca.substitute(
-        [rows, starts_rows, kinetic, potential, held, power, pairs.friction_power, pairs.damping_power], [old], [new])
-    newton_rows = ca.vertcat(*[rows[3 * b + c] for b, c in s.free], rows[3 * n_b:])
-    start_C, start_W = _start_blocks(layout, uG, rows, starts_rows, starts)
+        [rows, starts_rows, kinetic, potential, held, power, pairs.friction_power, pairs.damping_power], [old], [new]
+    )
     inputs = [uG, affine, k, starts, ends, p, pdot, pddot, damping, mask]
-    outputs = [rows, ca.jacobian(newton_rows, uG), starts_rows, ca.horzcat(*start_C) if start_C else ca.SX(6, 0),
-               ca.horzcat(*start_W) if start_W else ca.SX(3, 0), ca.vertcat(*end_theta) if end_theta else ca.SX(0, 1),
-               ca.vertcat(kinetic, potential, held, power, friction_power, contact_damping_power)]
+    energies = [kinetic, potential, held, power, friction_power, contact_damping_power]
+    outputs = _outputs(layout, uG, starts, rows, starts_rows, end_theta, energies)
     fn = ca.Function(f"global_part_{level}", inputs, outputs, list(INPUTS), list(OUTPUTS), {"cse": True})
     if fn.has_free():
         raise RuntimeError(f"global part has free symbols {fn.get_free()}")
     return fn
+
+
+def _body_inertia(ctx, d, d_rates, Q, Qd, Qdd) -> tuple[ca.SX, ca.SX, ca.SX]:
+    """(kinetic energy, mass matrix, inertia rows): Lagrange's equations of the bodies' kinetic
+    energy, in the coordinates Q and their rates Qd, Qdd."""
+    kinetic = kinetic_energy(ctx, d, d_rates)
+    momentum = ca.gradient(kinetic, Qd)
+    mass = ca.jacobian(momentum, Qd)
+    inertia = ca.mtimes(mass, Qdd) + ca.jtimes(momentum, Q, Qd) - ca.gradient(kinetic, Q)
+    return kinetic, mass, inertia
+
+
+def _outputs(layout: KernelLayout, uG, starts, rows, starts_rows, end_theta: list, energies: list) -> list[ca.SX]:
+    """The part's outputs (OUTPUTS) from its rows in the unknowns: the Newton rows' derivative,
+    the chains' start blocks and end angles, and the energies (ENERGIES)."""
+    s = layout.structure
+    n_b = len(s.bodies)
+    newton_rows = ca.vertcat(*[rows[3 * b + c] for b, c in s.free], rows[3 * n_b :])
+    start_C, start_W = _start_blocks(layout, uG, rows, starts_rows, starts)
+    return [
+        rows,
+        ca.jacobian(newton_rows, uG),
+        starts_rows,
+        ca.horzcat(*start_C) if start_C else ca.SX(6, 0),
+        ca.horzcat(*start_W) if start_W else ca.SX(3, 0),
+        ca.vertcat(*end_theta) if end_theta else ca.SX(0, 1),
+        ca.vertcat(*energies),
+    ]
 
 
 def _chain_ends(ctx, layout: KernelLayout, d, lam, starts, ends, Qs, k, level: str, equalities: list):
@@ -123,7 +150,7 @@ def _chain_ends(ctx, layout: KernelLayout, d, lam, starts, ends, Qs, k, level: s
         else:  # their second derivatives
             values = ca.vertcat(ends[2:4, c], ends[5, c])
             end_rows = [values[j] - _second_derivative(end_rows[j], Q, Qd, Qdd) for j in range(len(end_rows))]
-        equalities[m:m + len(end_rows)] = [("done", row) for row in end_rows]
+        equalities[m : m + len(end_rows)] = [("done", row) for row in end_rows]
         end_theta.append(lam[m + 2] if t.end == "clamped" else ca.SX(0))
     return caps, start_rows, end_theta
 
@@ -145,10 +172,18 @@ def _start_blocks(layout: KernelLayout, uG, rows, starts_rows, starts) -> tuple[
     start_C, start_W = [], []
     for c, chain in enumerate(layout.chains):
         b = chain.topology.start_body
-        block = starts_rows[6 * c:6 * c + 6]
-        start_C.append(ca.horzcat(*[ca.jacobian(block, uG[layout.x_global.index(s.free.index((b, q)))])
-                                    if (b, q) in s.free else ca.SX.zeros(6, 1) for q in range(3)]))
-        start_W.append(ca.jacobian(rows[3 * b:3 * b + 3], starts[6:8, c]))
+        block = starts_rows[6 * c : 6 * c + 6]
+        start_C.append(
+            ca.horzcat(
+                *[
+                    ca.jacobian(block, uG[layout.x_global.index(s.free.index((b, q)))])
+                    if (b, q) in s.free
+                    else ca.SX.zeros(6, 1)
+                    for q in range(3)
+                ]
+            )
+        )
+        start_W.append(ca.jacobian(rows[3 * b : 3 * b + 3], starts[6:8, c]))
     return start_C, start_W
 
 
@@ -168,7 +203,7 @@ def _elements(ctx, layout: KernelLayout, d, q_own, lam):
         t = s.elements[element]
         terms = FAMILIES.of(t).energy_terms(ctx, t, d)
         if n_own:
-            mine = q_own[k:k + n_own]
+            mine = q_own[k : k + n_own]
             terms_energy = ca.substitute(terms.energy, terms.variables, mine)
             eq = [ca.substitute(g, terms.variables, mine) for _, g in terms.equalities]
             k += n_own
@@ -178,7 +213,7 @@ def _elements(ctx, layout: KernelLayout, d, q_own, lam):
         element_lag = terms_energy + sum((lam[lam_offset + j] * g for j, g in enumerate(eq)), ca.SX(0))
         lagrangian = lagrangian + element_lag
         if n_own:
-            own_rows.append(ca.gradient(element_lag, q_own[k - n_own:k]))
+            own_rows.append(ca.gradient(element_lag, q_own[k - n_own : k]))
         for j, g in enumerate(eq):
             equalities[lam_offset + j] = g
     return potential, lagrangian, ca.vertcat(*own_rows) if own_rows else ca.SX(0, 1), equalities
@@ -199,7 +234,7 @@ def _end(ctx, chain, d, lam):
     data = link_data(ctx, t, signature)
     _, start_point, _ = t.geometry.build(ctx, t)
     o = sum(size for name, size in data_layout(signature) if name != "undeformed_increment")
-    end_point = start_point + ca.sum2(data[o:o + 2, :])
+    end_point = start_point + ca.sum2(data[o : o + 2, :])
     j = t.end_body
     target = ctx.place(j, ctx.body_axes(j, end_point), d)
     m = chain.multiplier_offset
@@ -249,17 +284,24 @@ def start_nodes(layout: KernelLayout, moving: tuple[int, ...]) -> ca.Function:
     u_x = uG[:n_xg]
     X, V, A = affine[:, 0] + k[0] * u_x, affine[:, 1] + k[1] * u_x, affine[:, 2] + k[2] * u_x
     D, Dd, Ddd = (ca.SX.sym(name, 3 * n_b) for name in ("D", "Dd", "Ddd"))
-    d = [D[3 * b:3 * b + 3] for b in range(n_b)]
+    d = [D[3 * b : 3 * b + 3] for b in range(n_b)]
     nodes = []
     for chain in layout.chains:
         start = _start_point(ctx, chain.topology, d)
         rate = ca.jtimes(start, D, Dd)
         nodes.append(ca.vertcat(start / k[3], rate, ca.jtimes(rate, D, Dd) + ca.jtimes(start, D, Ddd)))
     values, rates, accelerations = _body_values(ctx, moving, X, V, A, pdot, pddot)
-    out = ca.substitute(ca.horzcat(*nodes) if nodes else ca.SX(6, 0), ca.vertcat(D, Dd, Ddd),
-                        ca.vertcat(values, rates, accelerations))
-    fn = ca.Function("start_nodes", [uG, affine, k, p, pdot, pddot], [out], ["uG", "affine", "k", "p", "pdot", "pddot"],
-                     ["nodes"], {"cse": True})
+    out = ca.substitute(
+        ca.horzcat(*nodes) if nodes else ca.SX(6, 0), ca.vertcat(D, Dd, Ddd), ca.vertcat(values, rates, accelerations)
+    )
+    fn = ca.Function(
+        "start_nodes",
+        [uG, affine, k, p, pdot, pddot],
+        [out],
+        ["uG", "affine", "k", "p", "pdot", "pddot"],
+        ["nodes"],
+        {"cse": True},
+    )
     if fn.has_free():
         raise RuntimeError(f"start nodes have free symbols {fn.get_free()}")
     return fn

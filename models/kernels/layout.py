@@ -21,8 +21,8 @@ import numpy as np
 
 from models.elements import FAMILIES
 from models.elements.link import LinkElementsTopology
+from models.kernels.chain_signature import NODE, ChainSignature
 from models.kernels.chain_solver import BORDER, BlockLayout
-from models.kernels.link_chain import NODE, ChainSignature
 from models.kernels.link_data import signature_of
 from models.structure import Structure
 
@@ -117,7 +117,7 @@ class KernelLayout:
                 self.other_elements.append((k, len(x_names), own, len(lam_names)))
                 x_global += list(range(len(x_names), len(x_names) + own))
             x_names += names[:own]
-            lam_names += names[own:own + eq]
+            lam_names += names[own : own + eq]
         self.groups = list(groups.values())
         self.x_names, self.lam_names = tuple(x_names), tuple(lam_names)
         self.x_global = tuple(x_global)
@@ -170,7 +170,7 @@ class KernelLayout:
             size, bl = g.blocks.size, g.blocks
             for c in g.chains:
                 for e in range(c.n_elements):
-                    for i, (which, slot) in enumerate(bl.unknown_slots[:g.signature.n_c]):
+                    for i, (which, slot) in enumerate(bl.unknown_slots[: g.signature.n_c]):
                         x = c.coordinate_x(e, i)
                         if x is not None:
                             out[x] = offset + (c.first_block + e + which) * size + slot

@@ -37,66 +37,14 @@ differentiating the graph would take ten.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cache, cached_property
+from functools import cache
 
 import casadi as ca
 import numpy as np
 
-from models.kernels.rules import ElementPoints, element_points
+from models.kernels.chain_signature import NODE, ChainSignature, split_data
 
-NODE = 8  # rho, v, a, F: 2 each
 ENERGIES = ("kinetic", "strain", "first_moment_x", "first_moment_y", "momentum_x", "momentum_y")
-
-
-@dataclass(frozen=True)
-class ChainSignature:
-    """What shapes the element kernel: the rotation's degree, the strains, the point rule."""
-
-    degree: int
-    shear: bool
-    axial: bool
-    rule: str = "interpolated"
-
-    @property
-    def n_c(self) -> int:
-        return (self.degree + 1) + self.degree * (int(self.shear) + int(self.axial))
-
-    @property
-    def n_local(self) -> int:
-        """Unknowns of one element: its coordinates, then node e's and node e+1's quantities."""
-        return self.n_c + 2 * NODE
-
-    @property
-    def n_rows(self) -> int:
-        return self.n_c + 8
-
-    @property
-    def key(self) -> str:
-        return f"chain_p{self.degree}{'s' if self.shear else ''}{'a' if self.axial else ''}_{self.points.key}"
-
-    @cached_property
-    def points(self) -> ElementPoints:
-        return element_points(self.degree, self.rule)
-
-    @property
-    def n_data(self) -> int:
-        return sum(size for _, size in data_layout(self))
-
-
-def data_layout(signature: ChainSignature) -> list[tuple[str, int]]:
-    """(name, size) of one element's data vector, in order: everything that does not change
-    in time (geometry, section, material), computed once from the parameters."""
-    ns, nq = len(signature.points.xi), len(signature.points.quad_xi)
-    return [("du", 1), ("length", 1), ("eta_points", ns), ("eta_quad", nq), ("EI", nq), ("kGA", nq), ("EA", nq),
-            ("mass", nq), ("rotary", nq), ("undeformed_increment", 2)]
-
-
-def split_data(signature: ChainSignature, data) -> dict:
-    out, k = {}, 0
-    for name, size in data_layout(signature):
-        out[name] = data[k:k + size]
-        k += size
-    return out
 
 
 @dataclass
@@ -110,10 +58,10 @@ class _Fields:
 
 def _split(signature: ChainSignature, c: ca.SX) -> _Fields:
     p = signature.degree
-    rest = c[p + 1:]
+    rest = c[p + 1 :]
     gamma = rest[:p] if signature.shear else None
-    eps = (rest[p:2 * p] if signature.shear else rest[:p]) if signature.axial else None
-    return _Fields(c[:p + 1], gamma, eps)
+    eps = (rest[p : 2 * p] if signature.shear else rest[:p]) if signature.axial else None
+    return _Fields(c[: p + 1], gamma, eps)
 
 
 class _Tangents:
@@ -179,8 +127,11 @@ def _weighted_levers(signature: ChainSignature) -> ca.Function:
     blocks = [ca.SX.zeros(2, signature.degree + (k == 0)) for k in range(1 + signature.shear + signature.axial)]
     for s in range(ns):
         rotation, shear, axial = (levers[:, 3 * s + i] for i in range(3))
-        bases = [(rotation, pts.rotation[s])] + [(shear, pts.strain[s])] * signature.shear \
+        bases = (
+            [(rotation, pts.rotation[s])]
+            + [(shear, pts.strain[s])] * signature.shear
             + [(axial, pts.strain[s])] * signature.axial
+        )
         blocks = [block + weights[s] * ca.mtimes(lever, ca.DM(basis).T) for block, (lever, basis) in zip(blocks, bases)]
     return ca.Function(f"{signature.key}_weighted_levers", [weights, levers], [ca.horzcat(*blocks)])
 
@@ -204,9 +155,14 @@ INPUT_NAMES = ["u", "affine", "k", "damping", "gravity", "data"]
 
 
 def element_symbols(signature: ChainSignature) -> ElementSymbols:
-    return ElementSymbols(ca.SX.sym("u", signature.n_local), ca.SX.sym("affine", 3 * signature.n_c),
-                          ca.SX.sym("k", 4), ca.SX.sym("damping"), ca.SX.sym("gravity", 2),
-                          ca.SX.sym("data", signature.n_data))
+    return ElementSymbols(
+        ca.SX.sym("u", signature.n_local),
+        ca.SX.sym("affine", 3 * signature.n_c),
+        ca.SX.sym("k", 4),
+        ca.SX.sym("damping"),
+        ca.SX.sym("gravity", 2),
+        ca.SX.sym("data", signature.n_data),
+    )
 
 
 class ElementEquations:
@@ -219,11 +175,11 @@ class ElementEquations:
         du, L = d["du"], d["length"]
         kx, kv, ka, k_rho = sym.k[0], sym.k[1], sym.k[2], sym.k[3]
         uc = sym.u[:n_c]
-        node = [sym.u[n_c + i * NODE:n_c + (i + 1) * NODE] for i in range(2)]
-        rho, v, a, F = ([q[2 * j:2 * j + 2] for q in node] for j in range(4))
+        node = [sym.u[n_c + i * NODE : n_c + (i + 1) * NODE] for i in range(2)]
+        rho, v, a, F = ([q[2 * j : 2 * j + 2] for q in node] for j in range(4))
         self.X = sym.affine[:n_c] + kx * uc
-        self.V = sym.affine[n_c:2 * n_c] + kv * uc
-        self.A = sym.affine[2 * n_c:] + ka * uc
+        self.V = sym.affine[n_c : 2 * n_c] + kv * uc
+        self.A = sym.affine[2 * n_c :] + ka * uc
         X, V, A = (_split(sig, q) for q in (self.X, self.V, self.A))
         tan = _Tangents(sig, X, V, A, d["eta_points"], L)
         alpha, g = sym.damping, sym.gravity
@@ -235,10 +191,49 @@ class ElementEquations:
         Pdd = [du * _combine(pts.mass_positions[q], tan.Tdd) for q in range(nq)]
         m, rotary = d["mass"], d["rotary"]
         f = [m[q] * (a[0] + Pdd[q] + alpha * (v[0] + Pd[q]) - g) for q in range(nq)]
+        h, gen = self._mass_point_forces(tan, f, du)
+        gen_theta, gen_gamma, gen_eps, self.energies = self._sections(d, X, V, A, v, k_rho * rho[0], P, Pd, gen)
+        self.lever = du * _lever_matrix(sig, pts.increment, tan.levers)  # dDelta/dc (2 x n_c)
+        self.gen_inner = ca.vertcat(*[q for q in (gen_theta, gen_gamma, gen_eps) if q is not None])
+        self.gen = self.gen_inner + ca.mtimes(self.lever.T, F[1])
+        self.force = sum(f, ca.SX.zeros(2))
+        self.increments = ca.vertcat(self.delta / k_rho, delta_d, delta_dd)
+        self.rows = ca.vertcat(
+            self.gen,
+            F[0] - F[1] - self.force,
+            rho[1] - rho[0] - self.delta / k_rho,
+            v[1] - v[0] - delta_d,
+            a[1] - a[0] - delta_dd,
+        )
+        self._jacobian_parts = (
+            tan,
+            du,
+            m,
+            rotary,
+            d,
+            kx,
+            kv,
+            ka,
+            alpha,
+            k_rho,
+            [h[s] + du * float(pts.increment[s]) * F[1] for s in range(len(pts.xi))],
+        )
+        self._length = L
+
+    def _mass_point_forces(self, tan: _Tangents, f: list[ca.SX], du) -> tuple[list[ca.SX], tuple]:
+        """The mass points' forces f (inertia and weight) on the coordinates: h, what acts through
+        each point's tangent, and the generalized forces (theta, gamma, eps) through the levers."""
+        sig, pts = self.signature, self.signature.points
+        nq = len(pts.quad_xi)
         # what acts through each point's tangent: the mass points beyond it in the element (the end
-        # force F_{e+1} acts through all of them: the lever dDelta/dc below)
-        h = [du * sum((float(pts.mass_positions[q, s]) * f[q] for q in range(nq) if pts.mass_positions[q, s]),
-                      ca.SX.zeros(2)) for s in range(len(pts.xi))]
+        # force F_{e+1} acts through all of them: the lever dDelta/dc, self.lever)
+        h = [
+            du
+            * sum(
+                (float(pts.mass_positions[q, s]) * f[q] for q in range(nq) if pts.mass_positions[q, s]), ca.SX.zeros(2)
+            )
+            for s in range(len(pts.xi))
+        ]
         gen_theta = ca.SX.zeros(sig.degree + 1)
         gen_gamma = ca.SX.zeros(sig.degree) if sig.shear else None
         gen_eps = ca.SX.zeros(sig.degree) if sig.axial else None
@@ -249,18 +244,7 @@ class ElementEquations:
                 gen_gamma = gen_gamma + ca.dot(h[s], shear) * ca.DM(pts.strain[s])
             if sig.axial:
                 gen_eps = gen_eps + ca.dot(h[s], axial) * ca.DM(pts.strain[s])
-        gen_theta, gen_gamma, gen_eps, self.energies = self._sections(
-            d, X, V, A, v, k_rho * rho[0], P, Pd, (gen_theta, gen_gamma, gen_eps))
-        self.lever = du * _lever_matrix(sig, pts.increment, tan.levers)  # dDelta/dc (2 x n_c)
-        self.gen_inner = ca.vertcat(*[q for q in (gen_theta, gen_gamma, gen_eps) if q is not None])
-        self.gen = self.gen_inner + ca.mtimes(self.lever.T, F[1])
-        self.force = sum(f, ca.SX.zeros(2))
-        self.increments = ca.vertcat(self.delta / k_rho, delta_d, delta_dd)
-        self.rows = ca.vertcat(self.gen, F[0] - F[1] - self.force, rho[1] - rho[0] - self.delta / k_rho,
-                               v[1] - v[0] - delta_d, a[1] - a[0] - delta_dd)
-        self._jacobian_parts = (tan, du, m, rotary, d, kx, kv, ka, alpha, k_rho,
-                                [h[s] + du * float(pts.increment[s]) * F[1] for s in range(len(pts.xi))])
-        self._length = L
+        return h, (gen_theta, gen_gamma, gen_eps)
 
     def _sections(self, d, X, V, A, v, r0, P, Pd, gen):
         """The sections' share at the quadrature points: rotary inertia and strain energy in the
@@ -309,8 +293,9 @@ class ElementEquations:
         J_delta = self.lever
         J_delta_gyro, J_delta_accel = (levers(pts.increment, q) for q in (tan.gyro, tan.accel))
         # each mass point's levers, built once (the expressions are the same wherever they are used)
-        P_lever, P_gyro, P_accel = ([levers(pts.mass_positions[q], kind) for q in range(nq)]
-                                    for kind in (tan.levers, tan.gyro, tan.accel))
+        P_lever, P_gyro, P_accel = (
+            [levers(pts.mass_positions[q], kind) for q in range(nq)] for kind in (tan.levers, tan.gyro, tan.accel)
+        )
         # d P''_q / du and d P'_q / du (P' and P'' move with X, V and A)
         dPdd = [ka * P_lever[q] + kv * P_gyro[q] + kx * P_accel[q] for q in range(nq)]
         dPd = [kv * P_lever[q] + kx / 2 * P_gyro[q] for q in range(nq)]
@@ -319,7 +304,7 @@ class ElementEquations:
         for q in range(nq):
             K = K + ca.mtimes(P_lever[q].T, df[q])
             rot = ca.SX.zeros(n_c, 1)
-            rot[:sig.degree + 1] = ca.DM(pts.quad_rotation[q])
+            rot[: sig.degree + 1] = ca.DM(pts.quad_rotation[q])
             K = K + rotary[q] * (ka + alpha * kv) * ca.mtimes(rot, rot.T)
         K = K + kx * (self._stiffness(d) + self._curvature(tan, h))
         eye, zero = ca.SX.eye(2), ca.SX.zeros(2, 2)
@@ -327,12 +312,14 @@ class ElementEquations:
         lever_sum = sum((m[q] * P_lever[q] for q in range(nq)), ca.SX.zeros(2, n_c))
         # columns: [u_c | rho_e v_e a_e F_e | rho_{e+1} v_{e+1} a_{e+1} F_{e+1}]
         gen = ca.horzcat(K, ca.SX.zeros(n_c, 2), alpha * lever_sum.T, lever_sum.T, ca.SX.zeros(n_c, 8), J_delta.T)
-        force = ca.horzcat(-sum(df, ca.SX.zeros(2, n_c)), zero, -alpha * mass_sum * eye, -mass_sum * eye, eye,
-                           zero, zero, zero, -eye)
+        force = ca.horzcat(
+            -sum(df, ca.SX.zeros(2, n_c)), zero, -alpha * mass_sum * eye, -mass_sum * eye, eye, zero, zero, zero, -eye
+        )
         position = ca.horzcat(-(kx / k_rho) * J_delta, -eye, zero, zero, zero, eye, zero, zero, zero)
         velocity = ca.horzcat(-(kv * J_delta + kx / 2 * J_delta_gyro), zero, -eye, zero, zero, zero, eye, zero, zero)
-        acceleration = ca.horzcat(-(ka * J_delta + kv * J_delta_gyro + kx * J_delta_accel), zero, zero, -eye, zero,
-                                  zero, zero, eye, zero)
+        acceleration = ca.horzcat(
+            -(ka * J_delta + kv * J_delta_gyro + kx * J_delta_accel), zero, zero, -eye, zero, zero, zero, eye, zero
+        )
         return ca.vertcat(gen, force, position, velocity, acceleration)
 
     def _curvature(self, tan: _Tangents, h: list[ca.SX]) -> ca.SX:
@@ -347,7 +334,7 @@ class ElementEquations:
             hs = h[s]
             # the point's (psi, a, b) from the coordinates: B (3 x n_c)
             B = ca.SX.zeros(3, n_c)
-            B[0, :p + 1] = ca.DM(pts.rotation[s]).T
+            B[0, : p + 1] = ca.DM(pts.rotation[s]).T
             k = p + 1
             rows = {}
             if sig.shear:
@@ -356,9 +343,9 @@ class ElementEquations:
             if sig.axial:
                 rows["a"] = k
             if "a" in rows:
-                B[1, rows["a"]:rows["a"] + p] = ca.DM(pts.strain[s]).T
+                B[1, rows["a"] : rows["a"] + p] = ca.DM(pts.strain[s]).T
             if "b" in rows:
-                B[2, rows["b"]:rows["b"] + p] = ca.DM(pts.strain[s]).T
+                B[2, rows["b"] : rows["b"] + p] = ca.DM(pts.strain[s]).T
             H = ca.SX.zeros(3, 3)
             H[0, 0] = -L * ca.dot(hs, a * t + b * n)
             H[0, 1] = H[1, 0] = L * ca.dot(hs, n)
@@ -374,12 +361,12 @@ class ElementEquations:
         for q in range(len(pts.quad_xi)):
             weight = du * float(pts.quad_weights[q])
             slope = ca.DM(pts.quad_slope[q]) / du
-            K[:p + 1, :p + 1] = K[:p + 1, :p + 1] + weight * d["EI"][q] / L * ca.mtimes(slope, slope.T)
+            K[: p + 1, : p + 1] = K[: p + 1, : p + 1] + weight * d["EI"][q] / L * ca.mtimes(slope, slope.T)
             S = ca.DM(pts.quad_strain[q])
             k = p + 1
             for present, stiffness in ((sig.shear, d["kGA"][q]), (sig.axial, d["EA"][q])):
                 if present:
-                    K[k:k + p, k:k + p] = K[k:k + p, k:k + p] + weight * L * stiffness * ca.mtimes(S, S.T)
+                    K[k : k + p, k : k + p] = K[k : k + p, k : k + p] + weight * L * stiffness * ca.mtimes(S, S.T)
                     k += p
         return K
 
@@ -388,13 +375,20 @@ def residual_function(signature: ChainSignature) -> ca.Function:
     """(u, affine, k, damping, gravity, data) -> (rows, energies)."""
     sym = element_symbols(signature)
     eq = ElementEquations(signature, sym)
-    return ca.Function(f"{signature.key}_residual", sym.inputs(), [eq.rows, eq.energies], INPUT_NAMES,
-                       ["rows", "energies"], {"cse": True})
+    return ca.Function(
+        f"{signature.key}_residual",
+        sym.inputs(),
+        [eq.rows, eq.energies],
+        INPUT_NAMES,
+        ["rows", "energies"],
+        {"cse": True},
+    )
 
 
 def jacobian_function(signature: ChainSignature) -> ca.Function:
     """(u, affine, k, damping, gravity, data) -> (rows, J)."""
     sym = element_symbols(signature)
     eq = ElementEquations(signature, sym)
-    return ca.Function(f"{signature.key}_jacobian", sym.inputs(), [eq.rows, eq.jacobian], INPUT_NAMES,
-                       ["rows", "J"], {"cse": True})
+    return ca.Function(
+        f"{signature.key}_jacobian", sym.inputs(), [eq.rows, eq.jacobian], INPUT_NAMES, ["rows", "J"], {"cse": True}
+    )

@@ -10,7 +10,7 @@ import numpy as np
 
 from models.context import AssemblyContext
 from models.elements.link import LinkElementsTopology, link_properties
-from models.kernels.link_chain import ChainSignature, data_layout
+from models.kernels.chain_signature import ChainSignature, data_layout
 from models.sections import section_properties
 
 
@@ -37,10 +37,15 @@ def link_data(ctx: AssemblyContext, t: LinkElementsTopology, signature: ChainSig
         at_quad = [ca.SX(u0 + du * float(xi)) for xi in pts.quad_xi]
         weights = [du * float(w) for w in pts.quad_weights]
         eta_points = [props.eta(u) for u in at_points]
-        increment = du * sum((float(w) * L * ca.vertcat(ca.cos(eta), ca.sin(eta))
-                              for w, eta in zip(pts.increment, eta_points)), ca.SX.zeros(2))
+        increment = du * sum(
+            (float(w) * L * ca.vertcat(ca.cos(eta), ca.sin(eta)) for w, eta in zip(pts.increment, eta_points)),
+            ca.SX.zeros(2),
+        )
         parts = {
-            "du": [ca.SX(du)], "length": [L], "eta_points": eta_points, "eta_quad": [props.eta(u) for u in at_quad],
+            "du": [ca.SX(du)],
+            "length": [L],
+            "eta_points": eta_points,
+            "eta_quad": [props.eta(u) for u in at_quad],
             "EI": [props.EI(u) for u in at_quad],
             "kGA": [props.kGA(u) if props.kGA is not None else zero for u in at_quad],
             "EA": [props.EA(u) if props.EA is not None else zero for u in at_quad],
@@ -56,5 +61,5 @@ def undeformed_nodes(data: np.ndarray, signature: ChainSignature, start: np.ndar
     """(2, intervals + 1): the undeformed nodes of a link from its start point and data."""
     layout = data_layout(signature)
     k = sum(size for name, size in layout if name != "undeformed_increment")
-    increments = data[k:k + 2, :]
+    increments = data[k : k + 2, :]
     return start[:, None] + np.concatenate([np.zeros((2, 1)), np.cumsum(increments, axis=1)], axis=1)

@@ -63,7 +63,7 @@ def element_points(degree: int, name: str = "interpolated") -> ElementPoints:
         increment = np.concatenate([rule.weights, np.zeros(nq * nq)])
         positions = np.zeros((nq, nq + nq * nq))
         for q in range(nq):
-            positions[q, nq + q * nq:nq + (q + 1) * nq] = partial.partial_weights[q]
+            positions[q, nq + q * nq : nq + (q + 1) * nq] = partial.partial_weights[q]
     elif name == "interpolated":
         count = INTERPOLATED_POINTS[degree]
         gx, gw = np.polynomial.legendre.leggauss(count)
@@ -73,8 +73,20 @@ def element_points(degree: int, name: str = "interpolated") -> ElementPoints:
         positions = np.array([[_integral_of_lagrange(xi, s, rule.xi[q]) for s in range(count)] for q in range(nq)])
     else:
         raise ValueError(f"unknown element point rule '{name}' (partial, interpolated)")
-    return ElementPoints(degree, name, xi, rotation, strain, increment, positions, rule.xi, rule.weights,
-                         rule.rotation, rule.slope, rule.strain)
+    return ElementPoints(
+        degree,
+        name,
+        xi,
+        rotation,
+        strain,
+        increment,
+        positions,
+        rule.xi,
+        rule.weights,
+        rule.rotation,
+        rule.slope,
+        rule.strain,
+    )
 
 
 def _basis(nodes: np.ndarray, at: np.ndarray) -> np.ndarray:

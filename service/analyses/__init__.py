@@ -12,15 +12,17 @@ from service.analyses.linearization import LINEARIZATION
 from service.analyses.simulate import SIMULATE
 from service.analyses.trace import TRACE
 
-ANALYSES = Analyses([
-    EQUILIBRIUM,
-    LINEARIZATION,
-    TRACE,
-    INVERSE,
-    ENERGY,
-    CONTACT,
-    SIMULATE,
-])
+ANALYSES = Analyses(
+    [
+        EQUILIBRIUM,
+        LINEARIZATION,
+        TRACE,
+        INVERSE,
+        ENERGY,
+        CONTACT,
+        SIMULATE,
+    ]
+)
 
 # Last: a plugin module registers on ANALYSES, which exists by now.
 from service.plugins import load_plugins  # noqa: E402

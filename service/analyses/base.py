@@ -17,7 +17,7 @@ A new analysis is one module with a subclass and one line `ANALYSES.register(...
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -45,8 +45,10 @@ class AnalysisResult(BaseModel):
 
     analysis: str
     name: str = Field(description="the document's name")
-    status: str = Field(description="converged, not_converged, singular, time_limit, infeasible (finished: "
-                                    "a simulation reached its end)")
+    status: str = Field(
+        description="converged, not_converged, singular, time_limit, infeasible (finished: "
+        "a simulation reached its end)"
+    )
     message: str = ""
     warnings: list[str] = Field(default_factory=list)
 
@@ -68,12 +70,12 @@ class Analysis(ABC):
     Options: ClassVar[type[AnalysisOptions]] = AnalysisOptions
     Result: ClassVar[type[AnalysisResult]] = AnalysisResult
 
-    def run(self, mech: Mechanism, request: AnalysisRequest = AnalysisRequest()) -> dict:
+    def run(self, mech: Mechanism, request: AnalysisRequest = AnalysisRequest()) -> dict[str, Any]:
         """The report of one mechanism."""
         return self.report(mech, request.options, self.options_of(request.given))
 
     @abstractmethod
-    def report(self, mech: Mechanism, newton: NewtonOptions, options: Any) -> dict:
+    def report(self, mech: Mechanism, newton: NewtonOptions, options: Any) -> dict[str, Any]:
         """The report of one mechanism under this analysis' typed options."""
 
     def options_of(self, given: AnalysisOptions | Mapping[str, Any] | None) -> AnalysisOptions:
@@ -87,8 +89,9 @@ class Analysis(ABC):
             raise MechanismError(pointer_of(tuple(first["loc"])), first["msg"]) from None
 
     def point(self, mech: Mechanism, p: np.ndarray, guess: np.ndarray, options: NewtonOptions) -> EquilibriumResult:
-        raise MechanismError("/analysis", f"the {self.name} analysis has no points to sweep "
-                             "(sweepable: equilibrium and energy)")
+        raise MechanismError(
+            "/analysis", f"the {self.name} analysis has no points to sweep (sweepable: equilibrium and energy)"
+        )
 
 
 class Analyses:
@@ -118,7 +121,7 @@ class Analyses:
     def names(self) -> list[str]:
         return list(self._by_name)
 
-    def __iter__(self):
+    def __iter__(self) -> Iterator[Analysis]:
         return iter(list(self._by_name.values()))
 
     def named(self, name: str, pointer: str = "/analysis") -> Analysis:
@@ -126,8 +129,15 @@ class Analyses:
             raise MechanismError(pointer, f"unknown analysis '{name}' (analyses: {', '.join(self._by_name)})")
         return self._by_name[name]
 
-    def describe(self) -> list[dict]:
+    def describe(self) -> list[dict[str, Any]]:
         """Each analysis with its options' and result's JSON schemas (GET /v1/analyses)."""
-        return [{"name": a.name, "summary": a.summary, "sweepable": a.sweepable,
-                 "options": a.Options.model_json_schema(), "result": a.Result.model_json_schema()}
-                for a in self._by_name.values()]
+        return [
+            {
+                "name": a.name,
+                "summary": a.summary,
+                "sweepable": a.sweepable,
+                "options": a.Options.model_json_schema(),
+                "result": a.Result.model_json_schema(),
+            }
+            for a in self._by_name.values()
+        ]

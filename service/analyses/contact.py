@@ -15,7 +15,7 @@ from models import Mechanism, MechanismError
 from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult
 from service.analyses.shared_options import Sensitivities
 from service.contact.drawing import state_drawing
-from service.contact.problem import contact_problem
+from service.contact.problem import ContactProblem, contact_problem
 from service.contact.recovery import recovered_forces
 from service.contact.report import friction_coefficients, penetration_error, state_report
 from service.contact.sensitivity import contact_sensitivities
@@ -25,7 +25,7 @@ from service.reports import output_units, plain
 from service.requests import under
 
 
-def problem_of(mech: Mechanism):
+def problem_of(mech: Mechanism) -> ContactProblem:
     try:
         return contact_problem(mech.structure)
     except MechanismError as exc:
@@ -49,15 +49,23 @@ def motion_rates(mech: Mechanism, motion: dict, p: np.ndarray) -> np.ndarray:
 
 class ContactAnalysisOptions(AnalysisOptions):
     penetrating_start: Literal["approach", "refuse"] = Field(
-        "approach", description="an object inside a site in the undeformed state is approached from outside "
-                                "(relaxed, then tightened in steps), or refused naming the pair and depth")
+        "approach",
+        description="an object inside a site in the undeformed state is approached from outside "
+        "(relaxed, then tightened in steps), or refused naming the pair and depth",
+    )
     motion: dict[str, float] | None = Field(
-        None, max_length=64, description="how the moving fields change (document units per unit of progress): "
-                                         "friction opposes the sliding this motion causes",
-        examples=[{"/contacts/objects/fixture/centre/0": -1}])
+        None,
+        max_length=64,
+        description="how the moving fields change (document units per unit of progress): "
+        "friction opposes the sliding this motion causes",
+        examples=[{"/contacts/objects/fixture/centre/0": -1}],
+    )
     sensitivities: Sensitivities | None = Field(None, description="also d(outputs)/d(parameters) at the state")
-    thesis_recovery: bool = Field(False, description="also the thesis' recovery of the forces from the "
-                                                     "frictionless shape (Lan 2005 Eqs. 6.6-6.10), labelled")
+    thesis_recovery: bool = Field(
+        False,
+        description="also the thesis' recovery of the forces from the "
+        "frictionless shape (Lan 2005 Eqs. 6.6-6.10), labelled",
+    )
 
 
 class ContactReport(AnalysisResult):
@@ -68,8 +76,10 @@ class ContactReport(AnalysisResult):
 
 class ContactAnalysis(Analysis):
     name = "contact"
-    summary = ("The minimum of the total potential under non-penetration by IPOPT: contact forces from the "
-               "multipliers, friction along a given motion, sensitivities")
+    summary = (
+        "The minimum of the total potential under non-penetration by IPOPT: contact forces from the "
+        "multipliers, friction along a given motion, sensitivities"
+    )
 
     long = True
     Options = ContactAnalysisOptions
@@ -85,25 +95,39 @@ class ContactAnalysis(Analysis):
             state = solve_state(problem, p, mu, options=options, motion=rates)
         except PenetratingStart as error:
             raise penetration_error(mech, error) from None
-        report = {"analysis": self.name, "name": mech.document.name, **state_report(mech, problem, state),
-                  "units": {"force": mech.doc_unit("force"), "length": mech.doc_unit("length"),
-                            "moment": mech.doc_unit("moment")}, "output_units": output_units(mech), "warnings": [],
-                  "drawing": state_drawing(mech, problem, state)}
+        report = {
+            "analysis": self.name,
+            "name": mech.document.name,
+            **state_report(mech, problem, state),
+            "units": {
+                "force": mech.doc_unit("force"),
+                "length": mech.doc_unit("length"),
+                "moment": mech.doc_unit("moment"),
+            },
+            "output_units": output_units(mech),
+            "warnings": [],
+            "drawing": state_drawing(mech, problem, state),
+        }
         if np.any(mu > 0) and not motion:
-            report["warnings"].append("friction needs the direction of sliding: give `motion` (the rates of the "
-                                      "moving fields) or run a contact path; this state is frictionless")
+            report["warnings"].append(
+                "friction needs the direction of sliding: give `motion` (the rates of the "
+                "moving fields) or run a contact path; this state is frictionless"
+            )
         for name, pair in report["pairs"].items():
             if pair["state"] == "sticking":
-                report["warnings"].append(f"pair '{name}' sticks along this motion: its friction force depends on "
-                                          "the path that led here (run a contact path); none is applied")
+                report["warnings"].append(
+                    f"pair '{name}' sticks along this motion: its friction force depends on "
+                    "the path that led here (run a contact path); none is applied"
+                )
         sensitivities = given.sensitivities
         if sensitivities is not None and state.converged:
-            found, notes = contact_sensitivities(mech, problem, state, sensitivities.parameters,
-                                                 sensitivities.outputs)
+            found, notes = contact_sensitivities(mech, problem, state, sensitivities.parameters, sensitivities.outputs)
             report["sensitivities"] = found.to_dict()
             report["warnings"] += notes
         if given.thesis_recovery and state.converged:
-            plain_state = state if not np.any(mu > 0) else solve_state(problem, p, 0 * mu, previous=state, options=options)
+            plain_state = (
+                state if not np.any(mu > 0) else solve_state(problem, p, 0 * mu, previous=state, options=options)
+            )
             report["thesis_recovery"] = recovered_forces(mech, state_report(mech, problem, plain_state), report)
         return plain(report)
 

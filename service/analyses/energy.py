@@ -22,8 +22,10 @@ class EnergyOptions(AnalysisOptions):
 
 class EnergyAnalysis(Analysis):
     name = "energy"
-    summary = ("The minimum of the total potential (strain energy less the work of dead loads) under the "
-               "joints' constraints, by IPOPT; the same report as equilibrium")
+    summary = (
+        "The minimum of the total potential (strain energy less the work of dead loads) under the "
+        "joints' constraints, by IPOPT; the same report as equilibrium"
+    )
     sweepable = True
     Options = EnergyOptions
     Result = EquilibriumReport

@@ -19,11 +19,19 @@ from service.sweep import TargetResult, solve_for_target
 
 def solution_report(mech: Mechanism, result: EquilibriumResult, analysis: str) -> dict:
     """Status, diagnostics, displacements and outputs of a state, in document units."""
-    return {"analysis": analysis, "name": mech.document.name, **result.summary(), "history": result.history,
-            "output_units": output_units(mech), "displacement_units": coordinate_units(mech)}
+    return {
+        "analysis": analysis,
+        "name": mech.document.name,
+        **result.summary(),
+        "history": result.history,
+        "output_units": output_units(mech),
+        "displacement_units": coordinate_units(mech),
+    }
 
 
-def solve_state(mech: Mechanism, options: NewtonOptions, target: Target | None) -> tuple[EquilibriumResult, TargetResult | None]:
+def solve_state(
+    mech: Mechanism, options: NewtonOptions, target: Target | None
+) -> tuple[EquilibriumResult, TargetResult | None]:
     """The equilibrium under the document's loads, or for a target; errors name the request's
     field (/target/... or /document/...)."""
     try:
@@ -41,8 +49,13 @@ def solve_state(mech: Mechanism, options: NewtonOptions, target: Target | None) 
         raise (exc if exc.pointer.startswith("/target") else under("/document", exc)) from None
 
 
-def equilibrium_report(mech: Mechanism, options: NewtonOptions, stiffness: bool = False,
-                       target: Target | None = None, sensitivities: Sensitivities | None = None) -> dict:
+def equilibrium_report(
+    mech: Mechanism,
+    options: NewtonOptions,
+    stiffness: bool = False,
+    target: Target | None = None,
+    sensitivities: Sensitivities | None = None,
+) -> dict:
     """Solve the equilibrium; status, diagnostics, displacements and outputs in document units.
 
     target: instead of the document's value of the numeric field
@@ -53,9 +66,13 @@ def equilibrium_report(mech: Mechanism, options: NewtonOptions, stiffness: bool 
     result, found = solve_state(mech, options, target)
     mech = result.mechanism
     report = solution_report(mech, result, "equilibrium")
-    if found is not None:
-        report["target"] = {"path": target.path, "value": found.value, "status": found.status,
-                            "unit": mech.doc_unit(mech.parameter_kind(target.path))}
+    if found is not None and target is not None:
+        report["target"] = {
+            "path": target.path,
+            "value": found.value,
+            "status": found.status,
+            "unit": mech.doc_unit(mech.parameter_kind(target.path)),
+        }
     if stiffness and result.converged:
         report["stiffness"] = stiffness_dict(mech, result.z)
     if sensitivities is not None and result.converged:
@@ -64,19 +81,23 @@ def equilibrium_report(mech: Mechanism, options: NewtonOptions, stiffness: bool 
         try:
             following = (target.path, target.output) if target is not None else None
             report["sensitivities"] = equilibrium_sensitivities(
-                mech, result.z, sensitivities.parameters, sensitivities.outputs, following).to_dict()
+                mech, result.z, sensitivities.parameters, sensitivities.outputs, following
+            ).to_dict()
         except MechanismError as exc:
             raise MechanismError("/sensitivities" + exc.pointer, exc.problem) from None
     return plain(report)
 
 
 class EquilibriumOptions(AnalysisOptions):
-    target: Target | None = Field(None, description="solve for the field value that reaches a target "
-                                                    "(e.g. the actuation force that closes a gripper)",
-                                  json_schema_extra={"document_default": "/sweep/until"})
+    target: Target | None = Field(
+        None,
+        description="solve for the field value that reaches a target (e.g. the actuation force that closes a gripper)",
+        json_schema_extra={"document_default": "/sweep/until"},
+    )
     stiffness: bool = Field(False, description="also return the tangent stiffness K_T at the solution")
     sensitivities: Sensitivities | None = Field(
-        None, description="also return d(outputs)/d(parameters) by the implicit function theorem")
+        None, description="also return d(outputs)/d(parameters) by the implicit function theorem"
+    )
 
 
 class EquilibriumReport(AnalysisResult):
@@ -92,8 +113,10 @@ class EquilibriumReport(AnalysisResult):
 
 class EquilibriumAnalysis(Analysis):
     name = "equilibrium"
-    summary = ("Newton on the residual form under the document's loads; optionally for a target, with the "
-               "tangent stiffness and sensitivities")
+    summary = (
+        "Newton on the residual form under the document's loads; optionally for a target, with the "
+        "tangent stiffness and sensitivities"
+    )
     sweepable = True
     Options = EquilibriumOptions
     Result = EquilibriumReport

@@ -19,17 +19,23 @@ def inverse_report(mech: Mechanism, displacements: dict[str, Any]) -> dict:
     [dx, dy, rotation] in document units; bodies not named stay where they are."""
     wrenches = inverse_wrenches(mech, {k: tuple(v) for k, v in displacements.items()})
     force, moment = mech.doc_unit("force"), mech.doc_unit("moment")
-    return plain({
-        "analysis": "inverse", "name": mech.document.name, "status": "converged", "message": "",
-        "wrenches": {b: {"Fx": w[0], "Fy": w[1], "M": w[2]} for b, w in wrenches.items()},
-        "wrench_units": {"Fx": force, "Fy": force, "M": moment},
-    })
+    return plain(
+        {
+            "analysis": "inverse",
+            "name": mech.document.name,
+            "status": "converged",
+            "message": "",
+            "wrenches": {b: {"Fx": w[0], "Fy": w[1], "M": w[2]} for b, w in wrenches.items()},
+            "wrench_units": {"Fx": force, "Fy": force, "M": moment},
+        }
+    )
 
 
 class InverseOptions(AnalysisOptions):
     displacements: dict[str, tuple[float, float, float]] = Field(
         description="[dx, dy, rotation] of bodies (document units); bodies not named stay put",
-        examples=[{"input": [0.001, 0, 0]}])
+        examples=[{"input": [0.001, 0, 0]}],
+    )
 
 
 class InverseReport(AnalysisResult):

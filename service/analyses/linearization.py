@@ -38,7 +38,8 @@ def linearization_report(mech: Mechanism, options: NewtonOptions, at: str = "equ
 
 class LinearizationOptions(AnalysisOptions):
     at: Literal["equilibrium", "undeformed"] = Field(
-        "equilibrium", description="the state: the equilibrium under the document's loads, or undeformed")
+        "equilibrium", description="the state: the equilibrium under the document's loads, or undeformed"
+    )
 
 
 class LinearizationReport(AnalysisResult):

@@ -5,8 +5,9 @@ response, so its steps are bounded (SYNC_STEPS)."""
 from __future__ import annotations
 
 import copy
+from typing import Any
 
-from pydantic import Field, create_model
+from pydantic import Field, JsonValue, create_model
 from pydantic.fields import FieldInfo
 
 from models import Mechanism
@@ -26,28 +27,36 @@ SYNC_IMPACT_BYTES = 192 * 2**20  # the memory one run's states may take in a sol
 
 
 # Where the workbench's form starts a field from (the document's own section, else a drawing's need).
-FORM_STARTS = {"shapes": {"form_default": True}}
+FORM_STARTS: dict[str, dict[str, JsonValue]] = {"shapes": {"form_default": True}}
 
 
-def _overriding(name: str, info: FieldInfo) -> tuple:
+def _overriding(name: str, info: FieldInfo) -> tuple[Any, FieldInfo]:
     """A field of the simulate section as an override: absent (None) unless given."""
     field = copy.copy(info)
     field.default, field.default_factory = None, None
     field.json_schema_extra = FORM_STARTS.get(name)
-    return info.annotation | None, field
+    annotation: Any = info.annotation
+    return annotation | None, field
 
 
+_OVERRIDES: dict[str, Any] = {name: _overriding(name, info) for name, info in SimulateSpec.model_fields.items()}
 SimulateOverrides = create_model(
-    "SimulateOverrides", __base__=StrictModel, __module__=__name__,
+    "SimulateOverrides",
+    __base__=StrictModel,
+    __module__=__name__,
     __doc__="Fields of the document's `simulate` section that override it (the merged section is checked as the "
-            "document's is)",
-    **{name: _overriding(name, info) for name, info in SimulateSpec.model_fields.items()})
+    "document's is)",
+    **_OVERRIDES,
+)
 
 
 class SimulateOptions(AnalysisOptions):
     simulate: SimulateOverrides | None = Field(  # type: ignore[valid-type]
-        None, description="fields of the document's `simulate` section that override it",
-        examples=[{"until": 0.1, "step": 0.001}], json_schema_extra={"document_default": "/simulate"})
+        None,
+        description="fields of the document's `simulate` section that override it",
+        examples=[{"until": 0.1, "step": 0.001}],
+        json_schema_extra={"document_default": "/simulate"},
+    )
 
 
 class SimulateReport(AnalysisResult):
@@ -58,23 +67,31 @@ class SimulateReport(AnalysisResult):
 
 class SimulateAnalysis(Analysis):
     name = "simulate"
-    summary = ("Motion in time: Newmark or generalized-alpha steps of the links' and bodies' dynamics under loads "
-               "and prescribed motions in time; outputs, constraint forces and the energy balance per step; rigid bodies with "
-               "contact impacts and friction (event-driven or Moreau-Jean)")
+    summary = (
+        "Motion in time: Newmark or generalized-alpha steps of the links' and bodies' dynamics under loads "
+        "and prescribed motions in time; outputs, constraint forces and the energy balance per step; rigid bodies with "
+        "contact impacts and friction (event-driven or Moreau-Jean)"
+    )
 
     long = True
     Options = SimulateOptions
     Result = SimulateReport
 
     def report(self, mech: Mechanism, newton: NewtonOptions, options: SimulateOptions) -> dict:
-        given = options.simulate.model_dump(exclude_none=True) if options.simulate is not None else {}
+        given: dict[str, Any] = options.simulate.model_dump(exclude_none=True) if options.simulate is not None else {}
         spec = simulation_spec(mech, given)
         limit = newton.time_limit
         end = ends_after(limit)
         stop = (lambda: passed(end)) if limit else None
         if spec.scheme in IMPACT_SCHEMES:
-            _, report = run_impacts(mech.document, spec, stop=stop, max_steps=SYNC_IMPACT_STEPS, max_kept=SYNC_KEPT,
-                                    max_bytes=SYNC_IMPACT_BYTES)
+            _, report = run_impacts(
+                mech.document,
+                spec,
+                stop=stop,
+                max_steps=SYNC_IMPACT_STEPS,
+                max_kept=SYNC_KEPT,
+                max_bytes=SYNC_IMPACT_BYTES,
+            )
         else:
             _, report = run_simulation(mech, spec, stop=stop, max_steps=SYNC_STEPS)
         if report["status"] == "stopped":

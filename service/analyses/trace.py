@@ -26,7 +26,7 @@ from pydantic import Field
 from models import Mechanism, MechanismError
 from models.units import quantity_to_si
 from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult
-from service.continuation import trace_path
+from service.continuation import PathResult, trace_path
 from service.deadline import ends_after, passed
 from service.drawing import state_frame
 from service.newton import NewtonOptions
@@ -40,8 +40,12 @@ MAX_POINTS = 100_000
 # trace_path's statuses as the statuses of a solve response: the path reached its stop, or it
 # did not (no start, a corrector that failed, or max_points first), or the time limit stopped
 # it. The original is the report's path_status.
-STATUSES = {"completed": "converged", "not_converged": "not_converged", "max_points": "not_converged",
-            "stopped": "time_limit"}
+STATUSES = {
+    "completed": "converged",
+    "not_converged": "not_converged",
+    "max_points": "not_converged",
+    "stopped": "time_limit",
+}
 
 ASK = "give trace {path, stop, step} (on the command line: flexmech trace DOC --path --stop --step)"
 
@@ -50,8 +54,12 @@ class TraceIn(AnalysisOptions):
     """Follow the equilibrium path of numeric field `path` from its value in the document until
     it passes `stop`, through limit points (pseudo-arc-length continuation)."""
 
-    path: str = Field(pattern=r"^/", max_length=256, description="JSON pointer of the numeric field followed",
-                      examples=["/loads/P/force/1"])
+    path: str = Field(
+        pattern=r"^/",
+        max_length=256,
+        description="JSON pointer of the numeric field followed",
+        examples=["/loads/P/force/1"],
+    )
     stop: float = Field(description="the field's last value, document units of the field")
     step: float = Field(gt=0, description="the first arc-length step, document units of the field")
     max_points: int = Field(DEFAULT_POINTS, ge=2, le=MAX_POINTS, description="points of the path at most")
@@ -102,8 +110,10 @@ def sweep_spec(mech: Mechanism) -> TraceSpec:
     path = _field_checked(mech, sweep.path, "/document/sweep/path")
     kind = mech.parameter_kind(path)
     unit = mech.doc_unit(kind)
-    start, stop = (quantity_to_si(getattr(sweep, name), kind, unit, f"/document/sweep/{name}") / mech.doc_factor(kind)
-                   for name in ("start", "stop"))
+    start, stop = (
+        quantity_to_si(getattr(sweep, name), kind, unit, f"/document/sweep/{name}") / mech.doc_factor(kind)
+        for name in ("start", "stop")
+    )
     if start == stop:
         raise MechanismError("/trace", f"the document's sweep starts and stops at {start:g} {unit}: {ASK}")
     return TraceSpec(path, stop, abs(stop - start) / sweep.steps, DEFAULT_POINTS, start, "sweep")
@@ -120,8 +130,15 @@ def trace_report(mech: Mechanism, options: NewtonOptions, given: TraceIn | None 
             raise MechanismError("/document/sweep/start", exc.problem) from None
     try:
         end = ends_after(options.time_limit)
-        result = trace_path(mech, spec.path, spec.stop, spec.step, spec.max_points, options,
-                            should_stop=(lambda: passed(end)) if options.time_limit else None)
+        result = trace_path(
+            mech,
+            spec.path,
+            spec.stop,
+            spec.step,
+            spec.max_points,
+            options,
+            should_stop=(lambda: passed(end)) if options.time_limit else None,
+        )
     except MechanismError as exc:
         if exc.pointer in ("/step", "/stop"):
             where = "/trace" if spec.source == "request" else "/document/sweep"
@@ -129,18 +146,32 @@ def trace_report(mech: Mechanism, options: NewtonOptions, given: TraceIn | None 
         raise under("/document", exc) from None
     units = output_units(mech)
     body = result.to_dict()
-    return plain({
-        "analysis": "trace", "name": mech.document.name, "status": STATUSES.get(result.status, "not_converged"),
-        "path_status": result.status, "message": result.message, "seconds": result.seconds,
-        "path": result.path, "unit": result.unit, "source": spec.source, "start": mech.value(spec.path),
-        "stop": spec.stop, "step": spec.step, "max_points": spec.max_points,
-        "points": body["points"], "limit_points": body["limit_points"],
-        "values": [p.value for p in result.points],
-        "outputs": {name: [p.outputs.get(name) for p in result.points] for name in units},
-        "output_units": units, "frames": path_frames(mech, result)})
+    return plain(
+        {
+            "analysis": "trace",
+            "name": mech.document.name,
+            "status": STATUSES.get(result.status, "not_converged"),
+            "path_status": result.status,
+            "message": result.message,
+            "seconds": result.seconds,
+            "path": result.path,
+            "unit": result.unit,
+            "source": spec.source,
+            "start": mech.value(spec.path),
+            "stop": spec.stop,
+            "step": spec.step,
+            "max_points": spec.max_points,
+            "points": body["points"],
+            "limit_points": body["limit_points"],
+            "values": [p.value for p in result.points],
+            "outputs": {name: [p.outputs.get(name) for p in result.points] for name in units},
+            "output_units": units,
+            "frames": path_frames(mech, result),
+        }
+    )
 
 
-def path_frames(mech: Mechanism, result) -> list[dict]:
+def path_frames(mech: Mechanism, result: PathResult) -> list[dict]:
     """The path's states to animate (service.drawing.state_frame), at most MAX_FRAMES of them
     evenly spread; each with its index among the points and the field's value."""
     points = result.points
@@ -148,15 +179,22 @@ def path_frames(mech: Mechanism, result) -> list[dict]:
     frames = []
     for index in chosen:
         at = mech.with_values({result.path: points[index].value})
-        frames.append({"point": index, "value": points[index].value,
-                       **state_frame(at, points[index].z, at.p(), points[index].outputs)})
+        frames.append(
+            {
+                "point": index,
+                "value": points[index].value,
+                **state_frame(at, points[index].z, at.p(), points[index].outputs),
+            }
+        )
     return frames
 
 
 class TraceAnalysis(Analysis):
     name = "trace"
-    summary = ("The equilibrium path of a load (any numeric field) through limit points by arc-length continuation, "
-               "with each point's stability and the limit loads located exactly")
+    summary = (
+        "The equilibrium path of a load (any numeric field) through limit points by arc-length continuation, "
+        "with each point's stability and the limit loads located exactly"
+    )
 
     long = True
     Options = TraceOptions

@@ -67,22 +67,37 @@ def option_parameter(name: str, info) -> inspect.Parameter:
     kind = _plain(info.annotation)
     choices = typing.get_args(kind) if typing.get_origin(kind) is Literal else None
     if kind is bool:
-        annotation = Annotated[bool | None, typer.Option(f"{flag(name)}/--no-{name.replace('_', '-')}",
-                                                         help=_help(info, None), show_default=False)]
+        annotation = Annotated[
+            bool | None,
+            typer.Option(f"{flag(name)}/--no-{name.replace('_', '-')}", help=_help(info, None), show_default=False),
+        ]
     elif kind in (int, float, str) or choices:
         python = str if choices else kind
-        annotation = Annotated[python | None, typer.Option(flag(name), help=_help(info, choices),
-                                                           show_default=False)]
+        annotation = Annotated[python | None, typer.Option(flag(name), help=_help(info, choices), show_default=False)]
     else:
-        annotation = Annotated[str | None, typer.Option(flag(name), metavar="JSON", help=_help(info, None),
-                                                        show_default=False)]
+        annotation = Annotated[
+            str | None, typer.Option(flag(name), metavar="JSON", help=_help(info, None), show_default=False)
+        ]
     return inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=None, annotation=annotation)
 
 
-COMMON = [("document", DocArg), ("model", ModelOpt), ("sets", SetOpt), ("jacobian", JacobianOpt),
-          ("line_search", LineSearchOpt), ("max_iterations", MaxIterOpt), ("json_out", JsonOpt)]
-COMMON_DEFAULTS = {"model": None, "sets": None, "jacobian": "full", "line_search": True, "max_iterations": 50,
-                   "json_out": None}
+COMMON = [
+    ("document", DocArg),
+    ("model", ModelOpt),
+    ("sets", SetOpt),
+    ("jacobian", JacobianOpt),
+    ("line_search", LineSearchOpt),
+    ("max_iterations", MaxIterOpt),
+    ("json_out", JsonOpt),
+]
+COMMON_DEFAULTS = {
+    "model": None,
+    "sets": None,
+    "jacobian": "full",
+    "line_search": True,
+    "max_iterations": 50,
+    "json_out": None,
+}
 
 
 def typed_options(analysis: Analysis, given: dict[str, Any]):
@@ -110,8 +125,11 @@ SHOWN_ELSEWHERE = ("analysis", "name", "status", "message", "iterations", "secon
 
 
 def _named_numbers(value: Any) -> bool:
-    return isinstance(value, dict) and bool(value) and all(
-        isinstance(v, (int, float)) and not isinstance(v, bool) or v is None for v in value.values())
+    return (
+        isinstance(value, dict)
+        and bool(value)
+        and all(isinstance(v, (int, float)) and not isinstance(v, bool) or v is None for v in value.values())
+    )
 
 
 def print_report(out: Console, report: dict) -> None:
@@ -134,7 +152,9 @@ def print_report(out: Console, report: dict) -> None:
             units = report.get(f"{key.removesuffix('s')}_units") or {}
             table = table_of(key, "name", "value", "unit", text=1)
             for name, v in value.items():
-                table.add_row(escape(name), number(v), escape(str(units.get(name, "") if isinstance(units, dict) else "")))
+                table.add_row(
+                    escape(name), number(v), escape(str(units.get(name, "") if isinstance(units, dict) else ""))
+                )
             out.print(table)
         elif value not in (None, [], {}):
             rest.append(key)
@@ -144,8 +164,17 @@ def print_report(out: Console, report: dict) -> None:
         out.print(f"also in the report (--json): {escape(', '.join(rest))}")
 
 
-def run_command(analysis: Analysis, document: Path, model: str | None, sets: list[str] | None, jacobian: str,
-                line_search: bool, max_iterations: int, json_out: Path | None, given: dict[str, Any]) -> None:
+def run_command(
+    analysis: Analysis,
+    document: Path,
+    model: str | None,
+    sets: list[str] | None,
+    jacobian: str,
+    line_search: bool,
+    max_iterations: int,
+    json_out: Path | None,
+    given: dict[str, Any],
+) -> None:
     out, err = consoles()
     with user_errors(err):
         options = typed_options(analysis, given)
@@ -169,11 +198,20 @@ def command_of(analysis: Analysis):
         common = {name: kwargs.get(name, COMMON_DEFAULTS.get(name)) for name, _ in COMMON}
         run_command(analysis, **common, given={name: kwargs.get(name) for name in option_names})
 
-    parameters = [inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, annotation=annotation,
-                                    default=COMMON_DEFAULTS.get(name, inspect.Parameter.empty))
-                  for name, annotation in COMMON]
-    parameters += [option_parameter(name, analysis.Options.model_fields[name]) for name in option_names
-                   if name not in COMMON_DEFAULTS and name != "document"]
+    parameters = [
+        inspect.Parameter(
+            name,
+            inspect.Parameter.KEYWORD_ONLY,
+            annotation=annotation,
+            default=COMMON_DEFAULTS.get(name, inspect.Parameter.empty),
+        )
+        for name, annotation in COMMON
+    ]
+    parameters += [
+        option_parameter(name, analysis.Options.model_fields[name])
+        for name in option_names
+        if name not in COMMON_DEFAULTS and name != "document"
+    ]
     command.__signature__ = inspect.Signature(parameters)  # type: ignore[attr-defined]
     command.__annotations__ = {p.name: p.annotation for p in parameters}
     command.__doc__ = f"{analysis.summary}. Its options are the flags below (as fields of POST /v1/solve)."
@@ -196,4 +234,3 @@ def add_command(analysis: Analysis) -> None:
 def listen() -> None:
     """Commands for every analysis, registered now and later (service.cli imports this last)."""
     ANALYSES.listen(add_command)
-

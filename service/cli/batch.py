@@ -16,8 +16,9 @@ from service.cli.options import JacobianOpt, LineSearchOpt, MaxIterOpt, newton_o
 from service.newton import NewtonOptions
 
 
-def run_with_progress(err: Console, directory: Path, out: Path, options: NewtonOptions, count: int,
-                      chosen=None) -> dict:
+def run_with_progress(
+    err: Console, directory: Path, out: Path, options: NewtonOptions, count: int, chosen=None
+) -> dict:
     """service.batch.run_batch with a progress bar on stderr; its summary."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
@@ -38,13 +39,19 @@ def print_summary(console: Console, summary: dict, out: Path) -> None:
     message of each that failed."""
     from service.batch import succeeded
 
-    table = table_of(f"{summary['documents']} documents -> {out}", "document", "analysis", "status", "result",
-                     "seconds", text=4)
+    table = table_of(
+        f"{summary['documents']} documents -> {out}", "document", "analysis", "status", "result", "seconds", text=4
+    )
     rows = [(row, succeeded(row["analysis"], row["status"])) for row in summary["results"]]
     for row, ok in rows:
         colour = "green" if ok else "red"
-        table.add_row(escape(row["document"]), str(row["analysis"] or "-"),
-                      f"[{colour}]{escape(row['status'])}[/{colour}]", escape(row["result"]), f"{row['seconds']:.3g}")
+        table.add_row(
+            escape(row["document"]),
+            str(row["analysis"] or "-"),
+            f"[{colour}]{escape(row['status'])}[/{colour}]",
+            escape(row["result"]),
+            f"{row['seconds']:.3g}",
+        )
     console.print(table)
     for row in (row for row, ok in rows if not ok):
         console.print(f"[red]{escape(row['document'])}:[/red] {escape(row['message'])}")
@@ -79,17 +86,31 @@ def chosen_analysis(name: str | None, text: str | None):
 
 @app.command()
 def batch(
-    directory: Annotated[Path, typer.Argument(help="Folder of mechanism documents (JSON or YAML).", show_default=False)],
+    directory: Annotated[
+        Path, typer.Argument(help="Folder of mechanism documents (JSON or YAML).", show_default=False)
+    ],
     out: Annotated[Path, typer.Option("--out", help="Folder for the results (created).")],
     jacobian: JacobianOpt = "full",
     line_search: LineSearchOpt = True,
     max_iterations: MaxIterOpt = 50,
-    analysis: Annotated[str | None, typer.Option(
-        "--analysis", help="Run this analysis of every document instead of the one each declares "
-                           "(any of `flexmech solve --analysis`, a plugin's included).", show_default=False)] = None,
-    analysis_options: Annotated[str | None, typer.Option(
-        "--options", metavar="JSON", help="The analysis' options (its fields of POST /v1/solve), as a JSON object.",
-        show_default=False)] = None,
+    analysis: Annotated[
+        str | None,
+        typer.Option(
+            "--analysis",
+            help="Run this analysis of every document instead of the one each declares "
+            "(any of `flexmech solve --analysis`, a plugin's included).",
+            show_default=False,
+        ),
+    ] = None,
+    analysis_options: Annotated[
+        str | None,
+        typer.Option(
+            "--options",
+            metavar="JSON",
+            help="The analysis' options (its fields of POST /v1/solve), as a JSON object.",
+            show_default=False,
+        ),
+    ] = None,
 ) -> None:
     """Run every document of a folder through the analysis it declares (its optimize section,
     else its inverse section, else its sweep, else the equilibrium), or through --analysis with
@@ -108,8 +129,10 @@ def batch(
         if not documents:
             raise OptionError("DIRECTORY", f"no documents (*.json, *.yaml) in '{directory}'")
         if same_folder(directory, out):
-            raise OptionError("--out", f"'{out}' is the input folder: the results would overwrite its documents; "
-                              "choose another folder")
+            raise OptionError(
+                "--out",
+                f"'{out}' is the input folder: the results would overwrite its documents; choose another folder",
+            )
         try:
             out.mkdir(parents=True, exist_ok=True)
         except OSError as exc:

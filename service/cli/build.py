@@ -17,11 +17,13 @@ from service.cli.options import JsonOpt, mechanism
 
 
 @app.command()
-def build(documents: Annotated[list[Path] | None, typer.Argument(help="Mechanism documents.", show_default=False)] = None,
-          examples: Annotated[bool, typer.Option("--examples", help="Every shipped example.")] = False,
-          seconds: Annotated[float, typer.Option("--seconds", help="Time limit of one compiler run (s).")] = 60.0,
-          memory: Annotated[float, typer.Option("--memory", help="Memory limit of one compiler run (MiB).")] = 1024.0,
-          json_out: JsonOpt = None) -> None:
+def build(
+    documents: Annotated[list[Path] | None, typer.Argument(help="Mechanism documents.", show_default=False)] = None,
+    examples: Annotated[bool, typer.Option("--examples", help="Every shipped example.")] = False,
+    seconds: Annotated[float, typer.Option("--seconds", help="Time limit of one compiler run (s).")] = 60.0,
+    memory: Annotated[float, typer.Option("--memory", help="Memory limit of one compiler run (MiB).")] = 1024.0,
+    json_out: JsonOpt = None,
+) -> None:
     """Compile the kernels documents run on, once per kernel (shared by every document using it), and then each
     document's window of time steps that calls them."""
     from service.examples import examples_directory
@@ -49,11 +51,15 @@ def build(documents: Annotated[list[Path] | None, typer.Argument(help="Mechanism
                 failed += _build(b, path.name, compiler, limits, rows, seen, err)
             for b in window_builds(mech):  # once the kernels it calls are there
                 failed += _build(b, path.name, compiler, limits, rows, seen, err)
-        table = table_of("kernels", "document", "kernel", "part", "status", "C (kB)", "compile (s)", "peak (MiB)",
-                         text=4)
+        table = table_of(
+            "kernels", "document", "kernel", "part", "status", "C (kB)", "compile (s)", "peak (MiB)", text=4
+        )
         for r in rows:
-            numbers = ([f"{r['c_bytes'] / 1e3:.0f}", f"{r['seconds']:.1f}", f"{r['peak_bytes'] / 2**20:.0f}"]
-                       if "c_bytes" in r else ["", "", ""])
+            numbers = (
+                [f"{r['c_bytes'] / 1e3:.0f}", f"{r['seconds']:.1f}", f"{r['peak_bytes'] / 2**20:.0f}"]
+                if "c_bytes" in r
+                else ["", "", ""]
+            )
             table.add_row(escape(r["document"]), r["kernel"], r["part"], r["status"], *numbers)
         out.print(table)
         for r in rows:
@@ -82,6 +88,13 @@ def _build(b, document: str, compiler, limits, rows: list, seen: set, err) -> in
         if not outcome.ok:
             failed += 1
             note_abandoned(b.note, outcome)
-        rows.append({"document": document, "kernel": b.name, "part": part,
-                     "status": "built" if outcome.ok else "abandoned", **outcome.to_json()})
+        rows.append(
+            {
+                "document": document,
+                "kernel": b.name,
+                "part": part,
+                "status": "built" if outcome.ok else "abandoned",
+                **outcome.to_json(),
+            }
+        )
     return failed

@@ -88,8 +88,9 @@ def write_json(path: Path, payload: dict) -> None:
 
 def check_plot_option(plot: Path | None) -> None:
     if plot is not None and plot.suffix.lower() not in PLOT_SUFFIXES:
-        raise OptionError("--plot", f"cannot tell the figure format of '{plot}': use a name ending in "
-                          f"{' or '.join(PLOT_SUFFIXES)}")
+        raise OptionError(
+            "--plot", f"cannot tell the figure format of '{plot}': use a name ending in {' or '.join(PLOT_SUFFIXES)}"
+        )
 
 
 def save_plot(draw, *args, **options) -> None:
@@ -137,8 +138,11 @@ def reaction_along(mech: Mechanism, pointer: str) -> list[str]:
     if motion is None:
         return []
     body, component = motion
-    names = [f"{name}.{REACTION_ALONG[component]}" for name, spec in mech.document.outputs.items()
-             if spec.type == "reaction" and spec.body == body]
+    names = [
+        f"{name}.{REACTION_ALONG[component]}"
+        for name, spec in mech.document.outputs.items()
+        if spec.type == "reaction" and spec.body == body
+    ]
     names.append(f"reactions.{body}.{REACTION_ALONG[component]}")
     return [name for name in names if name in mech.graphs.output_names]
 

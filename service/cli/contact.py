@@ -29,28 +29,46 @@ from service.cli.options import DocArg, JsonOpt, PlotOpt, SetOpt, choice, mechan
 
 SHOWN_STATES = 8
 
-PathOpt = Annotated[str | None, typer.Option("--path", metavar="POINTER", help="The field the path moves "
-                                             "(instead of the document's contacts.path).")]
+PathOpt = Annotated[
+    str | None,
+    typer.Option(
+        "--path", metavar="POINTER", help="The field the path moves (instead of the document's contacts.path)."
+    ),
+]
 
 
 @app.command()
-def contact(document: DocArg, sets: SetOpt = None,
-            path: PathOpt = None,
-            start: Annotated[float | None, typer.Option(help="--path: first value (document units).")] = None,
-            stop: Annotated[float | None, typer.Option(help="--path: last value.")] = None,
-            steps: Annotated[int, typer.Option(help="--path: equal steps.")] = 50,
-            single: Annotated[bool, typer.Option("--single", help="Solve the document's state only.")] = False,
-            output: Annotated[str | None, typer.Option("--output", help="The result --plot draws (default: the "
-                                                       "first pair's force_x).")] = None,
-            shapes: Annotated[Path | None, typer.Option("--shapes", metavar="OUT.png|svg",
-                                                        help="Draw chosen states.")] = None,
-            at: Annotated[str | None, typer.Option("--at", metavar="I,J,...", help="--shapes: state indices "
-                                                   "(default: four spread over the contact).")] = None,
-            penetrating_start: Annotated[str, typer.Option(help="approach | refuse.")] = "approach",
-            friction: Annotated[list[float] | None, typer.Option(
-                "--friction", metavar="MU", help="Run the path with every pair's friction coefficient MU; "
-                "repeat to compare runs (--plot draws one curve each).")] = None,
-            json_out: JsonOpt = None, plot: PlotOpt = None) -> None:
+def contact(
+    document: DocArg,
+    sets: SetOpt = None,
+    path: PathOpt = None,
+    start: Annotated[float | None, typer.Option(help="--path: first value (document units).")] = None,
+    stop: Annotated[float | None, typer.Option(help="--path: last value.")] = None,
+    steps: Annotated[int, typer.Option(help="--path: equal steps.")] = 50,
+    single: Annotated[bool, typer.Option("--single", help="Solve the document's state only.")] = False,
+    output: Annotated[
+        str | None, typer.Option("--output", help="The result --plot draws (default: the first pair's force_x).")
+    ] = None,
+    shapes: Annotated[Path | None, typer.Option("--shapes", metavar="OUT.png|svg", help="Draw chosen states.")] = None,
+    at: Annotated[
+        str | None,
+        typer.Option(
+            "--at", metavar="I,J,...", help="--shapes: state indices (default: four spread over the contact)."
+        ),
+    ] = None,
+    penetrating_start: Annotated[str, typer.Option(help="approach | refuse.")] = "approach",
+    friction: Annotated[
+        list[float] | None,
+        typer.Option(
+            "--friction",
+            metavar="MU",
+            help="Run the path with every pair's friction coefficient MU; "
+            "repeat to compare runs (--plot draws one curve each).",
+        ),
+    ] = None,
+    json_out: JsonOpt = None,
+    plot: PlotOpt = None,
+) -> None:
     """Contact of fingers (links by elements) with rigid objects: forces from the multipliers."""
     out, err = consoles()
     with user_errors(err):
@@ -97,15 +115,24 @@ def _single_state(out, mech, problem, options, json_out) -> bool:
         report = CONTACT.run(mech, AnalysisRequest(given={"penetrating_start": options.penetrating_start}))
     except MechanismError as exc:
         raise MechanismError(exc.pointer.removeprefix("/document"), exc.problem) from None
-    out.print(f"[bold]{escape(mech.document.name)}[/bold]: {report['status']} in {report['iterations']} iterations, "
-              f"{report['seconds'] * 1e3:.1f} ms")
+    out.print(
+        f"[bold]{escape(mech.document.name)}[/bold]: {report['status']} in {report['iterations']} iterations, "
+        f"{report['seconds'] * 1e3:.1f} ms"
+    )
     table = table_of(None, "pair", "state", "F_x", "F_y", "normal", "friction", "point x", "point y", text=2)
     f, length = report["units"]["force"], report["units"]["length"]
     for name, pair in report["pairs"].items():
         point = pair["point"] or [None, None]
-        table.add_row(escape(name), pair["state"], number(pair["force"][0], f), number(pair["force"][1], f),
-                      number(pair["normal_force"], f), number(pair["friction_force"], f), number(point[0], length),
-                      number(point[1], length))
+        table.add_row(
+            escape(name),
+            pair["state"],
+            number(pair["force"][0], f),
+            number(pair["force"][1], f),
+            number(pair["normal_force"], f),
+            number(pair["friction_force"], f),
+            number(point[0], length),
+            number(point[1], length),
+        )
     out.print(table)
     for note in report["warnings"]:
         out.print(f"[yellow]warning:[/yellow] {escape(note)}")
@@ -148,10 +175,18 @@ def _path(out, mech, problem, options, parameters, output, json_out, plot, shape
         runs.append((label, run_mech, states, records))
     if json_out is not None:
         points = [[{k: v for k, v in r.items() if k != "state"} for r in records] for *_, records in runs]
-        write_json(json_out, {"document": mech.document.name, "parameters": [{"path": p, "values": list(v)} for p, v in
-                                                                            zip(fields.pointers, fields.values)],
-                              **({"points": points[0]} if not friction else
-                                 {"runs": [{"friction": mu, "points": p} for mu, p in zip(friction, points)]})})
+        write_json(
+            json_out,
+            {
+                "document": mech.document.name,
+                "parameters": [{"path": p, "values": list(v)} for p, v in zip(fields.pointers, fields.values)],
+                **(
+                    {"points": points[0]}
+                    if not friction
+                    else {"runs": [{"friction": mu, "points": p} for mu, p in zip(friction, points)]}
+                ),
+            },
+        )
     if plot is not None:
         _plot_path(mech, problem, fields, [(label, records) for label, _, _, records in runs], y_name, plot)
     if shapes is not None:
@@ -178,9 +213,11 @@ def _print_path(out, mech, fields, records, y_name, problem, label: str) -> None
     y_unit = mech.doc_unit(problem.output_kinds[problem.output_names.index(y_name)])
     converged = [r for r in records if r["status"] == "converged"]
     seconds = sum(r["seconds"] for r in records)
-    out.print(f"[bold]{escape(mech.document.name)}[/bold]{escape(', ' + label) if label else ''}: "
-              f"{len(converged)} of {len(records)} states converged, "
-              f"{seconds:.3f} s ({1e3 * seconds / max(len(records), 1):.1f} ms per state)")
+    out.print(
+        f"[bold]{escape(mech.document.name)}[/bold]{escape(', ' + label) if label else ''}: "
+        f"{len(converged)} of {len(records)} states converged, "
+        f"{seconds:.3f} s ({1e3 * seconds / max(len(records), 1):.1f} ms per state)"
+    )
     table = table_of(None, escape(fields.pointers[0]), "pairs", escape(y_name), text=2)
     step = max(1, len(records) // SHOWN_STATES)
     for r in records[::step]:
@@ -190,8 +227,10 @@ def _print_path(out, mech, fields, records, y_name, problem, label: str) -> None
     values = np.array([r["outputs"][y_name] if r["status"] == "converged" else np.nan for r in records])
     if np.isfinite(values).any():
         k = int(np.nanargmax(np.abs(values)))
-        out.print(f"largest |{escape(y_name)}| = {number(abs(values[k]), y_unit)} at {escape(fields.pointers[0])} = "
-                  f"{number(records[k]['values'][0], unit)}")
+        out.print(
+            f"largest |{escape(y_name)}| = {number(abs(values[k]), y_unit)} at {escape(fields.pointers[0])} = "
+            f"{number(records[k]['values'][0], unit)}"
+        )
     failed = [r for r in records if r["status"] != "converged"]
     for r in failed[:3]:
         out.print(f"[yellow]not converged[/yellow] at {number(r['values'][0], unit)}: {escape(r['message'])}")
@@ -209,8 +248,9 @@ def _plot_path(mech, problem, fields, runs, y_name, plot) -> None:
         y = np.array([r["outputs"][y_name] if r["status"] == "converged" else np.nan for r in records])
         curves.append((label or y_name, x, y))
     try:
-        plot_path(curves, f"{field_label(fields.pointers[0])} [{unit}]", f"{y_name} [{y_unit}]",
-                  mech.document.name, plot)
+        plot_path(
+            curves, f"{field_label(fields.pointers[0])} [{unit}]", f"{y_name} [{y_unit}]", mech.document.name, plot
+        )
     except OSError as exc:
         raise OptionError("--plot", f"cannot write {plot}: {exc.strerror}") from None
 

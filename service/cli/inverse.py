@@ -35,11 +35,16 @@ def internal_forces(given: dict[str, dict[str, float]], items: list[str] | None)
 
 def print_link_inverse(out: Console, mech: Mechanism, forces: dict, result: LinkInverseResult) -> None:
     """The given internal forces, the status, and when converged the loads found and the links."""
-    given = ", ".join(f"{name}.{c} = {number(v, mech.document.units.force)}"
-                      for name, values in forces.items() for c, v in values.items())
+    given = ", ".join(
+        f"{name}.{c} = {number(v, mech.document.units.force)}"
+        for name, values in forces.items()
+        for c, v in values.items()
+    )
     out.print(f"given internal forces: {escape(given)}")
-    out.print(f"status: {result.status} after {result.iterations} iterations"
-              + (f" ({escape(result.message)})" if result.message else ""))
+    out.print(
+        f"status: {result.status} after {result.iterations} iterations"
+        + (f" ({escape(result.message)})" if result.message else "")
+    )
     if not result.converged:
         return
     table = table_of("unknown loads", "field", "value")
@@ -48,8 +53,12 @@ def print_link_inverse(out: Console, mech: Mechanism, forces: dict, result: Link
     out.print(table)
     table = table_of("links", "link", "h", "v", "M start", "M end", "eta(0) [rad]", "eta(1) [rad]")
     for name, values in result.links.items():
-        table.add_row(name, *(number(values[k]) for k in ("h", "v", "M_start", "M_end")),
-                      number(values["eta"][0]), number(values["eta"][-1]))
+        table.add_row(
+            name,
+            *(number(values[k]) for k in ("h", "v", "M_start", "M_end")),
+            number(values["eta"][0]),
+            number(values["eta"][-1]),
+        )
     out.print(table)
 
 
@@ -57,8 +66,14 @@ def print_link_inverse(out: Console, mech: Mechanism, forces: dict, result: Link
 def inverse(
     document: DocArg,
     sets: SetOpt = None,
-    h: Annotated[list[str] | None, typer.Option("--internal-force", metavar="LINK.h=VALUE",
-                                                help="Replace an internal force of the document's inverse section (repeatable).")] = None,
+    h: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--internal-force",
+            metavar="LINK.h=VALUE",
+            help="Replace an internal force of the document's inverse section (repeatable).",
+        ),
+    ] = None,
     max_iterations: MaxIterOpt = 50,
     json_out: JsonOpt = None,
 ) -> None:
@@ -71,15 +86,20 @@ def inverse(
         mech = mechanism(document, None, sets)
         spec = mech.document.inverse
         if spec is None:
-            raise MechanismError("/inverse", "the document has no inverse section (shapes, internal_forces, unknown_loads)")
+            raise MechanismError(
+                "/inverse", "the document has no inverse section (shapes, internal_forces, unknown_loads)"
+            )
         forces = internal_forces(spec.internal_forces, h)
-        result = inverse_links(mech, spec.shapes, forces, spec.unknown_loads,
-                               NewtonOptions(max_iterations=max_iterations))
+        result = inverse_links(
+            mech, spec.shapes, forces, spec.unknown_loads, NewtonOptions(max_iterations=max_iterations)
+        )
         out.print(f"[bold]{escape(mech.document.name)}[/bold]  ({escape(str(document))}): link inverse")
         print_link_inverse(out, mech, forces, result)
         if json_out is not None:
-            write_json(json_out, {"document": str(document), "name": mech.document.name,
-                                  "internal_forces": forces, **result.__dict__})
+            write_json(
+                json_out,
+                {"document": str(document), "name": mech.document.name, "internal_forces": forces, **result.__dict__},
+            )
             out.print(f"wrote {escape(str(json_out))}")
     if not result.converged:
         raise typer.Exit(EXIT_NOT_CONVERGED)

@@ -33,23 +33,36 @@ def run_starts(err: Console, prepared: Prepared, starts: int) -> OptimizationRes
 def print_optimum(out: Console, problem: DesignProblem, best: StartResult) -> None:
     """The objective, the design against its bounds and the constraints at the optimum."""
     mech = problem.mechanism
-    out.print(f"objective {problem.spec.objective.output}: "
-              f"{number(best.objective, mech.doc_unit(problem.objective.kind))}  "
-              f"({best.iterations} IPOPT iterations, {best.seconds:.3g} s, equilibrium residual "
-              f"{best.equilibrium_residual:.2g})")
+    out.print(
+        f"objective {problem.spec.objective.output}: "
+        f"{number(best.objective, mech.doc_unit(problem.objective.kind))}  "
+        f"({best.iterations} IPOPT iterations, {best.seconds:.3g} s, equilibrium residual "
+        f"{best.equilibrium_residual:.2g})"
+    )
     table = table_of("design", "field", "start", "optimum", "lower", "upper", "multiplier")
     for k, path in enumerate(problem.paths):
         unit = mech.doc_unit(mech.parameter_kind(path))
-        table.add_row(path, number(best.design_start[path], unit), number(best.design[path], unit),
-                      number(problem.lower[k]), number(problem.upper[k]), number(best.multipliers["design"][k]))
+        table.add_row(
+            path,
+            number(best.design_start[path], unit),
+            number(best.design[path], unit),
+            number(problem.lower[k]),
+            number(problem.upper[k]),
+            number(best.multipliers["design"][k]),
+        )
     out.print(table)
     if best.constraints:
         table = table_of("constraints", "output", "case", "value", "lower", "upper", "active", "multiplier")
         for row in best.constraints:
-            table.add_row(row["output"], row["case"], number(row["value"]),
-                          "-" if row["lower"] is None else number(row["lower"]),
-                          "-" if row["upper"] is None else number(row["upper"]),
-                          "yes" if row["active"] else "no", number(row["multiplier"]))
+            table.add_row(
+                row["output"],
+                row["case"],
+                number(row["value"]),
+                "-" if row["lower"] is None else number(row["lower"]),
+                "-" if row["upper"] is None else number(row["upper"]),
+                "yes" if row["active"] else "no",
+                number(row["multiplier"]),
+            )
         out.print(table)
 
 
@@ -69,9 +82,15 @@ def print_sensitivities(out: Console, prepared: Prepared, best: StartResult, fie
 def optimize(
     document: DocArg,
     sets: SetOpt = None,
-    starts: Annotated[int | None, typer.Option(min=1, max=64, help="Number of starts (default: the document's).")] = None,
-    sensitivity: Annotated[list[str] | None, typer.Option(
-        "--sensitivity", metavar="PATH", help="Also give d(optimum)/d(field) for this numeric field (repeatable).")] = None,
+    starts: Annotated[
+        int | None, typer.Option(min=1, max=64, help="Number of starts (default: the document's).")
+    ] = None,
+    sensitivity: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--sensitivity", metavar="PATH", help="Also give d(optimum)/d(field) for this numeric field (repeatable)."
+        ),
+    ] = None,
     json_out: JsonOpt = None,
 ) -> None:
     """Solve the design problem of the document's `optimize` section: one NLP over the design

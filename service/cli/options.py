@@ -16,13 +16,25 @@ JACOBIANS = ("full", "first_term", "frozen")
 RESTARTS = ("previous", "undeformed")
 
 DocArg = Annotated[Path, typer.Argument(help="Mechanism document (JSON or YAML).", show_default=False)]
-ModelOpt = Annotated[str | None, typer.Option(
-    "--model", help=f"Model of every curved beam: {' | '.join(MODELS)} (default: as in the document).")]
-SetOpt = Annotated[list[str] | None, typer.Option(
-    "--set", metavar="POINTER=VALUE",
-    help='Override a numeric field, in document units or as a quantity ("5 um"). Repeatable.')]
-JacobianOpt = Annotated[str, typer.Option(
-    "--jacobian", help=f"Newton matrix: {' | '.join(JACOBIANS)} (K_T, its first term, or K_T frozen at the undeformed state).")]
+ModelOpt = Annotated[
+    str | None,
+    typer.Option("--model", help=f"Model of every curved beam: {' | '.join(MODELS)} (default: as in the document)."),
+]
+SetOpt = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--set",
+        metavar="POINTER=VALUE",
+        help='Override a numeric field, in document units or as a quantity ("5 um"). Repeatable.',
+    ),
+]
+JacobianOpt = Annotated[
+    str,
+    typer.Option(
+        "--jacobian",
+        help=f"Newton matrix: {' | '.join(JACOBIANS)} (K_T, its first term, or K_T frozen at the undeformed state).",
+    ),
+]
 LineSearchOpt = Annotated[bool, typer.Option("--line-search/--no-line-search", help="Backtracking line search.")]
 MaxIterOpt = Annotated[int, typer.Option("--max-iterations", help="Newton iterations per solve.")]
 JsonOpt = Annotated[Path | None, typer.Option("--json", metavar="OUT.json", help="Write the results as JSON.")]

@@ -21,10 +21,16 @@ class SimulationProgress:
         self.last_line = -float("inf")
         self.bar = None
         if console.is_terminal:
-            self.bar = Progress(TextColumn("{task.description}"), BarColumn(),
-                                TextColumn("t = {task.completed:.4g} / {task.total:g} s"),
-                                TextColumn("{task.fields[steps]} steps"), TextColumn("ETA"), TimeRemainingColumn(),
-                                console=console, transient=True)
+            self.bar = Progress(
+                TextColumn("{task.description}"),
+                BarColumn(),
+                TextColumn("t = {task.completed:.4g} / {task.total:g} s"),
+                TextColumn("{task.fields[steps]} steps"),
+                TextColumn("ETA"),
+                TimeRemainingColumn(),
+                console=console,
+                transient=True,
+            )
             self.task = self.bar.add_task(label, total=until, steps=0)
 
     def __enter__(self) -> SimulationProgress:
@@ -50,5 +56,7 @@ class SimulationProgress:
         fraction = min(1.0, t / self.until)
         eta = elapsed * (1 - fraction) / fraction if fraction > 0 else float("nan")
         counted = f", {steps} steps" if steps is not None else ""
-        return (f"{self.label}: t = {t:.4g} of {self.until:g} s ({100 * fraction:.0f} %){counted}, "
-                f"{elapsed:.1f} s elapsed, ETA {eta:.0f} s")
+        return (
+            f"{self.label}: t = {t:.4g} of {self.until:g} s ({100 * fraction:.0f} %){counted}, "
+            f"{elapsed:.1f} s elapsed, ETA {eta:.0f} s"
+        )

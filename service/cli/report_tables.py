@@ -36,8 +36,12 @@ def print_status(out: Console, report: dict) -> None:
 def print_solution(out: Console, mech: Mechanism, report: dict) -> None:
     """Bodies, named outputs, support reactions, flexures and the strain energy of a solution."""
     values = report["outputs"]
-    for table in (bodies_table(mech, values), outputs_table(mech, values), reactions_table(mech, values),
-                  flexures_table(mech, values)):
+    for table in (
+        bodies_table(mech, values),
+        outputs_table(mech, values),
+        reactions_table(mech, values),
+        flexures_table(mech, values),
+    ):
         if table is not None:
             out.print(table)
     out.print(f"strain energy: {number(values['energy'], mech.doc_unit('energy'))}")
@@ -46,12 +50,23 @@ def print_solution(out: Console, mech: Mechanism, report: dict) -> None:
 def bodies_table(mech: Mechanism, values: dict) -> Table:
     structure = mech.structure
     L, A = mech.doc_unit("length"), mech.doc_unit("angle")
-    table = table_of("bodies: pose of the reference point, and its displacement", "body", "support",
-                     f"x [{L}]", f"y [{L}]", f"angle [{A}]", f"dx [{L}]", f"dy [{L}]", f"rotation [{A}]", text=2)
+    table = table_of(
+        "bodies: pose of the reference point, and its displacement",
+        "body",
+        "support",
+        f"x [{L}]",
+        f"y [{L}]",
+        f"angle [{A}]",
+        f"dx [{L}]",
+        f"dy [{L}]",
+        f"rotation [{A}]",
+        text=2,
+    )
     for b, name in enumerate(structure.bodies):
         row = structure.prescribed[b]
-        support = "fixed" if all(v == "" for v in row) else (
-            "prescribed" if any(v is not None for v in row) else "free")
+        support = (
+            "fixed" if all(v == "" for v in row) else ("prescribed" if any(v is not None for v in row) else "free")
+        )
         x, y, angle = (values[f"bodies.{name}.{c}"] for c in ("x", "y", "angle"))
         x0, y0 = mech.value(f"/bodies/{name}/position/0"), mech.value(f"/bodies/{name}/position/1")
         angle0 = mech.value(f"/bodies/{name}/angle")
@@ -77,8 +92,9 @@ def reactions_table(mech: Mechanism, values: dict) -> Table | None:
     if not supported:
         return None
     F, M = mech.doc_unit("force"), mech.doc_unit("moment")
-    table = table_of("support reactions (about the body's reference point)", "body", f"Fx [{F}]", f"Fy [{F}]",
-                     f"M [{M}]")
+    table = table_of(
+        "support reactions (about the body's reference point)", "body", f"Fx [{F}]", f"Fy [{F}]", f"M [{M}]"
+    )
     for name in supported:
         table.add_row(name, *(number(values[f"reactions.{name}.{q}"]) for q in ("Fx", "Fy", "M")))
     return table
@@ -95,9 +111,16 @@ def flexures_table(mech: Mechanism, values: dict) -> Table | None:
     beam_models = sorted({f.model for f in beams})
     mixed = len(beam_models) > 1
     heads = ["flexure", "bodies"] + (["model"] if mixed else [])
-    table = table_of("flexures" if mixed else f"flexures ({beam_models[0]} model)",
-                     *heads, f"rotation [{A}]", f"M end [{M}]", f"σ start [{S}]", f"σ end [{S}]",
-                     f"σ max [{S}]", text=len(heads))
+    table = table_of(
+        "flexures" if mixed else f"flexures ({beam_models[0]} model)",
+        *heads,
+        f"rotation [{A}]",
+        f"M end [{M}]",
+        f"σ start [{S}]",
+        f"σ end [{S}]",
+        f"σ max [{S}]",
+        text=len(heads),
+    )
     for f in beams:
         e = f"elements.{f.name}"
         cells = [f.name, f"{structure.bodies[f.start_body]}→{structure.bodies[f.end_body]}"]
@@ -112,7 +135,7 @@ STIFFNESS_TERMS = {
     "I": "term I of K_T (Cammarata et al. 2022, Eqs. 26-28): through the flexures' deformation",
     "II": "term II of K_T (Cammarata et al. 2022): through the body rotations that carry the flexures' ends",
     "III": "term III of K_T (Cammarata et al. 2022): through the tip displacement in the flexure frames "
-           "(partial non-linear model)",
+    "(partial non-linear model)",
     "load": "load term of K_T: through the arms of forces applied away from a reference point",
 }
 
@@ -121,8 +144,12 @@ def print_stiffness(out: Console, stiffness: dict) -> None:
     """K_T (service.reports.stiffness_dict) in blocks of columns that fit the console;
     K[i][j] in (row unit)/(column unit). Then each of its terms I, II, III and load that is
     not zero (curved-beam mechanisms without links have them), titled, in the same units."""
-    out.print(escape("tangent stiffness K_T = dR/dz at the solution: row i is the generalized force on "
-                     "coordinate i, column j a displacement; K[i, j] in (row unit)/(column unit)"))
+    out.print(
+        escape(
+            "tangent stiffness K_T = dR/dz at the solution: row i is the generalized force on "
+            "coordinate i, column j a displacement; K[i, j] in (row unit)/(column unit)"
+        )
+    )
     print_matrix(out, stiffness, stiffness["K"])
     terms = stiffness.get("terms") or {}
     nonzero = {name for name, term in terms.items() if any(value != 0 for row in term for value in row)}
@@ -153,8 +180,13 @@ def print_matrix(out: Console, stiffness: dict, K: list[list[float | None]]) -> 
 def print_wrenches(out: Console, report: dict) -> None:
     """The inverse analysis: the wrench each body needs (loads plus supports)."""
     units = report["wrench_units"]
-    table = table_of("wrench each body needs (loads plus supports)", "body", f"Fx [{units['Fx']}]",
-                     f"Fy [{units['Fy']}]", f"M [{units['M']}]")
+    table = table_of(
+        "wrench each body needs (loads plus supports)",
+        "body",
+        f"Fx [{units['Fx']}]",
+        f"Fy [{units['Fy']}]",
+        f"M [{units['M']}]",
+    )
     for body, wrench in report["wrenches"].items():
         table.add_row(body, *(number(wrench[q]) for q in ("Fx", "Fy", "M")))
     out.print(table)

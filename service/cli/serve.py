@@ -12,7 +12,9 @@ from service.cli.common import EXIT_ERROR, consoles, print_error
 
 @app.command()
 def serve(
-    host: Annotated[str | None, typer.Option("--host", help="Address to listen on (default FLEXMECH_HOST or 127.0.0.1).")] = None,
+    host: Annotated[
+        str | None, typer.Option("--host", help="Address to listen on (default FLEXMECH_HOST or 127.0.0.1).")
+    ] = None,
     port: Annotated[int | None, typer.Option("--port", help="Port (default FLEXMECH_PORT or 8000).")] = None,
 ) -> None:
     """Run the HTTP API with uvicorn. Settings come from FLEXMECH_* environment variables
@@ -32,5 +34,11 @@ def serve(
         raise typer.Exit(EXIT_ERROR) from None
     # The app is named by import string so that the service layer never imports the api package.
     # The protocol adds a deadline for a request's headers (api.protocol), which uvicorn lacks.
-    uvicorn.run("api.app:create_app", factory=True, host=host or settings.host, port=port or settings.port,
-                log_level=settings.log_level, http="api.protocol:HeaderTimeoutProtocol")
+    uvicorn.run(
+        "api.app:create_app",
+        factory=True,
+        host=host or settings.host,
+        port=port or settings.port,
+        log_level=settings.log_level,
+        http="api.protocol:HeaderTimeoutProtocol",
+    )

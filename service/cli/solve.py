@@ -65,8 +65,9 @@ def in_the_file(exc: MechanismError) -> MechanismError:
     return exc
 
 
-def run_analysis(mech: Mechanism, analysis: Analysis, options: NewtonOptions,
-                 stiffness: bool) -> tuple[EquilibriumResult | None, dict]:
+def run_analysis(
+    mech: Mechanism, analysis: Analysis, options: NewtonOptions, stiffness: bool
+) -> tuple[EquilibriumResult | None, dict]:
     """(the solution, or None for an analysis that has none; the analysis' report)."""
     solver = SOLVERS.get(analysis.name)
     if solver is None:
@@ -106,8 +107,10 @@ def print_path_summary(out: Console, report: dict) -> None:
     has every point)."""
     values, unit, limits = report["values"], report["unit"], report["limit_points"]
     if values:
-        out.print(f"path of {escape(report['path'])} (from the {report['source']}): {len(values)} points from "
-                  f"{number(values[0], unit)} to {number(values[-1], unit)}, {len(limits)} limit points")
+        out.print(
+            f"path of {escape(report['path'])} (from the {report['source']}): {len(values)} points from "
+            f"{number(values[0], unit)} to {number(values[-1], unit)}, {len(limits)} limit points"
+        )
     if limits:
         table = table_of("limit points", "kind", f"{report['path']} [{unit}]", "after point")
         for lp in limits:
@@ -118,15 +121,17 @@ def print_path_summary(out: Console, report: dict) -> None:
 def check_solve_options(analysis: Analysis, plot: Path | None) -> None:
     check_plot_option(plot)
     if plot is not None and analysis.name not in SOLVERS:
-        raise OptionError("--plot", f"draws a solution: use it with --analysis {' or '.join(SOLVERS)}, "
-                          f"not {analysis.name}")
+        raise OptionError(
+            "--plot", f"draws a solution: use it with --analysis {' or '.join(SOLVERS)}, not {analysis.name}"
+        )
 
 
 @app.command()
 def solve(
     document: DocArg,
-    analysis: Annotated[str, typer.Option(
-        "--analysis", help=f"The analysis: {' | '.join(ANALYSES.names())}.")] = "equilibrium",
+    analysis: Annotated[
+        str, typer.Option("--analysis", help=f"The analysis: {' | '.join(ANALYSES.names())}.")
+    ] = "equilibrium",
     model: ModelOpt = None,
     sets: SetOpt = None,
     jacobian: JacobianOpt = "full",
@@ -134,7 +139,13 @@ def solve(
     max_iterations: MaxIterOpt = 50,
     json_out: JsonOpt = None,
     plot: PlotOpt = None,
-    stiffness: Annotated[bool, typer.Option("--stiffness", help="Print the tangent stiffness K_T at the solution, and its terms I, II, III (Cammarata et al. 2022) and load term where they apply.")] = False,
+    stiffness: Annotated[
+        bool,
+        typer.Option(
+            "--stiffness",
+            help="Print the tangent stiffness K_T at the solution, and its terms I, II, III (Cammarata et al. 2022) and load term where they apply.",
+        ),
+    ] = False,
 ) -> None:
     """Solve the equilibrium of a mechanism under its loads (or another analysis of it)."""
     out, err = consoles()

@@ -3,7 +3,7 @@ one given by --path), for one model or each (--compare-models)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
 import numpy as np
@@ -12,21 +12,13 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-from models import COMPARED_MODELS, Mechanism, MechanismError
-from models.document import SweepSpec, SweepUntil
+from models import COMPARED_MODELS, Mechanism
 from models.elements import FAMILIES
-from models.units import quantity_to_si
 from service.cli.application import app
 from service.cli.common import (
     EXIT_NOT_CONVERGED,
-    OptionError,
-    check_plot_option,
     consoles,
-    default_xy,
-    displacement_xy,
     number,
-    output_hint,
-    reaction_along,
     save_plot,
     table_of,
     user_errors,
@@ -42,10 +34,9 @@ from service.cli.options import (
     ModelOpt,
     PlotOpt,
     SetOpt,
-    choice,
     mechanism,
-    newton_options,
 )
+from service.cli.sweep_plan import SweepPlan, checked_options, plan_sweep
 from service.newton import NewtonOptions
 from service.plotting import field_label, output_unit
 
@@ -56,105 +47,6 @@ if TYPE_CHECKING:  # the sweep is imported when the command runs
 
 # Points of each curve printed (the --json file has every one).
 SHOWN_POINTS = 6
-
-
-@dataclass(frozen=True)
-class SweepPlan:
-    """What every curve of one sweep command shares."""
-
-    spec: SweepSpec
-    unit: str  # of the swept field
-    goal: str | None  # "OUTPUT = VALUE" where the path ends, when it ends at an output value
-    x_output: str
-    y_output: str
-    restart: str
-    stiffness: bool  # the field is a prescribed displacement and y_output the reaction along it
-
-
-# --- the options -----------------------------------------------------------------------------
-def check_path_options(path: str | None, start: str | None, stop: str | None, steps: int | None,
-                       until: str | None) -> None:
-    """--start, --stop, --steps and --until go with --path; --path needs --start and one end."""
-    if path is None:
-        given = [name for name, v in (("--start", start), ("--stop", stop), ("--steps", steps),
-                                      ("--until", until)) if v is not None]
-        if given:
-            raise OptionError(given[0], "needs --path (without --path the document's sweep section is run)")
-        return
-    if start is None:
-        raise OptionError("--start", "required with --path")
-    if (stop is None) == (until is None):
-        raise OptionError("--stop", "give exactly one of --stop and --until with --path")
-    if steps is not None and steps < 1:
-        raise OptionError("--steps", f"must be at least 1, got {steps}")
-
-
-def given_value(text: str) -> float | str:
-    """A command-line value: a number (document units), else a quantity string."""
-    try:
-        return float(text)
-    except ValueError:
-        return text
-
-
-def field_value(mech: Mechanism, pointer: str, text: str, option: str) -> float:
-    """A value of numeric field `pointer` given on the command line, in document units."""
-    kind = mech.parameter_kind(pointer)
-    return quantity_to_si(given_value(text), kind, mech.doc_unit(kind), option) / mech.doc_factor(kind)
-
-
-def output_value(mech: Mechanism, name: str, text: str, option: str) -> float:
-    """A value of output `name` given on the command line, in document units."""
-    try:
-        unit = output_unit(mech, name)
-    except KeyError:
-        raise OptionError(option, f"unknown output '{name}' ({output_hint(mech)})") from None
-    kind = mech.graphs.output_kinds[mech.graphs.output_names.index(name)]
-    return quantity_to_si(given_value(text), kind, unit, option) / mech.doc_factor(kind)
-
-
-def swept_field(mech: Mechanism, path: str | None) -> str:
-    """--path, else the path of the document's sweep section; checked to be a numeric field."""
-    if path is None and mech.document.sweep is None:
-        raise MechanismError("/sweep", "the document declares no sweep: give --path, --start and --stop or --until")
-    swept = path if path is not None else mech.document.sweep.path
-    mech.parameter_index(swept)
-    return swept
-
-
-def axes(mech: Mechanism, swept: str, x_output: str | None, y_output: str | None) -> tuple[str, str]:
-    """The outputs of the table and the figure: as given, else for a prescribed displacement
-    the moved body's displacement and the reaction along it (displacement_xy), else the first
-    point output's x and y (default_xy)."""
-    default_x, default_y = displacement_xy(mech, swept) or default_xy(mech)
-    x_output, y_output = x_output or default_x, y_output or default_y
-    for option, name in (("--x-output", x_output), ("--y-output", y_output)):
-        if name not in mech.graphs.output_names:
-            raise OptionError(option, f"unknown output '{name}' ({output_hint(mech)})")
-    return x_output, y_output
-
-
-def path_spec(mech: Mechanism, path: str, start: str, stop: str | None, steps: int | None,
-              until: str | None) -> SweepSpec:
-    """The sweep of --path from --start to --stop, or until OUTPUT=VALUE, in --steps steps."""
-    target = None
-    if until is not None:
-        name, sep, text = until.partition("=")
-        if not sep or not name.strip() or not text.strip():
-            raise OptionError("--until", f"expected OUTPUT=VALUE, got '{until}'")
-        target = SweepUntil(output=name.strip(), equals=output_value(mech, name.strip(), text.strip(), "--until"))
-    first = field_value(mech, path, start, "--start")
-    last = field_value(mech, path, stop, "--stop") if stop is not None else None
-    return SweepSpec(path=path, start=first, stop=last, steps=100 if steps is None else steps, until=target)
-
-
-def goal_text(mech: Mechanism, spec: SweepSpec) -> str | None:
-    if spec.until is None:
-        return None
-    equals = spec.until.equals
-    if isinstance(equals, (int, float)):
-        equals = number(equals, output_unit(mech, spec.until.output))
-    return f"{spec.until.output} = {equals}"
 
 
 # --- the curves ------------------------------------------------------------------------------
@@ -175,21 +67,39 @@ def sweep_table(mech: Mechanism, label: str, result: SweepResult, x_output: str,
     rows = sorted(set(np.linspace(0, n - 1, min(n, SHOWN_POINTS)).round().astype(int).tolist()))
     unit = mech.doc_unit(mech.parameter_kind(result.path))
     converged = sum(s == "converged" for s in result.status)
-    table = table_of(f"{label}: {n} points, {converged} converged, {result.seconds:.3g} s",
-                     "point", f"{result.path} [{unit}]", f"{x_output} [{output_unit(mech, x_output)}]",
-                     f"{y_output} [{output_unit(mech, y_output)}]", "status", "iterations")
+    table = table_of(
+        f"{label}: {n} points, {converged} converged, {result.seconds:.3g} s",
+        "point",
+        f"{result.path} [{unit}]",
+        f"{x_output} [{output_unit(mech, x_output)}]",
+        f"{y_output} [{output_unit(mech, y_output)}]",
+        "status",
+        "iterations",
+    )
     table.columns[0].justify = "right"
     table.columns[4].justify = "left"
     table.columns[4].overflow = "ellipsis"
     for i in rows:
-        table.add_row(str(i), number(result.values[i]), number(result.outputs[x_output][i]),
-                      number(result.outputs[y_output][i]), result.status[i], str(result.iterations[i]))
+        table.add_row(
+            str(i),
+            number(result.values[i]),
+            number(result.outputs[x_output][i]),
+            number(result.outputs[y_output][i]),
+            result.status[i],
+            str(result.iterations[i]),
+        )
     return table
 
 
 def target_dict(target: TargetResult, plan: SweepPlan) -> dict:
-    return {"goal": plan.goal, "status": target.status, "value": target.value, "unit": plan.unit,
-            "iterations": target.equilibrium.iterations, "message": target.equilibrium.message}
+    return {
+        "goal": plan.goal,
+        "status": target.status,
+        "value": target.value,
+        "unit": plan.unit,
+        "iterations": target.equilibrium.iterations,
+        "message": target.equilibrium.message,
+    }
 
 
 def print_unconverged_points(out: Console, label: str, result: SweepResult, plan: SweepPlan) -> None:
@@ -197,11 +107,13 @@ def print_unconverged_points(out: Console, label: str, result: SweepResult, plan
     bad = [i for i, s in enumerate(result.status) if s != "converged"]
     first = bad[0]
     residuals = result.residuals(first)
-    out.print(f"[red]{label}: {len(bad)} of {len(result.status)} points did not converge[/red] "
-              f"(first: point {first}, {plan.spec.path} = {number(result.values[first], plan.unit)}, "
-              f"status {result.status[first]}, residual "
-              f"{number(residuals['residual_norm'], residuals['residual_unit'])}, "
-              f"{result.iterations[first]} iterations)")
+    out.print(
+        f"[red]{label}: {len(bad)} of {len(result.status)} points did not converge[/red] "
+        f"(first: point {first}, {plan.spec.path} = {number(result.values[first], plan.unit)}, "
+        f"status {result.status[first]}, residual "
+        f"{number(residuals['residual_norm'], residuals['residual_unit'])}, "
+        f"{result.iterations[first]} iterations)"
+    )
 
 
 # --- the stiffness of a prescribed displacement --------------------------------------------
@@ -220,13 +132,18 @@ def stiffness_record(result: SweepResult, y_output: str) -> dict | None:
     near = solve_equilibrium(mech.with_values({result.path: float(values[0] + small)}), guess=result.z[0])
     y_kind = mech.graphs.output_kinds[mech.graphs.output_names.index(y_output)]
     x_kind = mech.parameter_kind(result.path)
-    return {"output": y_output, "unit": f"{output_unit(mech, y_output)}/{mech.doc_unit(x_kind)}",
-            "si_unit": f"{SI_UNITS[y_kind]}/{SI_UNITS[x_kind]}",
-            "si_per_unit": mech.doc_factor(y_kind) / mech.doc_factor(x_kind),
-            "first_step": float((force[1] - force[0]) / (values[1] - values[0])), "at_first_step": float(values[1]),
-            "last": float((force[-1] - force[0]) / (values[-1] - values[0])), "at_last": float(values[-1]),
-            "start": float((near.outputs()[y_output] - force[0]) / small) if near.converged else None,
-            "start_step": float(small)}
+    return {
+        "output": y_output,
+        "unit": f"{output_unit(mech, y_output)}/{mech.doc_unit(x_kind)}",
+        "si_unit": f"{SI_UNITS[y_kind]}/{SI_UNITS[x_kind]}",
+        "si_per_unit": mech.doc_factor(y_kind) / mech.doc_factor(x_kind),
+        "first_step": float((force[1] - force[0]) / (values[1] - values[0])),
+        "at_first_step": float(values[1]),
+        "last": float((force[-1] - force[0]) / (values[-1] - values[0])),
+        "at_last": float(values[-1]),
+        "start": float((near.outputs()[y_output] - force[0]) / small) if near.converged else None,
+        "start_step": float(small),
+    }
 
 
 def si_number(value: float) -> str:
@@ -238,20 +155,26 @@ def si_number(value: float) -> str:
 def print_stiffness(out: Console, label: str, record: dict, plan: SweepPlan) -> None:
     """The secant stiffness at the first step and at the last, and the stiffness at the start,
     in document units and SI."""
+
     def both(k: float) -> str:
         return f"[bold]{escape(number(k, record['unit']))}[/bold] ({si_number(k * record['si_per_unit'])} {record['si_unit']})"
 
     first, last, start = record["first_step"], record["last"], record["start"]
-    out.print(f"{escape(label)}: secant stiffness {escape(record['output'])} / {escape(field_label(plan.spec.path))}: "
-              f"{both(first)} at the first step, {both(last)} at the last ({100 * (last / first - 1):+.2f} %)")
+    out.print(
+        f"{escape(label)}: secant stiffness {escape(record['output'])} / {escape(field_label(plan.spec.path))}: "
+        f"{both(first)} at the first step, {both(last)} at the last ({100 * (last / first - 1):+.2f} %)"
+    )
     if start is not None:
-        out.print(f"{escape(label)}: stiffness at the start {both(start)} (secant over "
-                  f"{number(record['start_step'], plan.unit)}); the last secant (at "
-                  f"{number(record['at_last'], plan.unit)}) is {100 * (last / start - 1):+.2f} % relative to it")
+        out.print(
+            f"{escape(label)}: stiffness at the start {both(start)} (secant over "
+            f"{number(record['start_step'], plan.unit)}); the last secant (at "
+            f"{number(record['at_last'], plan.unit)}) is {100 * (last / start - 1):+.2f} % relative to it"
+        )
 
 
-def run_curve(out: Console, mech: Mechanism, model: str | None, plan: SweepPlan, options: NewtonOptions,
-              advance) -> tuple[tuple[str, SweepResult] | None, dict, bool]:
+def run_curve(
+    out: Console, mech: Mechanism, model: str | None, plan: SweepPlan, options: NewtonOptions, advance
+) -> tuple[tuple[str, SweepResult] | None, dict, bool]:
     """One model's sweep, printed: (the curve to plot or None, its JSON record, whether it failed)."""
     from service.sweep import run_sweep_spec
 
@@ -259,33 +182,53 @@ def run_curve(out: Console, mech: Mechanism, model: str | None, plan: SweepPlan,
     result, target = run_sweep_spec(mech, plan.spec, options, plan.restart, advance)
     if result is None:  # the end of the path (a target output value) was not reached
         eq = target.equilibrium
-        out.print(f"{label}: target {plan.goal} not reached: status "
-                  f"[bold red]{target.status}[/bold red] after {eq.iterations} iterations, "
-                  f"residual {number(eq.residual_norm_force, mech.doc_unit('force'))}; "
-                  f"{escape(eq.message or 'no message')}")
+        out.print(
+            f"{label}: target {plan.goal} not reached: status "
+            f"[bold red]{target.status}[/bold red] after {eq.iterations} iterations, "
+            f"residual {number(eq.residual_norm_force, mech.doc_unit('force'))}; "
+            f"{escape(eq.message or 'no message')}"
+        )
         return None, {"label": label, "model": model, "target": target_dict(target, plan)}, True
-    record = {"label": label, "model": model, "sweep": result.to_dict(),
-              "target": target_dict(target, plan) if target else None}
+    record = {
+        "label": label,
+        "model": model,
+        "sweep": result.to_dict(),
+        "target": target_dict(target, plan) if target else None,
+    }
     out.print(sweep_table(mech, label, result, plan.x_output, plan.y_output))
     if plan.stiffness and (stiffness := stiffness_record(result, plan.y_output)) is not None:
         record["stiffness"] = stiffness
         print_stiffness(out, label, stiffness, plan)
     if target is not None:
-        out.print(f"{label}: {plan.goal} at {field_label(plan.spec.path)} = "
-                  f"[bold]{number(target.value, plan.unit)}[/bold]")
+        out.print(
+            f"{label}: {plan.goal} at {field_label(plan.spec.path)} = [bold]{number(target.value, plan.unit)}[/bold]"
+        )
     if not result.all_converged:
         print_unconverged_points(out, label, result, plan)
     return (label, result), record, not result.all_converged
 
 
-def run_curves(out: Console, err: Console, mechs: list[Mechanism], models: list[str | None], plan: SweepPlan,
-               options: NewtonOptions) -> tuple[list, list[dict], bool]:
+def run_curves(
+    out: Console,
+    err: Console,
+    mechs: list[Mechanism],
+    models: list[str | None],
+    plan: SweepPlan,
+    options: NewtonOptions,
+) -> tuple[list, list[dict], bool]:
     """Every model's sweep under a progress bar on stderr: (curves, records, whether any failed)."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     curves, records, failed = [], [], False
-    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-                  TimeElapsedColumn(), console=err, transient=True, disable=not err.is_terminal) as progress:
+    with Progress(
+        TextColumn("{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+        console=err,
+        transient=True,
+        disable=not err.is_terminal,
+    ) as progress:
         for mech, model in zip(mechs, models):
             task = progress.add_task(curve_label(mech, model), total=None)
 
@@ -304,53 +247,101 @@ def run_curves(out: Console, err: Console, mechs: list[Mechanism], models: list[
 @app.command()
 def sweep(
     document: DocArg,
-    path: Annotated[str | None, typer.Option("--path", metavar="POINTER", help="Numeric field to sweep (default: the document's sweep section).")] = None,
+    path: Annotated[
+        str | None,
+        typer.Option(
+            "--path", metavar="POINTER", help="Numeric field to sweep (default: the document's sweep section)."
+        ),
+    ] = None,
     start: Annotated[str | None, typer.Option("--start", help="First value (document units or a quantity).")] = None,
     stop: Annotated[str | None, typer.Option("--stop", help="Last value.")] = None,
-    steps: Annotated[int | None, typer.Option("--steps", help="Number of steps (points = steps + 1); default 100.")] = None,
-    until: Annotated[str | None, typer.Option("--until", metavar="OUTPUT=VALUE", help="End where OUTPUT reaches VALUE, instead of --stop.")] = None,
+    steps: Annotated[
+        int | None, typer.Option("--steps", help="Number of steps (points = steps + 1); default 100.")
+    ] = None,
+    until: Annotated[
+        str | None,
+        typer.Option("--until", metavar="OUTPUT=VALUE", help="End where OUTPUT reaches VALUE, instead of --stop."),
+    ] = None,
     model: ModelOpt = None,
-    compare_models: Annotated[bool, typer.Option("--compare-models", help=f"Sweep with each model ({', '.join(COMPARED_MODELS)}).")] = False,
-    restart: Annotated[str, typer.Option("--restart", help=f"Newton start at each point: {' | '.join(RESTARTS)}.")] = "previous",
+    compare_models: Annotated[
+        bool, typer.Option("--compare-models", help=f"Sweep with each model ({', '.join(COMPARED_MODELS)}).")
+    ] = False,
+    restart: Annotated[
+        str, typer.Option("--restart", help=f"Newton start at each point: {' | '.join(RESTARTS)}.")
+    ] = "previous",
     sets: SetOpt = None,
     jacobian: JacobianOpt = "full",
     line_search: LineSearchOpt = True,
     max_iterations: MaxIterOpt = 50,
     json_out: JsonOpt = None,
     plot: PlotOpt = None,
-    x_output: Annotated[str | None, typer.Option("--x-output", help="Output on the horizontal axis (default: the first point output's x; for a prescribed displacement, the moved body's displacement along it).")] = None,
-    y_output: Annotated[str | None, typer.Option("--y-output", help="Output on the left panel's vertical axis (default: the point's y; for a prescribed displacement, the reaction along it, and its secant stiffness is printed and drawn).")] = None,
+    x_output: Annotated[
+        str | None,
+        typer.Option(
+            "--x-output",
+            help="Output on the horizontal axis (default: the first point output's x; for a prescribed displacement, the moved body's displacement along it).",
+        ),
+    ] = None,
+    y_output: Annotated[
+        str | None,
+        typer.Option(
+            "--y-output",
+            help="Output on the left panel's vertical axis (default: the point's y; for a prescribed displacement, the reaction along it, and its secant stiffness is printed and drawn).",
+        ),
+    ] = None,
 ) -> None:
     """Sweep a numeric field (a load, by default the document's sweep section) with continuation."""
     out, err = consoles()
     with user_errors(err):
-        check_plot_option(plot)
-        choice("--restart", restart, RESTARTS)
-        if compare_models and model is not None:
-            raise OptionError("--compare-models", "runs every model; leave out --model")
-        check_path_options(path, start, stop, steps, until)
-        options = newton_options(jacobian, line_search, max_iterations)
-        models = list(COMPARED_MODELS) if compare_models else [model]
+        options, models = checked_options(
+            plot, restart, compare_models, model, path, start, stop, steps, until, jacobian, line_search, max_iterations
+        )
         mechs = [mechanism(document, m, sets) for m in models]
-        first = mechs[0]
-        swept = swept_field(first, path)
-        x_output, y_output = axes(first, swept, x_output, y_output)
-        spec = first.document.sweep if path is None else path_spec(first, swept, start, stop, steps, until)
-        plan = SweepPlan(spec, first.doc_unit(first.parameter_kind(swept)), goal_text(first, spec),
-                         x_output, y_output, restart, y_output in reaction_along(first, swept))
-
-        out.print(f"[bold]{escape(first.document.name)}[/bold]  ({escape(str(document))}): "
-                  f"sweeping {escape(f'{swept} [{plan.unit}]')}, restart from {restart}")
+        swept, plan = plan_sweep(mechs[0], path, start, stop, steps, until, x_output, y_output, restart)
+        _print_heading(out, mechs[0], document, swept, plan)
         curves, records, failed = run_curves(out, err, mechs, models, plan, options)
-        if json_out is not None:
-            write_json(json_out, {"document": str(document), "name": first.document.name, "path": swept,
-                                  "unit": plan.unit, "restart": restart, "x_output": x_output,
-                                  "y_output": y_output, "curves": records})
-            out.print(f"wrote {escape(str(json_out))}")
-        if plot is not None and curves:
-            from service.plotting import plot_sweeps
-
-            save_plot(plot_sweeps, curves, x_output, y_output, swept, plot, secant=plan.stiffness)
-            out.print(f"wrote {escape(str(plot))}")
+        _write_files(out, document, mechs[0], swept, plan, curves, records, json_out, plot)
     if failed:
         raise typer.Exit(EXIT_NOT_CONVERGED)
+
+
+def _print_heading(out: Console, first: Mechanism, document: Path, swept: str, plan: SweepPlan) -> None:
+    """The document, the swept field and its unit, and the restart."""
+    out.print(
+        f"[bold]{escape(first.document.name)}[/bold]  ({escape(str(document))}): "
+        f"sweeping {escape(f'{swept} [{plan.unit}]')}, restart from {plan.restart}"
+    )
+
+
+def _write_files(
+    out: Console,
+    document: Path,
+    first: Mechanism,
+    swept: str,
+    plan: SweepPlan,
+    curves: list,
+    records: list[dict],
+    json_out: Path | None,
+    plot: Path | None,
+) -> None:
+    """The --json file (every curve's record) and the --plot figure (the curves that ran)."""
+    if json_out is not None:
+        write_json(
+            json_out,
+            {
+                "document": str(document),
+                "name": first.document.name,
+                "path": swept,
+                "unit": plan.unit,
+                "restart": plan.restart,
+                "x_output": plan.x_output,
+                "y_output": plan.y_output,
+                "curves": records,
+            },
+        )
+        out.print(f"wrote {escape(str(json_out))}")
+    if plot is not None and curves:
+        from service.plotting import plot_sweeps
+
+        save_plot(plot_sweeps, curves, plan.x_output, plan.y_output, swept, plot, secant=plan.stiffness)
+        out.print(f"wrote {escape(str(plot))}")

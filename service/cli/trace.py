@@ -55,8 +55,12 @@ def print_path(out: Console, mech: Mechanism, path: str, result: PathResult) -> 
     n = len(result.points)
     for i in sorted(set(np.linspace(0, n - 1, min(n, SHOWN_POINTS)).round().astype(int).tolist())):
         pt = result.points[i]
-        table.add_row(str(i), number(pt.value), number(pt.outputs[shown]),
-                      {True: "yes", False: "no", None: "?"}[pt.stability.stable])
+        table.add_row(
+            str(i),
+            number(pt.value),
+            number(pt.outputs[shown]),
+            {True: "yes", False: "no", None: "?"}[pt.stability.stable],
+        )
     out.print(table)
 
 
@@ -69,9 +73,15 @@ def trace(
     sets: SetOpt = None,
     max_points: Annotated[int, typer.Option(min=2, max=100_000)] = 400,
     json_out: JsonOpt = None,
-    plot: Annotated[Path | None, typer.Option(
-        "--plot", metavar="OUT.png|svg", help="Draw the field against the shown output along the path: stable "
-        "stretches solid, unstable dashed, limit points marked with their value.")] = None,
+    plot: Annotated[
+        Path | None,
+        typer.Option(
+            "--plot",
+            metavar="OUT.png|svg",
+            help="Draw the field against the shown output along the path: stable "
+            "stretches solid, unstable dashed, limit points marked with their value.",
+        ),
+    ] = None,
 ) -> None:
     """Pseudo-arc-length continuation of the equilibrium path through limit points (snap-through),
     with the stability of every point and the limit loads located exactly."""
@@ -89,8 +99,10 @@ def trace(
             raise OptionError("--step", f"must be positive, got {step:g}")
         result = trace_path(mech, path, stop, step, max_points)
         out.print(f"[bold]{escape(mech.document.name)}[/bold]  ({escape(str(document))}): path of {path}")
-        out.print(f"status: {result.status}, {len(result.points)} points, {result.seconds:.3g} s"
-                  + (f" ({escape(result.message)})" if result.message else ""))
+        out.print(
+            f"status: {result.status}, {len(result.points)} points, {result.seconds:.3g} s"
+            + (f" ({escape(result.message)})" if result.message else "")
+        )
         print_path(out, mech, path, result)
         if json_out is not None:
             write_json(json_out, {"document": str(document), **result.to_dict()})

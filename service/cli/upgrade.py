@@ -19,10 +19,13 @@ from service.cli.common import OptionError, consoles, user_errors
 
 
 @app.command()
-def upgrade(document: Annotated[Path, typer.Argument(help="A mechanism document (JSON or YAML).")],
-            output: Annotated[Path | None, typer.Option("--output", "-o", help="Write the upgraded document "
-                                                        "here (default: print it).")] = None,
-            in_place: Annotated[bool, typer.Option("--in-place", help="Write it over DOC.")] = False) -> None:
+def upgrade(
+    document: Annotated[Path, typer.Argument(help="A mechanism document (JSON or YAML).")],
+    output: Annotated[
+        Path | None, typer.Option("--output", "-o", help="Write the upgraded document here (default: print it).")
+    ] = None,
+    in_place: Annotated[bool, typer.Option("--in-place", help="Write it over DOC.")] = False,
+) -> None:
     """Convert a document of an older shape (an `impacts` section) to today's."""
     out, err = consoles()
     with user_errors(err):
@@ -43,9 +46,12 @@ def upgrade(document: Annotated[Path, typer.Argument(help="A mechanism document 
             try:
                 target.write_text(written)
             except OSError as exc:
-                raise OptionError("--output" if output is not None else "--in-place",
-                                  f"cannot write {target}: {exc.strerror}") from None
+                raise OptionError(
+                    "--output" if output is not None else "--in-place", f"cannot write {target}: {exc.strerror}"
+                ) from None
         for change in changes:
             err.print(escape(change))
-        err.print(f"{len(changes)} change{'s' if len(changes) != 1 else ''}" + (
-            "" if changes else ": the document is in today's shape"))
+        err.print(
+            f"{len(changes)} change{'s' if len(changes) != 1 else ''}"
+            + ("" if changes else ": the document is in today's shape")
+        )

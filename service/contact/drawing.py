@@ -23,13 +23,19 @@ def state_drawing(mech: Mechanism, problem: ContactProblem, state: ContactState)
     jaws, links = (np.asarray(a, dtype=float) * to_doc for a in problem.drawing(w, state.p))
     drawn_links, start = [], 0
     for name, count in problem.drawn_links:
-        block = links[:, start:start + 3 * count]
+        block = links[:, start : start + 3 * count]
         start += 3 * count
-        drawn_links.append({"name": name, "centre": block[:, 0::3].T.tolist(), "left": block[:, 1::3].T.tolist(),
-                            "right": block[:, 2::3].T.tolist()})
+        drawn_links.append(
+            {
+                "name": name,
+                "centre": block[:, 0::3].T.tolist(),
+                "left": block[:, 1::3].T.tolist(),
+                "right": block[:, 2::3].T.tolist(),
+            }
+        )
     drawn_jaws, start = [], 0
     for name, count, closed in problem.drawn_jaws:
-        drawn_jaws.append({"name": name, "points": jaws[:, start:start + count].T.tolist(), "closed": bool(closed)})
+        drawn_jaws.append({"name": name, "points": jaws[:, start : start + count].T.tolist(), "closed": bool(closed)})
         start += count
     span = float(np.ptp(links, axis=1).max()) if links.size else 1.0
     return {"links": drawn_links, "jaws": drawn_jaws, "objects": _objects(mech, problem, w, state.p, span or 1.0)}

@@ -32,9 +32,19 @@ class Mode:
     angles_old: np.ndarray
 
     def arguments(self, v: np.ndarray, p: np.ndarray) -> dict:
-        return {"v": v, "p": p, "active": self.active, "phi": self.phi, "freeze": self.freeze, "ref": self.ref,
-                "stick": self.stick, "weights": self.weights, "points_old": self.points_old,
-                "origins_old": self.origins_old, "angles_old": self.angles_old}
+        return {
+            "v": v,
+            "p": p,
+            "active": self.active,
+            "phi": self.phi,
+            "freeze": self.freeze,
+            "ref": self.ref,
+            "stick": self.stick,
+            "weights": self.weights,
+            "points_old": self.points_old,
+            "origins_old": self.origins_old,
+            "angles_old": self.angles_old,
+        }
 
 
 @dataclass
@@ -94,14 +104,14 @@ def freeze_untouched_axes(problem: ContactProblem, mode: Mode, v: np.ndarray) ->
     """Axes of pairs with no active row are held where they are (nothing else fixes them)."""
     if not problem.n_axes:
         return mode
-    touching = {problem.row_pairs[k] for k in range(problem.n_rows)
-                if mode.active[problem.n_element_in + k] > 0.5}
+    touching = {problem.row_pairs[k] for k in range(problem.n_rows) if mode.active[problem.n_element_in + k] > 0.5}
     freeze = np.array([0.0 if problem.axis_pairs[j // 2] in touching else 1.0 for j in range(problem.n_axes)])
-    return replace(mode, freeze=freeze, ref=v[problem.n_x:problem.n_w].copy())
+    return replace(mode, freeze=freeze, ref=v[problem.n_x : problem.n_w].copy())
 
 
-def consistent_active_set(problem: ContactProblem, v: np.ndarray, p: np.ndarray, mode: Mode,
-                          rounds: int = 12) -> tuple[NewtonRun, Mode]:
+def consistent_active_set(
+    problem: ContactProblem, v: np.ndarray, p: np.ndarray, mode: Mode, rounds: int = 12
+) -> tuple[NewtonRun, Mode]:
     """Newton, then correct the active set (drop pulling rows, add penetrating ones) and
     repeat until both hold; the last run and mode."""
     run = None
@@ -126,7 +136,9 @@ def consistent_active_set(problem: ContactProblem, v: np.ndarray, p: np.ndarray,
 
 def inequality_values(problem: ContactProblem, w: np.ndarray, p: np.ndarray) -> np.ndarray:
     """Every inequality row's h (elements' rows first, unshifted)."""
-    x = w[:problem.n_x]
-    element = np.asarray(problem.element_inequalities(x, p), dtype=float).ravel() if problem.n_element_in else np.zeros(0)
+    x = w[: problem.n_x]
+    element = (
+        np.asarray(problem.element_inequalities(x, p), dtype=float).ravel() if problem.n_element_in else np.zeros(0)
+    )
     contact = np.asarray(problem.rows(w, p)[0], dtype=float).ravel()
     return np.concatenate([element, contact])

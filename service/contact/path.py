@@ -35,8 +35,11 @@ def path_count(parameters: list[dict], pointer: str = "/path") -> int:
     together, so each gives as many values)."""
     counts = [value_count(p, f"{pointer}/{k}") for k, p in enumerate(parameters)]
     if len(set(counts)) > 1:
-        raise MechanismError(pointer, "every field of a path changes together: give each as many values "
-                             f"(got {', '.join(str(c) for c in counts)})")
+        raise MechanismError(
+            pointer,
+            "every field of a path changes together: give each as many values "
+            f"(got {', '.join(str(c) for c in counts)})",
+        )
     return counts[0]
 
 
@@ -66,9 +69,15 @@ def parameters_at(mech: Mechanism, fields: PathFields, index: int) -> np.ndarray
     return p
 
 
-def follow(mech: Mechanism, problem: ContactProblem, fields: PathFields, indices: list[int],
-           previous: ContactState | None, options: ContactOptions,
-           stop: Callable[[], bool] = lambda: False) -> Iterator[tuple[int, ContactState]]:
+def follow(
+    mech: Mechanism,
+    problem: ContactProblem,
+    fields: PathFields,
+    indices: list[int],
+    previous: ContactState | None,
+    options: ContactOptions,
+    stop: Callable[[], bool] = lambda: False,
+) -> Iterator[tuple[int, ContactState]]:
     """The states at `indices` in order, each from the last converged one."""
     for index in indices:
         if stop():
@@ -82,18 +91,28 @@ def follow(mech: Mechanism, problem: ContactProblem, fields: PathFields, indices
 
 def resumed_state(problem: ContactProblem, p: np.ndarray, stored: dict) -> ContactState:
     """A stored state (its v and friction directions) to go on from."""
-    return ContactState("converged", p, np.asarray(stored["v"], dtype=float), empty_mode(problem), [],
-                        np.asarray(stored["sigma"], dtype=float), 0, 0.0)
+    return ContactState(
+        "converged",
+        p,
+        np.asarray(stored["v"], dtype=float),
+        empty_mode(problem),
+        [],
+        np.asarray(stored["sigma"], dtype=float),
+        0,
+        0.0,
+    )
 
 
-def state_record(mech: Mechanism, problem: ContactProblem, state: ContactState, values: list[float],
-                 outputs: list[str]) -> dict:
+def state_record(
+    mech: Mechanism, problem: ContactProblem, state: ContactState, values: list[float], outputs: list[str]
+) -> dict:
     """A state as stored: its values, status, pairs, chosen outputs and its drawing (document
     units), and what a resumed path needs to go on from it."""
     mode = state.mode
     y = np.asarray(problem.outputs(state.v, state.p, mode.phi, mode.stick, mode.weights), dtype=float).ravel()
-    open_pairs = {pair.name for pair, state_of in zip(problem.structure.contacts.pairs, state.pair_states)
-                  if state_of == "open"}
+    open_pairs = {
+        pair.name for pair, state_of in zip(problem.structure.contacts.pairs, state.pair_states) if state_of == "open"
+    }
     chosen = {}
     for name in outputs:
         k = problem.output_names.index(name)
@@ -101,10 +120,17 @@ def state_record(mech: Mechanism, problem: ContactProblem, state: ContactState, 
         pair = name.removeprefix("contacts.").rpartition(".")[0] if name.startswith("contacts.") else None
         if pair in open_pairs:  # no contact: no force, no point (not rounding noise)
             chosen[name] = 0.0 if problem.output_kinds[k] == "force" else None
-    return {"values": values, "status": state.status, "message": state.message, "iterations": state.iterations,
-            "seconds": state.seconds, "pairs": pairs_report(mech, problem, state), "outputs": chosen,
-            "drawing": state_drawing(mech, problem, state),
-            "state": {"v": state.v.tolist(), "sigma": state.sigma.tolist()}}
+    return {
+        "values": values,
+        "status": state.status,
+        "message": state.message,
+        "iterations": state.iterations,
+        "seconds": state.seconds,
+        "pairs": pairs_report(mech, problem, state),
+        "outputs": chosen,
+        "drawing": state_drawing(mech, problem, state),
+        "state": {"v": state.v.tolist(), "sigma": state.sigma.tolist()},
+    }
 
 
 def default_outputs(problem: ContactProblem) -> list[str]:

@@ -22,8 +22,7 @@ ARROW_SPAN = 0.15  # the largest force's arrow, as a fraction of the drawing's s
 IMPLICIT_GRID = 201
 
 
-def states_figure(mech: Mechanism, problem: ContactProblem, states: list[ContactState],
-                  labels: list[str]) -> Figure:
+def states_figure(mech: Mechanism, problem: ContactProblem, states: list[ContactState], labels: list[str]) -> Figure:
     from service.contact.kkt import split
     from service.contact.report import pair_values
 
@@ -56,7 +55,7 @@ def states_figure(mech: Mechanism, problem: ContactProblem, states: list[Contact
 def _draw_links(ax, problem, links: np.ndarray, color: str, label: str) -> None:
     start = 0
     for k, (_, count) in enumerate(problem.drawn_links):
-        block = links[:, start:start + 3 * count]
+        block = links[:, start : start + 3 * count]
         start += 3 * count
         centre, left, right = block[:, 0::3], block[:, 1::3], block[:, 2::3]
         ax.plot(*centre, color=color, linewidth=0.8, linestyle=":")
@@ -68,7 +67,7 @@ def _draw_links(ax, problem, links: np.ndarray, color: str, label: str) -> None:
 def _draw_jaws(ax, problem, jaws: np.ndarray, color: str) -> None:
     start = 0
     for _, count, closed in problem.drawn_jaws:
-        block = jaws[:, start:start + count]
+        block = jaws[:, start : start + count]
         start += count
         if closed:
             block = np.hstack([block, block[:, :1]])
@@ -93,8 +92,11 @@ def _draw_objects(ax, mech, problem, w, p, color: str, centre: np.ndarray, span:
         elif obj.type == "hole":
             ax.add_patch(Circle(origin, value("radius"), fill=False, edgecolor=color, linewidth=1.0))
         elif obj.type == "ellipse":
-            ax.add_patch(Ellipse(origin, 2 * value("semi_axes/0"), 2 * value("semi_axes/1"),
-                                 angle=np.degrees(angles[k]), **style))
+            ax.add_patch(
+                Ellipse(
+                    origin, 2 * value("semi_axes/0"), 2 * value("semi_axes/1"), angle=np.degrees(angles[k]), **style
+                )
+            )
         elif obj.type == "polygon":
             count = 1 + max(max(piece) for piece in obj.pieces)
             local = np.array([[value(f"vertices/{i}/0"), value(f"vertices/{i}/1")] for i in range(count)])
@@ -115,8 +117,12 @@ def _draw_half_plane(ax, mech, obj, p, origin, angle, color, span: float) -> Non
     reach = 3 * span
     ends = np.array([origin - reach * along, origin + reach * along])
     ax.plot(*ends.T, color=color, linewidth=1.2)
-    ax.fill([*ends[:, 0], *(ends[::-1, 0] - reach * normal[0])], [*ends[:, 1], *(ends[::-1, 1] - reach * normal[1])],
-            color=color, alpha=0.08)
+    ax.fill(
+        [*ends[:, 0], *(ends[::-1, 0] - reach * normal[0])],
+        [*ends[:, 1], *(ends[::-1, 1] - reach * normal[1])],
+        color=color,
+        alpha=0.08,
+    )
 
 
 def _draw_implicit(ax, obj, origin, angle, color, centre: np.ndarray, span: float) -> None:
@@ -145,8 +151,12 @@ def _draw_forces(ax, pairs: dict, state, largest: float, color: str, to_doc: flo
             continue
         point = pairs["point"][:, j] * to_doc
         force = pairs["force"][:, j] / largest
-        ax.annotate("", xy=point, xytext=point - ARROW_SPAN * force * span,
-                    arrowprops=dict(arrowstyle="->", color=color, linewidth=1.2))
+        ax.annotate(
+            "",
+            xy=point,
+            xytext=point - ARROW_SPAN * force * span,
+            arrowprops=dict(arrowstyle="->", color=color, linewidth=1.2),
+        )
 
 
 def plot_states(mech, problem, states, labels, path: str | Path) -> Path:
@@ -154,8 +164,7 @@ def plot_states(mech, problem, states, labels, path: str | Path) -> Path:
     return save_figure(states_figure(mech, problem, states, labels), path)
 
 
-def path_figure(curves: list[tuple[str, np.ndarray, np.ndarray]], x_label: str, y_label: str,
-                title: str) -> Figure:
+def path_figure(curves: list[tuple[str, np.ndarray, np.ndarray]], x_label: str, y_label: str, title: str) -> Figure:
     """y against x, one curve per (label, x, y)."""
     fig = new_figure(7.0, 4.5)
     ax = fig.add_subplot()

@@ -33,8 +33,8 @@ from models.contact.constraints import ContactGeometry, contact_constraints, sub
 from models.contact.laws import FRICTION_LAWS, NORMAL_LAWS, check_law
 from models.errors import MechanismError
 from models.forms import symbolic_energy
-from models.planar import rot
 from models.structure import Structure
+from service.contact.kkt_system import kkt_functions
 from service.contact.outputs import PAIR_OUTPUTS
 from service.contact.wrenches import contact_wrenches, friction_force, with_contact_wrenches
 
@@ -58,7 +58,7 @@ class ContactProblem:
     element_inequalities: ca.Function  # (x, p) -> h_el
     rows: ca.Function  # (w, p) -> h, normals (2 x rows), points (2 x rows), along
     frames: ca.Function  # (w, p) -> origins (2 x objects), angles
-    kkt: ca.Function  # (v = [w; lam_eq; lam_in; tau], p, mode...) -> F, dF/dv (see _kkt_functions)
+    kkt: ca.Function  # (v = [w; lam_eq; lam_in; tau], p, mode...) -> F, dF/dv (see service.contact.kkt_system)
     kkt_parameters: ca.Function  # the same inputs -> dF/dp, dF/dphi
     slides: ca.Function  # (w, p, points_old, origins_old, angles_old) -> per row, the site's tangential slide,
     #                      and its w- and p-Jacobians
@@ -86,18 +86,14 @@ class ContactProblem:
     def to_state(self, w: np.ndarray, lam_eq: np.ndarray) -> np.ndarray:
         """The residual form's z (for the structure's outputs and reactions)."""
         z = np.zeros(len(self.x_in_state) + len(self.multipliers_in_state))
-        z[list(self.x_in_state)] = w[:self.n_x]
+        z[list(self.x_in_state)] = w[: self.n_x]
         z[list(self.multipliers_in_state)] = lam_eq
         return z
 
 
 @lru_cache(maxsize=16)
 def contact_problem(structure: Structure) -> ContactProblem:
-    if structure.contacts is None or not structure.contacts.pairs:
-        raise MechanismError("/contacts/pairs", "the contact analysis needs at least one contact pair")
-    for pair in structure.contacts.pairs:
-        check_law(NORMAL_LAWS, "normal", pair.normal_law, "contact", f"{pair.pointer}/normal/law")
-        check_law(FRICTION_LAWS, "friction", pair.friction_law, "contact", f"{pair.pointer}/friction/law")
+    _check_pairs(structure)
     energy = symbolic_energy(structure, nudged=True)
     nudge = ca.vec(energy.nudge)
     geometry = ContactGeometry(energy.ctx, energy.d, energy.surfaces, structure.contacts)
@@ -105,114 +101,121 @@ def contact_problem(structure: Structure) -> ContactProblem:
     constraints = substituted(nudged, nudge, ca.SX.zeros(nudge.shape))
     x, a, p = energy.x, constraints.axes, energy.ctx.p
     w = ca.vertcat(x, a)
-    # a row no unknown moves (a surface point at a clamp on a fixed body) cannot change: left out
+    _keep_moving_rows(constraints, nudged, w)
+    n_rows = len(constraints.rows)
+    nlp, potential, g_eq, h_el, h = _nlp(energy, constraints, nudge, w, p)
+    rows = _rows_function(constraints, w, p, h)
+    frames = _frames_function(constraints, w, p)
+    axes_guess = ca.Function("axes_guess", [x, p], [constraints.axes_guess], ["x", "p"], ["a"])
+    n_pairs, n_objects = len(structure.contacts.pairs), len(structure.contacts.objects)
+    kkt, kkt_p, slides = kkt_functions(potential, g_eq, ca.vertcat(h_el, h), constraints, x, a, p, n_pairs, n_objects)
+    results = pair_results(constraints, w, p, g_eq.numel(), h_el.numel(), n_pairs)
+    corrections = contact_wrenches(structure, nudged, nudge, w, p, g_eq.numel(), h_el.numel(), n_pairs)
+    outputs, names, kinds = _outputs(
+        structure, energy, results, corrections, w, p, g_eq.numel(), h_el.numel() + n_rows, n_pairs
+    )
+    problem = ContactProblem(
+        structure,
+        x.numel(),
+        a.numel(),
+        g_eq.numel(),
+        h_el.numel() + n_rows,
+        h_el.numel(),
+        tuple(row.pair for row in constraints.rows),
+        tuple(row.point is not None for row in constraints.rows),
+        tuple(row.axis for row in constraints.rows),
+        tuple(constraints.axis_pairs),
+        tuple(energy.x_in_state),
+        tuple(energy.multipliers_in_state),
+        nlp,
+        axes_guess,
+        ca.Function("element_inequalities", [x, p], [h_el], ["x", "p"], ["h"]),
+        rows,
+        frames,
+        kkt,
+        kkt_p,
+        slides,
+        results,
+        p.numel(),
+        n_pairs,
+        tuple(pair.object for pair in structure.contacts.pairs),
+        outputs,
+        names,
+        kinds,
+        _jacobians(outputs),
+        *_drawing(energy, geometry, w, p, nudge),
+    )
+    _check_no_free_symbols(rows, frames, axes_guess, kkt, slides, results)
+    return problem
+
+
+def _check_pairs(structure: Structure) -> None:
+    """At least one contact pair, and every pair's laws known."""
+    if structure.contacts is None or not structure.contacts.pairs:
+        raise MechanismError("/contacts/pairs", "the contact analysis needs at least one contact pair")
+    for pair in structure.contacts.pairs:
+        check_law(NORMAL_LAWS, "normal", pair.normal_law, "contact", f"{pair.pointer}/normal/law")
+        check_law(FRICTION_LAWS, "friction", pair.friction_law, "contact", f"{pair.pointer}/friction/law")
+
+
+def _keep_moving_rows(constraints, nudged, w: ca.SX) -> None:
+    """A row no unknown moves (a surface point at a clamp on a fixed body) cannot change: left
+    out, of both forms of the constraints."""
     kept = [k for k, row in enumerate(constraints.rows) if ca.depends_on(row.value, w)]
     constraints.rows = [constraints.rows[k] for k in kept]
     nudged.rows = [nudged.rows[k] for k in kept]
-    n_rows = len(constraints.rows)
-    shift = ca.SX.sym("shift", n_rows)
 
-    def unnudged(e):
-        return ca.substitute(e, nudge, ca.SX.zeros(nudge.shape))
 
-    g_eq = unnudged(_stack([g for _, g in energy.equalities]))
-    h_el = unnudged(_stack([h for _, h in energy.inequalities]))
-    potential = unnudged(energy.potential)
+def _unnudged(expression: ca.SX, nudge: ca.SX) -> ca.SX:
+    """The expression with the bodies' nudges at 0."""
+    return ca.substitute(expression, nudge, ca.SX.zeros(nudge.shape))
+
+
+def _nlp(energy, constraints, nudge: ca.SX, w: ca.SX, p: ca.SX):
+    """The NLP {x, p, f, g} (module docstring), the contact rows relaxed by a shift each; with
+    its parts V, g_eq, h_el and the contact rows' h."""
+    shift = ca.SX.sym("shift", len(constraints.rows))
+    g_eq = _unnudged(_stack([g for _, g in energy.equalities]), nudge)
+    h_el = _unnudged(_stack([h for _, h in energy.inequalities]), nudge)
+    potential = _unnudged(energy.potential, nudge)
     h = _stack([row.value for row in constraints.rows])
     nlp = {"x": w, "p": ca.vertcat(p, shift), "f": potential, "g": ca.vertcat(g_eq, h_el, h + shift)}
+    return nlp, potential, g_eq, h_el, h
+
+
+def _rows_function(constraints, w: ca.SX, p: ca.SX, h: ca.SX) -> ca.Function:
+    """Per contact row at a state: its gap h, normal, site point and site parameter."""
     zero2 = ca.SX.zeros(2)
     normals = ca.horzcat(*[row.normal if row.normal is not None else zero2 for row in constraints.rows])
     points = ca.horzcat(*[row.point if row.point is not None else zero2 for row in constraints.rows])
     along = _stack([row.site_parameter if row.site_parameter is not None else ca.SX(0) for row in constraints.rows])
-    rows = ca.Function("contact_rows", [w, p], [h, normals, points, along], ["w", "p"],
-                       ["h", "normals", "points", "along"])
-    frames = ca.Function("object_frames", [w, p], [ca.horzcat(*[f.origin for f in constraints.object_frames]),
-                                                   _stack([f.angle for f in constraints.object_frames])],
-                         ["w", "p"], ["origins", "angles"])
-    axes_guess = ca.Function("axes_guess", [x, p], [constraints.axes_guess], ["x", "p"], ["a"])
-    n_pairs, n_objects = len(structure.contacts.pairs), len(structure.contacts.objects)
-    kkt, kkt_p, slides = _kkt_functions(potential, g_eq, ca.vertcat(h_el, h), constraints, x, a, p,
-                                        n_pairs, n_objects)
-    results = pair_results(constraints, w, p, g_eq.numel(), h_el.numel(), n_pairs)
-    corrections = contact_wrenches(structure, nudged, nudge, w, p, g_eq.numel(), h_el.numel(), n_pairs)
-    outputs, names, kinds = _outputs(structure, results, corrections, w, p, g_eq.numel(), h_el.numel() + n_rows,
-                                     n_pairs, energy.x_in_state, energy.multipliers_in_state)
-    problem = ContactProblem(structure, x.numel(), a.numel(), g_eq.numel(), h_el.numel() + n_rows, h_el.numel(),
-                             tuple(row.pair for row in constraints.rows),
-                             tuple(row.point is not None for row in constraints.rows),
-                             tuple(row.axis for row in constraints.rows), tuple(constraints.axis_pairs),
-                             tuple(energy.x_in_state), tuple(energy.multipliers_in_state), nlp, axes_guess,
-                             ca.Function("element_inequalities", [x, p], [h_el], ["x", "p"], ["h"]), rows,
-                             frames, kkt, kkt_p, slides, results, p.numel(), n_pairs,
-                             tuple(pair.object for pair in structure.contacts.pairs), outputs, names, kinds,
-                             _jacobians(outputs), *_drawing(energy, geometry, w, p, unnudged))
-    for fn in (rows, frames, axes_guess, kkt, slides, results):
+    return ca.Function(
+        "contact_rows", [w, p], [h, normals, points, along], ["w", "p"], ["h", "normals", "points", "along"]
+    )
+
+
+def _frames_function(constraints, w: ca.SX, p: ca.SX) -> ca.Function:
+    """Every object's frame at a state: its origin and angle."""
+    return ca.Function(
+        "object_frames",
+        [w, p],
+        [
+            ca.horzcat(*[f.origin for f in constraints.object_frames]),
+            _stack([f.angle for f in constraints.object_frames]),
+        ],
+        ["w", "p"],
+        ["origins", "angles"],
+    )
+
+
+def _check_no_free_symbols(*functions: ca.Function) -> None:
+    for fn in functions:
         if fn.has_free():
             raise RuntimeError(f"graph {fn.name()} has free symbols {fn.get_free()}")
-    return problem
 
 
 def _stack(items: list) -> ca.SX:
     return ca.vertcat(*items) if items else ca.SX(0, 1)
-
-
-def _kkt_functions(V, g_eq, h_in, constraints, x, a, p, n_pairs: int, n_objects: int):
-    """The active-set KKT system with friction (slipping rows: phi = mu sigma; sticking pairs:
-    their tangential force tau and the condition that the contact does not slide relative to
-    the object over the step from the reference state), its p-Jacobian, and the slides."""
-    w = ca.vertcat(x, a)
-    n_w, n_eq, n_in, n_a = w.numel(), g_eq.numel(), h_in.numel(), a.numel()
-    n_rows = len(constraints.rows)
-    n_element = n_in - n_rows
-    lam_eq, lam_in, tau = ca.SX.sym("lam_eq", n_eq), ca.SX.sym("lam_in", n_in), ca.SX.sym("tau", n_pairs)
-    active, phi = ca.SX.sym("active", n_in), ca.SX.sym("phi", n_in)
-    freeze, ref = ca.SX.sym("freeze", n_a), ca.SX.sym("ref", n_a)
-    stick, weights = ca.SX.sym("stick", n_pairs), ca.SX.sym("weights", n_rows)
-    points_old = ca.SX.sym("points_old", 2, n_rows)
-    origins_old, angles_old = ca.SX.sym("origins_old", 2, n_objects), ca.SX.sym("angles_old", n_objects)
-    lagrangian = V + ca.dot(lam_eq, g_eq) - ca.dot(lam_in, h_in)
-    stationarity = ca.gradient(lagrangian, w)
-    slides = []
-    pair_slide = [ca.SX(0) for _ in range(n_pairs)]
-    points, forces = [], []  # the friction force at each pushing row's material point
-    for k, row in enumerate(constraints.rows):
-        if row.point is None:
-            slides.append(ca.SX(0))
-            continue
-        unit_tangent = ca.vertcat(-row.normal[1], row.normal[0]) / ca.norm_2(row.normal)
-        obj = constraints.pair_objects[row.pair]
-        frame = constraints.object_frames[obj]
-        carried = origins_old[:, obj] + rot(angles_old[obj] - frame.angle) @ (row.point - frame.origin)
-        slide = ca.dot(unit_tangent, carried - points_old[:, k])  # the site's slide relative to the object
-        slides.append(slide)
-        pair_slide[row.pair] = pair_slide[row.pair] + weights[k] * slide
-        points.append(row.point)
-        forces.append(friction_force(row, lam_in[n_element + k], phi[n_element + k], stick[row.pair], weights[k],
-                                     tau[row.pair]))
-    friction = ca.SX.zeros(n_w)
-    if points:  # one Jacobian of every point: its transpose takes the forces to the unknowns
-        friction = ca.mtimes(ca.jacobian(ca.vertcat(*points), w).T, ca.vertcat(*forces))
-    stationarity = stationarity - friction
-    if n_a:
-        held = ca.vertcat(ca.SX.zeros(n_w - n_a), freeze)
-        target = ca.vertcat(ca.SX.zeros(n_w - n_a), a - ref)
-        stationarity = (1 - held) * stationarity + held * target
-    complementarity = active * h_in + (1 - active) * lam_in
-    sticking = ca.vertcat(*[stick[j] * pair_slide[j] + (1 - stick[j]) * tau[j] for j in range(n_pairs)])
-    v = ca.vertcat(w, lam_eq, lam_in, tau)
-    F = ca.vertcat(stationarity, g_eq, complementarity, sticking)
-    inputs = [v, p, active, phi, freeze, ref, stick, weights, points_old, origins_old, angles_old]
-    names = ["v", "p", "active", "phi", "freeze", "ref", "stick", "weights", "points_old", "origins_old", "angles_old"]
-    kkt = ca.Function("contact_kkt", inputs, [F, ca.jacobian(F, v)], names, ["F", "J"])
-    # phi (= mu sigma at a slipping row) is an input: its Jacobian carries a friction coefficient's
-    # derivative (service.contact.sensitivity), which dF/dp alone would miss
-    kkt_p = ca.Function("contact_kkt_p", inputs, [ca.jacobian(F, p), ca.jacobian(F, phi)], names, ["Fp", "Fphi"])
-    slide_values = _stack(slides)
-    slide_fn = ca.Function("contact_slides", [w, p, points_old, origins_old, angles_old],
-                           [slide_values, ca.jacobian(slide_values, w), ca.jacobian(slide_values, p)],
-                           ["w", "p", "points_old", "origins_old", "angles_old"], ["slides", "slides_w", "slides_p"])
-    return kkt, kkt_p, slide_fn
-
 
 
 def pair_results(constraints, w: ca.SX, p: ca.SX, n_eq: int, n_element: int, n_pairs: int) -> ca.Function:
@@ -225,7 +228,11 @@ def pair_results(constraints, w: ca.SX, p: ca.SX, n_eq: int, n_element: int, n_p
     lam = ca.SX.sym("lam_in", n_element + n_rows)
     tau = ca.SX.sym("tau", n_pairs)
     lam_eq = ca.SX.sym("lam_eq", n_eq)
-    phi, stick, weights = ca.SX.sym("phi", n_element + n_rows), ca.SX.sym("stick", n_pairs), ca.SX.sym("weights", n_rows)
+    phi, stick, weights = (
+        ca.SX.sym("phi", n_element + n_rows),
+        ca.SX.sym("stick", n_pairs),
+        ca.SX.sym("weights", n_rows),
+    )
     normal_sum = [ca.SX.zeros(2) for _ in range(n_pairs)]
     friction_sum = [ca.SX.zeros(2) for _ in range(n_pairs)]
     magnitude = [ca.SX(0) for _ in range(n_pairs)]
@@ -237,8 +244,9 @@ def pair_results(constraints, w: ca.SX, p: ca.SX, n_eq: int, n_element: int, n_p
         j = row.pair
         pushing = lam[n_element + k] * ca.norm_2(row.normal)
         normal_sum[j] = normal_sum[j] + lam[n_element + k] * row.normal
-        friction_sum[j] = friction_sum[j] + friction_force(row, lam[n_element + k], phi[n_element + k], stick[j],
-                                                           weights[k], tau[j])
+        friction_sum[j] = friction_sum[j] + friction_force(
+            row, lam[n_element + k], phi[n_element + k], stick[j], weights[k], tau[j]
+        )
         magnitude[j] = magnitude[j] + pushing
         point[j] = point[j] + pushing * row.point
         along[j] = along[j] + pushing * row.site_parameter
@@ -246,12 +254,21 @@ def pair_results(constraints, w: ca.SX, p: ca.SX, n_eq: int, n_element: int, n_p
     normal_force = [_length(n) for n in normal_sum]
     tangential = [ca.dot(f, ca.vertcat(-n[1], n[0])) / (_length(n) + tiny) for f, n in zip(friction_sum, normal_sum)]
     v = ca.vertcat(w, lam_eq, lam, tau)
-    outputs = [ca.horzcat(*[n + f for n, f in zip(normal_sum, friction_sum)]), ca.vertcat(*normal_force),
-               ca.vertcat(*tangential), ca.horzcat(*[q / (m + tiny) for q, m in zip(point, magnitude)]),
-               ca.vertcat(*[s / (m + tiny) for s, m in zip(along, magnitude)]),
-               ca.horzcat(*[n / (_length(n) + tiny) for n in normal_sum])]
-    return ca.Function("pair_results", [v, p, phi, stick, weights], outputs, ["v", "p", "phi", "stick", "weights"],
-                       ["force", "normal_force", "tangential_force", "point", "along", "normal"])
+    outputs = [
+        ca.horzcat(*[n + f for n, f in zip(normal_sum, friction_sum)]),
+        ca.vertcat(*normal_force),
+        ca.vertcat(*tangential),
+        ca.horzcat(*[q / (m + tiny) for q, m in zip(point, magnitude)]),
+        ca.vertcat(*[s / (m + tiny) for s, m in zip(along, magnitude)]),
+        ca.horzcat(*[n / (_length(n) + tiny) for n in normal_sum]),
+    ]
+    return ca.Function(
+        "pair_results",
+        [v, p, phi, stick, weights],
+        outputs,
+        ["v", "p", "phi", "stick", "weights"],
+        ["force", "normal_force", "tangential_force", "point", "along", "normal"],
+    )
 
 
 def _length(vector: ca.SX) -> ca.SX:
@@ -261,7 +278,7 @@ def _length(vector: ca.SX) -> ca.SX:
     return ca.if_else(square > 0, ca.sqrt(ca.fmax(square, 1e-300)), 0.0)
 
 
-def _outputs(structure, results, corrections, w, p, n_eq, n_in, n_pairs, x_in_state, multipliers_in_state):
+def _outputs(structure, energy, results, corrections, w, p, n_eq, n_in, n_pairs):
     """y(v, p, mode): "contacts.<pair>.<quantity>" of every pair (PAIR_OUTPUTS), then the
     structure's own outputs at the state (its residual-form z assembled from v), its
     reactions and its links' start wrenches with the contact forces they carry added."""
@@ -270,31 +287,39 @@ def _outputs(structure, results, corrections, w, p, n_eq, n_in, n_pairs, x_in_st
     v = ca.SX.sym("v", w.numel() + n_eq + n_in + n_pairs)
     phi, stick, weights = ca.SX.sym("phi", n_in), ca.SX.sym("stick", n_pairs), ca.SX.sym("weights", results.size1_in(4))
     force, normal, tangential, point, along, _ = results(v, p, phi, stick, weights)
-    per_pair = [ca.vertcat(force[0, j], force[1, j], normal[j], tangential[j], point[0, j], point[1, j], along[j])
-                for j in range(n_pairs)]
-    z = ca.SX.zeros(len(x_in_state) + len(multipliers_in_state))
-    for k, slot in enumerate(x_in_state):
+    per_pair = [
+        ca.vertcat(force[0, j], force[1, j], normal[j], tangential[j], point[0, j], point[1, j], along[j])
+        for j in range(n_pairs)
+    ]
+    z = ca.SX.zeros(len(energy.x_in_state) + len(energy.multipliers_in_state))
+    for k, slot in enumerate(energy.x_in_state):
         z[slot] = v[k]
-    for k, slot in enumerate(multipliers_in_state):
+    for k, slot in enumerate(energy.multipliers_in_state):
         z[slot] = v[w.numel() + k]
     graphs = graphs_for(structure)
     y_structure = with_contact_wrenches(structure, graphs, graphs.outputs(z, p), corrections(v, p, phi, stick, weights))
     y = ca.vertcat(*per_pair, y_structure)
     names += list(graphs.output_names)
     kinds += list(graphs.output_kinds)
-    function = ca.Function("contact_outputs", [v, p, phi, stick, weights], [y], ["v", "p", "phi", "stick", "weights"], ["y"])
+    function = ca.Function(
+        "contact_outputs", [v, p, phi, stick, weights], [y], ["v", "p", "phi", "stick", "weights"], ["y"]
+    )
     return function, tuple(names), tuple(kinds)
 
 
 def _jacobians(outputs: ca.Function) -> ca.Function:
     args = [ca.SX.sym(outputs.name_in(i), outputs.sparsity_in(i)) for i in range(outputs.n_in())]
     y = outputs(*args)
-    return ca.Function("contact_outputs_jacobian", args, [ca.jacobian(y, args[0]), ca.jacobian(y, args[1]),
-                                                          ca.jacobian(y, args[2])],
-                       [outputs.name_in(i) for i in range(outputs.n_in())], ["y_v", "y_p", "y_phi"])
+    return ca.Function(
+        "contact_outputs_jacobian",
+        args,
+        [ca.jacobian(y, args[0]), ca.jacobian(y, args[1]), ca.jacobian(y, args[2])],
+        [outputs.name_in(i) for i in range(outputs.n_in())],
+        ["y_v", "y_p", "y_phi"],
+    )
 
 
-def _drawing(energy, geometry, w, p, unnudged):
+def _drawing(energy, geometry, w, p, nudge):
     """The sites drawn at a state: every jaw's vertices, every link's centre line and surfaces."""
     jaws, vertices = [], []
     for site in geometry.topology.sites:
@@ -307,7 +332,14 @@ def _drawing(energy, geometry, w, p, unnudged):
             half = point.half_thickness if point.half_thickness is not None else ca.SX(0)
             outline += [point.centre, point.centre + half * point.normal, point.centre - half * point.normal]
         links.append((name, len(surfaces.points)))
-    function = ca.Function("contact_drawing", [w, p], [unnudged(ca.horzcat(*vertices)) if vertices else ca.SX(2, 0),
-                                                       unnudged(ca.horzcat(*outline)) if outline else ca.SX(2, 0)],
-                           ["w", "p"], ["jaws", "links"])
+    function = ca.Function(
+        "contact_drawing",
+        [w, p],
+        [
+            _unnudged(ca.horzcat(*vertices), nudge) if vertices else ca.SX(2, 0),
+            _unnudged(ca.horzcat(*outline), nudge) if outline else ca.SX(2, 0),
+        ],
+        ["w", "p"],
+        ["jaws", "links"],
+    )
     return function, tuple(links), tuple(jaws)

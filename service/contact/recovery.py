@@ -15,16 +15,21 @@ import numpy as np
 from models import Mechanism
 from models.elements import FAMILIES
 
-METHOD = ("Lan 2005 Eqs. 6.6-6.10: the frictionless shape, the force recovered from the clamp moment and split "
-          "with |F_t| = mu |F_n|; the friction force is not a load on that shape (no equilibrium with friction)")
+METHOD = (
+    "Lan 2005 Eqs. 6.6-6.10: the frictionless shape, the force recovered from the clamp moment and split "
+    "with |F_t| = mu |F_n|; the friction force is not a load on that shape (no equilibrium with friction)"
+)
 
 
 def carrying_link(mech: Mechanism, site) -> str | None:
     """The link whose clamp the site's force runs to: its own link, or the link ending on its body."""
     if site.link is not None:
         return site.link
-    ends = [t.name for t in mech.structure.elements
-            if getattr(FAMILIES.of(t), "centre_line_sites", False) and t.end_body == site.body]
+    ends = [
+        t.name
+        for t in mech.structure.elements
+        if getattr(FAMILIES.of(t), "centre_line_sites", False) and t.end_body == site.body
+    ]
     return ends[0] if len(ends) == 1 else None
 
 
@@ -49,7 +54,12 @@ def recovered_forces(mech: Mechanism, frictionless_report: dict, consistent_repo
         direction = n + mu * sigma * t
         arm = np.array(before["point"]) - clamp
         normal_force = moment / (arm[0] * direction[1] - arm[1] * direction[0])
-        out[pair.name] = {"force": (normal_force * direction).tolist(), "normal_force": normal_force,
-                          "friction_force": mu * sigma * normal_force, "point": before["point"],
-                          "clamp_moment": moment, "link": link}
+        out[pair.name] = {
+            "force": (normal_force * direction).tolist(),
+            "normal_force": normal_force,
+            "friction_force": mu * sigma * normal_force,
+            "point": before["point"],
+            "clamp_moment": moment,
+            "link": link,
+        }
     return {"method": METHOD, "pairs": out}

@@ -21,14 +21,22 @@ def friction_coefficients(mech: Mechanism, problem: ContactProblem, p: np.ndarra
 def pair_values(problem: ContactProblem, state: ContactState) -> dict[str, np.ndarray]:
     """Nondimensional per-pair results of a state (pair_results, and the gap)."""
     mode = state.mode
-    force, normal, tangential, point, along, direction = (np.asarray(a, dtype=float) for a in problem.pair_results(
-        state.v, state.p, mode.phi, mode.stick, mode.weights))
-    h = inequality_values(problem, split(problem, state.v).w, state.p)[problem.n_element_in:]
+    force, normal, tangential, point, along, direction = (
+        np.asarray(a, dtype=float) for a in problem.pair_results(state.v, state.p, mode.phi, mode.stick, mode.weights)
+    )
+    h = inequality_values(problem, split(problem, state.v).w, state.p)[problem.n_element_in :]
     gap = np.full(problem.n_pairs, np.inf)
     for k, pair in enumerate(problem.row_pairs):
         gap[pair] = min(gap[pair], h[k])
-    return {"force": force.reshape(2, -1), "normal_force": normal.ravel(), "tangential_force": tangential.ravel(),
-            "point": point.reshape(2, -1), "along": along.ravel(), "gap": gap, "normal": direction.reshape(2, -1)}
+    return {
+        "force": force.reshape(2, -1),
+        "normal_force": normal.ravel(),
+        "tangential_force": tangential.ravel(),
+        "point": point.reshape(2, -1),
+        "along": along.ravel(),
+        "gap": gap,
+        "normal": direction.reshape(2, -1),
+    }
 
 
 def pairs_report(mech: Mechanism, problem: ContactProblem, state: ContactState) -> dict[str, dict]:
@@ -62,10 +70,16 @@ def structure_outputs(mech: Mechanism, problem: ContactProblem, state: ContactSt
 
 
 def state_report(mech: Mechanism, problem: ContactProblem, state: ContactState) -> dict:
-    return {"status": state.status, "message": state.message, "iterations": state.iterations,
-            "seconds": state.seconds, "approach_steps": state.approach_steps,
-            "kkt_residual": state.kkt_norm / mech.nd_per_doc("force") if np.isfinite(state.kkt_norm) else None,
-            "pairs": pairs_report(mech, problem, state), "outputs": structure_outputs(mech, problem, state)}
+    return {
+        "status": state.status,
+        "message": state.message,
+        "iterations": state.iterations,
+        "seconds": state.seconds,
+        "approach_steps": state.approach_steps,
+        "kkt_residual": state.kkt_norm / mech.nd_per_doc("force") if np.isfinite(state.kkt_norm) else None,
+        "pairs": pairs_report(mech, problem, state),
+        "outputs": structure_outputs(mech, problem, state),
+    }
 
 
 def penetration_error(mech: Mechanism, error: PenetratingStart) -> MechanismError:
@@ -73,6 +87,9 @@ def penetration_error(mech: Mechanism, error: PenetratingStart) -> MechanismErro
     pair = contacts.pairs[error.pair]
     site, obj = contacts.sites[pair.site], contacts.objects[pair.object]
     depth = error.depth / mech.nd_per_doc("length")
-    return MechanismError(f"/document{pair.pointer}", f"object '{obj.name}' penetrates site '{site.name}' by "
-                          f"{depth:.4g} {mech.doc_unit('length')} in the start state (the undeformed mechanism): move "
-                          "it clear, or let the analysis approach it (penetrating_start: approach)")
+    return MechanismError(
+        f"/document{pair.pointer}",
+        f"object '{obj.name}' penetrates site '{site.name}' by "
+        f"{depth:.4g} {mech.doc_unit('length')} in the start state (the undeformed mechanism): move "
+        "it clear, or let the analysis approach it (penetrating_start: approach)",
+    )

@@ -23,8 +23,14 @@ WEAK = 1e-8
 TOUCHING = 1e-6
 
 
-def contact_sensitivities(mech: Mechanism, problem: ContactProblem, state: ContactState, parameters: list[str],
-                          outputs: list[str], pointer: str = "/sensitivities") -> tuple[Sensitivities, list[str]]:
+def contact_sensitivities(
+    mech: Mechanism,
+    problem: ContactProblem,
+    state: ContactState,
+    parameters: list[str],
+    outputs: list[str],
+    pointer: str = "/sensitivities",
+) -> tuple[Sensitivities, list[str]]:
     """d(outputs)/d(parameters) in document units, and warnings."""
     slots = []
     for k, path in enumerate(parameters):
@@ -35,9 +41,12 @@ def contact_sensitivities(mech: Mechanism, problem: ContactProblem, state: Conta
     rows = []
     for k, name in enumerate(outputs):
         if name not in problem.output_names:
-            raise MechanismError(f"{pointer}/outputs/{k}", f"unknown output '{name}' (contact outputs are "
-                                 "contacts.<pair>.force_x, force_y, normal_force, friction_force, point_x, point_y, "
-                                 "site_parameter, and the mechanism's outputs)")
+            raise MechanismError(
+                f"{pointer}/outputs/{k}",
+                f"unknown output '{name}' (contact outputs are "
+                "contacts.<pair>.force_x, force_y, normal_force, friction_force, point_x, point_y, "
+                "site_parameter, and the mechanism's outputs)",
+            )
         rows.append(problem.output_names.index(name))
     out_kinds = [problem.output_kinds[r] for r in rows]
     in_kinds = [mech.parameter_kind(path) for path in parameters]
@@ -49,13 +58,16 @@ def contact_sensitivities(mech: Mechanism, problem: ContactProblem, state: Conta
         try:
             matrix = _derivatives(mech, problem, state, slots, rows) * factor
         except np.linalg.LinAlgError:
-            boundary = ["the KKT system is singular at this state (contact rows that do not determine their "
-                        "forces): no derivative is given"]
+            boundary = [
+                "the KKT system is singular at this state (contact rows that do not determine their "
+                "forces): no derivative is given"
+            ]
     return Sensitivities(list(parameters), list(outputs), matrix, units, boundary), boundary
 
 
-def _derivatives(mech: Mechanism, problem: ContactProblem, state: ContactState, slots: list[int],
-                 rows: list[int]) -> np.ndarray:
+def _derivatives(
+    mech: Mechanism, problem: ContactProblem, state: ContactState, slots: list[int], rows: list[int]
+) -> np.ndarray:
     """d(outputs[rows]) / d(p[slots]), nondimensional, on the state's active set."""
     mode = state.mode
     arguments = mode.arguments(state.v, state.p)
@@ -99,11 +111,20 @@ def _at_a_state_change(problem: ContactProblem, state: ContactState) -> list[str
     weak = active & (lam < WEAK * max(largest, 1e-300))
     near = ~active & (gaps < TOUCHING)
     pairs = problem.structure.contacts.pairs
+
     def named(rows) -> set[str]:
-        return {pairs[problem.row_pairs[k - problem.n_element_in]].name for k in np.flatnonzero(rows)
-                if k >= problem.n_element_in}
+        return {
+            pairs[problem.row_pairs[k - problem.n_element_in]].name
+            for k in np.flatnonzero(rows)
+            if k >= problem.n_element_in
+        }
 
     opening, touching = named(weak), named(near) - named(active)  # a touching pair is about to open, if at all
-    return [f"pair '{name}' {what}: the derivatives are one-sided, none is given"
-            for names, what in ((opening, "touches with a vanishing force (about to open)"),
-                                (touching, "is apart by a vanishing gap (about to touch)")) for name in sorted(names)]
+    return [
+        f"pair '{name}' {what}: the derivatives are one-sided, none is given"
+        for names, what in (
+            (opening, "touches with a vanishing force (about to open)"),
+            (touching, "is apart by a vanishing gap (about to touch)"),
+        )
+        for name in sorted(names)
+    ]

@@ -23,8 +23,13 @@ from service.contact.kkt import CONSISTENCY, Mode, consistent_active_set, split
 from service.contact.problem import ContactProblem
 
 IPOPT_OPTIONS = {"tol": 1e-12, "constr_viol_tol": 1e-12, "acceptable_tol": 1e-9, "max_iter": 500}
-WARM = {"warm_start_init_point": "yes", "warm_start_bound_push": 1e-9, "warm_start_mult_bound_push": 1e-9,
-        "warm_start_slack_bound_push": 1e-9, "mu_init": 1e-6}
+WARM = {
+    "warm_start_init_point": "yes",
+    "warm_start_bound_push": 1e-9,
+    "warm_start_mult_bound_push": 1e-9,
+    "warm_start_slack_bound_push": 1e-9,
+    "mu_init": 1e-6,
+}
 APPROACH_STEP = 0.02  # largest fall of the relaxation per approach step (nondimensional length)
 SEPARATION_DIRECTIONS = 180  # directions tried for the line of least overlap before narrowing down
 FRICTION_ROUNDS = 8
@@ -107,9 +112,17 @@ def separated(problem: ContactProblem, w: np.ndarray, p: np.ndarray) -> tuple[np
 
 def empty_mode(problem: ContactProblem) -> Mode:
     n_rows, n_objects = problem.n_rows, len(problem.structure.contacts.objects)
-    return Mode(np.zeros(problem.n_in), np.zeros(problem.n_in), np.zeros(problem.n_axes), np.zeros(problem.n_axes),
-                np.zeros(problem.n_pairs), np.zeros(n_rows), np.zeros((2, n_rows)), np.zeros((2, n_objects)),
-                np.zeros(n_objects))
+    return Mode(
+        np.zeros(problem.n_in),
+        np.zeros(problem.n_in),
+        np.zeros(problem.n_axes),
+        np.zeros(problem.n_axes),
+        np.zeros(problem.n_pairs),
+        np.zeros(n_rows),
+        np.zeros((2, n_rows)),
+        np.zeros((2, n_objects)),
+        np.zeros(n_objects),
+    )
 
 
 def _solver(problem: ContactProblem, warm: bool):
@@ -117,11 +130,16 @@ def _solver(problem: ContactProblem, warm: bool):
     return ipopt.nlp_solver("contact_warm" if warm else "contact", problem.structure, lambda: problem.nlp, options)
 
 
-def _ipopt(problem: ContactProblem, p: np.ndarray, shift: np.ndarray, w0: np.ndarray, v_warm: np.ndarray | None,
-           stop) -> ipopt.IpoptResult:
+def _ipopt(
+    problem: ContactProblem, p: np.ndarray, shift: np.ndarray, w0: np.ndarray, v_warm: np.ndarray | None, stop
+) -> ipopt.IpoptResult:
     n_eq, n_in = problem.n_eq, problem.n_in
-    arguments = {"x0": w0, "p": np.concatenate([p, shift]), "lbg": np.zeros(n_eq + n_in),
-                 "ubg": np.concatenate([np.zeros(n_eq), np.full(n_in, np.inf)])}
+    arguments = {
+        "x0": w0,
+        "p": np.concatenate([p, shift]),
+        "lbg": np.zeros(n_eq + n_in),
+        "ubg": np.concatenate([np.zeros(n_eq), np.full(n_in, np.inf)]),
+    }
     if v_warm is not None:
         parts = split(problem, v_warm)
         arguments["lam_g0"] = np.concatenate([parts.lam_eq, -parts.lam_in])
@@ -130,15 +148,16 @@ def _ipopt(problem: ContactProblem, p: np.ndarray, shift: np.ndarray, w0: np.nda
 
 def _from_ipopt(problem: ContactProblem, run: ipopt.IpoptResult) -> tuple[np.ndarray, np.ndarray]:
     """(v, active) of an IPOPT solution."""
-    lam_eq = run.lam_g[:problem.n_eq]
-    lam_in = np.maximum(-run.lam_g[problem.n_eq:], 0.0)
-    h = run.g[problem.n_eq:]
+    lam_eq = run.lam_g[: problem.n_eq]
+    lam_in = np.maximum(-run.lam_g[problem.n_eq :], 0.0)
+    h = run.g[problem.n_eq :]
     active = (lam_in > h).astype(float)  # complementarity lam h ~ 0: whichever is nearer zero says
     return np.concatenate([run.x, lam_eq, lam_in, np.zeros(problem.n_pairs)]), active
 
 
-def frictionless(problem: ContactProblem, p: np.ndarray, previous: ContactState | None,
-                 options: ContactOptions) -> tuple[ipopt.IpoptResult, int]:
+def frictionless(
+    problem: ContactProblem, p: np.ndarray, previous: ContactState | None, options: ContactOptions
+) -> tuple[ipopt.IpoptResult, int]:
     """IPOPT from the previous state (warm), or from the undeformed state, approaching a
     penetrating object by relaxing its rows and tightening them in steps (following the
     branch that grows from the contact-free state)."""
@@ -164,8 +183,14 @@ def frictionless(problem: ContactProblem, p: np.ndarray, previous: ContactState 
     return run, steps
 
 
-def solve_state(problem: ContactProblem, p: np.ndarray, mu: np.ndarray, previous: ContactState | None = None,
-                options: ContactOptions = ContactOptions(), motion: np.ndarray | None = None) -> ContactState:
+def solve_state(
+    problem: ContactProblem,
+    p: np.ndarray,
+    mu: np.ndarray,
+    previous: ContactState | None = None,
+    options: ContactOptions = ContactOptions(),
+    motion: np.ndarray | None = None,
+) -> ContactState:
     """The contact state at parameters p (nondimensional). `previous`: the state to start
     from, and the state friction slides from (a path's last). `motion`: instead, the rate of
     p (a single state): friction opposes the slide this motion causes at the state."""
@@ -177,18 +202,8 @@ def solve_state(problem: ContactProblem, p: np.ndarray, mu: np.ndarray, previous
         slides = lambda v, mode, forces: _pair_slides(problem, v, p, mode, forces)  # noqa: E731
     run, approach_steps = frictionless(problem, p, previous, options)
     base = empty_mode(problem)
-    states = ["open"] * problem.n_pairs
     if not run.succeeded:
-        v = np.concatenate([run.x, np.zeros(problem.n_eq + problem.n_in + problem.n_pairs)])
-        message = f"IPOPT: {run.return_status}"
-        if run.status == "time_limit":
-            message = f"stopped by the time limit of {options.time_limit:g} s (IPOPT: {run.return_status})"
-        elif run.status == "infeasible":
-            message = ("no state keeps every site out of every object (IPOPT: Infeasible_Problem_Detected): "
-                       "the objects leave the sites no room")
-        return ContactState(run.status if run.status != "optimal" else "not_converged", p, v, base, states,
-                            np.zeros(problem.n_pairs), run.iterations, time.perf_counter() - started,
-                            message, approach_steps=approach_steps)
+        return _failed_state(problem, p, run, base, approach_steps, options, started)
     v, active = _from_ipopt(problem, run)
     newton_run, mode = consistent_active_set(problem, v, p, replace(base, active=active))
     iterations = run.iterations + newton_run.iterations
@@ -196,22 +211,67 @@ def solve_state(problem: ContactProblem, p: np.ndarray, mu: np.ndarray, previous
     if newton_run.converged and slides is not None and np.any(mu > 0):
         if previous is not None and motion is None:
             mode = _reference(problem, mode, previous)
-        newton_run, mode, sigma, rounds = _with_friction(problem, newton_run.v, p, mu, mode, slides,
-                                                         previous.sigma if previous is not None else None,
-                                                         can_stick=motion is None)
+        newton_run, mode, sigma, rounds = _with_friction(
+            problem,
+            newton_run.v,
+            p,
+            mu,
+            mode,
+            slides,
+            previous.sigma if previous is not None else None,
+            can_stick=motion is None,
+        )
         iterations += rounds
     status = "converged" if newton_run.converged else "not_converged"
     message = "" if newton_run.converged else "the contact's KKT system did not converge (Newton, active set)"
     states = _pair_states(problem, newton_run.v, mode, mu, sigma)
-    return ContactState(status, p, newton_run.v, mode, states, sigma, iterations, time.perf_counter() - started,
-                        message, newton_run.norm, approach_steps, newton_run.history)
+    return ContactState(
+        status,
+        p,
+        newton_run.v,
+        mode,
+        states,
+        sigma,
+        iterations,
+        time.perf_counter() - started,
+        message,
+        newton_run.norm,
+        approach_steps,
+        newton_run.history,
+    )
+
+
+def _failed_state(problem, p, run, base, approach_steps, options, started) -> ContactState:
+    """The state IPOPT stopped at without a solution, every pair open, and why it stopped."""
+    states = ["open"] * problem.n_pairs
+    v = np.concatenate([run.x, np.zeros(problem.n_eq + problem.n_in + problem.n_pairs)])
+    message = f"IPOPT: {run.return_status}"
+    if run.status == "time_limit":
+        message = f"stopped by the time limit of {options.time_limit:g} s (IPOPT: {run.return_status})"
+    elif run.status == "infeasible":
+        message = (
+            "no state keeps every site out of every object (IPOPT: Infeasible_Problem_Detected): "
+            "the objects leave the sites no room"
+        )
+    return ContactState(
+        run.status if run.status != "optimal" else "not_converged",
+        p,
+        v,
+        base,
+        states,
+        np.zeros(problem.n_pairs),
+        run.iterations,
+        time.perf_counter() - started,
+        message,
+        approach_steps=approach_steps,
+    )
 
 
 def _row_forces(problem: ContactProblem, v: np.ndarray, p: np.ndarray) -> np.ndarray:
     """Per contact row, the size of its normal force on the site (0 for object rows)."""
     parts = split(problem, v)
     normals = np.asarray(problem.rows(parts.w, p)[1], dtype=float)
-    lam = parts.lam_in[problem.n_element_in:]
+    lam = parts.lam_in[problem.n_element_in :]
     return np.maximum(lam, 0.0) * np.linalg.norm(normals, axis=0) * np.asarray(problem.row_pushes, dtype=float)
 
 
@@ -290,7 +350,7 @@ def _pair_slide_rates(problem, v, p, mode, forces, motion) -> np.ndarray:
     w = split(problem, v).w
     here = _reference(problem, mode, ContactState("converged", p, v, mode, [], np.zeros(0), 0, 0.0))
     out = problem.slides(w, p, here.points_old, here.origins_old, here.angles_old)
-    rates = np.asarray(out[1], dtype=float) @ v_rate[:problem.n_w] + np.asarray(out[2], dtype=float) @ motion
+    rates = np.asarray(out[1], dtype=float) @ v_rate[: problem.n_w] + np.asarray(out[2], dtype=float) @ motion
     totals = _pair_sums(problem, forces)
     return np.where(totals > 0, _pair_sums(problem, forces * rates) / np.maximum(totals, 1e-300), 0.0)
 
@@ -298,14 +358,16 @@ def _pair_slide_rates(problem, v, p, mode, forces, motion) -> np.ndarray:
 def _pair_slides(problem, v, p, mode, forces) -> np.ndarray:
     """Per pair, the normal-force weighted slide of its rows from the reference state."""
     w = split(problem, v).w
-    slides = np.asarray(problem.slides(w, p, mode.points_old, mode.origins_old, mode.angles_old)[0], dtype=float).ravel()
+    slides = np.asarray(
+        problem.slides(w, p, mode.points_old, mode.origins_old, mode.angles_old)[0], dtype=float
+    ).ravel()
     totals = _pair_sums(problem, forces)
     weighted = _pair_sums(problem, forces * slides)
     return np.where(totals > 0, weighted / np.maximum(totals, 1e-300), 0.0)
 
 
 def _pair_states(problem, v, mode, mu, sigma) -> list[str]:
-    active = mode.active[problem.n_element_in:] > 0.5
+    active = mode.active[problem.n_element_in :] > 0.5
     touching = np.zeros(problem.n_pairs, dtype=bool)
     for k, pair in enumerate(problem.row_pairs):
         touching[pair] |= bool(active[k])

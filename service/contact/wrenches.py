@@ -47,22 +47,31 @@ def contact_wrenches(structure, nudged, nudge: ca.SX, w: ca.SX, p: ca.SX, n_eq: 
         pushing = [k for k in selected if rows[k].point is not None]
         if pushing:
             points = ca.vertcat(*[rows[k].point for k in pushing])
-            forces = ca.vertcat(*[friction_force(rows[k], lam[k], phi[k], stick[rows[k].pair], weights[k],
-                                                 tau[rows[k].pair]) for k in pushing])
+            forces = ca.vertcat(
+                *[
+                    friction_force(rows[k], lam[k], phi[k], stick[rows[k].pair], weights[k], tau[rows[k].pair])
+                    for k in pushing
+                ]
+            )
             total = total - ca.mtimes(ca.jacobian(points, nudge).T, forces)
         return ca.substitute(total, nudge, ca.SX.zeros(nudge.shape))
 
     every = wrench(list(range(n_rows)))
     starts = [structure.elements[[t.name for t in structure.elements].index(link)].start_body for link in links]
-    carried = [wrench([k for k, row in enumerate(rows) if row.carrier == link])[3 * b:3 * b + 3]
-               for link, b in zip(links, starts)]
-    function = ca.Function("contact_wrenches", [w, p, lam, tau, phi, stick, weights],
-                           [ca.reshape(every, 3, n_bodies), ca.horzcat(*carried) if carried else ca.SX(3, 0)])
+    carried = [
+        wrench([k for k, row in enumerate(rows) if row.carrier == link])[3 * b : 3 * b + 3]
+        for link, b in zip(links, starts)
+    ]
+    function = ca.Function(
+        "contact_wrenches",
+        [w, p, lam, tau, phi, stick, weights],
+        [ca.reshape(every, 3, n_bodies), ca.horzcat(*carried) if carried else ca.SX(3, 0)],
+    )
     n_w = w.numel()
 
     def builder(v, p_value, phi_all, stick_value, weights_value):
-        lam_rows = v[n_w + n_eq + n_element:n_w + n_eq + n_element + n_rows]
-        tau_value = v[n_w + n_eq + n_element + n_rows:]
+        lam_rows = v[n_w + n_eq + n_element : n_w + n_eq + n_element + n_rows]
+        tau_value = v[n_w + n_eq + n_element + n_rows :]
         C, per_link = function(v[:n_w], p_value, lam_rows, tau_value, phi_all[n_element:], stick_value, weights_value)
         return C, dict(zip(links, [per_link[:, j] for j in range(len(links))]))
 

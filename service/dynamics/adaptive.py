@@ -57,9 +57,11 @@ class AdaptiveRunner(StepRunner):
         left = self.tolerance.max_steps - at.step
         if left <= 0:
             history.status = "step_limit"
-            history.message = (f"stopped at t = {at.time:g} s of {self.until:g} s: the run took its limit of "
-                               f"{self.tolerance.max_steps} adaptive steps (last step {h:.3g} s); loosen the "
-                               "tolerance or shorten the run")
+            history.message = (
+                f"stopped at t = {at.time:g} s of {self.until:g} s: the run took its limit of "
+                f"{self.tolerance.max_steps} adaptive steps (last step {h:.3g} s); loosen the "
+                "tolerance or shorten the run"
+            )
             return at
         for _ in range(MAX_REJECTIONS):
             remaining = self.until - at.time
@@ -68,15 +70,17 @@ class AdaptiveRunner(StepRunner):
             count = min(count, left)
             if h_use < self.tolerance.min_step:
                 history.status = "min_step"
-                history.message = (f"stopped at t = {at.time:g} s of {self.until:g} s: the step fell below "
-                                   f"min_step = {self.tolerance.min_step:g} s (a loss of convergence or an "
-                                   "impact-like event); loosen the tolerance")
+                history.message = (
+                    f"stopped at t = {at.time:g} s of {self.until:g} s: the step fell below "
+                    f"min_step = {self.tolerance.min_step:g} s (a loss of convergence or an "
+                    "impact-like event); loosen the tolerance"
+                )
                 return at
             inputs, S, monitors, iterations, settled = self.run_window(at, h_use, count)
             if S is None:
                 h = 0.5 * h_use
                 continue
-            accelerations = np.column_stack([at.state[3 * n:4 * n], S[3 * n:4 * n, :count]])
+            accelerations = np.column_stack([at.state[3 * n : 4 * n], S[3 * n : 4 * n, :count]])
             errors = self.factor * h_use**2 * np.abs(np.diff(accelerations, axis=1)).max(axis=0, initial=0.0)
             too_large = [j for j in range(settled) if not errors[j] <= tol]
             first_bad = too_large[0] if too_large else settled
@@ -86,7 +90,7 @@ class AdaptiveRunner(StepRunner):
                 continue
             entering = crossing(self, at, inputs, S, first_bad)
             if entering is not None:  # a damped contact begins within a step: step onto its onset
-                history.iterations += int(iterations[:entering[0]].sum())
+                history.iterations += int(iterations[: entering[0]].sum())
                 at = self.accept(history, at, S, monitors, inputs[0], entering[0], h_use)
                 at = step_onto_onset(self, history, at, entering[1], entering[2], h_use)
                 at.h = h_use
@@ -102,8 +106,10 @@ class AdaptiveRunner(StepRunner):
             at.h = min(h_use * grow, self.tolerance.max_step)
             return at
         history.status = "not_converged"
-        history.message = (f"at t = {at.time:g} s the first step was rejected {MAX_REJECTIONS} times in a row, down to "
-                           f"{h:.3g} s: the motion cannot be followed from here (a loss of convergence)")
+        history.message = (
+            f"at t = {at.time:g} s the first step was rejected {MAX_REJECTIONS} times in a row, down to "
+            f"{h:.3g} s: the motion cannot be followed from here (a loss of convergence)"
+        )
         return at
 
 

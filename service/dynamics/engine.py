@@ -21,7 +21,8 @@ from models.context import AssemblyContext
 from models.kernels.link_data import link_data
 from models.structure import Structure
 from service.dynamics.kernel_groups import padded
-from service.dynamics.kernel_system import NEWTON_TOLERANCE, Factors, StepSystem
+from service.dynamics.kernel_records import Factors
+from service.dynamics.kernel_system import NEWTON_TOLERANCE, StepSystem
 from service.dynamics.kernel_window import Stepper
 from service.dynamics.schemes import Scheme
 
@@ -113,16 +114,18 @@ class Engine:
             columns = [[s], [monitor], [norm], [used]]
             for j in range(1, steps):
                 alive = (norm <= WINDOW_ACCEPTANCE) * (count > j)
-                s, monitor, norm, used = st.step_function(*factors, alive, s, h, P[:, j], PD[:, j], PDD[:, j], damping,
-                                                          mask, *data)
+                s, monitor, norm, used = st.step_function(
+                    *factors, alive, s, h, P[:, j], PD[:, j], PDD[:, j], damping, mask, *data
+                )
                 for column, value in zip(columns, (s, monitor, norm, used)):
                     column.append(value)
             window = ca.Function(
-                f"kernel_window_{steps}", [state, h, P, PD, PDD, damping, mask, count, *data],
+                f"kernel_window_{steps}",
+                [state, h, P, PD, PDD, damping, mask, count, *data],
                 [ca.horzcat(*column) for column in columns],
-                ["s0", "h", "P", "PDOT", "PDDOT", "damping", "mask", "count",
-                 *[f"data{i}" for i in range(len(data))]],
-                ["S", "MONITOR", "NORMS", "ITERATIONS"])
+                ["s0", "h", "P", "PDOT", "PDDOT", "damping", "mask", "count", *[f"data{i}" for i in range(len(data))]],
+                ["S", "MONITOR", "NORMS", "ITERATIONS"],
+            )
             self._glue[steps] = window
         return self._glue[steps]
 
@@ -144,11 +147,12 @@ class Engine:
             Z = ca.if_else(ev.norm > NEWTON_TOLERANCE, Z - sys.solve(ev, one, factors), Z)
         factors = sys.factorize(Z, si)
         ev = sys.evaluate(Z, one, si, factors.kept_reverse)
-        u = Z[:self.n_x]
+        u = Z[: self.n_x]
         cX, cV, _ = affine
-        new_state = ca.vertcat(cX + k[0] * u, cV + k[1] * u, c_a1 + fa * u, u, Z[self.n_x:])
-        return ca.Function("kernel_rescue", [state, h, p, pdot, pddot, damping, mask, *data],
-                           [new_state, st.monitor(ev, si), ev.norm])
+        new_state = ca.vertcat(cX + k[0] * u, cV + k[1] * u, c_a1 + fa * u, u, Z[self.n_x :])
+        return ca.Function(
+            "kernel_rescue", [state, h, p, pdot, pddot, damping, mask, *data], [new_state, st.monitor(ev, si), ev.norm]
+        )
 
     @cached_property
     def static_iteration(self) -> ca.Function:
@@ -160,12 +164,15 @@ class Engine:
         x, Z = ca.MX.sym("x", self.n_x), ca.MX.sym("Z", sys.n_z)
         k = ca.MX(ca.DM([1, 0, 0, 1]))
         still = ca.MX.zeros(self.n_x)
-        si = sys.step_inputs((x, still, still), k, p, ca.MX.zeros(pdot.shape), ca.MX.zeros(pddot.shape), ca.MX(0),
-                             mask, data)
+        si = sys.step_inputs(
+            (x, still, still), k, p, ca.MX.zeros(pdot.shape), ca.MX.zeros(pddot.shape), ca.MX(0), mask, data
+        )
         one = ca.MX(1)
         factors = sys.factorize(Z, si)
         ev = sys.evaluate(Z, one, si, factors.kept_reverse)
-        return ca.Function("kernel_static_iteration", [x, Z, p, mask, *data], [Z - sys.solve(ev, one, factors), ev.norm])
+        return ca.Function(
+            "kernel_static_iteration", [x, Z, p, mask, *data], [Z - sys.solve(ev, one, factors), ev.norm]
+        )
 
     @cached_property
     def start(self) -> ca.Function:
@@ -185,8 +192,11 @@ class Engine:
             ev = system.evaluate(Z, one, si, factors.kept_reverse)
             Z = Z - system.solve(ev, one, factors)
         ev = system.evaluate(Z, one, si, factors.kept_reverse)
-        return ca.Function("kernel_start", [x, v, p, pdot, pddot, damping, mask, *data],
-                           [Z[:self.n_x], Z[self.n_x:], ev.norm, st.monitor(ev, si)])
+        return ca.Function(
+            "kernel_start",
+            [x, v, p, pdot, pddot, damping, mask, *data],
+            [Z[: self.n_x], Z[self.n_x :], ev.norm, st.monitor(ev, si)],
+        )
 
 
 _engines: OrderedDict[tuple, Engine] = OrderedDict()

@@ -25,10 +25,15 @@ def plot_history(report: dict, outputs: list[str], path: Path) -> None:
     top.set_ylabel("outputs (document units)")
     top.legend(fontsize=8)
     energies, unit = report["energies"], report["units"]["energy"]
-    for key, label in (("kinetic", "kinetic T"), ("potential", "strain and gravity V"),
-                       ("input_work", "work of inputs"), ("damping_work", "work of damping"), ("friction_work", "work of friction"),
-                       ("contact_damping_work", "work of contact damping"),
-                       ("balance", "balance")):
+    for key, label in (
+        ("kinetic", "kinetic T"),
+        ("potential", "strain and gravity V"),
+        ("input_work", "work of inputs"),
+        ("damping_work", "work of damping"),
+        ("friction_work", "work of friction"),
+        ("contact_damping_work", "work of contact damping"),
+        ("balance", "balance"),
+    ):
         if np.any(np.array(energies.get(key, [0])) != 0):
             bottom.plot(t, energies[key], label=label)
     bottom.set_xlabel("t (s)")
@@ -43,8 +48,10 @@ def plot_history(report: dict, outputs: list[str], path: Path) -> None:
 def _centre_lines(mech: Mechanism, history: History, chosen) -> list[np.ndarray]:
     form = state_map(mech.structure)
     scale = mech.scales.length / mech.doc_factor("length")
-    return [np.asarray(mech.graphs.shapes(form.to_state(history.x[k], history.lam[k]), history.p[k])[0]) * scale
-            for k in chosen]
+    return [
+        np.asarray(mech.graphs.shapes(form.to_state(history.x[k], history.lam[k]), history.p[k])[0]) * scale
+        for k in chosen
+    ]
 
 
 def draw_snapshots(mech: Mechanism, history: History, path: Path, count: int = 6) -> None:
@@ -59,8 +66,13 @@ def draw_snapshots(mech: Mechanism, history: History, path: Path, count: int = 6
     for shade, (k, line) in enumerate(zip(chosen, _centre_lines(mech, history, chosen))):
         colour = plt.cm.viridis(shade / max(len(chosen) - 1, 1))
         for index, (_, first, columns, _, _) in enumerate(mech.graphs.shape_segments):
-            ax.plot(line[0, first:first + columns], line[1, first:first + columns], color=colour, lw=2,
-                    label=f"t = {history.times[k]:.3f} s" if index == 0 else None)
+            ax.plot(
+                line[0, first : first + columns],
+                line[1, first : first + columns],
+                color=colour,
+                lw=2,
+                label=f"t = {history.times[k]:.3f} s" if index == 0 else None,
+            )
     ax.set_aspect("equal")
     ax.set_xlabel(f"x ({mech.doc_unit('length')})")
     ax.set_ylabel(f"y ({mech.doc_unit('length')})")
@@ -93,7 +105,7 @@ def animate(mech: Mechanism, history: History, path: Path, frames: int = 100) ->
 
     def draw(i):
         for line, (_, first, count, _, _) in zip(lines, mech.graphs.shape_segments):
-            line.set_data(shapes[i][0, first:first + count], shapes[i][1, first:first + count])
+            line.set_data(shapes[i][0, first : first + count], shapes[i][1, first : first + count])
         label.set_text(f"t = {history.times[chosen[i]]:.3f} s")
         return [*lines, label]
 

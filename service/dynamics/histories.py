@@ -91,8 +91,11 @@ def read_histories(mech: Mechanism, spec: dict | None, until: float, pointer: st
             _check_unloaded(mech, path, motions[path], where)
         if isinstance(history, dict) and "table" in history:
             if path in motions:
-                raise MechanismError(f"{where}/table", "a prescribed motion needs an acceleration: give an expression "
-                                     "or pieces, not a table (a table's rate jumps at its points)")
+                raise MechanismError(
+                    f"{where}/table",
+                    "a prescribed motion needs an acceleration: give an expression "
+                    "or pieces, not a table (a table's rate jumps at its points)",
+                )
             times, values = _table(history["table"], f"{where}/table")
             tables.append((index, times, values * scale))
             continue
@@ -117,8 +120,11 @@ def _varying_field(mech: Mechanism, path: str, where: str) -> int:
         raise MechanismError(where, f"'{path}' is {exc.problem}") from None
     parts = path.strip("/").split("/")
     if not (parts[0] == "gravity" or (parts[0] == "loads" and len(parts) >= 3 and parts[2] in VARYING)):
-        raise MechanismError(where, f"'{path}' cannot change in time: only loads (force, moment), prescribed "
-                             "displacements (dx, dy, rotation) and gravity can")
+        raise MechanismError(
+            where,
+            f"'{path}' cannot change in time: only loads (force, moment), prescribed "
+            "displacements (dx, dy, rotation) and gravity can",
+        )
     return index
 
 
@@ -131,8 +137,11 @@ def _check_unloaded(mech: Mechanism, path: str, coordinate: tuple[int, int], whe
         acts = (c < 2) if load.kind == "force" else (c == 2)
         if load.body == b and acts:
             coordinate_name = ("x", "y", "angle")[c]
-            raise MechanismError(where, f"{body}.{coordinate_name} is prescribed in time by '{path}' and also loaded by "
-                                 f"/loads/{load.name}: remove the load or the motion")
+            raise MechanismError(
+                where,
+                f"{body}.{coordinate_name} is prescribed in time by '{path}' and also loaded by "
+                f"/loads/{load.name}: remove the load or the motion",
+            )
 
 
 def history_expression(history, t: ca.SX, where: str, until: float) -> ca.SX:
@@ -141,8 +150,9 @@ def history_expression(history, t: ca.SX, where: str, until: float) -> ca.SX:
     if isinstance(history, dict) and "table" in history:
         times, values = _table(history["table"], f"{where}/table")
         if len(times) > MAX_INLINE_TABLE:
-            raise MechanismError(f"{where}/table", f"at most {MAX_INLINE_TABLE} rows here: give an expression or "
-                                 "pieces")
+            raise MechanismError(
+                f"{where}/table", f"at most {MAX_INLINE_TABLE} rows here: give an expression or pieces"
+            )
         expression = ca.SX(float(values[-1]))
         for k in range(len(times) - 2, -1, -1):
             slope = (values[k + 1] - values[k]) / (times[k + 1] - times[k])
@@ -162,18 +172,23 @@ def _smooth(history, t: ca.SX, where: str) -> ca.SX:
     if isinstance(history, dict) and "pieces" in history:
         pieces = history["pieces"]
         if not isinstance(pieces, list) or not pieces:
-            raise MechanismError(f"{where}/pieces", "expected a list of pieces {\"until\": t, \"value\": expression}")
+            raise MechanismError(f"{where}/pieces", 'expected a list of pieces {"until": t, "value": expression}')
         ends = [piece.get("until") if isinstance(piece, dict) else None for piece in pieces[:-1]]
         if any(not isinstance(end, (int, float)) for end in ends) or any(b <= a for a, b in zip(ends, ends[1:])):
-            raise MechanismError(f"{where}/pieces", "every piece but the last needs \"until\" (s), increasing")
-        exprs = [_smooth(piece.get("value") if isinstance(piece, dict) else None, t, f"{where}/pieces/{k}/value")
-                 for k, piece in enumerate(pieces)]
+            raise MechanismError(f"{where}/pieces", 'every piece but the last needs "until" (s), increasing')
+        exprs = [
+            _smooth(piece.get("value") if isinstance(piece, dict) else None, t, f"{where}/pieces/{k}/value")
+            for k, piece in enumerate(pieces)
+        ]
         out = exprs[-1]
         for end, expr in zip(reversed(ends), reversed(exprs[:-1])):
             out = ca.if_else(t < end, expr, out)
         return out
-    raise MechanismError(where, "expected a number, an expression in t, {\"table\": [[t, value], ...]} or "
-                         "{\"pieces\": [{\"until\": t, \"value\": expression}, ...]}")
+    raise MechanismError(
+        where,
+        'expected a number, an expression in t, {"table": [[t, value], ...]} or '
+        '{"pieces": [{"until": t, "value": expression}, ...]}',
+    )
 
 
 def _table(rows, where: str) -> tuple[np.ndarray, np.ndarray]:
@@ -196,8 +211,11 @@ def _finite(expression: ca.SX, t: ca.SX, until: float, where: str) -> None:
     values, rates = (np.asarray(q, dtype=float).ravel() for q in f(times))
     bad = np.flatnonzero(~(np.isfinite(values) & np.isfinite(rates)))
     if len(bad):
-        raise MechanismError(where, f"the history is not a finite number at t = {times[bad[0]]:g} s (a division by "
-                             "zero, an overflow, or a root or logarithm of a negative number)")
+        raise MechanismError(
+            where,
+            f"the history is not a finite number at t = {times[bad[0]]:g} s (a division by "
+            "zero, an overflow, or a root or logarithm of a negative number)",
+        )
 
 
 def _joins_meet(history, expression: ca.SX, t: ca.SX, where: str) -> None:
@@ -208,6 +226,9 @@ def _joins_meet(history, expression: ca.SX, t: ca.SX, where: str) -> None:
         before, after = (np.array([float(q) for q in f(end + side * 1e-9 * max(1.0, abs(end)))]) for side in (-1, 1))
         size = max(1.0, *np.abs(before))
         if np.any(np.abs(after - before) > 1e-6 * size):
-            raise MechanismError(f"{where}/pieces", f"the motion's value or rate jumps at t = {end:g} s "
-                                 f"(from {before[0]:.6g}, {before[1]:.6g} to {after[0]:.6g}, {after[1]:.6g}): "
-                                 "a prescribed motion must be smooth")
+            raise MechanismError(
+                f"{where}/pieces",
+                f"the motion's value or rate jumps at t = {end:g} s "
+                f"(from {before[0]:.6g}, {before[1]:.6g} to {after[0]:.6g}, {after[1]:.6g}): "
+                "a prescribed motion must be smooth",
+            )

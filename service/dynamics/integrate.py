@@ -16,9 +16,22 @@ from service.dynamics.stepping import History, Resume, StepRunner, start_of
 __all__ = ["History", "Resume", "Tolerance", "integrate", "start_of"]
 
 
-def integrate(structure: Structure, p: np.ndarray, x0: np.ndarray, v0: np.ndarray, until: float, h: float,
-              scheme: Scheme, damping: float = 0.0, every: int = 1, stop=None, histories: Histories | None = None,
-              progress=None, resume: Resume | None = None, adaptive=None) -> History:
+def integrate(
+    structure: Structure,
+    p: np.ndarray,
+    x0: np.ndarray,
+    v0: np.ndarray,
+    until: float,
+    h: float,
+    scheme: Scheme,
+    damping: float = 0.0,
+    every: int = 1,
+    stop=None,
+    histories: Histories | None = None,
+    progress=None,
+    resume: Resume | None = None,
+    adaptive=None,
+) -> History:
     """States from t = 0 (or from `resume`) to `until` in steps h (seconds), keeping every
     `every`-th step (and the start, when not resumed). Steps run in windows of one Function
     call each (service.dynamics.engine, on the element kernels the cache has compiled); a step

@@ -60,14 +60,35 @@ def group_index(L, g, zero: int, prescribed_angle: Callable) -> GroupIndex:
     node_columns, force_sum, end_of_block = [], np.zeros((E, B)), []
     for k, (c, j, first) in enumerate(blocks):
         node_columns.append(g.chains.index(c) if j == 0 else n_chains + first + j - 1)
-        force_sum[first + j:first + c.n_elements, k] = 1.0
+        force_sum[first + j : first + c.n_elements, k] = 1.0
         end_of_block.append(n_x + c.multiplier_offset)
     node_columns += [0] * pad
     end_of_block += [zero] * pad
     element_node = [c.first_block + e for c in g.chains for e in range(c.n_elements)]
-    return GroupIndex(E, B, gu, gaff, np.array([present]), np.array([start]), start_chain, this, prev,
-                      eflags[:, this], eflags[:, prev], block_present, np.array(flags).T, end, forward, chain_ids, b0,
-                      last_element, node_columns, force_sum, end_of_block, element_node)
+    return GroupIndex(
+        E,
+        B,
+        gu,
+        gaff,
+        np.array([present]),
+        np.array([start]),
+        start_chain,
+        this,
+        prev,
+        eflags[:, this],
+        eflags[:, prev],
+        block_present,
+        np.array(flags).T,
+        end,
+        forward,
+        chain_ids,
+        b0,
+        last_element,
+        node_columns,
+        force_sum,
+        end_of_block,
+        element_node,
+    )
 
 
 def _element_arrays(L, g, zero: int, prescribed_angle: Callable, E: int):

@@ -23,8 +23,6 @@ Everything here is built in milliseconds for any number of elements.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import casadi as ca
 import numpy as np
 
@@ -35,6 +33,7 @@ from models.kernels.global_part import global_part, start_nodes
 from models.kernels.layout import layout_of
 from models.structure import Structure
 from service.dynamics.kernel_groups import UNSET_AFFINE, GroupIndex, group_index
+from service.dynamics.kernel_records import Evaluation, Factors, StepInputs
 
 NEWTON_TOLERANCE = 1e-10  # nondimensional forces
 CONSTRAINT_TOLERANCE = 1e-13  # and lengths, angles
@@ -48,67 +47,23 @@ def _gated(fn: ca.Function) -> ca.Function:
     return ca.Function.if_else(f"{fn.name()}_gated", fn, idle)
 
 
-@dataclass
-class Evaluation:
-    """The residual at Z, eliminated along the chains, and what comes with it."""
-
-    y: list[ca.MX]  # per group (block size x padded blocks, reverse order): the eliminated blocks
-    rhs: ca.MX  # the global rows' right-hand side, condensed (n_global)
-    all_rows: ca.MX  # rows of every body coordinate (prescribed too), own variable and multiplier
-    routed: ca.MX  # (clamped chains,): each clamped start's theta_0 row (its start body's angle row)
-    energies: ca.MX  # (6,): the links' kinetic and strain energy, first moment and momentum of their mass
-    global_energies: ca.MX  # (6,): the global part's (models.kernels.global_part.ENERGIES)
-    norm: ca.MX
-
-    def parts(self) -> list[ca.MX]:
-        return [*self.y, self.rhs, self.all_rows, self.routed, self.energies, self.global_energies, self.norm]
-
-    @classmethod
-    def of(cls, parts: list, groups: int) -> Evaluation:
-        return cls(list(parts[:groups]), *parts[groups:groups + 6])
-
-
-@dataclass
-class Factors:
-    kept_reverse: list[ca.MX]  # per group (factor size x padded blocks), blocks in reverse order
-    kept_forward: list[ca.MX]  # per group, in order (substitution)
-    inverse: ca.MX  # of the condensed global system
-
-    def parts(self) -> list[ca.MX]:
-        return [*self.kept_reverse, *self.kept_forward, self.inverse]
-
-    @classmethod
-    def of(cls, parts: list, groups: int) -> Factors:
-        return cls(list(parts[:groups]), list(parts[groups:2 * groups]), parts[2 * groups])
-
-
-@dataclass
-class StepInputs:
-    """What a step's iterations share (everything that does not depend on Z)."""
-
-    affine: tuple  # (cX, cV, cA) of every coordinate
-    k: ca.MX  # (kx, kv, ka, k_rho)
-    p: ca.MX
-    pdot: ca.MX
-    pddot: ca.MX
-    damping: ca.MX
-    mask: ca.MX
-    element_affine: list  # per group (3 n_c x padded elements)
-    element_constants: list  # per group: (k, damping, gravity rows)
-    data: list  # per group (n_data x padded elements)
-    affine_global: ca.MX  # (global coordinates x 3)
-
-
 class StepSystem:
     """The Newton system of a structure's step (level "position") or of its consistent
     accelerations at a start (level "acceleration"), on the chunks of its chain signatures."""
 
-    def __init__(self, structure: Structure, moving: tuple[int, ...], level: str = "position",
-                 compiled: dict | None = None, rule: str = "interpolated"):
+    def __init__(
+        self,
+        structure: Structure,
+        moving: tuple[int, ...],
+        level: str = "position",
+        compiled: dict | None = None,
+        rule: str = "interpolated",
+    ):
         self.layout = layout_of(structure, rule)
         self.structure, self.moving, self.level = structure, moving, level
-        self.chunks: list[Chunks] = [(compiled or {}).get(g.signature) or chunks(g.signature)
-                                     for g in self.layout.groups]
+        self.chunks: list[Chunks] = [
+            (compiled or {}).get(g.signature) or chunks(g.signature) for g in self.layout.groups
+        ]
         # no compiled kernel at all: the time step may expand them (kernel_window.Stepper.gated_iteration)
         self.interpreted = not any(g.signature in (compiled or {}) for g in self.layout.groups)
         self.global_part = _gated(global_part(self.layout, moving, level))
@@ -141,8 +96,9 @@ class StepSystem:
         self.newton_rows = [3 * b + c for b, c in s.free] + list(range(3 * n_b, 3 * n_b + L.n_global - len(s.free)))
         row_of = {row: k for k, row in enumerate(self.newton_rows)}
         self.border_rows = [[row_of.get(r, -1) for r in L.border_rows(c)] for c in L.chains]
-        self.border_cols = [[col - L.n_block_unknowns if col >= 0 else -1 for col in L.border_columns(c)]
-                            for c in L.chains]
+        self.border_cols = [
+            [col - L.n_block_unknowns if col >= 0 else -1 for col in L.border_columns(c)] for c in L.chains
+        ]
         clamped = [c for g in L.groups for c in g.chains if c.topology.start == "clamped"]
         self.routed_bodies = [c.topology.start_body for c in clamped]
         self.routed_rows = [row_of.get(3 * b + 2, -1) for b in self.routed_bodies]
@@ -158,7 +114,7 @@ class StepSystem:
                 if row >= 0:
                     T[row, len(clamped) + BORDER * cid + i] = 1.0
         self.rhs_scatter = ca.DM(ca.sparsify(ca.DM(T)))
-        self.routed_into_newton = ca.DM(ca.sparsify(ca.DM(T[:, :len(clamped)])))
+        self.routed_into_newton = ca.DM(ca.sparsify(ca.DM(T[:, : len(clamped)])))
         # from the lifted solution [blocks in order, per group, unpadded; global unknowns] to dZ
         self.lift_to_z = list(L.x_unknown) + [L.lam_index(j) for j in range(L.n_lam)]
 
@@ -196,8 +152,9 @@ class StepSystem:
         for gr, g in zip(self.groups, self.layout.groups):
             n_c = g.signature.n_c
             element_affine.append(ca.vertcat(*[ca.reshape(v[gr.gather_affine], n_c, gr.elements) for v in extended]))
-            constants.append((ca.repmat(k, 1, gr.elements), ca.repmat(damping, 1, gr.elements),
-                              ca.repmat(gravity, 1, gr.elements)))
+            constants.append(
+                (ca.repmat(k, 1, gr.elements), ca.repmat(damping, 1, gr.elements), ca.repmat(gravity, 1, gr.elements))
+            )
         xg = list(self.layout.x_global)
         cX, cV, cA = affine
         affine_global = ca.horzcat(cX[xg], cV[xg], cA[xg]) if xg else ca.MX(0, 3)
@@ -210,12 +167,25 @@ class StepSystem:
         Zext = ca.vertcat(Z, 0)
         starts = self.start_nodes(go, Z[self.z_global], si.affine_global, si.k, si.p, si.pdot, si.pddot)
         out = []
-        for gr, g, ch, aff, (kk, damping, gravity), dat in zip(self.groups, self.layout.groups, self.chunks,
-                                                              si.element_affine, si.element_constants, si.data):
+        for gr, g, ch, aff, (kk, damping, gravity), dat in zip(
+            self.groups, self.layout.groups, self.chunks, si.element_affine, si.element_constants, si.data
+        ):
             u = ca.reshape(Zext[gr.gather_u], g.signature.n_c, gr.elements)
             sweep = ch.sweep.mapaccum("sweeps", gr.elements // CHUNK, [1], [0])
-            out.append(sweep(go * ca.DM(gr.present), ca.DM.zeros(6), u, aff, kk, damping, gravity, dat,
-                             ca.DM(gr.start), starts[:, gr.start_chain])[1:])
+            out.append(
+                sweep(
+                    go * ca.DM(gr.present),
+                    ca.DM.zeros(6),
+                    u,
+                    aff,
+                    kk,
+                    damping,
+                    gravity,
+                    dat,
+                    ca.DM(gr.start),
+                    starts[:, gr.start_chain],
+                )[1:]
+            )
         return out, starts
 
     def evaluate(self, Z, go, si: StepInputs, kept_reverse: list) -> Evaluation:
@@ -232,13 +202,21 @@ class StepSystem:
             columns = ca.horzcat(packed, ca.DM.zeros(packed_size(g.signature), 1))
             end = ca.reshape(Zext[gr.end], 3, gr.blocks)
             backward = ch.backward.mapaccum("backward_sweeps", gr.blocks // CHUNK, [1], [0])
-            _, carries, y, node = backward(go * ca.DM(gr.block_present), ca.DM.zeros(2 + g.blocks.size + BORDER),
-                                           kept, columns[:, gr.this], ca.DM(gr.this_flags), columns[:, gr.prev],
-                                           ca.DM(gr.prev_flags), end, ca.DM(gr.flags))
+            _, carries, y, node = backward(
+                go * ca.DM(gr.block_present),
+                ca.DM.zeros(2 + g.blocks.size + BORDER),
+                kept,
+                columns[:, gr.this],
+                ca.DM(gr.this_flags),
+                columns[:, gr.prev],
+                ca.DM(gr.prev_flags),
+                end,
+                ca.DM(gr.flags),
+            )
             ys.append(y)
             sizes.append(ca.mmax(node[3, :]))
             for c, cid, b0, last in zip(g.chains, gr.chains, gr.b0, gr.last_element):
-                border[cid] = carries[2 + g.blocks.size:, b0]
+                border[cid] = carries[2 + g.blocks.size :, b0]
                 node0_F[cid] = node[0:2, b0]
                 if c.topology.start == "clamped":
                     routed.append(node[2, b0])
@@ -247,8 +225,9 @@ class StepSystem:
                 ends[cid] = ca.vertcat(nxt[0:2, last], nxt[4:6, last], cX[x] + si.k[0] * Z[x], cA[x] + si.k[2] * Z[x])
         starts8 = ca.vertcat(starts, ca.horzcat(*node0_F)) if n_ch else ca.MX(8, 0)
         ends6 = ca.horzcat(*ends) if n_ch else ca.MX(6, 0)
-        all_rows = self.global_part(go, Z[self.z_global], si.affine_global, si.k, starts8, ends6, si.p, si.pdot,
-                                    si.pddot, si.damping, si.mask)
+        all_rows = self.global_part(
+            go, Z[self.z_global], si.affine_global, si.k, starts8, ends6, si.p, si.pdot, si.pddot, si.damping, si.mask
+        )
         all_rows, global_energies = all_rows[0], all_rows[6]
         routed_v = ca.vertcat(*routed) if routed else ca.MX(0, 1)
         newton = all_rows[self.newton_rows] + ca.mtimes(self.routed_into_newton, routed_v)
@@ -276,7 +255,7 @@ class StepSystem:
             n_c = g.signature.n_c
             kinematics = ca.horzcat(starts[:, gr.chains], nxt)[:, gr.node_columns]  # (6, blocks) in order
             lam_end = ca.horzcat(Zext[gr.end_of_block], Zext[[i + 1 if i < self.n_z else i for i in gr.end_of_block]]).T
-            F = ca.mtimes(packed[n_c:n_c + 2, :], ca.DM(gr.force_sum)) + lam_end
+            F = ca.mtimes(packed[n_c : n_c + 2, :], ca.DM(gr.force_sum)) + lam_end
             nodes = ca.vertcat(kinematics, F)  # (8, padded blocks) in order
             at = gr.element_node + [0] * (gr.elements - g.n_elements)
             after = [q + 1 for q in gr.element_node] + [0] * (gr.elements - g.n_elements)
@@ -287,39 +266,61 @@ class StepSystem:
                 node0_F[cid] = F[:, c.first_block]
                 x = c.coordinate_x(c.n_elements - 1, g.signature.degree)
                 cX, _, cA = si.affine
-                ends[cid] = ca.vertcat(kinematics[0:2, last], kinematics[4:6, last], cX[x] + si.k[0] * Z[x],
-                                       cA[x] + si.k[2] * Z[x])
+                ends[cid] = ca.vertcat(
+                    kinematics[0:2, last], kinematics[4:6, last], cX[x] + si.k[0] * Z[x], cA[x] + si.k[2] * Z[x]
+                )
         starts8 = ca.vertcat(starts, ca.horzcat(*node0_F)) if n_ch else ca.MX(8, 0)
         ends6 = ca.horzcat(*ends) if n_ch else ca.MX(6, 0)
-        out = self.global_part(one, Z[self.z_global], si.affine_global, si.k, starts8, ends6, si.p, si.pdot,
-                               si.pddot, si.damping, si.mask)
+        out = self.global_part(
+            one, Z[self.z_global], si.affine_global, si.k, starts8, ends6, si.p, si.pdot, si.pddot, si.damping, si.mask
+        )
         J_global, start_C, start_W = out[1], out[3], out[4]
         A = ca.densify(J_global)
         kept_reverse, kept_forward = [], []
-        for gi, (gr, g, ch, local, aff, (kk, damping, gravity), dat) in enumerate(zip(
-                self.groups, L.groups, self.chunks, locals_, si.element_affine, si.element_constants, si.data)):
-            sig, n = g.signature, g.blocks.size
-            jacobian = ch.jacobian.map(gr.elements // CHUNK)
-            _, J = jacobian(ca.DM(gr.present), local, aff, kk, damping, gravity, dat)
-            J_cols = ca.horzcat(ca.reshape(ca.densify(J), sig.n_rows * sig.n_local, gr.elements),
-                                ca.DM.zeros(sig.n_rows * sig.n_local, 1))
-
-            def per_block(index):
-                return ca.reshape(J_cols[:, index], sig.n_rows, sig.n_local * gr.blocks)
-
-            extra_C, extra_W = self._extra_C_W(gr, g, start_C, start_W)
-            carry0 = ca.DM.zeros(n * n + 2 * n * BORDER + BORDER * BORDER)
-            factor = ch.factor.mapaccum("factor_sweeps", gr.blocks // CHUNK, [1], [0])
-            _, carries, kept = factor(ca.DM(gr.block_present), carry0, per_block(gr.this), ca.DM(gr.this_flags),
-                                      per_block(gr.prev), ca.DM(gr.prev_flags), ca.DM(self.extra_D(gi)), extra_C,
-                                      extra_W, ca.DM(gr.flags))
+        for gi, (gr, local) in enumerate(zip(self.groups, locals_)):
+            kept, carries = self._factor_group(gi, local, si, start_C, start_W)
             kept_reverse.append(kept)
             kept_forward.append(kept[:, gr.forward])
             for cid, b0 in zip(gr.chains, gr.b0):
-                S = ca.reshape(carries[-BORDER * BORDER:, b0], BORDER, BORDER)
+                S = ca.reshape(carries[-BORDER * BORDER :, b0], BORDER, BORDER)
                 A = self._add_border(A, S, cid)
         inverse = ca.inv(A) if L.n_global else ca.MX(0, 0)
         return Factors(kept_reverse, kept_forward, inverse)
+
+    def _factor_group(
+        self, gi: int, local: ca.MX, si: StepInputs, start_C: ca.MX, start_W: ca.MX
+    ) -> tuple[ca.MX, ca.MX]:
+        """(kept, carries) of group gi's factor sweep: its elements' Jacobians at their local
+        unknowns, eliminated block by block along its chains (reverse order)."""
+        gr, g, ch = self.groups[gi], self.layout.groups[gi], self.chunks[gi]
+        kk, damping, gravity = si.element_constants[gi]
+        sig, n = g.signature, g.blocks.size
+        jacobian = ch.jacobian.map(gr.elements // CHUNK)
+        _, J = jacobian(ca.DM(gr.present), local, si.element_affine[gi], kk, damping, gravity, si.data[gi])
+        J_cols = ca.horzcat(
+            ca.reshape(ca.densify(J), sig.n_rows * sig.n_local, gr.elements),
+            ca.DM.zeros(sig.n_rows * sig.n_local, 1),
+        )
+
+        def per_block(index):
+            return ca.reshape(J_cols[:, index], sig.n_rows, sig.n_local * gr.blocks)
+
+        extra_C, extra_W = self._extra_C_W(gr, g, start_C, start_W)
+        carry0 = ca.DM.zeros(n * n + 2 * n * BORDER + BORDER * BORDER)
+        factor = ch.factor.mapaccum("factor_sweeps", gr.blocks // CHUNK, [1], [0])
+        _, carries, kept = factor(
+            ca.DM(gr.block_present),
+            carry0,
+            per_block(gr.this),
+            ca.DM(gr.this_flags),
+            per_block(gr.prev),
+            ca.DM(gr.prev_flags),
+            ca.DM(self.extra_D(gi)),
+            extra_C,
+            extra_W,
+            ca.DM(gr.flags),
+        )
+        return kept, carries
 
     def _add_border(self, A: ca.MX, S: ca.MX, chain: int) -> ca.MX:
         rows, cols = self.border_rows[chain], self.border_cols[chain]
@@ -339,9 +340,10 @@ class StepSystem:
         W = ca.MX.zeros(BORDER, n * gr.blocks)
         for c, cid, b0 in zip(g.chains, gr.chains, gr.b0):
             bN = b0 - c.n_elements  # reverse order: B_N comes n_elements before B_0
-            C[[bl.aux(q) for q in range(6)], list(range(b0 * BORDER, b0 * BORDER + 3))] = \
-                start_C[:, 3 * cid:3 * cid + 3]
-            W[[0, 1, 2], [b0 * n + bl.aux(6), b0 * n + bl.aux(7)]] = start_W[:, 2 * cid:2 * cid + 2]
+            C[[bl.aux(q) for q in range(6)], list(range(b0 * BORDER, b0 * BORDER + 3))] = start_C[
+                :, 3 * cid : 3 * cid + 3
+            ]
+            W[[0, 1, 2], [b0 * n + bl.aux(6), b0 * n + bl.aux(7)]] = start_W[:, 2 * cid : 2 * cid + 2]
             node = (bl.aux(0), bl.aux(1)) if self.level == "position" else (bl.aux(4), bl.aux(5))
             W[3, bN * n + node[0]] = 1
             W[4, bN * n + node[1]] = 1
@@ -365,7 +367,13 @@ class StepSystem:
             x_border = ca.reshape(x_ext[border], BORDER, gr.blocks)
             present = ca.DM(gr.block_present[:, gr.forward])
             substitute = ch.substitute.mapaccum("substitute_sweeps", gr.blocks // CHUNK, [1], [0])
-            _, _, x = substitute(go * present, ca.DM.zeros(g.blocks.size), kept, y[:, gr.forward], x_border,
-                                 ca.DM(gr.flags[:, gr.forward]))
-            parts.append(ca.vec(x[:, :g.n_blocks]))
+            _, _, x = substitute(
+                go * present,
+                ca.DM.zeros(g.blocks.size),
+                kept,
+                y[:, gr.forward],
+                x_border,
+                ca.DM(gr.flags[:, gr.forward]),
+            )
+            parts.append(ca.vec(x[:, : g.n_blocks]))
         return ca.vertcat(*parts, x_global)[self.lift_to_z]

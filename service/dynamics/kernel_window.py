@@ -29,7 +29,8 @@ from functools import cached_property
 import casadi as ca
 
 from service.dynamics.kernel_groups import padded
-from service.dynamics.kernel_system import NEWTON_TOLERANCE, Evaluation, Factors, StepInputs, StepSystem
+from service.dynamics.kernel_records import Evaluation, Factors, StepInputs
+from service.dynamics.kernel_system import NEWTON_TOLERANCE, StepSystem
 from service.dynamics.schemes import Scheme
 
 MAX_ITERATIONS = 8
@@ -46,7 +47,7 @@ class StateLayout:
 
     def split(self, s):
         n = self.n_x
-        return s[:n], s[n:2 * n], s[2 * n:3 * n], s[3 * n:4 * n], s[4 * n:]
+        return s[:n], s[n : 2 * n], s[2 * n : 3 * n], s[3 * n : 4 * n], s[4 * n :]
 
 
 class Stepper:
@@ -70,9 +71,16 @@ class Stepper:
     # ---- symbols ----------------------------------------------------------------------------------
     def _symbols(self):
         data = [ca.MX.sym(f"data{i}", *shape) for i, shape in enumerate(self.data_shapes())]
-        return (ca.MX.sym("state", self.state.size), ca.MX.sym("h"), ca.MX.sym("p", self.n_p),
-                ca.MX.sym("pdot", self.n_moving), ca.MX.sym("pddot", self.n_moving), ca.MX.sym("damping"),
-                ca.MX.sym("mask", self.n_p), data)
+        return (
+            ca.MX.sym("state", self.state.size),
+            ca.MX.sym("h"),
+            ca.MX.sym("p", self.n_p),
+            ca.MX.sym("pdot", self.n_moving),
+            ca.MX.sym("pddot", self.n_moving),
+            ca.MX.sym("damping"),
+            ca.MX.sym("mask", self.n_p),
+            data,
+        )
 
     def _iteration_symbols(self):
         """(factors, a step's symbols, the step's shared inputs from them), made in this order."""
@@ -80,15 +88,20 @@ class Stepper:
         state, h, p, pdot, pddot, damping, mask, data = self._symbols()
         _, k = self.coefficients(h)
         affine, _ = self._affine(state, h)
-        return f, (state, h, p, pdot, pddot, damping, mask, data), self.system.step_inputs(
-            affine, k, p, pdot, pddot, damping, mask, data)
+        return (
+            f,
+            (state, h, p, pdot, pddot, damping, mask, data),
+            self.system.step_inputs(affine, k, p, pdot, pddot, damping, mask, data),
+        )
 
     def _factor_symbols(self) -> Factors:
         sys = self.system
         shapes = [(ch.factor_size, gr.blocks) for ch, gr in zip(sys.chunks, sys.groups)]
-        return Factors([ca.MX.sym(f"kept_rev{i}", *b) for i, b in enumerate(shapes)],
-                       [ca.MX.sym(f"kept_fwd{i}", *b) for i, b in enumerate(shapes)],
-                       ca.MX.sym("inverse", sys.layout.n_global, sys.layout.n_global))
+        return Factors(
+            [ca.MX.sym(f"kept_rev{i}", *b) for i, b in enumerate(shapes)],
+            [ca.MX.sym(f"kept_fwd{i}", *b) for i, b in enumerate(shapes)],
+            ca.MX.sym("inverse", sys.layout.n_global, sys.layout.n_global),
+        )
 
     def coefficients(self, h):
         """(d a / d u, k = (kx, kv, ka, k_rho)) of the scheme for the step h."""
@@ -120,7 +133,7 @@ class Stepper:
         dead = ca.Function("kernel_step_dead", inputs, [state, ca.MX.zeros(monitor.shape), ca.MX(ca.inf), ca.MX(0)])
         branch = ca.Function.if_else("kernel_step_branch", live, dead)
         alive = ca.MX.sym("alive")
-        return ca.Function("kernel_step", [*f.parts(), alive, *inputs[len(f.parts()):]], branch(alive, *inputs))
+        return ca.Function("kernel_step", [*f.parts(), alive, *inputs[len(f.parts()) :]], branch(alive, *inputs))
 
     @cached_property
     def first_step_function(self) -> ca.Function:
@@ -128,8 +141,9 @@ class Stepper:
         iterations, factors...): a step that makes the factors at its predictor."""
         state, h, p, pdot, pddot, damping, mask, data = self._symbols()
         out = self._step(None, state, h, p, pdot, pddot, damping, mask, data)
-        return ca.Function("kernel_first_step", [state, h, p, pdot, pddot, damping, mask, *data],
-                           [*out[:4], *out[4].parts()])
+        return ca.Function(
+            "kernel_first_step", [state, h, p, pdot, pddot, damping, mask, *data], [*out[:4], *out[4].parts()]
+        )
 
     def _step(self, factors: Factors | None, state, h, p, pdot, pddot, damping, mask, data):
         sys = self.system
@@ -141,8 +155,10 @@ class Stepper:
         if factors is None:
             factors = sys.factorize(Z, si)
         if self.expanded:
-            ev = Evaluation.of(self.evaluation_function(*factors.kept_reverse, state, h, p, pdot, pddot, damping, mask,
-                                                        *data, Z), self.n_groups)
+            ev = Evaluation.of(
+                self.evaluation_function(*factors.kept_reverse, state, h, p, pdot, pddot, damping, mask, *data, Z),
+                self.n_groups,
+            )
         else:
             ev = sys.evaluate(Z, ca.MX(1), si, factors.kept_reverse)
         carry = [Z, ca.MX.zeros(sys.n_z), ca.MX.zeros(sys.n_z), ca.MX(0), ca.MX(0), *ev.parts()]
@@ -178,13 +194,30 @@ class Stepper:
         ev_next = sys.evaluate(Z_next, go, si, f.kept_reverse)
         # a gated evaluation computes nothing: keep what the monitor and the test need from the
         # last one that ran (the eliminated blocks and right-hand side only feed a solve, gated too)
-        kept = Evaluation(ev_next.y, ev_next.rhs, *[ca.if_else(go, new, old) for new, old in zip(
-            [ev_next.all_rows, ev_next.routed, ev_next.energies, ev_next.global_energies, ev_next.norm],
-            [ev.all_rows, ev.routed, ev.energies, ev.global_energies, ev.norm])])
-        carry = [ca.if_else(go, Z_next, Z), ca.if_else(go, Z, previous), ca.if_else(go, g, g_previous),
-                 ca.if_else(go, 1, have), used + go, *kept.parts()]
-        return ca.Function("kernel_iteration", [*f.parts(), state, h, p, pdot, pddot, damping, mask, *data, Z, previous,
-                                                g_previous, have, used, *parts], carry)
+        kept = Evaluation(
+            ev_next.y,
+            ev_next.rhs,
+            *[
+                ca.if_else(go, new, old)
+                for new, old in zip(
+                    [ev_next.all_rows, ev_next.routed, ev_next.energies, ev_next.global_energies, ev_next.norm],
+                    [ev.all_rows, ev.routed, ev.energies, ev.global_energies, ev.norm],
+                )
+            ],
+        )
+        carry = [
+            ca.if_else(go, Z_next, Z),
+            ca.if_else(go, Z, previous),
+            ca.if_else(go, g, g_previous),
+            ca.if_else(go, 1, have),
+            used + go,
+            *kept.parts(),
+        ]
+        return ca.Function(
+            "kernel_iteration",
+            [*f.parts(), state, h, p, pdot, pddot, damping, mask, *data, Z, previous, g_previous, have, used, *parts],
+            carry,
+        )
 
     @cached_property
     def gated_iteration(self) -> ca.Function:
@@ -210,8 +243,9 @@ class Stepper:
         f, (state, h, p, pdot, pddot, damping, mask, data), si = self._iteration_symbols()
         Z = ca.MX.sym("Z", self.system.n_z)
         ev = self.system.evaluate(Z, ca.MX(1), si, f.kept_reverse)
-        return ca.Function("kernel_evaluation", [*f.kept_reverse, state, h, p, pdot, pddot, damping, mask, *data, Z],
-                           ev.parts()).expand()
+        return ca.Function(
+            "kernel_evaluation", [*f.kept_reverse, state, h, p, pdot, pddot, damping, mask, *data, Z], ev.parts()
+        ).expand()
 
     def monitor(self, ev: Evaluation, si: StepInputs) -> ca.MX:
         """(kinetic, held potential, input power, damping power, the contacts' friction power and
@@ -233,8 +267,9 @@ class Stepper:
         Q = ca.vertcat(*Q) if Q else ca.MX(0, 1)
         if self.n_moving:
             power = power + ca.dot(Q, si.pdot)
-        return ca.vertcat(kinetic, held, power, 2 * si.damping * kinetic, ev.global_energies[4],
-                          ev.global_energies[5], Q)
+        return ca.vertcat(
+            kinetic, held, power, 2 * si.damping * kinetic, ev.global_energies[4], ev.global_energies[5], Q
+        )
 
     @cached_property
     def _motion_rows(self) -> list[tuple[int, int | None]]:

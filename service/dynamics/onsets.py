@@ -31,8 +31,11 @@ class Onsets:
 
     def __init__(self, structure: Structure, moving: tuple[int, ...]):
         topology = structure.contacts
-        pairs = [] if topology is None else [pair for pair in topology.pairs
-                                             if pair.potential and pair.normal_law in DAMPED_LAWS]
+        pairs = (
+            []
+            if topology is None
+            else [pair for pair in topology.pairs if pair.potential and pair.normal_law in DAMPED_LAWS]
+        )
         self.names = [pair.name for pair in pairs]
         self.speed_rows = [structure.index.get(f"{pair.pointer}/normal/onset_speed") for pair in pairs]
         self.structure, self.moving = structure, moving
@@ -45,7 +48,7 @@ class Onsets:
 
     def indentations(self, states: np.ndarray, n_x: int, P: np.ndarray, PD: np.ndarray) -> tuple[np.ndarray, ...]:
         """(q, qdot) per pair (rows) and state (columns; document length and length per second)."""
-        x, v = states[:self.n_free], states[n_x:n_x + self.n_free]
+        x, v = states[: self.n_free], states[n_x : n_x + self.n_free]
         q, qdot = self.gaps.map(states.shape[1])(x, v, P, PD)
         return np.asarray(q), np.asarray(qdot)
 
@@ -121,21 +124,35 @@ def step_onto_onset(runner, history, at, pair: int, q_end: float, h: float):
     found = _locate(runner, at, pair, q_end, h)
     if found is None:
         history.status = "not_converged"
-        history.message = (f"the onset of contact '{runner.onsets.names[pair]}' after t = {at.time:g} s could not be "
-                           "located: try a smaller step")
+        history.message = (
+            f"the onset of contact '{runner.onsets.names[pair]}' after t = {at.time:g} s could not be "
+            "located: try a smaller step"
+        )
         return at
     state, monitor, p_end, tau, approach = found
     speeds = list(runner.speeds(at))
     speeds[pair] = max(approach, MIN_APPROACH)
     rest = h - tau
-    onset = runner.advance(history, at, state, monitor, tau, p=p_end, time=at.time + tau, kept=True,
-                           speeds=speeds, inserted=at.inserted + (1 if rest > GRID_SLACK * h else 0))
+    onset = runner.advance(
+        history,
+        at,
+        state,
+        monitor,
+        tau,
+        p=p_end,
+        time=at.time + tau,
+        kept=True,
+        speeds=speeds,
+        inserted=at.inserted + (1 if rest > GRID_SLACK * h else 0),
+    )
     if rest <= GRID_SLACK * h:
         return onset
     trial = _trial(runner, onset, rest)
     if trial is None:
         history.status = "not_converged"
-        history.message = f"the step after the contact onset at t = {onset.time:g} s did not converge: try a smaller step"
+        history.message = (
+            f"the step after the contact onset at t = {onset.time:g} s did not converge: try a smaller step"
+        )
         return onset
     state, monitor, inputs = trial
     entering = crossing(runner, onset, inputs, state[:, None], 1)

@@ -41,8 +41,9 @@ def simulation_spec(mech: Mechanism, overrides: dict | None = None) -> SimulateS
     except ValidationError as exc:
         error = exc.errors()[0]
         where = "/".join(str(part) for part in error["loc"])
-        raise MechanismError(f"/simulate/{where}" if where else "/simulate",
-                             error["msg"].removeprefix("Value error, ")) from None
+        raise MechanismError(
+            f"/simulate/{where}" if where else "/simulate", error["msg"].removeprefix("Value error, ")
+        ) from None
     if spec.until is None:
         raise MechanismError("/simulate/until", "give the end time `until` (s), in the document or the request")
     return spec
@@ -74,8 +75,12 @@ def tolerance_of(spec: SimulateSpec, max_steps: int = MAX_STEPS) -> Tolerance | 
     """The adaptive steps' tolerance and limits, or None for fixed steps."""
     if not spec.adaptive:
         return None
-    return Tolerance(spec.tolerance, spec.max_step if spec.max_step is not None else float("inf"), spec.min_step,
-                     step_limit(spec, max_steps))
+    return Tolerance(
+        spec.tolerance,
+        spec.max_step if spec.max_step is not None else float("inf"),
+        spec.min_step,
+        step_limit(spec, max_steps),
+    )
 
 
 def step_limit(spec: SimulateSpec, max_steps: int) -> int:
@@ -89,8 +94,11 @@ def check_steps(spec: SimulateSpec, max_steps: int) -> int:
     if steps < 1:
         raise MechanismError("/simulate/step", f"the step {spec.step:g} s is longer than the run ({spec.until:g} s)")
     if steps > limit and not spec.adaptive:
-        raise MechanismError("/simulate/step", f"the run needs {steps} steps of {spec.step:g} s, over the limit of "
-                             f"{limit}: take a longer step or a shorter run")
+        raise MechanismError(
+            "/simulate/step",
+            f"the run needs {steps} steps of {spec.step:g} s, over the limit of "
+            f"{limit}: take a longer step or a shorter run",
+        )
     return steps
 
 
@@ -107,10 +115,13 @@ def check_scheme(mech: Mechanism, spec: SimulateSpec, x0: np.ndarray | None = No
     factor = critical_step_factor(spec.a1, spec.a2 / 2)
     omega = highest_frequency(mech.structure, mech.p(), x0)
     critical = f"{factor / omega:.3g} s" if omega > 0 else "unbounded (no stiffness at the start)"
-    raise MechanismError("/simulate/a2", f"Newmark a1 = {spec.a1:g}, a2 = {spec.a2:g} is only conditionally stable "
-                         f"(unconditional stability needs a2 >= a1): its critical step is {factor:.4g} / omega_max "
-                         f"= {critical} for this mechanism (omega_max = {omega:.4g} rad/s); raise a2 to at least "
-                         f"{spec.a1:g}")
+    raise MechanismError(
+        "/simulate/a2",
+        f"Newmark a1 = {spec.a1:g}, a2 = {spec.a2:g} is only conditionally stable "
+        f"(unconditional stability needs a2 >= a1): its critical step is {factor:.4g} / omega_max "
+        f"= {critical} for this mechanism (omega_max = {omega:.4g} rad/s); raise a2 to at least "
+        f"{spec.a1:g}",
+    )
 
 
 def start_shape(mech: Mechanism, spec: SimulateSpec, histories: Histories | None = None) -> tuple[np.ndarray, str]:
@@ -129,8 +140,9 @@ def start_shape(mech: Mechanism, spec: SimulateSpec, histories: Histories | None
     return mech.graphs.energy_form.x_of_state(static.z), note
 
 
-def run_simulation(mech: Mechanism, spec: SimulateSpec, stop=None, progress=None,
-                   max_steps: int = MAX_STEPS) -> tuple[History, dict]:
+def run_simulation(
+    mech: Mechanism, spec: SimulateSpec, stop=None, progress=None, max_steps: int = MAX_STEPS
+) -> tuple[History, dict]:
     """(the raw history, the report)."""
     simulated(mech)
     check_masses(mech)
@@ -140,9 +152,21 @@ def run_simulation(mech: Mechanism, spec: SimulateSpec, stop=None, progress=None
     x0, start_note = start_shape(mech, spec, histories)
     check_scheme(mech, spec, x0)
     n, p = len(x0), mech.p()
-    history = integrate(mech.structure, p, x0, np.zeros(n), spec.until, spec.step, scheme_of(spec),
-                        damping=spec.damping, every=spec.every, stop=stop, histories=histories, progress=progress,
-                        adaptive=tolerance_of(spec, max_steps))
+    history = integrate(
+        mech.structure,
+        p,
+        x0,
+        np.zeros(n),
+        spec.until,
+        spec.step,
+        scheme_of(spec),
+        damping=spec.damping,
+        every=spec.every,
+        stop=stop,
+        histories=histories,
+        progress=progress,
+        adaptive=tolerance_of(spec, max_steps),
+    )
     return history, report(mech, spec, history, histories, start_note)
 
 
@@ -157,8 +181,9 @@ def records(mech: Mechanism, spec: SimulateSpec, history: History, histories) ->
         values = np.asarray(mech.graphs.outputs.map(len(history.times))(states, np.column_stack(history.p)))
     else:
         values = np.zeros((len(names), 0))
-    outputs = {name: (values[names.index(name)] / mech.nd_per_doc(kinds[names.index(name)])).tolist()
-               for name in wanted}
+    outputs = {
+        name: (values[names.index(name)] / mech.nd_per_doc(kinds[names.index(name)])).tolist() for name in wanted
+    }
     _damped_normal_forces(mech, history, histories, outputs)
     state_names = unknown_names(mech.structure)
     forces = {}
@@ -173,14 +198,20 @@ def records(mech: Mechanism, spec: SimulateSpec, history: History, histories) ->
         kind = "moment" if pointer.endswith("/rotation") else "force"
         scale = mech.nd_per_doc(kind)
         motion_forces[pointer] = [float(q[k]) / scale for q in history.motion_forces]
-    kept = {"times": list(history.times), "outputs": outputs, "constraint_forces": forces,
-            "motion_forces": motion_forces,
-            "energies": {"kinetic": [e * energy for e in history.kinetic],
-                         "potential": [e * energy for e in history.potential],
-                         "input_work": [e * energy for e in history.input_work],
-                         "damping_work": [e * energy for e in history.damping_work],
-                         "friction_work": [e * energy for e in history.friction_work],
-                         "contact_damping_work": [e * energy for e in history.contact_damping_work]}}
+    kept = {
+        "times": list(history.times),
+        "outputs": outputs,
+        "constraint_forces": forces,
+        "motion_forces": motion_forces,
+        "energies": {
+            "kinetic": [e * energy for e in history.kinetic],
+            "potential": [e * energy for e in history.potential],
+            "input_work": [e * energy for e in history.input_work],
+            "damping_work": [e * energy for e in history.damping_work],
+            "friction_work": [e * energy for e in history.friction_work],
+            "contact_damping_work": [e * energy for e in history.contact_damping_work],
+        },
+    }
     if spec.shapes:
         kept["shapes"] = shapes_of(mech, states, history.p) if history.times else []
     return kept
@@ -208,8 +239,9 @@ def shapes_of(mech: Mechanism, states: np.ndarray, parameters: list) -> list[dic
     out = []
     for k in range(states.shape[1]):
         line = np.asarray(mech.graphs.shapes(states[:, k], parameters[k])[0]) * scale
-        out.append({name: line[:, first:first + count].tolist()
-                    for name, first, count, _, _ in mech.graphs.shape_segments})
+        out.append(
+            {name: line[:, first : first + count].tolist() for name, first, count, _, _ in mech.graphs.shape_segments}
+        )
     return out
 
 
@@ -219,8 +251,9 @@ def wanted_outputs(mech: Mechanism, spec: SimulateSpec) -> list[str]:
         return [name for name in names if not name.endswith(STATIC_OUTPUTS) and not name.startswith("reactions.")]
     for k, name in enumerate(spec.outputs):
         if name not in names:
-            raise MechanismError(f"/simulate/outputs/{k}", f"unknown output '{name}' (outputs: "
-                                 f"{', '.join(names[:12])}, ...)")
+            raise MechanismError(
+                f"/simulate/outputs/{k}", f"unknown output '{name}' (outputs: {', '.join(names[:12])}, ...)"
+            )
     return list(spec.outputs)
 
 
@@ -242,21 +275,41 @@ def with_balance(energies: dict) -> tuple[dict, float | None]:
 
 def units(mech: Mechanism) -> dict:
     moment = f"{mech.doc_unit('force')}*{mech.doc_unit('length')}"
-    return {"time": "s", "force": mech.doc_unit("force"), "length": mech.doc_unit("length"), "moment": moment,
-            "energy": moment, "angle": mech.doc_unit("angle")}
+    return {
+        "time": "s",
+        "force": mech.doc_unit("force"),
+        "length": mech.doc_unit("length"),
+        "moment": moment,
+        "energy": moment,
+        "angle": mech.doc_unit("angle"),
+    }
 
 
 def report(mech: Mechanism, spec: SimulateSpec, history: History, histories, start_note: str) -> dict:
     kept = records(mech, spec, history, histories)
     energies, error = with_balance(kept.pop("energies"))
     every = output_units(mech)
-    return {"analysis": "simulate", "name": mech.document.name, "status": history.status,
-            "message": history.message, "time_reached": history.resume.time if history.resume is not None else 0.0,
-            "steps": history.steps, "iterations": history.iterations, "rescued_steps": history.newton_iterations,
-            "seconds": history.seconds, "start": start_note, "scheme": scheme_summary(spec), "step": spec.step,
-            "adaptive": {"tolerance": spec.tolerance, "max_step": spec.max_step} if spec.adaptive else None,
-            "damping": spec.damping, **kept, "energies": energies, "energy_balance_error": error,
-            "units": units(mech), "output_units": {name: every[name] for name in kept["outputs"]}}
+    return {
+        "analysis": "simulate",
+        "name": mech.document.name,
+        "status": history.status,
+        "message": history.message,
+        "time_reached": history.resume.time if history.resume is not None else 0.0,
+        "steps": history.steps,
+        "iterations": history.iterations,
+        "rescued_steps": history.newton_iterations,
+        "seconds": history.seconds,
+        "start": start_note,
+        "scheme": scheme_summary(spec),
+        "step": spec.step,
+        "adaptive": {"tolerance": spec.tolerance, "max_step": spec.max_step} if spec.adaptive else None,
+        "damping": spec.damping,
+        **kept,
+        "energies": energies,
+        "energy_balance_error": error,
+        "units": units(mech),
+        "output_units": {name: every[name] for name in kept["outputs"]},
+    }
 
 
 def scheme_summary(spec: SimulateSpec) -> dict:

@@ -32,8 +32,10 @@ def newmark(gamma: float = 0.5, beta: float = 0.25) -> Scheme:
     """Unconditionally stable for gamma >= 1/2 and beta >= gamma / 2 (Hughes 2000, Sec. 9.1);
     beta >= (gamma + 1/2)^2 / 4 also damps the highest frequencies most, not a stability bound."""
     if not (gamma >= 0.5 and beta >= 0.5 * gamma - 1e-15):
-        raise ValueError(f"Newmark gamma = {gamma:g}, beta = {beta:g} is not unconditionally stable "
-                         "(gamma >= 1/2 and beta >= gamma / 2)")
+        raise ValueError(
+            f"Newmark gamma = {gamma:g}, beta = {beta:g} is not unconditionally stable "
+            "(gamma >= 1/2 and beta >= gamma / 2)"
+        )
     return Scheme("newmark", 0.0, 0.0, gamma, beta)
 
 

@@ -57,6 +57,6 @@ def _newton(engine: Engine, x: np.ndarray, lam: np.ndarray, p: np.ndarray, data)
         if not np.isfinite(norm):
             return None
         if norm <= NEWTON_TOLERANCE:
-            return x + Z[:engine.n_x], Z[engine.n_x:]
+            return x + Z[: engine.n_x], Z[engine.n_x :]
         Z = np.asarray(step, dtype=float).ravel()
     return None

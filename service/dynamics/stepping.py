@@ -67,17 +67,32 @@ class Resume:
     onset_speeds: list[float] | None = None  # per damped contact pair, its approach speed at its last onset
 
     def to_json(self) -> dict:
-        return {"step": self.step, "state": self.state.tolist(), "works": self.works.tolist(),
-                "monitor": self.monitor.tolist(), "time": self.time, "h": self.h, "inserted": self.inserted,
-                "onset_speeds": self.onset_speeds}
+        return {
+            "step": self.step,
+            "state": self.state.tolist(),
+            "works": self.works.tolist(),
+            "monitor": self.monitor.tolist(),
+            "time": self.time,
+            "h": self.h,
+            "inserted": self.inserted,
+            "onset_speeds": self.onset_speeds,
+        }
 
     @classmethod
     def from_json(cls, data: dict) -> Resume:
         state, works, monitor = (np.array(data[k], dtype=float) for k in ("state", "works", "monitor"))
         if len(works) == 2:  # stored before the contacts' friction and damping had rows: none acted
             works, monitor = np.append(works, [0.0, 0.0]), np.insert(monitor, 4, [0.0, 0.0])
-        return cls(int(data["step"]), state, works, monitor, float(data.get("time", 0.0)), data.get("h"),
-                   int(data.get("inserted", 0)), data.get("onset_speeds"))
+        return cls(
+            int(data["step"]),
+            state,
+            works,
+            monitor,
+            float(data.get("time", 0.0)),
+            data.get("h"),
+            int(data.get("inserted", 0)),
+            data.get("onset_speeds"),
+        )
 
 
 def engine_of(structure: Structure, scheme, histories: Histories) -> Engine:
@@ -101,16 +116,20 @@ def start_of(structure: Structure, p, x0, v0, histories: Histories, damping: flo
     mask = histories.load_mask(len(p))
     data = engine.data(p_now)
     try:
-        qdd, lam, norm, monitor = (np.asarray(q, dtype=float).ravel() for q in engine.start(
-            x, v, p_now, pdot, pddot, damping, mask, *data))
+        qdd, lam, norm, monitor = (
+            np.asarray(q, dtype=float).ravel() for q in engine.start(x, v, p_now, pdot, pddot, damping, mask, *data)
+        )
     except RuntimeError:  # a zero pivot: the system of accelerations is singular
         qdd, norm = np.array([np.nan]), np.array([np.nan])
     if not (np.all(np.isfinite(qdd)) and float(norm[0]) <= 1e-6 * max(1.0, np.abs(qdd).max())):
         massless = massless_coordinates(structure, x, p_now)
-        raise MechanismError("/bodies", "the motion is undetermined: a coordinate that is free carries no mass"
-                             + (f" ({', '.join(massless[:6])})" if massless else " (or the start is inconsistent)")
-                             + ": give the body a mass (and an inertia, for its angle), or tie the coordinate by a "
-                             "joint or a link")
+        raise MechanismError(
+            "/bodies",
+            "the motion is undetermined: a coordinate that is free carries no mass"
+            + (f" ({', '.join(massless[:6])})" if massless else " (or the start is inconsistent)")
+            + ": give the body a mass (and an inertia, for its angle), or tie the coordinate by a "
+            "joint or a link",
+        )
     state = np.concatenate([x, v, qdd, qdd, lam])
     return Resume(0, state, np.zeros(4), monitor)
 
@@ -137,7 +156,13 @@ class StepRunner:
 
     def __init__(self, structure, p, h, scheme, damping, histories: Histories, until: float, every: int):
         self.structure, self.p, self.h, self.scheme, self.damping, self.histories = (
-            structure, p, h, scheme, damping, histories)
+            structure,
+            p,
+            h,
+            scheme,
+            damping,
+            histories,
+        )
         self.until, self.every, self.steps = until, every, int(round(until / h))
         self.engine = engine_of(structure, scheme, histories)
         self.n = self.engine.n_x
@@ -172,7 +197,8 @@ class StepRunner:
             P = self.onsets.apply(P, self.speeds(at))
         try:
             S, monitors, norms, iterations = self._call(self.engine.window(size))(
-                at.state, h, P, PD, PDD, self.damping, self.mask, steps, *self.data)
+                at.state, h, P, PD, PDD, self.damping, self.mask, steps, *self.data
+            )
         except RuntimeError:  # a factorization met a singular or non-finite system: no step of it counts
             return (P, PD, PDD), None, None, np.zeros(steps), 0
         unsettled = np.flatnonzero(~(norms.ravel()[:steps] <= WINDOW_ACCEPTANCE))  # NaN too
@@ -207,23 +233,27 @@ class StepRunner:
                 return step_onto_onset(self, history, at, entering[1], entering[2], self.h)
             if not norm <= WINDOW_ACCEPTANCE:
                 history.status = "not_converged"
-                history.message = (f"the step from t = {at.time:g} s to {at.time + self.h:g} s did not converge "
-                                   f"(residual {norm:.3g} after full Newton): try a smaller step")
+                history.message = (
+                    f"the step from t = {at.time:g} s to {at.time + self.h:g} s did not converge "
+                    f"(residual {norm:.3g} after full Newton): try a smaller step"
+                )
                 return at
             at = self.advance(history, at, state, monitor, self.h, p=step_inputs[0])
         return at
 
     def rescue(self, at: Resume, step_inputs, h: float):
         p1, pdot1, pddot1 = step_inputs
-        state, monitor, norm = (np.asarray(q, dtype=float).ravel() for q in self.engine.rescue(
-            at.state, h, p1, pdot1, pddot1, self.damping, self.mask, *self.data))
+        state, monitor, norm = (
+            np.asarray(q, dtype=float).ravel()
+            for q in self.engine.rescue(at.state, h, p1, pdot1, pddot1, self.damping, self.mask, *self.data)
+        )
         return state, monitor, float(norm[0])
 
     def accept(self, history, at: Resume, S, monitors, P, count: int, h: float, final: bool = False) -> Resume:
         """The window's first `count` steps (in steps h): works summed, every `every`-th kept."""
         if count == 0:
             return at
-        previous = np.column_stack([at.monitor, monitors[:, :count - 1]])
+        previous = np.column_stack([at.monitor, monitors[:, : count - 1]])
         works = at.works[:, None] + np.cumsum(0.5 * h * (monitors[2:6, :count] + previous[2:6]), axis=1)
         start = at
         for j in range(count):
@@ -231,21 +261,48 @@ class StepRunner:
             now = self.time_of(step, start, h * (j + 1))
             kept = (step - start.inserted) % self.every == 0 or (last and final) or now >= self.until * (1 - 1e-12)
             if kept or last:
-                at = Resume(step, S[:, j].copy(), works[:, j], monitors[:, j].copy(), now, start.h, start.inserted,
-                            start.onset_speeds)
+                at = Resume(
+                    step,
+                    S[:, j].copy(),
+                    works[:, j],
+                    monitors[:, j].copy(),
+                    now,
+                    start.h,
+                    start.inserted,
+                    start.onset_speeds,
+                )
             if kept:
                 self.keep(history, at, P[:, j])
         return at
 
-    def advance(self, history, at: Resume, state, monitor, h: float, final: bool = False, p=None, time=None,
-                kept: bool = False, speeds=None, inserted: int | None = None) -> Resume:
+    def advance(
+        self,
+        history,
+        at: Resume,
+        state,
+        monitor,
+        h: float,
+        final: bool = False,
+        p=None,
+        time=None,
+        kept: bool = False,
+        speeds=None,
+        inserted: int | None = None,
+    ) -> Resume:
         """One step h on from `at`; `time`, `speeds` and `inserted` given for a step onto a
         contact's onset (service.dynamics.onsets), which is `kept`."""
         works = at.works + 0.5 * h * (monitor[2:6] + at.monitor[2:6])
         step = at.step + 1
-        now = Resume(step, np.array(state), works, np.array(monitor), self.time_of(step, at, h) if time is None else time,
-                     at.h, at.inserted if inserted is None else inserted,
-                     at.onset_speeds if speeds is None else speeds)
+        now = Resume(
+            step,
+            np.array(state),
+            works,
+            np.array(monitor),
+            self.time_of(step, at, h) if time is None else time,
+            at.h,
+            at.inserted if inserted is None else inserted,
+            at.onset_speeds if speeds is None else speeds,
+        )
         if kept or (now.step - now.inserted) % self.every == 0 or final or self.done(now):
             self.keep(history, now, p)
         return now
@@ -257,9 +314,9 @@ class StepRunner:
 def _keep(history: History, t, state, n, p, monitor, works) -> None:
     history.times.append(t)
     history.x.append(state[:n].copy())
-    history.v.append(state[n:2 * n].copy())
-    history.acceleration.append(state[3 * n:4 * n].copy())
-    history.lam.append(state[4 * n:].copy())
+    history.v.append(state[n : 2 * n].copy())
+    history.acceleration.append(state[3 * n : 4 * n].copy())
+    history.lam.append(state[4 * n :].copy())
     history.p.append(np.array(p, dtype=float))
     history.motion_forces.append(np.array(monitor[6:]))
     history.kinetic.append(float(monitor[0]))

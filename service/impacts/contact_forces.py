@@ -12,9 +12,16 @@ from models.impacts.model import ImpactModel
 def kinematics(model: ImpactModel) -> list[tuple]:
     """(indentation, rate, v_T, Dn, Dt) per pair; a driven body's motion adds to the rates."""
     v = model.v
-    return [(pair.indentation, -(ca.dot(pair.normal_direction, v) + pair.normal_drift),
-             ca.dot(pair.tangent_direction, v) + pair.tangent_drift, pair.normal_direction, pair.tangent_direction)
-            for pair in model.pairs]
+    return [
+        (
+            pair.indentation,
+            -(ca.dot(pair.normal_direction, v) + pair.normal_drift),
+            ca.dot(pair.tangent_direction, v) + pair.tangent_drift,
+            pair.normal_direction,
+            pair.tangent_direction,
+        )
+        for pair in model.pairs
+    ]
 
 
 def regularized_forces(model: ImpactModel, geometry, contact, beyond_v0, beyond_v1, impact_speed) -> list[tuple]:

@@ -77,11 +77,22 @@ def moreau_step(model: ImpactModel) -> ca.Function:
     q, v, p = model.q, model.v, model.p
     geometry = kinematics(model)
     drift = ca.vertcat(*[ca.vertcat(pair.normal_drift, pair.tangent_drift) for pair in model.pairs])
-    at = ca.Function("at", [q, v, model.t, p], [model.force, model.extra, model.damping, model.load_power,
-                                                ca.vertcat(*[g[0] for g in geometry]), ca.horzcat(*[g[3] for g in geometry]),
-                                                ca.horzcat(*[g[4] for g in geometry]), drift])
+    at = ca.Function(
+        "at",
+        [q, v, model.t, p],
+        [
+            model.force,
+            model.extra,
+            model.damping,
+            model.load_power,
+            ca.vertcat(*[g[0] for g in geometry]),
+            ca.horzcat(*[g[3] for g in geometry]),
+            ca.horzcat(*[g[4] for g in geometry]),
+            drift,
+        ],
+    )
     S, h = ca.SX.sym("S", 1 + 2 * n + len(WORKS)), ca.SX.sym("h")
-    t, q0, v0, works = S[0], S[1:1 + n], S[1 + n:1 + 2 * n], S[1 + 2 * n:]
+    t, q0, v0, works = S[0], S[1 : 1 + n], S[1 + n : 1 + 2 * n], S[1 + 2 * n :]
     q_mid = q0 + h / 2 * v0
     force, extra, damping, power, pen, Dn, Dt, drift = at(q_mid, v0, t + h / 2, p)
     load_force = ca.gradient(power, v0)  # the inputs' power: linear in v, plus the supports' rate
@@ -92,8 +103,11 @@ def moreau_step(model: ImpactModel) -> ca.Function:
     lam_N, lam_T = _contact_impulses(model, pins, v_free, v0, Dn, Dt, drift, active)
     v1 = v_free + sum((pins.apply(Dn[:, k] * lam_N[k] + Dt[:, k] * lam_T[k]) for k in range(P)), ca.SX.zeros(n))
     q1 = q_mid + h / 2 * v1
-    reaction = pins.reaction(v0 + h * pins.inverse_mass * force + pins.inverse_mass * sum(
-        (Dn[:, k] * lam_N[k] + Dt[:, k] * lam_T[k] for k in range(P)), ca.SX.zeros(n)))
+    reaction = pins.reaction(
+        v0
+        + h * pins.inverse_mass * force
+        + pins.inverse_mass * sum((Dn[:, k] * lam_N[k] + Dt[:, k] * lam_T[k] for k in range(P)), ca.SX.zeros(n))
+    )
     W_N = sum(lam_N[k] * ca.dot(Dn[:, k], v0 + v1) / 2 for k in range(P))  # on the free bodies
     W_T = sum(lam_T[k] * ca.dot(Dt[:, k], v0 + v1) / 2 for k in range(P))
     W_extra = h * ca.dot(extra, v0 + v1) / 2
@@ -103,8 +117,13 @@ def moreau_step(model: ImpactModel) -> ca.Function:
     S1 = ca.vertcat(t + h, q1, v1, works + ca.vertcat(W_N, W_T, W_extra, W_damping, W_load))
     before = [ca.dot(Dn[:, k], v0) + drift[2 * k] for k in range(P)]
     after = [ca.dot(Dn[:, k], v1) + drift[2 * k] for k in range(P)]
-    return ca.Function("moreau_step", [S, p, h], [S1, ca.vertcat(*lam_N, *lam_T, *before, *after), ca.vertcat(*active),
-                                                  reaction], ["S", "p", "h"], ["S1", "impulses", "active", "pins"])
+    return ca.Function(
+        "moreau_step",
+        [S, p, h],
+        [S1, ca.vertcat(*lam_N, *lam_T, *before, *after), ca.vertcat(*active), reaction],
+        ["S", "p", "h"],
+        ["S1", "impulses", "active", "pins"],
+    )
 
 
 def _contact_impulses(model, pins: _Constrained, v_free, v0, Dn, Dt, drift, active):
@@ -114,11 +133,15 @@ def _contact_impulses(model, pins: _Constrained, v_free, v0, Dn, Dt, drift, acti
     for _ in range(1 if P == 1 else GAUSS_SEIDEL_SWEEPS):  # one pair: exact (the pins act through N)
         for k, pair in enumerate(model.pairs):
             d_n, d_t = Dn[:, k], Dt[:, k]
-            base = v_free + sum((pins.apply(Dn[:, j] * lam_N[j] + Dt[:, j] * lam_T[j]) for j in range(P) if j != k),
-                                ca.SX.zeros(v_free.shape))
+            base = v_free + sum(
+                (pins.apply(Dn[:, j] * lam_N[j] + Dt[:, j] * lam_T[j]) for j in range(P) if j != k),
+                ca.SX.zeros(v_free.shape),
+            )
             n_n, n_t = pins.apply(d_n), pins.apply(d_t)
-            W = ca.vertcat(ca.horzcat(ca.dot(d_n, n_n), ca.dot(d_n, n_t)), ca.horzcat(ca.dot(d_t, n_n), ca.dot(d_t, n_t)))
-            U_free = ca.vertcat(ca.dot(d_n, base), ca.dot(d_t, base)) + drift[2 * k:2 * k + 2]
+            W = ca.vertcat(
+                ca.horzcat(ca.dot(d_n, n_n), ca.dot(d_n, n_t)), ca.horzcat(ca.dot(d_t, n_n), ca.dot(d_t, n_t))
+            )
+            U_free = ca.vertcat(ca.dot(d_n, base), ca.dot(d_t, base)) + drift[2 * k : 2 * k + 2]
             target = -pair.restitution * (ca.dot(d_n, v0) + drift[2 * k])
             f_a, f_d = (pair.adherence, pair.sliding) if pair.friction != "none" else (0, 0)
             N_k, T_k = local_solve(W, U_free, target, f_a, f_d)

@@ -93,49 +93,82 @@ def histories(model: ImpactModel, spec: SimulateSpec, trace: Trace, p: np.ndarra
     return Histories(states, per, coordinates, velocities, pairs, joints, events, impacts, event_rows)
 
 
-def report(model: ImpactModel, spec: SimulateSpec, trace: Trace, p: np.ndarray, max_kept: int | None = None,
-           full: Histories | None = None) -> dict:
+def report(
+    model: ImpactModel,
+    spec: SimulateSpec,
+    trace: Trace,
+    p: np.ndarray,
+    max_kept: int | None = None,
+    full: Histories | None = None,
+) -> dict:
     """The report of a run. Contact events, impacts and their peak forces come from every
     state of the trace; the histories (and the energies, evaluated on them alone) from the
     kept rows: at most `max_points` spread over the run, with the rows around each event."""
     full = full if full is not None else histories(model, spec, trace, p)
-    states, per, book, n = full.states, full.per, model.book, model.bodies.size
+    states, per, book = full.states, full.per, model.book
     limit = spec.max_points if max_kept is None else min(spec.max_points, max_kept)
     keep, stride = reported_rows(len(states), spec.every, limit, full.event_rows)
     if stride > spec.every:
         trace.message = (trace.message + "; " if trace.message else "") + (
             f"kept one state in {stride} of {len(states) - 1} steps, and those around each contact event "
-            f"({len(keep)} states; max_points {limit})")
+            f"({len(keep)} states; max_points {limit})"
+        )
     kept = states[keep]
-    q, v = kept[:, 1:1 + n], kept[:, 1 + n:1 + 2 * n]
-    works = kept[:, 1 + 2 * n:1 + 2 * n + len(WORKS)]
+    energies, balance_error = _energies(model, kept, p)
+    return {
+        "analysis": "simulate",
+        "name": book.document.name,
+        "scheme": {"name": spec.scheme},
+        "status": trace.status,
+        "message": trace.message or f"reached t = {states[-1, 0]:g} s",
+        "time_reached": float(states[-1, 0]),
+        "steps": trace.steps if trace.steps is not None else len(states) - 1,
+        "trial_steps": trace.calls,
+        "seconds": trace.seconds,
+        "step": spec.step,
+        "tolerance": spec.tolerance if spec.scheme != "moreau" else None,
+        "times": kept[:, 0].tolist(),
+        "coordinates": {k: c[keep].tolist() for k, c in full.coordinates.items()},
+        "velocities": {k: c[keep].tolist() for k, c in full.velocities.items()},
+        "contacts": {
+            name: {k: np.asarray(x)[keep].tolist() for k, x in values.items()} for name, values in full.pairs.items()
+        },
+        "joints": {name: {k: x[keep].tolist() for k, x in values.items()} for name, values in full.joints.items()},
+        "events": full.events,
+        "impacts": full.impacts,
+        "energies": {k: (np.asarray(x) * per["energy"]).tolist() for k, x in energies.items()},
+        "energy_balance_error": balance_error,
+        "flexure_stiffness": "turning" if model.turning else "constant",
+        "clearance": _clearance(model) * per["length"],
+        "units": {
+            "time": "s",
+            "length": book.document.units.length,
+            "angle": book.document.units.angle,
+            "force": book.document.units.force,
+            "energy": f"{book.document.units.force}*{book.document.units.length}",
+            "impulse": f"{book.document.units.force}*s",
+        },
+    }
+
+
+def _energies(model: ImpactModel, kept: np.ndarray, p: np.ndarray) -> tuple[dict, float]:
+    """At the kept states (SI): the energies, the works and their balance (its change from the
+    first state), and the balance's largest change relative to the largest energy or work."""
+    n = model.bodies.size
+    q, v = kept[:, 1 : 1 + n], kept[:, 1 + n : 1 + 2 * n]
+    works = kept[:, 1 + 2 * n : 1 + 2 * n + len(WORKS)]
     T, elastic, gravity = (x.ravel() for x in evaluated(model, _energy, [q.T, v.T, kept[:, 0]], p))
     balance = T + elastic + gravity - works.sum(axis=1)
     balance = balance - balance[0]
     size = max(float(np.abs(T).max()), float(np.ptp(elastic + gravity)), float(np.abs(works).max()), 1e-300)
-    energies = {"kinetic": T, "elastic": elastic, "gravity": gravity, **{name: works[:, k] for k, name in
-                                                                          enumerate(WORKS)}, "balance": balance}
-    return {
-        "analysis": "simulate", "name": book.document.name, "scheme": {"name": spec.scheme},
-        "status": trace.status, "message": trace.message or f"reached t = {states[-1, 0]:g} s",
-        "time_reached": float(states[-1, 0]), "steps": trace.steps if trace.steps is not None else len(states) - 1,
-        "trial_steps": trace.calls,
-        "seconds": trace.seconds, "step": spec.step, "tolerance": spec.tolerance if spec.scheme != "moreau" else None,
-        "times": kept[:, 0].tolist(),
-        "coordinates": {k: c[keep].tolist() for k, c in full.coordinates.items()},
-        "velocities": {k: c[keep].tolist() for k, c in full.velocities.items()},
-        "contacts": {name: {k: np.asarray(x)[keep].tolist() for k, x in values.items()}
-                     for name, values in full.pairs.items()},
-        "joints": {name: {k: x[keep].tolist() for k, x in values.items()} for name, values in full.joints.items()},
-        "events": full.events, "impacts": full.impacts,
-        "energies": {k: (np.asarray(x) * per["energy"]).tolist() for k, x in energies.items()},
-        "energy_balance_error": float(np.abs(balance).max() / size),
-        "flexure_stiffness": "turning" if model.turning else "constant",
-        "clearance": _clearance(model) * per["length"],
-        "units": {"time": "s", "length": book.document.units.length, "angle": book.document.units.angle,
-                  "force": book.document.units.force, "energy": f"{book.document.units.force}*{book.document.units.length}",
-                  "impulse": f"{book.document.units.force}*s"},
+    energies = {
+        "kinetic": T,
+        "elastic": elastic,
+        "gravity": gravity,
+        **{name: works[:, k] for k, name in enumerate(WORKS)},
+        "balance": balance,
     }
+    return energies, float(np.abs(balance).max() / size)
 
 
 def _clearance(model: ImpactModel) -> float:
@@ -152,14 +185,19 @@ def _event_pairs(model: ImpactModel, states: np.ndarray, p: np.ndarray, per: dic
     n, P = model.bodies.size, len(model.pairs)
     L = EventLayout(n, P)
     cols = [states[:, L.at(k)].T for k in ("contact", "beyond_v0", "beyond_v1", "speed")]
-    _, _, F_N, F_T, rate, v_T, pins = evaluated(model, rhs_function, [states[:, 1:1 + n].T, states[:, 1 + n:1 + 2 * n].T,
-                                                                      states[:, 0], *cols], p)
-    pen = evaluated(model, depth_function, [states[:, 1:1 + n].T, states[:, 0]], p)[0]
+    _, _, F_N, F_T, rate, v_T, pins = evaluated(
+        model, rhs_function, [states[:, 1 : 1 + n].T, states[:, 1 + n : 1 + 2 * n].T, states[:, 0], *cols], p
+    )
+    pen = evaluated(model, depth_function, [states[:, 1 : 1 + n].T, states[:, 0]], p)[0]
     pairs, events, impacts = {}, [], []
     for k, pair in enumerate(model.pairs):
-        pairs[pair.name] = {"normal_force": F_N[k] * per["force"], "friction_force": F_T[k] * per["force"],
-                            "indentation": pen[k] * per["length"], "slip_speed": v_T[k] * per["length"],
-                            "in_contact": states[:, L.at("contact")][:, k]}
+        pairs[pair.name] = {
+            "normal_force": F_N[k] * per["force"],
+            "friction_force": F_T[k] * per["force"],
+            "indentation": pen[k] * per["length"],
+            "slip_speed": v_T[k] * per["length"],
+            "in_contact": states[:, L.at("contact")][:, k],
+        }
     joints = _joints(model, pins.reshape(-1, len(states)).T, per)
     flags = np.column_stack([states[:, L.at(key)] for key in ("contact", "beyond_v0", "beyond_v1")])
     onsets: dict[str, tuple[float, float, int]] = {}  # per pair, its contact's start, impact speed and row
@@ -171,16 +209,25 @@ def _event_pairs(model: ImpactModel, states: np.ndarray, p: np.ndarray, per: dic
             name, t = model.pairs[k].name, float(states[row, 0])
             if kind == 0 and flags[row, index] > 0.5:
                 onsets[name] = (t, float(rate[k, row]), row)
-                events.append({"time": t, "pair": name, "kind": "contact", "impact_speed": onsets[name][1] * per["length"]})
+                events.append(
+                    {"time": t, "pair": name, "kind": "contact", "impact_speed": onsets[name][1] * per["length"]}
+                )
             elif kind == 0:
                 exit_speed = float(-rate[k, row])
                 events.append({"time": t, "pair": name, "kind": "separation", "exit_speed": exit_speed * per["length"]})
                 if name in onsets:
                     start, speed, first = onsets.pop(name)
-                    impacts.append({"pair": name, "time": start, "impact_speed": speed * per["length"],
-                                    "exit_speed": exit_speed * per["length"], "duration": t - start,
-                                    "rebound_ratio": exit_speed / speed,
-                                    "peak_force": float(F_N[k, first:row + 1].max()) * per["force"]})
+                    impacts.append(
+                        {
+                            "pair": name,
+                            "time": start,
+                            "impact_speed": speed * per["length"],
+                            "exit_speed": exit_speed * per["length"],
+                            "duration": t - start,
+                            "rebound_ratio": exit_speed / speed,
+                            "peak_force": float(F_N[k, first : row + 1].max()) * per["force"],
+                        }
+                    )
             else:
                 level = "v0" if kind == 1 else "v1"
                 rising = flags[row, index] > 0.5
@@ -192,8 +239,10 @@ def _joints(model: ImpactModel, forces: np.ndarray, per: dict) -> dict:
     """Per joint, what it applies to its `to` body (rows: states; `forces` SI): a pin's force
     (Fx, Fy), a slider's force along the axis normal and couple (N, M)."""
     scale = {"force": per["force"], "moment": per["force"] * per["length"]}
-    return {name: {label: forces[:, 2 * k + i] * scale[kind] for i, (label, kind) in enumerate(labels)}
-            for k, (name, labels) in enumerate(zip(model.joint_names, model.joint_labels))}
+    return {
+        name: {label: forces[:, 2 * k + i] * scale[kind] for i, (label, kind) in enumerate(labels)}
+        for k, (name, labels) in enumerate(zip(model.joint_names, model.joint_labels))
+    }
 
 
 def _moreau_pairs(model: ImpactModel, spec: SimulateSpec, extras: np.ndarray, states: np.ndarray, per: dict):
@@ -207,30 +256,52 @@ def _moreau_pairs(model: ImpactModel, spec: SimulateSpec, extras: np.ndarray, st
     for k, pair in enumerate(model.pairs):
         lam_N, lam_T = extras[:, k], extras[:, P + k]
         before, after, active = extras[:, 2 * P + k], extras[:, 3 * P + k], extras[:, 4 * P + k]
-        pairs[pair.name] = {"normal_impulse": lam_N * impulse, "friction_impulse": lam_T * impulse,
-                            "normal_force": lam_N / h * per["force"], "friction_force": lam_T / h * per["force"],
-                            "active": active}
+        pairs[pair.name] = {
+            "normal_impulse": lam_N * impulse,
+            "friction_impulse": lam_T * impulse,
+            "normal_force": lam_N / h * per["force"],
+            "friction_force": lam_T / h * per["force"],
+            "active": active,
+        }
         pushing = np.r_[0, (lam_N > 0).astype(np.int8), 0]
         firsts, lasts = np.nonzero(np.diff(pushing) == 1)[0], np.nonzero(np.diff(pushing) == -1)[0] - 1
         episode = np.zeros(len(lam_N), dtype=int)  # each step's episode (0: none)
         for number, (first, last) in enumerate(zip(firsts, lasts), start=1):
-            episode[first:last + 1] = number
-            events.append({"time": float(states[first - 1, 0]), "pair": pair.name, "kind": "contact",
-                           "impact_speed": float(-before[first]) * per["length"]})
-            events.append({"time": float(states[last, 0]), "pair": pair.name, "kind": "separation",
-                           "exit_speed": float(after[last]) * per["length"],
-                           "peak_force": float(lam_N[first:last + 1].max()) / h * per["force"]})
+            episode[first : last + 1] = number
+            events.append(
+                {
+                    "time": float(states[first - 1, 0]),
+                    "pair": pair.name,
+                    "kind": "contact",
+                    "impact_speed": float(-before[first]) * per["length"],
+                }
+            )
+            events.append(
+                {
+                    "time": float(states[last, 0]),
+                    "pair": pair.name,
+                    "kind": "separation",
+                    "exit_speed": float(after[last]) * per["length"],
+                    "peak_force": float(lam_N[first : last + 1].max()) / h * per["force"],
+                }
+            )
             rows += [first - 1, first, last, min(last + 1, len(lam_N) - 1)]
         hits = np.nonzero((lam_N > 0) & (before < 0))[0]
         for row in hits:  # an impact: an impulse on an approaching contact
             if row and lam_N[row - 1] > 0 and before[row - 1] < 0:
                 continue  # the same impact, spread over consecutive steps
             first, last = firsts[episode[row] - 1], lasts[episode[row] - 1]
-            impacts.append({"pair": pair.name, "time": float(states[row - 1, 0]) if row else 0.0,
-                            "impact_speed": float(-before[row]) * per["length"],
-                            "exit_speed": float(after[row]) * per["length"],
-                            "impulse": float(lam_N[row]) * impulse, "rebound_ratio": float(-after[row] / before[row]),
-                            "duration": float(states[last, 0] - states[first - 1, 0]),
-                            "peak_force": float(lam_N[first:last + 1].max()) / h * per["force"]})
+            impacts.append(
+                {
+                    "pair": pair.name,
+                    "time": float(states[row - 1, 0]) if row else 0.0,
+                    "impact_speed": float(-before[row]) * per["length"],
+                    "exit_speed": float(after[row]) * per["length"],
+                    "impulse": float(lam_N[row]) * impulse,
+                    "rebound_ratio": float(-after[row] / before[row]),
+                    "duration": float(states[last, 0] - states[first - 1, 0]),
+                    "peak_force": float(lam_N[first : last + 1].max()) / h * per["force"],
+                }
+            )
     events.sort(key=lambda event: event["time"])
-    return pairs, events, impacts, _joints(model, extras[:, 5 * P:] / h, per), np.asarray(rows, dtype=int)
+    return pairs, events, impacts, _joints(model, extras[:, 5 * P :] / h, per), np.asarray(rows, dtype=int)

@@ -33,7 +33,9 @@ def timed_fields(document: MechanismDocument, spec: SimulateSpec) -> list[tuple[
     for path, history in spec.histories.items():
         pointer = path if path.startswith("/") else f"/{path}"
         where = f"/simulate/histories/{pointer.lstrip('/').replace('~', '~0').replace('/', '~1')}"
-        kind = "acceleration" if pointer.startswith("/gravity/") else "moment" if pointer.endswith("/moment") else "force"
+        kind = (
+            "acceleration" if pointer.startswith("/gravity/") else "moment" if pointer.endswith("/moment") else "force"
+        )
         factor = quantity_to_si(1.0, kind, document_unit(document.units, kind), where)
 
         def value(t, history=history, where=where, factor=factor):
@@ -50,8 +52,13 @@ def check_laws(model: ImpactModel, spec: SimulateSpec) -> None:
         base = f"/contacts/pairs/{pair.name}"
         check_law(NORMAL_LAWS, "normal", pair.law, spec.scheme, f"{base}/normal/law")
         written = model.book.document.contacts.pairs[pair.name].friction
-        check_law(FRICTION_LAWS, "friction", pair.friction, spec.scheme,
-                  f"{base}/friction/law" if isinstance(written, FrictionFields) else f"{base}/friction")
+        check_law(
+            FRICTION_LAWS,
+            "friction",
+            pair.friction,
+            spec.scheme,
+            f"{base}/friction/law" if isinstance(written, FrictionFields) else f"{base}/friction",
+        )
 
 
 def start_state(model: ImpactModel, spec: SimulateSpec, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -72,9 +79,12 @@ def start_state(model: ImpactModel, spec: SimulateSpec, p: np.ndarray) -> tuple[
     for pair, pen in zip(model.pairs, pens):
         if pen > 0:
             where = next((f"/simulate/initial/{name}" for name in spec.initial), "/simulate/initial")
-            raise MechanismError(where, f"the start state penetrates: pair '{pair.name}' overlaps by "
-                                 f"{pen / book.si(1.0, 'length', where):.6g} {book.document.units.length}; "
-                                 "start the bodies apart")
+            raise MechanismError(
+                where,
+                f"the start state penetrates: pair '{pair.name}' overlaps by "
+                f"{pen / book.si(1.0, 'length', where):.6g} {book.document.units.length}; "
+                "start the bodies apart",
+            )
     return q0, v0
 
 
@@ -102,9 +112,16 @@ def model_of(document: MechanismDocument, spec: SimulateSpec) -> ImpactModel:
     return model
 
 
-def run_impacts(document: MechanismDocument, spec: SimulateSpec, stop=None, max_steps: int = 2_000_000,
-                parameters: dict[str, float] | None = None, progress=None,
-                max_kept: int | None = None, max_bytes: int | None = None) -> tuple[Trace, dict]:
+def run_impacts(
+    document: MechanismDocument,
+    spec: SimulateSpec,
+    stop=None,
+    max_steps: int = 2_000_000,
+    parameters: dict[str, float] | None = None,
+    progress=None,
+    max_kept: int | None = None,
+    max_bytes: int | None = None,
+) -> tuple[Trace, dict]:
     """(the raw trace, the report). `parameters` replaces numbers (SI) by their pointers;
     `max_kept` bounds the states a report keeps below `max_points` (one response); `max_bytes`
     the memory the run's states may take (check_memory)."""
@@ -115,17 +132,24 @@ def run_impacts(document: MechanismDocument, spec: SimulateSpec, stop=None, max_
     return trace, answer
 
 
-def run_with_histories(document: MechanismDocument, spec: SimulateSpec, stop=None,
-                       max_steps: int = 2_000_000) -> tuple[Histories, dict]:
+def run_with_histories(
+    document: MechanismDocument, spec: SimulateSpec, stop=None, max_steps: int = 2_000_000
+) -> tuple[Histories, dict]:
     """(the histories at every state the run holds, the report)."""
     model, p, trace = integrate(document, spec, stop, max_steps)
     full = histories(model, spec, trace, p)
     return full, report(model, spec, trace, p, full=full)
 
 
-def integrate(document: MechanismDocument, spec: SimulateSpec, stop=None, max_steps: int = 2_000_000,
-              parameters: dict[str, float] | None = None, progress=None,
-              max_bytes: int | None = None) -> tuple[ImpactModel, np.ndarray, Trace]:
+def integrate(
+    document: MechanismDocument,
+    spec: SimulateSpec,
+    stop=None,
+    max_steps: int = 2_000_000,
+    parameters: dict[str, float] | None = None,
+    progress=None,
+    max_bytes: int | None = None,
+) -> tuple[ImpactModel, np.ndarray, Trace]:
     """(the model, its parameter vector, the trace of the run)."""
     check_cost(spec, max_steps)
     model = model_of(document, spec)
@@ -146,8 +170,20 @@ def integrate(document: MechanismDocument, spec: SimulateSpec, stop=None, max_st
         trace = run_moreau(model, p, q0, v0, spec.until, spec.step, stop, progress)
     else:
         max_step = spec.max_step if spec.max_step is not None else spec.until / MAX_STEP_PARTS
-        trace = run_events(model, p, q0, v0, spec.until, spec.tolerance, spec.step, max_step,
-                           max_steps * TRIALS_PER_STEP, stop, progress, directions)
+        trace = run_events(
+            model,
+            p,
+            q0,
+            v0,
+            spec.until,
+            spec.tolerance,
+            spec.step,
+            max_step,
+            max_steps * TRIALS_PER_STEP,
+            stop,
+            progress,
+            directions,
+        )
     return model, p, trace
 
 
@@ -166,10 +202,14 @@ def held_bytes(model: ImpactModel, spec: SimulateSpec) -> int:
 def check_memory(model: ImpactModel, spec: SimulateSpec, max_bytes: int) -> None:
     needed = held_bytes(model, spec)
     if needed > max_bytes:
-        raise MechanismError("/simulate/until", (
-            f"{spec.until:g} s of {spec.scheme} steps of {spec.step:g} s would hold about {needed / 2**20:.0f} MiB "
-            f"of states, over the {max_bytes / 2**20:.0f} MiB one run may take: simulate a shorter time or take a "
-            "longer step"))
+        raise MechanismError(
+            "/simulate/until",
+            (
+                f"{spec.until:g} s of {spec.scheme} steps of {spec.step:g} s would hold about {needed / 2**20:.0f} MiB "
+                f"of states, over the {max_bytes / 2**20:.0f} MiB one run may take: simulate a shorter time or take a "
+                "longer step"
+            ),
+        )
 
 
 def check_cost(spec: SimulateSpec, max_steps: int) -> None:
@@ -178,16 +218,23 @@ def check_cost(spec: SimulateSpec, max_steps: int) -> None:
     if spec.scheme == "moreau":
         steps = round(spec.until / spec.step)
         if steps < 1:
-            raise MechanismError("/simulate/step", f"the step {spec.step:g} s is longer than the run ({spec.until:g} s)")
+            raise MechanismError(
+                "/simulate/step", f"the step {spec.step:g} s is longer than the run ({spec.until:g} s)"
+            )
         if steps > max_steps:
-            raise MechanismError("/simulate/step", f"the run needs {steps} steps of {spec.step:g} s, over the limit "
-                                 f"of {max_steps}: take a longer step or a shorter run")
+            raise MechanismError(
+                "/simulate/step",
+                f"the run needs {steps} steps of {spec.step:g} s, over the limit "
+                f"of {max_steps}: take a longer step or a shorter run",
+            )
         return
     costed = spec.until / spec.step
     if costed > max_steps:
-        raise MechanismError("/simulate/until", (
-            f"{spec.until:g} s from a first step of {spec.step:g} s is costed at {costed:.3g} steps, over the "
-            f"limit of {max_steps}: event-driven steps adapt (scenario 6.3 takes about 1700 a second), but a run "
-            "is costed before it starts at its first step; simulate a shorter time or take a longer first step"))
-
-
+        raise MechanismError(
+            "/simulate/until",
+            (
+                f"{spec.until:g} s from a first step of {spec.step:g} s is costed at {costed:.3g} steps, over the "
+                f"limit of {max_steps}: event-driven steps adapt (scenario 6.3 takes about 1700 a second), but a run "
+                "is costed before it starts at its first step; simulate a shorter time or take a longer first step"
+            ),
+        )

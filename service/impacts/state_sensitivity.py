@@ -35,8 +35,9 @@ def sensitivity_step(model: ImpactModel, fields: int) -> ca.Function:
     settings = ca.SX.sym("settings", step.size1_in(2))
     S1 = step(S, p, settings)
     dS1 = ca.jtimes(S1, ca.vertcat(S, p), ca.vertcat(dS, dp))
-    return ca.Function("event_sensitivity_step", [S, dS, p, dp, settings], [S1, dS1],
-                       ["S", "dS", "p", "dp", "settings"], ["S1", "dS1"])
+    return ca.Function(
+        "event_sensitivity_step", [S, dS, p, dp, settings], [S1, dS1], ["S", "dS", "p", "dp", "settings"], ["S1", "dS1"]
+    )
 
 
 def parameter_directions(book: ParameterBook, values: np.ndarray, pointers: list[str]) -> np.ndarray:
@@ -53,8 +54,11 @@ def check_fields(book: ParameterBook, pointers: list[str], driven=()) -> None:
     for k, pointer in enumerate(pointers):
         if pointer not in known:
             close = difflib.get_close_matches(pointer, known, n=3)
-            hint = f"did you mean {' or '.join(close)}?" if close else (
-                f"its numbers are {', '.join(known[:12])}{' and more' if len(known) > 12 else ''}")
+            hint = (
+                f"did you mean {' or '.join(close)}?"
+                if close
+                else (f"its numbers are {', '.join(known[:12])}{' and more' if len(known) > 12 else ''}")
+            )
             raise MechanismError(f"/simulate/sensitivities/{k}", f"'{pointer}' is not a number of this run; {hint}")
 
 
@@ -64,13 +68,15 @@ def end_state_derivatives(model: ImpactModel, trace, pointers: list[str], events
     differentiable (a grazing contact, whose onset time has no derivative)."""
     book, n = model.book, model.bodies.size
     to_si = book.si(1.0, "length", "/units")
-    warnings = [f"the contact of pair '{event['pair']}' at t = {event['time']:.9g} s begins grazing (impact speed "
-                f"{event['impact_speed'] * to_si:.3g} m/s): its onset time has no derivative, and the state after "
-                "it may have none (a change of the number can make it touch or miss): check by differences"
-                for event in events
-                if event["kind"] == "contact" and event["impact_speed"] * to_si < GRAZING_SPEED]
+    warnings = [
+        f"the contact of pair '{event['pair']}' at t = {event['time']:.9g} s begins grazing (impact speed "
+        f"{event['impact_speed'] * to_si:.3g} m/s): its onset time has no derivative, and the state after "
+        "it may have none (a change of the number can make it touch or miss): check by differences"
+        for event in events
+        if event["kind"] == "contact" and event["impact_speed"] * to_si < GRAZING_SPEED
+    ]
     L = EventLayout(n, len(model.pairs))
-    state = trace.derivatives[L.y][:2 * n]  # SI per SI
+    state = trace.derivatives[L.y][: 2 * n]  # SI per SI
     per = {kind: book.si(1.0, kind, "/units") for kind in ("length", "angle")}
     names = model.coordinate_names()
     scale = np.array([per["angle"] if name.endswith(".theta") else per["length"] for name in names])
@@ -80,12 +86,20 @@ def end_state_derivatives(model: ImpactModel, trace, pointers: list[str], events
         unit, si = book.units.get(pointer, ("SI", 1.0))
         column = state[:, k] * si
         fields[pointer] = {
-            "unit": unit, "value": book.value(pointer) / si,
+            "unit": unit,
+            "value": book.value(pointer) / si,
             "coordinates": {name: float(column[j] / scale[j]) for j, name in enumerate(names)},
-            "velocities": {name: float(column[n + j] / scale[j]) for j, name in enumerate(names)}}
-    return {"time": float(trace.states[0][-1, 0]), "fields": fields, "warnings": warnings,
-            "units": {"coordinates": f"{units.length} (x, y) or {units.angle} (theta) per the field's unit",
-                      "velocities": "those per second"}}
+            "velocities": {name: float(column[n + j] / scale[j]) for j, name in enumerate(names)},
+        }
+    return {
+        "time": float(trace.states[0][-1, 0]),
+        "fields": fields,
+        "warnings": warnings,
+        "units": {
+            "coordinates": f"{units.length} (x, y) or {units.angle} (theta) per the field's unit",
+            "velocities": "those per second",
+        },
+    }
 
 
 _CHUNKS: dict[tuple, ca.Function] = {}
@@ -101,14 +115,16 @@ class SensitivityChunk:
         if key not in _CHUNKS:
             if len(_CHUNKS) >= MAX_CACHED:
                 _CHUNKS.pop(next(iter(_CHUNKS)))
-            _CHUNKS[key] = sensitivity_step(model, fields).mapaccum("event_sensitivity_chunk", count,
-                                                                    ["S", "dS"], ["S1", "dS1"])
+            _CHUNKS[key] = sensitivity_step(model, fields).mapaccum(
+                "event_sensitivity_chunk", count, ["S", "dS"], ["S1", "dS1"]
+            )
         self.fn, self.fields = _CHUNKS[key], fields
-        self.fixed = [ca.DM(np.tile(np.reshape(column, (len(column), -1)), (1, count)))
-                      for column in (p, directions, settings)]
+        self.fixed = [
+            ca.DM(np.tile(np.reshape(column, (len(column), -1)), (1, count))) for column in (p, directions, settings)
+        ]
         self.derivatives = np.zeros((EventLayout(model.bodies.size, len(model.pairs)).size, fields))
 
     def run(self, S: np.ndarray) -> list[np.ndarray]:
         states, derivatives = self.fn.call([ca.DM(S), ca.DM(self.derivatives), *self.fixed])
-        self.derivatives = np.asarray(derivatives)[:, -self.fields:]
+        self.derivatives = np.asarray(derivatives)[:, -self.fields :]
         return [np.asarray(states).T]

@@ -45,9 +45,12 @@ def _code_version(family_sources: tuple[str, ...]) -> str:
 
     here = Path(__file__).parent
     folders = [Path(module.__file__).parent for module in (built, laws, families)]
-    sources = [path for folder in folders for path in sorted(folder.glob("*.py"))] + [
-        here / f"{name}.py" for name in STEP_SOURCES] + [Path(statics_context.__file__), Path(statics_loads.__file__)] + [
-        Path(source) for source in family_sources]  # a family registered from elsewhere too
+    sources = (
+        [path for folder in folders for path in sorted(folder.glob("*.py"))]
+        + [here / f"{name}.py" for name in STEP_SOURCES]
+        + [Path(statics_context.__file__), Path(statics_loads.__file__)]
+        + [Path(source) for source in family_sources]
+    )  # a family registered from elsewhere too
     digest = hashlib.sha256()
     for source in sources:
         digest.update(source.read_bytes())
@@ -137,9 +140,20 @@ def event_settings(model: ImpactModel, until: float, tolerance: float, max_step:
     return np.concatenate([[until, tolerance, max_step], atol])
 
 
-def run_events(model: ImpactModel, p: np.ndarray, q0, v0, until: float, tolerance: float, first_step: float,
-               max_step: float, max_calls: int, stop=None, progress=None,
-               directions: np.ndarray | None = None) -> Trace:
+def run_events(
+    model: ImpactModel,
+    p: np.ndarray,
+    q0,
+    v0,
+    until: float,
+    tolerance: float,
+    first_step: float,
+    max_step: float,
+    max_calls: int,
+    stop=None,
+    progress=None,
+    directions: np.ndarray | None = None,
+) -> Trace:
     """`directions`: d p / d number, one column per number the end state is differentiated by."""
     n, P = model.bodies.size, len(model.pairs)
     L = EventLayout(n, P)
@@ -175,7 +189,8 @@ def run_events(model: ImpactModel, p: np.ndarray, q0, v0, until: float, toleranc
         trace.derivatives = steps.derivatives
     if rows.stride > 1:
         trace.message = (trace.message + "; " if trace.message else "") + (
-            f"held {len(rows)} of {rows.seen - 1} steps (every contact event among them)")
+            f"held {len(rows)} of {rows.seen - 1} steps (every contact event among them)"
+        )
     return trace
 
 
@@ -193,8 +208,7 @@ def _ended(trace: Trace, S: np.ndarray, stop, progress, reached: float) -> bool:
     return False
 
 
-def run_moreau(model: ImpactModel, p: np.ndarray, q0, v0, until: float, h: float, stop=None,
-               progress=None) -> Trace:
+def run_moreau(model: ImpactModel, p: np.ndarray, q0, v0, until: float, h: float, stop=None, progress=None) -> Trace:
     S = np.concatenate([[0.0], q0, v0, np.zeros(len(WORKS))])
     count = round(until / h)
     steps = chunk(model, "moreau", [p, np.array([h])])

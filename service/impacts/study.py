@@ -37,8 +37,9 @@ def study_fields(document: dict, fields: list[dict]) -> list[tuple[str, float]]:
         pointer, step = item.get("path"), item.get("step")
         where = f"/study/fields/{k}"
         if not isinstance(pointer, str) or not pointer.startswith("/"):
-            raise MechanismError(f"{where}/path", "give the field as a JSON pointer into the document, e.g. "
-                                 "/contacts/sites/pin/radius")
+            raise MechanismError(
+                f"{where}/path", "give the field as a JSON pointer into the document, e.g. /contacts/sites/pin/radius"
+            )
         if not isinstance(step, (int, float)) or isinstance(step, bool) or step == 0:
             raise MechanismError(f"{where}/step", "give a non-zero number: the field moves by +step and -step")
         value = _at(document, pointer, f"{where}/path")
@@ -69,8 +70,9 @@ def with_overrides(document: dict, overrides: dict | None) -> dict:
     for pointer, value in (overrides or {}).items():
         old = _at(doc, pointer, f"/overrides/{pointer.lstrip('/').replace('/', '~1')}")
         if not isinstance(old, (int, float)) or not isinstance(value, (int, float)):
-            raise MechanismError(f"/overrides/{pointer.lstrip('/').replace('/', '~1')}", "an impact study overrides "
-                                 "numbers with numbers")
+            raise MechanismError(
+                f"/overrides/{pointer.lstrip('/').replace('/', '~1')}", "an impact study overrides numbers with numbers"
+            )
         doc = variant(doc, pointer, value - old)
     return doc
 
@@ -117,14 +119,30 @@ def nominal_run(document: dict, simulate: dict | None, stop=None, max_steps: int
     return full, report
 
 
-def study_point(document: dict, simulate: dict | None, pointer: str | None, change: float, tolerance: float,
-                stop=None, max_steps: int = 2_000_000) -> dict:
+def study_point(
+    document: dict,
+    simulate: dict | None,
+    pointer: str | None,
+    change: float,
+    tolerance: float,
+    stop=None,
+    max_steps: int = 2_000_000,
+) -> dict:
     """One run of the study (pointer None: the nominal one) with its contacts and, for a
     moved field, its influence against the nominal run."""
-    full, report = (nominal_run(document, simulate, stop, max_steps) if pointer is None
-                    else _run(variant(document, pointer, change), simulate, stop, max_steps))
-    point = {"status": report["status"], "message": report["message"], "time_reached": report["time_reached"],
-             "seconds": report["seconds"], "impacts": len(report["impacts"]), "contacts": contact_summary(full)}
+    full, report = (
+        nominal_run(document, simulate, stop, max_steps)
+        if pointer is None
+        else _run(variant(document, pointer, change), simulate, stop, max_steps)
+    )
+    point = {
+        "status": report["status"],
+        "message": report["message"],
+        "time_reached": report["time_reached"],
+        "seconds": report["seconds"],
+        "impacts": len(report["impacts"]),
+        "contacts": contact_summary(full),
+    }
     if pointer is not None and report["status"] != "stopped":
         nominal, nominal_report = nominal_run(document, simulate, stop, max_steps)
         if nominal_report["status"] == "stopped":
@@ -143,10 +161,13 @@ def contact_summary(full: Histories) -> dict:
         ends = [e["time"] for e in full.events if e["pair"] == name and e["kind"] == "separation"]
         force = np.asarray(values["normal_force"])
         top = int(np.argmax(force)) if len(force) else 0
-        out[name] = {"contacts": len(onsets), "first_contact": onsets[0] if onsets else None,
-                     "first_separation": ends[0] if ends else None,
-                     "peak_force": float(force[top]) if len(force) else 0.0,
-                     "peak_time": float(full.times[top]) if len(force) and force[top] > 0 else None}
+        out[name] = {
+            "contacts": len(onsets),
+            "first_contact": onsets[0] if onsets else None,
+            "first_separation": ends[0] if ends else None,
+            "peak_force": float(force[top]) if len(force) else 0.0,
+            "peak_time": float(full.times[top]) if len(force) and force[top] > 0 else None,
+        }
     return out
 
 
@@ -166,22 +187,33 @@ def compared(nominal: Histories, run: Histories, tolerance: float) -> dict:
     same = len(times) == len(theirs) and np.array_equal(times, theirs)
     upto = times <= theirs[-1] * (1 + 1e-12)
     reference_series, run_series = _series(nominal), _series(run)
-    return {name: _measures(times[upto], reference[upto],
-                            run_series[name] if same else np.interp(times[upto], theirs, run_series[name]), tolerance)
-            for name, reference in reference_series.items()}
+    return {
+        name: _measures(
+            times[upto],
+            reference[upto],
+            run_series[name] if same else np.interp(times[upto], theirs, run_series[name]),
+            tolerance,
+        )
+        for name, reference in reference_series.items()
+    }
 
 
 def legacy_influence(nominal: dict, run: dict, until: float, tolerance: float) -> dict:
     """The influence of points stored before runs were compared where they are made: their
     series sampled on a common grid of 2000 times."""
     grid = np.linspace(0.0, until, len(next(iter(nominal["series"].values()))))
-    return {name: _measures(grid, np.asarray(reference), np.asarray(run["series"][name]), tolerance)
-            for name, reference in nominal["series"].items()}
+    return {
+        name: _measures(grid, np.asarray(reference), np.asarray(run["series"][name]), tolerance)
+        for name, reference in nominal["series"].items()
+    }
 
 
 def _measures(times: np.ndarray, reference: np.ndarray, values: np.ndarray, tolerance: float) -> dict:
     """departure, rms and max of values against reference, relative to the reference's range."""
     difference = np.abs(values - reference) / max(float(np.ptp(reference)), 1e-300)
     beyond = np.nonzero(difference > tolerance)[0]
-    return {"departure": float(times[beyond[0]]) if len(beyond) else None,
-            "rms": float(np.sqrt(np.mean(difference**2))), "max": float(difference.max())}
+    return {
+        "departure": float(times[beyond[0]]) if len(beyond) else None,
+        "rms": float(np.sqrt(np.mean(difference**2))),
+        "max": float(difference.max()),
+    }

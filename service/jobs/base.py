@@ -22,6 +22,8 @@ from typing import Any, Protocol
 
 from service.requests import Limits
 
+JSON = dict[str, Any]  # a stored spec, plan, task or point: JSON objects
+
 
 @dataclass(frozen=True)
 class Plan:
@@ -33,18 +35,19 @@ class JobKind(Protocol):
     name: str
     paged: bool  # its result lists its points, so GET /result may page them (False: it needs them all)
 
-    def prepare(self, spec: dict, limits: Limits) -> Plan: ...
+    def prepare(self, spec: JSON, limits: Limits) -> Plan: ...
 
-    def tasks(self, spec: dict, plan: dict, finished: Mapping[int, dict], chunk_size: int) -> list[dict]: ...
+    def tasks(self, spec: JSON, plan: JSON, finished: Mapping[int, JSON], chunk_size: int) -> list[JSON]: ...
 
-    def follow_up(self, spec: dict, plan: dict, task: dict, finished: Mapping[int, dict],
-                  chunk_size: int) -> list[dict]: ...
+    def follow_up(
+        self, spec: JSON, plan: JSON, task: JSON, finished: Mapping[int, JSON], chunk_size: int
+    ) -> list[JSON]: ...
 
-    def run(self, spec: dict, task: dict) -> list[tuple[int, dict]]: ...
+    def run(self, spec: JSON, task: JSON) -> list[tuple[int, JSON]]: ...
 
-    def failed(self, point: dict) -> bool: ...
+    def failed(self, point: JSON) -> bool: ...
 
-    def result(self, spec: dict, plan: dict, finished: Mapping[int, dict]) -> dict: ...
+    def result(self, spec: JSON, plan: JSON, finished: Mapping[int, JSON]) -> JSON: ...
 
 
 class InOrder:
@@ -52,9 +55,14 @@ class InOrder:
     point (a path, a simulation): one task at a time, the next once its points are stored.
     Subclasses say next_chunk(plan, finished, chunk_size) -> task or None."""
 
-    def tasks(self, spec, plan, finished, chunk_size):
+    def next_chunk(self, plan: JSON, finished: Mapping[int, JSON], chunk_size: int) -> JSON | None:
+        raise NotImplementedError
+
+    def tasks(self, spec: JSON, plan: JSON, finished: Mapping[int, JSON], chunk_size: int) -> list[JSON]:
         task = self.next_chunk(plan, finished, chunk_size)
         return [task] if task is not None else []
 
-    def follow_up(self, spec, plan, task, finished, chunk_size):
+    def follow_up(
+        self, spec: JSON, plan: JSON, task: JSON, finished: Mapping[int, JSON], chunk_size: int
+    ) -> list[JSON]:
         return self.tasks(spec, plan, finished, chunk_size)

@@ -39,8 +39,9 @@ def path_parameters(spec: dict) -> list[dict]:
         return spec["path"]
     contacts = (spec.get("document") or {}).get("contacts") or {}
     if not (contacts.get("path") or {}).get("parameters"):
-        raise MechanismError("/path", "a contact path needs fields to change: give path, or contacts.path in the "
-                             "document")
+        raise MechanismError(
+            "/path", "a contact path needs fields to change: give path, or contacts.path in the document"
+        )
     return contacts["path"]["parameters"]
 
 
@@ -69,10 +70,15 @@ class ContactJob(InOrder):
         per_state = len(outputs) + problem.n_w + problem.n_eq + problem.n_in + 2 * problem.n_pairs
         check_result_size(total, per_state + 2 * (drawn + 73 * problem.n_pairs), limits)
         units = [mech.doc_unit(mech.parameter_kind(p)) for p in fields.pointers]
-        meta = {"parameters": [{"path": p, "unit": u, "values": list(v)} for p, u, v in zip(fields.pointers, units, fields.values)],
-                "output_units": {n: mech.doc_unit(problem.output_kinds[problem.output_names.index(n)]) for n in outputs},
-                "force_unit": mech.doc_unit("force"), "length_unit": mech.doc_unit("length"),
-                "solve_time_limit": limits.solve_time_limit}
+        meta = {
+            "parameters": [
+                {"path": p, "unit": u, "values": list(v)} for p, u, v in zip(fields.pointers, units, fields.values)
+            ],
+            "output_units": {n: mech.doc_unit(problem.output_kinds[problem.output_names.index(n)]) for n in outputs},
+            "force_unit": mech.doc_unit("force"),
+            "length_unit": mech.doc_unit("length"),
+            "solve_time_limit": limits.solve_time_limit,
+        }
         return Plan(total, meta)
 
     def failed(self, point: dict) -> bool:
@@ -86,9 +92,12 @@ class ContactJob(InOrder):
         if position is None:
             return None
         resume = next((i for i in reversed(range(position)) if finished[i]["status"] == "converged"), None)
-        return {"indices": list(range(position, min(position + chunk_size, total))), "resume": resume,
-                "resume_state": finished[resume]["state"] if resume is not None else None,
-                "time_limit": plan.get("solve_time_limit")}
+        return {
+            "indices": list(range(position, min(position + chunk_size, total))),
+            "resume": resume,
+            "resume_state": finished[resume]["state"] if resume is not None else None,
+            "time_limit": plan.get("solve_time_limit"),
+        }
 
     def run(self, spec, task):
         mech = mechanism_of(spec)
@@ -100,8 +109,9 @@ class ContactJob(InOrder):
         if task.get("resume") is not None:
             previous = resumed_state(problem, parameters_at(mech, fields, task["resume"]), task["resume_state"])
         time_limit = control.time_limit(task.get("time_limit"))
-        options = ContactOptions(spec.get("penetrating_start") or "approach",
-                                 newton_options(spec.get("options"), time_limit).time_limit)
+        options = ContactOptions(
+            spec.get("penetrating_start") or "approach", newton_options(spec.get("options"), time_limit).time_limit
+        )
         points = []
         try:
             for index, state in follow(mech, problem, fields, task["indices"], previous, options, control.should_stop):
@@ -112,8 +122,13 @@ class ContactJob(InOrder):
 
     def result(self, spec, plan, finished):
         points = [{"index": i, **{k: v for k, v in d.items() if k != "state"}} for i, d in sorted(finished.items())]
-        return {"parameters": plan["parameters"], "output_units": plan["output_units"],
-                "force_unit": plan["force_unit"], "length_unit": plan["length_unit"], "points": points}
+        return {
+            "parameters": plan["parameters"],
+            "output_units": plan["output_units"],
+            "force_unit": plan["force_unit"],
+            "length_unit": plan["length_unit"],
+            "points": points,
+        }
 
 
 def contact_problem_of(mech):

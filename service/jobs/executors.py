@@ -82,8 +82,9 @@ class ProcessPool(TaskExecutor):
 
     def _new(self) -> ProcessPoolExecutor:
         # spawn: the server has threads (uvicorn, the body parser, the solver pool's readers); forking them is unsafe.
-        return ProcessPoolExecutor(self.workers, mp_context=multiprocessing.get_context("spawn"),
-                                   initializer=worker_started)
+        return ProcessPoolExecutor(
+            self.workers, mp_context=multiprocessing.get_context("spawn"), initializer=worker_started
+        )
 
     def executor(self) -> Executor:
         return self._pool

@@ -46,24 +46,37 @@ class ImpactStudyJob:
         mech = compile_request(spec["document"], spec.get("model"), spec.get("overrides"), limits)
         simulate = simulation_spec(mech, spec.get("simulate"))
         if simulate.scheme not in IMPACT_SCHEMES:
-            raise MechanismError("/simulate/scheme", f"an impact study runs an impact scheme ({', '.join(IMPACT_SCHEMES)})"
-                                 f", not {simulate.scheme}")
+            raise MechanismError(
+                "/simulate/scheme",
+                f"an impact study runs an impact scheme ({', '.join(IMPACT_SCHEMES)}), not {simulate.scheme}",
+            )
         tolerance = (spec.get("study") or {}).get("tolerance", DEFAULT_TOLERANCE)
         if not isinstance(tolerance, (int, float)) or not 0 < tolerance < 1:
-            raise MechanismError("/study/tolerance", "give the departure tolerance as a fraction in (0, 1) of each "
-                                 "quantity's nominal range")
+            raise MechanismError(
+                "/study/tolerance",
+                "give the departure tolerance as a fraction in (0, 1) of each quantity's nominal range",
+            )
         runs = _runs(spec)
         check_grid_size([len(runs)], limits, "/study/fields")
         check_cost(simulate, limits.max_simulation_steps)
         check_memory(model_of(mech.document, simulate), simulate, RUN_BYTES)
-        return Plan(len(runs), {"runs": [{"path": p, "change": c} for p, c in runs], "until": simulate.until,
-                                "tolerance": tolerance, "scheme": simulate.scheme,
-                                "max_steps": limits.max_simulation_steps})
+        return Plan(
+            len(runs),
+            {
+                "runs": [{"path": p, "change": c} for p, c in runs],
+                "until": simulate.until,
+                "tolerance": tolerance,
+                "scheme": simulate.scheme,
+                "max_steps": limits.max_simulation_steps,
+            },
+        )
 
     def tasks(self, spec, plan, finished, chunk_size):
         todo = [k for k in range(len(plan["runs"])) if k not in finished]
-        return [{"indices": todo[i:i + chunk_size], "max_steps": plan.get("max_steps")}
-                for i in range(0, len(todo), chunk_size)]
+        return [
+            {"indices": todo[i : i + chunk_size], "max_steps": plan.get("max_steps")}
+            for i in range(0, len(todo), chunk_size)
+        ]
 
     def follow_up(self, spec, plan, task, finished, chunk_size):
         return []
@@ -76,8 +89,15 @@ class ImpactStudyJob:
             if control.should_stop():
                 break
             pointer, change = runs[index]
-            run = study_point(_document(spec), spec.get("simulate"), pointer, change, tolerance, control.should_stop,
-                              task.get("max_steps", 2_000_000))
+            run = study_point(
+                _document(spec),
+                spec.get("simulate"),
+                pointer,
+                change,
+                tolerance,
+                control.should_stop,
+                task.get("max_steps", 2_000_000),
+            )
             if run["status"] == "stopped":  # cancelled or out of time: not stored, so a restart runs it again
                 break
             points.append((index, {"path": pointer, "change": change, **run}))
@@ -97,26 +117,46 @@ class ImpactStudyJob:
                 side = "+" if point["change"] > 0 else "-"
                 influence = point.get("influence")
                 if influence is None:  # a point stored by an earlier version: sampled series
-                    influence = (legacy_influence(nominal, point, plan["until"], plan["tolerance"])
-                                 if "series" in nominal and "series" in point else {})
-                entry[side] = {"change": point["change"], "status": point["status"], "impacts": point["impacts"],
-                               "contacts": point.get("contacts"), "influence": influence}
+                    influence = (
+                        legacy_influence(nominal, point, plan["until"], plan["tolerance"])
+                        if "series" in nominal and "series" in point
+                        else {}
+                    )
+                entry[side] = {
+                    "change": point["change"],
+                    "status": point["status"],
+                    "impacts": point["impacts"],
+                    "contacts": point.get("contacts"),
+                    "influence": influence,
+                }
         status = "running" if len(finished) < len(plan["runs"]) else "finished"
-        return {"status": status, "until": plan["until"], "tolerance": plan["tolerance"], "scheme": plan["scheme"],
-                "nominal": None if nominal is None else {"impacts": nominal["impacts"], "seconds": nominal["seconds"],
-                                                         "contacts": nominal.get("contacts")},
-                "fields": fields, "ranking": _ranking(fields)}
+        return {
+            "status": status,
+            "until": plan["until"],
+            "tolerance": plan["tolerance"],
+            "scheme": plan["scheme"],
+            "nominal": None
+            if nominal is None
+            else {"impacts": nominal["impacts"], "seconds": nominal["seconds"], "contacts": nominal.get("contacts")},
+            "fields": fields,
+            "ranking": _ranking(fields),
+        }
 
 
 def _ranking(fields: dict) -> list[dict]:
     """Fields by their earliest departure (then largest rms): the most influential first."""
     rows = []
     for pointer, sides in fields.items():
-        departures = [v["departure"] for side in sides.values() for v in side["influence"].values()
-                      if v["departure"] is not None]
+        departures = [
+            v["departure"] for side in sides.values() for v in side["influence"].values() if v["departure"] is not None
+        ]
         rms = max((v["rms"] for side in sides.values() for v in side["influence"].values()), default=0.0)
-        rows.append({"path": pointer, "earliest_departure": min(departures) if departures else None, "largest_rms": rms})
-    return sorted(rows, key=lambda r: (r["earliest_departure"] is None, r["earliest_departure"] or 0.0, -r["largest_rms"]))
+        rows.append(
+            {"path": pointer, "earliest_departure": min(departures) if departures else None, "largest_rms": rms}
+        )
+    return sorted(
+        rows, key=lambda r: (r["earliest_departure"] is None, r["earliest_departure"] or 0.0, -r["largest_rms"])
+    )
 
 
 IMPACT_STUDY = ImpactStudyJob()

@@ -22,13 +22,16 @@ def job_kinds() -> dict[str, JobKind]:
     from service.jobs.simulation import SIMULATION
     from service.jobs.sweep import SWEEP
 
-    return {kind.name: kind for kind in (
-        SWEEP,
-        OPTIMIZE,
-        CONTACT,
-        SIMULATION,
-        IMPACT_STUDY,
-    )}
+    return {
+        kind.name: kind
+        for kind in (
+            SWEEP,
+            OPTIMIZE,
+            CONTACT,
+            SIMULATION,
+            IMPACT_STUDY,
+        )
+    }
 
 
 def kind_named(name: str) -> JobKind:

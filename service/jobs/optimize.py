@@ -27,9 +27,12 @@ from service.requests import Limits, compile_request, under
 
 
 def problem_of(spec: dict) -> DesignProblem:
-    return _problem(json.dumps(spec["document"], sort_keys=True), spec.get("model"),
-                    json.dumps(spec.get("overrides") or {}, sort_keys=True),
-                    json.dumps(spec.get("problem"), sort_keys=True))
+    return _problem(
+        json.dumps(spec["document"], sort_keys=True),
+        spec.get("model"),
+        json.dumps(spec.get("overrides") or {}, sort_keys=True),
+        json.dumps(spec.get("problem"), sort_keys=True),
+    )
 
 
 @lru_cache(maxsize=8)
@@ -53,9 +56,14 @@ def _prepared(key: tuple) -> Prepared:
 
 
 def prepared_of(spec: dict) -> Prepared:
-    return _prepared((json.dumps(spec["document"], sort_keys=True), spec.get("model"),
-                      json.dumps(spec.get("overrides") or {}, sort_keys=True),
-                      json.dumps(spec.get("problem"), sort_keys=True)))
+    return _prepared(
+        (
+            json.dumps(spec["document"], sort_keys=True),
+            spec.get("model"),
+            json.dumps(spec.get("overrides") or {}, sort_keys=True),
+            json.dumps(spec.get("problem"), sort_keys=True),
+        )
+    )
 
 
 def start_from_point(data: dict) -> StartResult:
@@ -81,7 +89,7 @@ class OptimizeJob:
 
     def tasks(self, spec, plan, finished, chunk_size):
         todo = [k for k in range(plan["starts"]) if k not in finished]
-        return [{"indices": todo[i:i + chunk_size]} for i in range(0, len(todo), chunk_size)]
+        return [{"indices": todo[i : i + chunk_size]} for i in range(0, len(todo), chunk_size)]
 
     def follow_up(self, spec, plan, task, finished, chunk_size):
         return []
@@ -94,8 +102,9 @@ class OptimizeJob:
             if control.should_stop():  # cancelled, or out of the job's time: the runner drops the rest
                 break
             start = run_start(prepared, k, stop=control.should_stop)
-            points.append((k, plain({**start.summary(), "start": k, "x": start.x, "lam_g": start.lam_g,
-                                     "lam_x": start.lam_x})))
+            points.append(
+                (k, plain({**start.summary(), "start": k, "x": start.x, "lam_g": start.lam_g, "lam_x": start.lam_x}))
+            )
         return points
 
     def result(self, spec, plan, finished: Mapping[int, dict]):

@@ -52,8 +52,14 @@ class _ActiveJob:
 
 
 class JobRunner:
-    def __init__(self, store: JobStore, executor: TaskExecutor, chunk_size: int = 8,
-                 job_time_limit: float = 3600.0, poll_seconds: float = 0.2):
+    def __init__(
+        self,
+        store: JobStore,
+        executor: TaskExecutor,
+        chunk_size: int = 8,
+        job_time_limit: float = 3600.0,
+        poll_seconds: float = 0.2,
+    ):
         self.store = store
         self.guard = StoreGuard(on_recovery=store.compact)
         self.executor = executor
@@ -139,8 +145,9 @@ class JobRunner:
             self.store.mark_started(job.id, resumed)
             if resumed:
                 log.info("resuming job %s: %d of %d points already stored", job.id, len(finished), job.total)
-            self._active[job.id] = _ActiveJob(job, kind, finished, deque(tasks), time.monotonic(),
-                                              time.time() + self.job_time_limit)
+            self._active[job.id] = _ActiveJob(
+                job, kind, finished, deque(tasks), time.monotonic(), time.time() + self.job_time_limit
+            )
 
     def _drop_finished_jobs(self) -> None:
         """Jobs cancelled through the API (their status is final in the store), and jobs over
@@ -222,8 +229,9 @@ class JobRunner:
                 return
             active.unsaved.popleft()
             active.finished.update(points)
-            active.pending.extend(active.kind.follow_up(active.job.spec, active.job.plan, task, active.finished,
-                                                        self.chunk_size))
+            active.pending.extend(
+                active.kind.follow_up(active.job.spec, active.job.plan, task, active.finished, self.chunk_size)
+            )
 
     def _task_failed(self, active: _ActiveJob, task: dict, error: BaseException, born: int) -> None:
         if isinstance(error, BrokenProcessPool):
@@ -259,8 +267,10 @@ class JobRunner:
             self._finish(active.job.id, "failed", f"only {stored} of {active.job.total} points could be computed")
 
     def _out_of_time(self, active: _ActiveJob) -> str:
-        return (f"stopped by the job time limit of {self.job_time_limit:g} s; {len(active.finished)} of "
-                f"{active.job.total} points are stored")
+        return (
+            f"stopped by the job time limit of {self.job_time_limit:g} s; {len(active.finished)} of "
+            f"{active.job.total} points are stored"
+        )
 
     def _finish(self, job_id: str, status: str, error: str | None = None) -> None:
         """A job's final status, written at the end of the step (and again while the store

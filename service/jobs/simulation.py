@@ -53,9 +53,12 @@ class SimulationJob(InOrder):
         mech = simulated(compile_request(spec["document"], spec.get("model"), spec.get("overrides"), limits))
         simulate = simulation_spec(mech, spec.get("simulate"))
         if simulate.scheme in IMPACT_SCHEMES:
-            raise MechanismError("/simulate/scheme", f"an {simulate.scheme} impact simulation runs in one call of "
-                                 "/v1/solve (analysis simulate: a second of motion takes milliseconds); the impact "
-                                 "study job (/v1/impact-studies) runs many")
+            raise MechanismError(
+                "/simulate/scheme",
+                f"an {simulate.scheme} impact simulation runs in one call of "
+                "/v1/solve (analysis simulate: a second of motion takes milliseconds); the impact "
+                "study job (/v1/impact-studies) runs many",
+            )
         try:
             check_masses(mech)
             check_link_dynamics(mech.document)  # its contact pairs' laws, as a call of /v1/solve checks them
@@ -76,9 +79,15 @@ class SimulationJob(InOrder):
         else:
             window = WINDOW * max(1, math.ceil(steps / WINDOWS / WINDOW))  # the stepping's own windows fit
             windows, span = math.ceil(steps / window), window * simulate.step
-        meta = {"windows": windows, "span": span, "step": simulate.step, "until": simulate.until,
-                "max_steps": step_limit(simulate, limits.max_simulation_steps),
-                "scheme": scheme_summary(simulate), "units": units(mech)}
+        meta = {
+            "windows": windows,
+            "span": span,
+            "step": simulate.step,
+            "until": simulate.until,
+            "max_steps": step_limit(simulate, limits.max_simulation_steps),
+            "scheme": scheme_summary(simulate),
+            "units": units(mech),
+        }
         return Plan(windows, meta)
 
     def failed(self, point: dict) -> bool:
@@ -92,9 +101,12 @@ class SimulationJob(InOrder):
             return None
         resume = finished[position - 1]["resume"] if position > 0 else None
         size = 1 if position == 0 else chunk_size  # the first window alone: progress shows from it
-        return {"indices": list(range(position, min(position + size, plan["windows"]))), "resume": resume,
-                "span": plan["span"],
-                "max_steps": plan.get("max_steps")}
+        return {
+            "indices": list(range(position, min(position + size, plan["windows"]))),
+            "resume": resume,
+            "span": plan["span"],
+            "max_steps": plan.get("max_steps"),
+        }
 
     def run(self, spec, task):
         mech = simulated(mechanism_of(spec))
@@ -108,13 +120,34 @@ class SimulationJob(InOrder):
         for index in task["indices"]:
             end = min((index + 1) * task["span"], simulate.until)
             started = 0.0 if at is None else at.time
-            history = integrate(mech.structure, p, x0, None if x0 is None else 0 * x0, end, simulate.step, scheme,
-                                damping=simulate.damping, every=simulate.every, stop=control.should_stop,
-                                histories=histories, resume=at,
-                                adaptive=tolerance_of(simulate, task.get("max_steps") or MAX_STEPS))
-            points.append((index, {"status": history.status, "message": history.message, "t_start": started,
-                                   "t_end": history.resume.time,
-                                   **records(mech, simulate, history, histories), "resume": history.resume.to_json()}))
+            history = integrate(
+                mech.structure,
+                p,
+                x0,
+                None if x0 is None else 0 * x0,
+                end,
+                simulate.step,
+                scheme,
+                damping=simulate.damping,
+                every=simulate.every,
+                stop=control.should_stop,
+                histories=histories,
+                resume=at,
+                adaptive=tolerance_of(simulate, task.get("max_steps") or MAX_STEPS),
+            )
+            points.append(
+                (
+                    index,
+                    {
+                        "status": history.status,
+                        "message": history.message,
+                        "t_start": started,
+                        "t_end": history.resume.time,
+                        **records(mech, simulate, history, histories),
+                        "resume": history.resume.to_json(),
+                    },
+                )
+            )
             if history.status != "finished":
                 break
             at, x0 = history.resume, None
@@ -122,9 +155,20 @@ class SimulationJob(InOrder):
 
     def result(self, spec, plan, finished):
         windows = [finished[i] for i in sorted(finished)]
-        joined = {"times": [], "outputs": {}, "constraint_forces": {}, "motion_forces": {},
-                  "energies": {"kinetic": [], "potential": [], "input_work": [], "damping_work": [],
-                               "friction_work": [], "contact_damping_work": []}}
+        joined = {
+            "times": [],
+            "outputs": {},
+            "constraint_forces": {},
+            "motion_forces": {},
+            "energies": {
+                "kinetic": [],
+                "potential": [],
+                "input_work": [],
+                "damping_work": [],
+                "friction_work": [],
+                "contact_damping_work": [],
+            },
+        }
         for window in windows:
             joined["times"] += window["times"]
             for group in ("outputs", "constraint_forces", "motion_forces", "energies"):
@@ -140,9 +184,16 @@ class SimulationJob(InOrder):
             status = last["status"]
         else:
             status = "running"
-        return {**plan, "status": status, "message": last["message"] if last else "",
-                "time_reached": last["t_end"] if last else 0.0, "windows_stored": len(windows), **joined,
-                "energies": energies, "energy_balance_error": error}
+        return {
+            **plan,
+            "status": status,
+            "message": last["message"] if last else "",
+            "time_reached": last["t_end"] if last else 0.0,
+            "windows_stored": len(windows),
+            **joined,
+            "energies": energies,
+            "energy_balance_error": error,
+        }
 
 
 SIMULATION = SimulationJob()

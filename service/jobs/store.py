@@ -53,8 +53,9 @@ class JobRow(_Base):
 class PointRow(_Base):
     __tablename__ = "flexmech_job_points"
 
-    job_id: Mapped[str] = mapped_column(String(32), ForeignKey("flexmech_jobs.id", ondelete="CASCADE"),
-                                        primary_key=True)
+    job_id: Mapped[str] = mapped_column(
+        String(32), ForeignKey("flexmech_jobs.id", ondelete="CASCADE"), primary_key=True
+    )
     index: Mapped[int] = mapped_column(Integer, primary_key=True)
     data: Mapped[dict] = mapped_column(JSON)
     finished_at: Mapped[datetime] = mapped_column(DateTime(timezone=True))
@@ -86,8 +87,22 @@ def _aware(t: datetime | None) -> datetime | None:
 
 
 def _job(row: JobRow) -> Job:
-    return Job(row.id, row.kind, row.owner, row.status, row.spec, row.plan, row.total, row.done, row.failed_points,
-               row.error, _aware(row.created_at), _aware(row.started_at), _aware(row.finished_at), row.restarts)
+    return Job(
+        row.id,
+        row.kind,
+        row.owner,
+        row.status,
+        row.spec,
+        row.plan,
+        row.total,
+        row.done,
+        row.failed_points,
+        row.error,
+        _aware(row.created_at),
+        _aware(row.started_at),
+        _aware(row.finished_at),
+        row.restarts,
+    )
 
 
 # How long a write waits for another writer's lock on an SQLite file before it fails: a
@@ -135,8 +150,19 @@ class JobStore:
 
     # --- jobs -------------------------------------------------------------------------------
     def create(self, kind: str, owner: str, spec: dict, plan: dict, total: int) -> Job:
-        row = JobRow(id=uuid.uuid4().hex, kind=kind, owner=owner, status="queued", spec=spec, plan=plan, total=total,
-                     done=0, failed_points=0, created_at=utcnow(), restarts=0)
+        row = JobRow(
+            id=uuid.uuid4().hex,
+            kind=kind,
+            owner=owner,
+            status="queued",
+            spec=spec,
+            plan=plan,
+            total=total,
+            done=0,
+            failed_points=0,
+            created_at=utcnow(),
+            restarts=0,
+        )
         with self._session.begin() as s:
             s.add(row)
         return _job(row)
@@ -167,13 +193,17 @@ class JobStore:
         """Move an active job to a final status. False when it was already final (for
         example cancelled while its last task ran): a final status never changes."""
         with self._session.begin() as s:
-            result = s.execute(update(JobRow).where(JobRow.id == job_id, JobRow.status.in_(ACTIVE))
-                               .values(status=status, error=error, finished_at=utcnow()))
+            result = s.execute(
+                update(JobRow)
+                .where(JobRow.id == job_id, JobRow.status.in_(ACTIVE))
+                .values(status=status, error=error, finished_at=utcnow())
+            )
             return result.rowcount == 1
 
     # --- points -----------------------------------------------------------------------------
-    def add_points(self, job_id: str, points: Iterable[tuple[int, dict[str, Any]]],
-                   failed: Callable[[dict], bool] | None = None) -> int:
+    def add_points(
+        self, job_id: str, points: Iterable[tuple[int, dict[str, Any]]], failed: Callable[[dict], bool] | None = None
+    ) -> int:
         """Store finished points and advance the job's progress in one transaction. Points
         already stored are left as they are (never overwritten). Returns how many were new.
         Which points count as failed is the job kind's to say (`failed`, by default the kind
@@ -184,14 +214,20 @@ class JobStore:
         if failed is None:
             failed = self._kind_of(job_id).failed
         with self._session.begin() as s:
-            have = set(s.scalars(select(PointRow.index).where(
-                PointRow.job_id == job_id, PointRow.index.in_([i for i, _ in points]))))
+            have = set(
+                s.scalars(
+                    select(PointRow.index).where(PointRow.job_id == job_id, PointRow.index.in_([i for i, _ in points]))
+                )
+            )
             now = utcnow()
             new = [(i, d) for i, d in points if i not in have]
             s.add_all(PointRow(job_id=job_id, index=i, data=d, finished_at=now) for i, d in new)
             new_failed = sum(1 for _, d in new if failed(d))
-            s.execute(update(JobRow).where(JobRow.id == job_id).values(
-                done=JobRow.done + len(new), failed_points=JobRow.failed_points + new_failed))
+            s.execute(
+                update(JobRow)
+                .where(JobRow.id == job_id)
+                .values(done=JobRow.done + len(new), failed_points=JobRow.failed_points + new_failed)
+            )
         return len(new)
 
     def _kind_of(self, job_id: str):

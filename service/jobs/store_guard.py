@@ -48,8 +48,9 @@ class StoreGuard:
             log.warning("job store unavailable, retrying with backoff: %s", str(exc).splitlines()[0][:300])
         elif now - self._reported >= REPORT_EVERY:
             self._reported = now
-            log.warning("job store still unavailable after %.0f s: %s", now - self._down_since,
-                        str(exc).splitlines()[0][:300])
+            log.warning(
+                "job store still unavailable after %.0f s: %s", now - self._down_since, str(exc).splitlines()[0][:300]
+            )
         self._retry_at = now + self._delay
         self._delay = min(2 * self._delay, MAX_DELAY)
 

@@ -48,8 +48,10 @@ def value_count(parameter: dict, pointer: str, until: bool = False) -> int:
         return len(parameter["values"])
     missing = [k for k in ("start", "steps", *(() if until else ("stop",))) if parameter.get(k) is None]
     if missing:
-        raise MechanismError(pointer, "give start and steps (the stop is found by until)" if until
-                             else "give values, or start, stop and steps")
+        raise MechanismError(
+            pointer,
+            "give start and steps (the stop is found by until)" if until else "give values, or start, stop and steps",
+        )
     steps = parameter["steps"]
     if isinstance(steps, bool) or not isinstance(steps, int) or steps < 1:
         raise MechanismError(f"{pointer}/steps", "must be a whole number of at least 1")
@@ -77,8 +79,10 @@ def grid_size(spec: dict, limits: Limits) -> int:
     counts = [value_count(p, f"/parameters/{k}", until) for k, p in enumerate(spec["parameters"])]
     if spec.get("grid", "cartesian") == "zip":
         if len(set(counts)) > 1:
-            raise MechanismError("/parameters", f"a zip grid needs equally many values per parameter "
-                                                f"(got {', '.join(str(c) for c in counts)})")
+            raise MechanismError(
+                "/parameters",
+                f"a zip grid needs equally many values per parameter (got {', '.join(str(c) for c in counts)})",
+            )
         counts = counts[:1]
     return check_grid_size(counts, limits)
 
@@ -90,8 +94,10 @@ def grid_shape(spec: dict, stop: float | None = None) -> tuple[list[list[float]]
     if spec.get("grid", "cartesian") == "zip":
         lengths = {len(v) for v in values}
         if len(lengths) > 1:
-            raise MechanismError("/parameters", f"a zip grid needs equally many values per parameter "
-                                                f"(got {', '.join(str(len(v)) for v in values)})")
+            raise MechanismError(
+                "/parameters",
+                f"a zip grid needs equally many values per parameter (got {', '.join(str(len(v)) for v in values)})",
+            )
         return values, (len(values[0]),)
     return values, tuple(len(v) for v in values)
 
@@ -133,8 +139,11 @@ def _mechanism(document_json: str, model: str | None, overrides_json: str) -> Me
 
 
 def mechanism_of(spec: dict) -> Mechanism:
-    return _mechanism(json.dumps(spec["document"], sort_keys=True), spec.get("model"),
-                      json.dumps(spec.get("overrides") or {}, sort_keys=True))
+    return _mechanism(
+        json.dumps(spec["document"], sort_keys=True),
+        spec.get("model"),
+        json.dumps(spec.get("overrides") or {}, sort_keys=True),
+    )
 
 
 def until_stop(spec: dict, mech: Mechanism) -> tuple[float | None, dict | None]:
@@ -159,13 +168,23 @@ def until_stop(spec: dict, mech: Mechanism) -> tuple[float | None, dict | None]:
     options = newton_options(spec.get("options"))
     found = solve_for_target(mech, path, until["output"], float(until["equals"]), options)
     if found.status != "converged":
-        raise MechanismError("/until", f"the value at which {until['output']} = {until['equals']:g} was not found "
-                                       f"({found.status}: {found.equilibrium.message})")
-    return found.value, {"output": until["output"], "equals": until["equals"], "path": path, "value": found.value,
-                         "unit": mech.doc_unit(mech.parameter_kind(path))}
+        raise MechanismError(
+            "/until",
+            f"the value at which {until['output']} = {until['equals']:g} was not found "
+            f"({found.status}: {found.equilibrium.message})",
+        )
+    return found.value, {
+        "output": until["output"],
+        "equals": until["equals"],
+        "path": path,
+        "value": found.value,
+        "unit": mech.doc_unit(mech.parameter_kind(path)),
+    }
 
 
-def _check_spec(spec: dict, limits: Limits, stop: float | None = None) -> tuple[list[list[float]], tuple[int, ...], list[str]]:
+def _check_spec(
+    spec: dict, limits: Limits, stop: float | None = None
+) -> tuple[list[list[float]], tuple[int, ...], list[str]]:
     """The grid (values per parameter, shape) and the swept paths of a valid spec."""
     grid_size(spec, limits)
     values, shape = grid_shape(spec, stop)
@@ -173,12 +192,15 @@ def _check_spec(spec: dict, limits: Limits, stop: float | None = None) -> tuple[
     if len(set(paths)) != len(paths):
         raise MechanismError("/parameters", "a path is listed twice")
     if spec.get("continuation") is not None and spec["continuation"] not in paths:
-        raise MechanismError("/continuation", f"'{spec['continuation']}' is not one of the swept paths "
-                                              f"({', '.join(paths)})")
+        raise MechanismError(
+            "/continuation", f"'{spec['continuation']}' is not one of the swept paths ({', '.join(paths)})"
+        )
     analysis = ANALYSES.named(spec.get("analysis") or "equilibrium")
     if not analysis.sweepable:
         sweepable = ", ".join(a["name"] for a in ANALYSES.describe() if a["sweepable"])
-        raise MechanismError("/analysis", f"the {analysis.name} analysis has no points to sweep (sweepable: {sweepable})")
+        raise MechanismError(
+            "/analysis", f"the {analysis.name} analysis has no points to sweep (sweepable: {sweepable})"
+        )
     return values, shape, paths
 
 
@@ -200,7 +222,11 @@ class SweepJob:
                 raise MechanismError(f"/parameters/{k}/path", exc.problem) from None
         for k, (path, parameter_values_k) in enumerate(zip(paths, values)):
             for i, value in enumerate(parameter_values_k):  # the same checks as the document's own
-                where = f"/parameters/{k}/values/{i}" if spec["parameters"][k].get("values") is not None else f"/parameters/{k}"
+                where = (
+                    f"/parameters/{k}/values/{i}"
+                    if spec["parameters"][k].get("values") is not None
+                    else f"/parameters/{k}"
+                )
                 mech.checked_si(path, value, where)
         all_units = output_units(mech)
         wanted = spec.get("outputs") or list(all_units)
@@ -213,10 +239,15 @@ class SweepJob:
             check_constrained(mech)
         except MechanismError as exc:
             raise MechanismError("/document" + exc.pointer, exc.problem) from None
-        meta = {"parameters": [{"path": p, "unit": u, "values": v} for p, u, v in zip(paths, units, values)],
-                "shape": list(shape), "output_units": {n: all_units[n] for n in wanted},
-                "force_unit": mech.doc_unit("force"), "moment_unit": mech.doc_unit("moment"),
-                "solve_time_limit": limits.solve_time_limit, **({"until": until} if until else {})}
+        meta = {
+            "parameters": [{"path": p, "unit": u, "values": v} for p, u, v in zip(paths, units, values)],
+            "shape": list(shape),
+            "output_units": {n: all_units[n] for n in wanted},
+            "force_unit": mech.doc_unit("force"),
+            "moment_unit": mech.doc_unit("moment"),
+            "solve_time_limit": limits.solve_time_limit,
+            **({"until": until} if until else {}),
+        }
         return Plan(int(np.prod(shape)), meta)
 
     def failed(self, point: dict) -> bool:
@@ -228,7 +259,7 @@ class SweepJob:
         if spec.get("continuation") is None:
             todo = [line[0] for line in lines if line[0] not in finished]
             for start in range(0, len(todo), chunk_size):
-                tasks.append({"indices": todo[start:start + chunk_size], "guess": None})
+                tasks.append({"indices": todo[start : start + chunk_size], "guess": None})
         else:
             for number, line in enumerate(lines):
                 task = self._next_on_line(line, number, finished, chunk_size)
@@ -248,8 +279,10 @@ class SweepJob:
         """The task with its points' values (the plan's grid) and the solve time limit."""
         values = [p["values"] for p in plan["parameters"]]
         grid, shape = spec.get("grid", "cartesian"), tuple(plan["shape"])
-        return task | {"time_limit": plan.get("solve_time_limit"),
-                       "values": [point_values(values, shape, grid, i) for i in task["indices"]]}
+        return task | {
+            "time_limit": plan.get("solve_time_limit"),
+            "values": [point_values(values, shape, grid, i) for i in task["indices"]],
+        }
 
     @staticmethod
     def _next_on_line(line: list[int], number: int, finished: Mapping[int, dict], chunk_size: int) -> dict | None:
@@ -263,7 +296,7 @@ class SweepJob:
             if finished[i]["status"] == "converged":
                 guess = finished[i]["z"]
                 break
-        return {"indices": line[position:position + chunk_size], "guess": guess, "line": number}
+        return {"indices": line[position : position + chunk_size], "guess": guess, "line": number}
 
     def run(self, spec, task):
         mech = mechanism_of(spec)
@@ -296,21 +329,38 @@ class SweepJob:
                 z_prev = r.z
             y = np.asarray(mech.graphs.outputs(r.z, p)).ravel()
             residuals = residual_report(mech, r.z, p)
-            points.append((index, plain({
-                "values": here, "status": r.status, "message": r.message, "iterations": r.iterations,
-                **{k: residuals[k] for k in ("residual_norm", "residual_moment", "solver_residual")},
-                "seconds": r.seconds, "outputs": {n: y[j] / f for n, (j, f) in zip(wanted, columns)},
-                **({"z": r.z} if along_path else {}),  # the state a resumed load path starts from
-            })))
+            points.append(
+                (
+                    index,
+                    plain(
+                        {
+                            "values": here,
+                            "status": r.status,
+                            "message": r.message,
+                            "iterations": r.iterations,
+                            **{k: residuals[k] for k in ("residual_norm", "residual_moment", "solver_residual")},
+                            "seconds": r.seconds,
+                            "outputs": {n: y[j] / f for n, (j, f) in zip(wanted, columns)},
+                            **({"z": r.z} if along_path else {}),  # the state a resumed load path starts from
+                        }
+                    ),
+                )
+            )
         return points
 
     def result(self, spec, plan, finished):
         points = [{"index": i, **{k: v for k, v in d.items() if k != "z"}} for i, d in sorted(finished.items())]
-        return {"parameters": plan["parameters"], "grid": spec.get("grid", "cartesian"),
-                "continuation": spec.get("continuation"), "output_units": plan["output_units"],
-                "residual_unit": plan["force_unit"], "residual_moment_unit": plan.get("moment_unit"),
-                "analysis": spec.get("analysis") or "equilibrium", "points": points,
-                **({"until": plan["until"]} if plan.get("until") else {})}
+        return {
+            "parameters": plan["parameters"],
+            "grid": spec.get("grid", "cartesian"),
+            "continuation": spec.get("continuation"),
+            "output_units": plan["output_units"],
+            "residual_unit": plan["force_unit"],
+            "residual_moment_unit": plan.get("moment_unit"),
+            "analysis": spec.get("analysis") or "equilibrium",
+            "points": points,
+            **({"until": plan["until"]} if plan.get("until") else {}),
+        }
 
 
 SWEEP = SweepJob()

@@ -64,6 +64,7 @@ def _limited(limits: BuildLimits):
         resource.setrlimit(resource.RLIMIT_AS, (limits.memory_bytes, limits.memory_bytes))
         resource.setrlimit(resource.RLIMIT_CPU, (cpu, cpu + 5))
         os.nice(10)
+
     return setup
 
 
@@ -81,8 +82,9 @@ class Compiler:
             except ProcessLookupError:
                 pass
 
-    def build(self, fn: ca.Function, target: Path, limits: BuildLimits = BuildLimits(),
-              link: list[str] | tuple[str, ...] = ()) -> Outcome:
+    def build(
+        self, fn: ca.Function, target: Path, limits: BuildLimits = BuildLimits(), link: list[str] | tuple[str, ...] = ()
+    ) -> Outcome:
         """Generate fn's C and compile it to `target` (installed atomically), linked against the
         libraries `link` (the compiled kernels a window calls)."""
         cc = compiler()
@@ -95,8 +97,7 @@ class Compiler:
             source = Path(generator.generate(tmp + os.sep))
             c_bytes = source.stat().st_size
             partial = Path(tmp) / "library.so"
-            outcome = self._run([cc, *FLAGS, str(source), *link, "-o", str(partial), "-lm"], limits,
-                                Path(tmp) / "log")
+            outcome = self._run([cc, *FLAGS, str(source), *link, "-o", str(partial), "-lm"], limits, Path(tmp) / "log")
             outcome.c_bytes = c_bytes
             if outcome.ok:
                 os.replace(partial, target)
@@ -105,8 +106,9 @@ class Compiler:
     def _run(self, command: list[str], limits: BuildLimits, log: Path) -> Outcome:
         started = time.monotonic()
         with open(log, "wb") as out:
-            proc = subprocess.Popen(command, stdout=out, stderr=subprocess.STDOUT, process_group=0,
-                                    preexec_fn=_limited(limits))
+            proc = subprocess.Popen(
+                command, stdout=out, stderr=subprocess.STDOUT, process_group=0, preexec_fn=_limited(limits)
+            )
         self.running = proc.pid
         status, usage, timed_out = None, None, False
         try:
@@ -129,12 +131,20 @@ class Compiler:
             return Outcome(False, f"the compiler exceeded its time limit of {limits.seconds:g} s", 0, seconds, peak)
         if os.WIFSIGNALED(status):
             why = signal.Signals(os.WTERMSIG(status)).name
-            return Outcome(False, f"the compiler was killed by {why} (memory limit {limits.memory_bytes / 2**20:.0f} "
-                           "MiB, or CPU time)", 0, seconds, peak)
+            return Outcome(
+                False,
+                f"the compiler was killed by {why} (memory limit {limits.memory_bytes / 2**20:.0f} MiB, or CPU time)",
+                0,
+                seconds,
+                peak,
+            )
         if os.WEXITSTATUS(status) != 0:
             text = log.read_text(errors="replace")[-2000:]
             memory = "out of memory" in text or "virtual memory exhausted" in text or "Cannot allocate" in text
-            reason = (f"the compiler ran out of its memory limit of {limits.memory_bytes / 2**20:.0f} MiB" if memory
-                      else f"the compiler failed (exit {os.WEXITSTATUS(status)}): {text.strip()[-400:]}")
+            reason = (
+                f"the compiler ran out of its memory limit of {limits.memory_bytes / 2**20:.0f} MiB"
+                if memory
+                else f"the compiler failed (exit {os.WEXITSTATUS(status)}): {text.strip()[-400:]}"
+            )
             return Outcome(False, reason, 0, seconds, peak)
         return Outcome(True, "compiled", 0, seconds, peak)

@@ -21,8 +21,8 @@ from pathlib import Path
 import casadi as ca
 
 from models.disk_cache import cache_dir, touch
+from models.kernels.chain_signature import ChainSignature
 from models.kernels.chunks import CHUNK, Chunks, chunks
-from models.kernels.link_chain import ChainSignature
 
 KINDS = ("sweep", "jacobian", "factor", "backward", "substitute")
 FLAGS = ("-O2", "-fPIC", "-shared")

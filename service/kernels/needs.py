@@ -11,9 +11,9 @@ from pathlib import Path
 import casadi as ca
 
 from models import Mechanism, MechanismError
+from models.kernels.chain_signature import ChainSignature
 from models.kernels.chunks import chunks
 from models.kernels.layout import layout_of, runs_in_chains
-from models.kernels.link_chain import ChainSignature
 from service.kernels.cache import abandoned, library
 from service.kernels.queue import BUILD_ORDER, function_library, note_of
 
@@ -32,8 +32,9 @@ class Build:
 
 def chain_build(signature: ChainSignature) -> Build:
     functions = chunks(signature).functions()
-    return Build(signature.key, [(kind, functions[kind], library(signature, kind)) for kind in BUILD_ORDER],
-                 abandoned(signature))
+    return Build(
+        signature.key, [(kind, functions[kind], library(signature, kind)) for kind in BUILD_ORDER], abandoned(signature)
+    )
 
 
 def builds_of(mech: Mechanism) -> list[Build]:
@@ -46,8 +47,9 @@ def builds_of(mech: Mechanism) -> list[Build]:
         from service.impacts.run import check_laws, impact_model, timed_fields
         from service.impacts.stepping import chunk_function
 
-        model = impact_model(mech.document, timed_fields(mech.document, simulate),
-                             json.dumps(simulate.histories, sort_keys=True))
+        model = impact_model(
+            mech.document, timed_fields(mech.document, simulate), json.dumps(simulate.histories, sort_keys=True)
+        )
         try:
             check_laws(model, simulate)
         except MechanismError:

@@ -30,8 +30,8 @@ from pathlib import Path
 import casadi as ca
 
 from models.disk_cache import bound, cache_dir
+from models.kernels.chain_signature import ChainSignature
 from models.kernels.chunks import chunks
-from models.kernels.link_chain import ChainSignature
 from service.kernels.build import BuildLimits, Compiler, Outcome, die_with_parent
 from service.kernels.cache import KINDS, abandoned, folder, is_compiled, library
 
@@ -75,9 +75,18 @@ def request_chain(signature: ChainSignature) -> bool:
     """Ask for a chain signature's kernels (no-op when built, abandoned or already asked)."""
     if is_compiled(signature) or abandoned(signature).exists():
         return False
-    return _write_request(signature.key + "-" + folder(signature).parent.name, {
-        "kind": "chain", "signature": {"degree": signature.degree, "shear": signature.shear,
-                                       "axial": signature.axial, "rule": signature.rule}})
+    return _write_request(
+        signature.key + "-" + folder(signature).parent.name,
+        {
+            "kind": "chain",
+            "signature": {
+                "degree": signature.degree,
+                "shear": signature.shear,
+                "axial": signature.axial,
+                "rule": signature.rule,
+            },
+        },
+    )
 
 
 def function_library(fn: ca.Function, key: str) -> Path:
@@ -102,8 +111,9 @@ def request_function(fn: ca.Function, key: str, link: list[str] | None = None) -
     staged = serialized.with_suffix(f".{os.getpid()}.tmp")
     fn.save(str(staged))
     os.replace(staged, serialized)
-    return _write_request(name, {"kind": "function", "serialized": str(serialized), "library": str(target),
-                                 "link": list(link or [])})
+    return _write_request(
+        name, {"kind": "function", "serialized": str(serialized), "library": str(target), "link": list(link or [])}
+    )
 
 
 def note_of(target: Path) -> Path:
@@ -153,8 +163,7 @@ class Builder:
             self.run_one(requests[0])
 
 
-def build_chain(signature: ChainSignature, compiler: Compiler, limits: BuildLimits,
-                report=None) -> Outcome:
+def build_chain(signature: ChainSignature, compiler: Compiler, limits: BuildLimits, report=None) -> Outcome:
     """Compile a chain signature's chunks, cheapest first; the first failure abandons the key."""
     functions = chunks(signature).functions()
     total = Outcome(True, "compiled")
@@ -188,8 +197,10 @@ def main() -> None:
     logging.basicConfig(level=logging.INFO, format="%(asctime)s builder %(message)s")
     parent = os.getppid()
     os.environ.setdefault("OMP_NUM_THREADS", "1")
-    limits = BuildLimits(float(os.environ.get("FLEXMECH_BUILD_SECONDS", "60")),
-                         int(os.environ.get("FLEXMECH_BUILD_MEMORY_BYTES", str(1024**3))))
+    limits = BuildLimits(
+        float(os.environ.get("FLEXMECH_BUILD_SECONDS", "60")),
+        int(os.environ.get("FLEXMECH_BUILD_MEMORY_BYTES", str(1024**3))),
+    )
     builder = Builder(limits)
 
     def stop(signum, frame):
@@ -210,9 +221,12 @@ class BuilderProcess:
         self.proc: subprocess.Popen | None = None
 
     def start(self) -> None:
-        self.proc = subprocess.Popen([sys.executable, "-m", "service.kernels.queue"],
-                                     env={**os.environ, **self.env}, start_new_session=True,
-                                     preexec_fn=lambda: (die_with_parent(signal.SIGTERM), os.nice(10)))
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "service.kernels.queue"],
+            env={**os.environ, **self.env},
+            start_new_session=True,
+            preexec_fn=lambda: (die_with_parent(signal.SIGTERM), os.nice(10)),
+        )
         accept_requests(True)
 
     def queued(self) -> int:

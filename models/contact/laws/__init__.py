@@ -5,16 +5,16 @@ from models.contact.laws.friction import Ambrosio, Coulomb, NoFriction
 from models.contact.laws.impulsive import Restitution, Unilateral
 from models.contact.laws.penalty import Flores, Hertz, HuntCrossley, LankaraniNikravesh, LinearSpringDashpot, LnaEsdu
 from models.contact.laws.registry import (
-                                          ANALYSES,
-                                          FRICTION_LAWS,
-                                          NORMAL_LAWS,
-                                          FrictionLaw,
-                                          NormalLaw,
-                                          check_law,
-                                          friction_law,
-                                          normal_law,
-                                          register_friction_law,
-                                          register_normal_law,
+    ANALYSES,
+    FRICTION_LAWS,
+    NORMAL_LAWS,
+    FrictionLaw,
+    NormalLaw,
+    check_law,
+    friction_law,
+    normal_law,
+    register_friction_law,
+    register_normal_law,
 )
 
 register_normal_law(Unilateral())
@@ -29,5 +29,15 @@ register_friction_law(NoFriction())
 register_friction_law(Coulomb())
 register_friction_law(Ambrosio())
 
-__all__ = ["ANALYSES", "FRICTION_LAWS", "NORMAL_LAWS", "FrictionLaw", "NormalLaw", "check_law", "friction_law",
-           "normal_law", "register_friction_law", "register_normal_law"]
+__all__ = [
+    "ANALYSES",
+    "FRICTION_LAWS",
+    "NORMAL_LAWS",
+    "FrictionLaw",
+    "NormalLaw",
+    "check_law",
+    "friction_law",
+    "normal_law",
+    "register_friction_law",
+    "register_normal_law",
+]

@@ -22,7 +22,7 @@ ESDU_NEWTON_STEPS = 6
 def elastic_power(K, q, exponent):
     """K q^n for q >= 0: 0 at q = 0 exactly as 0^n, with derivatives that stay finite there
     (q^n's by n is q^n ln q, 0 * -inf; a run's sensitivities differentiate the law)."""
-    return ca.if_else(q > 0, K * ca.fmax(q, 1e-300)**exponent, 0.0)
+    return ca.if_else(q > 0, K * ca.fmax(q, 1e-300) ** exponent, 0.0)
 
 
 LINK_DYNAMICS = frozenset({"event_driven", "link_dynamics"})  # link dynamics locates their onsets
@@ -39,8 +39,10 @@ class DampedPowerLaw(NormalLaw):
 
     def damping_factor(self, restitution):
         """d of the law from c_r; each damped law gives its own (Eqs. 21-23)."""
-        raise TypeError(f"{type(self).__name__} is the damped laws' shape, not a law: register one of its "
-                        "subclasses, which give damping_factor")
+        raise TypeError(
+            f"{type(self).__name__} is the damped laws' shape, not a law: register one of its "
+            "subclasses, which give damping_factor"
+        )
 
     def force(self, pair, q, rate, impact_speed):
         d = self.damping_factor(pair.restitution)
@@ -140,8 +142,17 @@ def esdu_force(q, compliance_sum, length, clearance):
     return force, 1 / (a * ca.fmax(z, 1e-12))
 
 
-def hertz_stiffness(kind: str, E1: float, nu1: float, E2: float, nu2: float, R_pin: float,
-                    R_other: float | None, radius: str, length: float | None) -> float:
+def hertz_stiffness(
+    kind: str,
+    E1: float,
+    nu1: float,
+    E2: float,
+    nu2: float,
+    R_pin: float,
+    R_other: float | None,
+    radius: str,
+    length: float | None,
+) -> float:
     """K of Eq. 14 (spheres) or Eq. 16 (cylinders, pi E* L / 4), SI. R_other is the hole's or
     the other circle's radius (None: a line, an infinite radius)."""
     sigma = (1 - nu1**2) / E1 + (1 - nu2**2) / E2
