@@ -29,7 +29,10 @@ def _type_of(schema: Schema) -> str:
     return str(schema.get("type", "any"))
 
 
-def docstring(analysis: Schema) -> str:
+def docstring(
+    analysis: Schema,
+    returns: str = "the report (an AnalysisReport: its fields are attributes); non-convergence is its status",
+) -> str:
     """The analysis' summary, then one line per option: name (type, default): description."""
     lines = [
         f"{analysis['summary']}.",
@@ -43,7 +46,7 @@ def docstring(analysis: Schema) -> str:
         default = "required" if name in required else f"default {field.get('default')!r}"
         unit = f" [{field['unit']}]" if field.get("unit") else ""
         lines.append(f"    {name} ({_type_of(field)}, {default}){unit}: {field.get('description', '')}")
-    lines += ["", "Returns the report (an AnalysisReport: its fields are attributes); non-convergence is its status."]
+    lines += ["", f"Returns {returns}."]
     return "\n".join(lines)
 
 
@@ -57,31 +60,40 @@ def _signature(analysis: Schema) -> inspect.Signature:
     return inspect.Signature(parameters)
 
 
-def method_of(analysis: Schema, solve: Callable[..., Any]) -> Callable[..., Any]:
-    """A function calling `solve` with the analysis named, documented by its schema."""
+def method_of(analysis: Schema, solve: Callable[..., Any], returns: str | None = None) -> Callable[..., Any]:
+    """A function calling `solve` with the analysis (or job kind) named, documented by its schema."""
     name = analysis["name"]
 
     def run(**fields: Any) -> Any:
-        return solve(analysis=name, **{k: v for k, v in fields.items() if v is not None})
+        return solve(name, **{k: v for k, v in fields.items() if v is not None})
 
     run.__name__ = run.__qualname__ = name
-    run.__doc__ = docstring(analysis)
+    run.__doc__ = docstring(analysis, returns) if returns else docstring(analysis)
     run.__signature__ = _signature(analysis)  # type: ignore[attr-defined]
     return run
 
 
 class Analyses:
-    """The server's analyses as methods (read once, when first asked)."""
+    """The server's analyses (or job kinds) as methods, read once, when first asked: each calls
+    `call(name, **fields)`."""
 
-    def __init__(self, listing: Callable[[], list[Schema]], solve: Callable[..., Any]):
+    def __init__(
+        self,
+        listing: Callable[[], list[Schema]],
+        call: Callable[..., Any],
+        what: str = "analysis",
+        returns: str | None = None,
+    ):
         self._listing = listing
-        self._solve = solve
+        self._call = call
+        self._what = what
+        self._returns = returns
         self._methods: dict[str, Callable[..., Any]] | None = None
 
     def _all(self) -> dict[str, Callable[..., Any]]:
         if self._methods is None:
-            self._methods = {a["name"]: method_of(a, self._solve) for a in self._listing()}
-            self.__doc__ = "Analyses of this server:\n\n" + "\n\n".join(
+            self._methods = {a["name"]: method_of(a, self._call, self._returns) for a in self._listing()}
+            self.__doc__ = f"The {self._what} methods of this server:\n\n" + "\n\n".join(
                 f"{name}(...)\n{method.__doc__}" for name, method in self._methods.items()
             )
         return self._methods
@@ -91,7 +103,7 @@ class Analyses:
             raise AttributeError(name)
         methods = self._all()
         if name not in methods:
-            raise AttributeError(f"the server has no analysis '{name}' (analyses: {', '.join(methods)})")
+            raise AttributeError(f"the server has no {self._what} '{name}' (choices: {', '.join(methods)})")
         return methods[name]
 
     def __dir__(self) -> list[str]:

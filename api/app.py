@@ -19,7 +19,8 @@ from api.analysis_requests import documented
 from api.errors import install_error_handlers
 from api.headers import SecurityHeaders
 from api.limits import BodySizeLimit
-from api.routers import contacts, drawings, examples, health, impact_studies, jobs, optimize, simulations, sweeps
+from api.routers import drawings, examples, health, jobs
+from api.routers.job_routes import job_router
 from api.routers.solve import solve_router
 from api.routers.workbench import mount_workbench
 from api.solver_pool import SolverPool
@@ -103,7 +104,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app = FastAPIOffline(title="flexmech", version="1", description=DESCRIPTION, lifespan=lifespan, redoc_url=None)
     install_error_handlers(app)
     app.include_router(solve_router())
-    for module in (sweeps, optimize, contacts, simulations, impact_studies, jobs, examples, drawings, health):
+    app.include_router(job_router())
+    for module in (jobs, examples, drawings, health):
         app.include_router(module.router)
     mount_workbench(app)
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_request_bytes, read_timeout=settings.request_read_timeout)

@@ -25,10 +25,17 @@ from pydantic import BaseModel, TypeAdapter
 
 from api.analysis_methods import Analyses
 from api.drawing_schemas import DrawingRequest
-from api.impact_study_schemas import ImpactStudyRequest
-from api.job_schemas import ContactPathRequest, JobResultResponse, JobStatusResponse, OptimizeRequest, SweepRequest
+from api.job_schemas import (
+    ContactPathRequest,
+    ImpactStudyRequest,
+    JobRequest,
+    JobResultResponse,
+    JobStatusResponse,
+    OptimizeRequest,
+    SimulationRequest,
+    SweepRequest,
+)
 from api.schemas import AnalysisReport, ExampleSummary, HealthResponse, SolveRequest, SolveResponse
-from api.simulation_schemas import SimulationRequest
 
 T = TypeVar("T")
 Progress = Callable[[JobStatusResponse], None]
@@ -117,6 +124,7 @@ class Client:
     ):
         self._http = httpx.Client(base_url=base_url, headers=_headers(api_key), timeout=timeout, transport=transport)
         self._analyze: Analyses | None = None
+        self._jobs: Analyses | None = None
 
     def __enter__(self) -> Client:
         return self
@@ -144,6 +152,25 @@ class Client:
     def _report(self, **fields: Any) -> AnalysisReport:
         return _parse(self._http.post("/v1/solve", json=_request_body(SolveRequest, None, fields)), AnalysisReport)
 
+    def job_kinds(self) -> list[dict]:
+        """The server's job kinds: name, route, summary and their options' JSON schema."""
+        return _parse(self._http.get("/v1/job-kinds"), list)
+
+    @property
+    def jobs(self) -> Analyses:
+        """A method per job kind of the server (`jobs.sweep(example="gripper", parameters=[...])`),
+        its options as keyword arguments, documented from its schema; each returns the new
+        job's status."""
+        if self._jobs is None:
+            routes = {kind["name"]: kind["route"] for kind in self.job_kinds()}
+
+            def start(kind: str, **fields: Any) -> JobStatusResponse:
+                body = _request_body(JobRequest, None, fields)
+                return _parse(self._http.post(routes[kind], json=body), JobStatusResponse)
+
+            self._jobs = Analyses(self.job_kinds, start, "job kind", "the new job's status (JobStatusResponse)")
+        return self._jobs
+
     def analyses(self) -> list[dict]:
         """The server's analyses: name, summary, sweepable, and their options' and results'
         JSON schemas."""
@@ -154,7 +181,7 @@ class Client:
         """A method per analysis of the server (`analyze.equilibrium(example="gripper",
         stiffness=True)`), its options as keyword arguments, documented from its schema."""
         if self._analyze is None:
-            self._analyze = Analyses(self.analyses, self._report)
+            self._analyze = Analyses(self.analyses, lambda name, **fields: self._report(analysis=name, **fields))
         return self._analyze
 
     def sweep(self, request: SweepRequest | None = None, **fields: Any) -> JobStatusResponse:
@@ -272,7 +299,7 @@ class AsyncClient:
             body = _request_body(SolveRequest, None, fields)
             return _parse(await self._http.post("/v1/solve", json=body), AnalysisReport)
 
-        return Analyses(lambda: listing, report)
+        return Analyses(lambda: listing, lambda name, **fields: report(analysis=name, **fields))
 
     async def sweep(self, request: SweepRequest | None = None, **fields: Any) -> JobStatusResponse:
         body = _request_body(SweepRequest, request, fields)

@@ -34,6 +34,7 @@ from api import job_schemas, schemas
 from models import MechanismError
 from models.errors import pointer_of
 from service.analyses import ANALYSES
+from service.jobs.kinds import job_kinds
 
 log = logging.getLogger("flexmech.api")
 
@@ -129,7 +130,8 @@ def _request_field_names() -> tuple[str, ...]:
         for m in vars(module).values()
         if isinstance(m, type) and issubclass(m, BaseModel)
     ]
-    return tuple(sorted(_fields_of(models + [a.Options for a in ANALYSES])))
+    kinds = [kind.Options for kind in job_kinds().values()]
+    return tuple(sorted(_fields_of(models + [a.Options for a in ANALYSES] + kinds)))
 
 
 def _taken_by(key: str, analysis: str | None) -> str:

@@ -188,3 +188,29 @@ def test_no_two_modules_of_models_share_a_name():
         if name.startswith("models.") and not name.endswith("__init__"):
             seen.setdefault(name.rsplit(".", 1)[1], []).append(name)
     assert not {stem: names for stem, names in seen.items() if len(names) > 1}
+
+
+# The one parser of the Newton options object (into NewtonOptions, naming a bad field), and
+# the document's inverse shapes (free-form in the document's schema: not a request's options).
+DICT_READERS_ALLOWED = {"service.requests", "service.inverse_links"}
+REQUEST_NAMES = ("spec", "request", "given", "options")
+
+
+def test_no_module_outside_api_reads_request_options_from_a_dict():
+    """Requests are typed where they arrive (issue 26): an analysis reads its Options model, a
+    job kind its typed spec (service.jobs.base.read_spec); nothing in models/ or service/ reads
+    a request's field out of a dict (`spec.get("x")`, `request["x"]`, ...)."""
+    found = []
+    for name, tree in trees().items():
+        if name.startswith("api") or name in DICT_READERS_ALLOWED:
+            continue
+        names = REQUEST_NAMES + (("stored",) if name.startswith("service.jobs") else ())  # a kind's raw spec
+        for node in ast.walk(tree):
+            read = None
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "get":
+                read = node.func.value
+            elif isinstance(node, ast.Subscript) and isinstance(node.slice, ast.Constant):
+                read = node.value if isinstance(node.slice.value, str) else None
+            if isinstance(read, ast.Name) and read.id in names:
+                found.append(f"{name}:{node.lineno} reads {read.id}[...]")
+    assert not found, found

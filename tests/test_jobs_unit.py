@@ -12,8 +12,10 @@ from models import MechanismError
 from models.assembly import graphs_for
 from service.analysis import Limits
 from service.jobs import sweep as sweep_kind
+from service.jobs.grids import grid_shape, load_paths
 from service.jobs.kinds import kind_named
 from service.jobs.store import JobStore
+from service.jobs.sweep_options import SweepSpec
 
 H = "/sections/flexure/h"
 
@@ -29,12 +31,13 @@ def spec():
 
 
 def test_cartesian_load_paths_run_along_the_continuation_axis(spec):
-    _, shape = sweep_kind.grid_shape(spec)
+    typed = SweepSpec.model_validate(spec)
+    _, shape = grid_shape(typed.parameters, typed.grid)
     assert shape == (2, 3)
-    assert sweep_kind.load_paths(spec, shape) == [[0, 1, 2], [3, 4, 5]]
-    spec["parameters"].reverse()  # force first: each path holds h and walks the force
-    assert sweep_kind.load_paths(spec, (3, 2)) == [[0, 2, 4], [1, 3, 5]]
-    assert sweep_kind.load_paths(dict(spec, continuation=None), (3, 2)) == [[i] for i in range(6)]
+    assert load_paths([H, ACTUATION], "cartesian", ACTUATION, shape) == [[0, 1, 2], [3, 4, 5]]
+    # force first: each path holds h and walks the force
+    assert load_paths([ACTUATION, H], "cartesian", ACTUATION, (3, 2)) == [[0, 2, 4], [1, 3, 5]]
+    assert load_paths([ACTUATION, H], "cartesian", None, (3, 2)) == [[i] for i in range(6)]
 
 
 def test_resumed_load_path_starts_from_the_last_converged_stored_state(spec):
@@ -77,7 +80,8 @@ def test_a_task_in_a_worker_reuses_its_mechanism_and_functions(spec):
         (lambda s: s["parameters"].append({"path": H, "values": [1]}), "/parameters", "a path is listed twice"),
         (lambda s: s["parameters"][0].update(path="/sections/flexure/q"), "/parameters/0/path", "not a numeric field"),
         (lambda s: s.update(outputs=["jaw.x"]), "/outputs/0", "unknown output 'jaw.x'"),
-        (lambda s: s["parameters"][1].update(values=[float("nan")]), "/parameters/1/values", "values must be finite"),
+        (lambda s: s["parameters"][1].update(values=[float("nan")]), "/parameters/1/values/0", "finite number"),
+        (lambda s: s.update(grid="hexagonal"), "/grid", "Input should be 'cartesian' or 'zip'"),
     ],
 )
 def test_bad_sweep_specs_name_the_field(spec, change, pointer, message):

@@ -2,7 +2,9 @@
 model and its report, then one line `ANALYSES.register(...)`), is served by /v1/solve and in
 /openapi.json, is a command of `flexmech` with its flags, a method of the Python client with
 its docstring, a choice of `flexmech batch --analysis`, and a form of the workbench (checked in
-Chromium), and runs through each of them.
+Chromium), and runs through each of them. Likewise a job kind of its own (its options, its
+typed spec and the contract of service.jobs.base, then `register_job_kind(...)`): a route, a
+client method, a choice of the workbench's Run menu.
 
 The server imports this module as a plugin (FLEXMECH_PLUGINS=tests.test_own_analysis), so its
 top-level imports are the package's only; the test helpers are imported inside the tests.
@@ -18,11 +20,14 @@ from typing import Literal
 
 import numpy as np
 import pytest
-from pydantic import Field
+from pydantic import ConfigDict, Field
 
 from models import Mechanism, MechanismError
-from service.analyses import ANALYSES, Analysis, AnalysisOptions, AnalysisResult
+from service.analyses import ANALYSES, Analysis, AnalysisOptions, AnalysisRequest, AnalysisResult
+from service.jobs.base import JSON, JobOptions, Plan, StoredJob, read_spec
+from service.jobs.kinds import register_job_kind
 from service.newton import NewtonOptions
+from service.requests import Limits, compile_request
 from service.stiffness import tangent_stiffness
 
 E, B, H, L = 2e11, 0.01, 0.001, 0.1  # Pa, m, m, m
@@ -67,6 +72,56 @@ class BodyStiffness(Analysis):
 
 
 ANALYSES.register(BodyStiffness())
+
+
+class StiffnessMapOptions(JobOptions):
+    body: str = Field(description="the body the force pushes")
+    path: str = Field(pattern=r"^/", description="the numeric field varied")
+    values: list[float] = Field(min_length=1, max_length=64, description="its values, document units")
+
+
+class StiffnessMapSpec(StoredJob, StiffnessMapOptions):
+    model_config = ConfigDict(extra="ignore")
+
+
+class StiffnessMap:
+    """A job: the body's stiffness across (body_stiffness) at each value of a numeric field."""
+
+    name, paged, Options = "stiffness_map", False, StiffnessMapOptions
+    route, operation_id, request_name = "stiffness-maps", "create_stiffness_map", "StiffnessMapRequest"
+    title, summary = "Start a stiffness map", "A job: a body's stiffness at each value of a numeric field."
+    description, examples = "One point per value.", []
+
+    def prepare(self, stored: JSON, limits: Limits) -> Plan:
+        spec = read_spec(StiffnessMapSpec, stored)
+        compile_request(spec.document, spec.model, spec.overrides, limits).parameter_index(spec.path)
+        return Plan(len(spec.values), {})
+
+    def tasks(self, stored: JSON, plan: JSON, finished, chunk_size: int) -> list[JSON]:
+        count = len(read_spec(StiffnessMapSpec, stored).values)
+        return [{"indices": [k]} for k in range(count) if k not in finished]
+
+    def follow_up(self, stored, plan, task, finished, chunk_size):
+        return []
+
+    def run(self, stored: JSON, task: JSON) -> list[tuple[int, JSON]]:
+        spec = read_spec(StiffnessMapSpec, stored)
+        mech = compile_request(spec.document, spec.model, spec.overrides)
+        points = []
+        for k in task["indices"]:
+            at = mech.with_values({spec.path: spec.values[k]})
+            report = BodyStiffness().run(at, AnalysisRequest(given={"body": spec.body}))
+            points.append((k, {"value": spec.values[k], "stiffness": report["stiffness"]}))
+        return points
+
+    def failed(self, point: JSON) -> bool:
+        return False
+
+    def result(self, stored: JSON, plan: JSON, finished) -> JSON:
+        return {"points": [finished[k] for k in sorted(finished)]}
+
+
+register_job_kind(StiffnessMap())
 
 CLAMPED_LINK = {
     "name": "clamped link",
@@ -178,6 +233,23 @@ def test_it_runs_in_batch(tmp_path):
     assert result["stiffness"] == pytest.approx(ACROSS, rel=1e-6)
 
 
+def test_a_job_kind_of_its_own_is_a_route_and_a_client_method(server):
+    import httpx
+
+    from api.client import Client
+
+    paths = httpx.get(server.url + "/openapi.json").json()["paths"]
+    assert paths["/v1/stiffness-maps"]["post"]["operationId"] == "create_stiffness_map"
+    heights = [0.001, 0.002]
+    with Client(server.url) as client:
+        assert "values (array, required): its values, document units" in client.jobs.stiffness_map.__doc__
+        job = client.jobs.stiffness_map(document=CLAMPED_LINK, body="tip", path="/sections/strip/h", values=heights)
+        assert client.wait(job.id, timeout=120).status == "succeeded"
+        points = client.result(job.id).result["points"]
+    # 3 E I / L^3 with I = b h^3 / 12: twice the height, eight times the stiffness
+    assert [p["stiffness"] for p in points] == pytest.approx([ACROSS, 8 * ACROSS], rel=1e-6)
+
+
 def test_it_is_a_form_of_the_workbench(server):
     from browser import CHROMIUM_FLAGS, chromium_path
     from playwright.sync_api import sync_playwright
@@ -192,6 +264,7 @@ def test_it_is_a_form_of_the_workbench(server):
         assert page.text_content("label[for=option-body]") == "Body"
         assert page.get_attribute("#option-body", "title") == "the body the force pushes"
         assert page.input_value("#option-direction") == "y"
+        assert page.locator("#analysis option[value='job:stiffness_map']").count() == 1  # the job kind too
         page.fill("#option-body", "tip")
         page.click("#run")
         page.wait_for_function(

@@ -183,6 +183,7 @@ def test_openapi_operation_ids_are_stable(api_server):
         "get_example",
         "health",
         "list_analyses",
+        "list_job_kinds",
     }
 
 

@@ -4,17 +4,19 @@ branch), friction sliding against the motion from the previous state."""
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from models import Mechanism, MechanismError
+from models.contact.schema import PathParameter
 from service.contact.drawing import state_drawing
 from service.contact.problem import ContactProblem
 from service.contact.report import friction_coefficients, pairs_report
 from service.contact.solve import ContactOptions, ContactState, empty_mode, solve_state
-from service.jobs.sweep import parameter_values, value_count
+from service.jobs.grids import Ranged, parameter_values, value_count
 
 
 @dataclass(frozen=True)
@@ -30,7 +32,7 @@ class PathFields:
         return [v[index] for v in self.values]
 
 
-def path_count(parameters: list[dict], pointer: str = "/path") -> int:
+def path_count(parameters: Sequence[Ranged], pointer: str = "/path") -> int:
     """How many states a path has, checked before any value is made (all fields change
     together, so each gives as many values)."""
     counts = [value_count(p, f"{pointer}/{k}") for k, p in enumerate(parameters)]
@@ -43,18 +45,21 @@ def path_count(parameters: list[dict], pointer: str = "/path") -> int:
     return counts[0]
 
 
-def path_fields(mech: Mechanism, parameters: list[dict], pointer: str = "/path") -> PathFields:
+def path_fields(mech: Mechanism, given: Sequence[Ranged | Mapping[str, Any]], pointer: str = "/path") -> PathFields:
+    """The fields' values along the path, checked (a mapping is read as the document's
+    PathParameter first)."""
+    parameters = [p if not isinstance(p, Mapping) else PathParameter.model_validate(p) for p in given]
     path_count(parameters, pointer)
     pointers, values = [], []
     for k, parameter in enumerate(parameters):
         try:
-            mech.parameter_index(parameter["path"])
+            mech.parameter_index(parameter.path)
         except MechanismError as exc:
             raise MechanismError(f"{pointer}/{k}/path", exc.problem) from None
         these = parameter_values(parameter, f"{pointer}/{k}")
         for value in these:
-            mech.checked_si(parameter["path"], value, f"{pointer}/{k}")
-        pointers.append(parameter["path"])
+            mech.checked_si(parameter.path, value, f"{pointer}/{k}")
+        pointers.append(parameter.path)
         values.append(tuple(these))
     if len(set(pointers)) != len(pointers):
         raise MechanismError(pointer, "a field is listed twice")

@@ -21,6 +21,8 @@ import copy
 import json
 import threading
 from collections import OrderedDict
+from collections.abc import Sequence
+from typing import Protocol
 
 import numpy as np
 
@@ -30,17 +32,22 @@ from models.simulation_spec import SimulateSpec
 from service.impacts.run import Histories, run_with_histories
 
 
-def study_fields(document: dict, fields: list[dict]) -> list[tuple[str, float]]:
+class StudyField(Protocol):
+    path: str
+    step: float
+
+
+def study_fields(document: dict, fields: Sequence[StudyField]) -> list[tuple[str, float]]:
     """(pointer, step) per field, each a number of the document."""
     out = []
     for k, item in enumerate(fields):
-        pointer, step = item.get("path"), item.get("step")
+        pointer, step = item.path, item.step
         where = f"/study/fields/{k}"
-        if not isinstance(pointer, str) or not pointer.startswith("/"):
+        if not pointer.startswith("/"):
             raise MechanismError(
                 f"{where}/path", "give the field as a JSON pointer into the document, e.g. /contacts/sites/pin/radius"
             )
-        if not isinstance(step, (int, float)) or isinstance(step, bool) or step == 0:
+        if step == 0:
             raise MechanismError(f"{where}/step", "give a non-zero number: the field moves by +step and -step")
         value = _at(document, pointer, f"{where}/path")
         if not isinstance(value, (int, float)) or isinstance(value, bool):

@@ -12,14 +12,23 @@ persisted when it finishes. A kind says:
   result(spec, plan, finished)       the job's result from its points (a page of them, if paged)
 Tasks and point data are JSON-able dicts, so they travel to process pools and Dask workers
 and are stored as they are. The runner and the store know nothing else about a kind.
+
+A kind also says how it is asked for: its `Options` (a pydantic model of its request's own
+fields, beside the common ones of StoredJob) and its route; the HTTP route, its OpenAPI
+schema, the client's method and the workbench's form are made from them (api.routers.job_routes).
+The stored spec is the request as JSON; a kind reads it back as its typed spec (`Spec`), never
+field by field from the dict.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Any, ClassVar, Protocol, TypeVar
 
+from pydantic import BaseModel, ConfigDict, ValidationError
+
+from models.errors import MechanismError, pointer_of
 from service.requests import Limits
 
 JSON = dict[str, Any]  # a stored spec, plan, task or point: JSON objects
@@ -31,9 +40,48 @@ class Plan:
     meta: dict[str, Any] = field(default_factory=dict)  # JSON-able facts for result(): units, names
 
 
+class JobOptions(BaseModel):
+    """A kind's own request fields; each field's description is the help the API, the client
+    and the workbench show."""
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+
+StoredJobT = TypeVar("StoredJobT", bound="StoredJob")
+
+
+class StoredJob(BaseModel):
+    """What every stored job holds besides its kind's options: the mechanism and how to solve it."""
+
+    model_config = ConfigDict(extra="ignore")
+
+    document: dict[str, Any]
+    model: str | None = None
+    overrides: dict[str, float | str] | None = None
+    options: dict[str, Any] | None = None  # Newton options as given: service.requests.newton_options checks them
+
+
+def read_spec(model: type[StoredJobT], stored: JSON) -> StoredJobT:
+    """A stored spec as the kind's typed spec; a problem (a Python caller's spec: the API's
+    have been checked already) is a MechanismError naming the field."""
+    try:
+        return model.model_validate(stored)
+    except ValidationError as exc:
+        first = exc.errors()[0]
+        raise MechanismError(pointer_of(tuple(first["loc"])), first["msg"].removeprefix("Value error, ")) from None
+
+
 class JobKind(Protocol):
     name: str
     paged: bool  # its result lists its points, so GET /result may page them (False: it needs them all)
+    Options: ClassVar[type[JobOptions]]
+    route: str  # POST /v1/<route>
+    operation_id: str
+    request_name: str  # its request's name in the OpenAPI document
+    title: str
+    summary: str
+    description: str
+    examples: list[JSON]
 
     def prepare(self, spec: JSON, limits: Limits) -> Plan: ...
 

@@ -13,8 +13,12 @@ spec:
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import Literal
 
-from models import MechanismError
+from pydantic import ConfigDict, Field
+
+from models import Mechanism, MechanismError
+from models.contact.schema import PathParameter
 from service.contact.path import (
     default_outputs,
     follow,
@@ -28,26 +32,62 @@ from service.contact.problem import contact_problem
 from service.contact.report import penetration_error
 from service.contact.solve import ContactOptions, PenetratingStart
 from service.costs import Limits, check_grid_size, check_result_size
-from service.jobs.base import InOrder, Plan
+from service.jobs.base import JSON, InOrder, JobOptions, Plan, StoredJob, read_spec
 from service.jobs.control import TaskControl
 from service.jobs.sweep import mechanism_of
+from service.jobs.sweep_options import SweepParameter
 from service.requests import compile_request, newton_options, under
 
 
-def path_parameters(spec: dict) -> list[dict]:
-    if spec.get("path"):
-        return spec["path"]
-    contacts = (spec.get("document") or {}).get("contacts") or {}
-    if not (contacts.get("path") or {}).get("parameters"):
+class ContactPathOptions(JobOptions):
+    path: list[SweepParameter] | None = Field(
+        None,
+        min_length=1,
+        max_length=8,
+        description="fields that change together along the path",
+        json_schema_extra={"document_default": "/contacts/path/parameters/0"},
+    )
+    outputs: list[str] | None = Field(
+        None, min_length=1, max_length=256, description="outputs kept per state (default: every pair's results)"
+    )
+    penetrating_start: Literal["approach", "refuse"] = Field(
+        "approach", description="an object inside a site at the first state is approached from outside, or refused"
+    )
+
+
+class ContactPathSpec(StoredJob, ContactPathOptions):
+    model_config = ConfigDict(extra="ignore")
+
+
+EXAMPLES = [
+    {"example": "gripper_jaw_contact"},
+    {
+        "example": "gripper_jaw_contact",
+        "outputs": ["contacts.insertion.force_x"],
+        "path": [{"path": "/contacts/objects/fixture/centre/0", "start": 78, "stop": 50, "steps": 28}],
+    },
+    {
+        "example": "gripper_jaw_contact",
+        "path": [{"path": "/contacts/objects/fixture/centre/0", "start": 78, "stop": 50, "steps": 10**12}],
+    },
+]
+
+
+def path_parameters(spec: ContactPathSpec, mech: Mechanism) -> list[SweepParameter] | list[PathParameter]:
+    """The request's path, else the document's contacts.path."""
+    if spec.path:
+        return spec.path
+    declared = mech.document.contacts.path if mech.document.contacts is not None else None
+    if declared is None:
         raise MechanismError(
             "/path", "a contact path needs fields to change: give path, or contacts.path in the document"
         )
-    return contacts["path"]["parameters"]
+    return declared.parameters
 
 
-def wanted_outputs(spec: dict, problem) -> list[str]:
-    contacts = (spec.get("document") or {}).get("contacts") or {}
-    wanted = spec.get("outputs") or (contacts.get("path") or {}).get("outputs") or default_outputs(problem)
+def wanted_outputs(spec: ContactPathSpec, mech: Mechanism, problem) -> list[str]:
+    declared = mech.document.contacts.path if mech.document.contacts is not None else None
+    wanted = spec.outputs or (declared.outputs if declared is not None else None) or default_outputs(problem)
     for k, name in enumerate(wanted):
         if name not in problem.output_names:
             raise MechanismError(f"/outputs/{k}", f"unknown output '{name}'")
@@ -57,15 +97,27 @@ def wanted_outputs(spec: dict, problem) -> list[str]:
 class ContactJob(InOrder):
     name = "contact"
     paged = True
+    Options = ContactPathOptions
+    route, operation_id, request_name = "contacts", "create_contact_path", "ContactPathRequest"
+    title = "Start a contact path job"
+    summary = (
+        "A job: a quasi-static contact path (fields changing together, state after state, each from the one "
+        "before); without `path`, the document's contacts.path."
+    )
+    description = "Every state is stored as soon as it is solved; read them at /v1/jobs/{id}/result."
+    examples = EXAMPLES
 
-    def prepare(self, spec: dict, limits: Limits) -> Plan:
-        parameters = path_parameters(spec)
+    def prepare(self, stored: JSON, limits: Limits) -> Plan:
+        spec = read_spec(ContactPathSpec, stored)
+        if spec.path:  # the request's own path is counted before the document is compiled
+            check_grid_size([path_count(spec.path)], limits, "/path")
+        mech = compile_request(spec.document, spec.model, spec.overrides, limits)
+        parameters = path_parameters(spec, mech)
         total = check_grid_size([path_count(parameters)], limits, "/path")
-        mech = compile_request(spec["document"], spec.get("model"), spec.get("overrides"), limits)
-        newton_options(spec.get("options"))
+        newton_options(spec.options)
         problem = contact_problem_of(mech)
         fields = path_fields(mech, parameters)
-        outputs = wanted_outputs(spec, problem)
+        outputs = wanted_outputs(spec, mech, problem)
         drawn = 3 * sum(count for _, count in problem.drawn_links) + sum(count for _, count, _ in problem.drawn_jaws)
         per_state = len(outputs) + problem.n_w + problem.n_eq + problem.n_in + 2 * problem.n_pairs
         check_result_size(total, per_state + 2 * (drawn + 73 * problem.n_pairs), limits)
@@ -81,7 +133,7 @@ class ContactJob(InOrder):
         }
         return Plan(total, meta)
 
-    def failed(self, point: dict) -> bool:
+    def failed(self, point: JSON) -> bool:
         return point.get("status") != "converged"
 
     @staticmethod
@@ -99,19 +151,18 @@ class ContactJob(InOrder):
             "time_limit": plan.get("solve_time_limit"),
         }
 
-    def run(self, spec, task):
+    def run(self, stored: JSON, task: JSON) -> list[tuple[int, JSON]]:
+        spec = read_spec(ContactPathSpec, stored)
         mech = mechanism_of(spec)
         problem = contact_problem(mech.structure)
-        fields = path_fields(mech, path_parameters(spec))
-        outputs = wanted_outputs(spec, problem)
+        fields = path_fields(mech, path_parameters(spec, mech))
+        outputs = wanted_outputs(spec, mech, problem)
         control = TaskControl(task)
         previous = None
         if task.get("resume") is not None:
             previous = resumed_state(problem, parameters_at(mech, fields, task["resume"]), task["resume_state"])
         time_limit = control.time_limit(task.get("time_limit"))
-        options = ContactOptions(
-            spec.get("penetrating_start") or "approach", newton_options(spec.get("options"), time_limit).time_limit
-        )
+        options = ContactOptions(spec.penetrating_start, newton_options(spec.options, time_limit).time_limit)
         points = []
         try:
             for index, state in follow(mech, problem, fields, task["indices"], previous, options, control.should_stop):
@@ -120,7 +171,7 @@ class ContactJob(InOrder):
             raise penetration_error(mech, error) from None
         return points
 
-    def result(self, spec, plan, finished):
+    def result(self, stored: JSON, plan: JSON, finished: Mapping[int, JSON]) -> JSON:
         points = [{"index": i, **{k: v for k, v in d.items() if k != "state"}} for i, d in sorted(finished.items())]
         return {
             "parameters": plan["parameters"],

@@ -11,14 +11,18 @@ spec:
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import Any
+
+from pydantic import BaseModel, ConfigDict, Field
 
 from models import MechanismError
 from models.simulation_spec import IMPACT_SCHEMES
+from service.analyses.simulate import SimulateOverrides
 from service.costs import Limits, check_grid_size
 from service.dynamics.run import simulation_spec
 from service.impacts.run import check_cost, check_memory, model_of
 from service.impacts.study import legacy_influence, study_fields, study_point, with_overrides
-from service.jobs.base import Plan
+from service.jobs.base import JSON, JobOptions, Plan, StoredJob, read_spec
 from service.jobs.control import TaskControl
 from service.requests import compile_request
 
@@ -26,12 +30,63 @@ DEFAULT_TOLERANCE = 0.05
 RUN_BYTES = 192 * 2**20  # the memory one run's states may take (a task holds the nominal run's and one other)
 
 
-def _document(spec: dict) -> dict:
-    return with_overrides(spec["document"], spec.get("overrides"))
+class StudyField(BaseModel):
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+    path: str = Field(pattern=r"^/", max_length=256, description="a number of the document, by JSON pointer")
+    step: float = Field(description="it moves by +step and by -step, in the document's units")
 
 
-def _runs(spec: dict) -> list[tuple[str | None, float]]:
-    fields = study_fields(_document(spec), (spec.get("study") or {}).get("fields") or [])
+class ImpactStudy(BaseModel):
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+    fields: list[StudyField] = Field(min_length=1, max_length=64, description="the numbers varied, one at a time")
+    tolerance: float = Field(
+        DEFAULT_TOLERANCE,
+        gt=0,
+        lt=1,
+        description="a run departs from the nominal one when a quantity differs by more than this fraction of its "
+        "nominal range",
+    )
+
+
+class ImpactStudyOptions(JobOptions):
+    simulate: SimulateOverrides | None = Field(  # type: ignore[valid-type]
+        None,
+        description="fields of the document's `simulate` section over it",
+        json_schema_extra={"document_default": "/simulate"},
+    )
+    study: ImpactStudy = Field(description="the fields varied and the departure tolerance")
+
+
+class ImpactStudySpec(StoredJob, ImpactStudyOptions):
+    model_config = ConfigDict(extra="ignore")
+
+    def simulate_given(self) -> dict[str, Any]:
+        """The request's fields over the document's simulate section."""
+        return self.simulate.model_dump(exclude_none=True) if self.simulate is not None else {}  # type: ignore[attr-defined]
+
+
+EXAMPLES = [
+    {
+        "example": "csfh",
+        "simulate": {"until": 0.3},
+        "study": {
+            "fields": [
+                {"path": "/contacts/sites/pin/radius", "step": 0.001},
+                {"path": "/bodies/hinge/mass", "step": 0.1},
+            ]
+        },
+    },
+]
+
+
+def _document(spec: ImpactStudySpec) -> dict:
+    return with_overrides(spec.document, spec.overrides)
+
+
+def _runs(spec: ImpactStudySpec) -> list[tuple[str | None, float]]:
+    fields = study_fields(_document(spec), spec.study.fields)
     runs: list[tuple[str | None, float]] = [(None, 0.0)]
     for pointer, step in fields:
         runs += [(pointer, step), (pointer, -step)]
@@ -41,21 +96,23 @@ def _runs(spec: dict) -> list[tuple[str | None, float]]:
 class ImpactStudyJob:
     name = "impact_study"
     paged = False
+    Options = ImpactStudyOptions
+    route, operation_id, request_name = "impact-studies", "create_impact_study", "ImpactStudyRequest"
+    title = "Start a parametric study of an impact simulation"
+    summary = "A job: seed 004's parametric study of an impact simulation, one field at a time."
+    description = "Each run is stored as it finishes; the result ranks the fields by how early they change the motion."
+    examples = EXAMPLES
 
-    def prepare(self, spec: dict, limits: Limits) -> Plan:
-        mech = compile_request(spec["document"], spec.get("model"), spec.get("overrides"), limits)
-        simulate = simulation_spec(mech, spec.get("simulate"))
+    def prepare(self, stored: JSON, limits: Limits) -> Plan:
+        spec = read_spec(ImpactStudySpec, stored)
+        mech = compile_request(spec.document, spec.model, spec.overrides, limits)
+        simulate = simulation_spec(mech, spec.simulate_given())
         if simulate.scheme not in IMPACT_SCHEMES:
             raise MechanismError(
                 "/simulate/scheme",
                 f"an impact study runs an impact scheme ({', '.join(IMPACT_SCHEMES)}), not {simulate.scheme}",
             )
-        tolerance = (spec.get("study") or {}).get("tolerance", DEFAULT_TOLERANCE)
-        if not isinstance(tolerance, (int, float)) or not 0 < tolerance < 1:
-            raise MechanismError(
-                "/study/tolerance",
-                "give the departure tolerance as a fraction in (0, 1) of each quantity's nominal range",
-            )
+        tolerance = spec.study.tolerance
         runs = _runs(spec)
         check_grid_size([len(runs)], limits, "/study/fields")
         check_cost(simulate, limits.max_simulation_steps)
@@ -81,9 +138,10 @@ class ImpactStudyJob:
     def follow_up(self, spec, plan, task, finished, chunk_size):
         return []
 
-    def run(self, spec, task):
+    def run(self, stored: JSON, task: JSON) -> list[tuple[int, JSON]]:
+        spec = read_spec(ImpactStudySpec, stored)
         runs, control = _runs(spec), TaskControl(task)
-        tolerance = (spec.get("study") or {}).get("tolerance", DEFAULT_TOLERANCE)
+        tolerance = spec.study.tolerance
         points = []
         for index in task["indices"]:
             if control.should_stop():
@@ -91,7 +149,7 @@ class ImpactStudyJob:
             pointer, change = runs[index]
             run = study_point(
                 _document(spec),
-                spec.get("simulate"),
+                spec.simulate_given(),
                 pointer,
                 change,
                 tolerance,
@@ -106,7 +164,7 @@ class ImpactStudyJob:
     def failed(self, point: dict) -> bool:
         return point.get("status") != "finished"
 
-    def result(self, spec: dict, plan: dict, finished: Mapping[int, dict]) -> dict:
+    def result(self, stored: JSON, plan: JSON, finished: Mapping[int, JSON]) -> JSON:
         nominal = finished.get(0)
         fields: dict[str, dict] = {}
         if nominal is not None:

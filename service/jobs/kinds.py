@@ -1,7 +1,8 @@
 """The registry of job kinds (one line per kind), and the function workers run.
 
-The kinds are loaded when first asked for, not when this module is imported, so a worker
-loads the solvers only when it first runs a task. The contract is service.jobs.base.
+The built-in kinds are loaded when first asked for, not when this module is imported, so a
+worker loads the solvers only when it first runs a task; a plugin module (FLEXMECH_PLUGINS)
+adds its own with one line, `register_job_kind(...)`. The contract is service.jobs.base.
 """
 
 from __future__ import annotations
@@ -11,11 +12,30 @@ from functools import lru_cache
 from service.jobs.base import JobKind, Plan
 from service.threads import single_threaded_blas
 
-__all__ = ["JobKind", "Plan", "job_kinds", "kind_named", "run_task"]
+__all__ = ["JobKind", "Plan", "job_kinds", "kind_named", "register_job_kind", "run_task"]
+
+_REGISTERED: dict[str, JobKind] = {}  # kinds of plugins, beside the built-in ones
+
+
+def register_job_kind(kind: JobKind) -> JobKind:
+    """Add a kind: the app made after this serves its route (api.routers.job_routes)."""
+    if _REGISTERED.get(kind.name, kind) is not kind:
+        raise ValueError(f"a job kind named '{kind.name}' is registered already")
+    _REGISTERED[kind.name] = kind  # (not checked against the built-in ones here: loading them may load this plugin)
+    return kind
+
+
+def job_kinds() -> dict[str, JobKind]:
+    """Every kind: the built-in ones, then the registered ones."""
+    built_in = _built_in()
+    taken = sorted(set(built_in) & set(_REGISTERED))
+    if taken:
+        raise ValueError(f"a registered job kind has a built-in kind's name: {', '.join(taken)}")
+    return {**built_in, **_REGISTERED}
 
 
 @lru_cache(maxsize=1)
-def job_kinds() -> dict[str, JobKind]:
+def _built_in() -> dict[str, JobKind]:
     from service.jobs.contact import CONTACT
     from service.jobs.impact_study import IMPACT_STUDY
     from service.jobs.optimize import OPTIMIZE

@@ -13,26 +13,66 @@ from __future__ import annotations
 import json
 from collections.abc import Mapping
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
+from pydantic import ConfigDict, Field
 
 from models import MechanismError
 from models.document import parse_optimize_spec
 from service.design import DesignProblem, design_problem
-from service.jobs.base import Plan
+from service.jobs.base import JSON, JobOptions, Plan, StoredJob, read_spec
 from service.jobs.control import TaskControl
 from service.optimize import Prepared, StartResult, combine, prepare, run_start
 from service.reports import plain
 from service.requests import Limits, compile_request, under
 
 
-def problem_of(spec: dict) -> DesignProblem:
-    return _problem(
-        json.dumps(spec["document"], sort_keys=True),
-        spec.get("model"),
-        json.dumps(spec.get("overrides") or {}, sort_keys=True),
-        json.dumps(spec.get("problem"), sort_keys=True),
+class OptimizeOptions(JobOptions):
+    problem: dict[str, Any] | None = Field(
+        None,
+        description="design problem, in the shape of the document's optimize section (checked as it is): design "
+        "[{path, lower, upper, scale}], objective {output, case, sense}, constraints [{output, case, lower, upper | "
+        "equals}], cases {name: {overrides}}, starts, seed, max_iterations, tolerance (default: the document's "
+        "optimize section)",
+        json_schema_extra={"document_default": "/optimize"},
     )
+
+
+class OptimizeJobSpec(StoredJob, OptimizeOptions):
+    model_config = ConfigDict(extra="ignore")
+
+
+EXAMPLES = [
+    {"example": "grasper_shape"},
+    {
+        "example": "grasper_shape",
+        "problem": {
+            "design": [
+                {"path": "/elements/link/length", "lower": 0.0508, "upper": 0.085},
+                {"path": "/elements/link/shape/coefficients/0", "lower": 0, "upper": 2},
+            ],
+            "objective": {"output": "reactions.tip.Fy"},
+            "constraints": [{"output": "elements.link.x_end_undeformed", "equals": 0.0508}],
+            "starts": 2,
+        },
+    },
+]
+
+
+def _key(stored: JSON) -> tuple[str, str | None, str, str]:
+    """What a design problem is compiled from, as text (the caches' key)."""
+    spec = read_spec(OptimizeJobSpec, stored)
+    return (
+        json.dumps(spec.document, sort_keys=True),
+        spec.model,
+        json.dumps(spec.overrides or {}, sort_keys=True),
+        json.dumps(spec.problem, sort_keys=True),
+    )
+
+
+def problem_of(stored: JSON) -> DesignProblem:
+    return _problem(*_key(stored))
 
 
 @lru_cache(maxsize=8)
@@ -55,15 +95,8 @@ def _prepared(key: tuple) -> Prepared:
     return prepare(_problem(*key))
 
 
-def prepared_of(spec: dict) -> Prepared:
-    return _prepared(
-        (
-            json.dumps(spec["document"], sort_keys=True),
-            spec.get("model"),
-            json.dumps(spec.get("overrides") or {}, sort_keys=True),
-            json.dumps(spec.get("problem"), sort_keys=True),
-        )
-    )
+def prepared_of(stored: JSON) -> Prepared:
+    return _prepared(_key(stored))
 
 
 def start_from_point(data: dict) -> StartResult:
@@ -76,6 +109,19 @@ def start_from_point(data: dict) -> StartResult:
 class OptimizeJob:
     name = "optimize"
     paged = False  # the result is the best start: it needs every start (at most 64)
+    Options = OptimizeOptions
+    route, operation_id, request_name = "optimize", "create_optimization", "OptimizeRequest"
+    title = "Start an optimization job"
+    summary = (
+        "A job: a design problem solved as one NLP (design variables and every load case's equilibrium), from one "
+        "or more starts."
+    )
+    description = (
+        "Each start is a point of the job, stored when it finishes; the result (at /v1/jobs/{id}/result) is the "
+        "best feasible start with its multipliers, iterations and history, or status infeasible with how far each "
+        "constraint stays from its bounds."
+    )
+    examples = EXAMPLES
 
     def prepare(self, spec: dict, limits: Limits) -> Plan:
         problem = problem_of(spec)

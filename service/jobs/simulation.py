@@ -12,10 +12,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from typing import Any
+
+from pydantic import ConfigDict
 
 from models import MechanismError
 from models.contact.elastic_pairs import check_link_dynamics
 from models.simulation_spec import IMPACT_SCHEMES
+from service.analyses.simulate import SimulateOptions
 from service.costs import Limits, check_result_size
 from service.dynamics.histories import read_histories
 from service.dynamics.integrate import Resume, integrate
@@ -37,10 +41,31 @@ from service.dynamics.run import (
     with_balance,
 )
 from service.dynamics.stepping import WINDOW
-from service.jobs.base import InOrder, Plan
+from service.jobs.base import JSON, InOrder, JobOptions, Plan, StoredJob, read_spec
 from service.jobs.control import TaskControl
 from service.jobs.sweep import mechanism_of
 from service.requests import compile_request, under
+
+
+class SimulationOptions(JobOptions, SimulateOptions):
+    """The simulate analysis' options (one model: service.analyses.simulate)."""
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+
+class SimulationSpec(StoredJob, SimulationOptions):
+    model_config = ConfigDict(extra="ignore")
+
+    def overrides_of_simulate(self) -> dict[str, Any]:
+        """The request's fields over the document's simulate section."""
+        return self.simulate.model_dump(exclude_none=True) if self.simulate is not None else {}
+
+
+EXAMPLES = [
+    {"example": "spinning_rod_case1", "simulate": {"until": 2.0, "step": 0.01}},
+    {"example": "four_bar_dynamics", "simulate": {"until": 0.1}},
+    {"example": "spinning_rod_case1", "simulate": {"until": 1e9, "step": 1e-6}},
+]
 
 WINDOWS = 100  # a run is stored in about this many windows (points), each a whole number of step windows
 
@@ -48,10 +73,20 @@ WINDOWS = 100  # a run is stored in about this many windows (points), each a who
 class SimulationJob(InOrder):
     name = "simulation"
     paged = True
+    Options = SimulationOptions
+    route, operation_id, request_name = "simulations", "create_simulation", "SimulationRequest"
+    title = "Start a simulation job"
+    summary = (
+        "A job: a time simulation by the document's `simulate` section (with `simulate` over it), stored per time "
+        "window as it runs."
+    )
+    description = "Every time window is stored as soon as it is integrated; read them at /v1/jobs/{id}/result."
+    examples = EXAMPLES
 
-    def prepare(self, spec: dict, limits: Limits) -> Plan:
-        mech = simulated(compile_request(spec["document"], spec.get("model"), spec.get("overrides"), limits))
-        simulate = simulation_spec(mech, spec.get("simulate"))
+    def prepare(self, stored: JSON, limits: Limits) -> Plan:
+        spec = read_spec(SimulationSpec, stored)
+        mech = simulated(compile_request(spec.document, spec.model, spec.overrides, limits))
+        simulate = simulation_spec(mech, spec.overrides_of_simulate())
         if simulate.scheme in IMPACT_SCHEMES:
             raise MechanismError(
                 "/simulate/scheme",
@@ -108,9 +143,10 @@ class SimulationJob(InOrder):
             "max_steps": plan.get("max_steps"),
         }
 
-    def run(self, spec, task):
+    def run(self, stored: JSON, task: JSON) -> list[tuple[int, JSON]]:
+        spec = read_spec(SimulationSpec, stored)
         mech = simulated(mechanism_of(spec))
-        simulate = simulation_spec(mech, spec.get("simulate"))
+        simulate = simulation_spec(mech, spec.overrides_of_simulate())
         histories = read_histories(mech, simulate.histories, simulate.until, "/simulate/histories")
         control = TaskControl(task)
         p, scheme = mech.p(), scheme_of(simulate)
@@ -153,7 +189,7 @@ class SimulationJob(InOrder):
             at, x0 = history.resume, None
         return points
 
-    def result(self, spec, plan, finished):
+    def result(self, stored: JSON, plan: JSON, finished: Mapping[int, JSON]) -> JSON:
         windows = [finished[i] for i in sorted(finished)]
         joined = {
             "times": [],
