@@ -1,6 +1,6 @@
 """Parsing request bodies away from the event loop's interpreter.
 
-The strict reader (models.reading: duplicate keys, nesting depth) is Python: a 0.9 MB body of
+The strict reader (models.documents.reading: duplicate keys, nesting depth) is Python: a 0.9 MB body of
 ten thousand small objects takes 0.26 s of it. On a thread of the server that time is taken
 from the event loop in 5 ms slices, so eight clients sending such bodies held /v1/health at a
 p99 of 259 ms. A body of LARGE_BODY bytes or more is therefore parsed in a parser process (a
@@ -18,7 +18,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 from api.errors import ApiError
 from models import MechanismError
-from models.reading import DuplicateKey, parse_json
+from models.documents.reading import DuplicateKey, parse_json
 
 log = logging.getLogger("flexmech.bodies")
 

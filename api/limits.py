@@ -3,7 +3,7 @@
 - Size: counted as it arrives, so a chunked request without Content-Length is stopped too (413).
 - Time: the whole body must arrive within read_timeout seconds; a client that declares more
   than it sends no longer holds a connection forever (408).
-- JSON: parsed once here with the document reader's bounds (models.reading): nesting deeper
+- JSON: parsed once here with the document reader's bounds (models.documents.reading): nesting deeper
   than 64 levels or an integer of thousands of digits is malformed_json (400), a key given
   twice in one object is duplicate_key (422: the text is JSON, its meaning is not), never a
   merged object, a recursion error or a 500. The parse runs on one thread beside the

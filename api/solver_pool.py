@@ -34,7 +34,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 from api.errors import ApiError
 from models import MechanismError
-from models.graph_cache import defer_saves, flush_saves
+from models.caches.graph_cache import defer_saves, flush_saves
 from service.deadline import call_scope
 
 log = logging.getLogger("flexmech.solvers")

@@ -9,7 +9,7 @@ power law fitted to the seconds per step between 16 and 128 elements (1: linear)
 flexmech's side is the stepping alone (service.dynamics.integrate from the static start on the
 kernels), as the report's `seconds` counts it. Printed apart, per element count: the report of
 the run (its outputs' graphs built for the new structure, then evaluated on the kept states),
-and the first statics solve of the same structure in the process (service.equilibrium: it
+and the first statics solve of the same structure in the process (service.solvers.equilibrium: it
 builds the dense residual form and its tangent), both on an empty graph cache.
 
 The peer: pip install "flexmech[bench]" (exudyn). Run from the repository root:
@@ -58,8 +58,8 @@ def stepping(mech, until: float) -> tuple[float, float, float, float]:
 
 def first_statics_solve(mech) -> float:
     """Seconds of the first statics solve of the structure (its residual form built anew)."""
-    from models.assembly import _symbolic
-    from service.equilibrium import solve_equilibrium
+    from models.graph.assembly import _symbolic
+    from service.solvers.equilibrium import solve_equilibrium
 
     _symbolic.cache_clear()  # the report's expressions are not reused: a structure new to the process
     started = time.perf_counter()

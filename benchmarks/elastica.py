@@ -25,7 +25,7 @@ from scipy.integrate import solve_bvp
 
 from models import compile_mechanism, load_document
 from service import NewtonOptions, solve_equilibrium
-from service.fastpath import FastPath
+from service.solvers.fastpath import FastPath
 from tests.elastica_oracles import cantilever_tip
 
 EI, L, F = 0.08, 0.1016, 15.0

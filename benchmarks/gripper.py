@@ -5,7 +5,7 @@
     giving the configuration and the end-effector trajectory at every point),
 
 through flexmech's compiled fast path, its plain Python API (service.solve_equilibrium /
-service.sweep), and the peer: scipy.optimize.root (hybr, finite-difference Jacobian) on the
+service.solvers.sweep), and the peer: scipy.optimize.root (hybr, finite-difference Jacobian) on the
 same residual written in numpy. Prints medians and ratios; run as a script:
 
     python3 benchmarks/gripper.py [--model partial_nonlinear|linear] [--repeats N] [--sweep-repeats N]
@@ -23,7 +23,7 @@ from scipy.optimize import root
 
 from models import compile_mechanism, load_document
 from service import NewtonOptions, solve_equilibrium, solve_for_target, sweep
-from service.fastpath import FastPath
+from service.solvers.fastpath import FastPath
 
 try:
     from benchmarks.numpy_peer import NumpyGripperResidual

@@ -44,10 +44,10 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
+from models.beams.curved_beam_closed_form import stiffness
 from models.contact.laws.penalty import hertz_stiffness
-from models.curved_beam_closed_form import stiffness
-from models.document import MechanismDocument
-from models.simulation_spec import SimulateSpec
+from models.documents.document import MechanismDocument
+from models.documents.simulation_spec import SimulateSpec
 from service.impacts.run import model_of, run_impacts
 
 ROOT = Path(__file__).resolve().parents[1]

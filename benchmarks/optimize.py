@@ -28,9 +28,9 @@ from scipy.integrate import quad, solve_ivp
 from scipy.optimize import fsolve, minimize
 
 from models import compile_mechanism
-from models.document import parse_document
-from service.design import design_problem
-from service.optimize import optimize
+from models.documents.document import parse_document
+from service.design.optimize import optimize
+from service.design.problem import design_problem
 
 DOCUMENT = Path(__file__).resolve().parents[1] / "examples" / "grasper_shape.json"
 E, W, H = 2.62e9, 0.04572, 0.001016

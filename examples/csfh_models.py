@@ -20,8 +20,8 @@ import copy
 import json
 from pathlib import Path
 
-from models.document import MechanismDocument
-from models.simulation_spec import SimulateSpec
+from models.documents.document import MechanismDocument
+from models.documents.simulation_spec import SimulateSpec
 from service.impacts.figures import plot_impacts
 from service.impacts.run import run_impacts
 

@@ -22,7 +22,7 @@ from collections import Counter
 from functools import cache, lru_cache
 from pathlib import Path
 
-from models.disk_cache import cache_dir
+from models.caches.disk_cache import cache_dir
 from models.errors import MechanismError
 
 
@@ -285,7 +285,7 @@ _DOCUMENT_UNITS = {  # kind -> its unit, as text, from a document's declared uni
 
 
 def document_unit(units, kind: str) -> str:
-    """The unit, as text, in which a document with `units` (models.document.Units) states a
+    """The unit, as text, in which a document with `units` (models.documents.document.Units) states a
     quantity of `kind`; derived kinds are products of the declared ones. (Called for every
     output of every report: only the kind asked for is made.)"""
     return _DOCUMENT_UNITS[kind](units)

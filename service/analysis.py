@@ -16,9 +16,9 @@ from service.analyses import ANALYSES, AnalysisOptions, AnalysisRequest
 from service.analyses.equilibrium import equilibrium_report
 from service.analyses.inverse import inverse_report
 from service.analyses.linearization import linearization_report
-from service.newton import NewtonOptions
-from service.reports import coordinate_units, output_units, plain, stiffness_dict
 from service.requests import Limits, compile_request, escape_pointer_part, newton_options, under
+from service.solvers.newton import NewtonOptions
+from service.solvers.reports import coordinate_units, output_units, plain, stiffness_dict
 
 
 def run_analysis(

@@ -21,12 +21,12 @@ from pathlib import Path
 from models import Mechanism, MechanismDocument, MechanismError, compile_mechanism, load_document
 from service.analyses import Analysis, AnalysisOptions, AnalysisRequest
 from service.analyses.equilibrium import equilibrium_report
-from service.design import design_problem
-from service.equilibrium import NewtonOptions
-from service.inverse_links import inverse_links
-from service.optimize import optimize
-from service.reports import plain
-from service.sweep import document_sweep
+from service.design.optimize import optimize
+from service.design.problem import design_problem
+from service.solvers.equilibrium import NewtonOptions
+from service.solvers.inverse_links import inverse_links
+from service.solvers.reports import plain
+from service.solvers.sweep import document_sweep
 
 DOCUMENT_SUFFIXES = (".json", ".yaml", ".yml")
 SUMMARY = "summary.json"

@@ -12,7 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from models import MechanismError
-from models.document import MechanismDocument
+from models.documents.document import MechanismDocument
 from models.elements import FAMILIES
 from models.elements.base import Discretization
 

@@ -11,9 +11,9 @@ from dataclasses import fields
 from typing import Any
 
 from models import MODELS, Mechanism, MechanismError, compile_mechanism
-from models.document import parse_document
+from models.documents.document import parse_document
 from service.costs import Limits, check_document_cost
-from service.newton import NewtonOptions
+from service.solvers.newton import NewtonOptions
 
 __all__ = ["Limits", "compile_request", "escape_pointer_part", "newton_options", "under"]
 

@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from service.continuation import body_stability
-from service.equilibrium import NewtonOptions, newton
+from service.solvers.continuation import body_stability
+from service.solvers.equilibrium import NewtonOptions, newton
 
 OPTIONS = NewtonOptions(max_iterations=200, tol_residual=1e-11)
 

@@ -19,8 +19,8 @@ from typer.testing import CliRunner
 from models import compile_mechanism, load_document
 from service import solve_equilibrium, sweep
 from service.cli import app
-from service.continuation import trace_path
-from service.plotting import configuration_figure, load_point, sweeps_figure, trace_figure
+from service.drawings.plotting import configuration_figure, load_point, sweeps_figure, trace_figure
+from service.solvers.continuation import trace_path
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 GRIPPER = EXAMPLES / "gripper.json"

@@ -65,7 +65,7 @@ def document(bodies, elements, loads):
 
 @pytest.mark.parametrize("arc_deg", [60.0, 180.0, 300.0])
 def test_eq_2_equals_castigliano(arc_deg):
-    from models.curved_beam_closed_form import compliance
+    from models.beams.curved_beam_closed_form import compliance
 
     r, theta = 0.01, math.radians(arc_deg)
     C = np.array(compliance(r, theta, EI))

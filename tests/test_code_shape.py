@@ -192,7 +192,7 @@ def test_no_two_modules_of_models_share_a_name():
 
 # The one parser of the Newton options object (into NewtonOptions, naming a bad field), and
 # the document's inverse shapes (free-form in the document's schema: not a request's options).
-DICT_READERS_ALLOWED = {"service.requests", "service.inverse_links"}
+DICT_READERS_ALLOWED = {"service.requests", "service.solvers.inverse_links"}
 REQUEST_NAMES = ("spec", "request", "given", "options")
 
 

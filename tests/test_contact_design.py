@@ -8,11 +8,11 @@ from __future__ import annotations
 from test_contact_example import example_one
 
 from models import compile_mechanism, load_document
-from models.document import parse_optimize_spec
+from models.documents.document import parse_optimize_spec
 from service.analyses.base import AnalysisRequest
 from service.analyses.contact import CONTACT
-from service.design import design_problem
-from service.optimize import optimize
+from service.design.optimize import optimize
+from service.design.problem import design_problem
 
 
 def normal_force(thickness: float) -> tuple[float, float]:

@@ -19,13 +19,13 @@ from typer.testing import CliRunner
 from api.client import Client
 from models import MechanismError, compile_mechanism, load_document
 from models.contact.laws import NORMAL_LAWS, NormalLaw, register_normal_law
-from models.upgrade import upgraded
+from models.documents.upgrade import upgraded
 from service.analyses.base import AnalysisRequest
 from service.analyses.contact import CONTACT
 from service.cli import app
 from service.impacts.event_driven import HYSTERESIS
 from service.impacts.run import run_impacts
-from service.newton import NewtonOptions
+from service.solvers.newton import NewtonOptions
 from tests.impact_cases import EXAMPLES, csfh, parsed
 
 OLD = Path(__file__).parent / "old_documents"

@@ -17,7 +17,7 @@ from service.analyses.contact import CONTACT
 from service.contact.kkt import split
 from service.contact.problem import contact_problem
 from service.contact.solve import solve_state
-from service.equilibrium import NewtonOptions, solve_equilibrium
+from service.solvers.equilibrium import NewtonOptions, solve_equilibrium
 
 E, B, H, L = 2e11, 0.01, 0.001, 0.1
 EI = E * B * H**3 / 12

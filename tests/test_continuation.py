@@ -8,7 +8,7 @@ from conftest import EXAMPLES
 from continuation_oracles import natural_limit
 
 from models import MechanismError, compile_mechanism, load_document
-from service.continuation import _path_graphs, body_stability, trace_path
+from service.solvers.continuation import _path_graphs, body_stability, trace_path
 
 LOAD = "/loads/P/force/1"
 

@@ -9,10 +9,11 @@ import os
 import numpy as np
 from conftest import EXAMPLES
 
-from models import compile_mechanism, graph_cache, load_document
-from models.assembly import FUNCTIONS, build_functions
-from models.disk_cache import bound, entries, touch
-from models.graph_cache import GraphStore
+from models import compile_mechanism, load_document
+from models.caches import graph_cache
+from models.caches.disk_cache import bound, entries, touch
+from models.caches.graph_cache import GraphStore
+from models.graph.assembly import FUNCTIONS, build_functions
 
 
 def _entry(root, section: str, name: str, size: int, used: float):
@@ -46,7 +47,7 @@ def test_the_bound_is_a_setting(tmp_path, monkeypatch):
 
 def test_deferred_graphs_are_written_at_the_flush_and_then_loaded(tmp_path, monkeypatch):
     """A solver worker defers writing a new structure's graphs until its answer has gone out
-    (models.graph_cache.defer_saves): nothing is on disk before the flush, everything after,
+    (models.caches.graph_cache.defer_saves): nothing is on disk before the flush, everything after,
     and another store (another process) loads them instead of building."""
     monkeypatch.setenv("FLEXMECH_CACHE_DIR", str(tmp_path))
     monkeypatch.setattr(graph_cache, "_deferred", None)  # restored after the test: saving at once

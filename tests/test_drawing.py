@@ -1,4 +1,4 @@
-"""The drawing the workbench shows (service.drawing over POST /v1/drawings), the document
+"""The drawing the workbench shows (service.drawings.drawing over POST /v1/drawings), the document
 text reader (POST /v1/documents/parse), and the page's files as the service serves them."""
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from conftest import EXAMPLES
 
 from models import compile_mechanism, load_document
 from service import solve_equilibrium
-from service.drawing import mechanism_drawing
+from service.drawings.drawing import mechanism_drawing
 
 WEB = EXAMPLES.parent / "api" / "web"
 

@@ -15,7 +15,7 @@ import pytest
 
 from models import compile_mechanism, load_document
 from service.analysis import run_analysis
-from service.newton import NewtonOptions
+from service.solvers.newton import NewtonOptions
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 

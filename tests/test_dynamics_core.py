@@ -1,4 +1,4 @@
-"""Time simulation's core (models.dynamics, service.dynamics): a clamped steel rod (seed 002
+"""Time simulation's core (models.graph.dynamics, service.dynamics): a clamped steel rod (seed 002
 Table 4.1: 1.11 x 0.0127 x 0.0032 m, E = 200 GPa, rho = 7850 kg/m^3) by cubic elements.
 Its first natural period equals Euler-Bernoulli's 2 pi / (1.8751^2 sqrt(EI / (rho A L^4)));
 released in its first mode it rings with that period; average-acceleration Newmark keeps
@@ -14,7 +14,7 @@ from models import compile_mechanism, load_document
 from service.dynamics.integrate import integrate
 from service.dynamics.modes import natural_modes
 from service.dynamics.schemes import generalized_alpha, newmark
-from service.energy import minimize_energy
+from service.solvers.energy import minimize_energy
 
 L, B, H, RHO, E = 1.11, 0.0127, 0.0032, 7850.0, 2e11
 EI, RHO_A = E * B * H**3 / 12, RHO * B * H

@@ -1,6 +1,6 @@
 """The element kernels against independent references: an element's structured Jacobian
 against CasADi's differentiation of its residual; a time step solved on the kernels against
-the dense step equations of models.dynamics (Lagrange's equations of the whole structure);
+the dense step equations of models.graph.dynamics (Lagrange's equations of the whole structure);
 Newton on the kernels (chain elimination, global part) converging quadratically, which it
 does only if the factored system is the residual's exact Jacobian."""
 
@@ -81,7 +81,7 @@ def _dense_step_residual(mech, histories, scheme, state, h, t1, damping):
 @pytest.mark.parametrize("example", ["rod_free_vibration.json", "four_bar_dynamics.json"])
 def test_a_step_on_the_kernels_solves_the_dense_step_equations(example):
     """From a state with velocities (the start, then random rates), one step by Newton on the
-    kernels and one by dense Newton on models.dynamics' equations agree."""
+    kernels and one by dense Newton on models.graph.dynamics' equations agree."""
     mech, spec, histories, scheme, x0 = _setup(example)
     rng = np.random.default_rng(11)
     n = len(x0)

@@ -11,8 +11,8 @@ from conftest import EXAMPLES
 from test_joints import four_bar
 
 from models import MechanismError, compile_mechanism, load_document
-from service.energy import minimize_energy
-from service.equilibrium import NewtonOptions, solve_equilibrium
+from service.solvers.energy import minimize_energy
+from service.solvers.equilibrium import NewtonOptions, solve_equilibrium
 
 TIGHT = NewtonOptions(tol_residual=1e-13, tol_step=1e-12)
 

@@ -10,9 +10,9 @@ import pytest
 from conftest import ACTUATION, EXAMPLES
 
 import models
-from service.equilibrium import solve_equilibrium
-from service.stiffness import tangent_stiffness
-from service.sweep import solve_for_target
+from service.solvers.equilibrium import solve_equilibrium
+from service.solvers.stiffness import tangent_stiffness
+from service.solvers.sweep import solve_for_target
 
 
 @pytest.fixture(scope="module")

@@ -10,7 +10,7 @@ from conftest import ACTUATION
 from benchmarks.numpy_peer import NumpyGripperResidual
 from models import MechanismError
 from service import NewtonOptions, solve_equilibrium, sweep
-from service.fastpath import FastPath
+from service.solvers.fastpath import FastPath
 
 
 @pytest.fixture()

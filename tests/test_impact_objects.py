@@ -14,7 +14,7 @@ from scipy.optimize import brentq, minimize_scalar
 from models import MechanismError, compile_mechanism, load_document
 from service.analysis import run_analysis
 from service.impacts.study import variant
-from service.newton import NewtonOptions
+from service.solvers.newton import NewtonOptions
 from tests.impact_cases import as_moreau, csfh
 
 G, RADIUS, TOP, CORNER = 9.81, 0.18, -0.3, 1.0  # the block's top at y = -0.3 m, its right edge at x = 1 m

@@ -12,8 +12,8 @@ import pytest
 from typer.testing import CliRunner
 
 from models import MechanismError
-from models.document import MechanismDocument
-from models.simulation_spec import SimulateSpec
+from models.documents.document import MechanismDocument
+from models.documents.simulation_spec import SimulateSpec
 from service.cli import app
 from service.impacts.run import run_impacts
 from service.impacts.study import variant

@@ -9,11 +9,11 @@ import copy
 import numpy as np
 import pytest
 
-from models.simulation_spec import SimulateSpec
+from models.documents.simulation_spec import SimulateSpec
 from service.analysis import run_analysis
 from service.impacts.run import run_impacts
-from service.newton import NewtonOptions
 from service.requests import compile_request
+from service.solvers.newton import NewtonOptions
 from tests.impact_cases import csfh, parsed
 
 

@@ -114,8 +114,8 @@ def test_ipopt_stops_at_its_next_iteration_when_asked():
     import json
 
     from models import compile_mechanism, load_document
-    from service.design import design_problem
-    from service.optimize import prepare, run_start
+    from service.design.optimize import prepare, run_start
+    from service.design.problem import design_problem
 
     doc = load_document(json.loads((EXAMPLES / "grasper_shape.json").read_text()))
     prepared = prepare(design_problem(compile_mechanism(doc), doc.optimize))

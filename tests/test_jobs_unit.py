@@ -9,7 +9,7 @@ import pytest
 from conftest import ACTUATION, EXAMPLES
 
 from models import MechanismError
-from models.assembly import graphs_for
+from models.graph.assembly import graphs_for
 from service.analysis import Limits
 from service.jobs import sweep as sweep_kind
 from service.jobs.grids import grid_shape, load_paths

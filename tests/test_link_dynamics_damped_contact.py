@@ -13,7 +13,7 @@ from models import MechanismError, compile_mechanism, load_document
 from models.contact.laws import NORMAL_LAWS
 from models.contact.laws.penalty import effective_restitution
 from service.analysis import run_analysis
-from service.newton import NewtonOptions
+from service.solvers.newton import NewtonOptions
 
 MASS, HERTZ, PAD, GAP, KICK, KICK_TIME = 2.0, 2e6, 0.02, 0.03, 10.0, 0.1  # kg, N/m^1.5, m, m, N, s
 

@@ -17,7 +17,7 @@ import pytest
 
 from models import compile_mechanism, load_document
 from service.analysis import run_analysis
-from service.newton import NewtonOptions
+from service.solvers.newton import NewtonOptions
 
 MASS, RADIUS, MU, PUSH, HERTZ, EXPONENT, G = 2.0, 0.05, 0.3, 30.0, 1e7, 1.5, 9.81
 V0, V1, UNTIL = 1e-6, 1e-4, 0.4

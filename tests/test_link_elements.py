@@ -1,4 +1,4 @@
-"""Links by displacement-based elements (models.link_fe): the accuracy order of the
+"""Links by displacement-based elements (models.beams.link_fe): the accuracy order of the
 discretization over three resolutions against Frisch-Fay's elastica, agreement with the
 shooting solution of the same link (with shear and axial strain, pinned and curved), and
 the stationarity of their energy form being their residual form."""
@@ -11,8 +11,8 @@ import pytest
 from elastica_oracles import cantilever_tip
 
 from models import compile_mechanism, load_document
-from service.energy import minimize_energy
-from service.equilibrium import NewtonOptions, solve_equilibrium
+from service.solvers.energy import minimize_energy
+from service.solvers.equilibrium import NewtonOptions, solve_equilibrium
 
 TIGHT = NewtonOptions(tol_residual=1e-13, tol_step=1e-13)
 E, B, H, LENGTH = 2e11, 0.01, 0.001, 0.1

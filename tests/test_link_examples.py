@@ -11,9 +11,9 @@ from conftest import EXAMPLES
 from elastica_oracles import cantilever_tip
 
 import models
-from service.equilibrium import NewtonOptions, solve_equilibrium
-from service.inverse_links import inverse_links
-from service.sweep import document_sweep
+from service.solvers.equilibrium import NewtonOptions, solve_equilibrium
+from service.solvers.inverse_links import inverse_links
+from service.solvers.sweep import document_sweep
 
 LINK_EXAMPLES = [
     "cantilever",

@@ -10,8 +10,8 @@ import pytest
 
 import models
 from models import MechanismError
-from service.equilibrium import NewtonOptions, solve_equilibrium
-from service.inverse_links import inverse_links, link_states
+from service.solvers.equilibrium import NewtonOptions, solve_equilibrium
+from service.solvers.inverse_links import inverse_links, link_states
 
 TIGHT = NewtonOptions(tol_residual=1e-13, tol_step=1e-12)
 SI = {"length": "m", "force": "N", "stress": "Pa", "angle": "rad"}

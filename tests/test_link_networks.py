@@ -12,7 +12,7 @@ from elastica_oracles import cantilever_tip
 
 import models
 from models import MechanismError
-from service.equilibrium import NewtonOptions, solve_equilibrium
+from service.solvers.equilibrium import NewtonOptions, solve_equilibrium
 
 TIGHT = NewtonOptions(tol_residual=1e-13, tol_step=1e-12)
 SI = {"length": "m", "force": "N", "stress": "Pa", "angle": "rad"}

@@ -15,8 +15,8 @@ import pytest
 from elastica_oracles import cantilever_tip, circular_arc_tip, timoshenko_tip_deflection
 
 import models
-from models import curved_beam_closed_form as curved_beam
-from service.equilibrium import NewtonOptions, solve_equilibrium
+from models.beams import curved_beam_closed_form as curved_beam
+from service.solvers.equilibrium import NewtonOptions, solve_equilibrium
 
 # The thesis cantilever (Sec. 2.5.1): EI = 0.08 N m^2, L = 101.6 mm, F = 15 N.
 EI, L, F = 0.08, 0.1016, 15.0
@@ -210,7 +210,7 @@ def test_link_tangent_stiffness_equals_finite_differences_of_the_residual():
 def test_condensed_tangent_stiffness_of_a_link_is_the_beam_element_stiffness():
     """Unloaded, the tip's 3x3 K_T (links' unknowns condensed out) is the Euler-Bernoulli
     beam stiffness: EA/L axially, 12EI/L^3, -6EI/L^2, 4EI/L in bending."""
-    from service.stiffness import tangent_stiffness
+    from service.solvers.stiffness import tangent_stiffness
 
     A = 1e-4
     mech = models.compile_mechanism(
@@ -236,7 +236,7 @@ def test_bounds_pick_the_buckled_branch_of_a_column():
     from scipy.optimize import brentq
     from scipy.special import ellipk
 
-    from service.equilibrium import solve_bounded
+    from service.solvers.equilibrium import solve_bounded
 
     P = 1.2 * math.pi**2 * EI / (4 * L**2)
     k = math.sqrt(P / EI)

@@ -17,7 +17,7 @@ from typer.testing import CliRunner
 
 from api.client import Client
 from models import compile_mechanism, load_document
-from service.energy import minimize_energy
+from service.solvers.energy import minimize_energy
 
 ROOT = Path(__file__).resolve().parents[1]
 ENV = {"COLUMNS": "200", "FORCE_COLOR": None, "TTY_COMPATIBLE": None, "NO_COLOR": "1"}
@@ -25,12 +25,12 @@ ENV = {"COLUMNS": "200", "FORCE_COLOR": None, "TTY_COMPATIBLE": None, "NO_COLOR"
 # In a fresh process: count graph builds, solve gripper_exact, print the count and the outputs.
 PROBE = """
 import json, sys
-import models.assembly as assembly
+import models.graph.assembly as assembly
 built = []
 build = assembly.build_functions
 assembly.build_functions = lambda structure: built.append(1) or build(structure)
 from models import compile_mechanism, load_document
-from service.equilibrium import solve_equilibrium
+from service.solvers.equilibrium import solve_equilibrium
 result = solve_equilibrium(compile_mechanism(load_document(sys.argv[1])))
 print(json.dumps({"built": len(built), "status": result.status, "outputs": result.outputs()}))
 """
@@ -63,7 +63,7 @@ def test_a_new_process_loads_the_graphs_it_built_before(tmp_path):
 
 
 def test_ipopt_options_are_allowlisted_and_solvers_built_once():
-    from service import ipopt
+    from service.solvers import ipopt
 
     with pytest.raises(
         ipopt.IpoptOptionError,
@@ -92,8 +92,8 @@ def test_ipopt_options_are_allowlisted_and_solvers_built_once():
 
 
 def test_bounded_equilibrium_reuses_its_solver():
-    from service import ipopt
-    from service.equilibrium import solve_bounded
+    from service.solvers import ipopt
+    from service.solvers.equilibrium import solve_bounded
 
     mech = compile_mechanism(load_document(EXAMPLES / "cantilever.json"))
     first = solve_bounded(mech, {"tip.x": (None, 200.0)})
@@ -153,7 +153,7 @@ def test_a_sweep_of_energy_minima_follows_newton(client):
     assert client.wait(job.id, timeout=120).status == "succeeded"
     result = client.result(job.id).result
     assert result.analysis == "energy"
-    from service.equilibrium import solve_equilibrium
+    from service.solvers.equilibrium import solve_equilibrium
 
     mech = compile_mechanism(load_document(chain()))
     for point, value in zip(result.points, values):

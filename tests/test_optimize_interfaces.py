@@ -12,8 +12,8 @@ from typer.testing import CliRunner
 from api.client import Client, FlexmechError
 from models import compile_mechanism, load_document
 from service.cli import app
-from service.design import design_problem
-from service.optimize import optimize
+from service.design.optimize import optimize
+from service.design.problem import design_problem
 
 ENV = {"COLUMNS": "200", "FORCE_COLOR": None, "TTY_COMPATIBLE": None, "NO_COLOR": "1"}
 GRASPER = EXAMPLES / "grasper_shape.json"
@@ -135,8 +135,8 @@ def test_cli_trace_reports_the_limit_points(tmp_path):
 
 
 def test_solve_returns_closing_force_sensitivities_equal_to_the_core(client):
-    from service.sensitivity import equilibrium_sensitivities
-    from service.sweep import solve_for_target
+    from service.design.sensitivity import equilibrium_sensitivities
+    from service.solvers.sweep import solve_for_target
 
     actuation = "/loads/actuation/force/1"
     answer = client.solve(

@@ -26,9 +26,9 @@ from models import Mechanism, MechanismError
 from service.analyses import ANALYSES, Analysis, AnalysisOptions, AnalysisRequest, AnalysisResult
 from service.jobs.base import JSON, JobOptions, Plan, StoredJob, read_spec
 from service.jobs.kinds import register_job_kind
-from service.newton import NewtonOptions
 from service.requests import Limits, compile_request
-from service.stiffness import tangent_stiffness
+from service.solvers.newton import NewtonOptions
+from service.solvers.stiffness import tangent_stiffness
 
 E, B, H, L = 2e11, 0.01, 0.001, 0.1  # Pa, m, m, m
 ACROSS = 3 * E * (B * H**3 / 12) / L**3  # 500 N/m

@@ -1,5 +1,5 @@
 """An element family of the test's own, added with one registration line, works in statics,
-link dynamics and impact simulations (models.elements.base: the contract; models.document
+link dynamics and impact simulations (models.elements.base: the contract; models.documents.document
 takes its section at once; models.impacts.families brings its statics energy to impacts).
 
 The family is a bushing: a zero-length spring of stiffness k between the point of two bodies
@@ -20,12 +20,12 @@ import numpy as np
 import pytest
 
 from models import MechanismError, compile_mechanism, load_document
+from models.documents.fields import Number
 from models.elements import FAMILIES
 from models.elements.base import Contribution, EnergyTerms, ScaleHint, TwoBodyElement
-from models.fields import Number
-from models.structure import ElementTopology
+from models.graph.structure import ElementTopology
 from service.analysis import run_analysis
-from service.newton import NewtonOptions
+from service.solvers.newton import NewtonOptions
 from tests.impact_cases import csfh
 
 K, KT, MASS, INERTIA = 400.0, 50.0, 10.0, 0.1617  # N/m, N m/rad, kg, kg m^2
@@ -197,7 +197,7 @@ def test_an_impact_run_meets_the_hole_when_the_harmonic_motion_reaches_the_clear
 def test_the_graph_caches_are_keyed_by_a_registered_familys_source():
     """Graphs on disk are named by the code they come from: a family registered from outside
     the models package brings its file into that key, so editing it never loads stale graphs."""
-    from models.graph_cache import code_version
+    from models.caches.graph_cache import code_version
 
     before = code_version()
     FAMILIES.register(BushingFamily())

@@ -1,5 +1,5 @@
 """A mechanism that differs from one seen before only in its names shares its graphs
-(models.naming): no graph is built again, its results and labels are its own, and a server
+(models.documents.naming): no graph is built again, its results and labels are its own, and a server
 sent documents with ever new names keeps its memory and its disk cache flat."""
 
 from __future__ import annotations
@@ -14,10 +14,10 @@ from conftest import EXAMPLES
 from servers import ApiServer
 
 from models import compile_mechanism, load_document
-from models.assembly import graphs_for
-from models.naming import anonymous
-from service.equilibrium import solve_equilibrium
-from service.sweep import solve_for_target
+from models.documents.naming import anonymous
+from models.graph.assembly import graphs_for
+from service.solvers.equilibrium import solve_equilibrium
+from service.solvers.sweep import solve_for_target
 
 ACTUATION = "/loads/actuation/force/1"
 NAMED = ("materials", "sections", "bodies", "elements", "loads", "outputs")

@@ -94,7 +94,7 @@ def test_body_mass_and_inertia_are_not_ignored():
         "outputs": {"support": {"type": "reaction", "body": "ground"}},
     }
     mech = compile_mechanism(load_document(document))
-    from service.equilibrium import solve_equilibrium
+    from service.solvers.equilibrium import solve_equilibrium
 
     result = solve_equilibrium(mech)
     assert result.converged
@@ -102,7 +102,7 @@ def test_body_mass_and_inertia_are_not_ignored():
     assert outputs["support.Fy"] == pytest.approx(2.0 * 9.81, rel=1e-9)
     # The weight at the centre of mass, 0.1 m from the pin, twists the torsional spring.
     assert outputs["elements.k.M"] == pytest.approx(-2.0 * 9.81 * 0.1, rel=1e-6)
-    from service.inertia import mass_matrix
+    from service.solvers.inertia import mass_matrix
 
     coordinates, M = mass_matrix(mech)
     assert coordinates == ["block.x", "block.y", "block.angle"]
@@ -124,7 +124,7 @@ def test_material_density_is_not_ignored():
         },
     }
     mech = compile_mechanism(load_document(document))
-    from service.equilibrium import solve_equilibrium
+    from service.solvers.equilibrium import solve_equilibrium
 
     result = solve_equilibrium(mech)
     outputs = result.outputs()

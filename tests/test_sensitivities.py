@@ -9,12 +9,12 @@ import pytest
 from conftest import ACTUATION, EXAMPLES
 
 from models import compile_mechanism, load_document
-from models.document import parse_document
-from service.design import design_problem
-from service.equilibrium import solve_equilibrium
-from service.optimize import prepare, run_start
-from service.sensitivity import equilibrium_sensitivities, optimum_sensitivities
-from service.sweep import solve_for_target
+from models.documents.document import parse_document
+from service.design.optimize import prepare, run_start
+from service.design.problem import design_problem
+from service.design.sensitivity import equilibrium_sensitivities, optimum_sensitivities
+from service.solvers.equilibrium import solve_equilibrium
+from service.solvers.sweep import solve_for_target
 
 H_PATH, E_PATH = "/sections/flexure/h", "/materials/silicon/E"
 

@@ -1,5 +1,5 @@
 """A simulation's report reads its outputs and shapes from graphs of their own
-(models.assembly: Graphs.prefer_reporting), never building the residual form and its tangent
+(models.graph.assembly: Graphs.prefer_reporting), never building the residual form and its tangent
 (the most of a large structure's build): the same numbers as the residual form's graphs, and
 a statics analysis of the same structure afterwards still builds and solves its own."""
 
@@ -12,10 +12,10 @@ import pytest
 from conftest import EXAMPLES
 
 from models import compile_mechanism, load_document
-from models.assembly import build_functions
+from models.graph.assembly import build_functions
 from service.dynamics.run import run_simulation, simulation_spec
 from service.dynamics.state_map import state_map
-from service.equilibrium import solve_equilibrium
+from service.solvers.equilibrium import solve_equilibrium
 
 
 def _rod(intervals: int):

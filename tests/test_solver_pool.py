@@ -16,7 +16,7 @@ import pytest
 from api.errors import ApiError
 from api.solver_pool import WORKER_NAME, SolverPool
 from models import MechanismError
-from models.reading import parse_json
+from models.documents.reading import parse_json
 
 
 def _alive(pid: int) -> bool:

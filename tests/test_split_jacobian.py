@@ -1,4 +1,4 @@
-"""The split Jacobian (models.split_jacobian) against CasADi's own and against finite
+"""The split Jacobian (models.graph.split_jacobian) against CasADi's own and against finite
 differences: a residual with dense rows and columns (a long link's end conditions and their
 multipliers) and one without."""
 
@@ -11,9 +11,9 @@ import numpy as np
 from conftest import EXAMPLES
 
 from models import compile_mechanism, load_document
-from models.assembly import _symbolic
-from models.residual import residual_of
-from models.split_jacobian import jacobian
+from models.graph.assembly import _symbolic
+from models.graph.residual import residual_of
+from models.graph.split_jacobian import jacobian
 
 
 def _values(K: ca.SX, z: ca.SX, p: ca.SX, at: np.ndarray, params: np.ndarray) -> np.ndarray:

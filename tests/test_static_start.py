@@ -1,5 +1,5 @@
 """A simulation's static start by Newton on the element kernels (service.dynamics.static_start)
-against the minimum of the dense energy form found by IPOPT (service.energy), an independent
+against the minimum of the dense energy form found by IPOPT (service.solvers.energy), an independent
 solver on another assembly of the same physics; the path in fractions of the loads, the
 fallback to IPOPT, and a 128-element rod against an 8-element one."""
 
@@ -16,7 +16,7 @@ from service.dynamics import static_start
 from service.dynamics.histories import read_histories
 from service.dynamics.run import scheme_of, simulation_spec, start_shape
 from service.dynamics.stepping import engine_of
-from service.energy import minimize_energy
+from service.solvers.energy import minimize_energy
 
 
 def _mechanism(example: str, change=None):

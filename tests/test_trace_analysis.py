@@ -1,6 +1,6 @@
 """The trace analysis of /v1/solve over real HTTP (a uvicorn process on loopback): arc-length
 continuation through the snap-through of the shallow clamped arch, checked against
-service.continuation.trace_path, against the slope of its own load-displacement points,
+service.solvers.continuation.trace_path, against the slope of its own load-displacement points,
 and against natural continuation with bisection (tests/continuation_oracles.py)."""
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from continuation_oracles import natural_limit
 from typer.testing import CliRunner
 
 from models import compile_mechanism, load_document
-from service.continuation import trace_path
+from service.solvers.continuation import trace_path
 
 LOAD, STOP = "/loads/P/force/1", -300.0
 ARCH = EXAMPLES / "snap_through_arch.json"

@@ -14,7 +14,7 @@ from conftest import ACTUATION, EXAMPLES, Deployment
 
 from models import compile_mechanism, load_document
 from service import solve_for_target
-from service.continuation import trace_path
+from service.solvers.continuation import trace_path
 
 KEY = "workbench-test-key"
 

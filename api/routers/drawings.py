@@ -1,6 +1,6 @@
 """POST /v1/drawings: a mechanism drawn to scale; POST /v1/documents/parse: document text
 (JSON or YAML) read into a document; POST /v1/documents/upgrade: a document of an older
-shape in today's (models.upgrade). The workbench page draws and edits with them."""
+shape in today's (models.documents.upgrade). The workbench page draws and edits with them."""
 
 from __future__ import annotations
 
@@ -15,13 +15,13 @@ from api.drawing_schemas import DocumentText, DocumentUpgrade, DrawingRequest
 from api.parsed_route import ParsedBodyRoute
 from api.responses import ERRORS
 from models import MechanismError
-from models.reading import parse_json, parse_yaml
-from models.upgrade import upgraded
+from models.documents.reading import parse_json, parse_yaml
+from models.documents.upgrade import upgraded
 from service.analyses.equilibrium import solve_state
-from service.drawing import mechanism_drawing
-from service.drawing_path import path_frames
-from service.reports import plain
+from service.drawings.drawing import mechanism_drawing
+from service.drawings.path import path_frames
 from service.requests import Limits, compile_request, newton_options
+from service.solvers.reports import plain
 
 router = APIRouter(prefix="/v1", tags=["workbench"], route_class=ParsedBodyRoute)
 

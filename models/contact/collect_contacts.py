@@ -13,10 +13,10 @@ from models.contact.pair_forces import REGULARIZED
 from models.contact.polygons import convex_pieces, self_intersection, signed_area
 from models.contact.schema import Contacts, FrictionFields, JawSite
 from models.contact.topology import ContactTopology, ObjectTopology, PairTopology, SiteTopology
+from models.documents.expression import compile_expression, finite_on
 from models.elements import FAMILIES
 from models.errors import MechanismError
-from models.expression import compile_expression, finite_on
-from models.structure import ElementTopology
+from models.graph.structure import ElementTopology
 
 IMPLICIT_PROBES = ((0.0, 0.0), (1.0, 0.5), (-0.7, 1.3))  # where g must be a finite number (object frame)
 

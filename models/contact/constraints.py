@@ -25,9 +25,9 @@ from dataclasses import dataclass, field
 import casadi as ca
 
 from models.contact.topology import ContactTopology, ObjectTopology, SiteTopology
+from models.documents.expression import compile_expression
 from models.errors import MechanismError
-from models.expression import compile_expression
-from models.planar import rot
+from models.graph.planar import rot
 
 SAMPLES_PER_EDGE = 8  # points per jaw edge checked against an implicit curve
 QUASI_STATIC_CIRCLE_TOUCHES = ("circle", "hole", "half_plane")  # distances exact here
@@ -62,7 +62,7 @@ class ContactConstraints:
 
 class ContactGeometry:
     """The symbolic geometry of objects and sites for body displacements d and the elements'
-    surfaces (models.forms.SymbolicEnergy)."""
+    surfaces (models.graph.forms.SymbolicEnergy)."""
 
     def __init__(self, ctx, d: list[ca.SX], surfaces: dict, topology: ContactTopology):
         self.ctx, self.P, self.d, self.surfaces, self.topology = ctx, ctx.P, d, surfaces, topology

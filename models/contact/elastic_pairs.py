@@ -32,9 +32,9 @@ from models.contact.laws import FRICTION_LAWS, NORMAL_LAWS, check_law
 from models.contact.laws.penalty import elastic_power
 from models.contact.schema import FrictionFields
 from models.contact.topology import ContactTopology, PairTopology
-from models.context import AssemblyContext
 from models.errors import MechanismError
-from models.planar import rot
+from models.graph.context import AssemblyContext
+from models.graph.planar import rot
 
 # normal laws with an elastic part K q^n, a potential: the statics and link dynamics take them;
 # the damped ones' damping acts in link dynamics (models.contact.pair_forces). The linear law's

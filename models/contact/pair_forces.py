@@ -20,7 +20,7 @@ switches regime by the slip speed itself here (without the hysteresis flags that
 runs locate), so it is continuous in the slip speed and piecewise smooth.
 
 Units: the graphs' lengths and forces are nondimensional and time is in seconds
-(models.mechanism.Scales); the normal laws read the document's units (K, q and qdot in its
+(models.graph.mechanism.Scales); the normal laws read the document's units (K, q and qdot in its
 force and length per second), v0 and v1 are given in m/s."""
 
 from __future__ import annotations
@@ -31,8 +31,8 @@ import casadi as ca
 
 from models.contact.elastic_pairs import DAMPED_LAWS, ElasticPair, elastic_pairs, law_numbers
 from models.contact.laws import FRICTION_LAWS, NORMAL_LAWS
-from models.context import AssemblyContext
-from models.planar import cross
+from models.graph.context import AssemblyContext
+from models.graph.planar import cross
 
 REGULARIZED = ("ambrosio",)  # friction laws of the slip speed that link dynamics takes
 

@@ -25,7 +25,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field
 
-from models.fields import Number, StrictModel, Vec2
+from models.documents.fields import Number, StrictModel, Vec2
 
 MAX_VERTICES = 64
 

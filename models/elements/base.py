@@ -36,12 +36,12 @@ from typing import TYPE_CHECKING, Any, Protocol
 import casadi as ca
 from pydantic import Field
 
-from models.fields import StrictModel
-from models.structure import ElementTopology
+from models.documents.fields import StrictModel
+from models.graph.structure import ElementTopology
 
 if TYPE_CHECKING:
-    from models.collector import Collector
-    from models.context import AssemblyContext
+    from models.graph.collector import Collector
+    from models.graph.context import AssemblyContext
 
 
 class TwoBodyElement(StrictModel):
@@ -143,7 +143,7 @@ class Discretization:
 
 @dataclass(frozen=True)
 class Connector:
-    """How the page draws an element that connects two bodies at points (service.drawing): its
+    """How the page draws an element that connects two bodies at points (service.drawings.drawing): its
     glyph (the page's vocabulary: "pin" a ring at the point, "slider" a block on its axis,
     "zigzag" a spring between two points); per point the field holding it (global, undeformed)
     and the body whose reference point stands in when the field is left out; a field in the
@@ -174,7 +174,7 @@ class ElementFamily(Protocol):
     sites lie on its centre line); invertible (attribute: the link inverse solves its shape);
     kernel_chain and energy_form_counts(topology) (it runs as a chain of element kernels, and
     its own variables and equalities: models.kernels.layout); split_contribution (Cammarata et
-    al.'s K_T terms: models.tangent_split); flexure_outputs (a flexures table's columns);
+    al.'s K_T terms: models.graph.tangent_split); flexure_outputs (a flexures table's columns);
     impact_flexure, impact_constraint, impact_by_statics (models.impacts.families)."""
 
     type: str
@@ -209,7 +209,7 @@ class Families:
 
     def register(self, family: ElementFamily) -> None:
         """Add a family after import (a plug-in, a test): the document schema takes its section
-        at once (through the listeners, models.document)."""
+        at once (through the listeners, models.documents.document)."""
         self._add(family)
         self._changed()
 

@@ -21,8 +21,9 @@ from typing import Literal
 import casadi as ca
 from pydantic import Field
 
-from models import curved_beam_closed_form as kernel
-from models.context import AssemblyContext
+from models.beams import curved_beam_closed_form as kernel
+from models.documents.fields import Number, Vec2
+from models.documents.sections import RectangularSection, SectionTopology, nominal_EI
 from models.elements.base import (
     CentreLine,
     Contribution,
@@ -35,10 +36,9 @@ from models.elements.base import (
     beam_discretization,
 )
 from models.errors import MechanismError
-from models.fields import Number, Vec2
-from models.planar import cross, rot
-from models.sections import RectangularSection, SectionTopology, nominal_EI
-from models.structure import ElementTopology
+from models.graph.context import AssemblyContext
+from models.graph.planar import cross, rot
+from models.graph.structure import ElementTopology
 
 MODELS = ("linear", "partial_nonlinear", "exact", "conservative")
 COMPARED_MODELS = MODELS[:3]  # seed 000's three, which model comparisons draw side by side
@@ -117,7 +117,7 @@ class CurvedBeamFamily:
     def split_contribution(self, ctx: AssemblyContext, t: FlexureTopology, d_psi, d_N, d_T) -> Contribution:
         """The flexure's wrenches with its rotation, axial and transverse parts read from separate
         copies of the displacements: Cammarata et al.'s split of K_T into terms I-III
-        (models.tangent_split), written for these flexures."""
+        (models.graph.tangent_split), written for these flexures."""
         on_i, on_j, _ = flexure_wrenches(ctx, t, d_psi, d_N, d_T)
         return Contribution({t.start_body: on_i, t.end_body: on_j})
 

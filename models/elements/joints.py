@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import casadi as ca
 from pydantic import Field
 
-from models.context import AssemblyContext
+from models.documents.fields import Vec2
 from models.elements.base import (
     Connector,
     Contribution,
@@ -26,8 +26,8 @@ from models.elements.base import (
     constraint_wrenches,
 )
 from models.errors import MechanismError
-from models.fields import Vec2
-from models.structure import ElementTopology
+from models.graph.context import AssemblyContext
+from models.graph.structure import ElementTopology
 
 
 class RigidJoint(TwoBodyElement):

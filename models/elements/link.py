@@ -1,5 +1,5 @@
 """The link family (Lan 2005): a distributed elastica between two bodies, solved by multiple
-shooting inside the graph (models.link_shooting). Also the exact model of a curved beam, whose centre
+shooting inside the graph (models.beams.link_shooting). Also the exact model of a curved beam, whose centre
 line is the beam's arc.
 
 Unknowns (4 x intervals): h, v (the internal force at u = 0, global), the start rotation and
@@ -20,7 +20,9 @@ from dataclasses import dataclass, fields
 
 import casadi as ca
 
-from models.context import AssemblyContext
+from models.beams.link_shooting import LinkProperties, LinkShooting, LinkSolution
+from models.documents.expression import compile_expression, finite_on
+from models.documents.sections import GeneralSection, SectionTopology, nominal_EI, section_properties, section_topology
 from models.elements.base import (
     CentreLine,
     Contribution,
@@ -33,11 +35,9 @@ from models.elements.base import (
 )
 from models.elements.link_schema import Link
 from models.errors import MechanismError
-from models.expression import compile_expression, finite_on
-from models.link_shooting import LinkProperties, LinkShooting, LinkSolution
-from models.planar import cross
-from models.sections import GeneralSection, SectionTopology, nominal_EI, section_properties, section_topology
-from models.structure import ElementTopology
+from models.graph.context import AssemblyContext
+from models.graph.planar import cross
+from models.graph.structure import ElementTopology
 
 # Samples per shooting interval of a link, for stresses and drawing.
 SAMPLES_PER_INTERVAL = 4
@@ -124,7 +124,7 @@ class LinkFamily:
     type = "link"
     schema = Link
     centre_line_sites = True  # contact sites lie on its centre line (models.contact)
-    invertible = True  # the link inverse (models.link_inverse) solves its shape by shooting
+    invertible = True  # the link inverse (models.beams.link_inverse) solves its shape by shooting
 
     def discretization(self, el: Link, model: str | None) -> Discretization:
         return beam_discretization(el)

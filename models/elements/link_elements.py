@@ -1,4 +1,4 @@
-"""Links with the displacement-based discretization (models.link_fe): a link document with
+"""Links with the displacement-based discretization (models.beams.link_fe): a link document with
 `discretization: "elements"`. Its model is an energy, so it has an energy form (minimum
 energy, contact) as well as a residual form (the stationarity of that energy).
 
@@ -14,16 +14,16 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from models.context import AssemblyContext
+from models.beams.link_fe import LinkElements, LinkKinematics
+from models.documents.sections import section_properties
 from models.elements.base import CentreLine, Contribution, EnergyTerms, InertiaPoint, NoMassForm, ScaleHint, SiValues
 from models.elements.link import LINK, LinkElementsTopology, link_properties
 from models.elements.link_schema import Link
 from models.elements.surfaces import ElementSurfaces, SurfacePoint
 from models.elements.variational import variational_parts
 from models.errors import MechanismError
-from models.link_fe import LinkElements, LinkKinematics
-from models.planar import cross
-from models.sections import section_properties
+from models.graph.context import AssemblyContext
+from models.graph.planar import cross
 
 
 @dataclass
@@ -191,7 +191,7 @@ class LinkElementsFamily:
         if t.weighs:
             raise NoMassForm(
                 "its mass moves with its own variables, which the residual form's mass matrix does not "
-                "see: the dynamics form (models.dynamics) carries it"
+                "see: the dynamics form (models.graph.dynamics) carries it"
             )
         return None
 

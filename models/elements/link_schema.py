@@ -7,8 +7,8 @@ from typing import Literal
 
 from pydantic import Field
 
+from models.documents.fields import Number, StrictModel, Vec2
 from models.elements.base import TwoBodyElement
-from models.fields import Number, StrictModel, Vec2
 
 
 class StraightShape(StrictModel):

@@ -13,9 +13,9 @@ from typing import Literal
 
 import casadi as ca
 
+from models.documents.fields import Number
 from models.elements.base import Connector
 from models.elements.joints import JointFamily, JointTopology, RigidJoint, collect_joint, joint_points
-from models.fields import Number
 
 
 class Slider(RigidJoint):

@@ -25,13 +25,13 @@ import casadi as ca
 import numpy as np
 from pydantic import Field, model_validator
 
-from models.context import AssemblyContext
+from models.documents.expression import CONSTANTS, FUNCTIONS, compile_expression, finite_on
+from models.documents.fields import Number, Vec2
 from models.elements.base import Connector, Contribution, EnergyTerms, ScaleHint, SiValues, TwoBodyElement
 from models.errors import MechanismError
-from models.expression import CONSTANTS, FUNCTIONS, compile_expression, finite_on
-from models.fields import Number, Vec2
-from models.planar import cross
-from models.structure import ElementTopology
+from models.graph.context import AssemblyContext
+from models.graph.planar import cross
+from models.graph.structure import ElementTopology
 
 QUADRATURE_NODES = 24
 _NODES, _WEIGHTS = np.polynomial.legendre.leggauss(QUADRATURE_NODES)

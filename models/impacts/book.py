@@ -7,7 +7,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from models.document import MechanismDocument
+from models.documents.document import MechanismDocument
 from models.errors import MechanismError
 from models.units import document_unit, quantity_to_si
 

@@ -3,7 +3,7 @@ beam) in an impact model: a massless flexure of constant stiffness, the element'
 tangent about the drawn (unloaded) state, condensed onto its end body.
 
 The statics of the element alone, its `from` body held as drawn and its `to` body free, has
-the tangent K_T(z, p) of the residual form (models.assembly); at the undeformed state z = 0
+the tangent K_T(z, p) of the residual form (models.graph.assembly); at the undeformed state z = 0
 the inverse of its compliance (the free body's motion under unit loads on it) is the 3 x 3
 stiffness K of that body's reference point (global axes, SI), moved to the element's end E.
 The impact model then writes the flexure as the curved beams' closed form does (seed 000,
@@ -23,15 +23,15 @@ import casadi as ca
 import numpy as np
 
 from models.errors import MechanismError
+from models.graph.planar import rot
 from models.impacts.coordinates import NOT_SECTIONS, BodyCoordinates, parameters_of
-from models.planar import rot
 
 UNDEFORMED_TOLERANCE = 1e-10  # the residual at z = 0 (nondimensional): the element is unloaded as drawn
 
 
 def condensed_flexure(rb: BodyCoordinates, name: str) -> tuple[ca.SX, ca.SX, ca.SX]:
     """(1/2 psi.K.psi, psi, K) of element `name`, as an impact_flexure hook gives them."""
-    from models.mechanism import compile_mechanism
+    from models.graph.mechanism import compile_mechanism
 
     doc, base = rb.book.document, f"/elements/{name}"
     element = doc.elements[name]

@@ -6,7 +6,7 @@ laws and Moreau's step rely on it); a driven body (a `displacement` load) follow
 prescribed displacement, a fixed one stays. This module maps q to the bodies' points and to
 their displacements.
 
-The bodies themselves are the statics' (models.collect, models.loads): their numbers, their
+The bodies themselves are the statics' (models.graph.collect, models.graph.loads): their numbers, their
 kinetic energy (hence the mass matrix), and the potential of gravity and of the loads are
 written once there, and evaluated here at the bodies' displacements in SI: every statics
 parameter is the book's symbol under the same pointer (parameters_of), so each number stays a
@@ -18,11 +18,11 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from models.context import AssemblyContext
 from models.errors import MechanismError
+from models.graph.context import AssemblyContext
+from models.graph.loads import kinetic_energy, load_potential
+from models.graph.planar import rot
 from models.impacts.book import ParameterBook
-from models.loads import kinetic_energy, load_potential
-from models.planar import rot
 
 NOT_SECTIONS = {
     "loads": {},
@@ -60,7 +60,7 @@ def parameters_of(rb: BodyCoordinates, mech, scaled: bool = True) -> ca.SX:
 
 class BodyCoordinates:
     def __init__(self, book: ParameterBook):
-        from models.mechanism import compile_mechanism
+        from models.graph.mechanism import compile_mechanism
 
         self.book = book
         doc = book.document
@@ -162,14 +162,14 @@ class BodyCoordinates:
 
     def mass_diagonal(self) -> ca.SX:
         """The constant diagonal mass matrix of q: the Hessian in v of the statics' kinetic energy
-        (models.loads.kinetic_energy), which mass-centre coordinates make diagonal and free of q."""
+        (models.graph.loads.kinetic_energy), which mass-centre coordinates make diagonal and free of q."""
         T = kinetic_energy(self.si, self.displacements(), self.velocities())
         hessian = ca.substitute(ca.hessian(T, self.v)[0], self.q, ca.SX.zeros(self.size))
         return ca.diag(hessian)
 
     def load_potential(self) -> ca.SX:
         """Minus the work of gravity on the bodies with mass and of the force and moment loads,
-        from the drawn pose (models.loads.load_potential), at q."""
+        from the drawn pose (models.graph.loads.load_potential), at q."""
         return load_potential(self.si, self.displacements())
 
 

@@ -9,7 +9,7 @@
   joints      a family with an impact_constraint hook (pin, slider): rows of g(q, t) = 0.
 
 So the physics of an element is written once, in its own module, and statics, link dynamics
-and impacts all use it. The statics works in nondimensional numbers (models.mechanism.Scales);
+and impacts all use it. The statics works in nondimensional numbers (models.graph.mechanism.Scales);
 the impact model in SI symbols of its book: each statics parameter becomes its book symbol
 divided by its kind's scale, each body's displacement its reference point's and its rotation,
 so the energy's value in SI is the statics energy times the energy scale."""
@@ -18,13 +18,13 @@ from __future__ import annotations
 
 import casadi as ca
 
-from models.context import AssemblyContext
 from models.elements import FAMILIES
 from models.elements.base import NoEnergyForm
 from models.errors import MechanismError
+from models.graph.context import AssemblyContext
+from models.graph.planar import rot
 from models.impacts.condensed import condensed_flexure
 from models.impacts.coordinates import NOT_SECTIONS, BodyCoordinates, parameters_of
-from models.planar import rot
 
 
 def bridged(element) -> bool:
@@ -39,7 +39,7 @@ def element_energy(rb: BodyCoordinates) -> tuple[ca.SX, str, tuple[str, ...]]:
     """The strain energy (SI) of every bridged element of rb's document without unknowns of its
     own, at the bodies' poses; what shapes its graph (the elements' topologies: a spring's law
     is one); and the bridged elements with unknowns of their own (flexures() condenses them)."""
-    from models.mechanism import compile_mechanism
+    from models.graph.mechanism import compile_mechanism
 
     doc = rb.book.document
     names = [name for name, element in doc.elements.items() if bridged(element)]

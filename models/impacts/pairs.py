@@ -24,8 +24,8 @@ from models.contact.laws import FRICTION_LAWS, FrictionLaw, NormalLaw, friction_
 from models.contact.laws.penalty import hertz_stiffness
 from models.contact.schema import ContactPair, Contacts, FrictionFields, NormalLawFields
 from models.errors import MechanismError
+from models.graph.planar import rot
 from models.impacts.coordinates import BodyCoordinates
-from models.planar import rot
 
 ONE, SPEED = ("1", 1.0), ("m/s", 1.0)  # units of the laws' numbers (seed 004 gives v0, v1 in m/s)
 IMPACT_OBJECTS = ("circle", "hole", "half_plane", "polygon", "ellipse")

@@ -1,7 +1,7 @@
 """Where every unknown of a structure's kernel system lives.
 
 State (between steps): the energy form's coordinates x (free body coordinates, then every
-element's own variables, in document order: models.forms) with their rates and
+element's own variables, in document order: models.graph.forms) with their rates and
 accelerations, the energy form's multipliers lam (every element's equalities, in document
 order), and per node of every link discretized by elements its position, velocity,
 acceleration and internal force (`aux`, 8 per node: models.kernels.link_chain).
@@ -21,10 +21,10 @@ import numpy as np
 
 from models.elements import FAMILIES
 from models.elements.link import LinkElementsTopology
+from models.graph.structure import Structure
 from models.kernels.chain_signature import NODE, ChainSignature
 from models.kernels.chain_solver import BORDER, BlockLayout
 from models.kernels.link_data import signature_of
-from models.structure import Structure
 
 
 def own_counts(t) -> tuple[int, int]:

@@ -1,4 +1,4 @@
-"""The element kernel of a link discretized by elements (models.link_fe), in chain form: one
+"""The element kernel of a link discretized by elements (models.beams.link_fe), in chain form: one
 element's equations in terms of its own coordinates and the kinematics and force at its two
 nodes, so that a link is a chain of identical kernels and every Jacobian block is local.
 
@@ -26,7 +26,7 @@ and the end body's reaction). Element e's rows:
 
 with P_q the mass point q less the element's start, Delta the element's end less its start
 (models.kernels.rules), ' a time derivative. Eliminating the node quantities gives back
-Lagrange's equations of models.dynamics exactly: the mass points' inertia summed along the
+Lagrange's equations of models.graph.dynamics exactly: the mass points' inertia summed along the
 link is F, their positions summed are r.
 
 The Jacobian is exact, written with the structure of the kinematics (every derivative of T,

@@ -1,4 +1,4 @@
-"""Where one element of a link (models.link_fe) is evaluated, and the linear maps from there
+"""Where one element of a link (models.beams.link_fe) is evaluated, and the linear maps from there
 to its integrals: the constants of the link element kernels (models.kernels.link_chain).
 
 An element runs from xi = 0 to 1 (u = u0 + du xi). Its tangent
@@ -7,11 +7,11 @@ T(xi) = L [(1 + eps) t(psi) + gamma n(psi)] is evaluated at `points`; then
     Delta = du sum_s increment[s] T_s                 (the element's end less its start)
     P_q   = du sum_s mass_positions[q, s] T_s         (mass point q less the element's start)
 
-with the mass points at the element's degree + 2 Gauss points (models.link_fe lumps the
+with the mass points at the element's degree + 2 Gauss points (models.beams.link_fe lumps the
 mass and rotary inertia there; the strain energy uses the same quadrature).
 
 Two rules give these maps:
-  "partial": the model of models.link_fe exactly: Delta by the degree + 2 point Gauss rule,
+  "partial": the model of models.beams.link_fe exactly: Delta by the degree + 2 point Gauss rule,
       each P_q by that rule mapped onto [0, xi_q] (5 + 25 points for cubic elements);
   "interpolated": the tangent at `count` Gauss points, integrated exactly as the polynomial
       through them (Delta and every P_q from the same points: 8 for cubic elements). Its
@@ -26,7 +26,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from models.link_fe import element_rule
+from models.beams.link_fe import element_rule
 
 INTERPOLATED_POINTS = {1: 5, 2: 6, 3: 8, 4: 9, 5: 10, 6: 11}  # by degree: exact to 1e-12 at moderate turning
 

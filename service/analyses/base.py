@@ -26,8 +26,8 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from models import Mechanism, MechanismError
 from models.errors import pointer_of
-from service.equilibrium import EquilibriumResult
-from service.newton import NewtonOptions
+from service.solvers.equilibrium import EquilibriumResult
+from service.solvers.newton import NewtonOptions
 
 
 class AnalysisOptions(BaseModel):

@@ -20,9 +20,9 @@ from service.contact.recovery import recovered_forces
 from service.contact.report import friction_coefficients, penetration_error, state_report
 from service.contact.sensitivity import contact_sensitivities
 from service.contact.solve import ContactOptions, PenetratingStart, solve_state
-from service.newton import NewtonOptions
-from service.reports import output_units, plain
 from service.requests import under
+from service.solvers.newton import NewtonOptions
+from service.solvers.reports import output_units, plain
 
 
 def problem_of(mech: Mechanism) -> ContactProblem:

@@ -9,11 +9,11 @@ from pydantic import Field
 from models import Mechanism, MechanismError
 from service.analyses.base import Analysis, AnalysisOptions
 from service.analyses.equilibrium import EquilibriumReport, solution_report
-from service.energy import minimize_energy
-from service.equilibrium import EquilibriumResult
-from service.newton import NewtonOptions
-from service.reports import plain, stiffness_dict
 from service.requests import under
+from service.solvers.energy import minimize_energy
+from service.solvers.equilibrium import EquilibriumResult
+from service.solvers.newton import NewtonOptions
+from service.solvers.reports import plain, stiffness_dict
 
 
 class EnergyOptions(AnalysisOptions):

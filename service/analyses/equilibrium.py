@@ -10,11 +10,11 @@ from pydantic import Field
 from models import Mechanism, MechanismError
 from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult
 from service.analyses.shared_options import Sensitivities, Target
-from service.equilibrium import EquilibriumResult, newton, solve_equilibrium
-from service.newton import NewtonOptions
-from service.reports import coordinate_units, output_units, plain, stiffness_dict
 from service.requests import under
-from service.sweep import TargetResult, solve_for_target
+from service.solvers.equilibrium import EquilibriumResult, newton, solve_equilibrium
+from service.solvers.newton import NewtonOptions
+from service.solvers.reports import coordinate_units, output_units, plain, stiffness_dict
+from service.solvers.sweep import TargetResult, solve_for_target
 
 
 def solution_report(mech: Mechanism, result: EquilibriumResult, analysis: str) -> dict:
@@ -76,7 +76,7 @@ def equilibrium_report(
     if stiffness and result.converged:
         report["stiffness"] = stiffness_dict(mech, result.z)
     if sensitivities is not None and result.converged:
-        from service.sensitivity import equilibrium_sensitivities
+        from service.design.sensitivity import equilibrium_sensitivities
 
         try:
             following = (target.path, target.output) if target is not None else None

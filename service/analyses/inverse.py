@@ -9,9 +9,9 @@ from pydantic import Field
 
 from models import Mechanism
 from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult
-from service.inverse import inverse_wrenches
-from service.newton import NewtonOptions
-from service.reports import plain
+from service.solvers.inverse import inverse_wrenches
+from service.solvers.newton import NewtonOptions
+from service.solvers.reports import plain
 
 
 def inverse_report(mech: Mechanism, displacements: dict[str, Any]) -> dict:

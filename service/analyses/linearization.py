@@ -9,10 +9,10 @@ from pydantic import Field
 
 from models import Mechanism, MechanismError
 from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult
-from service.equilibrium import solve_equilibrium
-from service.newton import NewtonOptions
-from service.reports import plain, stiffness_dict
 from service.requests import under
+from service.solvers.equilibrium import solve_equilibrium
+from service.solvers.newton import NewtonOptions
+from service.solvers.reports import plain, stiffness_dict
 
 
 def linearization_report(mech: Mechanism, options: NewtonOptions, at: str = "equilibrium") -> dict:

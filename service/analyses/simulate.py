@@ -11,14 +11,14 @@ from pydantic import Field, JsonValue, create_model
 from pydantic.fields import FieldInfo
 
 from models import Mechanism
-from models.fields import StrictModel
-from models.simulation_spec import IMPACT_SCHEMES, SimulateSpec
+from models.documents.fields import StrictModel
+from models.documents.simulation_spec import IMPACT_SCHEMES, SimulateSpec
 from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult
 from service.deadline import ends_after, passed
 from service.dynamics.run import run_simulation, simulation_spec
 from service.impacts.run import run_impacts
-from service.newton import NewtonOptions
-from service.reports import plain
+from service.solvers.newton import NewtonOptions
+from service.solvers.reports import plain
 
 SYNC_STEPS = 20_000
 SYNC_IMPACT_STEPS = 2_000_000  # a microsecond each: a few seconds of a compiled impact model

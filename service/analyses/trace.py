@@ -1,5 +1,5 @@
 """The trace analysis: the equilibrium path of a numeric field (usually a load) through limit
-points, by pseudo-arc-length continuation (service.continuation.trace_path), as `flexmech
+points, by pseudo-arc-length continuation (service.solvers.continuation.trace_path), as `flexmech
 trace` follows it.
 
 The request's `trace` = {path, stop, step, max_points} (document units of the field) follows
@@ -26,12 +26,12 @@ from pydantic import Field
 from models import Mechanism, MechanismError
 from models.units import quantity_to_si
 from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult
-from service.continuation import PathResult, trace_path
 from service.deadline import ends_after, passed
-from service.drawing import state_frame
-from service.newton import NewtonOptions
-from service.reports import output_units, plain
+from service.drawings.drawing import state_frame
 from service.requests import under
+from service.solvers.continuation import PathResult, trace_path
+from service.solvers.newton import NewtonOptions
+from service.solvers.reports import output_units, plain
 
 DEFAULT_POINTS = 400
 MAX_FRAMES = 400  # states of the path drawn for the animation
@@ -172,7 +172,7 @@ def trace_report(mech: Mechanism, options: NewtonOptions, given: TraceIn | None 
 
 
 def path_frames(mech: Mechanism, result: PathResult) -> list[dict]:
-    """The path's states to animate (service.drawing.state_frame), at most MAX_FRAMES of them
+    """The path's states to animate (service.drawings.drawing.state_frame), at most MAX_FRAMES of them
     evenly spread; each with its index among the points and the field's value."""
     points = result.points
     chosen = sorted(set(np.linspace(0, len(points) - 1, min(len(points), MAX_FRAMES)).round().astype(int).tolist()))

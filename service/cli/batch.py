@@ -13,7 +13,7 @@ from rich.markup import escape
 from service.cli.application import app
 from service.cli.common import EXIT_NOT_CONVERGED, OptionError, consoles, table_of, user_errors
 from service.cli.options import JacobianOpt, LineSearchOpt, MaxIterOpt, newton_options
-from service.newton import NewtonOptions
+from service.solvers.newton import NewtonOptions
 
 
 def run_with_progress(

@@ -15,8 +15,8 @@ from rich.markup import escape
 from rich.table import Table
 
 from models import Mechanism, MechanismError
-from service.figures import PLOT_SUFFIXES
-from service.reports import plain
+from service.drawings.figures import PLOT_SUFFIXES
+from service.solvers.reports import plain
 
 EXIT_NOT_CONVERGED = 1
 EXIT_ERROR = 2
@@ -72,7 +72,7 @@ def print_error(err: Console, text: str) -> None:
 
 def number(value: float | None, unit: str | None = None) -> str:
     """Six significant figures, with the unit when given. None is a report's non-finite
-    number (service.reports.plain)."""
+    number (service.solvers.reports.plain)."""
     text = "-" if value is None else f"{value:.6g}"
     return f"{text} {unit}" if unit else text
 

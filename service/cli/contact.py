@@ -238,7 +238,7 @@ def _print_path(out, mech, fields, records, y_name, problem, label: str) -> None
 
 def _plot_path(mech, problem, fields, runs, y_name, plot) -> None:
     from service.contact.plots import plot_path
-    from service.figures import field_label
+    from service.drawings.figures import field_label
 
     unit = mech.doc_unit(mech.parameter_kind(fields.pointers[0]))
     y_unit = mech.doc_unit(problem.output_kinds[problem.output_names.index(y_name)])
@@ -271,7 +271,7 @@ def _chosen(at: str | None, states: int) -> list[int] | None:
 
 def _plot_shapes(mech, problem, states, fields, chosen, shapes) -> None:
     from service.contact.plots import plot_states
-    from service.figures import field_label
+    from service.drawings.figures import field_label
 
     if chosen is None:
         touching = [i for i, s in enumerate(states) if s.converged and any(t != "open" for t in s.pair_states)]

@@ -12,10 +12,10 @@ from models import Mechanism, MechanismError
 from service.cli.application import app
 from service.cli.common import EXIT_NOT_CONVERGED, OptionError, consoles, number, table_of, user_errors, write_json
 from service.cli.options import DocArg, JsonOpt, MaxIterOpt, SetOpt, mechanism
-from service.newton import NewtonOptions
+from service.solvers.newton import NewtonOptions
 
 if TYPE_CHECKING:  # the link inverse is imported when the command runs
-    from service.inverse_links import LinkInverseResult
+    from service.solvers.inverse_links import LinkInverseResult
 
 
 def internal_forces(given: dict[str, dict[str, float]], items: list[str] | None) -> dict[str, dict[str, float]]:
@@ -79,7 +79,7 @@ def inverse(
 ) -> None:
     """Link inverse (Lan 2005 Sec. 5.3): initial shapes and unknown loads from the deformed
     shapes and internal forces of the document's `inverse` section."""
-    from service.inverse_links import inverse_links
+    from service.solvers.inverse_links import inverse_links
 
     out, err = consoles()
     with user_errors(err):

@@ -14,13 +14,13 @@ from service.cli.common import EXIT_NOT_CONVERGED, consoles, number, table_of, u
 from service.cli.options import DocArg, JsonOpt, SetOpt, mechanism
 
 if TYPE_CHECKING:  # the optimizer is imported when the command runs
-    from service.design import DesignProblem
-    from service.optimize import OptimizationResult, Prepared, StartResult
+    from service.design.optimize import OptimizationResult, Prepared, StartResult
+    from service.design.problem import DesignProblem
 
 
 def run_starts(err: Console, prepared: Prepared, starts: int) -> OptimizationResult:
     """Every start, one after the other, each reported on stderr when there are several."""
-    from service.optimize import combine, run_start
+    from service.design.optimize import combine, run_start
 
     runs = []
     for k in range(starts):
@@ -68,7 +68,7 @@ def print_optimum(out: Console, problem: DesignProblem, best: StartResult) -> No
 
 def print_sensitivities(out: Console, prepared: Prepared, best: StartResult, fields: list[str]) -> dict:
     """d(optimum)/d(field) for the given numeric fields; returns them as the report's entry."""
-    from service.sensitivity import optimum_sensitivities
+    from service.design.sensitivity import optimum_sensitivities
 
     sens = optimum_sensitivities(prepared, best, fields)
     table = table_of("sensitivities of the optimum", "of", *fields)
@@ -95,8 +95,8 @@ def optimize(
 ) -> None:
     """Solve the design problem of the document's `optimize` section: one NLP over the design
     variables and the equilibrium of every load case (IPOPT, exact derivatives)."""
-    from service.design import design_problem
-    from service.optimize import prepare
+    from service.design.optimize import prepare
+    from service.design.problem import design_problem
 
     out, err = consoles()
     with user_errors(err):

@@ -10,7 +10,7 @@ import typer
 
 from models import MODELS, Mechanism, compile_mechanism, load_document
 from service.cli.common import OptionError
-from service.newton import NewtonOptions
+from service.solvers.newton import NewtonOptions
 
 JACOBIANS = ("full", "first_term", "frozen")
 RESTARTS = ("previous", "undeformed")

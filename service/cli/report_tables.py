@@ -10,7 +10,7 @@ from rich.table import Table
 from models import Mechanism
 from models.elements import FAMILIES
 from service.cli.common import number, table_of
-from service.plotting import output_unit
+from service.drawings.plotting import output_unit
 
 
 def print_status(out: Console, report: dict) -> None:
@@ -130,7 +130,7 @@ def flexures_table(mech: Mechanism, values: dict) -> Table | None:
     return table
 
 
-# The terms of K_T of Cammarata et al. 2022 (Eqs. 26-28), as service.stiffness names them.
+# The terms of K_T of Cammarata et al. 2022 (Eqs. 26-28), as service.solvers.stiffness names them.
 STIFFNESS_TERMS = {
     "I": "term I of K_T (Cammarata et al. 2022, Eqs. 26-28): through the flexures' deformation",
     "II": "term II of K_T (Cammarata et al. 2022): through the body rotations that carry the flexures' ends",
@@ -141,7 +141,7 @@ STIFFNESS_TERMS = {
 
 
 def print_stiffness(out: Console, stiffness: dict) -> None:
-    """K_T (service.reports.stiffness_dict) in blocks of columns that fit the console;
+    """K_T (service.solvers.reports.stiffness_dict) in blocks of columns that fit the console;
     K[i][j] in (row unit)/(column unit). Then each of its terms I, II, III and load that is
     not zero (curved-beam mechanisms without links have them), titled, in the same units."""
     out.print(

@@ -12,7 +12,7 @@ from typing import Annotated
 import typer
 from rich.markup import escape
 
-from models.simulation_spec import IMPACT_SCHEMES
+from models.documents.simulation_spec import IMPACT_SCHEMES
 from service.cli.application import app
 from service.cli.common import (
     EXIT_NOT_CONVERGED,

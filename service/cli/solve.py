@@ -40,10 +40,10 @@ from service.cli.options import (
     overrides,
 )
 from service.cli.report_tables import print_solution, print_status, print_stiffness, print_wrenches
-from service.energy import minimize_energy
-from service.equilibrium import EquilibriumResult, solve_equilibrium
-from service.newton import NewtonOptions
-from service.reports import stiffness_dict
+from service.solvers.energy import minimize_energy
+from service.solvers.equilibrium import EquilibriumResult, solve_equilibrium
+from service.solvers.newton import NewtonOptions
+from service.solvers.reports import stiffness_dict
 
 # The analyses whose report is a solution (an EquilibriumResult): the CLI calls their solver
 # itself, for the result that --plot draws, and builds the same report the registry does.
@@ -164,7 +164,7 @@ def solve(
             write_json(json_out, {"document": str(document), "model": model, "overrides": overrides(sets), **report})
             out.print(f"wrote {escape(str(json_out))}")
         if plot is not None:
-            from service.plotting import plot_configuration
+            from service.drawings.plotting import plot_configuration
 
             save_plot(plot_configuration, result, plot)
             out.print(f"wrote {escape(str(plot))}")

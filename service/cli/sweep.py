@@ -37,13 +37,13 @@ from service.cli.options import (
     mechanism,
 )
 from service.cli.sweep_plan import SweepPlan, checked_options, plan_sweep
-from service.newton import NewtonOptions
-from service.plotting import field_label, output_unit
+from service.drawings.plotting import field_label, output_unit
+from service.solvers.newton import NewtonOptions
 
 SI_UNITS = {"force": "N", "moment": "N*m", "length": "m", "angle": "rad"}
 
 if TYPE_CHECKING:  # the sweep is imported when the command runs
-    from service.sweep import SweepResult, TargetResult
+    from service.solvers.sweep import SweepResult, TargetResult
 
 # Points of each curve printed (the --json file has every one).
 SHOWN_POINTS = 6
@@ -123,7 +123,7 @@ def stiffness_record(result: SweepResult, y_output: str) -> dict | None:
     the second ("first_step") and to the last ("last"); and at the start ("start"), the secant
     over a hundredth of the first step, solved from the first point's state (None if that
     solve fails). None when the first, second or last point did not converge."""
-    from service.equilibrium import solve_equilibrium
+    from service.solvers.equilibrium import solve_equilibrium
 
     mech, values, force = result.mechanism, result.values, result.outputs[y_output]
     if len(values) < 2 or values[1] == values[0] or any(result.status[i] != "converged" for i in (0, 1, -1)):
@@ -176,7 +176,7 @@ def run_curve(
     out: Console, mech: Mechanism, model: str | None, plan: SweepPlan, options: NewtonOptions, advance
 ) -> tuple[tuple[str, SweepResult] | None, dict, bool]:
     """One model's sweep, printed: (the curve to plot or None, its JSON record, whether it failed)."""
-    from service.sweep import run_sweep_spec
+    from service.solvers.sweep import run_sweep_spec
 
     label = curve_label(mech, model)
     result, target = run_sweep_spec(mech, plan.spec, options, plan.restart, advance)
@@ -341,7 +341,7 @@ def _write_files(
         )
         out.print(f"wrote {escape(str(json_out))}")
     if plot is not None and curves:
-        from service.plotting import plot_sweeps
+        from service.drawings.plotting import plot_sweeps
 
         save_plot(plot_sweeps, curves, plan.x_output, plan.y_output, swept, plot, secant=plan.stiffness)
         out.print(f"wrote {escape(str(plot))}")

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from models import COMPARED_MODELS, Mechanism, MechanismError
-from models.document import SweepSpec, SweepUntil
+from models.documents.document import SweepSpec, SweepUntil
 from models.units import quantity_to_si
 from service.cli.common import (
     OptionError,
@@ -20,8 +20,8 @@ from service.cli.common import (
     reaction_along,
 )
 from service.cli.options import RESTARTS, choice, newton_options
-from service.newton import NewtonOptions
-from service.plotting import output_unit
+from service.drawings.plotting import output_unit
+from service.solvers.newton import NewtonOptions
 
 
 @dataclass(frozen=True)

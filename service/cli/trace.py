@@ -25,10 +25,10 @@ from service.cli.common import (
     write_json,
 )
 from service.cli.options import DocArg, JsonOpt, SetOpt, mechanism
-from service.plotting import output_unit
+from service.drawings.plotting import output_unit
 
 if TYPE_CHECKING:  # continuation is imported when the command runs
-    from service.continuation import PathResult
+    from service.solvers.continuation import PathResult
 
 # Points of the path printed (the --json file has every one).
 SHOWN_POINTS = 12
@@ -85,7 +85,7 @@ def trace(
 ) -> None:
     """Pseudo-arc-length continuation of the equilibrium path through limit points (snap-through),
     with the stability of every point and the limit loads located exactly."""
-    from service.continuation import trace_path
+    from service.solvers.continuation import trace_path
 
     out, err = consoles()
     with user_errors(err):
@@ -108,7 +108,7 @@ def trace(
             write_json(json_out, {"document": str(document), **result.to_dict()})
             out.print(f"wrote {escape(str(json_out))}")
         if plot is not None and result.points:
-            from service.plotting import plot_trace
+            from service.drawings.plotting import plot_trace
 
             save_plot(plot_trace, mech, result, shown_output(mech), plot)
             out.print(f"wrote {escape(str(plot))}")

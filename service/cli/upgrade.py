@@ -1,4 +1,4 @@
-"""`flexmech upgrade DOC`: a document of an older shape in today's (models.upgrade), printed,
+"""`flexmech upgrade DOC`: a document of an older shape in today's (models.documents.upgrade), printed,
 written to --output, or written over DOC with --in-place; what changed goes to stderr."""
 
 from __future__ import annotations
@@ -11,9 +11,9 @@ import typer
 import yaml
 from rich.markup import escape
 
+from models.documents.reading import parse_json, parse_yaml
+from models.documents.upgrade import upgraded
 from models.errors import MechanismError
-from models.reading import parse_json, parse_yaml
-from models.upgrade import upgraded
 from service.cli.application import app
 from service.cli.common import OptionError, consoles, user_errors
 

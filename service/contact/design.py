@@ -17,7 +17,7 @@ from service.contact.problem import contact_problem
 from service.contact.report import friction_coefficients
 from service.contact.sensitivity import contact_sensitivities
 from service.contact.solve import ContactState, PenetratingStart, solve_state
-from service.design import DesignProblem, OutputRef
+from service.design.problem import DesignProblem, OutputRef
 
 CONTACT_SOURCE = "contact"
 
@@ -87,7 +87,7 @@ class ContactEvaluator:
 
 def run_contact_start(problem: DesignProblem, start: int, design0: np.ndarray) -> dict:
     """One start (from design0, document units) of a design problem with contact outputs:
-    the fields of a service.optimize.StartResult."""
+    the fields of a service.design.optimize.StartResult."""
     started = time.perf_counter()
     evaluator = ContactEvaluator(problem)
     scale, sign = problem.scale, problem.sign

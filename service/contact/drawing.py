@@ -11,7 +11,7 @@ from models import Mechanism
 from service.contact.kkt import split
 from service.contact.problem import ContactProblem
 from service.contact.solve import ContactState
-from service.drawing_outlines import boundary_line, ellipse, turned
+from service.drawings.outlines import boundary_line, ellipse, turned
 
 # A half-plane's boundary is drawn this many times the links' extent across.
 HALF_PLANE_REACH = 3.0

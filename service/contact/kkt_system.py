@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from models.planar import rot
+from models.graph.planar import rot
 from service.contact.wrenches import friction_force
 
 

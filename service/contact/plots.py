@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from service.figures import check_plot_path, new_figure, save_figure, set_labels
+from service.drawings.figures import check_plot_path, new_figure, save_figure, set_labels
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -129,7 +129,7 @@ def _draw_implicit(ax, obj, origin, angle, color, centre: np.ndarray, span: floa
     """The region g < 0 around the drawing (g in the object's frame, document units)."""
     import casadi as ca
 
-    from models.expression import compile_expression
+    from models.documents.expression import compile_expression
 
     x, y = ca.SX.sym("x"), ca.SX.sym("y")
     g = ca.Function("g", [x, y], [ca.SX(compile_expression(obj.expression, "", "x", ("y",))(x, {"y": y}))])

@@ -28,12 +28,12 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
-from models.assembly import graphs_for
 from models.contact.constraints import ContactGeometry, contact_constraints, substituted
 from models.contact.laws import FRICTION_LAWS, NORMAL_LAWS, check_law
 from models.errors import MechanismError
-from models.forms import symbolic_energy
-from models.structure import Structure
+from models.graph.assembly import graphs_for
+from models.graph.forms import symbolic_energy
+from models.graph.structure import Structure
 from service.contact.kkt_system import kkt_functions
 from service.contact.outputs import PAIR_OUTPUTS
 from service.contact.wrenches import contact_wrenches, friction_force, with_contact_wrenches
@@ -53,7 +53,7 @@ class ContactProblem:
     axis_pairs: tuple[int, ...]
     x_in_state: tuple[int, ...]
     multipliers_in_state: tuple[int, ...]
-    nlp: dict  # {x, p, f, g} (SX), for service.ipopt
+    nlp: dict  # {x, p, f, g} (SX), for service.solvers.ipopt
     axes_guess: ca.Function  # (x, p) -> a
     element_inequalities: ca.Function  # (x, p) -> h_el
     rows: ca.Function  # (w, p) -> h, normals (2 x rows), points (2 x rows), along

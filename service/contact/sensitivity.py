@@ -15,7 +15,7 @@ from models import Mechanism, MechanismError
 from service.contact.kkt import inequality_values, split
 from service.contact.problem import ContactProblem
 from service.contact.solve import ContactState
-from service.sensitivity_table import Sensitivities
+from service.design.sensitivity_table import Sensitivities
 
 WEAK = 1e-8
 # a gap (nondimensional) below which a pair is about to touch: the solve's accuracy (an open

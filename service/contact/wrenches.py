@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from models.planar import cross
+from models.graph.planar import cross
 
 REACTION_QUANTITIES = ("Fx", "Fy", "M")
 

@@ -17,9 +17,9 @@ from functools import cached_property
 import casadi as ca
 import numpy as np
 
-from models.context import AssemblyContext
+from models.graph.context import AssemblyContext
+from models.graph.structure import Structure
 from models.kernels.link_data import link_data
-from models.structure import Structure
 from service.dynamics.kernel_groups import padded
 from service.dynamics.kernel_records import Factors
 from service.dynamics.kernel_system import NEWTON_TOLERANCE, StepSystem

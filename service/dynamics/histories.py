@@ -6,7 +6,7 @@ its JSON pointer (as sweeps name fields), in the field's document unit, with t i
                                         {"value": "2*(t - 7.5)"}]}
     "/loads/hold/force/1": "10.99*exp(-t/0.01)"      (or a number: a constant)
 
-Expressions are the safe ones of models.expression, in t. A table is linear between its
+Expressions are the safe ones of models.documents.expression, in t. A table is linear between its
 points and constant beyond them (loads only: a motion needs an acceleration, so it takes an
 expression or pieces whose values and rates meet at the joins). The document's own value
 of a field is its value before the run: a start from equilibrium uses it.
@@ -21,7 +21,7 @@ import casadi as ca
 import numpy as np
 
 from models import Mechanism, MechanismError
-from models.expression import compile_expression
+from models.documents.expression import compile_expression
 
 MAX_TABLE = 100_000
 MAX_INLINE_TABLE = 200  # a table inside a step graph (impact simulations)

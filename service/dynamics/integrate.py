@@ -7,7 +7,7 @@ import time
 
 import numpy as np
 
-from models.structure import Structure
+from models.graph.structure import Structure
 from service.dynamics.adaptive import AdaptiveRunner, Tolerance
 from service.dynamics.histories import Histories, no_histories
 from service.dynamics.schemes import Scheme

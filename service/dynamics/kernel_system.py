@@ -10,7 +10,7 @@ each evaluation computes them exactly, in two sweeps along every chain of link e
                              the rows completed with them, and block elimination on the way
                              (models.kernels.chain_solver),
 
-so Newton runs on Lagrange's equations of models.dynamics while its linear systems are solved
+so Newton runs on Lagrange's equations of models.graph.dynamics while its linear systems are solved
 in the sparse lifted form: the backward sweep, one forward substitution sweep, and the few
 global unknowns (bodies, multipliers) by the condensed system's inverse.
 
@@ -26,12 +26,12 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from models.graph.structure import Structure
 from models.kernels.chain_solver import BORDER
 from models.kernels.chain_sweep import packed_size
 from models.kernels.chunks import CHUNK, Chunks, chunks
 from models.kernels.global_part import global_part, start_nodes
 from models.kernels.layout import layout_of
-from models.structure import Structure
 from service.dynamics.kernel_groups import UNSET_AFFINE, GroupIndex, group_index
 from service.dynamics.kernel_records import Evaluation, Factors, StepInputs
 

@@ -10,13 +10,13 @@ import casadi as ca
 import numpy as np
 from scipy.linalg import eigh, null_space
 
-from models.dynamics import DynamicsForm, dynamics_form
-from models.structure import Structure
+from models.graph.dynamics import DynamicsForm, dynamics_form
+from models.graph.structure import Structure
 
 
 @lru_cache(maxsize=16)
 def form_of(structure: Structure, moving: tuple[int, ...] = ()) -> DynamicsForm:
-    """The dense dynamics form (models.dynamics): small eigenproblems and reference checks; time
+    """The dense dynamics form (models.graph.dynamics): small eigenproblems and reference checks; time
     stepping runs on element kernels (service.dynamics.engine)."""
     return dynamics_form(structure, moving)
 
@@ -29,7 +29,7 @@ class Modes:
 
 @lru_cache(maxsize=16)
 def _hessian(structure: Structure) -> ca.Function:
-    from models.forms import symbolic_energy
+    from models.graph.forms import symbolic_energy
 
     s = symbolic_energy(structure)
     g = ca.vertcat(*[row for _, row in s.equalities]) if s.equalities else ca.SX(0, 1)

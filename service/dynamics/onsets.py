@@ -17,8 +17,8 @@ import numpy as np
 
 from models.contact.elastic_pairs import DAMPED_LAWS, elastic_pairs
 from models.contact.pair_forces import contact_forces
-from models.context import AssemblyContext
-from models.structure import Structure
+from models.graph.context import AssemblyContext
+from models.graph.structure import Structure
 from service.dynamics.engine import WINDOW_ACCEPTANCE
 
 GRID_SLACK = 1e-10  # of the step: the onset is located within this much of it (and a rest this short is none)

@@ -13,9 +13,9 @@ from pydantic import ValidationError
 
 from models import Mechanism, MechanismError
 from models.contact.elastic_pairs import check_link_dynamics
+from models.documents.simulation_spec import SimulateSpec, critical_step_factor
 from models.elements import FAMILIES
-from models.residual import unknown_names
-from models.simulation_spec import SimulateSpec, critical_step_factor
+from models.graph.residual import unknown_names
 from service.costs import Limits
 from service.dynamics.adaptive import Tolerance
 from service.dynamics.histories import Histories, read_histories
@@ -25,8 +25,8 @@ from service.dynamics.schemes import Scheme, generalized_alpha, newmark
 from service.dynamics.state_map import state_map
 from service.dynamics.static_start import static_shape
 from service.dynamics.stepping import engine_of
-from service.energy import minimize_energy
-from service.reports import output_units
+from service.solvers.energy import minimize_energy
+from service.solvers.reports import output_units
 
 MAX_STEPS = Limits().max_simulation_steps  # the service's limit: the CLI and Python apply the same
 STATIC_OUTPUTS = (".h", ".v", ".M_start", ".M_end")

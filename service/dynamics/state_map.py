@@ -1,5 +1,5 @@
 """Where a kernel run's state sits in the residual form's unknowns z: the maps of the energy
-form (models.forms.EnergyForm), from the element counts alone. A run's report and figures
+form (models.graph.forms.EnergyForm), from the element counts alone. A run's report and figures
 need only these; building the energy form for them took 0.1-0.16 s of every simulation."""
 
 from __future__ import annotations
@@ -9,8 +9,8 @@ from functools import lru_cache
 
 import numpy as np
 
+from models.graph.structure import Structure
 from models.kernels.layout import own_counts
-from models.structure import Structure
 
 
 @dataclass(frozen=True)

@@ -2,7 +2,7 @@
 values, by full Newton on the time step's own system with inertia and damping off
 (service.dynamics.engine `static_iteration`), so a start costs a few factorizations of the
 sparse lifted system (milliseconds for any element count) instead of the dense energy
-form's minimization (service.energy: 0.7 s for the rod of 8 elements, 13.5 s for 64).
+form's minimization (service.solvers.energy: 0.7 s for the rod of 8 elements, 13.5 s for 64).
 
 Newton runs from the undeformed state with the whole load; if it does not settle, the loads
 (and gravity) are applied in growing fractions, each solved from the last, which follows the

@@ -17,8 +17,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from models import MechanismError
+from models.graph.structure import Structure
 from models.kernels.layout import layout_of
-from models.structure import Structure
 from service.buffered import BufferedCall
 from service.dynamics.engine import WINDOW_ACCEPTANCE, Engine, engine_for
 from service.dynamics.histories import Histories

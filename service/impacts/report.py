@@ -13,8 +13,8 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from models.documents.simulation_spec import SimulateSpec
 from models.impacts.model import WORKS, ImpactModel
-from models.simulation_spec import SimulateSpec
 from service.impacts.event_driven import EventLayout, rhs_function
 from service.impacts.kept_rows import reported_rows
 from service.impacts.stepping import Trace

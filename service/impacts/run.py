@@ -12,9 +12,9 @@ import numpy as np
 from models import MechanismError
 from models.contact.laws import FRICTION_LAWS, NORMAL_LAWS, check_law
 from models.contact.schema import FrictionFields
-from models.document import MechanismDocument
+from models.documents.document import MechanismDocument
+from models.documents.simulation_spec import SimulateSpec
 from models.impacts.model import DAMPING, WORKS, ImpactModel, impact_model
-from models.simulation_spec import SimulateSpec
 from models.units import document_unit, quantity_to_si
 from service.dynamics.histories import history_expression
 from service.impacts.event_driven import EventLayout

@@ -38,10 +38,10 @@ def _code_version(family_sources: tuple[str, ...]) -> str:
     from pathlib import Path
 
     import models.contact.laws as laws
-    import models.context as statics_context  # the statics energies of models.impacts.families read it
     import models.elements as families
+    import models.graph.context as statics_context  # the statics energies of models.impacts.families read it
+    import models.graph.loads as statics_loads  # the bodies' kinetic energy, gravity and loads (models.impacts.coordinates)
     import models.impacts as built
-    import models.loads as statics_loads  # the bodies' kinetic energy, gravity and loads (models.impacts.coordinates)
 
     here = Path(__file__).parent
     folders = [Path(module.__file__).parent for module in (built, laws, families)]

@@ -27,8 +27,8 @@ from typing import Protocol
 import numpy as np
 
 from models import MechanismError
-from models.document import MechanismDocument
-from models.simulation_spec import SimulateSpec
+from models.documents.document import MechanismDocument
+from models.documents.simulation_spec import SimulateSpec
 from service.impacts.run import Histories, run_with_histories
 
 

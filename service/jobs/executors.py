@@ -2,7 +2,7 @@
 
 Both are concurrent.futures executors, so the runner treats them alike. Worker processes
 import flexmech once and keep their compiled mechanisms and CasADi Functions between tasks
-(service.jobs.sweep caches them per document, models.assembly per structure, and built
+(service.jobs.sweep caches them per document, models.graph.assembly per structure, and built
 graphs are on disk for every new worker). No CasADi object ever crosses a process boundary:
 tasks carry JSON-able specs only.
 

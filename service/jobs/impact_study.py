@@ -16,7 +16,7 @@ from typing import Any
 from pydantic import BaseModel, ConfigDict, Field
 
 from models import MechanismError
-from models.simulation_spec import IMPACT_SCHEMES
+from models.documents.simulation_spec import IMPACT_SCHEMES
 from service.analyses.simulate import SimulateOverrides
 from service.costs import Limits, check_grid_size
 from service.dynamics.run import simulation_spec

@@ -19,13 +19,13 @@ import numpy as np
 from pydantic import ConfigDict, Field
 
 from models import MechanismError
-from models.document import parse_optimize_spec
-from service.design import DesignProblem, design_problem
+from models.documents.document import parse_optimize_spec
+from service.design.optimize import Prepared, StartResult, combine, prepare, run_start
+from service.design.problem import DesignProblem, design_problem
 from service.jobs.base import JSON, JobOptions, Plan, StoredJob, read_spec
 from service.jobs.control import TaskControl
-from service.optimize import Prepared, StartResult, combine, prepare, run_start
-from service.reports import plain
 from service.requests import Limits, compile_request, under
+from service.solvers.reports import plain
 
 
 class OptimizeOptions(JobOptions):

@@ -18,7 +18,7 @@ from pydantic import ConfigDict
 
 from models import MechanismError
 from models.contact.elastic_pairs import check_link_dynamics
-from models.simulation_spec import IMPACT_SCHEMES
+from models.documents.simulation_spec import IMPACT_SCHEMES
 from service.analyses.simulate import SimulateOptions
 from service.costs import Limits, check_result_size
 from service.dynamics.histories import read_histories

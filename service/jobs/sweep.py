@@ -33,21 +33,21 @@ import numpy as np
 from models import Mechanism, MechanismError
 from service.analyses import ANALYSES
 from service.costs import Limits, check_result_size
-from service.equilibrium import check_constrained
 from service.jobs.base import JSON, Plan, StoredJob, read_spec
 from service.jobs.control import TaskControl
 from service.jobs.grids import grid_shape, grid_size, load_paths, point_values
 from service.jobs.sweep_options import SWEEP_EXAMPLES, SweepOptions, SweepSpec
-from service.reports import output_units, plain
 from service.requests import compile_request, newton_options
-from service.sweep import solve_for_target
+from service.solvers.equilibrium import check_constrained
+from service.solvers.reports import output_units, plain
+from service.solvers.sweep import solve_for_target
 from service.units import residual_report
 
 
 @lru_cache(maxsize=16)
 def _mechanism(document_json: str, model: str | None, overrides_json: str) -> Mechanism:
     """One compiled mechanism per document in each worker process; its CasADi Functions are
-    built once per structure (models.assembly.graphs_for is cached) and reused by every task."""
+    built once per structure (models.graph.assembly.graphs_for is cached) and reused by every task."""
     return compile_request(json.loads(document_json), model, json.loads(overrides_json))
 
 

@@ -6,7 +6,7 @@ CasADi version and the compiler flags, never by a structure: every structure wit
 of that signature uses them. A signature counts as compiled when all five are there (the
 builder installs them atomically, the last one last). A run loads what is there and runs the
 rest interpreted; loading touches the folder, which the cache's size bound reads as use
-(models.disk_cache).
+(models.caches.disk_cache).
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from pathlib import Path
 
 import casadi as ca
 
-from models.disk_cache import cache_dir, touch
+from models.caches.disk_cache import cache_dir, touch
 from models.kernels.chain_signature import ChainSignature
 from models.kernels.chunks import CHUNK, Chunks, chunks
 
@@ -40,7 +40,7 @@ def version() -> str:
     the compiler: an image built with gcc may serve without one, and the C is plain C99)."""
     digest = hashlib.sha256(f"{ca.__version__}|{' '.join(FLAGS)}|{CHUNK}".encode())
     root = Path(__file__).resolve().parents[2] / "models"
-    for path in [*sorted((root / "kernels").glob("*.py")), root / "link_fe.py"]:
+    for path in [*sorted((root / "kernels").glob("*.py")), root / "beams" / "link_fe.py"]:
         digest.update(path.read_bytes())
     return digest.hexdigest()[:12]
 

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import casadi as ca
 
-from models.disk_cache import bound, cache_dir
+from models.caches.disk_cache import bound, cache_dir
 from models.kernels.chain_signature import ChainSignature
 from models.kernels.chunks import chunks
 from service.kernels.build import BuildLimits, Compiler, Outcome, die_with_parent

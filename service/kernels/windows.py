@@ -17,7 +17,7 @@ from collections import OrderedDict
 
 import casadi as ca
 
-from models.disk_cache import touch
+from models.caches.disk_cache import touch
 from models.kernels.chain_signature import ChainSignature
 from service.kernels.cache import KINDS, library
 from service.kernels.queue import function_library, request_function

@@ -1,0 +1,1 @@
+"""The mechanism document: its schema, fields, reading, sections, units of its sections, upgrades."""

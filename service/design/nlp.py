@@ -1,0 +1,169 @@
+"""The design NLP of a DesignProblem (simultaneous approach), as CasADi graphs.
+
+Unknowns x = [d; z_1; ...; z_C]: the scaled design variables (document value / scale) and
+the equilibrium state of every load case. Constraints g = [R(z_1, p_1); ...; R(z_C, p_C);
+outputs of the constraints / their scales]; the residuals are equalities. The objective is
+(+-) its output over its scale. Every number (the cases' parameters, the design scales, the
+output scales) is an NLP parameter, so one solver serves every start and every value.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import lru_cache
+
+import casadi as ca
+import numpy as np
+
+from models.graph.assembly import graphs_for
+from service.design.problem import DesignProblem, OutputRef
+from service.solvers.ipopt import nlp_solver, solve
+
+
+@dataclass(frozen=True, eq=False)
+class DesignNlp:
+    key: tuple
+    n_design: int
+    n_state: int  # per case
+    n_cases: int
+    n_params: int  # per case
+    n_residuals: int  # rows of g that are equilibrium residuals
+    evaluate: ca.Function  # (x, P) -> (f, g)
+    kkt: ca.Function  # (x, P, lam_g) -> (H, L_xp, J, g_p, f_p): for sensitivities of the optimum
+    x: ca.SX
+    P: ca.SX
+    f: ca.SX
+    g: ca.SX
+
+    def pack(self, problem: DesignProblem, objective_scale: float, constraint_scales: np.ndarray) -> np.ndarray:
+        """The NLP parameter vector: every case's parameters, the design scales (nondim per
+        scaled unit), the objective's scale (negative to maximize) and the constraints'
+        scales (nondimensional)."""
+        design_scale = problem.scale * problem.nd_per_doc
+        return np.concatenate([*problem.case_p, design_scale, [objective_scale], constraint_scales])
+
+
+def _key(problem: DesignProblem) -> tuple:
+    refs = (problem.objective, *(c.output for c in problem.constraints))
+    return (problem.mechanism.structure, problem.slots, len(problem.case_p), refs)
+
+
+def design_nlp(problem: DesignProblem) -> DesignNlp:
+    """The NLP graphs of a problem's structure, built once per process (numbers are parameters)."""
+    return _design_nlp(_key(problem))
+
+
+@lru_cache(maxsize=16)
+def _design_nlp(key: tuple) -> DesignNlp:
+    structure, slots, n_cases, refs = key
+    graphs = graphs_for(structure)
+    n_state, n_params, n_design = structure.n_unknowns, len(structure.parameters), len(slots)
+    d = ca.SX.sym("d", n_design)
+    zs = [ca.SX.sym(f"z{c}", n_state) for c in range(n_cases)]
+    P = ca.SX.sym("P", n_params * n_cases + n_design + 1 + len(refs) - 1)
+    design_scale = P[n_params * n_cases : n_params * n_cases + n_design]
+    objective_scale = P[n_params * n_cases + n_design]
+    constraint_scales = P[n_params * n_cases + n_design + 1 :]
+    ps = []
+    for c in range(n_cases):
+        pc = P[c * n_params : (c + 1) * n_params]
+        for k, slot in enumerate(slots):
+            pc[slot] = d[k] * design_scale[k]
+        ps.append(pc)
+    residuals = [graphs.residual(zs[c], ps[c]) for c in range(n_cases)]
+    outputs: dict[int, ca.SX] = {}
+
+    def value(ref: OutputRef) -> ca.SX:
+        c = ref.case
+        if ref.source == "parameter":
+            return ps[c][ref.index]
+        if ref.source == "stiffness":
+            K = graphs.residual_and_tangent(zs[c], ps[c])[1]
+            unit = ca.DM.zeros(n_state)
+            unit[ref.index] = 1
+            return 1 / ca.solve(K, unit)[ref.index]  # 1 / compliance: the condensed diagonal
+        if c not in outputs:
+            outputs[c] = graphs.outputs(zs[c], ps[c])
+        return outputs[c][ref.index]
+
+    f = value(refs[0]) / objective_scale
+    constraint_rows = [value(ref) / constraint_scales[k] for k, ref in enumerate(refs[1:])]
+    x = ca.vertcat(d, *zs)
+    g = ca.vertcat(*residuals, *constraint_rows)
+    evaluate = ca.Function("design_nlp", [x, P], [f, g], ["x", "P"], ["f", "g"], dict(cse=True))
+    lam = ca.SX.sym("lam_g", g.shape[0])
+    lagrangian = f + ca.dot(lam, g)
+    gradient = ca.gradient(lagrangian, x)
+    kkt = ca.Function(
+        "design_kkt",
+        [x, P, lam],
+        [ca.jacobian(gradient, x), ca.jacobian(gradient, P), ca.jacobian(g, x), ca.jacobian(g, P), ca.gradient(f, P)],
+        ["x", "P", "lam_g"],
+        ["H", "L_xp", "J", "g_p", "f_p"],
+        dict(cse=True),
+    )
+    for fn in (evaluate, kkt):
+        if fn.has_free():
+            raise RuntimeError(f"graph {fn.name()} has free symbols {fn.get_free()}")
+    return DesignNlp(key, n_design, n_state, n_cases, n_params, n_state * n_cases, evaluate, kkt, x, P, f, g)
+
+
+def solver_for(nlp: DesignNlp, max_iterations: int, tolerance: float) -> ca.Function:
+    """IPOPT on the design NLP (exact Hessian of the Lagrangian), one per setting."""
+    return nlp_solver(
+        "design",
+        nlp.key,
+        lambda: {"x": nlp.x, "p": nlp.P, "f": nlp.f, "g": nlp.g},
+        {"tol": tolerance, "max_iter": max_iterations, "mu_strategy": "adaptive"},
+    )
+
+
+def _elastic_solver(nlp: DesignNlp, max_iterations: int) -> ca.Function:
+    def problem() -> dict:
+        n_con = nlp.g.shape[0] - nlp.n_residuals
+        slack = ca.SX.sym("s", n_con)
+        residuals, constraints = nlp.g[: nlp.n_residuals], nlp.g[nlp.n_residuals :]
+        return {
+            "x": ca.vertcat(nlp.x, slack),
+            "p": nlp.P,
+            "f": ca.sum1(slack),
+            "g": ca.vertcat(residuals, constraints - slack, constraints + slack),
+        }
+
+    return nlp_solver("design_feasibility", nlp.key, problem, {"tol": 1e-10, "max_iter": max_iterations})
+
+
+def least_violation(
+    nlp: DesignNlp,
+    x0: np.ndarray,
+    P: np.ndarray,
+    lbx: np.ndarray,
+    ubx: np.ndarray,
+    lbg: np.ndarray,
+    ubg: np.ndarray,
+    max_iterations: int,
+    stop: Callable[[], bool] | None = None,
+) -> tuple[np.ndarray, float, str]:
+    """The point of least total constraint violation (in scaled units) with every case in
+    equilibrium and the design within its bounds: minimize the sum of elastic slacks s >= 0
+    with lower - s <= g <= upper + s. Returns (x, total violation, IPOPT status)."""
+    solver = _elastic_solver(nlp, max_iterations)
+    n_res = nlp.n_residuals
+    lower, upper = lbg[n_res:], ubg[n_res:]
+    _, g = nlp.evaluate(x0, P)
+    g = np.asarray(g).ravel()[n_res:]
+    s0 = np.maximum(np.maximum(lower - g, g - upper), 0.0) + 1e-3
+    n_con = len(lower)
+    outcome = solve(
+        solver,
+        stop=stop,
+        x0=np.concatenate([x0, s0]),
+        p=P,
+        lbx=np.concatenate([lbx, np.zeros(n_con)]),
+        ubx=np.concatenate([ubx, np.full(n_con, np.inf)]),
+        lbg=np.concatenate([np.zeros(n_res), np.full(n_con, -np.inf), lower]),
+        ubg=np.concatenate([np.zeros(n_res), upper, np.full(n_con, np.inf)]),
+    )
+    x = outcome.x
+    return x[: len(x0)], float(np.sum(x[len(x0) :])), outcome.status

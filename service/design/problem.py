@@ -1,0 +1,188 @@
+"""A design problem checked against its mechanism: which parameters move, which outputs are
+the objective and constraints, in which load cases, and their units and scales.
+
+Outputs are the names /v1/solve reports (reactions.tip.Fy, end_effector.x,
+elements.L1.stress_max, energy, ...), plus
+  stiffness.<body>.<x|y|angle>   the diagonal of the condensed tangent stiffness K_T
+  /a/numeric/field               the value of a numeric field of the case (e.g. a length)
+Every problem names its field under `pointer` (e.g. /optimize/design/0/lower).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from models import Mechanism, MechanismError
+from models.documents.optimize_spec import OptimizeSpec
+from models.graph.structure import COORDINATES
+from service.contact.outputs import PAIR_OUTPUTS
+
+STIFFNESS_PREFIX = "stiffness."
+_STIFFNESS_KINDS = {"x": "stiffness", "y": "stiffness", "angle": "moment"}  # per unit length / per rad
+
+
+@dataclass(frozen=True)
+class OutputRef:
+    """One output of one case: from the outputs graph, a stiffness, or a parameter."""
+
+    name: str
+    case: int
+    source: str  # output | stiffness | parameter
+    index: int  # into the outputs, the free coordinates or the parameters
+    kind: str
+
+
+@dataclass(frozen=True)
+class Bounded:
+    output: OutputRef
+    lower: float  # document units, -inf / inf when absent
+    upper: float
+    pointer: str
+
+
+@dataclass(frozen=True)
+class DesignProblem:
+    mechanism: Mechanism
+    spec: OptimizeSpec
+    paths: tuple[str, ...]
+    slots: tuple[int, ...]  # parameter index of each design variable
+    nd_per_doc: np.ndarray  # per design variable
+    start: np.ndarray  # document units (the document's values)
+    lower: np.ndarray  # document units, -inf / inf when absent
+    upper: np.ndarray
+    scale: np.ndarray  # document units
+    case_names: tuple[str, ...]
+    case_p: tuple[np.ndarray, ...]  # nondimensional parameters of each case (design slots: start values)
+    objective: OutputRef
+    sign: float  # +1 minimize, -1 maximize
+    constraints: tuple[Bounded, ...]
+
+    def output_factor(self, ref: OutputRef) -> float:
+        """Nondimensional value of one document unit of the output."""
+        return self.mechanism.nd_per_doc(ref.kind)
+
+
+def design_problem(mech: Mechanism, spec: OptimizeSpec, pointer: str = "/optimize") -> DesignProblem:
+    paths, slots, factors, lower, upper, scale, start = [], [], [], [], [], [], []
+    for k, var in enumerate(spec.design):
+        here = f"{pointer}/design/{k}"
+        try:
+            slot = mech.parameter_index(var.path)
+        except MechanismError as exc:
+            raise MechanismError(f"{here}/path", f"'{var.path}' is {exc.problem}") from None
+        if var.path in paths:
+            raise MechanismError(f"{here}/path", f"'{var.path}' is already a design variable")
+        for bound in ("lower", "upper", "scale"):  # the field's own checks (a positive h, an arc angle)
+            if getattr(var, bound) is not None:
+                mech.checked_si(var.path, getattr(var, bound), f"{here}/{bound}", own_checks=bound != "scale")
+        lo = -np.inf if var.lower is None else float(var.lower)
+        hi = np.inf if var.upper is None else float(var.upper)
+        if lo > hi:
+            raise MechanismError(f"{here}/lower", f"lower bound {var.lower:g} is above the upper bound {var.upper:g}")
+        value = mech.value(var.path)
+        paths.append(var.path)
+        slots.append(slot)
+        factors.append(mech.nd_per_doc(mech.parameters[slot].kind))
+        lower.append(lo)
+        upper.append(hi)
+        scale.append(var.scale if var.scale is not None else _typical(value, lo, hi))
+        start.append(value)
+
+    case_names, case_p = _cases(mech, spec, pointer, set(paths))
+    objective = _output(mech, spec.objective.output, spec.objective.case, case_names, f"{pointer}/objective")
+    constraints = []
+    for k, con in enumerate(spec.constraints):
+        here = f"{pointer}/constraints/{k}"
+        ref = _output(mech, con.output, con.case, case_names, here)
+        lo = con.equals if con.equals is not None else con.lower
+        hi = con.equals if con.equals is not None else con.upper
+        lo = -np.inf if lo is None else float(lo)
+        hi = np.inf if hi is None else float(hi)
+        if lo > hi:
+            raise MechanismError(f"{here}/lower", f"lower bound {lo:g} is above the upper bound {hi:g}")
+        constraints.append(Bounded(ref, lo, hi, here))
+    return DesignProblem(
+        mech,
+        spec,
+        tuple(paths),
+        tuple(slots),
+        np.array(factors),
+        np.array(start),
+        np.array(lower),
+        np.array(upper),
+        np.array(scale, dtype=float),
+        case_names,
+        case_p,
+        objective,
+        1.0 if spec.objective.sense == "minimize" else -1.0,
+        tuple(constraints),
+    )
+
+
+def _typical(value: float, lo: float, hi: float) -> float:
+    """A design variable's size for scaling: its start value, else its bounds' span, else 1."""
+    if value != 0:
+        return abs(value)
+    if np.isfinite(lo) and np.isfinite(hi) and hi > lo:
+        return hi - lo
+    return 1.0
+
+
+def _cases(mech: Mechanism, spec: OptimizeSpec, pointer: str, design: set[str]):
+    if not spec.cases:
+        return ("nominal",), (mech.p(),)
+    names, ps = [], []
+    for name, case in spec.cases.items():
+        mech_case = mech
+        for path, value in case.overrides.items():
+            here = f"{pointer}/cases/{name}/overrides/{path.replace('~', '~0').replace('/', '~1')}"
+            if path in design:
+                raise MechanismError(here, f"'{path}' is a design variable: a case cannot fix it")
+            try:
+                mech_case = mech_case.with_values({path: value})
+            except MechanismError as exc:
+                raise MechanismError(here, exc.problem) from None
+        names.append(name)
+        ps.append(mech_case.p())
+    return tuple(names), tuple(ps)
+
+
+def output_names(mech: Mechanism) -> list[str]:
+    """Every output an objective or constraint may name (besides numeric-field paths)."""
+    stiffness = [f"{STIFFNESS_PREFIX}{name}" for name in mech.free_coordinates]
+    return list(mech.graphs.output_names) + stiffness
+
+
+def _output(mech: Mechanism, name: str, case: str | None, case_names: tuple[str, ...], here: str) -> OutputRef:
+    if case is None:
+        if len(case_names) > 1:
+            raise MechanismError(f"{here}/case", f"name the load case ({', '.join(case_names)})")
+        c = 0
+    elif case not in case_names:
+        raise MechanismError(f"{here}/case", f"unknown load case '{case}' (cases: {', '.join(case_names)})")
+    else:
+        c = case_names.index(case)
+    g = mech.graphs
+    if name in g.output_names:
+        k = g.output_names.index(name)
+        return OutputRef(name, c, "output", k, g.output_kinds[k])
+    if name.startswith(STIFFNESS_PREFIX) and name[len(STIFFNESS_PREFIX) :] in mech.free_coordinates:
+        k = mech.free_coordinates.index(name[len(STIFFNESS_PREFIX) :])
+        coordinate = COORDINATES[mech.structure.free[k][1]]
+        return OutputRef(name, c, "stiffness", k, _STIFFNESS_KINDS[coordinate])
+    if name.startswith("contacts.") and mech.structure.contacts is not None:
+        kinds = dict(PAIR_OUTPUTS)
+        pair, _, quantity = name[len("contacts.") :].rpartition(".")
+        if pair in [p.name for p in mech.structure.contacts.pairs] and quantity in kinds:
+            return OutputRef(name, c, "contact", 0, kinds[quantity])
+    if name.startswith("/"):
+        try:
+            k = mech.parameter_index(name)
+        except MechanismError as exc:
+            raise MechanismError(f"{here}/output", f"'{name}' is {exc.problem}") from None
+        return OutputRef(name, c, "parameter", k, mech.parameters[k].kind)
+    close = [n for n in output_names(mech) if n.split(".")[0] == name.split(".")[0]][:8]
+    hint = f" (outputs like it: {', '.join(close)})" if close else " (see the outputs /v1/solve reports)"
+    raise MechanismError(f"{here}/output", f"unknown output '{name}'{hint}")
