@@ -22,6 +22,7 @@ field by field from the dict.
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar, Protocol, TypeVar
@@ -98,13 +99,13 @@ class JobKind(Protocol):
     def result(self, spec: JSON, plan: JSON, finished: Mapping[int, JSON]) -> JSON: ...
 
 
-class InOrder:
+class InOrder(ABC):
     """A kind whose points run in order, a chunk at a time, each chunk from the last stored
-    point (a path, a simulation): one task at a time, the next once its points are stored.
-    Subclasses say next_chunk(plan, finished, chunk_size) -> task or None."""
+    point (a path, a simulation): one task at a time, the next once its points are stored."""
 
+    @abstractmethod
     def next_chunk(self, plan: JSON, finished: Mapping[int, JSON], chunk_size: int) -> JSON | None:
-        raise NotImplementedError
+        """The next task (None when every point is stored)."""
 
     def tasks(self, spec: JSON, plan: JSON, finished: Mapping[int, JSON], chunk_size: int) -> list[JSON]:
         task = self.next_chunk(plan, finished, chunk_size)
