@@ -110,7 +110,7 @@ def _shown(text: str, limit: int = 40) -> str:
 @lru_cache(maxsize=1)
 def _known() -> dict[str, tuple[float, Dimension]]:
     """pint's answers for the unit names documents use most (scripts/unit_names.py writes them,
-    tests/test_unit_names.py checks them): a process on an empty cache reads these instead of
+    tests/documents/test_unit_names.py checks them): a process on an empty cache reads these instead of
     parsing pint's definitions, 0.5-0.75 s."""
     try:
         table = json.loads(KNOWN_NAMES.read_text())

@@ -1,7 +1,7 @@
 """Writes models/unit_names.json: pint's answer (SI size, dimension) for the unit names documents
 use most, so that a process on an empty cache reads them instead of parsing pint's definitions
 (0.5-0.75 s). models.units reads the table first and asks pint for any other name;
-tests/test_unit_names.py checks that every entry is still pint's answer. Run from the repository
+tests/documents/test_unit_names.py checks that every entry is still pint's answer. Run from the repository
 root after upgrading pint or adding names:
 
     python3 scripts/unit_names.py

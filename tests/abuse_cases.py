@@ -1,5 +1,5 @@
 """Requests that once broke the service (issues 12 and 24), as data: each with the status, the JSON
-pointer and a piece of the message it must get. tests/test_abuse.py sends them to a live
+pointer and a piece of the message it must get. tests/service/test_abuse.py sends them to a live
 server; the hardening tests use single cases."""
 
 from __future__ import annotations
