@@ -171,6 +171,14 @@ class Graphs:
         return energy_form(self.structure)
 
     @cached_property
+    def modal_form(self):
+        """The stiffness, constraints and masses of small vibration (models.graph.modal);
+        MechanismError as energy_form's."""
+        from models.graph.modal import modal_form
+
+        return modal_form(self.structure)
+
+    @cached_property
     def mass_matrix(self) -> ca.Function:
         """(z, p) -> M (models.graph.forms.mass_matrix)."""
         from models.graph.forms import mass_matrix

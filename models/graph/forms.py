@@ -66,6 +66,7 @@ class SymbolicEnergy:
     multipliers_in_state: list[int]
     nudge: ca.SX | None = None  # (3 x bodies) added to every body's displacement, when asked for: zero it
     inertia: list = field(default_factory=list)  # every element's InertiaPoints
+    inertia_owners: list[str] = field(default_factory=list)  # the element each InertiaPoint belongs to
 
 
 def symbolic_energy(structure: Structure, nudged: bool = False) -> SymbolicEnergy:
@@ -79,7 +80,7 @@ def symbolic_energy(structure: Structure, nudged: bool = False) -> SymbolicEnerg
     if nudged:
         d = [d_b + nudge[:, b] for b, d_b in enumerate(d)]
     V = load_potential(ctx, d)
-    equalities, inequalities, variables, surfaces, inertia = [], [], [x_body], {}, []
+    equalities, inequalities, variables, surfaces, inertia, owners = [], [], [x_body], {}, [], []
     names = [structure.coordinate_name(b, c) for b, c in structure.free]
     x_in_state, multipliers_in_state = list(range(len(names))), []
     for t, offset in zip(structure.elements, structure.element_offsets):
@@ -105,6 +106,7 @@ def symbolic_energy(structure: Structure, nudged: bool = False) -> SymbolicEnerg
         if terms.surfaces is not None:
             surfaces[t.name] = terms.surfaces
         inertia += terms.inertia
+        owners += [t.name] * len(terms.inertia)
         V = V + terms.energy
         equalities += [(f"{t.name}.{name}", g) for name, g in terms.equalities]
         inequalities += [(f"{t.name}.{name}", h) for name, h in terms.inequalities]
@@ -121,6 +123,7 @@ def symbolic_energy(structure: Structure, nudged: bool = False) -> SymbolicEnerg
         multipliers_in_state,
         nudge,
         inertia,
+        owners,
     )
 
 

@@ -68,15 +68,35 @@ def load_potential(ctx: AssemblyContext, d: list[ca.SX]) -> ca.SX:
 
 def kinetic_energy(ctx: AssemblyContext, d: list[ca.SX], v: list[ca.SX]) -> ca.SX:
     """Kinetic energy of the bodies with mass for displacements d and velocities v (per body
-    [vx, vy, omega] of the reference point): a point mass at the mass centre, or with the
-    inertia about the reference point when given."""
+    [vx, vy, omega] of the reference point)."""
+    return sum((T for _, T in body_kinetic_energies(ctx, d, v)), ca.SX(0))
+
+
+def body_kinetic_energies(ctx: AssemblyContext, d: list[ca.SX], v: list[ca.SX]) -> list[tuple[int, ca.SX]]:
+    """(body, its kinetic energy) of every body with mass: a point mass at the mass centre, or
+    with the inertia about the reference point when given."""
     s, P = ctx.structure, ctx.P
-    T = ca.SX(0)
+    out = []
     for m in s.masses:
         name = s.bodies[m.body]
         mass = P[f"/bodies/{name}/mass"]
         arm = ctx.arm(m.body, _center_of_mass(ctx, m.body, m.center), d)
         speed, omega = v[m.body][:2], v[m.body][2]
         inertia = P[f"/bodies/{name}/inertia"] if m.inertia else mass * ca.dot(arm, arm)
-        T = T + 0.5 * mass * ca.dot(speed, speed) + mass * omega * cross(arm, speed) + 0.5 * inertia * omega**2
-    return T
+        out.append(
+            (m.body, 0.5 * mass * ca.dot(speed, speed) + mass * omega * cross(arm, speed) + 0.5 * inertia * omega**2)
+        )
+    return out
+
+
+def mass_centres(ctx: AssemblyContext, d: list[ca.SX]) -> list[tuple[int, ca.SX, ca.SX]]:
+    """(body, mass, position of its mass centre) of every body with mass, displaced by d."""
+    s = ctx.structure
+    return [
+        (
+            m.body,
+            ctx.P[f"/bodies/{s.bodies[m.body]}/mass"],
+            ctx.reference(m.body)[0] + d[m.body][:2] + ctx.arm(m.body, _center_of_mass(ctx, m.body, m.center), d),
+        )
+        for m in s.masses
+    ]

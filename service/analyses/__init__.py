@@ -9,6 +9,7 @@ from service.analyses.energy import ENERGY
 from service.analyses.equilibrium import EQUILIBRIUM
 from service.analyses.inverse import INVERSE
 from service.analyses.linearization import LINEARIZATION
+from service.analyses.modes import MODES
 from service.analyses.simulate import SIMULATE
 from service.analyses.trace import TRACE
 
@@ -21,6 +22,7 @@ ANALYSES = Analyses(
         ENERGY,
         CONTACT,
         SIMULATE,
+        MODES,
     ]
 )
 

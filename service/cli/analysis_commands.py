@@ -34,6 +34,7 @@ from service.cli.options import (
     mechanism,
     newton_options,
 )
+from service.cli.record_tables import is_records, records_table
 from service.cli.report_tables import print_status
 
 FINE = ("converged", "finished")
@@ -132,6 +133,11 @@ def _named_numbers(value: Any) -> bool:
     )
 
 
+def _scalar_record(row: dict) -> bool:
+    """Every field of a record shows in its table's row (else --json has more)."""
+    return all(v is None or isinstance(v, (int, float, str)) for v in row.values())
+
+
 def print_report(out: Console, report: dict) -> None:
     """The status; then each number, each quantity ({value, unit}) and a table per mapping of
     named numbers (its units from the report's <key>_units); the rest is named as in --json."""
@@ -156,6 +162,11 @@ def print_report(out: Console, report: dict) -> None:
                     escape(name), number(v), escape(str(units.get(name, "") if isinstance(units, dict) else ""))
                 )
             out.print(table)
+        elif is_records(value):
+            units = report.get("units")
+            out.print(records_table(key, value, units if isinstance(units, dict) else {}))
+            if any(not _scalar_record(row) for row in value):
+                rest.append(key)
         elif value not in (None, [], {}):
             rest.append(key)
     for note in report.get("warnings", []):

@@ -1,0 +1,90 @@
+"""The modal form: what small vibration about an equilibrium needs, from the energy form's
+expressions (models.graph.forms) in its unknowns x (nondimensional; time in seconds):
+
+    K(x, lam, p) = d2/dx2 (V + lam . g)   the stiffness, prestress and load stiffness included
+    G(x, p) = dg/dx                         the constraints: the modes live in their null space
+    M_o(x, p)                               the mass matrix of each owner of mass (a body with
+                                            mass, an element with density); M = sum of them
+    F(x, p) = [M r_x, M r_y]                the generalized forces of a unit uniform acceleration
+                                            along x and along y, fixed bodies included (so a
+                                            link clamped to the ground shakes with it): with a
+                                            mode shape they give its participation factor
+    J(x, p)                                 where the elements' mass points move, per unit x
+
+A mass point of an element is one of its InertiaPoints (the quadrature points of its
+discretization, so M is the element's consistent mass)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+
+from models.graph.forms import symbolic_energy
+from models.graph.loads import body_kinetic_energies, mass_centres
+from models.graph.structure import Structure
+
+
+@dataclass(frozen=True)
+class ModalForm:
+    unknowns: tuple[str, ...]
+    n_equalities: int
+    x_in_state: tuple[int, ...]  # where x and the multipliers sit in the residual form's z
+    multipliers_in_state: tuple[int, ...]
+    stiffness: ca.Function  # (x, lam, p) -> K
+    constraint_jacobian: ca.Function  # (x, p) -> G
+    owners: tuple[str, ...]  # "bodies/<name>" or "elements/<name>", one per mass matrix
+    masses: ca.Function  # (x, p) -> M_o, one output per owner
+    total_mass: ca.Function  # (p) -> the mechanism's mass (its bodies' and elements')
+    uniform_forces: ca.Function  # (x, p) -> F (n x 2)
+    point_owners: tuple[str, ...]  # the element of each mass point
+    points: ca.Function  # (x, p) -> (positions (2 x k), J (2k x n): rows x0, y0, x1, y1, ...)
+
+
+def modal_form(structure: Structure) -> ModalForm:
+    s = symbolic_energy(structure)
+    x, p = s.x, s.ctx.p
+    n = x.numel()
+    g = ca.vertcat(*[row for _, row in s.equalities]) if s.equalities else ca.SX(0, 1)
+    lam = ca.SX.sym("lam", g.numel())
+    K = ca.hessian(s.potential + ca.dot(lam, g), x)[0]
+    rate = ca.SX.sym("xdot", n)
+
+    def speed(expr: ca.SX) -> ca.SX:
+        return ca.jtimes(expr, x, rate)
+
+    energies: dict[str, ca.SX] = {}
+    for b, T in body_kinetic_energies(s.ctx, s.d, [speed(d_b) for d_b in s.d]):
+        energies[f"bodies/{structure.bodies[b]}"] = T
+    for point, owner in zip(s.inertia, s.inertia_owners):
+        T = 0.5 * point.mass * ca.sumsqr(speed(point.position))
+        if point.angle is not None and point.rotary is not None:
+            T = T + 0.5 * point.rotary * speed(point.angle) ** 2
+        key = f"elements/{owner}"
+        energies[key] = energies.get(key, ca.SX(0)) + T
+    owners = tuple(energies)
+    masses = [ca.hessian(T, rate)[0] for T in energies.values()]
+    centres = mass_centres(s.ctx, s.d)
+    moment = [
+        sum((m * c[axis] for _, m, c in centres), ca.SX(0))
+        + sum((q.mass * q.position[axis] for q in s.inertia), ca.SX(0))
+        for axis in (0, 1)
+    ]
+    total = sum((m for _, m, _ in centres), ca.SX(0)) + sum((q.mass for q in s.inertia), ca.SX(0))
+    uniform = ca.horzcat(*[ca.gradient(moment[axis], x) for axis in (0, 1)])
+    where = ca.horzcat(*[q.position for q in s.inertia]) if s.inertia else ca.SX(2, 0)
+    stacked = ca.vec(where)
+    return ModalForm(
+        tuple(s.names),
+        g.numel(),
+        tuple(s.x_in_state),
+        tuple(s.multipliers_in_state),
+        ca.Function("modal_stiffness", [x, lam, p], [K], ["x", "lam", "p"], ["K"]),
+        ca.Function("constraint_jacobian", [x, p], [ca.jacobian(g, x)], ["x", "p"], ["G"]),
+        owners,
+        ca.Function("masses", [x, p], masses),
+        ca.Function("total_mass", [p], [total], ["p"], ["mass"]),
+        ca.Function("uniform_forces", [x, p], [uniform], ["x", "p"], ["F"]),
+        tuple(s.inertia_owners),
+        ca.Function("mass_points", [x, p], [where, ca.jacobian(stacked, x)], ["x", "p"], ["positions", "J"]),
+    )

@@ -1,0 +1,2 @@
+"""Vibration: the natural modes of a mechanism about an equilibrium (modes), and the eigenproblem
+they solve (eigen)."""

@@ -1,0 +1,101 @@
+"""The generalized eigenproblem of small vibration, K phi = omega^2 M phi, on the null space of
+the constraints' Jacobian G, with the motions that carry no mass condensed out statically.
+
+A massless motion (a spring's or a closed-form flexure's, a link without density, the
+rotation of a body given no inertia) has no inertia to vibrate with: it follows the massive
+ones quasi-statically. Splitting the constrained space by M's null space into massive (R) and
+massless (N) directions,
+
+    K_hat = R^T K T,   M_hat = R^T M R,   T = R - N (N^T K N)^-1 N^T K R,
+
+is exact for them (Guyan's condensation, with no error where the mass is zero). Shapes come back
+in the full unknowns, mass-normalized: phi^T M phi = 1.
+
+Small structures are solved densely (every eigenvalue); larger ones (more than
+DENSE_LIMIT massive directions) by shift-invert Lanczos near zero (scipy's eigsh), which
+resolves the low frequencies to full relative accuracy whatever the highest one.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.linalg import eig, eigh, null_space
+from scipy.sparse.linalg import eigsh
+
+from models import MechanismError
+
+DENSE_LIMIT = 400
+RIGID = 1e-12  # |omega^2| below this fraction of the largest is a zero-frequency (rigid) mode
+MASSLESS = 1e-12  # a direction whose mass is below this fraction of the largest carries none
+
+
+@dataclass
+class Eigen:
+    omega_squared: np.ndarray  # ascending, signed (negative: an unstable equilibrium)
+    shapes: np.ndarray  # (unknowns, modes), mass-normalized
+    kinds: list[str]  # per mode: "elastic", "rigid" (zero frequency) or "unstable"
+    largest: float  # the largest |omega^2| (rad^2/s^2): the scale rigid modes are judged by
+    available: int  # how many modes the structure has (its massive directions)
+    symmetric: bool  # False: a non-conservative tangent stiffness (frequencies from its real part)
+
+
+def vibration_eigen(K: np.ndarray, M: np.ndarray, G: np.ndarray | None, count: int) -> Eigen:
+    """The `count` lowest modes (MechanismError at /count when the structure has fewer)."""
+    n = K.shape[0]
+    Z = null_space(G) if G is not None and G.size else np.eye(n)
+    Kr, Mr = Z.T @ K @ Z, Z.T @ M @ Z
+    Mr = 0.5 * (Mr + Mr.T)
+    weights, U = eigh(Mr)
+    heaviest = weights.max(initial=0.0)
+    if heaviest <= 0.0:
+        raise MechanismError(
+            "/bodies", "the mechanism has no mass that can move: give a body a mass or a material a density"
+        )
+    massive = weights > MASSLESS * heaviest
+    R, N = U[:, massive], U[:, ~massive]
+    T = R if not N.shape[1] else R - N @ _massless_response(Kr, N, R)
+    K_hat, M_hat = R.T @ Kr @ T, R.T @ Mr @ R
+    available = K_hat.shape[0]
+    if count > available:
+        raise MechanismError(
+            "/count", f"{count} modes asked, but the mechanism has {available} (its coordinates that carry mass)"
+        )
+    symmetric = bool(np.allclose(Kr, Kr.T, rtol=1e-9, atol=1e-12 * max(np.abs(Kr).max(), 1e-300)))
+    values, Y, largest = _lowest(K_hat, M_hat, count, symmetric)
+    kinds = ["rigid" if abs(v) <= RIGID * largest else "unstable" if v < 0 else "elastic" for v in values]
+    return Eigen(values, Z @ T @ Y, kinds, largest, available, symmetric)
+
+
+def _massless_response(Kr: np.ndarray, N: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """(N^T K N)^-1 N^T K R: how the massless directions follow the massive ones."""
+    Knn = N.T @ Kr @ N
+    singular = np.linalg.svd(Knn, compute_uv=False)
+    if singular[-1] <= 1e-12 * max(np.abs(Kr).max(), 1e-300):
+        raise MechanismError(
+            "/elements",
+            "a motion of the mechanism has neither mass nor stiffness (a massless body or element "
+            "free to move): give it a mass or a density, or hold it",
+        )
+    return np.linalg.solve(Knn, N.T @ Kr @ R)
+
+
+def _lowest(K: np.ndarray, M: np.ndarray, count: int, symmetric: bool) -> tuple[np.ndarray, np.ndarray, float]:
+    """(omega^2, M-normalized vectors, the largest |omega^2|) of the `count` lowest modes."""
+    n = K.shape[0]
+    if symmetric and n > DENSE_LIMIT and count < n // 2:
+        K = 0.5 * (K + K.T)
+        top = float(abs(eigsh(K, 1, M, which="LM", return_eigenvectors=False)[0]))
+        shift = -1e-14 * top  # just below zero: rigid modes make K itself singular
+        values, Y = eigsh(K, count, M, sigma=shift, which="LM")
+        order = np.argsort(values)
+        return values[order], Y[:, order], top
+    if symmetric:
+        values, Y = eigh(0.5 * (K + K.T), M)
+        return values[:count], Y[:, :count], float(np.abs(values).max(initial=0.0))
+    values, Y = eig(K, M)
+    order = np.argsort(values.real)
+    values, Y = values.real[order], Y.real[:, order]
+    Y = Y / np.sqrt(np.einsum("im,ij,jm->m", Y, M, Y))
+    return values[:count], Y[:, :count], float(np.abs(values).max(initial=0.0))

@@ -1,0 +1,97 @@
+"""A modes report in document units: per mode its frequency, kind, effective masses along x and
+y, the share of its kinetic energy in each body and element, and its shape.
+
+Shapes are mass-normalized in SI (phi^T M phi = 1 with M in kg, kg m and kg m^2), then given in
+the document's length and angle units: the bodies' coordinates, and the displacement of each
+element's mass points (its quadrature points) from where they stand."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from models import Mechanism
+from service.vibration.modes import MechanismModes
+
+SHARE_SHOWN = 1e-4  # energy shares below this are left out of a mode's list
+
+
+def modes_report(mech: Mechanism, found: MechanismModes, shapes: bool = True) -> dict[str, Any]:
+    system, eigen = found.system, found.eigen
+    mass_unit = mech.doc_unit("mass")
+    mass_doc = mech.scales.of("mass") / mech.doc_factor("mass")  # document mass units per nondimensional
+    to_si = 1.0 / math.sqrt(mech.scales.of("energy"))  # nondimensional normalization to SI's
+    M = system.M
+    total = system.total_mass * mass_doc
+    modes = []
+    for k, (value, kind) in enumerate(zip(eigen.omega_squared, eigen.kinds)):
+        phi = eigen.shapes[:, k]
+        omega = math.sqrt(abs(value)) if kind != "rigid" else 0.0
+        participation = system.uniform.T @ phi
+        effective = participation**2 * mass_doc
+        energy = float(phi @ M @ phi)
+        shares = {owner: float(phi @ m @ phi) / energy for owner, m in zip(system.owners, system.masses)}
+        mode: dict[str, Any] = {
+            "mode": k + 1,
+            "kind": kind,
+            "omega": omega,
+            "frequency": omega / (2 * math.pi) if kind == "elastic" else None,
+            "period": 2 * math.pi / omega if kind == "elastic" and omega > 0 else None,
+            "omega_squared": float(value),
+            "effective_mass": {"x": float(effective[0]), "y": float(effective[1])},
+            "effective_mass_fraction": {
+                "x": float(effective[0] / total) if total > 0 else None,
+                "y": float(effective[1] / total) if total > 0 else None,
+            },
+            "energy_shares": {
+                owner: share
+                for owner, share in sorted(shares.items(), key=lambda item: -item[1])
+                if share >= SHARE_SHOWN
+            },
+        }
+        if shapes:
+            mode["shape"] = _shape(mech, system, phi * to_si)
+        modes.append(mode)
+    return {
+        "coordinates": system.coordinates_set,
+        "unknowns": len(system.coordinates),
+        "available": eigen.available,
+        "symmetric": eigen.symmetric,
+        "total_mass": total,
+        "total_mass_unit": mass_unit,
+        "modes": modes,
+        "points": _points(mech, system) if shapes else {},
+        "units": {
+            "omega": "rad/s",
+            "frequency": "Hz",
+            "period": "s",
+            "effective_mass": mass_unit,
+            "shape": f"{mech.doc_unit('length')} and {mech.doc_unit('angle')}, mass-normalized in SI",
+        },
+    }
+
+
+def _shape(mech: Mechanism, system, phi: np.ndarray) -> dict[str, Any]:
+    """The mode's bodies' coordinates and its elements' mass points' displacements (document units)."""
+    length = mech.nd_per_doc("length")
+    bodies: dict[str, list[float]] = {}
+    for k, (b, c) in enumerate(mech.structure.free[: system.n_body]):
+        name = mech.structure.bodies[b]
+        row = bodies.setdefault(name, [0.0, 0.0, 0.0])
+        row[c] = float(phi[k] / (length if c < 2 else mech.nd_per_doc("angle")))
+    moved = (system.point_jacobian @ phi).reshape(-1, 2) / length
+    elements: dict[str, list[list[float]]] = {}
+    for owner, (dx, dy) in zip(system.point_owners, moved):
+        elements.setdefault(owner, []).append([float(dx), float(dy)])
+    return {"bodies": bodies, "elements": elements}
+
+
+def _points(mech: Mechanism, system) -> dict[str, list[list[float]]]:
+    """Where each element's mass points stand (document length units)."""
+    length = mech.nd_per_doc("length")
+    out: dict[str, list[list[float]]] = {}
+    for owner, (x, y) in zip(system.point_owners, system.points.T):
+        out.setdefault(owner, []).append([float(x / length), float(y / length)])
+    return out

@@ -1,0 +1,225 @@
+"""The modes analysis (service.vibration) against closed forms: a cantilever's beta L and its
+effective modal masses, the Table 4.1 rod's period, a pinned-pinned link under axial tension and
+compression (prestress, down to buckling), rigid bodies on springs and on a curved-beam flexure,
+and bad input named by its field."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from conftest import EXAMPLES
+from scipy.linalg import eigh
+
+from models import MechanismError, compile_mechanism, load_document
+from service.analyses import ANALYSES
+from service.analyses.base import AnalysisRequest
+from service.vibration.eigen import vibration_eigen
+
+E, G_SHEAR, RHO = 2e11, 8e10, 7850.0
+B, H, L = 0.0127, 0.0003, 1.11  # a slender strip: its rotary inertia moves beta L by < 1e-7
+AREA, SECOND = B * H, B * H**3 / 12
+BETA_L = (1.875104068711961, 4.694091132974175, 7.854757438237613)  # roots of cos(x) cosh(x) = -1
+EFFECTIVE = (0.6131, 0.1883, 0.0647)  # a cantilever's effective modal masses, of its whole
+
+
+def strip(intervals: int, **link) -> dict:
+    return {
+        "units": {"length": "m", "force": "N", "angle": "rad", "mass": "kg"},
+        "materials": {"steel": {"E": E, "G": G_SHEAR, "density": RHO}},
+        "sections": {"strip": {"b": B, "h": H}},
+        "bodies": {"clamp": {"fixed": True, "position": [0, 0]}, "tip": {"position": [L, 0]}},
+        "elements": {
+            "strip": {
+                "type": "link",
+                "from": "clamp",
+                "to": "tip",
+                "length": L,
+                "material": "steel",
+                "section": "strip",
+                "discretization": "elements",
+                "intervals": intervals,
+                "degree": 3,
+                **link,
+            }
+        },
+    }
+
+
+def modes(document: dict | str, **options) -> dict:
+    mech = compile_mechanism(load_document(document))
+    return ANALYSES.named("modes").run(mech, AnalysisRequest(given=options))
+
+
+def beta_l(report: dict) -> np.ndarray:
+    omega = np.array([m["omega"] for m in report["modes"]])
+    return (omega**2 * RHO * AREA / (E * SECOND)) ** 0.25 * L
+
+
+def test_a_cantilever_has_the_beta_l_of_euler_bernoulli_at_order_2p_in_its_elements():
+    """Degree-3 elements: the third beta L's error falls by 2^6 per halving (2p = 6), and at 8
+    elements all three are within 1e-5 (measured: 7e-9, 1e-7, 2.6e-6)."""
+    errors = []
+    for intervals in (2, 4, 8):
+        report = modes(strip(intervals), count=3, at="undeformed")
+        assert report["coordinates"] == "elements" and [m["kind"] for m in report["modes"]] == ["elastic"] * 3
+        errors.append(np.abs(beta_l(report) / BETA_L - 1))
+    assert errors[-1].max() < 1e-5
+    order = math.log2(errors[1][2] / errors[2][2])
+    assert 5.5 < order < 6.5, order
+    fractions = [m["effective_mass_fraction"]["y"] for m in report["modes"]]
+    assert fractions == pytest.approx(EFFECTIVE, abs=5e-4)
+    assert all(m["effective_mass"]["x"] < 1e-20 for m in report["modes"])  # bending moves nothing along the strip
+    assert report["total_mass"] == pytest.approx(RHO * AREA * L, rel=1e-12)
+    assert all(m["energy_shares"] == {"elements/strip": pytest.approx(1.0)} for m in report["modes"])
+
+
+def test_the_table_4_1_rod_has_its_first_period():
+    report = modes(str(EXAMPLES / "rod_free_vibration.json"), count=2, at="undeformed")
+    assert report["modes"][0]["period"] == pytest.approx(0.47221, rel=2e-5)
+    assert report["modes"][0]["frequency"] == pytest.approx(1 / report["modes"][0]["period"])
+
+
+def pinned_pinned(axial_force: float) -> dict:
+    """The strip pinned at both ends, its far end on a rail along it, pulled by `axial_force`
+    (negative: pushed)."""
+    doc = strip(8, start="pinned", end="pinned")
+    doc["bodies"]["tip"]["joint"] = True
+    doc["elements"]["rail"] = {"type": "slider", "from": "clamp", "to": "tip", "angle": 0}
+    doc["loads"] = {"pull": {"type": "force", "body": "tip", "force": [axial_force, 0.0]}}
+    return doc
+
+
+EULER = math.pi**2 * E * SECOND / L**2
+
+
+@pytest.mark.parametrize("pull", [0.05, 1.0, -0.5], ids=["small tension", "Euler load", "half Euler compression"])
+def test_axial_force_stiffens_a_pinned_pinned_link_as_the_string_beam_formula_says(pull):
+    """omega_1^2 = (pi/L)^4 EI/(rho A) + (pi/L)^2 P/(rho A): doubled at P = P_cr, halved at -P_cr/2."""
+    report = modes(pinned_pinned(pull * EULER), count=1)
+    assert report["status"] == "converged"
+    expected = (math.pi / L) ** 4 * E * SECOND / (RHO * AREA) + (math.pi / L) ** 2 * pull * EULER / (RHO * AREA)
+    assert report["modes"][0]["omega_squared"] == pytest.approx(expected, rel=1e-5)
+    bare = (math.pi / L) ** 4 * E * SECOND / (RHO * AREA)
+    assert report["modes"][0]["omega_squared"] / bare == pytest.approx(1 + pull, rel=1e-5)
+
+
+def test_past_the_euler_load_the_straight_link_is_unstable_and_its_frequency_goes_to_zero_at_it():
+    near = modes(pinned_pinned(-0.999 * EULER), count=1)["modes"][0]
+    assert near["kind"] == "elastic" and near["omega_squared"] / ((math.pi / L) ** 4 * E * SECOND / (RHO * AREA)) == (
+        pytest.approx(0.001, rel=1e-2)
+    )
+    beyond = modes(pinned_pinned(-1.05 * EULER), count=1)
+    assert beyond["modes"][0]["kind"] == "unstable" and beyond["modes"][0]["omega_squared"] < 0
+    assert "unstable" in beyond["warnings"][-1]
+
+
+def body_on_springs(mass: float, inertia: float, k: float, k_turn: float) -> dict:
+    return {
+        "units": {"length": "m", "force": "N", "angle": "rad", "mass": "kg"},
+        "bodies": {
+            "ground": {"fixed": True, "position": [0, 0]},
+            "carriage": {"position": [1, 0], "mass": mass},
+            "wheel": {"position": [0, 2], "mass": mass, "inertia": inertia},
+        },
+        "elements": {
+            "rail": {"type": "slider", "from": "ground", "to": "carriage", "angle": 0},
+            "coil": {"type": "spring", "from": "ground", "to": "carriage", "from_at": [0, 0], "stiffness": k},
+            "axle": {"type": "pin", "from": "ground", "to": "wheel", "at": [0, 2]},
+            "torsion": {"type": "spring", "kind": "torsional", "from": "ground", "to": "wheel", "stiffness": k_turn},
+        },
+    }
+
+
+def test_a_body_on_a_spring_vibrates_at_the_square_root_of_k_over_m():
+    m, J, k, kt = 0.3, 0.002, 1200.0, 4.5
+    report = modes(body_on_springs(m, J, k, kt), count=2, at="undeformed")
+    omegas = sorted([math.sqrt(k / m), math.sqrt(kt / J)])
+    assert [mode["omega"] for mode in report["modes"]] == pytest.approx(omegas, rel=1e-10)
+    carriage = next(mode for mode in report["modes"] if "bodies/carriage" in mode["energy_shares"])
+    assert carriage["energy_shares"]["bodies/carriage"] == pytest.approx(1.0)
+    assert carriage["effective_mass"]["x"] == pytest.approx(m, rel=1e-10)  # the whole carriage moves with it
+
+
+def platform_on_a_flexure() -> dict:
+    return {
+        "units": {"length": "m", "force": "N", "angle": "rad", "mass": "kg", "stress": "Pa"},
+        "materials": {"steel": {"E": 2e11}},
+        "sections": {"blade": {"b": 0.005, "h": 0.0005}},
+        "bodies": {
+            "frame": {"fixed": True, "position": [0, 0]},
+            "platform": {"position": [0.04, 0.0], "mass": 0.05, "inertia": 4e-5, "center_of_mass": [0.005, 0.002]},
+        },
+        "elements": {
+            "hinge": {
+                "type": "curved_beam",
+                "from": "frame",
+                "to": "platform",
+                "center": [0.02, 0.0],
+                "radius": 0.02,
+                "start_angle": math.pi,
+                "arc_angle": math.pi,
+                "material": "steel",
+                "section": "blade",
+            }
+        },
+    }
+
+
+def test_a_platform_on_a_curved_beam_vibrates_with_the_flexures_tangent_stiffness_and_its_mass():
+    """The constant-stiffness flexure is massless: the modes are those of K_T (the linearization
+    analysis' numbers) with the platform's rigid-body mass matrix, written out here."""
+    doc = platform_on_a_flexure()
+    report = modes(doc, count=3, at="undeformed")
+    assert report["coordinates"] == "bodies"
+    mech = compile_mechanism(load_document(doc))
+    K = np.array(
+        ANALYSES.named("linearization").run(mech, AnalysisRequest(given={"at": "undeformed"}))["stiffness"]["K"]
+    )
+    m, J, (cx, cy) = 0.05, 4e-5, (0.005, 0.002)
+    M = np.array([[m, 0, -m * cy], [0, m, m * cx], [-m * cy, m * cx, J]])  # J about the reference point
+    expected = np.sqrt(eigh(0.5 * (K + K.T), M, eigvals_only=True))
+    assert [mode["omega"] for mode in report["modes"]] == pytest.approx(expected, rel=1e-9)
+    assert sum(mode["effective_mass"]["x"] + mode["effective_mass"]["y"] for mode in report["modes"]) == (
+        pytest.approx(2 * m, rel=1e-9)  # every mode counted: the platform's whole mass, along each direction
+    )
+
+
+def test_a_mechanism_without_mass_is_refused_naming_where_mass_goes():
+    doc = body_on_springs(0.3, 0.002, 1200.0, 4.5)
+    for body in ("carriage", "wheel"):
+        del doc["bodies"][body]["mass"]
+    del doc["bodies"]["wheel"]["inertia"]
+    with pytest.raises(MechanismError) as err:
+        modes(doc, at="undeformed")
+    assert err.value.pointer == "/bodies" and "no mass" in str(err.value)
+
+
+def test_more_modes_than_the_mechanism_has_are_refused_with_how_many_it_has():
+    with pytest.raises(MechanismError) as err:
+        modes(body_on_springs(0.3, 0.002, 1200.0, 4.5), count=3, at="undeformed")
+    assert err.value.pointer == "/count" and "3 modes asked, but the mechanism has 2" in str(err.value)
+
+
+def test_a_massless_motion_nothing_holds_is_named():
+    doc = body_on_springs(0.3, 0.002, 1200.0, 4.5)
+    del doc["elements"]["torsion"]
+    del doc["bodies"]["wheel"]["inertia"]
+    doc["bodies"]["wheel"]["mass"] = 0.0
+    with pytest.raises(MechanismError) as err:
+        modes(doc, at="undeformed")
+    assert "neither mass nor stiffness" in str(err.value)
+
+
+def test_shift_invert_finds_the_lowest_modes_of_a_long_chain_as_the_closed_form():
+    """A fixed-free chain of 600 equal masses and springs (past the dense limit): omega_j =
+    2 sqrt(k/m) sin((2j - 1) pi / (2 (2N + 1)))."""
+    n, k, m = 600, 3.0e4, 0.02
+    K = np.diag(np.full(n, 2 * k)) - np.diag(np.full(n - 1, k), 1) - np.diag(np.full(n - 1, k), -1)
+    K[-1, -1] = k
+    found = vibration_eigen(K, np.eye(n) * m, None, 5)
+    j = np.arange(1, 6)
+    exact = 2 * math.sqrt(k / m) * np.sin((2 * j - 1) * math.pi / (2 * (2 * n + 1)))
+    assert np.sqrt(found.omega_squared) == pytest.approx(exact, rel=1e-9)
+    assert np.einsum("im,ij,jm->m", found.shapes, np.eye(n) * m, found.shapes) == pytest.approx(np.ones(5))
