@@ -10,6 +10,8 @@ expressions (models.graph.forms) in its unknowns x (nondimensional; time in seco
                                             link clamped to the ground shakes with it): with a
                                             mode shape they give its participation factor
     J(x, p)                                 where the elements' mass points move, per unit x
+    B(x, p) = -d/dp (dV/dx)                 the generalized force per unit of each parameter
+                                            (a load's component: its harmonic force's shape)
 
 A mass point of an element is one of its InertiaPoints (the quadrature points of its
 discretization, so M is the element's consistent mass)."""
@@ -39,6 +41,7 @@ class ModalForm:
     uniform_forces: ca.Function  # (x, p) -> F (n x 2)
     point_owners: tuple[str, ...]  # the element of each mass point
     points: ca.Function  # (x, p) -> (positions (2 x k), J (2k x n): rows x0, y0, x1, y1, ...)
+    parameter_forces: ca.Function  # (x, p) -> B (n x parameters)
 
 
 def modal_form(structure: Structure) -> ModalForm:
@@ -87,4 +90,5 @@ def modal_form(structure: Structure) -> ModalForm:
         ca.Function("uniform_forces", [x, p], [uniform], ["x", "p"], ["F"]),
         tuple(s.inertia_owners),
         ca.Function("mass_points", [x, p], [where, ca.jacobian(stacked, x)], ["x", "p"], ["positions", "J"]),
+        ca.Function("parameter_forces", [x, p], [-ca.jacobian(ca.gradient(s.potential, x), p)], ["x", "p"], ["B"]),
     )

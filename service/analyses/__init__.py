@@ -7,6 +7,7 @@ from service.analyses.base import Analyses, Analysis, AnalysisOptions, AnalysisR
 from service.analyses.contact import CONTACT
 from service.analyses.energy import ENERGY
 from service.analyses.equilibrium import EQUILIBRIUM
+from service.analyses.frequency_response import FREQUENCY_RESPONSE
 from service.analyses.inverse import INVERSE
 from service.analyses.linearization import LINEARIZATION
 from service.analyses.modes import MODES
@@ -23,6 +24,7 @@ ANALYSES = Analyses(
         CONTACT,
         SIMULATE,
         MODES,
+        FREQUENCY_RESPONSE,
     ]
 )
 

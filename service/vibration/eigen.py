@@ -39,10 +39,13 @@ class Eigen:
     largest: float  # the largest |omega^2| (rad^2/s^2): the scale rigid modes are judged by
     available: int  # how many modes the structure has (its massive directions)
     symmetric: bool  # False: a non-conservative tangent stiffness (frequencies from its real part)
+    left: np.ndarray  # (unknowns, modes): a force f excites mode k by left[:, k] . f (= shapes if symmetric)
+    feedthrough: np.ndarray | None  # (unknowns, unknowns): the massless directions' static compliance
 
 
-def vibration_eigen(K: np.ndarray, M: np.ndarray, G: np.ndarray | None, count: int) -> Eigen:
-    """The `count` lowest modes (MechanismError at /count when the structure has fewer)."""
+def vibration_eigen(K: np.ndarray, M: np.ndarray, G: np.ndarray | None, count: int | None) -> Eigen:
+    """The `count` lowest modes (None: every one; MechanismError at /count when the structure
+    has fewer)."""
     n = K.shape[0]
     Z = null_space(G) if G is not None and G.size else np.eye(n)
     Kr, Mr = Z.T @ K @ Z, Z.T @ M @ Z
@@ -55,17 +58,22 @@ def vibration_eigen(K: np.ndarray, M: np.ndarray, G: np.ndarray | None, count: i
         )
     massive = weights > MASSLESS * heaviest
     R, N = U[:, massive], U[:, ~massive]
-    T = R if not N.shape[1] else R - N @ _massless_response(Kr, N, R)
+    symmetric = bool(np.allclose(Kr, Kr.T, rtol=1e-9, atol=1e-12 * max(np.abs(Kr).max(), 1e-300)))
+    T, T_left, feedthrough = R, R, None
+    if N.shape[1]:
+        T = R - N @ _massless_response(Kr, N, R)
+        T_left = T if symmetric else R - N @ _massless_response(Kr.T, N, R)
+        feedthrough = Z @ N @ np.linalg.solve(N.T @ Kr @ N, N.T @ Z.T)
     K_hat, M_hat = R.T @ Kr @ T, R.T @ Mr @ R
     available = K_hat.shape[0]
+    count = available if count is None else count
     if count > available:
         raise MechanismError(
             "/count", f"{count} modes asked, but the mechanism has {available} (its coordinates that carry mass)"
         )
-    symmetric = bool(np.allclose(Kr, Kr.T, rtol=1e-9, atol=1e-12 * max(np.abs(Kr).max(), 1e-300)))
-    values, Y, largest = _lowest(K_hat, M_hat, count, symmetric)
+    values, Y, W, largest = _lowest(K_hat, M_hat, count, symmetric)
     kinds = ["rigid" if abs(v) <= RIGID * largest else "unstable" if v < 0 else "elastic" for v in values]
-    return Eigen(values, Z @ T @ Y, kinds, largest, available, symmetric)
+    return Eigen(values, Z @ T @ Y, kinds, largest, available, symmetric, Z @ T_left @ W, feedthrough)
 
 
 def _massless_response(Kr: np.ndarray, N: np.ndarray, R: np.ndarray) -> np.ndarray:
@@ -81,8 +89,11 @@ def _massless_response(Kr: np.ndarray, N: np.ndarray, R: np.ndarray) -> np.ndarr
     return np.linalg.solve(Knn, N.T @ Kr @ R)
 
 
-def _lowest(K: np.ndarray, M: np.ndarray, count: int, symmetric: bool) -> tuple[np.ndarray, np.ndarray, float]:
-    """(omega^2, M-normalized vectors, the largest |omega^2|) of the `count` lowest modes."""
+def _lowest(
+    K: np.ndarray, M: np.ndarray, count: int, symmetric: bool
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """(omega^2, M-normalized right vectors Y, left vectors W with W^T M Y = I, the largest
+    |omega^2|) of the `count` lowest modes."""
     n = K.shape[0]
     if symmetric and n > DENSE_LIMIT and count < n // 2:
         K = 0.5 * (K + K.T)
@@ -90,12 +101,13 @@ def _lowest(K: np.ndarray, M: np.ndarray, count: int, symmetric: bool) -> tuple[
         shift = -1e-14 * top  # just below zero: rigid modes make K itself singular
         values, Y = eigsh(K, count, M, sigma=shift, which="LM")
         order = np.argsort(values)
-        return values[order], Y[:, order], top
+        return values[order], Y[:, order], Y[:, order], top
     if symmetric:
         values, Y = eigh(0.5 * (K + K.T), M)
-        return values[:count], Y[:, :count], float(np.abs(values).max(initial=0.0))
-    values, Y = eig(K, M)
+        return values[:count], Y[:, :count], Y[:, :count], float(np.abs(values).max(initial=0.0))
+    values, W, Y = eig(K, M, left=True, right=True)
     order = np.argsort(values.real)
-    values, Y = values.real[order], Y.real[:, order]
+    values, Y, W = values.real[order], Y.real[:, order], W.real[:, order]
     Y = Y / np.sqrt(np.einsum("im,ij,jm->m", Y, M, Y))
-    return values[:count], Y[:, :count], float(np.abs(values).max(initial=0.0))
+    W = W / np.einsum("im,ij,jm->m", W, M, Y)
+    return values[:count], Y[:, :count], W[:, :count], float(np.abs(values).max(initial=0.0))

@@ -39,6 +39,8 @@ class ModalSystem:
     points: np.ndarray  # (2, k) positions of the elements' mass points (nondimensional)
     point_jacobian: np.ndarray  # (2k, n)
     coordinates_set: str  # "elements" or "bodies"
+    x_in_state: list[int]  # where each coordinate sits in the residual form's z
+    multipliers_in_state: list[int]  # where the constraints' multipliers sit (energy form)
 
     @property
     def M(self) -> np.ndarray:
@@ -78,6 +80,8 @@ def modal_system(mech: Mechanism, z: np.ndarray | None) -> ModalSystem:
         np.asarray(positions, dtype=float).reshape(2, -1),
         np.asarray(J, dtype=float).reshape(-1, n),
         "elements",
+        list(form.x_in_state),
+        list(form.multipliers_in_state),
     )
 
 
@@ -110,6 +114,8 @@ def _body_system(mech: Mechanism, z: np.ndarray) -> ModalSystem:
         np.zeros((2, 0)),
         np.zeros((0, n)),
         "bodies",
+        list(range(n)),
+        [],
     )
 
 
