@@ -92,3 +92,27 @@ def modal_form(structure: Structure) -> ModalForm:
         ca.Function("mass_points", [x, p], [where, ca.jacobian(stacked, x)], ["x", "p"], ["positions", "J"]),
         ca.Function("parameter_forces", [x, p], [-ca.jacobian(ca.gradient(s.potential, x), p)], ["x", "p"], ["B"]),
     )
+
+
+def state_mass(structure: Structure) -> ca.Function:
+    """(z, p) -> M_z: the mass matrix over the residual form's unknowns z (the energy form's
+    masses placed at their unknowns, the multipliers massless; without an energy form, the
+    bodies' masses of models.graph.forms.mass_matrix)."""
+    from models.errors import MechanismError
+    from models.graph.forms import mass_matrix
+
+    try:
+        form = modal_form(structure)
+    except MechanismError:
+        return mass_matrix(structure)
+    n = structure.n_unknowns
+    z, p = ca.SX.sym("z", n), ca.SX.sym("p", len(structure.parameters))
+    x = z[list(form.x_in_state)]
+    M = ca.SX.zeros(n, n)
+    if form.owners:
+        parts = form.masses(x, p)
+        total = parts if len(form.owners) == 1 else sum(parts[1:], parts[0])
+        index = list(form.x_in_state)
+        place = ca.DM(ca.Sparsity.triplet(n, len(index), index, list(range(len(index)))), 1.0)
+        M = ca.mtimes([place, total, place.T])
+    return ca.Function("state_mass", [z, p], [M], ["z", "p"], ["M"])

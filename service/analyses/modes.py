@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from typing import Any, Literal
 
+import numpy as np
 from pydantic import BaseModel, Field
 
 from models import Mechanism, MechanismError
@@ -16,6 +17,7 @@ from service.solvers.newton import NewtonOptions
 from service.solvers.reports import plain
 from service.vibration.modes import mechanism_modes
 from service.vibration.report import modes_report
+from service.vibration.sensitivity import frequency_sensitivities, parameter_slots
 
 
 class ModesOptions(AnalysisOptions):
@@ -24,6 +26,11 @@ class ModesOptions(AnalysisOptions):
         "equilibrium", description="the state: the equilibrium under the document's loads, or undeformed"
     )
     shapes: bool = Field(True, description="report each mode's shape (bodies and the elements' mass points)")
+    sensitivities: list[str] = Field(
+        default_factory=list,
+        description="numeric fields (JSON pointers) to differentiate each frequency by, exactly",
+        examples=[["/sections/rod/h"]],
+    )
 
 
 class Mode(BaseModel):
@@ -41,6 +48,9 @@ class Mode(BaseModel):
         description="the share of the mode's kinetic energy in each body and element ('bodies/<name>', 'elements/<name>')"
     )
     shape: dict[str, Any] | None = None
+    sensitivities: dict[str, float | None] | None = Field(
+        None, description="d frequency / d field, in Hz per the field's document unit"
+    )
 
 
 class ModesReport(AnalysisResult):
@@ -72,13 +82,32 @@ def modes_analysis_report(mech: Mechanism, newton: NewtonOptions, options: Modes
         z = result.z
     else:
         report.update(status="converged", message="", iterations=0)
-    report.update(modes_report(mech, mechanism_modes(mech, z, options.count), options.shapes))
+    found = mechanism_modes(mech, z, options.count)
+    report.update(modes_report(mech, found, options.shapes))
+    if options.sensitivities:
+        _add_sensitivities(report, mech, z, found, options)
     unstable = [m["mode"] for m in report["modes"] if m["kind"] == "unstable"]
     if unstable:
         report.setdefault("warnings", []).append(
             f"the state is unstable: mode(s) {', '.join(map(str, unstable))} have omega^2 < 0"
         )
     return plain(report)
+
+
+def _add_sensitivities(report: dict[str, Any], mech: Mechanism, z, found, options: ModesOptions) -> None:
+    slots = parameter_slots(mech, options.sensitivities, "/sensitivities")
+    state = z if z is not None else np.zeros(mech.n_free)
+    matrix, clusters = frequency_sensitivities(mech, state, found, slots, options.at == "equilibrium")
+    for mode, row in zip(report["modes"], matrix):
+        mode["sensitivities"] = dict(zip(options.sensitivities, row.tolist()))
+    report["units"]["sensitivities"] = {
+        path: f"Hz/{mech.doc_unit(mech.parameters[slot].kind)}" for path, slot in zip(options.sensitivities, slots)
+    }
+    for cluster in clusters:
+        report.setdefault("warnings", []).append(
+            f"modes {', '.join(str(k + 1) for k in cluster)} share one frequency: their derivatives are of their "
+            "mean (a field splits repeated frequencies along directions of its own)"
+        )
 
 
 class ModesAnalysis(Analysis):

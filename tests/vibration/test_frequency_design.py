@@ -1,0 +1,79 @@
+"""Frequencies' exact derivatives (the modes analysis' sensitivities) against central finite
+differences of fresh modes runs, for a section height, a density or mass, and a load, about a
+prestressed link and a loaded platform on a curved-beam flexure; repeated frequencies."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from test_modes import EULER, pinned_pinned, platform_on_a_flexure
+
+from models import compile_mechanism, load_document
+from service.analyses import ANALYSES
+from service.analyses.base import AnalysisRequest
+
+
+def modes_of(mech, **options) -> dict:
+    return ANALYSES.named("modes").run(mech, AnalysisRequest(given=options))
+
+
+def central_difference(mech, path: str, count: int) -> np.ndarray:
+    value = mech.value(path)
+    step = 1e-4 * abs(value)
+    frequencies = []
+    for sign in (1, -1):
+        report = modes_of(mech.with_values({path: value + sign * step}), count=count)
+        frequencies.append(np.array([m["frequency"] for m in report["modes"]]))
+    return (frequencies[0] - frequencies[1]) / (2 * step)
+
+
+def loaded_platform() -> dict:
+    doc = platform_on_a_flexure()
+    doc["loads"] = {"push": {"type": "force", "body": "platform", "force": [0.3, 2.0]}}
+    return doc
+
+
+@pytest.mark.parametrize(
+    "document, fields",
+    [
+        (pinned_pinned(0.3 * EULER), ["/sections/strip/h", "/materials/steel/density", "/loads/pull/force/0"]),
+        (loaded_platform(), ["/sections/blade/h", "/bodies/platform/mass", "/loads/push/force/1"]),
+    ],
+    ids=["prestressed link (elements' coordinates)", "loaded curved-beam platform (bodies' coordinates)"],
+)
+def test_frequency_derivatives_equal_central_differences(document, fields):
+    mech = compile_mechanism(load_document(document))
+    report = modes_of(mech, count=2, sensitivities=fields)
+    for path in fields:
+        exact = np.array([mode["sensitivities"][path] for mode in report["modes"]])
+        assert exact == pytest.approx(central_difference(mech, path, 2), rel=1e-6), path
+        assert report["units"]["sensitivities"][path].startswith("Hz/")
+
+
+def test_repeated_frequencies_report_the_derivative_of_their_mean():
+    """A mass on equal springs along x and y: one frequency twice. Stiffening x alone moves the
+    x mode by 1 / (2 m omega) per unit of k (in rad/s) and the y mode not at all: each reports
+    the mean, and the warning names both."""
+    m, k = 0.5, 800.0
+    doc = {
+        "units": {"length": "m", "force": "N", "angle": "rad", "mass": "kg"},
+        "bodies": {
+            "ground": {"fixed": True, "position": [0, 0]},
+            "puck": {"position": [0, 0], "mass": m, "inertia": 1e-3},
+        },
+        "elements": {
+            "kx": {"type": "spring", "from": "ground", "to": "puck", "from_at": [-1, 0], "stiffness": k},
+            "ky": {"type": "spring", "from": "ground", "to": "puck", "from_at": [0, -1], "stiffness": k},
+            "turn": {"type": "spring", "kind": "torsional", "from": "ground", "to": "puck", "stiffness": 50.0},
+        },
+    }
+    report = modes_of(compile_mechanism(load_document(doc)), count=2, sensitivities=["/elements/kx/stiffness"])
+    omega = math.sqrt(k / m)
+    assert [mode["omega"] for mode in report["modes"]] == pytest.approx([omega, omega], rel=1e-12)
+    mean = 0.5 * (1 / (2 * m * omega)) / (2 * math.pi)
+    assert [mode["sensitivities"]["/elements/kx/stiffness"] for mode in report["modes"]] == pytest.approx(
+        [mean, mean], rel=1e-9
+    )
+    assert "modes 1, 2 share one frequency" in report["warnings"][-1]
