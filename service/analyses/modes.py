@@ -15,7 +15,7 @@ from service.requests import under
 from service.solvers.equilibrium import solve_equilibrium
 from service.solvers.newton import NewtonOptions
 from service.solvers.reports import plain
-from service.vibration.modes import mechanism_modes
+from service.vibration.modes import MechanismModes, mechanism_modes
 from service.vibration.report import modes_report
 from service.vibration.sensitivity import frequency_sensitivities, parameter_slots
 
@@ -94,7 +94,9 @@ def modes_analysis_report(mech: Mechanism, newton: NewtonOptions, options: Modes
     return plain(report)
 
 
-def _add_sensitivities(report: dict[str, Any], mech: Mechanism, z, found, options: ModesOptions) -> None:
+def _add_sensitivities(
+    report: dict[str, Any], mech: Mechanism, z: np.ndarray | None, found: MechanismModes, options: ModesOptions
+) -> None:
     slots = parameter_slots(mech, options.sensitivities, "/sensitivities")
     state = z if z is not None else np.zeros(mech.n_free)
     matrix, clusters = frequency_sensitivities(mech, state, found, slots, options.at == "equilibrium")
