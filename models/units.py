@@ -60,6 +60,7 @@ SI_UNITS: dict[str, str] = {
     "density": "kg/m**3",
     "acceleration": "m/s**2",
     "rotational_stiffness": "N*m/rad",
+    "frequency": "Hz",
 }
 
 KNOWN_NAMES = Path(__file__).with_name("unit_names.json")
@@ -281,6 +282,7 @@ _DOCUMENT_UNITS = {  # kind -> its unit, as text, from a document's declared uni
     "density": lambda u: f"{u.mass}/({u.length})**3",
     "acceleration": lambda u: f"{u.length}/s**2",
     "rotational_stiffness": lambda u: f"{u.force}*{u.length}/{u.angle}",
+    "frequency": lambda u: "Hz",  # time is in seconds in every document
 }
 
 

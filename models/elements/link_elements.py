@@ -168,6 +168,10 @@ class LinkElementsFamily:
         ]
         if t.axial:
             outputs.append(("elongation", "length", elongation))
+        fibre = link_properties(ctx, t).fibre
+        if fibre is not None:  # the bending stress at the ends, where a clamped flexure's peaks
+            outputs.append(("stress_start", "stress", ca.fabs(m_start) * fibre(ca.SX(0.0))))
+            outputs.append(("stress_end", "stress", ca.fabs(m_end) * fibre(ca.SX(1.0))))
         deformed = _ordered(nodes, points, s.kinematics)
         undeformed = _ordered(und.node_position, [q.position for q in und.contact_points], und)
         half = link_properties(ctx, t).half_thickness

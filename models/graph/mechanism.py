@@ -57,6 +57,7 @@ class Scales:
             "inertia": F * L,
             "acceleration": L,
             "density": F / L**4,
+            "frequency": 1.0,
         }
 
 

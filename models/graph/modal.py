@@ -19,6 +19,7 @@ discretization, so M is the element's consistent mass)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import casadi as ca
 
@@ -94,6 +95,7 @@ def modal_form(structure: Structure) -> ModalForm:
     )
 
 
+@lru_cache(maxsize=16)
 def state_mass(structure: Structure) -> ca.Function:
     """(z, p) -> M_z: the mass matrix over the residual form's unknowns z (the energy form's
     masses placed at their unknowns, the multipliers massless; without an energy form, the

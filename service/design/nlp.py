@@ -1,10 +1,17 @@
 """The design NLP of a DesignProblem (simultaneous approach), as CasADi graphs.
 
-Unknowns x = [d; z_1; ...; z_C]: the scaled design variables (document value / scale) and
-the equilibrium state of every load case. Constraints g = [R(z_1, p_1); ...; R(z_C, p_C);
-outputs of the constraints / their scales]; the residuals are equalities. The objective is
-(+-) its output over its scale. Every number (the cases' parameters, the design scales, the
-output scales) is an NLP parameter, so one solver serves every start and every value.
+Unknowns x = [d; z_1; ...; z_C; e_1; ...; e_F]: the scaled design variables (document value /
+scale), the equilibrium state of every load case, and for every natural frequency the problem
+names, its mode e = [v; l] (a right vector over z, and omega^2 / omega_0^2). Constraints
+g = [R(z_1, p_1); ...; R(z_C, p_C); per frequency (K_T v - omega_0^2 l M_z v) and
+v.M_z v / m_0 - 1; outputs of the constraints / their scales]; the residuals and the
+eigenproblems are equalities. The objective is (+-) its output over its scale. Every number
+(the cases' parameters, the design scales, the output scales, each frequency's omega_0^2 and
+m_0) is an NLP parameter, so one solver serves every start and every value.
+
+A frequency's eigenpair is followed from the start's k-th mode by continuity: where modes cross
+on the way, it may end as another (service.design.optimize checks the optimum by a fresh modes
+run).
 """
 
 from __future__ import annotations
@@ -28,7 +35,8 @@ class DesignNlp:
     n_state: int  # per case
     n_cases: int
     n_params: int  # per case
-    n_residuals: int  # rows of g that are equilibrium residuals
+    n_residuals: int  # rows of g that are equalities (equilibrium residuals, eigenproblems)
+    frequencies: tuple[OutputRef, ...]  # the frequencies named, each with its mode among the unknowns
     evaluate: ca.Function  # (x, P) -> (f, g)
     kkt: ca.Function  # (x, P, lam_g) -> (H, L_xp, J, g_p, f_p): for sensitivities of the optimum
     x: ca.SX
@@ -36,12 +44,23 @@ class DesignNlp:
     f: ca.SX
     g: ca.SX
 
-    def pack(self, problem: DesignProblem, objective_scale: float, constraint_scales: np.ndarray) -> np.ndarray:
+    @property
+    def n_states(self) -> int:
+        """The design variables' and the cases' states' share of x (the modes follow)."""
+        return self.n_design + self.n_state * self.n_cases
+
+    def pack(
+        self,
+        problem: DesignProblem,
+        objective_scale: float,
+        constraint_scales: np.ndarray,
+        eigen_scales: np.ndarray = np.zeros(0),
+    ) -> np.ndarray:
         """The NLP parameter vector: every case's parameters, the design scales (nondim per
-        scaled unit), the objective's scale (negative to maximize) and the constraints'
-        scales (nondimensional)."""
+        scaled unit), the objective's scale (negative to maximize), the constraints' scales
+        (nondimensional) and each frequency's (omega_0^2, m_0)."""
         design_scale = problem.scale * problem.nd_per_doc
-        return np.concatenate([*problem.case_p, design_scale, [objective_scale], constraint_scales])
+        return np.concatenate([*problem.case_p, design_scale, [objective_scale], constraint_scales, eigen_scales])
 
 
 def _key(problem: DesignProblem) -> tuple:
@@ -59,12 +78,15 @@ def _design_nlp(key: tuple) -> DesignNlp:
     structure, slots, n_cases, refs = key
     graphs = graphs_for(structure)
     n_state, n_params, n_design = structure.n_unknowns, len(structure.parameters), len(slots)
+    frequencies = tuple(dict.fromkeys(ref for ref in refs if ref.source == "frequency"))
     d = ca.SX.sym("d", n_design)
     zs = [ca.SX.sym(f"z{c}", n_state) for c in range(n_cases)]
-    P = ca.SX.sym("P", n_params * n_cases + n_design + 1 + len(refs) - 1)
+    modes = [ca.SX.sym(f"mode{j}", n_state + 1) for j in range(len(frequencies))]
+    n_fixed = n_params * n_cases + n_design + 1 + len(refs) - 1
+    P = ca.SX.sym("P", n_fixed + 2 * len(frequencies))
     design_scale = P[n_params * n_cases : n_params * n_cases + n_design]
     objective_scale = P[n_params * n_cases + n_design]
-    constraint_scales = P[n_params * n_cases + n_design + 1 :]
+    constraint_scales = P[n_params * n_cases + n_design + 1 : n_fixed]
     ps = []
     for c in range(n_cases):
         pc = P[c * n_params : (c + 1) * n_params]
@@ -72,10 +94,13 @@ def _design_nlp(key: tuple) -> DesignNlp:
             pc[slot] = d[k] * design_scale[k]
         ps.append(pc)
     residuals = [graphs.residual(zs[c], ps[c]) for c in range(n_cases)]
+    eigen_rows, omegas = _eigenproblems(structure, frequencies, zs, ps, modes, P[n_fixed:])
     outputs: dict[int, ca.SX] = {}
 
     def value(ref: OutputRef) -> ca.SX:
         c = ref.case
+        if ref.source == "frequency":
+            return omegas[frequencies.index(ref)] / (2 * np.pi)
         if ref.source == "parameter":
             return ps[c][ref.index]
         if ref.source == "stiffness":
@@ -89,8 +114,8 @@ def _design_nlp(key: tuple) -> DesignNlp:
 
     f = value(refs[0]) / objective_scale
     constraint_rows = [value(ref) / constraint_scales[k] for k, ref in enumerate(refs[1:])]
-    x = ca.vertcat(d, *zs)
-    g = ca.vertcat(*residuals, *constraint_rows)
+    x = ca.vertcat(d, *zs, *modes)
+    g = ca.vertcat(*residuals, *eigen_rows, *constraint_rows)
     evaluate = ca.Function("design_nlp", [x, P], [f, g], ["x", "P"], ["f", "g"], dict(cse=True))
     lam = ca.SX.sym("lam_g", g.shape[0])
     lagrangian = f + ca.dot(lam, g)
@@ -106,7 +131,27 @@ def _design_nlp(key: tuple) -> DesignNlp:
     for fn in (evaluate, kkt):
         if fn.has_free():
             raise RuntimeError(f"graph {fn.name()} has free symbols {fn.get_free()}")
-    return DesignNlp(key, n_design, n_state, n_cases, n_params, n_state * n_cases, evaluate, kkt, x, P, f, g)
+    n_equalities = n_state * n_cases + (n_state + 1) * len(frequencies)
+    return DesignNlp(key, n_design, n_state, n_cases, n_params, n_equalities, frequencies, evaluate, kkt, x, P, f, g)
+
+
+def _eigenproblems(structure, frequencies, zs, ps, modes, scales) -> tuple[list[ca.SX], list[ca.SX]]:
+    """Per frequency: its eigenproblem's rows and omega (rad/s), from its mode's unknowns."""
+    if not frequencies:
+        return [], []
+    from models.graph.modal import state_mass
+
+    graphs, mass = graphs_for(structure), state_mass(structure)
+    rows, omegas = [], []
+    for j, ref in enumerate(frequencies):
+        v, share = modes[j][:-1], modes[j][-1]
+        omega_squared = scales[2 * j] * share
+        z, p = zs[ref.case], ps[ref.case]
+        M = mass(z, p)
+        rows += [ca.jtimes(graphs.residual(z, p), z, v) - omega_squared * ca.mtimes(M, v)]
+        rows += [ca.dot(v, ca.mtimes(M, v)) / scales[2 * j + 1] - 1]
+        omegas.append(ca.sqrt(omega_squared))
+    return rows, omegas
 
 
 def solver_for(nlp: DesignNlp, max_iterations: int, tolerance: float) -> ca.Function:

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from service.contact.design import run_contact_start, uses_contact
+from service.design.frequencies import disagreements, eigen_guess, eigen_scales, frequency_value, unknown_bounds
 from service.design.nlp import DesignNlp, design_nlp, least_violation, solver_for
 from service.design.problem import DesignProblem, OutputRef
 from service.design.states import case_outputs, case_params, equilibria, polished_states
@@ -134,6 +135,8 @@ def _value(problem: DesignProblem, ref: OutputRef, z: np.ndarray, p: np.ndarray)
     if ref.source == "stiffness":
         K = np.asarray(g.residual_and_tangent(z, p)[1])
         return float(1 / np.linalg.inv(K)[ref.index, ref.index])
+    if ref.source == "frequency":
+        return frequency_value(problem, ref, z, p)
     return float(np.asarray(g.outputs(z, p)).ravel()[ref.index])
 
 
@@ -159,10 +162,11 @@ def prepare(problem: DesignProblem) -> Prepared:
 
     objective_scale = problem.sign * typical(problem.objective)  # negative: maximize
     constraint_scales = np.array([typical(c.output, c.lower, c.upper) for c in problem.constraints])
-    P = nlp.pack(problem, objective_scale, constraint_scales)
+    P = nlp.pack(problem, objective_scale, constraint_scales, eigen_scales(problem, nlp.frequencies, states, ps))
     n_z = nlp.n_state * nlp.n_cases
-    lbx = np.concatenate([problem.lower / problem.scale, np.full(n_z, -np.inf)])
-    ubx = np.concatenate([problem.upper / problem.scale, np.full(n_z, np.inf)])
+    mode_lower, mode_upper = unknown_bounds(nlp.frequencies, nlp.n_state)
+    lbx = np.concatenate([problem.lower / problem.scale, np.full(n_z, -np.inf), mode_lower])
+    ubx = np.concatenate([problem.upper / problem.scale, np.full(n_z, np.inf), mode_upper])
     factors = np.array([problem.output_factor(c.output) for c in problem.constraints])
     lower = (
         np.array([c.lower for c in problem.constraints]) * factors / constraint_scales if problem.constraints else []
@@ -195,7 +199,9 @@ def run_start(prepared: Prepared, start: int, stop: Callable[[], bool] | None = 
     started = time.perf_counter()
     design0 = start_design(problem, start)
     guesses = [z if status == "converged" else np.zeros(nlp.n_state) for status, z in equilibria(problem, design0)]
-    x0 = np.concatenate([design0 / problem.scale, *guesses])
+    scales = prepared.P[len(prepared.P) - 2 * len(nlp.frequencies) :]
+    modes0 = eigen_guess(problem, nlp.frequencies, guesses, case_params(problem, design0), scales)
+    x0 = np.concatenate([design0 / problem.scale, *guesses, modes0])
     run = solve(
         solver_for(nlp, spec.max_iterations, spec.tolerance),
         stop=stop,
@@ -209,7 +215,7 @@ def run_start(prepared: Prepared, start: int, stop: Callable[[], bool] | None = 
     status, x, lam_g, lam_x, message = _judged(prepared, run, x0, stop)
     # IPOPT may end a hair outside the bounds (its bound relaxation): report the design inside.
     design = np.clip(x[: nlp.n_design] * problem.scale, problem.lower, problem.upper)
-    zs, on_branch = polished_states(problem, design, np.split(x[nlp.n_design :], nlp.n_cases))
+    zs, on_branch = polished_states(problem, design, np.split(x[nlp.n_design : nlp.n_states], nlp.n_cases))
     residual = max(
         (
             float(np.abs(np.asarray(problem.mechanism.graphs.residual(z, p))).max(initial=0.0))
@@ -217,7 +223,7 @@ def run_start(prepared: Prepared, start: int, stop: Callable[[], bool] | None = 
         ),
         default=0.0,
     )
-    x = np.concatenate([design / problem.scale, *zs])
+    x = np.concatenate([design / problem.scale, *zs, x[nlp.n_states :]])
     f, _ = nlp.evaluate(x, prepared.P)
     if status in ("optimal", "acceptable") and not on_branch:
         status = "off_branch"
@@ -225,6 +231,9 @@ def run_start(prepared: Prepared, start: int, stop: Callable[[], bool] | None = 
             "the optimum's equilibrium is not the one the mechanism reaches when loaded at that "
             "design (another branch); try other starts or tighter bounds"
         )
+    crossed = disagreements(problem, nlp.frequencies, x, nlp.n_states, zs, case_params(problem, design))
+    if status in ("optimal", "acceptable") and crossed:
+        status, message = "mode_switched", "; ".join(crossed)
     return StartResult(
         start=start,
         status=status,

@@ -4,6 +4,7 @@ the objective and constraints, in which load cases, and their units and scales.
 Outputs are the names /v1/solve reports (reactions.tip.Fy, end_effector.x,
 elements.L1.stress_max, energy, ...), plus
   stiffness.<body>.<x|y|angle>   the diagonal of the condensed tangent stiffness K_T
+  frequency.<k>                  the k-th natural frequency (Hz) about the case's equilibrium
   /a/numeric/field               the value of a numeric field of the case (e.g. a length)
 Every problem names its field under `pointer` (e.g. /optimize/design/0/lower).
 """
@@ -20,6 +21,7 @@ from models.graph.structure import COORDINATES
 from service.contact.outputs import PAIR_OUTPUTS
 
 STIFFNESS_PREFIX = "stiffness."
+FREQUENCY_PREFIX = "frequency."
 _STIFFNESS_KINDS = {"x": "stiffness", "y": "stiffness", "angle": "moment"}  # per unit length / per rad
 
 
@@ -29,8 +31,8 @@ class OutputRef:
 
     name: str
     case: int
-    source: str  # output | stiffness | parameter
-    index: int  # into the outputs, the free coordinates or the parameters
+    source: str  # output | stiffness | parameter | frequency
+    index: int  # into the outputs, the free coordinates or the parameters; the mode (0-based)
     kind: str
 
 
@@ -152,7 +154,7 @@ def _cases(mech: Mechanism, spec: OptimizeSpec, pointer: str, design: set[str]):
 def output_names(mech: Mechanism) -> list[str]:
     """Every output an objective or constraint may name (besides numeric-field paths)."""
     stiffness = [f"{STIFFNESS_PREFIX}{name}" for name in mech.free_coordinates]
-    return list(mech.graphs.output_names) + stiffness
+    return list(mech.graphs.output_names) + stiffness + [f"{FREQUENCY_PREFIX}<k>"]
 
 
 def _output(mech: Mechanism, name: str, case: str | None, case_names: tuple[str, ...], here: str) -> OutputRef:
@@ -172,6 +174,11 @@ def _output(mech: Mechanism, name: str, case: str | None, case_names: tuple[str,
         k = mech.free_coordinates.index(name[len(STIFFNESS_PREFIX) :])
         coordinate = COORDINATES[mech.structure.free[k][1]]
         return OutputRef(name, c, "stiffness", k, _STIFFNESS_KINDS[coordinate])
+    if name.startswith(FREQUENCY_PREFIX):
+        mode = name[len(FREQUENCY_PREFIX) :]
+        if not mode.isdigit() or int(mode) < 1:
+            raise MechanismError(f"{here}/output", f"'{name}': name a mode by its number from 1 (frequency.1)")
+        return OutputRef(name, c, "frequency", int(mode) - 1, "frequency")
     if name.startswith("contacts.") and mech.structure.contacts is not None:
         kinds = dict(PAIR_OUTPUTS)
         pair, _, quantity = name[len("contacts.") :].rpartition(".")

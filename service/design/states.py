@@ -75,7 +75,8 @@ def case_outputs(problem: DesignProblem, x: np.ndarray) -> dict[str, dict[str, f
 
     mech: Mechanism = problem.mechanism
     n_design = len(problem.slots)
-    zs = np.split(x[n_design:], len(problem.case_p))
+    n_cases = len(problem.case_p)
+    zs = np.split(x[n_design : n_design + problem.mechanism.structure.n_unknowns * n_cases], n_cases)
     ps = case_params(problem, x[:n_design] * problem.scale)
     return {
         name: outputs_in_doc_units(mech, mech.graphs.outputs(z, p)) for name, z, p in zip(problem.case_names, zs, ps)

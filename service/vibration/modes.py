@@ -53,14 +53,15 @@ class MechanismModes:
     eigen: Eigen
 
 
-def modal_system(mech: Mechanism, z: np.ndarray | None) -> ModalSystem:
-    """The system about z (None: undeformed), in the energy form's unknowns where it exists."""
+def modal_system(mech: Mechanism, z: np.ndarray | None, p: np.ndarray | None = None) -> ModalSystem:
+    """The system about z (None: undeformed) at the parameters p (None: the mechanism's), in the
+    energy form's unknowns where it exists."""
     z = np.zeros(mech.n_free) if z is None else np.asarray(z, dtype=float)
+    p = mech.p() if p is None else p
     try:
         form = mech.graphs.modal_form
     except MechanismError:
-        return _body_system(mech, z)
-    p = mech.p()
+        return _body_system(mech, z, p)
     x, lam = z[list(form.x_in_state)], z[list(form.multipliers_in_state)]
     n = len(x)
     G = np.asarray(form.constraint_jacobian(x, p), dtype=float).reshape(form.n_equalities, n)
@@ -85,8 +86,7 @@ def modal_system(mech: Mechanism, z: np.ndarray | None) -> ModalSystem:
     )
 
 
-def _body_system(mech: Mechanism, z: np.ndarray) -> ModalSystem:
-    p = mech.p()
+def _body_system(mech: Mechanism, z: np.ndarray, p: np.ndarray) -> ModalSystem:
     n = mech.n_body_coordinates
     _, K = mech.graphs.residual_and_tangent(z, p)
     M = np.asarray(mech.graphs.mass_matrix(z, p), dtype=float)[:n, :n]
@@ -119,7 +119,9 @@ def _body_system(mech: Mechanism, z: np.ndarray) -> ModalSystem:
     )
 
 
-def mechanism_modes(mech: Mechanism, z: np.ndarray | None, count: int) -> MechanismModes:
-    """The `count` lowest natural modes about z."""
-    system = modal_system(mech, z)
+def mechanism_modes(
+    mech: Mechanism, z: np.ndarray | None, count: int | None, p: np.ndarray | None = None
+) -> MechanismModes:
+    """The `count` lowest natural modes about z (None: every one), at the parameters p."""
+    system = modal_system(mech, z, p)
     return MechanismModes(system, vibration_eigen(system.K, system.M, system.G, count))

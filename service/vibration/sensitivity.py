@@ -26,7 +26,7 @@ from models import Mechanism, MechanismError
 from models.graph.assembly import graphs_for
 from models.graph.modal import state_mass
 from models.graph.structure import Structure
-from service.vibration.modes import MechanismModes
+from service.vibration.modes import MechanismModes, mechanism_modes
 
 REPEATED = 1e-6
 
@@ -85,6 +85,14 @@ def frequency_sensitivities(
         d_frequency = d_lambda / (2 * omega[:, None]) / (2 * math.pi)
     factors = np.array([mech.nd_per_doc(mech.parameters[s].kind) for s in slots])
     return d_frequency * factors[None, :], clusters
+
+
+def state_mode(mech: Mechanism, z: np.ndarray, p: np.ndarray, k: int) -> tuple[np.ndarray, float]:
+    """Mode k (0-based) about (z, p) as a right vector over z, and its omega^2."""
+    found = mechanism_modes(mech, z, k + 1, p)
+    K = np.asarray(mech.graphs.residual_and_tangent(z, p)[1], dtype=float)
+    v, _ = _state_vectors(found, K, k)
+    return v, float(found.eigen.omega_squared[k])
 
 
 def _state_vectors(found: MechanismModes, K: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
