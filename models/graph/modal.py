@@ -34,14 +34,13 @@ class ModalForm:
     n_equalities: int
     x_in_state: tuple[int, ...]  # where x and the multipliers sit in the residual form's z
     multipliers_in_state: tuple[int, ...]
-    stiffness: ca.Function  # (x, lam, p) -> K
-    constraint_jacobian: ca.Function  # (x, p) -> G
     owners: tuple[str, ...]  # "bodies/<name>" or "elements/<name>", one per mass matrix
-    masses: ca.Function  # (x, p) -> M_o, one output per owner
-    total_mass: ca.Function  # (p) -> the mechanism's mass (its bodies' and elements')
-    uniform_forces: ca.Function  # (x, p) -> F (n x 2)
     point_owners: tuple[str, ...]  # the element of each mass point
-    points: ca.Function  # (x, p) -> (positions (2 x k), J (2k x n): rows x0, y0, x1, y1, ...)
+    # (x, lam, p) -> (K, G, the owners' M_o stacked (owners n x n), F (n x 2), the mass points'
+    # positions (2 x k), J (2k x n): rows x0, y0, x1, y1, ...): one call for a modes run
+    state: ca.Function
+    masses: ca.Function  # (x, p) -> M = sum of the M_o
+    total_mass: ca.Function  # (p) -> the mechanism's mass (its bodies' and elements')
     parameter_forces: ca.Function  # (x, p) -> B (n x parameters)
 
 
@@ -68,6 +67,8 @@ def modal_form(structure: Structure) -> ModalForm:
         energies[key] = energies.get(key, ca.SX(0)) + T
     owners = tuple(energies)
     masses = [ca.hessian(T, rate)[0] for T in energies.values()]
+    stacked_masses = ca.vertcat(*masses) if masses else ca.SX(0, n)
+    total_matrix = sum(masses[1:], masses[0]) if masses else ca.SX.zeros(n, n)
     centres = mass_centres(s.ctx, s.d)
     moment = [
         sum((m * c[axis] for _, m, c in centres), ca.SX(0))
@@ -83,14 +84,17 @@ def modal_form(structure: Structure) -> ModalForm:
         g.numel(),
         tuple(s.x_in_state),
         tuple(s.multipliers_in_state),
-        ca.Function("modal_stiffness", [x, lam, p], [K], ["x", "lam", "p"], ["K"]),
-        ca.Function("constraint_jacobian", [x, p], [ca.jacobian(g, x)], ["x", "p"], ["G"]),
         owners,
-        ca.Function("masses", [x, p], masses),
-        ca.Function("total_mass", [p], [total], ["p"], ["mass"]),
-        ca.Function("uniform_forces", [x, p], [uniform], ["x", "p"], ["F"]),
         tuple(s.inertia_owners),
-        ca.Function("mass_points", [x, p], [where, ca.jacobian(stacked, x)], ["x", "p"], ["positions", "J"]),
+        ca.Function(
+            "modal_state",
+            [x, lam, p],
+            [ca.densify(e) for e in (K, ca.jacobian(g, x), stacked_masses, uniform, where, ca.jacobian(stacked, x))],
+            ["x", "lam", "p"],
+            ["K", "G", "M_owners", "F", "positions", "J"],
+        ),
+        ca.Function("masses", [x, p], [total_matrix], ["x", "p"], ["M"]),
+        ca.Function("total_mass", [p], [total], ["p"], ["mass"]),
         ca.Function("parameter_forces", [x, p], [-ca.jacobian(ca.gradient(s.potential, x), p)], ["x", "p"], ["B"]),
     )
 
@@ -112,8 +116,7 @@ def state_mass(structure: Structure) -> ca.Function:
     x = z[list(form.x_in_state)]
     M = ca.SX.zeros(n, n)
     if form.owners:
-        parts = form.masses(x, p)
-        total = parts if len(form.owners) == 1 else sum(parts[1:], parts[0])
+        total = form.masses(x, p)
         index = list(form.x_in_state)
         place = ca.DM(ca.Sparsity.triplet(n, len(index), index, list(range(len(index)))), 1.0)
         M = ca.mtimes([place, total, place.T])

@@ -14,14 +14,13 @@ from pydantic import BaseModel, Field, ValidationInfo, field_validator
 
 from models import Mechanism, MechanismError
 from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult
-from service.requests import under
-from service.solvers.equilibrium import solve_equilibrium
 from service.solvers.newton import NewtonOptions
 from service.solvers.reports import plain
 from service.vibration.eigen import vibration_eigen
 from service.vibration.frf import TWO_PI, Damping, frequency_grid, modal_response, resonances
 from service.vibration.harmonic import channel
 from service.vibration.modes import modal_system
+from service.vibration.state import vibration_state
 
 
 class FrequencyResponseOptions(AnalysisOptions):
@@ -92,18 +91,9 @@ def frequency_response_report(
     mech: Mechanism, newton: NewtonOptions, options: FrequencyResponseOptions
 ) -> dict[str, Any]:
     report: dict[str, Any] = {"analysis": "frequency_response", "name": mech.document.name, "at": options.at}
-    z = np.zeros(mech.n_free)
-    if options.at == "equilibrium":
-        try:
-            result = solve_equilibrium(mech, newton)
-        except MechanismError as exc:
-            raise under("/document", exc) from None
-        report.update(result.summary())
-        if not result.converged:
-            return plain(report)
-        z = result.z
-    else:
-        report.update(status="converged", message="", iterations=0)
+    z = vibration_state(mech, newton, options.at, report)
+    if z is None:
+        return plain(report)
     system = modal_system(mech, z)
     eigen = vibration_eigen(system.K, system.M, system.G, None)  # every mode: the superposition is exact
     link = channel(mech, z, system, options.input, options.outputs)

@@ -9,15 +9,14 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import BaseModel, Field
 
-from models import Mechanism, MechanismError
+from models import Mechanism
 from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult
-from service.requests import under
-from service.solvers.equilibrium import solve_equilibrium
 from service.solvers.newton import NewtonOptions
 from service.solvers.reports import plain
 from service.vibration.modes import MechanismModes, mechanism_modes
 from service.vibration.report import modes_report
 from service.vibration.sensitivity import frequency_sensitivities, parameter_slots
+from service.vibration.state import vibration_state
 
 
 class ModesOptions(AnalysisOptions):
@@ -70,18 +69,9 @@ class ModesReport(AnalysisResult):
 
 def modes_analysis_report(mech: Mechanism, newton: NewtonOptions, options: ModesOptions) -> dict[str, Any]:
     report: dict[str, Any] = {"analysis": "modes", "name": mech.document.name, "at": options.at}
-    z = None
-    if options.at == "equilibrium":
-        try:
-            result = solve_equilibrium(mech, newton)
-        except MechanismError as exc:
-            raise under("/document", exc) from None
-        report.update(result.summary())
-        if not result.converged:
-            return plain(report)
-        z = result.z
-    else:
-        report.update(status="converged", message="", iterations=0)
+    z = vibration_state(mech, newton, options.at, report)
+    if z is None:
+        return plain(report)
     found = mechanism_modes(mech, z, options.count)
     report.update(modes_report(mech, found, options.shapes))
     if options.sensitivities:

@@ -91,17 +91,20 @@ class EquilibriumResult:
         return dict(zip(self.mechanism.free_coordinates, displacement_to_doc(self.mechanism, self.z)))
 
     def summary(self) -> dict:
-        m = self.mechanism
         outputs = self.outputs()
+        return {**self.summary_of_state(outputs), "displacements": self.displacements(), "outputs": outputs}
+
+    def summary_of_state(self, outputs: dict | None = None) -> dict:
+        """The status, residual and warnings, without the displacements and outputs."""
+        if outputs is None and self.converged:
+            outputs = self.outputs()
         return {
             "status": self.status,
             "message": self.message,
             "iterations": self.iterations,
-            **residual_report(m, self.z),
+            **residual_report(self.mechanism, self.z),
             "seconds": self.seconds,
             "warnings": self.warnings(outputs) if self.converged else [],
-            "displacements": self.displacements(),
-            "outputs": outputs,
         }
 
 

@@ -20,6 +20,8 @@ def plain(obj: Any) -> Any:
     if isinstance(obj, (list, tuple)):
         return [plain(v) for v in obj]
     if isinstance(obj, np.ndarray):
+        if obj.dtype.kind == "f" and np.isfinite(obj).all():
+            return obj.tolist()  # floats throughout: nothing to replace (long curves, quickly)
         return plain(obj.tolist())
     if isinstance(obj, np.integer):
         return int(obj)

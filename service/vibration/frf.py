@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from scipy.optimize import brentq, minimize_scalar
 
 from service.vibration.eigen import Eigen
 
@@ -82,52 +83,54 @@ def frequency_grid(start: float, stop: float, points: int, resonances: list[tupl
 
 def resonances(response: ModalResponse, kinds: list[str], start: float, stop: float) -> list[dict[str, Any]]:
     """Per elastic mode in [start, stop] (Hz) and per output it moves: the peak and its bandwidth
-    (a peak that lies beyond its mode's window, drowned by a neighbour's, is left out)."""
+    (a peak that lies beyond its mode's window, drowned by a neighbour's, is left out). The
+    peak and the half-power points are solved for (bounded search, Brent's roots) between
+    samples of the mode's window."""
     found = []
+    shares = np.abs(response.participation * response.forcing[None, :])
     for k, kind in enumerate(kinds):
         omega_k = math.sqrt(max(response.omega_squared[k], 0.0))
-        f_k = omega_k / TWO_PI
-        if kind != "elastic" or not start <= f_k <= stop or response.rates[k] <= 0:
+        if kind != "elastic" or not start <= omega_k / TWO_PI <= stop or response.rates[k] <= 0:
             continue
         zeta = response.rates[k] / (2 * omega_k)
-        window = omega_k * np.linspace(max(1 - 4 * zeta, 0.05), 1 + 4 * zeta, 4001)
-        H = response.at(window)
-        shares = np.abs(response.participation * response.forcing[None, :])
-        for output, row in enumerate(np.abs(H)):
-            if shares[output, k] <= 1e-9 * shares[output].max(initial=0.0):
-                continue  # the mode does not move this output under this load
+        window = omega_k * np.linspace(max(1 - 4 * zeta, 0.05), 1 + 4 * zeta, 161)
+        H = np.abs(response.at(window))
+        for output, row in enumerate(H):
+            top = int(np.argmax(row))
+            if shares[output, k] <= 1e-9 * shares[output].max(initial=0.0) or not 0 < top < len(window) - 1:
+                continue  # the mode does not move this output, or its peak is a neighbour's
 
-            def evaluate(omega: float, output: int = output) -> complex:
-                return complex(response.at(np.array([omega]))[output, 0])
+            def magnitude(omega: float, output: int = output) -> float:
+                return float(abs(response.at(np.array([omega]))[output, 0]))
 
-            if 0 < int(np.argmax(row)) < len(window) - 1:
-                found.append({"mode": k + 1, "output": output, **_peak(window, row, evaluate)})
+            found.append({"mode": k + 1, "output": output, **_peak(window, row, top, magnitude, response, output)})
     return found
 
 
-def _peak(window: np.ndarray, magnitude: np.ndarray, evaluate) -> dict[str, Any]:
-    top = int(np.argmax(magnitude))
-    if 0 < top < len(window) - 1:  # a parabola through the three samples at the top
-        a, b, c = magnitude[top - 1 : top + 2]
-        shift = 0.5 * (a - c) / (a - 2 * b + c) if a - 2 * b + c != 0 else 0.0
-        omega = window[top] + shift * (window[1] - window[0])
-    else:
-        omega = window[top]
-    at_peak = evaluate(omega)
-    peak = max(abs(at_peak), magnitude[top])
+def _peak(
+    window: np.ndarray, row: np.ndarray, top: int, magnitude, response: ModalResponse, output: int
+) -> dict[str, Any]:
+    best = minimize_scalar(
+        lambda omega: -magnitude(omega),
+        bounds=(window[top - 1], window[top + 1]),
+        method="bounded",
+        options={"xatol": 1e-12 * window[top]},
+    )
+    omega, peak = float(best.x), -float(best.fun)
     level = peak / math.sqrt(2)
-    below = np.nonzero(magnitude[:top] < level)[0]
-    above = np.nonzero(magnitude[top:] < level)[0]
+    below = np.nonzero(row[:top] < level)[0]
+    above = np.nonzero(row[top:] < level)[0]
     bandwidth = None
     if below.size and above.size:
         lo, hi = below[-1], top + above[0]
-        left = np.interp(level, magnitude[lo : lo + 2], window[lo : lo + 2])
-        right = np.interp(level, magnitude[hi - 1 : hi + 1][::-1], window[hi - 1 : hi + 1][::-1])
+        left = brentq(lambda w: magnitude(w) - level, window[lo], window[lo + 1], xtol=1e-14 * omega)
+        right = brentq(lambda w: magnitude(w) - level, window[hi - 1], window[hi], xtol=1e-14 * omega)
         bandwidth = (right - left) / TWO_PI
     frequency = omega / TWO_PI
+    at_peak = complex(response.at(np.array([omega]))[output, 0])
     return {
         "frequency": frequency,
-        "amplitude": float(peak),
+        "amplitude": peak,
         "phase": float(np.degrees(np.angle(at_peak))),
         "bandwidth": bandwidth,
         "quality": frequency / bandwidth if bandwidth else None,

@@ -10,11 +10,14 @@ bodies statically (they are massless), so both are condensed with K_T's blocks."
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import casadi as ca
 import numpy as np
 
 from models import Mechanism, MechanismError
+from models.graph.assembly import graphs_for
+from models.graph.structure import Structure
 from service.vibration.modes import ModalSystem
 
 
@@ -33,15 +36,13 @@ def channel(mech: Mechanism, z: np.ndarray, system: ModalSystem, pointer: str, n
         k = mech.parameter_index(pointer)
     except MechanismError as exc:
         raise MechanismError("/input", f"{pointer}: {exc.problem}") from None
-    zs, ps = ca.MX.sym("z", len(z)), ca.MX.sym("p", len(p))
     indices = _output_indices(mech, names)
-    y = mech.graphs.outputs(zs, ps)[indices]
-    dy = np.asarray(ca.Function("dy", [zs, ps], [ca.jacobian(y, zs)])(z, p), dtype=float)
+    dy = np.asarray(_derivatives(mech.structure)[0](z, p), dtype=float)[indices]
     if system.coordinates_set == "elements":
         force = np.asarray(mech.graphs.modal_form.parameter_forces(z[list(system.x_in_state)], p))[:, k]
         C = _motion_outputs(dy, system, names)
     else:
-        force, C = _condensed(mech, z, p, zs, ps, k, dy, system.n_body)
+        force, C = _condensed(mech, z, p, k, dy, system.n_body)
     if not np.any(force):
         raise MechanismError(
             "/input", f"{pointer} drives no force on the mechanism: name a load's component (/loads/<name>/force/1)"
@@ -73,11 +74,22 @@ def _motion_outputs(dy: np.ndarray, system: ModalSystem, names: list[str]) -> np
     return dy[:, list(system.x_in_state)]
 
 
-def _condensed(mech, z, p, zs, ps, k, dy, n_body):
+@lru_cache(maxsize=16)
+def _derivatives(structure: Structure) -> tuple[ca.Function, ca.Function]:
+    """(z, p) -> dy/dz of every output, and (z, p) -> dR/dp: built once per structure."""
+    graphs = graphs_for(structure)
+    zs, ps = ca.MX.sym("z", structure.n_unknowns), ca.MX.sym("p", len(structure.parameters))
+    return (
+        ca.Function("outputs_z", [zs, ps], [ca.jacobian(graphs.outputs(zs, ps), zs)]),
+        ca.Function("residual_p", [zs, ps], [ca.jacobian(graphs.residual(zs, ps), ps)]),
+    )
+
+
+def _condensed(mech, z, p, k, dy, n_body):
     """(force, C) on the body coordinates, the elements' unknowns following statically."""
     _, K = mech.graphs.residual_and_tangent(z, p)
     K = np.asarray(K, dtype=float)
-    dR = np.asarray(ca.Function("dR", [zs, ps], [ca.jacobian(mech.graphs.residual(zs, ps), ps)])(z, p))[:, k]
+    dR = np.asarray(_derivatives(mech.structure)[1](z, p), dtype=float)[:, k]
     b, own = slice(0, n_body), slice(n_body, K.shape[0])
     if K.shape[0] == n_body:
         return -dR, dy

@@ -15,10 +15,13 @@ Both are nondimensional with time in seconds, so omega comes out in rad/s.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
+import casadi as ca
 import numpy as np
 
 from models import Mechanism, MechanismError
+from service.buffered import BufferedCall
 from service.solvers.stiffness import condensed
 from service.vibration.eigen import Eigen, vibration_eigen
 
@@ -64,26 +67,29 @@ def modal_system(mech: Mechanism, z: np.ndarray | None, p: np.ndarray | None = N
         return _body_system(mech, z, p)
     x, lam = z[list(form.x_in_state)], z[list(form.multipliers_in_state)]
     n = len(x)
-    G = np.asarray(form.constraint_jacobian(x, p), dtype=float).reshape(form.n_equalities, n)
-    masses = form.masses(x, p) if form.owners else []
-    masses = [masses] if len(form.owners) == 1 else list(masses)
-    positions, J = form.points(x, p)
+    K, G, stacked, F, positions, J = _state_call(form.state)(x, lam, p)
     return ModalSystem(
         list(form.unknowns),
-        np.asarray(form.stiffness(x, lam, p), dtype=float),
-        G,
+        K,
+        G.reshape(form.n_equalities, n),
         list(form.owners),
-        [np.asarray(m, dtype=float) for m in masses],
-        np.asarray(form.uniform_forces(x, p), dtype=float).reshape(n, 2),
+        list(stacked.reshape(len(form.owners), n, n)),
+        F.reshape(n, 2),
         float(form.total_mass(p)),
         len(mech.structure.free),
         list(form.point_owners),
-        np.asarray(positions, dtype=float).reshape(2, -1),
-        np.asarray(J, dtype=float).reshape(-1, n),
+        positions.reshape(2, -1),
+        J.reshape(-1, n),
         "elements",
         list(form.x_in_state),
         list(form.multipliers_in_state),
     )
+
+
+@lru_cache(maxsize=16)
+def _state_call(state: ca.Function) -> BufferedCall:
+    """The modal state through buffers of its own (no conversion of its matrices), once per graph."""
+    return BufferedCall(state)
 
 
 def _body_system(mech: Mechanism, z: np.ndarray, p: np.ndarray) -> ModalSystem:
