@@ -19,6 +19,7 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, ClassVar
 
 import numpy as np
@@ -69,6 +70,9 @@ class Analysis(ABC):
     long: ClassVar[bool] = False  # may run for seconds: never on the worker kept for small requests
     Options: ClassVar[type[AnalysisOptions]] = AnalysisOptions
     Result: ClassVar[type[AnalysisResult]] = AnalysisResult
+    # (flag, suffixes, help) of each figure its command can draw (flexmech <name> --<flag> OUT): draw() makes them
+    figures: ClassVar[tuple[tuple[str, tuple[str, ...], str], ...]] = ()
+    aliases: ClassVar[tuple[str, ...]] = ()  # other names of its command (flexmech frf)
 
     def run(self, mech: Mechanism, request: AnalysisRequest = AnalysisRequest()) -> dict[str, Any]:
         """The report of one mechanism."""
@@ -77,6 +81,12 @@ class Analysis(ABC):
     @abstractmethod
     def report(self, mech: Mechanism, newton: NewtonOptions, options: Any) -> dict[str, Any]:
         """The report of one mechanism under this analysis' typed options."""
+
+    def draw(
+        self, mech: Mechanism, newton: NewtonOptions, options: Any, report: dict[str, Any], figure: str, path: Path
+    ) -> None:
+        """Draw the figure named by `figure` (one of `figures`) of a report into `path`."""
+        raise MechanismError(f"/{figure}", f"the {self.name} analysis draws no {figure}")
 
     def options_of(self, given: AnalysisOptions | Mapping[str, Any] | None) -> AnalysisOptions:
         """Typed options: as given, or checked from a mapping (MechanismError at the field)."""

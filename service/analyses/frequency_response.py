@@ -7,6 +7,7 @@ ratio and Rayleigh's mass and stiffness terms; each resonance's peak and half-po
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
@@ -81,6 +82,7 @@ class Resonance(BaseModel):
 
 class FrequencyResponseReport(AnalysisResult):
     at: str
+    input: str = Field(description="the load's component the harmonic force drives")
     frequencies: list[float] = Field(default_factory=list, description="Hz")
     responses: dict[str, Response] = Field(default_factory=dict)
     resonances: list[Resonance] = Field(default_factory=list)
@@ -90,7 +92,12 @@ class FrequencyResponseReport(AnalysisResult):
 def frequency_response_report(
     mech: Mechanism, newton: NewtonOptions, options: FrequencyResponseOptions
 ) -> dict[str, Any]:
-    report: dict[str, Any] = {"analysis": "frequency_response", "name": mech.document.name, "at": options.at}
+    report: dict[str, Any] = {
+        "analysis": "frequency_response",
+        "name": mech.document.name,
+        "at": options.at,
+        "input": options.input,
+    }
     z = vibration_state(mech, newton, options.at, report)
     if z is None:
         return plain(report)
@@ -143,9 +150,24 @@ class FrequencyResponseAnalysis(Analysis):
     long = True
     Options = FrequencyResponseOptions
     Result = FrequencyResponseReport
+    aliases = ("frf",)
+    figures = (("plot", (".png", ".svg"), "Draw the Bode plot: amplitude and phase of the outputs."),)
 
     def report(self, mech: Mechanism, newton: NewtonOptions, options: FrequencyResponseOptions) -> dict[str, Any]:
         return frequency_response_report(mech, newton, options)
+
+    def draw(
+        self,
+        mech: Mechanism,
+        newton: NewtonOptions,
+        options: FrequencyResponseOptions,
+        report: dict[str, Any],
+        figure: str,
+        path: Path,
+    ) -> None:
+        from service.vibration.figures import plot_bode
+
+        plot_bode(report, path)
 
 
 FREQUENCY_RESPONSE = FrequencyResponseAnalysis()

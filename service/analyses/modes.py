@@ -4,6 +4,7 @@ included), or about the undeformed state (service.vibration)."""
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
@@ -108,9 +109,32 @@ class ModesAnalysis(Analysis):
     long = True
     Options = ModesOptions
     Result = ModesReport
+    figures = (
+        ("plot", (".png", ".svg"), "Draw the mode shapes (up to six) over the mechanism."),
+        ("animation", (".gif",), "Animate the first mode through one period."),
+    )
 
     def report(self, mech: Mechanism, newton: NewtonOptions, options: ModesOptions) -> dict[str, Any]:
         return modes_analysis_report(mech, newton, options)
+
+    def draw(
+        self,
+        mech: Mechanism,
+        newton: NewtonOptions,
+        options: ModesOptions,
+        report: dict[str, Any],
+        figure: str,
+        path: Path,
+    ) -> None:
+        from service.vibration.figures import animate_mode, plot_modes
+
+        z = vibration_state(mech, newton, options.at, {})
+        if z is None:
+            return
+        if figure == "plot":
+            plot_modes(mech, z, report, path)
+        else:
+            animate_mode(mech, z, report, 1, path)
 
 
 MODES = ModesAnalysis()

@@ -185,9 +185,11 @@ def run_command(
     max_iterations: int,
     json_out: Path | None,
     given: dict[str, Any],
+    figures: dict[str, Path | None] | None = None,
 ) -> None:
     out, err = consoles()
     with user_errors(err):
+        wanted = {flag: checked_figure(analysis, flag, path) for flag, path in (figures or {}).items() if path}
         options = typed_options(analysis, given)
         newton = newton_options(jacobian, line_search, max_iterations)
         mech = mechanism(document, model, sets)
@@ -197,6 +199,10 @@ def run_command(
         if json_out is not None:
             write_json(json_out, {"document": str(document), "model": model, **report})
             out.print(f"wrote {escape(str(json_out))}")
+        if report.get("status") in FINE:
+            for flag, path in wanted.items():
+                analysis.draw(mech, newton, options, report, flag, path)
+                out.print(f"wrote {escape(str(path))}")
     if report.get("status") not in FINE:
         raise typer.Exit(EXIT_NOT_CONVERGED)
 
@@ -207,7 +213,8 @@ def command_of(analysis: Analysis):
 
     def command(**kwargs: Any) -> None:
         common = {name: kwargs.get(name, COMMON_DEFAULTS.get(name)) for name, _ in COMMON}
-        run_command(analysis, **common, given={name: kwargs.get(name) for name in option_names})
+        figures = {flag: kwargs.get(f"figure_{flag}") for flag, _, _ in analysis.figures}
+        run_command(analysis, **common, given={name: kwargs.get(name) for name in option_names}, figures=figures)
 
     parameters = [
         inspect.Parameter(
@@ -223,10 +230,31 @@ def command_of(analysis: Analysis):
         for name in option_names
         if name not in COMMON_DEFAULTS and name != "document"
     ]
+    parameters += [
+        inspect.Parameter(
+            f"figure_{flag}",
+            inspect.Parameter.KEYWORD_ONLY,
+            annotation=Annotated[
+                Path | None, typer.Option(f"--{flag}", metavar=f"OUT{'|'.join(suffixes)}", help=help_text)
+            ],
+            default=None,
+        )
+        for flag, suffixes, help_text in analysis.figures
+    ]
     command.__signature__ = inspect.Signature(parameters)  # type: ignore[attr-defined]
     command.__annotations__ = {p.name: p.annotation for p in parameters}
     command.__doc__ = f"{analysis.summary}. Its options are the flags below (as fields of POST /v1/solve)."
     return command
+
+
+def checked_figure(analysis: Analysis, flag: str, path: Path) -> Path:
+    """The figure's path, OptionError at its flag unless its suffix is one the figure takes."""
+    suffixes = next(suffixes for name, suffixes, _ in analysis.figures if name == flag)
+    if path.suffix.lower() not in suffixes:
+        raise OptionError(
+            f"--{flag}", f"cannot tell the format of '{path}': use a name ending in {' or '.join(suffixes)}"
+        )
+    return path
 
 
 def _taken() -> set[str]:
@@ -240,6 +268,9 @@ def add_command(analysis: Analysis) -> None:
         return
     command = command_of(analysis)
     app.command(name=name, help=command.__doc__, short_help=analysis.summary)(command)
+    for alias in analysis.aliases:
+        if alias not in _taken():
+            app.command(name=alias, help=command.__doc__, short_help=f"{analysis.summary} (as {name})")(command)
 
 
 def listen() -> None:
