@@ -4,6 +4,7 @@
 
 import { contactFrame } from "./contactframes.js";
 import { posesAtElementEnds } from "./scene.js";
+import { modeFrames, modesTable, recordsTable, responseSeries } from "./vibration.js";
 
 const isNumberList = (value) => Array.isArray(value) && value.length > 0 && value.every((v) => v === null || typeof v === "number");
 
@@ -125,6 +126,18 @@ export function resultView(kind, result, drawing) {
   if (result.analysis === "simulate") return simulationView(result, drawing);
   if (result.analysis === "trace") return traceView(result);
   const v = solveView(result);
+  if (result.analysis === "modes") {
+    v.tables.push(modesTable(result));
+    v.frames = modeFrames(result);
+    return v;
+  }
+  if (result.analysis === "frequency_response") {
+    responseSeries(v, result);
+    return v;
+  }
+  for (const [key, value] of Object.entries(result)) {  // an analysis' own lists of records (a plugin's too)
+    if (Array.isArray(value) && value.length && value.every((row) => row && typeof row === "object" && !Array.isArray(row))) v.tables.push(recordsTable(key, value, result.units || {}));
+  }
   if (result.drawing && drawing) v.frames = [contactFrame(result, `contact: ${result.status}`, drawing, (result.units || {}).force)]; // the contact state
   return v;
 }

@@ -66,6 +66,10 @@ class ModesReport(AnalysisResult):
     points: dict[str, list[list[float]]] = Field(
         default_factory=dict, description="where each element's mass points stand (the shapes' points)"
     )
+    lines: dict[str, list[list[float]]] = Field(
+        default_factory=dict,
+        description="each drawn element's centre line at the state (its modes' shape.lines move it)",
+    )
 
 
 def modes_analysis_report(mech: Mechanism, newton: NewtonOptions, options: ModesOptions) -> dict[str, Any]:
@@ -74,7 +78,7 @@ def modes_analysis_report(mech: Mechanism, newton: NewtonOptions, options: Modes
     if z is None:
         return plain(report)
     found = mechanism_modes(mech, z, options.count)
-    report.update(modes_report(mech, found, options.shapes))
+    report.update(modes_report(mech, found, z, options.shapes))
     if options.sensitivities:
         _add_sensitivities(report, mech, z, found, options)
     unstable = [m["mode"] for m in report["modes"] if m["kind"] == "unstable"]

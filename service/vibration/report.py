@@ -18,8 +18,9 @@ from service.vibration.modes import MechanismModes
 SHARE_SHOWN = 1e-4  # energy shares below this are left out of a mode's list
 
 
-def modes_report(mech: Mechanism, found: MechanismModes, shapes: bool = True) -> dict[str, Any]:
+def modes_report(mech: Mechanism, found: MechanismModes, z: np.ndarray, shapes: bool = True) -> dict[str, Any]:
     system, eigen = found.system, found.eigen
+    lines = _centre_line_modes(mech, found, z) if shapes else None
     mass_unit = mech.doc_unit("mass")
     mass_doc = mech.scales.of("mass") / mech.doc_factor("mass")  # document mass units per nondimensional
     to_si = 1.0 / math.sqrt(mech.scales.of("energy"))  # nondimensional normalization to SI's
@@ -51,8 +52,8 @@ def modes_report(mech: Mechanism, found: MechanismModes, shapes: bool = True) ->
                 if share >= SHARE_SHOWN
             },
         }
-        if shapes:
-            mode["shape"] = _shape(mech, system, phi * to_si)
+        if shapes and lines is not None:
+            mode["shape"] = {**_shape(mech, system, phi * to_si), "lines": _lines(mech, lines[1][k] * to_si)}
         modes.append(mode)
     return {
         "coordinates": system.coordinates_set,
@@ -63,11 +64,13 @@ def modes_report(mech: Mechanism, found: MechanismModes, shapes: bool = True) ->
         "total_mass_unit": mass_unit,
         "modes": modes,
         "points": _points(mech, system) if shapes else {},
+        "lines": _lines(mech, lines[0]) if lines is not None else {},
         "units": {
             "omega": "rad/s",
             "frequency": "Hz",
             "period": "s",
             "effective_mass": mass_unit,
+            "angle": mech.doc_unit("angle"),
             "shape": f"{mech.doc_unit('length')} and {mech.doc_unit('angle')}, mass-normalized in SI",
         },
     }
@@ -86,6 +89,32 @@ def _shape(mech: Mechanism, system, phi: np.ndarray) -> dict[str, Any]:
     for owner, (dx, dy) in zip(system.point_owners, moved):
         elements.setdefault(owner, []).append([float(dx), float(dy)])
     return {"bodies": bodies, "elements": elements}
+
+
+def _centre_line_modes(mech: Mechanism, found: MechanismModes, z: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]]:
+    """The drawn centre lines at the state (document units), and each mode's displacement of
+    them (nondimensional modal amplitude): CasADi's forward derivative of the drawing along the
+    mode over the residual form's unknowns."""
+    from service.vibration.sensitivity import state_vectors
+
+    p = mech.p()
+    K = np.asarray(mech.graphs.residual_and_tangent(z, p)[1], dtype=float)
+    shapes = mech.graphs.shapes
+    rest = [np.asarray(out, dtype=float) for out in shapes(z, p)]
+    along = shapes.forward(1)
+    scale = mech.scales.length / mech.doc_factor("length")
+    moved = []
+    for k in range(found.eigen.shapes.shape[1]):
+        v, _ = state_vectors(found, K, k)
+        moved.append(np.asarray(along(z, p, *rest, v, np.zeros(len(p)))[0], dtype=float) * scale)
+    return rest[0] * scale, moved
+
+
+def _lines(mech: Mechanism, lines: np.ndarray) -> dict[str, list[list[float]]]:
+    """Per drawn element, its centre line's points [[x, y], ...]."""
+    return {
+        name: lines[:, first : first + columns].T.tolist() for name, first, columns, _, _ in mech.graphs.shape_segments
+    }
 
 
 def _points(mech: Mechanism, system) -> dict[str, list[list[float]]]:

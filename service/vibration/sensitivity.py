@@ -69,7 +69,7 @@ def frequency_sensitivities(
     K = np.asarray(terms(z, p, np.zeros(len(z)), np.zeros(len(z)))[0], dtype=float)
     rows = []
     for k, value in enumerate(eigen.omega_squared):
-        v, w = _state_vectors(found, K, k)
+        v, w = state_vectors(found, K, k)
         _, R_p, M, Kz, Kp, Mz, Mp = (np.asarray(a, dtype=float) for a in terms(z, p, v, w))
         partial_z = (Kz - value * Mz).ravel()
         partial_p = (Kp - value * Mp).ravel()[slots]
@@ -91,11 +91,11 @@ def state_mode(mech: Mechanism, z: np.ndarray, p: np.ndarray, k: int) -> tuple[n
     """Mode k (0-based) about (z, p) as a right vector over z, and its omega^2."""
     found = mechanism_modes(mech, z, k + 1, p)
     K = np.asarray(mech.graphs.residual_and_tangent(z, p)[1], dtype=float)
-    v, _ = _state_vectors(found, K, k)
+    v, _ = state_vectors(found, K, k)
     return v, float(found.eigen.omega_squared[k])
 
 
-def _state_vectors(found: MechanismModes, K: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+def state_vectors(found: MechanismModes, K: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
     """Mode k's right and left vectors over z."""
     system, eigen = found.system, found.eigen
     n = K.shape[0]

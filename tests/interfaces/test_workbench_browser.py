@@ -444,3 +444,42 @@ def test_a_bad_option_is_marked_at_its_field(page, log):
     assert page.get_attribute("#option-parameters-0-path", "aria-invalid") == "true"
     assert page.evaluate("document.activeElement.id") == "option-parameters-0-path"
     screenshot(page, "20-bad-option")
+
+
+def test_the_modes_are_tabled_and_each_swings_in_the_drawing(page):
+    open_example(page, "rod_free_vibration")
+    choose(page, "solve:modes")
+    page.fill("#option-count", "3")
+    page.select_option("#option-at", "undeformed")
+    run_and_wait(page, "modes: converged")
+    table = page.locator("#panel-table table", has_text="Natural modes")
+    row = table.locator("tbody tr").first
+    cells = row.locator("td").all_text_contents()
+    assert row.locator("th").text_content() == "1" and cells[0] == "elastic"
+    assert float(cells[1]) == pytest.approx(2.11769, rel=1e-3)  # Hz: 1 / 0.47221 s, as the table rounds it
+    assert int(page.get_attribute("#frame", "max")) + 1 == 3 * 24  # one period of each mode
+    page.locator("#frame").focus()
+    page.keyboard.press("Home")
+    assert "mode 1: 2.1177 Hz" in page.text_content("#frame-label")
+    at_rest = element_path(page, "rod")
+    for _ in range(6):
+        page.keyboard.press("ArrowRight")  # a quarter period: the largest swing
+    assert element_path(page, "rod") != at_rest
+    screenshot(page, "21-modes")
+
+
+def test_a_frequency_response_plots_its_amplitude_in_db_and_tables_its_resonances(page):
+    open_example(page, "gripper_modes")
+    choose(page, "solve:frequency_response")
+    page.fill("#option-input", "/loads/actuation/force/1")
+    page.fill("#option-outputs", "end_effector.x")
+    page.fill("#option-points", "300")
+    run_and_wait(page, "frequency_response: converged")
+    assert page.input_value("#curve-x") == "log10 frequency" and page.input_value("#curve-y") == "end_effector.x dB"
+    resonances = page.locator("#panel-table table", has_text="Resonances").locator("tbody tr")
+    assert resonances.count() >= 5
+    first = float(resonances.first.locator("td").nth(1).text_content())  # after mode (th) and output
+    assert first == pytest.approx(2200.0, rel=1e-3)  # the first mode (about 2200 Hz), its damped peak
+    page.click("#tab-curves")
+    assert page.locator("#curve svg path").count() >= 1
+    screenshot(page, "22-frequency-response")
