@@ -166,12 +166,7 @@ class LinkElementsFamily:
             ("y_end_undeformed", "length", und.node_position[-1][1]),
             ("energy", "energy", energy),
         ]
-        if t.axial:
-            outputs.append(("elongation", "length", elongation))
-        fibre = link_properties(ctx, t).fibre
-        if fibre is not None:  # the bending stress at the ends, where a clamped flexure's peaks
-            outputs.append(("stress_start", "stress", ca.fabs(m_start) * fibre(ca.SX(0.0))))
-            outputs.append(("stress_end", "stress", ca.fabs(m_end) * fibre(ca.SX(1.0))))
+        outputs += _end_outputs(ctx, t, elongation, m_start, m_end)
         deformed = _ordered(nodes, points, s.kinematics)
         undeformed = _ordered(und.node_position, [q.position for q in und.contact_points], und)
         half = link_properties(ctx, t).half_thickness
@@ -222,3 +217,14 @@ def _ordered(nodes: list[ca.SX], points: list[ca.SX], kin: LinkKinematics) -> li
 
 
 LINK_ELEMENTS = LinkElementsFamily()
+
+
+def _end_outputs(ctx: AssemblyContext, t: LinkElementsTopology, elongation, m_start, m_end) -> list:
+    """The elongation (with axial strain) and the bending stress at the ends, where a clamped
+    flexure's peaks (with a section that has an outer fibre)."""
+    outputs = [("elongation", "length", elongation)] if t.axial else []
+    fibre = link_properties(ctx, t).fibre
+    if fibre is not None:
+        outputs.append(("stress_start", "stress", ca.fabs(m_start) * fibre(ca.SX(0.0))))
+        outputs.append(("stress_end", "stress", ca.fabs(m_end) * fibre(ca.SX(1.0))))
+    return outputs

@@ -20,10 +20,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from service.contact.design import run_contact_start, uses_contact
-from service.design.frequencies import disagreements, eigen_guess, eigen_scales, frequency_value, unknown_bounds
+from service.design.frequencies import disagreements, eigen_guess, eigen_scales, unknown_bounds
 from service.design.nlp import DesignNlp, design_nlp, least_violation, solver_for
 from service.design.problem import DesignProblem, OutputRef
-from service.design.states import case_outputs, case_params, equilibria, polished_states
+from service.design.states import case_outputs, case_params, equilibria, output_value, polished_states
 from service.solvers.ipopt import solve
 
 # A constraint counts as active within this (scaled) distance of its bound.
@@ -127,19 +127,6 @@ def design_units(problem: DesignProblem) -> dict[str, str]:
     return units
 
 
-def _value(problem: DesignProblem, ref: OutputRef, z: np.ndarray, p: np.ndarray) -> float:
-    """An output's nondimensional value at a state."""
-    g = problem.mechanism.graphs
-    if ref.source == "parameter":
-        return float(p[ref.index])
-    if ref.source == "stiffness":
-        K = np.asarray(g.residual_and_tangent(z, p)[1])
-        return float(1 / np.linalg.inv(K)[ref.index, ref.index])
-    if ref.source == "frequency":
-        return frequency_value(problem, ref, z, p)
-    return float(np.asarray(g.outputs(z, p)).ravel()[ref.index])
-
-
 def prepare(problem: DesignProblem) -> Prepared:
     """Scales from the document's design (its equilibria), the NLP and the bounds. A problem
     that names contact results is solved over its contact states instead (service.contact.design)."""
@@ -156,7 +143,7 @@ def prepare(problem: DesignProblem) -> Prepared:
         sizes = [abs(b) * factor for b in bounds if np.isfinite(b)]
         status, z = states[ref.case]
         if status == "converged":
-            sizes.append(abs(_value(problem, ref, z, ps[ref.case])))
+            sizes.append(abs(output_value(problem, ref, z, ps[ref.case])))
         size = max(sizes, default=0.0)
         return size if size > 1e-12 else 1.0
 
@@ -225,15 +212,7 @@ def run_start(prepared: Prepared, start: int, stop: Callable[[], bool] | None = 
     )
     x = np.concatenate([design / problem.scale, *zs, x[nlp.n_states :]])
     f, _ = nlp.evaluate(x, prepared.P)
-    if status in ("optimal", "acceptable") and not on_branch:
-        status = "off_branch"
-        message = (
-            "the optimum's equilibrium is not the one the mechanism reaches when loaded at that "
-            "design (another branch); try other starts or tighter bounds"
-        )
-    crossed = disagreements(problem, nlp.frequencies, x, nlp.n_states, zs, case_params(problem, design))
-    if status in ("optimal", "acceptable") and crossed:
-        status, message = "mode_switched", "; ".join(crossed)
+    status, message = _checked(prepared, status, message, on_branch, x, zs, design)
     return StartResult(
         start=start,
         status=status,
@@ -253,6 +232,21 @@ def run_start(prepared: Prepared, start: int, stop: Callable[[], bool] | None = 
         constraints=constraint_report(prepared, x, lam_g),
         multipliers=_multipliers(prepared, lam_g, lam_x),
     )
+
+
+def _checked(prepared: Prepared, status: str, message: str, on_branch: bool, x, zs, design) -> tuple[str, str]:
+    """(status, message) of a solved start after its checks: its equilibria on the branch the
+    mechanism reaches, and its frequencies those of a fresh modes run."""
+    if status not in ("optimal", "acceptable"):
+        return status, message
+    if not on_branch:
+        return "off_branch", (
+            "the optimum's equilibrium is not the one the mechanism reaches when loaded at that "
+            "design (another branch); try other starts or tighter bounds"
+        )
+    problem, nlp = prepared.problem, prepared.nlp
+    crossed = disagreements(problem, nlp.frequencies, x, nlp.n_states, zs, case_params(problem, design))
+    return ("mode_switched", "; ".join(crossed)) if crossed else (status, message)
 
 
 def _judged(prepared: Prepared, run, x0: np.ndarray, stop: Callable[[], bool] | None = None):

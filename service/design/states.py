@@ -9,7 +9,8 @@ import re
 import numpy as np
 
 from models import Mechanism
-from service.design.problem import DesignProblem
+from service.design.frequencies import frequency_value
+from service.design.problem import DesignProblem, OutputRef
 from service.solvers.equilibrium import newton
 from service.solvers.newton import NewtonOptions
 
@@ -81,3 +82,16 @@ def case_outputs(problem: DesignProblem, x: np.ndarray) -> dict[str, dict[str, f
     return {
         name: outputs_in_doc_units(mech, mech.graphs.outputs(z, p)) for name, z, p in zip(problem.case_names, zs, ps)
     }
+
+
+def output_value(problem: DesignProblem, ref: OutputRef, z: np.ndarray, p: np.ndarray) -> float:
+    """An output's nondimensional value at a state."""
+    g = problem.mechanism.graphs
+    if ref.source == "parameter":
+        return float(p[ref.index])
+    if ref.source == "stiffness":
+        K = np.asarray(g.residual_and_tangent(z, p)[1])
+        return float(1 / np.linalg.inv(K)[ref.index, ref.index])
+    if ref.source == "frequency":
+        return frequency_value(problem, ref, z, p)
+    return float(np.asarray(g.outputs(z, p)).ravel()[ref.index])
