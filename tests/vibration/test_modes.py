@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from conftest import EXAMPLES
 from scipy.linalg import eigh
+from scipy.optimize import brentq
 
 from models import MechanismError, compile_mechanism, load_document
 from service.analyses import ANALYSES
@@ -223,3 +224,31 @@ def test_shift_invert_finds_the_lowest_modes_of_a_long_chain_as_the_closed_form(
     exact = 2 * math.sqrt(k / m) * np.sin((2 * j - 1) * math.pi / (2 * (2 * n + 1)))
     assert np.sqrt(found.omega_squared) == pytest.approx(exact, rel=1e-9)
     assert np.einsum("im,ij,jm->m", found.shapes, np.eye(n) * m, found.shapes) == pytest.approx(np.ones(5))
+
+
+def test_an_elastic_contact_law_stiffens_the_mode_by_its_tangent():
+    """A 2 kg block on a 400 N/m spring and a rail, pushed by 10 N into a stop through Hertz's
+    law F = K q^1.5 (K = 2e6 N/m^1.5): about the equilibrium the block vibrates at
+    omega^2 = (k + 1.5 K q^0.5) / m, q its indentation there (the penalty law is a stiffness)."""
+    k, K, m, push, gap, pad = 400.0, 2e6, 2.0, 10.0, 0.01, 0.02
+    doc = {
+        "units": {"length": "m", "force": "N", "angle": "rad", "mass": "kg"},
+        "bodies": {"wall": {"fixed": True, "position": [0, 0]}, "block": {"position": [0.5, 0], "mass": m}},
+        "elements": {
+            "spring": {"type": "spring", "from": "wall", "to": "block", "stiffness": k},
+            "rail": {"type": "slider", "from": "wall", "to": "block", "angle": 0},
+        },
+        "loads": {"push": {"type": "force", "body": "block", "force": [push, 0]}},
+        "contacts": {
+            "sites": {"pad": {"type": "circle", "body": "block", "centre": [0, 0], "radius": pad}},
+            "objects": {"stop": {"type": "half_plane", "point": [0.5 + pad + gap, 0], "normal": [-1, 0]}},
+            "pairs": {
+                "touch": {"site": "pad", "object": "stop", "normal": {"law": "hertz", "stiffness": K, "exponent": 1.5}}
+            },
+        },
+    }
+    x = brentq(lambda x: k * x + K * max(x - gap, 0) ** 1.5 - push, 0, 0.1, xtol=1e-16)
+    report = modes(doc, count=1)
+    assert report["modes"][0]["omega_squared"] == pytest.approx((k + 1.5 * K * (x - gap) ** 0.5) / m, rel=1e-9)
+    free = modes({**doc, "loads": {}}, count=1)  # not touching: the spring alone
+    assert free["modes"][0]["omega_squared"] == pytest.approx(k / m, rel=1e-12)
