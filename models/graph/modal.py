@@ -121,3 +121,25 @@ def state_mass(structure: Structure) -> ca.Function:
         place = ca.DM(ca.Sparsity.triplet(n, len(index), index, list(range(len(index)))), 1.0)
         M = ca.mtimes([place, total, place.T])
     return ca.Function("state_mass", [z, p], [M], ["z", "p"], ["M"])
+
+
+@lru_cache(maxsize=16)
+def motion_coupling(structure: Structure) -> ca.Function:
+    """(x, p) -> M_xp = d2T / dxdot dpdot: the inertia a moving parameter (a prescribed
+    displacement) puts on the unknowns, through the masses whose positions it moves (the
+    points of a link that starts on a shaken body). Its harmonic motion P e^(i omega t) pushes
+    the unknowns by omega^2 M_xp P besides its stiffness coupling."""
+    s = symbolic_energy(structure)
+    x, p = s.x, s.ctx.p
+    xdot, pdot = ca.SX.sym("xdot", x.numel()), ca.SX.sym("pdot", p.numel())
+
+    def speed(expr: ca.SX) -> ca.SX:
+        return ca.jtimes(expr, x, xdot) + ca.jtimes(expr, p, pdot)
+
+    T = sum((T_b for _, T_b in body_kinetic_energies(s.ctx, s.d, [speed(d_b) for d_b in s.d])), ca.SX(0))
+    for point in s.inertia:
+        T = T + 0.5 * point.mass * ca.sumsqr(speed(point.position))
+        if point.angle is not None and point.rotary is not None:
+            T = T + 0.5 * point.rotary * speed(point.angle) ** 2
+    coupling = ca.jacobian(ca.gradient(T, xdot), pdot)
+    return ca.Function("motion_coupling", [x, p], [coupling], ["x", "p"], ["M_xp"])

@@ -26,7 +26,8 @@ from service.vibration.state import vibration_state
 
 class FrequencyResponseOptions(AnalysisOptions):
     input: str = Field(
-        description="the harmonic load: a load's component (JSON pointer), amplitude one document unit",
+        description="the harmonic input, amplitude one document unit: a load's component or a prescribed "
+        "displacement's (JSON pointer)",
         examples=["/loads/actuation/force/1"],
     )
     outputs: list[str] = Field(
@@ -105,7 +106,7 @@ def frequency_response_report(
     eigen = vibration_eigen(system.K, system.M, system.G, None)  # every mode: the superposition is exact
     link = channel(mech, z, system, options.input, options.outputs)
     damping = Damping(options.damping_ratio, options.mass_damping, options.stiffness_damping)
-    response = modal_response(eigen, link.outputs, link.force, damping)
+    response = modal_response(eigen, link.outputs, link.force, damping, link.inertial, link.direct, link.carried)
     start, stop = _range(options, eigen.omega_squared, eigen.kinds)
     natural = [
         math.sqrt(v) / TWO_PI if kind == "elastic" else None for v, kind in zip(eigen.omega_squared, eigen.kinds)

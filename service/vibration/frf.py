@@ -46,12 +46,19 @@ class ModalResponse:
     forcing: np.ndarray  # g = Phi^T f (modes)
     rates: np.ndarray  # c_k
     direct: np.ndarray  # (outputs,)
+    inertial: np.ndarray  # modes: Phi^T f_2, the forcing that grows with omega^2 (a prescribed motion's)
+    dragged: np.ndarray  # modes: alpha Phi^T M x_qs, the forcing of alpha's drag on a carried motion, times -i omega
 
     def at(self, omega: np.ndarray) -> np.ndarray:
         """H (outputs x frequencies) at the circular frequencies omega (rad/s)."""
         omega = np.asarray(omega, dtype=float)
         denominator = self.omega_squared[:, None] - omega[None, :] ** 2 + 1j * omega[None, :] * self.rates[:, None]
-        return self.participation @ (self.forcing[:, None] / denominator) + self.direct[:, None]
+        forcing = (
+            self.forcing[:, None]
+            + self.inertial[:, None] * omega[None, :] ** 2
+            - 1j * omega[None, :] * self.dragged[:, None]
+        )
+        return self.participation @ (forcing / denominator) + self.direct[:, None]
 
     def static(self) -> np.ndarray | None:
         """H(0): None where a rigid mode is forced (no static equilibrium)."""
@@ -60,11 +67,27 @@ class ModalResponse:
         return self.participation @ (self.forcing / self.omega_squared) + self.direct
 
 
-def modal_response(eigen: Eigen, C: np.ndarray, force: np.ndarray, damping: Damping) -> ModalResponse:
+def modal_response(
+    eigen: Eigen, C: np.ndarray, force: np.ndarray, damping: Damping, inertial=None, direct=None, carried=None
+) -> ModalResponse:
+    """The response to the force f (+ omega^2 `inertial` and alpha's drag on the `carried`
+    momentum, a prescribed motion's), the outputs' `direct` response added."""
     values = np.where(np.array(eigen.kinds) == "rigid", 0.0, eigen.omega_squared)
     omega_k = np.sqrt(np.maximum(values, 0.0))
-    direct = C @ (eigen.feedthrough @ force) if eigen.feedthrough is not None else np.zeros(C.shape[0])
-    return ModalResponse(values, C @ eigen.shapes, eigen.left.T @ force, damping.rates(omega_k), direct)
+    inertial = np.zeros_like(force) if inertial is None else inertial
+    static = np.zeros(C.shape[0]) if direct is None else np.asarray(direct, dtype=float)
+    if eigen.feedthrough is not None:
+        static = static + C @ (eigen.feedthrough @ force)
+    carried = np.zeros_like(force) if carried is None else carried
+    return ModalResponse(
+        values,
+        C @ eigen.shapes,
+        eigen.left.T @ force,
+        damping.rates(omega_k),
+        static,
+        eigen.left.T @ inertial,
+        damping.mass * (eigen.left.T @ carried),
+    )
 
 
 def frequency_grid(start: float, stop: float, points: int, resonances: list[tuple[float, float]]) -> np.ndarray:
@@ -87,7 +110,7 @@ def resonances(response: ModalResponse, kinds: list[str], start: float, stop: fl
     peak and the half-power points are solved for (bounded search, Brent's roots) between
     samples of the mode's window."""
     found = []
-    shares = np.abs(response.participation * response.forcing[None, :])
+    shares = np.abs(response.participation * (response.forcing + response.inertial * response.omega_squared)[None, :])
     for k, kind in enumerate(kinds):
         omega_k = math.sqrt(max(response.omega_squared[k], 0.0))
         if kind != "elastic" or not start <= omega_k / TWO_PI <= stop or response.rates[k] <= 0:

@@ -17,6 +17,7 @@ import numpy as np
 
 from models import Mechanism, MechanismError
 from models.graph.assembly import graphs_for
+from models.graph.modal import motion_coupling
 from models.graph.structure import Structure
 from service.vibration.modes import ModalSystem
 
@@ -25,6 +26,9 @@ from service.vibration.modes import ModalSystem
 class Channel:
     force: np.ndarray  # (n,) nondimensional generalized force per nondimensional unit of the input
     outputs: np.ndarray  # (m, n) C
+    inertial: np.ndarray  # (n,) a prescribed motion's inertial push per unit, times omega^2 (zero for a load)
+    direct: np.ndarray  # (m,) the outputs' response that is not modal (a prescribed motion's quasi-static one)
+    carried: np.ndarray  # (n,) M x_qs: the momentum a prescribed motion carries (air drag alpha M acts on it)
     scale: np.ndarray  # (m,) document (output unit / input unit) per nondimensional
     input_unit: str
     output_units: list[str]
@@ -37,20 +41,52 @@ def channel(mech: Mechanism, z: np.ndarray, system: ModalSystem, pointer: str, n
     except MechanismError as exc:
         raise MechanismError("/input", f"{pointer}: {exc.problem}") from None
     indices = _output_indices(mech, names)
-    dy = np.asarray(_derivatives(mech.structure)[0](z, p), dtype=float)[indices]
+    outputs_z, outputs_p, residual_p = _derivatives(mech.structure)
+    dy = np.asarray(outputs_z(z, p), dtype=float)[indices]
+    direct = np.asarray(outputs_p(z, p), dtype=float)[indices, k]
     if system.coordinates_set == "elements":
-        force = np.asarray(mech.graphs.modal_form.parameter_forces(z[list(system.x_in_state)], p))[:, k]
+        x = z[list(system.x_in_state)]
+        force = np.asarray(mech.graphs.modal_form.parameter_forces(x, p))[:, k]
         C = _motion_outputs(dy, system, names)
     else:
         force, C = _condensed(mech, z, p, k, dy, system.n_body)
-    if not np.any(force):
-        raise MechanismError(
-            "/input", f"{pointer} drives no force on the mechanism: name a load's component (/loads/<name>/force/1)"
-        )
+    n = len(system.coordinates)
+    if not _moves_a_body(mech, pointer):
+        if not np.any(force):
+            raise MechanismError(
+                "/input",
+                f"{pointer} drives no force on the mechanism: name a load's component (/loads/<name>/force/1) "
+                "or a prescribed displacement's (/loads/<name>/dx)",
+            )
+        zero = np.zeros(n)
+        link = (force, C, zero, direct, zero)
+    else:
+        link = _prescribed_motion(mech, z, p, k, system, C, direct, np.asarray(residual_p(z, p), dtype=float)[:, k])
     kind = mech.parameter_kind(pointer)
     kinds = [mech.graphs.output_kinds[i] for i in indices]
     scale = np.array([mech.nd_per_doc(kind) / mech.nd_per_doc(out) for out in kinds])
-    return Channel(force, C, scale, mech.doc_unit(kind), [mech.doc_unit(out) for out in kinds])
+    return Channel(*link, scale, mech.doc_unit(kind), [mech.doc_unit(out) for out in kinds])
+
+
+def _prescribed_motion(mech, z, p, k, system: ModalSystem, C, direct, dR):
+    """A prescribed displacement P e^(i omega t) as a quasi-static motion x_qs P (every constraint
+    it moves kept) plus the dynamic remainder it drives: omega^2 (M x_qs + M_xp) P. Damping
+    ratios and Rayleigh's beta act on the remainder (the deformation), Rayleigh's alpha also on
+    the carried motion (it drags absolute velocities)."""
+    K = np.asarray(mech.graphs.residual_and_tangent(z, p)[1], dtype=float)
+    dz = -np.linalg.solve(K, dR)
+    if system.coordinates_set == "elements":
+        quasi_static = dz[system.x_in_state]
+        coupling = np.asarray(motion_coupling(mech.structure)(z[system.x_in_state], p))[:, k]
+    else:
+        quasi_static, coupling = dz[: system.n_body], np.zeros(system.n_body)
+    carried = system.M @ quasi_static
+    return np.zeros(len(quasi_static)), C, carried + coupling, direct + C @ quasi_static, carried
+
+
+def _moves_a_body(mech: Mechanism, pointer: str) -> bool:
+    """Whether the field is a prescribed displacement of a body (it moves masses with it)."""
+    return any(pointer in row for row in mech.structure.prescribed)
 
 
 def _output_indices(mech: Mechanism, names: list[str]) -> list[int]:
@@ -75,12 +111,14 @@ def _motion_outputs(dy: np.ndarray, system: ModalSystem, names: list[str]) -> np
 
 
 @lru_cache(maxsize=16)
-def _derivatives(structure: Structure) -> tuple[ca.Function, ca.Function]:
-    """(z, p) -> dy/dz of every output, and (z, p) -> dR/dp: built once per structure."""
+def _derivatives(structure: Structure) -> tuple[ca.Function, ca.Function, ca.Function]:
+    """(z, p) -> dy/dz and dy/dp of every output, and (z, p) -> dR/dp: built once per structure."""
     graphs = graphs_for(structure)
     zs, ps = ca.MX.sym("z", structure.n_unknowns), ca.MX.sym("p", len(structure.parameters))
+    y = graphs.outputs(zs, ps)
     return (
-        ca.Function("outputs_z", [zs, ps], [ca.jacobian(graphs.outputs(zs, ps), zs)]),
+        ca.Function("outputs_z", [zs, ps], [ca.jacobian(y, zs)]),
+        ca.Function("outputs_p", [zs, ps], [ca.jacobian(y, ps)]),
         ca.Function("residual_p", [zs, ps], [ca.jacobian(graphs.residual(zs, ps), ps)]),
     )
 
@@ -89,7 +127,7 @@ def _condensed(mech, z, p, k, dy, n_body):
     """(force, C) on the body coordinates, the elements' unknowns following statically."""
     _, K = mech.graphs.residual_and_tangent(z, p)
     K = np.asarray(K, dtype=float)
-    dR = np.asarray(_derivatives(mech.structure)[1](z, p), dtype=float)[:, k]
+    dR = np.asarray(_derivatives(mech.structure)[2](z, p), dtype=float)[:, k]
     b, own = slice(0, n_body), slice(n_body, K.shape[0])
     if K.shape[0] == n_body:
         return -dR, dy

@@ -166,3 +166,58 @@ def test_a_load_on_a_massless_body_reaches_it_at_once_and_the_mass_through_the_s
     assert report["responses"]["bodies.a.x"]["amplitude"] == pytest.approx(np.abs(x_a), rel=1e-9)
     assert report["responses"]["bodies.a.x"]["static"] == pytest.approx(1 / k2, rel=1e-12)
     assert "undamped" in report["warnings"][-1]
+
+
+def base_and_mass() -> dict:
+    """A 0.3 kg mass on a rail, tied by a 1200 N/m spring to a base whose motion is prescribed."""
+    return {
+        "units": {"length": "m", "force": "N", "angle": "rad", "mass": "kg"},
+        "bodies": {
+            "ground": {"fixed": True, "position": [0, 0]},
+            "base": {"position": [0, 1]},
+            "mass": {"position": [1, 1], "mass": M},
+        },
+        "elements": {
+            "rail": {"type": "slider", "from": "ground", "to": "mass", "angle": 0},
+            "coil": {"type": "spring", "from": "base", "to": "mass", "stiffness": K},
+        },
+        "loads": {"shake": {"type": "displacement", "body": "base", "dx": 0.0, "dy": 0.0, "rotation": 0.0}},
+    }
+
+
+def test_a_shaken_base_moves_a_mass_on_a_spring_as_the_transmissibility_says():
+    """Damping on the deformation (the modal ratio): (k + i c omega) / (k - m omega^2 + i c omega),
+    c = 2 zeta sqrt(k m); Rayleigh's alpha drags the absolute velocity: k / (k - m omega^2 + i alpha m omega)."""
+    zeta, alpha = 0.05, 4.0
+    for damping, c_relative, c_absolute in (({"damping_ratio": zeta}, 2 * zeta * math.sqrt(K * M), 0.0),
+                                            ({"damping_ratio": 0, "mass_damping": alpha}, 0.0, alpha * M)):  # fmt: skip
+        report = respond(base_and_mass(), input="/loads/shake/dx", outputs=["bodies.mass.x"], points=80, **damping)
+        omega = 2 * math.pi * np.array(report["frequencies"])
+        exact = (K + 1j * c_relative * omega) / (K - M * omega**2 + 1j * (c_relative + c_absolute) * omega)
+        response = report["responses"]["bodies.mass.x"]
+        assert response["unit"] == "m/m" and response["static"] == pytest.approx(1.0, rel=1e-12)
+        assert response["amplitude"] == pytest.approx(np.abs(exact), rel=1e-9)
+        assert response["phase"] == pytest.approx(np.degrees(np.angle(exact)), abs=1e-7)
+
+
+def test_a_cantilever_on_a_shaken_clamp_has_the_tip_transmissibility_of_euler_bernoulli():
+    """Tip over base: (cos bL + cosh bL) / (1 + cos bL cosh bL), b^4 = omega^2 rho A / (E I): the
+    link's mass rides on the clamp (its inertial coupling) and the end conditions move with it.
+    Compared a tenth of a resonance or more away from each, over the first two modes (16 cubic
+    elements: near a pole the discretization's shift of it is amplified)."""
+    doc = strip(16)
+    doc["bodies"]["clamp"] = {"position": [0, 0]}
+    doc["loads"] = {"shake": {"type": "displacement", "body": "clamp", "dx": 0, "dy": 0, "rotation": 0}}
+    report = respond(
+        doc, input="/loads/shake/dy", outputs=["bodies.tip.y"], damping_ratio=0, start=0.01, stop=3, points=60
+    )
+    E, b, h, L, rho = 2e11, 0.0127, 0.0003, 1.11, 7850.0
+    f = np.array(report["frequencies"])
+    away = np.all([np.abs(f / r - 1) > 0.1 for r in report["natural_frequencies"] if r], axis=0)
+    bl = ((2 * math.pi * f) ** 2 * rho * b * h / (E * b * h**3 / 12)) ** 0.25 * L
+    exact = (np.cos(bl) + np.cosh(bl)) / (1 + np.cos(bl) * np.cosh(bl))
+    response = report["responses"]["bodies.tip.y"]
+    signed = np.array(response["amplitude"]) * np.sign(np.cos(np.radians(response["phase"])))
+    assert away.sum() > 25
+    assert signed[away] == pytest.approx(exact[away], rel=1e-5)
+    assert response["static"] == pytest.approx(1.0, rel=1e-12)
