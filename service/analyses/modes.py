@@ -10,10 +10,12 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import BaseModel, Field
 
-from models import Mechanism
+from models import Mechanism, MechanismError
 from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult
 from service.solvers.newton import NewtonOptions
 from service.solvers.reports import plain
+from service.vibration.contact_state import contact_system
+from service.vibration.eigen import vibration_eigen
 from service.vibration.modes import MechanismModes, mechanism_modes
 from service.vibration.report import modes_report
 from service.vibration.sensitivity import frequency_sensitivities, parameter_slots
@@ -22,8 +24,10 @@ from service.vibration.state import vibration_state
 
 class ModesOptions(AnalysisOptions):
     count: int = Field(6, ge=1, le=500, description="how many of the lowest modes")
-    at: Literal["equilibrium", "undeformed"] = Field(
-        "equilibrium", description="the state: the equilibrium under the document's loads, or undeformed"
+    at: Literal["equilibrium", "undeformed", "contact"] = Field(
+        "equilibrium",
+        description="the state: the equilibrium under the document's loads, undeformed, or the contact "
+        "state (the frictionless minimum under the document's contacts, its closed contacts held)",
     )
     shapes: bool = Field(True, description="report each mode's shape (bodies and the elements' mass points)")
     sensitivities: list[str] = Field(
@@ -74,10 +78,21 @@ class ModesReport(AnalysisResult):
 
 def modes_analysis_report(mech: Mechanism, newton: NewtonOptions, options: ModesOptions) -> dict[str, Any]:
     report: dict[str, Any] = {"analysis": "modes", "name": mech.document.name, "at": options.at}
-    z = vibration_state(mech, newton, options.at, report)
-    if z is None:
-        return plain(report)
-    found = mechanism_modes(mech, z, options.count)
+    if options.at == "contact":
+        if options.sensitivities:
+            raise MechanismError(
+                "/sensitivities", "frequency derivatives are given about an equilibrium, not a contact state"
+            )
+        held = contact_system(mech, newton, report)
+        if held is None:
+            return plain(report)
+        system, z = held
+        found = MechanismModes(system, vibration_eigen(system.K, system.M, system.G, options.count))
+    else:
+        state = vibration_state(mech, newton, options.at, report)
+        if state is None:
+            return plain(report)
+        z, found = state, mechanism_modes(mech, state, options.count)
     report.update(modes_report(mech, found, z, options.shapes))
     if options.sensitivities:
         _add_sensitivities(report, mech, z, found, options)
@@ -132,13 +147,10 @@ class ModesAnalysis(Analysis):
     ) -> None:
         from service.vibration.figures import animate_mode, plot_modes
 
-        z = vibration_state(mech, newton, options.at, {})
-        if z is None:
-            return
         if figure == "plot":
-            plot_modes(mech, z, report, path)
+            plot_modes(report, path, mech.doc_unit("length"))
         else:
-            animate_mode(mech, z, report, 1, path)
+            animate_mode(report, 1, path, mech.doc_unit("length"))
 
 
 MODES = ModesAnalysis()

@@ -99,6 +99,10 @@ def state_vectors(found: MechanismModes, K: np.ndarray, k: int) -> tuple[np.ndar
     """Mode k's right and left vectors over z."""
     system, eigen = found.system, found.eigen
     n = K.shape[0]
+    if system.coordinates_set == "elements (contact)":  # its multipliers are the contact problem's: drawn only
+        v = np.zeros(n)
+        v[system.x_in_state] = eigen.shapes[: len(system.x_in_state), k]
+        return v, v
     if system.coordinates_set == "elements":
         phi = eigen.shapes[:, k]
         v = np.zeros(n)

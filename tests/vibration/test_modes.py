@@ -252,3 +252,62 @@ def test_an_elastic_contact_law_stiffens_the_mode_by_its_tangent():
     assert report["modes"][0]["omega_squared"] == pytest.approx((k + 1.5 * K * (x - gap) ** 0.5) / m, rel=1e-9)
     free = modes({**doc, "loads": {}}, count=1)  # not touching: the spring alone
     assert free["modes"][0]["omega_squared"] == pytest.approx(k / m, rel=1e-12)
+
+
+def pressed_against_a_wall(push: float) -> dict:
+    """A body (mass m, inertia J about its reference point, its mass centre) on springs along x
+    and y (1 m long; the y one leans 10 mm so that it stands upright once pressed) and a torsion
+    spring, a round pad of radius R at (0, d) from its reference point, a frictionless rigid wall
+    10 mm beyond the pad, pushed along x: the push, the x spring and the wall's force all act at
+    the pad's height, so nothing turns the body."""
+    m, J, kx, ky, kt, R, d = 0.4, 2e-3, 900.0, 300.0, 2.0, 0.02, 0.05
+    return {
+        "units": {"length": "m", "force": "N", "angle": "rad", "mass": "kg"},
+        "bodies": {
+            "ground": {"fixed": True, "position": [0, 0]},
+            "block": {"position": [0.5, 0], "mass": m, "inertia": J},
+        },
+        "elements": {
+            "kx": {
+                "type": "spring",
+                "from": "ground",
+                "to": "block",
+                "from_at": [-0.5, d],
+                "to_at": [0.5, d],
+                "stiffness": kx,
+            },
+            "ky": {"type": "spring", "from": "ground", "to": "block", "from_at": [0.51, -1], "stiffness": ky},
+            "kt": {"type": "spring", "kind": "torsional", "from": "ground", "to": "block", "stiffness": kt},
+        },
+        "loads": {"push": {"type": "force", "body": "block", "offset": [0, d], "force": [push, 0]}},
+        "contacts": {
+            "sites": {"pad": {"type": "circle", "body": "block", "centre": [0, d], "radius": R}},
+            "objects": {"wall": {"type": "half_plane", "point": [0.5 + R + 0.01, 0], "normal": [-1, 0]}},
+            "pairs": {"touch": {"site": "pad", "object": "wall"}},
+        },
+    }
+
+
+def test_a_closed_contact_holds_its_normal_motion_in_the_modes():
+    """Pressed (30 N against kx's 9 N at the wall): the pad stays on the wall, so the reference
+    point moves along x by d sin(theta) as the body turns (the x spring's end, on the pad's line,
+    stays): omega_y^2 = (ky + T_x / l_x) / m and omega_turn^2 = (kt + T_y d^2 / l_y - T_x d y0 / l_x)
+    / (J + m d^2), T the springs' tensions there (kx stretched 10 mm; ky upright and a little short,
+    pushed across by the turn) and y0 the body's rise, which tilts the x spring by y0 / l_x so that
+    the turn (its end rising by -d theta^2 / 2) shortens it. Open (5 N): the modes without the wall."""
+    m, J, kx, ky, kt, d = 0.4, 2e-3, 900.0, 300.0, 2.0, 0.05
+    closed = modes(pressed_against_a_wall(30.0), at="contact", count=2)
+    assert closed["status"] == "converged" and closed["contacts"] == {"touch": "frictionless"}
+    rest_y, tension_x = math.sqrt(1 + 0.01**2), kx * 0.01
+    rise = ky * (rest_y - 1) / (ky + tension_x / 1.01)
+    tension_y = ky * (1 + rise - rest_y)
+    turn = kt + tension_y * d**2 / (1 + rise) - tension_x * d * rise / 1.01
+    expected = sorted([(ky + tension_x / 1.01) / m, turn / (J + m * d**2)])
+    assert [mode["omega_squared"] for mode in closed["modes"]] == pytest.approx(expected, rel=1e-8)
+    assert closed["available"] == 2  # the normal motion is held
+    free = modes(pressed_against_a_wall(5.0), at="contact", count=3)
+    assert free["contacts"] == {"touch": "open"}
+    apart = pressed_against_a_wall(5.0)
+    del apart["contacts"]  # nothing touches: the modes of the equilibrium without the wall
+    expected = [mode["omega_squared"] for mode in modes(apart, count=3)["modes"]]
+    assert [mode["omega_squared"] for mode in free["modes"]] == pytest.approx(expected, rel=1e-8)
