@@ -70,3 +70,17 @@ def test_the_analyses_answer_over_http_and_through_the_client(api_server):
         peaks = report.model_extra["resonances"]
         first = client.analyze.modes(example="gripper_modes", count=1, shapes=False)
         assert peaks[0]["frequency"] == pytest.approx(first.model_extra["modes"][0]["frequency"], rel=1e-3)
+
+
+def test_flexmech_batch_runs_the_modes_of_a_folder(tmp_path):
+    folder = tmp_path / "in"
+    folder.mkdir()
+    for name in ("rod_free_vibration.json", "csfh.json"):
+        (folder / name).write_text((EXAMPLES / name).read_text())
+    options = json.dumps({"count": 2, "at": "undeformed", "shapes": False})
+    result = invoke("batch", str(folder), "--out", str(tmp_path / "out"), "--analysis", "modes", "--options", options)
+    assert result.exit_code == 0, result.output
+    rod = json.loads((tmp_path / "out" / "rod_free_vibration.json").read_text())
+    assert rod["analysis"] == "modes" and rod["modes"][0]["period"] == pytest.approx(0.47221, rel=2e-5)
+    hinge = json.loads((tmp_path / "out" / "csfh.json").read_text())
+    assert hinge["coordinates"] == "bodies" and hinge["modes"][0]["kind"] == "elastic"  # seed 004's body mass
