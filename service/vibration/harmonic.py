@@ -1,11 +1,14 @@
 """A harmonic input and the outputs it is watched at, in a modal system's coordinates
-(service.vibration.modes): the generalized force per unit of the input (a load's component, a
-parameter of the document) and the outputs' rows C = dy/dq, both linearized at the state z.
+(service.vibration.modes), linearized at the state z.
 
-In the energy form's unknowns the force is -d/dp (dV/dx) and C reads dy/dz at x; an output
-that moves with the constraints' forces (a reaction) is refused there: the modes carry the
-motion, not the multipliers. In the bodies' coordinates the elements' own unknowns follow the
-bodies statically (they are massless), so both are condensed with K_T's blocks."""
+A load's component: the generalized force per unit of it (in the energy form's unknowns
+-d/dp (dV/dx); in the bodies' coordinates -dR/dp with the elements' unknowns following
+statically, they are massless). A prescribed displacement (a shaken body): its quasi-static
+motion x_qs (the state's static sensitivity, every constraint it moves kept) plus the remainder
+it drives, omega^2 (M x_qs + M_xp), M_xp the inertia of the masses it carries (models.graph.modal).
+The outputs' rows C = dy/dq, with their direct dependence on the input; in the energy form's
+unknowns an output that moves with the constraints' forces (a reaction) is refused: the modes
+carry the motion, not the multipliers."""
 
 from __future__ import annotations
 
