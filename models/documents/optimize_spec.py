@@ -49,6 +49,13 @@ class LoadCase(StrictModel):
     overrides: dict[str, Number] = {}
 
 
+class ResponseDamping(StrictModel):
+    """Rayleigh damping D = alpha M + beta K of the frequency responses a problem names."""
+
+    mass: float = Field(default=0.0, ge=0, description="alpha (1/s)")
+    stiffness: float = Field(default=0.0, ge=0, description="beta (s)")
+
+
 class OptimizeSpec(StrictModel):
     """A design problem (Cammarata et al. 2022 Sec. 5.2, Lan 2005 Sec. 5.6): one NLP whose unknowns are the
     design variables and the equilibrium state of every load case."""
@@ -63,3 +70,6 @@ class OptimizeSpec(StrictModel):
     seed: int = Field(default=0, ge=0, description="random seed of the extra starts")
     max_iterations: int = Field(default=500, ge=1, le=100_000)
     tolerance: float = Field(default=1e-9, gt=0, le=1e-2, description="IPOPT tol (scaled problem)")
+    damping: ResponseDamping = Field(
+        default=ResponseDamping(), description="damping of the response(...) outputs (default: none)"
+    )

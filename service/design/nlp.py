@@ -37,6 +37,7 @@ class DesignNlp:
     n_params: int  # per case
     n_residuals: int  # rows of g that are equalities (equilibrium residuals, eigenproblems)
     frequencies: tuple[OutputRef, ...]  # the frequencies named, each with its mode among the unknowns
+    responses: tuple[OutputRef, ...]  # the frequency responses named, each with its amplitude's unknowns
     evaluate: ca.Function  # (x, P) -> (f, g)
     kkt: ca.Function  # (x, P, lam_g) -> (H, L_xp, J, g_p, f_p): for sensitivities of the optimum
     x: ca.SX
@@ -55,12 +56,15 @@ class DesignNlp:
         objective_scale: float,
         constraint_scales: np.ndarray,
         eigen_scales: np.ndarray = np.zeros(0),
+        response_scales: np.ndarray = np.zeros(0),
     ) -> np.ndarray:
         """The NLP parameter vector: every case's parameters, the design scales (nondim per
         scaled unit), the objective's scale (negative to maximize), the constraints' scales
         (nondimensional) and each frequency's (omega_0^2, m_0)."""
         design_scale = problem.scale * problem.nd_per_doc
-        return np.concatenate([*problem.case_p, design_scale, [objective_scale], constraint_scales, eigen_scales])
+        return np.concatenate(
+            [*problem.case_p, design_scale, [objective_scale], constraint_scales, eigen_scales, response_scales]
+        )
 
 
 def _key(problem: DesignProblem) -> tuple:
@@ -79,11 +83,14 @@ def _design_nlp(key: tuple) -> DesignNlp:
     graphs = graphs_for(structure)
     n_state, n_params, n_design = structure.n_unknowns, len(structure.parameters), len(slots)
     frequencies = tuple(dict.fromkeys(ref for ref in refs if ref.source == "frequency"))
+    responses = tuple(dict.fromkeys(ref for ref in refs if ref.source == "response"))
     d = ca.SX.sym("d", n_design)
     zs = [ca.SX.sym(f"z{c}", n_state) for c in range(n_cases)]
     modes = [ca.SX.sym(f"mode{j}", n_state + 1) for j in range(len(frequencies))]
+    amplitudes = [ca.SX.sym(f"response{j}", 2 * n_state) for j in range(len(responses))]
     n_fixed = n_params * n_cases + n_design + 1 + len(refs) - 1
-    P = ca.SX.sym("P", n_fixed + 2 * len(frequencies))
+    n_eigen = 2 * len(frequencies)
+    P = ca.SX.sym("P", n_fixed + n_eigen + (len(responses) + 2 if responses else 0))
     design_scale = P[n_params * n_cases : n_params * n_cases + n_design]
     objective_scale = P[n_params * n_cases + n_design]
     constraint_scales = P[n_params * n_cases + n_design + 1 : n_fixed]
@@ -94,13 +101,16 @@ def _design_nlp(key: tuple) -> DesignNlp:
             pc[slot] = d[k] * design_scale[k]
         ps.append(pc)
     residuals = [graphs.residual(zs[c], ps[c]) for c in range(n_cases)]
-    eigen_rows, omegas = _eigenproblems(structure, frequencies, zs, ps, modes, P[n_fixed:])
+    eigen_rows, omegas = _eigenproblems(structure, frequencies, zs, ps, modes, P[n_fixed : n_fixed + n_eigen])
+    response_rows, magnitudes = _responses(structure, responses, zs, ps, amplitudes, P[n_fixed + n_eigen :])
     outputs: dict[int, ca.SX] = {}
 
     def value(ref: OutputRef) -> ca.SX:
         c = ref.case
         if ref.source == "frequency":
             return omegas[frequencies.index(ref)] / (2 * np.pi)
+        if ref.source == "response":
+            return magnitudes[responses.index(ref)]
         if ref.source == "parameter":
             return ps[c][ref.index]
         if ref.source == "stiffness":
@@ -114,12 +124,20 @@ def _design_nlp(key: tuple) -> DesignNlp:
 
     f = value(refs[0]) / objective_scale
     constraint_rows = [value(ref) / constraint_scales[k] for k, ref in enumerate(refs[1:])]
-    x = ca.vertcat(d, *zs, *modes)
-    g = ca.vertcat(*residuals, *eigen_rows, *constraint_rows)
+    x = ca.vertcat(d, *zs, *modes, *amplitudes)
+    g = ca.vertcat(*residuals, *eigen_rows, *response_rows, *constraint_rows)
+    evaluate, kkt = _functions(x, P, f, g)
+    n_equalities = n_state * n_cases + (n_state + 1) * len(frequencies) + 2 * n_state * len(responses)
+    return DesignNlp(
+        key, n_design, n_state, n_cases, n_params, n_equalities, frequencies, responses, evaluate, kkt, x, P, f, g
+    )
+
+
+def _functions(x: ca.SX, P: ca.SX, f: ca.SX, g: ca.SX) -> tuple[ca.Function, ca.Function]:
+    """(x, P) -> (f, g), and the KKT terms (x, P, lam_g) -> (H, L_xp, J, g_p, f_p) for sensitivities."""
     evaluate = ca.Function("design_nlp", [x, P], [f, g], ["x", "P"], ["f", "g"], dict(cse=True))
     lam = ca.SX.sym("lam_g", g.shape[0])
-    lagrangian = f + ca.dot(lam, g)
-    gradient = ca.gradient(lagrangian, x)
+    gradient = ca.gradient(f + ca.dot(lam, g), x)
     kkt = ca.Function(
         "design_kkt",
         [x, P, lam],
@@ -131,8 +149,42 @@ def _design_nlp(key: tuple) -> DesignNlp:
     for fn in (evaluate, kkt):
         if fn.has_free():
             raise RuntimeError(f"graph {fn.name()} has free symbols {fn.get_free()}")
-    n_equalities = n_state * n_cases + (n_state + 1) * len(frequencies)
-    return DesignNlp(key, n_design, n_state, n_cases, n_params, n_equalities, frequencies, evaluate, kkt, x, P, f, g)
+    return evaluate, kkt
+
+
+def _responses(structure, responses, zs, ps, amplitudes, scales) -> tuple[list[ca.SX], list[ca.SX]]:
+    """Per response: the rows of (K_T - omega^2 M + i omega D) X = f in real and imaginary parts,
+    D = alpha M + beta K_T, f the load's unit force (R is affine in a load); and |dy/dz . X| in
+    document units (scales: a factor per response, then alpha and beta)."""
+    if not responses:
+        return [], []
+    from models.graph.modal import state_mass
+
+    graphs, mass = graphs_for(structure), state_mass(structure)
+    alpha, beta = scales[len(responses)], scales[len(responses) + 1]
+    rows, magnitudes = [], []
+    for j, ref in enumerate(responses):
+        z, p = zs[ref.case], ps[ref.case]
+        n = z.numel()
+        real, imaginary = amplitudes[j][:n], amplitudes[j][n:]
+        omega = 2 * np.pi * ref.frequency
+        R = graphs.residual(z, p)
+        pushed = ca.SX(p)
+        pushed[ref.input] = p[ref.input] + 1
+        force = R - graphs.residual(z, pushed)
+        M = mass(z, p)
+
+        def stiff(v: ca.SX) -> ca.SX:
+            return ca.jtimes(R, z, v)
+
+        def damped(v: ca.SX) -> ca.SX:
+            return alpha * ca.mtimes(M, v) + beta * stiff(v)
+
+        rows += [stiff(real) - omega**2 * ca.mtimes(M, real) - omega * damped(imaginary) - force]
+        rows += [stiff(imaginary) - omega**2 * ca.mtimes(M, imaginary) + omega * damped(real)]
+        y = graphs.outputs(z, p)[ref.index]
+        magnitudes.append(scales[j] * ca.sqrt(ca.jtimes(y, z, real) ** 2 + ca.jtimes(y, z, imaginary) ** 2))
+    return rows, magnitudes
 
 
 def _eigenproblems(structure, frequencies, zs, ps, modes, scales) -> tuple[list[ca.SX], list[ca.SX]]:

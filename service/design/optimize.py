@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from service.contact.design import run_contact_start, uses_contact
-from service.design.frequencies import disagreements, eigen_guess, eigen_scales, unknown_bounds
+from service.design.frequencies import disagreements, eigen_scales, response_scales, unknown_bounds, vibration_start
 from service.design.nlp import DesignNlp, design_nlp, least_violation, solver_for
 from service.design.problem import DesignProblem, OutputRef
 from service.design.states import case_outputs, case_params, equilibria, output_value, polished_states
@@ -123,7 +123,8 @@ class Prepared:
 def design_units(problem: DesignProblem) -> dict[str, str]:
     mech = problem.mechanism
     units = {path: mech.doc_unit(mech.parameters[slot].kind) for path, slot in zip(problem.paths, problem.slots)}
-    units["objective"] = mech.doc_unit(problem.objective.kind)
+    objective = problem.objective
+    units["objective"] = objective.unit if objective.source == "response" else mech.doc_unit(objective.kind)
     return units
 
 
@@ -149,9 +150,15 @@ def prepare(problem: DesignProblem) -> Prepared:
 
     objective_scale = problem.sign * typical(problem.objective)  # negative: maximize
     constraint_scales = np.array([typical(c.output, c.lower, c.upper) for c in problem.constraints])
-    P = nlp.pack(problem, objective_scale, constraint_scales, eigen_scales(problem, nlp.frequencies, states, ps))
+    P = nlp.pack(
+        problem,
+        objective_scale,
+        constraint_scales,
+        eigen_scales(problem, nlp.frequencies, states, ps),
+        response_scales(problem, nlp.responses),
+    )
     n_z = nlp.n_state * nlp.n_cases
-    mode_lower, mode_upper = unknown_bounds(nlp.frequencies, nlp.n_state)
+    mode_lower, mode_upper = unknown_bounds(nlp.frequencies, nlp.n_state, len(nlp.responses))
     lbx = np.concatenate([problem.lower / problem.scale, np.full(n_z, -np.inf), mode_lower])
     ubx = np.concatenate([problem.upper / problem.scale, np.full(n_z, np.inf), mode_upper])
     factors = np.array([problem.output_factor(c.output) for c in problem.constraints])
@@ -186,9 +193,8 @@ def run_start(prepared: Prepared, start: int, stop: Callable[[], bool] | None = 
     started = time.perf_counter()
     design0 = start_design(problem, start)
     guesses = [z if status == "converged" else np.zeros(nlp.n_state) for status, z in equilibria(problem, design0)]
-    scales = prepared.P[len(prepared.P) - 2 * len(nlp.frequencies) :]
-    modes0 = eigen_guess(problem, nlp.frequencies, guesses, case_params(problem, design0), scales)
-    x0 = np.concatenate([design0 / problem.scale, *guesses, modes0])
+    vibration0 = vibration_start(problem, nlp, prepared.P, guesses, case_params(problem, design0))
+    x0 = np.concatenate([design0 / problem.scale, *guesses, vibration0])
     run = solve(
         solver_for(nlp, spec.max_iterations, spec.tolerance),
         stop=stop,

@@ -5,12 +5,16 @@ Outputs are the names /v1/solve reports (reactions.tip.Fy, end_effector.x,
 elements.L1.stress_max, energy, ...), plus
   stiffness.<body>.<x|y|angle>   the diagonal of the condensed tangent stiffness K_T
   frequency.<k>                  the k-th natural frequency (Hz) about the case's equilibrium
+  response(<output>, <load's component>, <Hz>)   the amplitude of the output under a harmonic
+                                 load of unit amplitude at that frequency (output unit per load unit;
+                                 the spec's `damping`)
   /a/numeric/field               the value of a numeric field of the case (e.g. a length)
 Every problem names its field under `pointer` (e.g. /optimize/design/0/lower).
 """
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,6 +26,7 @@ from service.contact.outputs import PAIR_OUTPUTS
 
 STIFFNESS_PREFIX = "stiffness."
 FREQUENCY_PREFIX = "frequency."
+RESPONSE = re.compile(r"response\(([^,]+),([^,]+),([^,)]+)\)")
 _STIFFNESS_KINDS = {"x": "stiffness", "y": "stiffness", "angle": "moment"}  # per unit length / per rad
 
 
@@ -31,9 +36,12 @@ class OutputRef:
 
     name: str
     case: int
-    source: str  # output | stiffness | parameter | frequency
+    source: str  # output | stiffness | parameter | frequency | response
     index: int  # into the outputs, the free coordinates or the parameters; the mode (0-based)
     kind: str
+    input: int = -1  # a response's load parameter
+    frequency: float = 0.0  # a response's frequency (Hz)
+    unit: str = ""  # a response's unit (its value is in it: no kind converts it)
 
 
 @dataclass(frozen=True)
@@ -63,7 +71,7 @@ class DesignProblem:
 
     def output_factor(self, ref: OutputRef) -> float:
         """Nondimensional value of one document unit of the output."""
-        return self.mechanism.nd_per_doc(ref.kind)
+        return 1.0 if ref.source == "response" else self.mechanism.nd_per_doc(ref.kind)
 
 
 def design_problem(mech: Mechanism, spec: OptimizeSpec, pointer: str = "/optimize") -> DesignProblem:
@@ -174,6 +182,9 @@ def _output(mech: Mechanism, name: str, case: str | None, case_names: tuple[str,
         k = mech.free_coordinates.index(name[len(STIFFNESS_PREFIX) :])
         coordinate = COORDINATES[mech.structure.free[k][1]]
         return OutputRef(name, c, "stiffness", k, _STIFFNESS_KINDS[coordinate])
+    response = RESPONSE.fullmatch(name.replace(" ", ""))
+    if response is not None:
+        return _response(mech, name, c, here, *response.groups())
     if name.startswith(FREQUENCY_PREFIX):
         mode = name[len(FREQUENCY_PREFIX) :]
         if not mode.isdigit() or int(mode) < 1:
@@ -193,3 +204,25 @@ def _output(mech: Mechanism, name: str, case: str | None, case_names: tuple[str,
     close = [n for n in output_names(mech) if n.split(".")[0] == name.split(".")[0]][:8]
     hint = f" (outputs like it: {', '.join(close)})" if close else " (see the outputs /v1/solve reports)"
     raise MechanismError(f"{here}/output", f"unknown output '{name}'{hint}")
+
+
+def _response(mech: Mechanism, name: str, c: int, here: str, output: str, load: str, hertz: str) -> OutputRef:
+    """response(<output>, <load's component>, <Hz>): checked, its unit output unit per load unit."""
+    g = mech.graphs
+    if output not in g.output_names:
+        raise MechanismError(f"{here}/output", f"'{name}': no output '{output}'")
+    try:
+        k = mech.parameter_index(load)
+        frequency = float(hertz)
+    except MechanismError as exc:
+        raise MechanismError(f"{here}/output", f"'{name}': {load} is {exc.problem}") from None
+    except ValueError:
+        raise MechanismError(f"{here}/output", f"'{name}': the frequency '{hertz}' is not a number (Hz)") from None
+    if mech.parameters[k].kind not in ("force", "moment") or not frequency > 0:
+        raise MechanismError(
+            f"{here}/output", f"'{name}': name a load's force or moment component and a frequency > 0 Hz"
+        )
+    index = g.output_names.index(output)
+    kind = g.output_kinds[index]
+    unit = f"{mech.doc_unit(kind)}/{mech.doc_unit(mech.parameters[k].kind)}"
+    return OutputRef(name, c, "response", index, kind, k, frequency, unit)

@@ -9,7 +9,7 @@ import re
 import numpy as np
 
 from models import Mechanism
-from service.design.frequencies import frequency_value
+from service.design.frequencies import frequency_value, response_value
 from service.design.problem import DesignProblem, OutputRef
 from service.solvers.equilibrium import newton
 from service.solvers.newton import NewtonOptions
@@ -94,4 +94,6 @@ def output_value(problem: DesignProblem, ref: OutputRef, z: np.ndarray, p: np.nd
         return float(1 / np.linalg.inv(K)[ref.index, ref.index])
     if ref.source == "frequency":
         return frequency_value(problem, ref, z, p)
+    if ref.source == "response":
+        return response_value(problem, ref, z, p)
     return float(np.asarray(g.outputs(z, p)).ravel()[ref.index])

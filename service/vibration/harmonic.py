@@ -44,7 +44,7 @@ def channel(mech: Mechanism, z: np.ndarray, system: ModalSystem, pointer: str, n
     except MechanismError as exc:
         raise MechanismError("/input", f"{pointer}: {exc.problem}") from None
     indices = _output_indices(mech, names)
-    outputs_z, outputs_p, residual_p = _derivatives(mech.structure)
+    outputs_z, outputs_p, residual_p = output_derivatives(mech.structure)
     dy = np.asarray(outputs_z(z, p), dtype=float)[indices]
     direct = np.asarray(outputs_p(z, p), dtype=float)[indices, k]
     if system.coordinates_set == "elements":
@@ -114,7 +114,7 @@ def _motion_outputs(dy: np.ndarray, system: ModalSystem, names: list[str]) -> np
 
 
 @lru_cache(maxsize=16)
-def _derivatives(structure: Structure) -> tuple[ca.Function, ca.Function, ca.Function]:
+def output_derivatives(structure: Structure) -> tuple[ca.Function, ca.Function, ca.Function]:
     """(z, p) -> dy/dz and dy/dp of every output, and (z, p) -> dR/dp: built once per structure."""
     graphs = graphs_for(structure)
     zs, ps = ca.MX.sym("z", structure.n_unknowns), ca.MX.sym("p", len(structure.parameters))
@@ -130,7 +130,7 @@ def _condensed(mech, z, p, k, dy, n_body):
     """(force, C) on the body coordinates, the elements' unknowns following statically."""
     _, K = mech.graphs.residual_and_tangent(z, p)
     K = np.asarray(K, dtype=float)
-    dR = np.asarray(_derivatives(mech.structure)[2](z, p), dtype=float)[:, k]
+    dR = np.asarray(output_derivatives(mech.structure)[2](z, p), dtype=float)[:, k]
     b, own = slice(0, n_body), slice(n_body, K.shape[0])
     if K.shape[0] == n_body:
         return -dR, dy

@@ -105,3 +105,64 @@ def test_the_stage_example_maximizes_its_first_frequency_under_its_stroke_and_th
     assert stress_row["value"] == pytest.approx(6 * abs(moment) / (10 * h**2), rel=1e-12)
     fresh = modes_of(mech.with_values({"/sections/blade/h": h, "/loads/drive/force/0": 0.0}), count=1)
     assert fresh["modes"][0]["frequency"] == pytest.approx(result["objective"], rel=1e-6)
+
+
+def test_a_frequency_response_bounds_a_design_at_the_closed_form():
+    """The softest spring that keeps a 0.3 kg carriage's response to a 10 Hz force under 1 mm/N:
+    undamped |H| = 1 / |k - m omega^2|, so k* = m omega^2 + 1000 N/m, the response's bound active."""
+    from service.design.optimize import optimize
+    from service.design.problem import design_problem
+
+    m, limit, hertz = 0.3, 1e-3, 10.0
+    doc = {
+        "units": {"length": "m", "force": "N", "angle": "rad", "mass": "kg"},
+        "bodies": {"ground": {"fixed": True, "position": [0, 0]}, "carriage": {"position": [1, 0], "mass": m}},
+        "elements": {
+            "rail": {"type": "slider", "from": "ground", "to": "carriage", "angle": 0},
+            "coil": {"type": "spring", "from": "ground", "to": "carriage", "stiffness": 3000.0},
+        },
+        "loads": {"shake": {"type": "force", "body": "carriage", "force": [0.0, 0.0]}},
+        "optimize": {
+            "design": [{"path": "/elements/coil/stiffness", "lower": 1500, "upper": 5000}],
+            "objective": {"output": "/elements/coil/stiffness", "sense": "minimize"},
+            "constraints": [{"output": f"response(bodies.carriage.x, /loads/shake/force/0, {hertz})", "upper": limit}],
+        },
+    }
+    mech = compile_mechanism(load_document(doc))
+    result = optimize(design_problem(mech, mech.document.optimize)).summary()
+    assert result["status"] == "optimal"
+    expected = m * (2 * math.pi * hertz) ** 2 + 1 / limit
+    assert result["design"]["/elements/coil/stiffness"] == pytest.approx(expected, rel=1e-7)
+    (row,) = result["constraints"]
+    assert row["active"] and row["value"] == pytest.approx(limit, rel=1e-7)
+    response = ANALYSES.named("frequency_response").run(
+        mech.with_values({"/elements/coil/stiffness": result["design"]["/elements/coil/stiffness"]}),
+        AnalysisRequest(given={"input": "/loads/shake/force/0", "outputs": ["bodies.carriage.x"], "damping_ratio": 0,
+                               "start": hertz * 0.999999, "stop": hertz, "points": 2}),
+    )  # fmt: skip
+    assert response["responses"]["bodies.carriage.x"]["amplitude"][-1] == pytest.approx(limit, rel=1e-6)
+
+
+@pytest.mark.parametrize(
+    "output, words",
+    [
+        ("response(bodies.cart.x, /loads/push/force/1, 10)", "no output 'bodies.cart.x'"),
+        ("response(bodies.platform.x, /sections/blade/h, 10)", "name a load's force or moment component"),
+        ("response(bodies.platform.x, /loads/push/force/1, fast)", "the frequency 'fast' is not a number"),
+        ("frequency.0", "name a mode by its number from 1"),
+    ],
+)
+def test_a_bad_vibration_output_in_a_design_is_named(output, words):
+    from models import MechanismError
+    from service.design.problem import design_problem
+
+    doc = loaded_platform()
+    doc["sections"]["blade"]["h"] = 0.0005
+    doc["optimize"] = {
+        "design": [{"path": "/sections/blade/h", "lower": 0.0002, "upper": 0.001}],
+        "objective": {"output": output},
+    }
+    mech = compile_mechanism(load_document(doc))
+    with pytest.raises(MechanismError) as err:
+        design_problem(mech, mech.document.optimize)
+    assert err.value.pointer == "/optimize/objective/output" and words in str(err.value)
