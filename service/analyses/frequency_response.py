@@ -1,5 +1,6 @@
-"""The frequency_response analysis: amplitude and phase of chosen outputs under a harmonic load
-(one component of a document load, its amplitude one document unit) over a frequency range,
+"""The frequency_response analysis: amplitude and phase of chosen outputs under a harmonic input
+(one component of a document load or of a prescribed displacement, its amplitude one document
+unit) over a frequency range,
 about the equilibrium under the document's loads or the undeformed state, with a modal damping
 ratio and Rayleigh's mass and stiffness terms; each resonance's peak and half-power bandwidth
 (service.vibration.frf)."""
@@ -66,8 +67,8 @@ class FrequencyResponseOptions(AnalysisOptions):
 
 class Response(BaseModel):
     unit: str = Field(description="output unit per input unit")
-    amplitude: list[float]
-    phase: list[float] = Field(description="degrees, of the output behind the load")
+    amplitude: list[float | None] = Field(description="None where undamped and exactly at a natural frequency")
+    phase: list[float | None] = Field(description="degrees, of the output behind the input")
     static: float | None = Field(description="the response at zero frequency (None with a rigid mode)")
 
 
@@ -83,7 +84,7 @@ class Resonance(BaseModel):
 
 class FrequencyResponseReport(AnalysisResult):
     at: str
-    input: str = Field(description="the load's component the harmonic force drives")
+    input: str = Field(description="the field whose harmonic motion or force drives the response")
     frequencies: list[float] = Field(default_factory=list, description="Hz")
     responses: dict[str, Response] = Field(default_factory=dict)
     resonances: list[Resonance] = Field(default_factory=list)
