@@ -5,6 +5,7 @@ and bad input named by its field."""
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -311,3 +312,27 @@ def test_a_closed_contact_holds_its_normal_motion_in_the_modes():
     del apart["contacts"]  # nothing touches: the modes of the equilibrium without the wall
     expected = [mode["omega_squared"] for mode in modes(apart, count=3)["modes"]]
     assert [mode["omega_squared"] for mode in free["modes"]] == pytest.approx(expected, rel=1e-8)
+
+
+def test_the_arch_snap_through_paths_stability_and_the_modes_agree_at_every_point():
+    """The clamped arch (examples/snap_through_arch.json) with a 10 g mass at its crown, traced
+    through both limit points: at each of the path's states (both branches) the continuation calls
+    the state stable exactly when every mode is elastic, and omega_1^2 falls toward zero at the
+    first limit point."""
+    from service.solvers.continuation import trace_path
+    from service.vibration.modes import mechanism_modes
+
+    doc = json.loads((EXAMPLES / "snap_through_arch.json").read_text())
+    doc["bodies"]["crown"].update(mass=0.01, inertia=1.0)
+    doc["units"]["mass"] = "kg"
+    mech = compile_mechanism(load_document(doc))
+    path = trace_path(mech, "/loads/P/force/1", -300.0, 20.0)
+    assert [lp.kind for lp in path.limit_points] == ["minimum", "maximum"]
+    verdicts, lowest = [], []
+    for point in path.points:
+        eigen = mechanism_modes(mech.with_values({"/loads/P/force/1": point.value}), point.z, None).eigen
+        verdicts.append((point.stability.stable, all(kind == "elastic" for kind in eigen.kinds)))
+        lowest.append(eigen.omega_squared[0])
+    assert all(static == dynamic for static, dynamic in verdicts) and not all(s for s, _ in verdicts)
+    before = path.limit_points[0].after_point
+    assert lowest[before] < 0.1 * lowest[0] and lowest[before] > 0 > lowest[before + 1]
