@@ -4,6 +4,7 @@ prestressed link and a loaded platform on a curved-beam flexure; repeated freque
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -166,3 +167,29 @@ def test_a_bad_vibration_output_in_a_design_is_named(output, words):
     with pytest.raises(MechanismError) as err:
         design_problem(mech, mech.document.optimize)
     assert err.value.pointer == "/optimize/objective/output" and words in str(err.value)
+
+
+def test_a_frequency_constraint_holds_the_thinnest_blades_at_the_closed_form():
+    """The stage unloaded: the thinnest blades whose first frequency is at least 30 Hz, h^3 =
+    m (2 pi 30)^2 L^3 / (2 E b); the frequency constraint is the active one, its value confirmed
+    by a fresh modes run."""
+    from service.design.optimize import optimize
+    from service.design.problem import design_problem
+
+    doc = json.loads((EXAMPLES / "stage_frequency.json").read_text())
+    doc["loads"]["drive"]["force"] = [0, 0]
+    doc["optimize"] = {
+        "design": [{"path": "/sections/blade/h", "lower": 0.2, "upper": 1.5}],
+        "objective": {"output": "/sections/blade/h", "sense": "minimize"},
+        "constraints": [{"output": "frequency.1", "lower": 30.0}],
+    }
+    mech = compile_mechanism(load_document(doc))
+    result = optimize(design_problem(mech, mech.document.optimize)).summary()
+    assert result["status"] == "optimal"
+    E, b, L, m = 200e9, 0.01, 0.04, 0.2
+    h = (m * (2 * math.pi * 30) ** 2 * L**3 / (2 * E * b)) ** (1 / 3) * 1e3  # mm
+    assert result["design"]["/sections/blade/h"] == pytest.approx(h, rel=1e-7)
+    (row,) = result["constraints"]
+    assert row["active"] and row["value"] == pytest.approx(30.0, rel=1e-7)
+    fresh = modes_of(mech.with_values({"/sections/blade/h": result["design"]["/sections/blade/h"]}), count=1)
+    assert fresh["modes"][0]["frequency"] == pytest.approx(30.0, rel=1e-7)
