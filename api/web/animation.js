@@ -53,6 +53,13 @@ export function setFrames(drawing, frames) {
   if (frames.length) showFrame(frames.length - 1);
 }
 
+// Frames to show and play at once (a mode picked from its table).
+export function playFrames(drawing, frames) {
+  setFrames(drawing, frames);
+  showFrame(0);
+  play();
+}
+
 export function clearFrames() {
   setFrames(null, []);
 }

@@ -3,13 +3,14 @@
 // animation, downloads). On /jobs/{id} it follows that job.
 
 import { ApiProblem, apiKey, documentPointer, get, post, setApiKey } from "./api.js";
-import { clearFrames, setFrames, wireAnimation } from "./animation.js";
+import { clearFrames, playFrames, setFrames, wireAnimation } from "./animation.js";
 import { readDocument, setText, showProblems } from "./editor.js";
 import { buildRequest, choices, renderForm } from "./forms.js";
 import { jobView } from "./jobviews.js";
 import { cancel, fullResult, follow, jobRequest, showProgress } from "./jobs.js";
 import { csvOf, fillCurveChoices, renderCurve, renderEnergies, renderTables } from "./render.js";
 import { resultView } from "./results.js";
+import { wireModeRows } from "./vibration.js";
 import { drawScene } from "./scene.js";
 import { wireDownloads } from "./downloads.js";
 import { wireTabs } from "./tabs.js";
@@ -104,6 +105,7 @@ function showView(view, result) {
 async function runSolve(choice, request) {
   const report = await post("/v1/solve", request);
   showView(resultView("solve", report, state.drawing), report);
+  if (report.analysis === "modes" && state.drawing) wireModeRows($("panel-table"), state.drawing, state.view.frames, playFrames);
   say("run-state", `${choice.analysis}: ${report.status}${report.seconds ? ` in ${report.seconds.toPrecision(3)} s` : ""}`,
       !["converged", "finished"].includes(report.status));
   if (DEFORMING.includes(choice.analysis)) {

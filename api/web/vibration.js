@@ -59,7 +59,7 @@ export function modeFrames(report) {
         return [p[0] + a * d[0], p[1] + a * d[1]];
       })]));
       const poses = Object.fromEntries(Object.entries(shape.bodies || {}).map(([body, [dx, dy, turn]]) => [body, [a * dx, a * dy, a * turn * toRadians]]));
-      frames.push({ elements, poses, about: "reference", label: heading });
+      frames.push({ elements, poses, about: "reference", label: heading, mode: mode.mode });
     }
   }
   return frames;
@@ -67,7 +67,7 @@ export function modeFrames(report) {
 
 export function modesTable(report) {
   const rows = (report.modes || []).map((mode) => ({
-    mode: mode.mode, kind: mode.kind, frequency: mode.frequency, period: mode.period,
+    mode: String(mode.mode), kind: mode.kind, frequency: mode.frequency, period: mode.period,
     effective_mass: mode.effective_mass,
     dominated_by: Object.keys(mode.energy_shares || {})[0] || "–",
   }));
@@ -89,3 +89,19 @@ export function responseSeries(v, report) {
   v.defaultCurve = first ? ["log10 frequency", `${first} dB`] : null;
   if ((report.resonances || []).length) v.tables.push(recordsTable("Resonances", report.resonances, { frequency: "Hz", bandwidth: "Hz" }));
 }
+
+// A mode's row in the table animates that mode alone (click, or Enter when focused).
+export function wireModeRows(panel, drawing, frames, playFrames) {
+  for (const row of panel.querySelectorAll("tr[data-name]")) {
+    const mode = Number(row.dataset.name);
+    const own = frames.filter((frame) => frame.mode === mode);
+    if (!own.length) continue;
+    row.tabIndex = 0;
+    row.title = `Animate mode ${mode}`;
+    row.classList.add("pickable");
+    const pick = () => playFrames(drawing, own);
+    row.addEventListener("click", pick);
+    row.addEventListener("keydown", (event) => { if (event.key === "Enter") pick(); });
+  }
+}
+

@@ -465,6 +465,10 @@ def test_the_modes_are_tabled_and_each_swings_in_the_drawing(page):
     for _ in range(6):
         page.keyboard.press("ArrowRight")  # a quarter period: the largest swing
     assert element_path(page, "rod") != at_rest
+    table.locator('tbody tr[data-name="2"]').click()  # a mode picked from the table plays alone
+    assert int(page.get_attribute("#frame", "max")) + 1 == 24
+    page.wait_for_function("() => document.getElementById('play').textContent === 'Play'", timeout=30_000)
+    assert "mode 2: 13.271 Hz" in page.text_content("#frame-label")
     screenshot(page, "21-modes")
 
 
