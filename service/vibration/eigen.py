@@ -11,9 +11,15 @@ massless (N) directions,
 is exact for them (Guyan's condensation, with no error where the mass is zero). Shapes come back
 in the full unknowns, mass-normalized: phi^T M phi = 1.
 
-Small structures are solved densely (every eigenvalue); larger ones (more than
-DENSE_LIMIT massive directions) by shift-invert Lanczos near zero (scipy's eigsh), which
-resolves the low frequencies to full relative accuracy whatever the highest one.
+Small structures are solved densely (every eigenvalue). Larger ones (more than DENSE_LIMIT
+unknowns, a symmetric K, a few modes asked) never form the null space: shift-invert Lanczos near
+zero (scipy's eigsh) on the sparse bordered pencil
+
+    [[K, G^T], [G, 0]] v = lambda [[M, 0], [0, 0]] v,
+
+whose factorization solves the constraints and the massless unknowns at once (the same exact
+condensation), and which resolves the low frequencies to full relative accuracy whatever the
+highest one.
 """
 
 from __future__ import annotations
@@ -21,6 +27,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 from scipy.linalg import eig, eigh, null_space
 from scipy.sparse.linalg import eigsh
 
@@ -47,6 +54,8 @@ def vibration_eigen(K: np.ndarray, M: np.ndarray, G: np.ndarray | None, count: i
     """The `count` lowest modes (None: every one; MechanismError at /count when the structure
     has fewer)."""
     n = K.shape[0]
+    if count is not None and n > DENSE_LIMIT and count < n // 4 and _symmetric(K):
+        return _sparse_lowest(K, M, G, count)
     Z = null_space(G) if G is not None and G.size else np.eye(n)
     Kr, Mr = Z.T @ K @ Z, Z.T @ M @ Z
     Mr = 0.5 * (Mr + Mr.T)
@@ -58,7 +67,7 @@ def vibration_eigen(K: np.ndarray, M: np.ndarray, G: np.ndarray | None, count: i
         )
     massive = weights > MASSLESS * heaviest
     R, N = U[:, massive], U[:, ~massive]
-    symmetric = bool(np.allclose(Kr, Kr.T, rtol=1e-9, atol=1e-12 * max(np.abs(Kr).max(), 1e-300)))
+    symmetric = _symmetric(Kr)
     T, T_left, feedthrough = R, R, None
     if N.shape[1]:
         T = R - N @ _massless_response(Kr, N, R)
@@ -74,6 +83,41 @@ def vibration_eigen(K: np.ndarray, M: np.ndarray, G: np.ndarray | None, count: i
     values, Y, W, largest = _lowest(K_hat, M_hat, count, symmetric)
     kinds = ["rigid" if abs(v) <= RIGID * largest else "unstable" if v < 0 else "elastic" for v in values]
     return Eigen(values, Z @ T @ Y, kinds, largest, available, symmetric, Z @ T_left @ W, feedthrough)
+
+
+def _symmetric(K: np.ndarray) -> bool:
+    return bool(np.allclose(K, K.T, rtol=1e-9, atol=1e-12 * max(np.abs(K).max(), 1e-300)))
+
+
+def _sparse_lowest(K: np.ndarray, M: np.ndarray, G: np.ndarray | None, count: int) -> Eigen:
+    """The `count` lowest modes by shift-invert on the sparse bordered pencil. The scale rigid
+    modes are judged by is the largest diagonal stiffness over the smallest diagonal mass (an
+    upper estimate of the largest omega^2); `available` counts the unknowns with mass less the
+    constraints."""
+    n = K.shape[0]
+    stiffness, mass = sp.csc_matrix(0.5 * (K + K.T)), sp.csc_matrix(0.5 * (M + M.T))
+    rows = 0 if G is None else G.shape[0]
+    heavy = np.diag(M)[np.diag(M) > 0]
+    if not heavy.size:
+        raise MechanismError(
+            "/bodies", "the mechanism has no mass that can move: give a body a mass or a material a density"
+        )
+    available = heavy.size - rows
+    if count > available:
+        raise MechanismError(
+            "/count", f"{count} modes asked, but the mechanism has {available} (its coordinates that carry mass)"
+        )
+    top = float(np.abs(np.diag(K)).max() / heavy.min())
+    if rows:
+        constraints = sp.csc_matrix(G)
+        stiffness = sp.bmat([[stiffness, constraints.T], [constraints, None]], format="csc")
+        mass = sp.bmat([[mass, None], [None, sp.csc_matrix((rows, rows))]], format="csc")
+    values, vectors = eigsh(stiffness, count, mass, sigma=-1e-14 * top, which="LM")
+    order = np.argsort(values)
+    values, shapes = values[order], vectors[:n, order]
+    shapes = shapes / np.sqrt(np.einsum("im,ij,jm->m", shapes, M, shapes))
+    kinds = ["rigid" if abs(v) <= RIGID * top else "unstable" if v < 0 else "elastic" for v in values]
+    return Eigen(values, shapes, kinds, top, available, True, shapes, None)
 
 
 def _massless_response(Kr: np.ndarray, N: np.ndarray, R: np.ndarray) -> np.ndarray:
@@ -94,14 +138,6 @@ def _lowest(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """(omega^2, M-normalized right vectors Y, left vectors W with W^T M Y = I, the largest
     |omega^2|) of the `count` lowest modes."""
-    n = K.shape[0]
-    if symmetric and n > DENSE_LIMIT and count < n // 2:
-        K = 0.5 * (K + K.T)
-        top = float(abs(eigsh(K, 1, M, which="LM", return_eigenvectors=False)[0]))
-        shift = -1e-14 * top  # just below zero: rigid modes make K itself singular
-        values, Y = eigsh(K, count, M, sigma=shift, which="LM")
-        order = np.argsort(values)
-        return values[order], Y[:, order], Y[:, order], top
     if symmetric:
         values, Y = eigh(0.5 * (K + K.T), M)
         return values[:count], Y[:, :count], Y[:, :count], float(np.abs(values).max(initial=0.0))
