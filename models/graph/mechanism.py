@@ -141,6 +141,16 @@ class Mechanism:
             hint = f" (numeric fields here: {', '.join(close[:8])})" if close else ""
             raise MechanismError(pointer, f"not a numeric field of this mechanism{hint}") from None
 
+    def parameter_indices(self, paths: list[str], pointer: str) -> list[int]:
+        """parameter_index of each path, a problem named at `pointer`/k (the k-th path)."""
+        slots = []
+        for k, path in enumerate(paths):
+            try:
+                slots.append(self.parameter_index(path))
+            except MechanismError as exc:
+                raise MechanismError(f"{pointer}/{k}", f"'{path}' is {exc.problem}") from None
+        return slots
+
     def parameter_kind(self, pointer: str) -> str:
         return self.parameters[self.parameter_index(pointer)].kind
 

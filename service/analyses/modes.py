@@ -18,7 +18,7 @@ from service.vibration.contact_state import contact_system
 from service.vibration.eigen import vibration_eigen
 from service.vibration.modes import MechanismModes, mechanism_modes
 from service.vibration.report import modes_report
-from service.vibration.sensitivity import frequency_sensitivities, parameter_slots
+from service.vibration.sensitivity import frequency_sensitivities
 from service.vibration.state import vibration_state
 
 
@@ -107,7 +107,7 @@ def modes_analysis_report(mech: Mechanism, newton: NewtonOptions, options: Modes
 def _add_sensitivities(
     report: dict[str, Any], mech: Mechanism, z: np.ndarray | None, found: MechanismModes, options: ModesOptions
 ) -> None:
-    slots = parameter_slots(mech, options.sensitivities, "/sensitivities")
+    slots = mech.parameter_indices(options.sensitivities, "/sensitivities")
     state = z if z is not None else np.zeros(mech.n_free)
     matrix, clusters = frequency_sensitivities(mech, state, found, slots, options.at == "equilibrium")
     for mode, row in zip(report["modes"], matrix):

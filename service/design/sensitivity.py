@@ -41,16 +41,6 @@ def _derivatives(structure: Structure) -> ca.Function:
     )
 
 
-def _slots(mech: Mechanism, paths: list[str], pointer: str) -> list[int]:
-    slots = []
-    for k, path in enumerate(paths):
-        try:
-            slots.append(mech.parameter_index(path))
-        except MechanismError as exc:
-            raise MechanismError(f"{pointer}/{k}", f"'{path}' is {exc.problem}") from None
-    return slots
-
-
 def _rows(mech: Mechanism, outputs: list[str], pointer: str) -> list[int]:
     names = mech.graphs.output_names
     rows = []
@@ -69,7 +59,7 @@ def equilibrium_sensitivities(
     target = (path, output): the field `path` is not held but follows the parameters so that
     `output` keeps its value (mech must hold the target's solution); `path` may then be named
     among the outputs, e.g. the closing force."""
-    slots = _slots(mech, parameters, "/parameters")
+    slots = mech.parameter_indices(parameters, "/parameters")
     names = list(mech.graphs.output_names)
     wanted = [o for o in outputs if not (target is not None and o == target[0])]
     rows = _rows(mech, wanted, "/outputs")
@@ -79,7 +69,7 @@ def equilibrium_sensitivities(
     if target is None:
         A, B = K, R_p[:, slots]
     else:
-        t = _slots(mech, [target[0]], "/target/path")[0]
+        t = mech.parameter_indices([target[0]], "/target/path")[0]
         o = _rows(mech, [target[1]], "/target/output")[0]
         A = np.block([[K, R_p[:, [t]]], [y_z[[o], :], y_p[[o], [t]].reshape(1, 1)]])
         B = np.vstack([R_p[:, slots], y_p[[o], :][:, slots]])
@@ -121,7 +111,7 @@ def optimum_sensitivities(prepared: Prepared, result: StartResult, parameters: l
     case keeps its override there."""
     problem, nlp = prepared.problem, prepared.nlp
     mech = problem.mechanism
-    slots = _slots(mech, parameters, "/parameters")
+    slots = mech.parameter_indices(parameters, "/parameters")
     for k, (path, slot) in enumerate(zip(parameters, slots)):
         if slot in problem.slots:
             raise MechanismError(f"/parameters/{k}", f"'{path}' is a design variable")

@@ -20,11 +20,13 @@ from service.contact.report import penetration_error
 from service.contact.solve import ContactOptions, PenetratingStart, solve_state
 from service.solvers.newton import NewtonOptions
 from service.vibration.modes import ModalSystem, modal_system
+from service.vibration.state import check_modal_cost
 
 
 def contact_system(mech: Mechanism, newton: NewtonOptions, report: dict) -> tuple[ModalSystem, np.ndarray] | None:
     """(the system about the contact state, the residual form's z of its x), or None when the
     state was not found (the report says why)."""
+    check_modal_cost(mech)
     if mech.structure.contacts is None:
         raise MechanismError("/at", "the document has no contacts: take at = equilibrium")
     try:

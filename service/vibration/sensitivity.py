@@ -22,7 +22,7 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
-from models import Mechanism, MechanismError
+from models import Mechanism
 from models.graph.assembly import graphs_for
 from models.graph.modal import state_mass
 from models.graph.structure import Structure
@@ -129,13 +129,3 @@ def _clusters(values: np.ndarray) -> list[list[int]]:
             else:
                 clusters.append([k - 1, k])
     return clusters
-
-
-def parameter_slots(mech: Mechanism, paths: list[str], pointer: str) -> list[int]:
-    slots = []
-    for k, path in enumerate(paths):
-        try:
-            slots.append(mech.parameter_index(path))
-        except MechanismError as exc:
-            raise MechanismError(f"{pointer}/{k}", f"'{path}' is {exc.problem}") from None
-    return slots

@@ -356,3 +356,11 @@ def test_the_sparse_bordered_solver_agrees_with_the_dense_one_with_constraints_a
     assert np.abs(G @ sparse.shapes).max() < 1e-9 * np.abs(sparse.shapes).max()  # the ties hold
     overlap = np.abs(np.einsum("im,ij,jm->m", sparse.shapes, M, dense.shapes[:, :6]))
     assert overlap == pytest.approx(np.ones(6), rel=1e-8)  # the same shapes, up to sign
+
+
+def test_a_structure_too_large_for_the_modal_graphs_is_refused_before_they_are_built():
+    doc = json.loads((EXAMPLES / "rod_free_vibration.json").read_text())
+    doc["elements"]["rod"]["intervals"] = 16  # 16 x 3 x 3 = 144 own unknowns: its graphs take 14 s
+    with pytest.raises(MechanismError) as err:
+        modes(doc, at="undeformed")
+    assert err.value.pointer == "/document/elements/rod/intervals" and "at most 96 unknowns" in str(err.value)
