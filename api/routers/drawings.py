@@ -20,6 +20,7 @@ from models.documents.upgrade import upgraded
 from service.analyses.equilibrium import solve_state
 from service.drawings.drawing import mechanism_drawing
 from service.drawings.path import path_frames
+from service.offers import offers
 from service.requests import Limits, compile_request, newton_options
 from service.solvers.reports import plain
 
@@ -28,8 +29,8 @@ router = APIRouter(prefix="/v1", tags=["workbench"], route_class=ParsedBodyRoute
 
 def _drawing(request: DrawingRequest, document: dict, limits: Limits) -> dict:
     mech = compile_request(document, request.model, request.overrides, limits)
-    if request.state == "undeformed":
-        return plain({"status": "undeformed", **mechanism_drawing(mech)})
+    if request.state == "undeformed":  # with what the document can be asked (the page's Run menu)
+        return plain({"status": "undeformed", **mechanism_drawing(mech), "offers": offers(mech)})
     options = newton_options(request.options.given() if request.options else None, limits.solve_time_limit)
     if request.state == "path":
         frames = path_frames(mech, request.path.path, request.path.values, options)

@@ -196,14 +196,20 @@ class CurvedBeamFamily:
     def unknowns(self, t: FlexureTopology) -> list[tuple[str, str]]:
         return []
 
-    def energy_terms(self, ctx, t: FlexureTopology, d):
+    def energy_form_problem(self, t: FlexureTopology) -> str | None:
         if t.model == "conservative":
-            return EnergyTerms(flexure_wrenches(ctx, t, d, d, d)[2]["energy"])
-        raise NoEnergyForm(
+            return None
+        return (
             f"the {t.model} curved-beam model balances a constant stiffness in frames that "
             "do not turn with the bodies: its tangent stiffness is unsymmetric once deformed, "
             "so it is not the gradient of an energy (the exact model is a link)"
         )
+
+    def energy_terms(self, ctx, t: FlexureTopology, d):
+        problem = self.energy_form_problem(t)
+        if problem is not None:
+            raise NoEnergyForm(problem)
+        return EnergyTerms(flexure_wrenches(ctx, t, d, d, d)[2]["energy"])
 
     def kinetic_energy(self, ctx, t: FlexureTopology, d, v) -> None:
         return None  # the constant-stiffness flexure is massless (seed 000, seed 004)

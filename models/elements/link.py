@@ -231,12 +231,15 @@ class LinkFamily:
             ]
         return names
 
-    def energy_terms(self, ctx, t: LinkTopology, d):
-        raise NoEnergyForm(
+    def energy_form_problem(self, t: LinkTopology) -> str | None:
+        return (
             "the shooting unknowns of a link mix internal forces and displacements, so its "
             'balance is not the gradient of an energy in them; give the link "discretization": '
             '"elements" for minimum energy and contact'
         )
+
+    def energy_terms(self, ctx, t: LinkTopology, d):
+        raise NoEnergyForm(self.energy_form_problem(t))
 
     def kinetic_energy(self, ctx, t: LinkTopology, d, v) -> None:
         if t.weighs:

@@ -183,3 +183,14 @@ def _body_rates(structure: Structure, rate: ca.SX) -> list[ca.SX]:
         ca.vertcat(*[rate[free_index[(b, c)]] if (b, c) in free_index else ca.SX(0) for c in range(3)])
         for b in range(len(structure.bodies))
     ]
+
+
+def energy_form_problem(structure: Structure) -> str | None:
+    """Why the structure has no energy form (the first element without one, as the form's
+    build would refuse it), or None; read from the families without building anything."""
+    for t in structure.elements:
+        family = FAMILIES.of(t)
+        problem = getattr(family, "energy_form_problem", lambda _: None)(t)
+        if problem is not None:
+            return f"element '{t.name}' ({family.type}) has no energy form: {problem}"
+    return None
