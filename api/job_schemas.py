@@ -61,6 +61,14 @@ class JobStatusResponse(BaseModel):
         return self.status in ("succeeded", "failed", "cancelled")
 
 
+class JobSummary(JobStatusResponse):
+    name: str = Field("", description="the name of the job's mechanism document")
+
+
+class JobListResponse(BaseModel):
+    jobs: list[JobSummary] = Field(description="the caller's newest jobs first")
+
+
 class SweepParameterOut(BaseModel):
     path: str
     unit: str

@@ -10,7 +10,7 @@ from fastapi.concurrency import run_in_threadpool
 
 from api.deps import OwnerDep, ServicesDep
 from api.errors import ApiError, not_found
-from api.job_schemas import JobResultResponse, JobStatusResponse
+from api.job_schemas import JobListResponse, JobResultResponse, JobStatusResponse, JobSummary
 from api.responses import errors
 from service.jobs.kinds import kind_named
 from service.jobs.store import FINAL, Job
@@ -53,6 +53,22 @@ def _owned(services, job_id: str, owner: str) -> Job:
     if job is None or job.owner != owner:
         raise not_found(f"no job '{job_id}'")
     return job
+
+
+@router.get(
+    "",
+    operation_id="list_jobs",
+    response_model=JobListResponse,
+    responses=errors(401),
+    summary="The caller's recent jobs, newest first, with status and progress",
+)
+async def list_jobs(
+    services: ServicesDep,
+    owner: OwnerDep,
+    limit: int = Query(20, ge=1, le=100, description="jobs in the list"),
+) -> JobListResponse:
+    recent = await run_in_threadpool(services.store.recent, owner, limit)
+    return JobListResponse(jobs=[JobSummary(**job_status(job).model_dump(), name=name) for job, name in recent])
 
 
 @router.get(

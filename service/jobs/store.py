@@ -172,6 +172,14 @@ class JobStore:
             row = s.get(JobRow, job_id)
             return _job(row) if row is not None else None
 
+    def recent(self, owner: str, limit: int) -> list[tuple[Job, str]]:
+        """The owner's newest jobs first, each with its document's name (for a list of them)."""
+        with self._session() as s:
+            rows = s.scalars(
+                select(JobRow).where(JobRow.owner == owner).order_by(JobRow.created_at.desc()).limit(limit)
+            )
+            return [(_job(r), str(((r.spec or {}).get("document") or {}).get("name", ""))) for r in rows]
+
     def active(self) -> list[Job]:
         """Jobs queued or running, oldest first."""
         with self._session() as s:
