@@ -72,6 +72,9 @@ def equilibrium_report(
             "value": found.value,
             "status": found.status,
             "unit": mech.doc_unit(mech.parameter_kind(target.path)),
+            "output": target.output,
+            "equals": target.equals,
+            "output_unit": report["output_units"].get(target.output, ""),
         }
     if stiffness and result.converged:
         report["stiffness"] = stiffness_dict(mech, result.z)

@@ -66,6 +66,20 @@ def _mapped(function: ca.Function, count: int) -> ca.Function:
     return function.map(count)
 
 
+def varying_values(mech: Mechanism, histories: Histories, p: list[np.ndarray]) -> dict:
+    """The fields that histories drive (loads and motions), in document units at each kept
+    state's parameters `p`, with their units: {"values": {pointer: [...]}, "units": {...}}.
+    The page draws a frame's loads from them, not from the document's values."""
+    indices = sorted(set(histories.indices) | {index for index, _, _ in histories.tables})
+    values, units = {}, {}
+    for index in indices:
+        parameter = mech.parameters[index]
+        scale = mech.nd_per_doc(parameter.kind)
+        values[parameter.pointer] = [float(q[index]) / scale for q in p]
+        units[parameter.pointer] = mech.doc_unit(parameter.kind)
+    return {"values": values, "units": units}
+
+
 def no_histories() -> Histories:
     t = ca.SX.sym("t")
     return Histories((), (), ca.Function("histories", [t], [ca.SX(0, 1), ca.SX(0, 1), ca.SX(0, 1)]), ())

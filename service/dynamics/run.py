@@ -18,7 +18,7 @@ from models.elements import FAMILIES
 from models.graph.residual import unknown_names
 from service.costs import Limits
 from service.dynamics.adaptive import Tolerance
-from service.dynamics.histories import Histories, read_histories
+from service.dynamics.histories import Histories, read_histories, varying_values
 from service.dynamics.integrate import History, integrate
 from service.dynamics.onsets import Onsets
 from service.dynamics.schemes import Scheme, generalized_alpha, newmark
@@ -186,11 +186,12 @@ def records(mech: Mechanism, spec: SimulateSpec, history: History, histories) ->
     }
     _damped_normal_forces(mech, history, histories, outputs)
     state_names = unknown_names(mech.structure)
-    forces = {}
+    forces, series_units = {}, {}
     multipliers = np.array(history.lam).reshape(len(history.lam), -1)
     for j, index in enumerate(form.multipliers_in_state):
         name, kind = state_names[index]
         forces[name] = (multipliers[:, j] / mech.nd_per_doc(kind)).tolist()
+        series_units[name] = mech.doc_unit(kind)
     energy = 1 / mech.nd_per_doc("force") / mech.nd_per_doc("length")
     motion_forces = {}
     for k, index in enumerate(histories.moving):
@@ -198,11 +199,15 @@ def records(mech: Mechanism, spec: SimulateSpec, history: History, histories) ->
         kind = "moment" if pointer.endswith("/rotation") else "force"
         scale = mech.nd_per_doc(kind)
         motion_forces[pointer] = [float(q[k]) / scale for q in history.motion_forces]
+        series_units[pointer] = mech.doc_unit(kind)
     kept = {
         "times": list(history.times),
         "outputs": outputs,
         "constraint_forces": forces,
         "motion_forces": motion_forces,
+        "series_units": series_units,
+        "steps": history.steps,
+        "varying": varying_values(mech, histories, history.p),
         "energies": {
             "kinetic": [e * energy for e in history.kinetic],
             "potential": [e * energy for e in history.potential],

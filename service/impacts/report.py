@@ -115,6 +115,7 @@ def report(
         )
     kept = states[keep]
     energies, balance_error = _energies(model, kept, p)
+    units = report_units(book.document.units)
     return {
         "analysis": "simulate",
         "name": book.document.name,
@@ -140,15 +141,66 @@ def report(
         "energy_balance_error": balance_error,
         "flexure_stiffness": "turning" if model.turning else "constant",
         "clearance": _clearance(model) * per["length"],
-        "units": {
-            "time": "s",
-            "length": book.document.units.length,
-            "angle": book.document.units.angle,
-            "force": book.document.units.force,
-            "energy": f"{book.document.units.force}*{book.document.units.length}",
-            "impulse": f"{book.document.units.force}*s",
-        },
+        "units": units,
+        "series_units": _series_units(full, units),
+        "event_units": {name: units[kind] for name, kind in EVENT_FIELDS.items()},
     }
+
+
+def report_units(document_units) -> dict[str, str]:
+    """The unit of each kind of quantity a report holds, in the document's units."""
+    length, force, angle = document_units.length, document_units.force, document_units.angle
+    return {
+        "time": "s",
+        "length": length,
+        "angle": angle,
+        "force": force,
+        "moment": f"{force}*{length}",
+        "energy": f"{force}*{length}",
+        "impulse": f"{force}*s",
+        "speed": f"{length}/s",
+        "angular_speed": f"{angle}/s",
+        "ratio": "1",
+        "flag": "0/1",
+    }
+
+
+# The quantity of each field of a contact pair's, a joint's, an impact's or an event's record.
+PAIR_FIELDS = {
+    "normal_force": "force",
+    "friction_force": "force",
+    "normal_impulse": "impulse",
+    "friction_impulse": "impulse",
+    "indentation": "length",
+    "slip_speed": "speed",
+    "in_contact": "flag",
+    "active": "flag",
+}
+JOINT_FIELDS = {"Fx": "force", "Fy": "force", "N": "force", "M": "moment"}
+EVENT_FIELDS = {
+    "time": "time",
+    "impact_speed": "speed",
+    "exit_speed": "speed",
+    "duration": "time",
+    "rebound_ratio": "ratio",
+    "peak_force": "force",
+    "impulse": "impulse",
+}
+
+
+def _series_units(full: Histories, units: dict) -> dict:
+    """The unit of every series of the report, by the name it is plotted under: a coordinate
+    and its velocity (`hinge.x`, `hinge.x.velocity`), a pair's (`conjugate.normal_force`) and a
+    joint's fields (`pin.Fx`)."""
+    named = {}
+    for name in full.coordinates:
+        angle = name.endswith(".theta")
+        named[name] = units["angle" if angle else "length"]
+        named[f"{name}.velocity"] = units["angular_speed" if angle else "speed"]
+    for group, fields in ((full.pairs, PAIR_FIELDS), (full.joints, JOINT_FIELDS)):
+        for owner, values in group.items():
+            named.update({f"{owner}.{field}": units[fields[field]] for field in values if field in fields})
+    return named
 
 
 def _energies(model: ImpactModel, kept: np.ndarray, p: np.ndarray) -> tuple[dict, float]:

@@ -198,6 +198,17 @@ class ImpactStudyJob:
             else {"impacts": nominal["impacts"], "seconds": nominal["seconds"], "contacts": nominal.get("contacts")},
             "fields": fields,
             "ranking": _ranking(fields),
+            # by a field's last name: departures and times in s; rms and max relative to the nominal range
+            "units": {
+                "until": "s",
+                "seconds": "s",
+                "departure": "s",
+                "earliest_departure": "s",
+                "tolerance": "1",
+                "rms": "1",
+                "largest_rms": "1",
+                "max": "1",
+            },
         }
 
 

@@ -45,6 +45,7 @@ from service.jobs.base import JSON, InOrder, JobOptions, Plan, StoredJob, read_s
 from service.jobs.control import TaskControl
 from service.jobs.sweep import mechanism_of
 from service.requests import compile_request, under
+from service.solvers.reports import output_units
 
 
 class SimulationOptions(JobOptions, SimulateOptions):
@@ -122,6 +123,7 @@ class SimulationJob(InOrder):
             "max_steps": step_limit(simulate, limits.max_simulation_steps),
             "scheme": scheme_summary(simulate),
             "units": units(mech),
+            "output_units": {name: unit for name, unit in output_units(mech).items() if name in outputs},
         }
         return Plan(windows, meta)
 
@@ -205,6 +207,7 @@ class SimulationJob(InOrder):
                 "contact_damping_work": [],
             },
         }
+        varying: dict = {"values": {}, "units": {}}
         for window in windows:
             joined["times"] += window["times"]
             for group in ("outputs", "constraint_forces", "motion_forces", "energies"):
@@ -212,6 +215,9 @@ class SimulationJob(InOrder):
                     joined[group].setdefault(name, []).extend(values)
             if "shapes" in window:
                 joined.setdefault("shapes", []).extend(window["shapes"])
+            for name, values in window.get("varying", {}).get("values", {}).items():  # none in windows stored before it
+                varying["values"].setdefault(name, []).extend(values)
+            varying["units"].update(window.get("varying", {}).get("units", {}))
         energies, error = with_balance(joined.pop("energies"))
         last = windows[-1] if windows else None
         if last is None:
@@ -226,9 +232,13 @@ class SimulationJob(InOrder):
             "message": last["message"] if last else "",
             "time_reached": last["t_end"] if last else 0.0,
             "windows_stored": len(windows),
+            "steps": last.get("steps") if last else 0,  # a window's count runs on from the run's start
             **joined,
             "energies": energies,
             "energy_balance_error": error,
+            "output_units": plan.get("output_units", {}),
+            "series_units": {name: unit for window in windows for name, unit in window.get("series_units", {}).items()},
+            "varying": varying,
         }
 
 
