@@ -3,6 +3,9 @@
 Shape (api.schemas.ErrorResponse):
     {"error": {"status": 422, "code": "invalid_input", "message": "...", "pointer": "/document/..."}}
 
+A 422 with problems in more than one field lists them all in "problems", the one the message
+and pointer name first: [{"pointer": "/document/...", "message": "..."}, ...].
+
     400 malformed_json     the body is not JSON
     401 unauthorized       X-API-Key missing or not one of FLEXMECH_API_KEYS
     404 not_found          no such route, example or job (another key's job included)
@@ -65,11 +68,19 @@ def excerpt(text: str) -> str:
 
 
 def error_response(
-    status: int, code: str, message: str, pointer: str | None = None, headers: dict | None = None
+    status: int,
+    code: str,
+    message: str,
+    pointer: str | None = None,
+    headers: dict | None = None,
+    problems: list[tuple[str, str]] | None = None,
 ) -> JSONResponse:
+    """The error's body; `problems` (pointer, message) of every field, kept when more than one."""
     pointer = None if pointer is None else excerpt(pointer)
-    body = {"error": {"status": status, "code": code, "message": excerpt(message), "pointer": pointer}}
-    return JSONResponse(body, status_code=status, headers=headers)
+    error: dict = {"status": status, "code": code, "message": excerpt(message), "pointer": pointer}
+    if problems and len(problems) > 1:
+        error["problems"] = [{"pointer": excerpt(where), "message": excerpt(what)} for where, what in problems]
+    return JSONResponse({"error": error}, status_code=status, headers=headers)
 
 
 def _validation_pointer(loc: tuple) -> str:
@@ -179,15 +190,18 @@ def _on_validation_error(_request: Request, exc: RequestValidationError) -> JSON
     first = next((e for e in errors if e.get("type") == "extra_forbidden"), errors[0])
     pointer = _error_pointer(first)
     message = _message(first)
-    others = len({_error_pointer(e) for e in errors} - {pointer})
+    problems = {pointer: message}
+    for error in errors:
+        problems.setdefault(_error_pointer(error), _message(error))
+    others = len(problems) - 1
     if others:
         message += f" (and {others} more field{'s' if others > 1 else ''} with problems)"
     where = pointer or "body"
-    return error_response(422, "invalid_request", f"{where}: {message}", pointer)
+    return error_response(422, "invalid_request", f"{where}: {message}", pointer, problems=list(problems.items()))
 
 
 def _on_mechanism_error(_request: Request, exc: MechanismError) -> JSONResponse:
-    return error_response(422, "invalid_input", str(exc), exc.pointer)
+    return error_response(422, "invalid_input", str(exc), exc.pointer, problems=list(exc.problems))
 
 
 def _on_api_error(_request: Request, exc: ApiError) -> JSONResponse:

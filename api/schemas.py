@@ -78,11 +78,19 @@ class SolveRequest(DocumentRequest):
 
 
 # --- responses ------------------------------------------------------------------------------
+class Problem(BaseModel):
+    pointer: str = Field(description="JSON pointer of the field in the request body")
+    message: str = Field(description="what is wrong with it")
+
+
 class ErrorBody(BaseModel):
     status: int = Field(description="the HTTP status code")
     code: str = Field(description="stable machine-readable code, e.g. invalid_input, not_found")
     message: str = Field(description="what is wrong, naming the field")
     pointer: str | None = Field(None, description="JSON pointer of the offending field in the request body")
+    problems: list[Problem] | None = Field(
+        None, description="every field with a problem, when more than one has (the one `pointer` names first)"
+    )
 
 
 class ErrorResponse(BaseModel):

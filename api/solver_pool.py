@@ -65,7 +65,7 @@ def _packed(exc: BaseException) -> tuple:
     constructors take more than the message), others as themselves when they survive a round
     trip, else as their text."""
     if isinstance(exc, MechanismError):
-        return "mechanism_error", exc.pointer, exc.problem
+        return "mechanism_error", exc.pointer, exc.problem, exc.problems
     if isinstance(exc, ApiError):
         return "api_error", exc.status, exc.code, exc.message, exc.pointer
     try:

@@ -7,12 +7,15 @@ class MechanismError(ValueError):
     """A mechanism document (or an override of it) that cannot be modelled.
 
     ``pointer`` is the JSON pointer of the offending field ("" for the whole document) and
-    ``problem`` says what is wrong with it, in words an engineer can act on.
+    ``problem`` says what is wrong with it, in words an engineer can act on. ``problems`` are
+    (pointer, problem) of every field with a problem when a reader found several, this one
+    first (default: this one alone).
     """
 
-    def __init__(self, pointer: str, problem: str):
+    def __init__(self, pointer: str, problem: str, problems: tuple[tuple[str, str], ...] = ()):
         self.pointer = pointer
         self.problem = problem
+        self.problems = tuple(problems) or ((pointer, problem),)
         where = pointer if pointer else "document"
         super().__init__(f"{where}: {problem}")
 

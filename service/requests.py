@@ -24,7 +24,7 @@ def escape_pointer_part(part: str) -> str:
 
 def under(prefix: str, exc: MechanismError) -> MechanismError:
     """The same error, its pointer placed under `prefix` (e.g. /document)."""
-    return MechanismError(prefix + exc.pointer, exc.problem)
+    return MechanismError(prefix + exc.pointer, exc.problem, tuple((prefix + p, m) for p, m in exc.problems))
 
 
 def newton_options(options: dict | None, time_limit: float | None = None, pointer: str = "/options") -> NewtonOptions:

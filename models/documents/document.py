@@ -221,27 +221,43 @@ _NOT_A_NUMBER = {"float_type", "string_type", "float_parsing", "finite_number", 
 
 def _raise_first(exc: ValidationError) -> None:
     """Turn pydantic's error list into our error type, naming one offending field: an unknown
-    field first (a typo explains the rest), and counting the other fields with problems."""
+    field first (a typo explains the rest), and counting the other fields with problems; its
+    `problems` list every field with its own message, that one first."""
     errors = exc.errors()
     first = next((e for e in errors if e["type"] == "extra_forbidden"), errors[0])
-    location = _field_location(first["loc"])
-    here = [e for e in errors if _field_location(e["loc"]) == location]
-    message = first["msg"].removeprefix("Value error, ")  # pydantic's prefix to our validators' words
-    if first["type"] == "missing":
-        message = "required field is missing"
-    elif first["type"] == "extra_forbidden":
-        message = unknown_field_message(str(location[-1]) if location else "")
-    elif first["type"] in ("union_tag_invalid", "union_tag_not_found"):
-        location, message = _tag_problem(first, location)
-    elif all(e["type"] in _NOT_A_NUMBER for e in here):
-        message = (
-            f"expected a number (or a quantity string like '25 um', at most {MAX_QUANTITY_CHARS} "
-            f"characters), got {_shown(first.get('input'))}"
-        )
+    location, message = _problem(first, errors)
+    at_each: dict[tuple, dict] = {}
+    for error in errors:
+        at_each.setdefault(_field_location(error["loc"]), error)
+    at_each.pop(_field_location(first["loc"]))
+    rest = [_problem(error, errors) for error in at_each.values()]
+    problems = (
+        (pointer_of(location), message),
+        *((pointer_of(where), what) for where, what in rest if where != location),
+    )
     others = len({_field_location(e["loc"]) for e in errors} - {location, _field_location(first["loc"])})
     if others:
         message += f" (and {others} more field{'s' if others > 1 else ''} with problems)"
-    raise MechanismError(pointer_of(location), message) from None
+    raise MechanismError(pointer_of(location), message, problems) from None
+
+
+def _problem(error: dict, errors: list[dict]) -> tuple[tuple, str]:
+    """The field one of pydantic's errors names, and its problem in our words."""
+    location = _field_location(error["loc"])
+    here = [e for e in errors if _field_location(e["loc"]) == location]
+    message = error["msg"].removeprefix("Value error, ")  # pydantic's prefix to our validators' words
+    if error["type"] == "missing":
+        message = "required field is missing"
+    elif error["type"] == "extra_forbidden":
+        message = unknown_field_message(str(location[-1]) if location else "")
+    elif error["type"] in ("union_tag_invalid", "union_tag_not_found"):
+        location, message = _tag_problem(error, location)
+    elif all(e["type"] in _NOT_A_NUMBER for e in here):
+        message = (
+            f"expected a number (or a quantity string like '25 um', at most {MAX_QUANTITY_CHARS} "
+            f"characters), got {_shown(error.get('input'))}"
+        )
+    return location, message
 
 
 def _tag_problem(error: dict, location: tuple) -> tuple[tuple, str]:

@@ -63,7 +63,8 @@ def analysis_error(doc: dict, **fields) -> MechanismError:
 def _error(response: httpx.Response) -> dict:
     """The one error shape of the API."""
     body = response.json()
-    assert set(body) == {"error"} and set(body["error"]) == {"status", "code", "message", "pointer"}, body
+    keys = set(body["error"]) - {"problems"}  # every field's problem, when several have one
+    assert set(body) == {"error"} and keys == {"status", "code", "message", "pointer"}, body
     assert body["error"]["status"] == response.status_code
     return body["error"]
 
