@@ -16,7 +16,10 @@ and --json/--plot files are still written); 2 a problem with the document or the
 printed as one line "error: <where>: <problem>" on stderr.
 
 One module per command; importing it registers the command on the shared typer app. The
-`flexmech` script runs main() (service.cli.leaving): the app, then a quick exit.
+modules import the physics (NumPy, CasADi, the models) in their commands' bodies, not at their
+top, so that --help answers at once (benchmarks/cli_startup.py); the analyses' commands come
+from the registry when one runs (service.cli.commands). The `flexmech` script runs main()
+(service.cli.leaving): the app, then a quick exit.
 """
 
 from service.cli.application import app
@@ -32,9 +35,6 @@ from service.cli import contact  # noqa: F401
 from service.cli import simulate  # noqa: F401
 from service.cli import build  # noqa: F401
 from service.cli import upgrade  # noqa: F401
-from service.cli import analysis_commands
 from service.cli.leaving import main
-
-analysis_commands.listen()  # last: a registered analysis without a command of its own gets one
 
 __all__ = ["app", "main"]

@@ -12,16 +12,19 @@ import inspect
 import json
 import types
 import typing
+from collections.abc import Collection
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
 import typer
+import typer.main
 from pydantic import ValidationError
 from rich.console import Console
 from rich.markup import escape
 
-from service.analyses import ANALYSES, Analysis, AnalysisRequest
-from service.cli.application import app
+from service.analyses import Analysis, AnalysisRequest
+from service.analyses.base import Analyses
+from service.cli.catalog import command_names
 from service.cli.common import EXIT_NOT_CONVERGED, OptionError, consoles, number, table_of, user_errors, write_json
 from service.cli.options import (
     DocArg,
@@ -257,22 +260,11 @@ def checked_figure(analysis: Analysis, flag: str, path: Path) -> Path:
     return path
 
 
-def _taken() -> set[str]:
-    return {c.name or c.callback.__name__ for c in app.registered_commands if c.callback is not None}
-
-
-def add_command(analysis: Analysis) -> None:
-    """Register the analysis' command unless a command has its name (a richer one of its own)."""
-    name = analysis.name.replace("_", "-")
-    if name in _taken():
-        return
-    command = command_of(analysis)
-    app.command(name=name, help=command.__doc__, short_help=analysis.summary)(command)
-    for alias in analysis.aliases:
-        if alias not in _taken():
-            app.command(name=alias, help=command.__doc__, short_help=f"{analysis.summary} (as {name})")(command)
-
-
-def listen() -> None:
-    """Commands for every analysis, registered now and later (service.cli imports this last)."""
-    ANALYSES.listen(add_command)
+def commands_of(analyses: Analyses, taken: Collection[str]) -> dict[str, Any]:
+    """Command name -> command of every analysis whose name (and of each alias) no command in
+    `taken` has (service.cli.commands lists them after the modules' own commands)."""
+    maker = typer.Typer(add_completion=False)
+    for command, name, short in command_names(((a.name, a.summary, a.aliases) for a in analyses), taken):
+        function = command_of(analyses.named(name))
+        maker.command(name=command, help=function.__doc__, short_help=short)(function)
+    return dict(typer.main.get_group(maker).commands) if maker.registered_commands else {}

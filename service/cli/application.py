@@ -1,11 +1,15 @@
-"""The typer app every command module registers its command on (service.cli imports them)."""
+"""The typer app every command module registers its command on (service.cli imports them); its
+group adds a command per analysis (service.cli.commands)."""
 
 from __future__ import annotations
 
 import typer
 
+from service.cli.commands import Commands
+
 app = typer.Typer(
     name="flexmech",
+    cls=Commands,
     help="Kinetostatics of planar compliant mechanisms described by a mechanism document.",
     no_args_is_help=True,
     add_completion=False,

@@ -4,7 +4,7 @@ results (another folder than the input's)."""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich.console import Console
@@ -13,7 +13,9 @@ from rich.markup import escape
 from service.cli.application import app
 from service.cli.common import EXIT_NOT_CONVERGED, OptionError, consoles, table_of, user_errors
 from service.cli.options import JacobianOpt, LineSearchOpt, MaxIterOpt, newton_options
-from service.solvers.newton import NewtonOptions
+
+if TYPE_CHECKING:  # the solvers are imported when the command runs
+    from service.solvers.newton import NewtonOptions
 
 
 def run_with_progress(

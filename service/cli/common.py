@@ -5,18 +5,21 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import typer
 from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-from models import Mechanism, MechanismError
 from service.drawings.figures import PLOT_SUFFIXES
-from service.solvers.reports import plain
+
+if TYPE_CHECKING:  # the models are imported when a command runs
+    from models import Mechanism
 
 EXIT_NOT_CONVERGED = 1
 EXIT_ERROR = 2
@@ -55,12 +58,18 @@ def table_of(title: str | None, *columns: str, text: int = 1) -> Table:
     return table
 
 
+def user_error_types() -> tuple[type[Exception], ...]:
+    """OptionError, and MechanismError once the models are imported (none is raised before)."""
+    errors = sys.modules.get("models.errors")
+    return (OptionError,) if errors is None else (OptionError, errors.MechanismError)
+
+
 @contextmanager
 def user_errors(err: Console) -> Iterator[None]:
     """Turn problems with the document or the options into one red line and exit code 2."""
     try:
         yield
-    except (MechanismError, OptionError) as exc:
+    except user_error_types() as exc:  # evaluated when an exception arrives
         print_error(err, str(exc))
         raise typer.Exit(EXIT_ERROR) from None
 
@@ -68,6 +77,31 @@ def user_errors(err: Console) -> Iterator[None]:
 def print_error(err: Console, text: str) -> None:
     """The one line "error: <where>: <problem>"."""
     err.print(f"[bold red]error:[/bold red] {escape(text)}", soft_wrap=True)
+
+
+def spread(count: int, shown: int) -> list[int]:
+    """The indices of at most `shown` of `count` rows, spread evenly, the first and the last
+    among them (every row when there are no more than `shown`)."""
+    if count <= shown:
+        return list(range(count))
+    return sorted({round(k * (count - 1) / (shown - 1)) for k in range(shown)})
+
+
+def left_out(shown: int, total: int, what: str, spread_out: bool = False) -> str | None:
+    """The line under a table that shows `shown` of `total` rows (None when it shows them all):
+    "... and 14 more impacts (--json has them all)", or for rows spread over the whole
+    ("12 of 400 points shown, spread evenly (--json has them all)")."""
+    if shown >= total:
+        return None
+    if spread_out:
+        return f"{shown} of {total} {what} shown, spread evenly (--json has them all)"
+    return f"... and {total - shown} more {what} (--json has them all)"
+
+
+def print_left_out(out: Console, shown: int, total: int, what: str, spread_out: bool = False) -> None:
+    line = left_out(shown, total, what, spread_out)
+    if line is not None:
+        out.print(escape(line), style="dim")
 
 
 def number(value: float | None, unit: str | None = None) -> str:
@@ -79,6 +113,8 @@ def number(value: float | None, unit: str | None = None) -> str:
 
 # --- files ---------------------------------------------------------------------------------
 def write_json(path: Path, payload: dict) -> None:
+    from service.solvers.reports import plain
+
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(json.dumps(plain(payload), indent=2))

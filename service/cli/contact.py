@@ -8,12 +8,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Annotated
 
-import numpy as np
 import typer
 from rich.markup import escape
-from rich.progress import Progress
 
-from models import MechanismError
 from service.cli.application import app
 from service.cli.common import (
     EXIT_NOT_CONVERGED,
@@ -21,6 +18,7 @@ from service.cli.common import (
     check_plot_option,
     consoles,
     number,
+    print_left_out,
     table_of,
     user_errors,
     write_json,
@@ -76,6 +74,7 @@ def contact(
         check_plot_option(shapes)
         choice("--penetrating-start", penetrating_start, ("approach", "refuse"))
         mech = mechanism(document, None, sets)
+        from models import MechanismError
         from service.contact.problem import contact_problem
         from service.contact.solve import ContactOptions
 
@@ -108,6 +107,7 @@ def _path_parameters(mech, path, start, stop, steps) -> list[dict] | None:
 
 
 def _single_state(out, mech, problem, options, json_out) -> bool:
+    from models import MechanismError
     from service.analyses.base import AnalysisRequest
     from service.analyses.contact import CONTACT
 
@@ -143,6 +143,8 @@ def _single_state(out, mech, problem, options, json_out) -> bool:
 
 def _runs(mech, friction: list[float] | None) -> list[tuple[str, object]]:
     """(label, mechanism) of each run: the document's, or one per --friction value."""
+    import numpy as np
+
     if not friction:
         return [("", mech)]
     pairs = [pair.friction_pointer for pair in mech.structure.contacts.pairs]
@@ -196,6 +198,8 @@ def _path(out, mech, problem, options, parameters, output, json_out, plot, shape
 
 
 def _follow(out, mech, problem, fields, options, wanted, label):
+    from rich.progress import Progress
+
     from service.contact.path import follow, state_record
 
     states, records = [], []
@@ -209,6 +213,8 @@ def _follow(out, mech, problem, fields, options, wanted, label):
 
 
 def _print_path(out, mech, fields, records, y_name, problem, label: str) -> None:
+    import numpy as np
+
     unit = mech.doc_unit(mech.parameter_kind(fields.pointers[0]))
     y_unit = mech.doc_unit(problem.output_kinds[problem.output_names.index(y_name)])
     converged = [r for r in records if r["status"] == "converged"]
@@ -224,6 +230,7 @@ def _print_path(out, mech, fields, records, y_name, problem, label: str) -> None
         states = ", ".join(f"{name} {pair['state']}" for name, pair in r["pairs"].items())
         table.add_row(number(r["values"][0], unit), states, number(r["outputs"].get(y_name), y_unit))
     out.print(table)
+    print_left_out(out, len(records[::step]), len(records), "states", spread_out=True)
     values = np.array([r["outputs"][y_name] if r["status"] == "converged" else np.nan for r in records])
     if np.isfinite(values).any():
         k = int(np.nanargmax(np.abs(values)))
@@ -234,9 +241,12 @@ def _print_path(out, mech, fields, records, y_name, problem, label: str) -> None
     failed = [r for r in records if r["status"] != "converged"]
     for r in failed[:3]:
         out.print(f"[yellow]not converged[/yellow] at {number(r['values'][0], unit)}: {escape(r['message'])}")
+    print_left_out(out, min(3, len(failed)), len(failed), "states that did not converge")
 
 
 def _plot_path(mech, problem, fields, runs, y_name, plot) -> None:
+    import numpy as np
+
     from service.contact.plots import plot_path
     from service.drawings.figures import field_label
 
@@ -270,6 +280,8 @@ def _chosen(at: str | None, states: int) -> list[int] | None:
 
 
 def _plot_shapes(mech, problem, states, fields, chosen, shapes) -> None:
+    import numpy as np
+
     from service.contact.plots import plot_states
     from service.drawings.figures import field_label
 

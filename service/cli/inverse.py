@@ -8,13 +8,12 @@ import typer
 from rich.console import Console
 from rich.markup import escape
 
-from models import Mechanism, MechanismError
 from service.cli.application import app
 from service.cli.common import EXIT_NOT_CONVERGED, OptionError, consoles, number, table_of, user_errors, write_json
 from service.cli.options import DocArg, JsonOpt, MaxIterOpt, SetOpt, mechanism
-from service.solvers.newton import NewtonOptions
 
 if TYPE_CHECKING:  # the link inverse is imported when the command runs
+    from models import Mechanism
     from service.solvers.inverse_links import LinkInverseResult
 
 
@@ -79,7 +78,9 @@ def inverse(
 ) -> None:
     """Link inverse (Lan 2005 Sec. 5.3): initial shapes and unknown loads from the deformed
     shapes and internal forces of the document's `inverse` section."""
+    from models import MechanismError
     from service.solvers.inverse_links import inverse_links
+    from service.solvers.newton import NewtonOptions
 
     out, err = consoles()
     with user_errors(err):

@@ -8,7 +8,6 @@ import typer
 from rich.console import Console
 from rich.markup import escape
 
-from models import MechanismError
 from service.cli.application import app
 from service.cli.common import EXIT_NOT_CONVERGED, consoles, number, table_of, user_errors, write_json
 from service.cli.options import DocArg, JsonOpt, SetOpt, mechanism
@@ -95,6 +94,7 @@ def optimize(
 ) -> None:
     """Solve the design problem of the document's `optimize` section: one NLP over the design
     variables and the equilibrium of every load case (IPOPT, exact derivatives)."""
+    from models import MechanismError
     from service.design.optimize import prepare
     from service.design.problem import design_problem
 

@@ -4,13 +4,16 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from models import MODELS, Mechanism, compile_mechanism, load_document
+from service.cli.catalog import MODEL_NAMES
 from service.cli.common import OptionError
-from service.solvers.newton import NewtonOptions
+
+if TYPE_CHECKING:  # the models and the solvers are imported when a command runs
+    from models import Mechanism
+    from service.solvers.newton import NewtonOptions
 
 JACOBIANS = ("full", "first_term", "frozen")
 RESTARTS = ("previous", "undeformed")
@@ -18,7 +21,9 @@ RESTARTS = ("previous", "undeformed")
 DocArg = Annotated[Path, typer.Argument(help="Mechanism document (JSON or YAML).", show_default=False)]
 ModelOpt = Annotated[
     str | None,
-    typer.Option("--model", help=f"Model of every curved beam: {' | '.join(MODELS)} (default: as in the document)."),
+    typer.Option(
+        "--model", help=f"Model of every curved beam: {' | '.join(MODEL_NAMES)} (default: as in the document)."
+    ),
 ]
 SetOpt = Annotated[
     list[str] | None,
@@ -64,6 +69,8 @@ def overrides(sets: list[str] | None) -> dict[str, float | str]:
 
 
 def mechanism(document: Path, model: str | None, sets: list[str] | None) -> Mechanism:
+    from models import MODELS, compile_mechanism, load_document
+
     choice("--model", model, MODELS)
     given = overrides(sets)
     mech = compile_mechanism(load_document(document), model=model)
@@ -71,6 +78,8 @@ def mechanism(document: Path, model: str | None, sets: list[str] | None) -> Mech
 
 
 def newton_options(jacobian: str, line_search: bool, max_iterations: int) -> NewtonOptions:
+    from service.solvers.newton import NewtonOptions
+
     choice("--jacobian", jacobian, JACOBIANS)
     if max_iterations < 1:
         raise OptionError("--max-iterations", f"must be at least 1, got {max_iterations}")

@@ -1,7 +1,9 @@
 """`flexmech simulate`: motion in time by the document's `simulate` section, with --until,
---step and the scheme from the command line over it. A progress bar follows simulated time;
---plot draws outputs and energies against time, --snapshots the links at six times,
---animation the moving links (.gif, or .mp4 when ffmpeg is installed)."""
+--step and the scheme from the command line over it. Progress follows the whole run (the steps,
+then building the report and writing each file); --every keeps every n-th step in the report;
+--json writes the report, --csv its histories, --plot draws outputs and energies against time,
+--snapshots the links at six times, --animation the moving links (.gif, or .mp4 when ffmpeg is
+installed). The summary and files: service.cli.simulate_output."""
 
 from __future__ import annotations
 
@@ -10,24 +12,38 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.markup import escape
 
-from models.documents.simulation_spec import IMPACT_SCHEMES
 from service.cli.application import app
-from service.cli.common import (
-    EXIT_NOT_CONVERGED,
-    OptionError,
-    check_plot_option,
-    consoles,
-    number,
-    table_of,
-    user_errors,
-    write_json,
-)
+from service.cli.common import EXIT_NOT_CONVERGED, OptionError, check_plot_option, consoles, user_errors
 from service.cli.options import DocArg, JsonOpt, PlotOpt, SetOpt, mechanism
 from service.cli.progress import SimulationProgress
+from service.cli.simulate_output import Files, print_impacts, print_run, write_files
 
-SHOWN_OUTPUTS = 6
+EveryOpt = Annotated[
+    int | None,
+    typer.Option(
+        "--every",
+        metavar="N",
+        help="Keep every N-th step in the report, its histories and frames (the first and the last "
+        "always; impacts: and the states around each contact event); the steps themselves are unchanged.",
+    ),
+]
+MaxPointsOpt = Annotated[
+    int | None,
+    typer.Option(
+        "--max-points",
+        help="Impacts (event_driven, moreau): the most states the report keeps, spread over the run "
+        "(after --every), besides those around each contact event.",
+    ),
+]
+CsvOpt = Annotated[
+    Path | None,
+    typer.Option(
+        "--csv",
+        metavar="OUT.csv",
+        help="Write the histories as CSV: the time and every output, a column each, units in the header.",
+    ),
+]
 
 
 @app.command()
@@ -70,7 +86,10 @@ def simulate(
     snapshots: Annotated[
         Path | None, typer.Option("--snapshots", metavar="OUT.png|svg", help="Draw the links at six times.")
     ] = None,
+    every: EveryOpt = None,
+    max_points: MaxPointsOpt = None,
     json_out: JsonOpt = None,
+    csv_out: CsvOpt = None,
     plot: PlotOpt = None,
 ) -> None:
     """Motion in time: links, bodies and joints under loads and prescribed motions in time."""
@@ -79,11 +98,10 @@ def simulate(
         _check_figures(plot, snapshots, animation)
         mech = mechanism(document, None, sets)
         given = {"until": until, "step": step, "scheme": scheme, "damping": damping, "max_steps": max_steps}
-        spec = _spec(mech, err, compiled, {**given, "sensitivities": sensitivity or None})
-        if spec.scheme in IMPACT_SCHEMES:
-            _impacts(mech, spec, out, err, json_out, plot, snapshots, animation)
-            return
-        report = _run(mech, spec, out, err, max_steps, json_out, plot, snapshots, animation)
+        given |= {"every": every, "max_points": max_points, "sensitivities": sensitivity or None}
+        spec = _spec(mech, err, compiled, given)
+        files = Files(json_out, csv_out, plot, snapshots, animation)
+        report = _run(mech, spec, out, err, max_steps, files)
     if report["status"] != "finished":
         raise typer.Exit(EXIT_NOT_CONVERGED)
 
@@ -101,28 +119,39 @@ def _spec(mech, err, compiled: bool, given: dict):
     return simulation_spec(mech, given)
 
 
-def _run(mech, spec, out, err, max_steps, json_out, plot, snapshots, animation) -> dict:
-    """Links, bodies and joints in time under a progress bar: the report printed, the files
-    written; the report."""
-    from service.dynamics.run import MAX_STEPS, run_simulation
+def _run(mech, spec, out, err, max_steps: int | None, files: Files) -> dict:
+    """The run under its progress (links, bodies and joints; or rigid bodies with impacts), its
+    files written, its summary printed; the report. The service's step limit applies unless
+    --max-steps raises it."""
+    from models.documents.simulation_spec import IMPACT_SCHEMES
+    from service.dynamics.run import MAX_STEPS
 
-    with SimulationProgress(err, spec.until) as progress:  # --max-steps may raise the service's limit here
-        history, report = run_simulation(mech, spec, progress=progress, max_steps=max(MAX_STEPS, max_steps or 0))
-    _print(out, report)
-    if json_out is not None:
-        write_json(json_out, report)
-    if plot is not None:
-        from service.dynamics.figures import plot_history
+    impacts = spec.scheme in IMPACT_SCHEMES
+    if impacts:
+        for option, value in (("--snapshots", files.snapshots), ("--animation", files.animation)):
+            if value is not None:
+                raise OptionError(
+                    option, f"{option} draws links; for impacts --plot draws the motion and contact forces"
+                )
+    with SimulationProgress(err, spec.until) as progress:
+        if impacts:
+            from service.impacts.run import run_impacts
 
-        _write(plot_history, report, [n for n in report["outputs"]][:SHOWN_OUTPUTS], plot, option="--plot")
-    if snapshots is not None:
-        from service.dynamics.figures import draw_snapshots
+            history = None
+            _, report = run_impacts(
+                mech.document, spec, progress=progress.stepping(), max_steps=spec.max_steps or MAX_STEPS
+            )
+        else:
+            from service.dynamics.run import run_simulation
 
-        _write(draw_snapshots, mech, history, snapshots, option="--snapshots")
-    if animation is not None:
-        from service.dynamics.figures import animate
-
-        _write(animate, mech, history, animation, option="--animation")
+            limit = max(MAX_STEPS, max_steps or 0)
+            history, report = run_simulation(mech, spec, progress=progress.stepping(), max_steps=limit)
+        write_files(progress, files, report, mech, history)
+        progress.finish(f"{report['status']} at t = {report['time_reached']:g} s, {report['steps']} steps")
+    if impacts:
+        print_impacts(out, report, spec.scheme)
+    else:
+        print_run(out, report)
     return report
 
 
@@ -137,80 +166,3 @@ def _check_figures(plot: Path | None, snapshots: Path | None, animation: Path | 
             raise OptionError("--animation", f"cannot tell the format of '{animation}': use .gif or .mp4")
         if suffix == ".mp4" and shutil.which("ffmpeg") is None:
             raise OptionError("--animation", "an .mp4 needs ffmpeg, which is not installed: use .gif")
-
-
-def _impacts(mech, spec, out, err, json_out, plot, snapshots, animation) -> None:
-    """Rigid bodies with impacts: the path of each body's mass centre and the contact forces."""
-    from service.impacts.run import run_impacts
-
-    for option, value in (("--snapshots", snapshots), ("--animation", animation)):
-        if value is not None:
-            raise OptionError(option, f"{option} draws links; for impacts --plot draws the motion and contact forces")
-    from service.dynamics.run import MAX_STEPS
-
-    with SimulationProgress(err, spec.until) as progress:  # the service's step limit unless --max-steps raises it
-        _, report = run_impacts(mech.document, spec, progress=progress, max_steps=spec.max_steps or MAX_STEPS)
-    out.print(
-        f"[bold]{escape(report['name'])}[/bold]: {report['status']} at t = {report['time_reached']:g} s, "
-        f"{report['steps']} steps ({spec.scheme}) in {report['seconds']:.3f} s; energy balance error "
-        f"{report['energy_balance_error']:.2e}"
-    )
-    table = table_of(None, "impact", "pair", "time (s)", "impact speed", "exit speed", "ratio", text=2)
-    for k, hit in enumerate(report["impacts"][:SHOWN_OUTPUTS]):
-        table.add_row(
-            str(k + 1),
-            escape(hit["pair"]),
-            f"{hit['time']:.7f}",
-            *(number(hit[key], "") for key in ("impact_speed", "exit_speed", "rebound_ratio")),
-        )
-    out.print(table)
-    if "sensitivities" in report:
-        _print_sensitivities(out, report["sensitivities"])
-    if json_out is not None:
-        write_json(json_out, report)
-    if plot is not None:
-        from service.impacts.figures import plot_impacts
-
-        _write(plot_impacts, report, plot, option="--plot")
-    if report["status"] != "finished":
-        raise typer.Exit(EXIT_NOT_CONVERGED)
-
-
-def _print_sensitivities(out, sensitivities: dict) -> None:
-    """d (coordinate at the end time) / d field, a row per field."""
-    fields = sensitivities["fields"]
-    names = list(next(iter(fields.values()))["coordinates"]) if fields else []
-    table = table_of(
-        f"d (state at t = {sensitivities['time']:g} s) / d field; {sensitivities['units']['coordinates']}",
-        "field",
-        "unit",
-        *names,
-        text=2,
-    )
-    for pointer, values in fields.items():
-        row = [number(values["coordinates"][name], "") for name in names]
-        table.add_row(escape(pointer), escape(values["unit"]), *row)
-    out.print(table)
-    for warning in sensitivities["warnings"]:
-        out.print(f"[yellow]warning:[/yellow] {escape(warning)}")
-
-
-def _write(draw, *args, option: str) -> None:
-    try:
-        draw(*args)
-    except OSError as exc:
-        raise OptionError(option, f"cannot write {args[-1]}: {exc.strerror}") from None
-
-
-def _print(out, report: dict) -> None:
-    out.print(
-        f"[bold]{escape(report['name'])}[/bold]: {report['status']} at t = {report['time_reached']:g} s, "
-        f"{report['steps']} steps in {report['seconds']:.2f} s; energy balance error "
-        f"{report['energy_balance_error']:.2e}"
-    )
-    if report["message"]:
-        out.print(escape(report["message"]))
-    table = table_of(None, "output", "start", "end", "min", "max", text=1)
-    for name, values in list(report["outputs"].items())[: 3 * SHOWN_OUTPUTS]:
-        table.add_row(escape(name), *(number(v, "") for v in (values[0], values[-1], min(values), max(values))))
-    out.print(table)

@@ -5,16 +5,14 @@ command's own keys (document, model, overrides)."""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich.console import Console
 from rich.markup import escape
 
-from models import Mechanism, MechanismError
-from service.analyses import ANALYSES, Analysis, AnalysisRequest
-from service.analyses.equilibrium import solution_report
 from service.cli.application import app
+from service.cli.catalog import analysis_names
 from service.cli.common import (
     EXIT_NOT_CONVERGED,
     OptionError,
@@ -39,18 +37,30 @@ from service.cli.options import (
     newton_options,
     overrides,
 )
-from service.cli.report_tables import print_solution, print_status, print_stiffness, print_wrenches
-from service.solvers.energy import minimize_energy
-from service.solvers.equilibrium import EquilibriumResult, solve_equilibrium
-from service.solvers.newton import NewtonOptions
-from service.solvers.reports import stiffness_dict
+
+if TYPE_CHECKING:  # the analyses and solvers are imported when the command runs
+    from models import Mechanism, MechanismError
+    from service.analyses import Analysis
+    from service.solvers.equilibrium import EquilibriumResult
+    from service.solvers.newton import NewtonOptions
 
 # The analyses whose report is a solution (an EquilibriumResult): the CLI calls their solver
 # itself, for the result that --plot draws, and builds the same report the registry does.
-SOLVERS = {"equilibrium": solve_equilibrium, "energy": minimize_energy}
+SOLVERS = ("equilibrium", "energy")
+
+
+def solver_of(name: str):
+    """The solver of an analysis of SOLVERS: (mech, options) -> EquilibriumResult."""
+    from service.solvers.energy import minimize_energy
+    from service.solvers.equilibrium import solve_equilibrium
+
+    return {"equilibrium": solve_equilibrium, "energy": minimize_energy}[name]
 
 
 def analysis_named(name: str) -> Analysis:
+    from models import MechanismError
+    from service.analyses import ANALYSES
+
     try:
         return ANALYSES.named(name)
     except MechanismError as exc:
@@ -60,6 +70,8 @@ def analysis_named(name: str) -> Analysis:
 def in_the_file(exc: MechanismError) -> MechanismError:
     """The registry places document errors under /document (the request's field); here the
     document is the file, whose fields are named from its root."""
+    from models import MechanismError
+
     if exc.pointer == "/document" or exc.pointer.startswith("/document/"):
         return MechanismError(exc.pointer.removeprefix("/document"), exc.problem)
     return exc
@@ -69,14 +81,18 @@ def run_analysis(
     mech: Mechanism, analysis: Analysis, options: NewtonOptions, stiffness: bool
 ) -> tuple[EquilibriumResult | None, dict]:
     """(the solution, or None for an analysis that has none; the analysis' report)."""
-    solver = SOLVERS.get(analysis.name)
-    if solver is None:
+    from models import MechanismError
+    from service.analyses import AnalysisRequest
+    from service.analyses.equilibrium import solution_report
+    from service.solvers.reports import stiffness_dict
+
+    if analysis.name not in SOLVERS:
         try:
             asked = {"stiffness": stiffness} if "stiffness" in analysis.Options.model_fields else {}
             return None, analysis.run(mech, AnalysisRequest(options, asked))
         except MechanismError as exc:
             raise in_the_file(exc) from None
-    result = solver(mech, options)
+    result = solver_of(analysis.name)(mech, options)
     report = solution_report(mech, result, analysis.name)
     if stiffness and result.converged:
         report["stiffness"] = stiffness_dict(mech, result.z)
@@ -84,6 +100,8 @@ def run_analysis(
 
 
 def print_report(out: Console, mech: Mechanism, report: dict, stiffness: bool) -> None:
+    from service.cli.report_tables import print_solution, print_status, print_stiffness, print_wrenches
+
     print_status(out, report)
     if report["analysis"] in SOLVERS:
         if report["status"] == "converged":
@@ -130,7 +148,7 @@ def check_solve_options(analysis: Analysis, plot: Path | None) -> None:
 def solve(
     document: DocArg,
     analysis: Annotated[
-        str, typer.Option("--analysis", help=f"The analysis: {' | '.join(ANALYSES.names())}.")
+        str, typer.Option("--analysis", help=f"The analysis: {' | '.join(analysis_names())}.")
     ] = "equilibrium",
     model: ModelOpt = None,
     sets: SetOpt = None,

@@ -1,29 +1,19 @@
 """`flexmech sweep`: a numeric field swept with continuation (the document's sweep section, or
-one given by --path), for one model or each (--compare-models)."""
+one given by --path), for one model or each (--compare-models); the curves are run and printed
+by service.cli.sweep_curves, --csv writes them as a table (service.cli.csv_files)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
-import numpy as np
 import typer
 from rich.console import Console
 from rich.markup import escape
-from rich.table import Table
 
-from models import COMPARED_MODELS, Mechanism
-from models.elements import FAMILIES
 from service.cli.application import app
-from service.cli.common import (
-    EXIT_NOT_CONVERGED,
-    consoles,
-    number,
-    save_plot,
-    table_of,
-    user_errors,
-    write_json,
-)
+from service.cli.catalog import COMPARED_MODEL_NAMES
+from service.cli.common import EXIT_NOT_CONVERGED, consoles, save_plot, user_errors, write_json
 from service.cli.options import (
     RESTARTS,
     DocArg,
@@ -36,211 +26,34 @@ from service.cli.options import (
     SetOpt,
     mechanism,
 )
-from service.cli.sweep_plan import SweepPlan, checked_options, plan_sweep
-from service.drawings.plotting import field_label, output_unit
-from service.solvers.newton import NewtonOptions
 
-SI_UNITS = {"force": "N", "moment": "N*m", "length": "m", "angle": "rad"}
+if TYPE_CHECKING:  # the models and the sweep are imported when the command runs
+    from models import Mechanism
+    from service.cli.sweep_plan import SweepPlan
 
-if TYPE_CHECKING:  # the sweep is imported when the command runs
-    from service.solvers.sweep import SweepResult, TargetResult
-
-# Points of each curve printed (the --json file has every one).
-SHOWN_POINTS = 6
-
-
-# --- the curves ------------------------------------------------------------------------------
-def curve_label(mech: Mechanism, model: str | None) -> str:
-    """The material (when there is one) and the model of the curved beams."""
-    elements = mech.structure.elements
-    materials = sorted({t.material for t in elements if hasattr(t, "material")})
-    named = [getattr(FAMILIES.named(element.type), "model_name", None) for element in mech.document.elements.values()]
-    models = sorted({name(element) for name, element in zip(named, mech.document.elements.values()) if name})
-    parts = [", ".join(materials)] if len(materials) == 1 else []
-    if model or models:  # a mechanism without curved beams has no model to name
-        parts.append(model or (models[0] if len(models) == 1 else "mixed models"))
-    return ", ".join(parts) or "curve"
-
-
-def sweep_table(mech: Mechanism, label: str, result: SweepResult, x_output: str, y_output: str) -> Table:
-    n = len(result.values)
-    rows = sorted(set(np.linspace(0, n - 1, min(n, SHOWN_POINTS)).round().astype(int).tolist()))
-    unit = mech.doc_unit(mech.parameter_kind(result.path))
-    converged = sum(s == "converged" for s in result.status)
-    table = table_of(
-        f"{label}: {n} points, {converged} converged, {result.seconds:.3g} s",
-        "point",
-        f"{result.path} [{unit}]",
-        f"{x_output} [{output_unit(mech, x_output)}]",
-        f"{y_output} [{output_unit(mech, y_output)}]",
-        "status",
-        "iterations",
-    )
-    table.columns[0].justify = "right"
-    table.columns[4].justify = "left"
-    table.columns[4].overflow = "ellipsis"
-    for i in rows:
-        table.add_row(
-            str(i),
-            number(result.values[i]),
-            number(result.outputs[x_output][i]),
-            number(result.outputs[y_output][i]),
-            result.status[i],
-            str(result.iterations[i]),
-        )
-    return table
-
-
-def target_dict(target: TargetResult, plan: SweepPlan) -> dict:
-    return {
-        "goal": plan.goal,
-        "status": target.status,
-        "value": target.value,
-        "unit": plan.unit,
-        "iterations": target.equilibrium.iterations,
-        "message": target.equilibrium.message,
-    }
-
-
-def print_unconverged_points(out: Console, label: str, result: SweepResult, plan: SweepPlan) -> None:
-    """How many points did not converge, and the first of them."""
-    bad = [i for i, s in enumerate(result.status) if s != "converged"]
-    first = bad[0]
-    residuals = result.residuals(first)
-    out.print(
-        f"[red]{label}: {len(bad)} of {len(result.status)} points did not converge[/red] "
-        f"(first: point {first}, {plan.spec.path} = {number(result.values[first], plan.unit)}, "
-        f"status {result.status[first]}, residual "
-        f"{number(residuals['residual_norm'], residuals['residual_unit'])}, "
-        f"{result.iterations[first]} iterations)"
-    )
-
-
-# --- the stiffness of a prescribed displacement --------------------------------------------
-def stiffness_record(result: SweepResult, y_output: str) -> dict | None:
-    """The secant stiffness of the reaction `y_output` against the prescribed displacement the
-    sweep moves (document units: the reaction's unit per the field's), from the first point to
-    the second ("first_step") and to the last ("last"); and at the start ("start"), the secant
-    over a hundredth of the first step, solved from the first point's state (None if that
-    solve fails). None when the first, second or last point did not converge."""
-    from service.solvers.equilibrium import solve_equilibrium
-
-    mech, values, force = result.mechanism, result.values, result.outputs[y_output]
-    if len(values) < 2 or values[1] == values[0] or any(result.status[i] != "converged" for i in (0, 1, -1)):
-        return None
-    small = (values[1] - values[0]) / 100
-    near = solve_equilibrium(mech.with_values({result.path: float(values[0] + small)}), guess=result.z[0])
-    y_kind = mech.graphs.output_kinds[mech.graphs.output_names.index(y_output)]
-    x_kind = mech.parameter_kind(result.path)
-    return {
-        "output": y_output,
-        "unit": f"{output_unit(mech, y_output)}/{mech.doc_unit(x_kind)}",
-        "si_unit": f"{SI_UNITS[y_kind]}/{SI_UNITS[x_kind]}",
-        "si_per_unit": mech.doc_factor(y_kind) / mech.doc_factor(x_kind),
-        "first_step": float((force[1] - force[0]) / (values[1] - values[0])),
-        "at_first_step": float(values[1]),
-        "last": float((force[-1] - force[0]) / (values[-1] - values[0])),
-        "at_last": float(values[-1]),
-        "start": float((near.outputs()[y_output] - force[0]) / small) if near.converged else None,
-        "start_step": float(small),
-    }
-
-
-def si_number(value: float) -> str:
-    """3.25729e4, as a paper writes it."""
-    mantissa, exponent = f"{value:.5e}".split("e")
-    return f"{mantissa}e{int(exponent)}"
-
-
-def print_stiffness(out: Console, label: str, record: dict, plan: SweepPlan) -> None:
-    """The secant stiffness at the first step and at the last, and the stiffness at the start,
-    in document units and SI."""
-
-    def both(k: float) -> str:
-        return f"[bold]{escape(number(k, record['unit']))}[/bold] ({si_number(k * record['si_per_unit'])} {record['si_unit']})"
-
-    first, last, start = record["first_step"], record["last"], record["start"]
-    out.print(
-        f"{escape(label)}: secant stiffness {escape(record['output'])} / {escape(field_label(plan.spec.path))}: "
-        f"{both(first)} at the first step, {both(last)} at the last ({100 * (last / first - 1):+.2f} %)"
-    )
-    if start is not None:
-        out.print(
-            f"{escape(label)}: stiffness at the start {both(start)} (secant over "
-            f"{number(record['start_step'], plan.unit)}); the last secant (at "
-            f"{number(record['at_last'], plan.unit)}) is {100 * (last / start - 1):+.2f} % relative to it"
-        )
-
-
-def run_curve(
-    out: Console, mech: Mechanism, model: str | None, plan: SweepPlan, options: NewtonOptions, advance
-) -> tuple[tuple[str, SweepResult] | None, dict, bool]:
-    """One model's sweep, printed: (the curve to plot or None, its JSON record, whether it failed)."""
-    from service.solvers.sweep import run_sweep_spec
-
-    label = curve_label(mech, model)
-    result, target = run_sweep_spec(mech, plan.spec, options, plan.restart, advance)
-    if result is None:  # the end of the path (a target output value) was not reached
-        eq = target.equilibrium
-        out.print(
-            f"{label}: target {plan.goal} not reached: status "
-            f"[bold red]{target.status}[/bold red] after {eq.iterations} iterations, "
-            f"residual {number(eq.residual_norm_force, mech.doc_unit('force'))}; "
-            f"{escape(eq.message or 'no message')}"
-        )
-        return None, {"label": label, "model": model, "target": target_dict(target, plan)}, True
-    record = {
-        "label": label,
-        "model": model,
-        "sweep": result.to_dict(),
-        "target": target_dict(target, plan) if target else None,
-    }
-    out.print(sweep_table(mech, label, result, plan.x_output, plan.y_output))
-    if plan.stiffness and (stiffness := stiffness_record(result, plan.y_output)) is not None:
-        record["stiffness"] = stiffness
-        print_stiffness(out, label, stiffness, plan)
-    if target is not None:
-        out.print(
-            f"{label}: {plan.goal} at {field_label(plan.spec.path)} = [bold]{number(target.value, plan.unit)}[/bold]"
-        )
-    if not result.all_converged:
-        print_unconverged_points(out, label, result, plan)
-    return (label, result), record, not result.all_converged
-
-
-def run_curves(
-    out: Console,
-    err: Console,
-    mechs: list[Mechanism],
-    models: list[str | None],
-    plan: SweepPlan,
-    options: NewtonOptions,
-) -> tuple[list, list[dict], bool]:
-    """Every model's sweep under a progress bar on stderr: (curves, records, whether any failed)."""
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
-
-    curves, records, failed = [], [], False
-    with Progress(
-        TextColumn("{task.description}"),
-        BarColumn(),
-        MofNCompleteColumn(),
-        TimeElapsedColumn(),
-        console=err,
-        transient=True,
-        disable=not err.is_terminal,
-    ) as progress:
-        for mech, model in zip(mechs, models):
-            task = progress.add_task(curve_label(mech, model), total=None)
-
-            def advance(done: int, total: int, task=task) -> None:
-                progress.update(task, completed=done, total=total)
-
-            curve, record, curve_failed = run_curve(out, mech, model, plan, options, advance)
-            progress.update(task, visible=False)
-            curves += [curve] if curve is not None else []
-            records.append(record)
-            failed = failed or curve_failed
-    return curves, records, failed
+CsvOpt = Annotated[
+    Path | None,
+    typer.Option(
+        "--csv",
+        metavar="OUT.csv",
+        help="Write every point of every curve as CSV: the swept field, each output and the status, "
+        "a column each, units in the header.",
+    ),
+]
+XOutputOpt = Annotated[
+    str | None,
+    typer.Option(
+        "--x-output",
+        help="Output on the horizontal axis (default: the first point output's x; for a prescribed displacement, the moved body's displacement along it).",
+    ),
+]
+YOutputOpt = Annotated[
+    str | None,
+    typer.Option(
+        "--y-output",
+        help="Output on the left panel's vertical axis (default: the point's y; for a prescribed displacement, the reaction along it, and its secant stiffness is printed and drawn).",
+    ),
+]
 
 
 # --- the command -----------------------------------------------------------------------------
@@ -264,7 +77,7 @@ def sweep(
     ] = None,
     model: ModelOpt = None,
     compare_models: Annotated[
-        bool, typer.Option("--compare-models", help=f"Sweep with each model ({', '.join(COMPARED_MODELS)}).")
+        bool, typer.Option("--compare-models", help=f"Sweep with each model ({', '.join(COMPARED_MODEL_NAMES)}).")
     ] = False,
     restart: Annotated[
         str, typer.Option("--restart", help=f"Newton start at each point: {' | '.join(RESTARTS)}.")
@@ -274,23 +87,15 @@ def sweep(
     line_search: LineSearchOpt = True,
     max_iterations: MaxIterOpt = 50,
     json_out: JsonOpt = None,
+    csv_out: CsvOpt = None,
     plot: PlotOpt = None,
-    x_output: Annotated[
-        str | None,
-        typer.Option(
-            "--x-output",
-            help="Output on the horizontal axis (default: the first point output's x; for a prescribed displacement, the moved body's displacement along it).",
-        ),
-    ] = None,
-    y_output: Annotated[
-        str | None,
-        typer.Option(
-            "--y-output",
-            help="Output on the left panel's vertical axis (default: the point's y; for a prescribed displacement, the reaction along it, and its secant stiffness is printed and drawn).",
-        ),
-    ] = None,
+    x_output: XOutputOpt = None,
+    y_output: YOutputOpt = None,
 ) -> None:
     """Sweep a numeric field (a load, by default the document's sweep section) with continuation."""
+    from service.cli.sweep_curves import run_curves
+    from service.cli.sweep_plan import checked_options, plan_sweep
+
     out, err = consoles()
     with user_errors(err):
         options, models = checked_options(
@@ -300,7 +105,7 @@ def sweep(
         swept, plan = plan_sweep(mechs[0], path, start, stop, steps, until, x_output, y_output, restart)
         _print_heading(out, mechs[0], document, swept, plan)
         curves, records, failed = run_curves(out, err, mechs, models, plan, options)
-        _write_files(out, document, mechs[0], swept, plan, curves, records, json_out, plot)
+        _write_files(out, document, mechs[0], swept, plan, curves, records, (json_out, csv_out, plot))
     if failed:
         raise typer.Exit(EXIT_NOT_CONVERGED)
 
@@ -321,10 +126,11 @@ def _write_files(
     plan: SweepPlan,
     curves: list,
     records: list[dict],
-    json_out: Path | None,
-    plot: Path | None,
+    files: tuple[Path | None, Path | None, Path | None],
 ) -> None:
-    """The --json file (every curve's record) and the --plot figure (the curves that ran)."""
+    """The --json file (every curve's record), the --csv file (their points) and the --plot
+    figure (the curves that ran), as `files` names them."""
+    json_out, csv_out, plot = files
     if json_out is not None:
         write_json(
             json_out,
@@ -340,6 +146,12 @@ def _write_files(
             },
         )
         out.print(f"wrote {escape(str(json_out))}")
+    if csv_out is not None:
+        from service.cli.csv_files import sweep_columns, write_csv
+        from service.solvers.reports import output_units
+
+        write_csv(csv_out, sweep_columns(swept, plan.unit, output_units(first), records))
+        out.print(f"wrote {escape(str(csv_out))}")
     if plot is not None and curves:
         from service.drawings.plotting import plot_sweeps
 

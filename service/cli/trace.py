@@ -5,12 +5,10 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
-import numpy as np
 import typer
 from rich.console import Console
 from rich.markup import escape
 
-from models import Mechanism, MechanismError
 from service.cli.application import app
 from service.cli.common import (
     EXIT_NOT_CONVERGED,
@@ -19,15 +17,17 @@ from service.cli.common import (
     consoles,
     default_xy,
     number,
+    print_left_out,
     save_plot,
+    spread,
     table_of,
     user_errors,
     write_json,
 )
 from service.cli.options import DocArg, JsonOpt, SetOpt, mechanism
-from service.drawings.plotting import output_unit
 
 if TYPE_CHECKING:  # continuation is imported when the command runs
+    from models import Mechanism
     from service.solvers.continuation import PathResult
 
 # Points of the path printed (the --json file has every one).
@@ -45,6 +45,8 @@ def shown_output(mech: Mechanism) -> str:
 def print_path(out: Console, mech: Mechanism, path: str, result: PathResult) -> None:
     """The limit points and a dozen points of the path, with the displacement of the first
     point output (shown_output) and their stability."""
+    from service.drawings.plotting import output_unit
+
     shown = shown_output(mech)
     field, output = f"{path} [{result.unit}]", f"{shown} [{output_unit(mech, shown)}]"
     table = table_of("limit points", "kind", field, output, "after point")
@@ -52,8 +54,8 @@ def print_path(out: Console, mech: Mechanism, path: str, result: PathResult) -> 
         table.add_row(lp.kind, number(lp.value), number(lp.outputs[shown]), str(lp.after_point))
     out.print(table)
     table = table_of("path", "point", field, output, "stable")
-    n = len(result.points)
-    for i in sorted(set(np.linspace(0, n - 1, min(n, SHOWN_POINTS)).round().astype(int).tolist())):
+    rows = spread(len(result.points), SHOWN_POINTS)
+    for i in rows:
         pt = result.points[i]
         table.add_row(
             str(i),
@@ -62,6 +64,7 @@ def print_path(out: Console, mech: Mechanism, path: str, result: PathResult) -> 
             {True: "yes", False: "no", None: "?"}[pt.stability.stable],
         )
     out.print(table)
+    print_left_out(out, len(rows), len(result.points), "points", spread_out=True)
 
 
 @app.command()
@@ -85,6 +88,7 @@ def trace(
 ) -> None:
     """Pseudo-arc-length continuation of the equilibrium path through limit points (snap-through),
     with the stability of every point and the limit loads located exactly."""
+    from models import MechanismError
     from service.solvers.continuation import trace_path
 
     out, err = consoles()

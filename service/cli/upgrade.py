@@ -8,12 +8,8 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-import yaml
 from rich.markup import escape
 
-from models.documents.reading import parse_json, parse_yaml
-from models.documents.upgrade import upgraded
-from models.errors import MechanismError
 from service.cli.application import app
 from service.cli.common import OptionError, consoles, user_errors
 
@@ -27,6 +23,12 @@ def upgrade(
     in_place: Annotated[bool, typer.Option("--in-place", help="Write it over DOC.")] = False,
 ) -> None:
     """Convert a document of an older shape (an `impacts` section) to today's."""
+    import yaml
+
+    from models.documents.reading import parse_json, parse_yaml
+    from models.documents.upgrade import upgraded
+    from models.errors import MechanismError
+
     out, err = consoles()
     with user_errors(err):
         if in_place and output is not None:
