@@ -96,3 +96,22 @@ def simulate_to_the_first_frame(page, example: str, until: float) -> None:
     run_and_wait(page, "simulate: finished", timeout=180_000)
     page.locator("#frame").focus()
     page.keyboard.press("Home")
+
+
+def set_document_text(page, text: str) -> None:
+    """Replace the editor's text as a user pastes it: all selected, then the text typed in one
+    go (the page hears "input" and redraws)."""
+    page.click("#editor")
+    page.keyboard.press("Control+A")
+    page.keyboard.insert_text(text)
+    assert document_text(page) == text
+
+
+def document_text(page) -> str:
+    """The editor's whole text (as the page reads it)."""
+    return page.evaluate("async () => (await import('/workbench/editor.js')).text()")
+
+
+def selected_text(page) -> str:
+    """The text selected in the editor."""
+    return page.evaluate("() => getSelection().toString()")

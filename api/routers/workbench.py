@@ -1,14 +1,18 @@
 """The browser workbench: the page at / (and /jobs/{id}, the same page showing a job) and its
-scripts and styles under /workbench/, all files of this package (api/web): no CDN, no
-build step. The page talks to the same /v1 API as any client, with the same API keys."""
+scripts and styles under /workbench/, all files of this package (api/web): no CDN, and no
+build step but the editor's library, one committed module (api/web/vendor/codemirror.js, made
+by scripts/build-editor-bundle). The page talks to the same /v1 API as any client, with the
+same API keys."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 from fastapi import APIRouter, FastAPI
-from fastapi.responses import FileResponse
+from fastapi.responses import FileResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
+
+from models.documents.document import MechanismDocument
 
 WEB = Path(__file__).resolve().parents[1] / "web"
 # The page loads nothing from elsewhere: the browser refuses any other origin.
@@ -34,6 +38,13 @@ async def workbench() -> FileResponse:
 async def job_page(job_id: str) -> FileResponse:
     """The page; its script reads the job id from the address and follows the job."""
     return _page()
+
+
+@router.get("/workbench/document-schema.json")
+async def document_schema() -> JSONResponse:
+    """The JSON schema of the mechanism document (its element families as registered now):
+    the editor completes field names from it."""
+    return JSONResponse(MechanismDocument.model_json_schema(), headers={"Cache-Control": "no-cache"})
 
 
 def mount_workbench(app: FastAPI) -> None:

@@ -1,10 +1,12 @@
 // The animation of a result's frames (simulation states, contact path states): a slider
-// (keyboard: arrows, Home, End), Play/Pause, and the frame's label (time or field value).
+// (keyboard: arrows, Home, End), Play/Pause at a speed (a simulation in real time, or slower or
+// faster; any frames one by one), and the frame's label (time or field value).
 
 import { drawScene, sceneBounds } from "./scene.js";
 
 const $ = (id) => document.getElementById(id);
-const PLAY_SECONDS = 8; // a whole animation, whatever its number of frames
+const PLAY_SECONDS = 8; // a whole animation of frames not in time (states of a sweep, a mode's swing)
+const FRAMES_PER_SECOND = 10; // playing frame by frame
 const BOUND_SAMPLES = 200; // frames looked at for the drawing's fixed extent
 
 let current = { drawing: null, frames: [], bounds: null, playing: false };
@@ -24,6 +26,22 @@ function stop() {
   $("play").setAttribute("aria-pressed", "false");
 }
 
+// The frame to show `elapsed` seconds after frame `first` started playing: frames in time (a
+// simulation's) at the speed chosen (1: real time); others, or "frames", at FRAMES_PER_SECOND,
+// else the whole animation in PLAY_SECONDS.
+function frameAfter(frames, first, elapsed) {
+  const speed = $("speed").value;
+  const timed = frames.every((f) => typeof f.time === "number");
+  if (timed && speed !== "frames") {
+    const t = frames[first].time + elapsed * Number(speed);
+    let k = first;
+    while (k < frames.length - 1 && frames[k + 1].time <= t) k += 1;
+    return k;
+  }
+  const rate = speed === "frames" ? FRAMES_PER_SECOND : frames.length / PLAY_SECONDS;
+  return first + Math.floor(elapsed * rate);
+}
+
 function play() {
   const { frames } = current;
   if (frames.length < 2) return;
@@ -35,7 +53,7 @@ function play() {
   const tick = (now) => {
     if (!current.playing) return;
     if (start === null) start = now;
-    const k = first + Math.floor(((now - start) / 1000 / PLAY_SECONDS) * frames.length);
+    const k = frameAfter(frames, first, (now - start) / 1000);
     showFrame(k);
     if (k >= frames.length - 1) { stop(); return; }
     requestAnimationFrame(tick);
@@ -51,6 +69,7 @@ export function setFrames(drawing, frames) {
   $("animation").hidden = frames.length < 2;
   $("frame").max = String(Math.max(0, frames.length - 1));
   if (frames.length) showFrame(frames.length - 1);
+  else $("frame-label").textContent = "";
 }
 
 // Frames to show and play at once (a mode picked from its table).

@@ -1,13 +1,15 @@
 // The /v1 API as the page uses it: JSON in and out, the API key in X-API-Key (kept in the
-// browser's local storage), and errors as ApiProblem carrying the pointer the server names.
+// browser's local storage), and errors as ApiProblem carrying the pointer the server names
+// and every problem it lists ({pointer, message}, the named one first; that one alone if none).
 
 const KEY_STORE = "flexmech.apiKey";
 
 export class ApiProblem extends Error {
-  constructor(status, message, pointer) {
+  constructor(status, message, pointer, problems = null) {
     super(message);
     this.status = status;
     this.pointer = pointer || null;
+    this.problems = problems && problems.length ? problems : [{ pointer: this.pointer, message }];
   }
 }
 
@@ -35,7 +37,8 @@ async function call(method, path, body) {
   try { data = text ? JSON.parse(text) : null; } catch { data = null; }
   if (!response.ok) {
     const problem = (data && data.error) || {};
-    throw new ApiProblem(response.status, problem.message || `${response.status} ${response.statusText}`, problem.pointer);
+    throw new ApiProblem(response.status, problem.message || `${response.status} ${response.statusText}`, problem.pointer,
+                         problem.problems);
   }
   return data;
 }

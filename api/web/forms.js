@@ -31,7 +31,8 @@ const isObjectModel = (s) => s.type === "object" && s.properties;
 
 // The field tree of a schema's properties: {key, path, label, kind, schema, optional, children}.
 function fieldsOf(schema, root, path = [], skip = COMMON) {
-  return Object.entries(schema.properties || {}).filter(([key]) => !skip.has(key)).map(([key, raw]) => {
+  const deprecated = ([, raw]) => /^deprecated\b/.test(raw.description || ""); // kept by the API for old clients, never offered
+  return Object.entries(schema.properties || {}).filter(([key]) => !skip.has(key)).filter((entry) => !deprecated(entry)).map(([key, raw]) => {
     const [s, nullable] = withoutNull(raw, root);
     const label = raw.title || key.charAt(0).toUpperCase() + key.slice(1).replace(/_/g, " ");
     const field = { key, path: [...path, key], label, schema: { ...s, ...raw },

@@ -3,7 +3,8 @@
 // anything else as a table of its numbers.
 
 import { contactFrame } from "./contactframes.js";
-import { simulationView } from "./results.js";
+import { mostMoving, simulationView } from "./results.js";
+import { recordsTable } from "./vibration.js";
 
 const MAX_TABLE_ROWS = 500;
 
@@ -22,7 +23,8 @@ function pointSeries(v, result, points) {
     v.units[name] = (result.output_units || {})[name] || "";
   }
   const first = (result.parameters || [])[0];
-  const output = [...outputs][0];
+  const lengthUnit = v.units[[...outputs].find((name) => /\.(x|y)$/.test(name))];
+  const output = mostMoving(v, [...outputs], lengthUnit) || [...outputs][0];
   v.defaultCurve = first && output ? [first.path, output] : null;
 }
 
@@ -61,15 +63,18 @@ function contactView(result, base) {
   return v;
 }
 
+// Every number of a result, with the unit its report gives the field (its `units` by the
+// field's last name), "1" for a count or a ratio it gives none.
 function numbersTable(caption, data) {
   const rows = [];
-  const walk = (value, path) => {
-    if (rows.length >= MAX_TABLE_ROWS) return;
-    if (value === null || typeof value !== "object") rows.push([path || "(value)", value]);
-    else for (const [key, inner] of Object.entries(value)) walk(inner, path ? `${path}.${key}` : key);
+  const units = (data && data.units) || {};
+  const walk = (value, path, key) => {
+    if (rows.length >= MAX_TABLE_ROWS || key === "units") return;
+    if (value === null || typeof value !== "object") rows.push([path || "(value)", value, typeof value === "number" ? units[key] || "1" : ""]);
+    else for (const [inner, entry] of Object.entries(value)) walk(entry, path ? `${path}.${inner}` : inner, inner);
   };
-  walk(data, "");
-  return { caption, columns: ["field", "value"], rows };
+  walk(data, "", "");
+  return { caption, columns: ["field", "value", "unit"], rows };
 }
 
 // An optimization: the design at its start and its optimum, and the iterations as curves.
@@ -83,7 +88,8 @@ function optimizeView(result) {
                   rows: Object.entries(result.design || {}).map(([path, value]) => [path, (result.design_start || {})[path], value, units[path] || ""]) });
   const history = result.history || [];
   for (const name of ["iteration", "objective", "constraint_violation", "dual_infeasibility"]) v.series[name] = history.map((h) => h[name] ?? null);
-  v.units.objective = units.objective || "";
+  Object.assign(v.units, { iteration: "1", constraint_violation: "1", dual_infeasibility: "1" }); // IPOPT's scaled measures
+  v.units.objective = units.objective || "1";
   v.defaultCurve = history.length ? ["iteration", "objective"] : null;
   v.design = result.design || null;
   return v;
@@ -97,8 +103,7 @@ export function jobView(kind, result, drawing) {
   const v = emptyView();
   if (result && result.status) v.summary.push(["status", result.status]);
   if (kind === "impact_study" && result.ranking) {
-    v.tables.push({ caption: "Fields ranked by their earliest departure", columns: Object.keys(result.ranking[0] || { field: 0 }),
-                    rows: result.ranking.map((r) => Object.values(r).map((x) => (typeof x === "object" ? JSON.stringify(x) : x))) });
+    v.tables.push(recordsTable("Fields ranked by their earliest departure", result.ranking, { ...(result.units || {}), departure: "s", time: "s" }));
   }
   v.tables.push(numbersTable("Result", result));
   return v;

@@ -13,6 +13,9 @@ import { resultView } from "./results.js";
 import { wireModeRows } from "./vibration.js";
 import { drawScene } from "./scene.js";
 import { wireDownloads } from "./downloads.js";
+import { clearCard, showCard, statusStyle } from "./card.js";
+import { showRecentJobs } from "./recent.js";
+import { defaultChoice, whyNot } from "./offers.js";
 import { wireTabs } from "./tabs.js";
 
 const $ = (id) => document.getElementById(id);
@@ -26,9 +29,29 @@ const DEFORMING = ["equilibrium", "linearization", "energy"];
 const state = { loaded: false, finishedJob: null, overrides: {}, doc: null, drawing: null, view: null, result: null, name: "", choices: [], jobId: null, busy: false,
                 csv: () => (state.view ? csvOf(state.view) : "") };
 
-function say(id, text, failed = false) {
+// A status line; `style` one of card.js' styles (running, ok, failed, cancelled) or "".
+function say(id, text, style = "") {
   $(id).textContent = text;
-  $(id).classList.toggle("failed", failed);
+  $(id).classList.toggle("failed", style === "failed");
+  $(id).dataset.style = style;
+}
+
+// The results of the last run taken away: a new run or another document shows none until its own.
+function clearResults(message = "Run an analysis to see its outputs.") {
+  state.view = null; state.result = null;
+  clearFrames();
+  clearCard();
+  const hint = document.createElement("p");
+  hint.className = "hint";
+  hint.textContent = message;
+  $("panel-table").replaceChildren(hint);
+  $("curve").replaceChildren();
+  $("energy-plot").replaceChildren();
+  $("raw").textContent = "";
+  $("download-json").disabled = true;
+  $("download-csv").disabled = true;
+  $("tab-curves").disabled = true;
+  $("tab-energies").disabled = true;
 }
 
 // The option of the form a request pointer names (its input's id is the pointer's parts,
@@ -45,11 +68,12 @@ function markOption(pointer) {
 
 // A problem from the service or the page, shown at the field it names.
 function report(error, where = "run-state") {
-  if (!(error instanceof ApiProblem)) { say(where, String(error.message || error), true); return; }
+  if (where === "run-state" && state.running) showCard(state.running.source, state.running.title, "failed", null, String(error.message || error));
+  if (!(error instanceof ApiProblem)) { say(where, String(error.message || error), "failed"); return; }
   const inDocument = documentPointer(error.pointer);
   markOption(inDocument === null ? error.pointer : null);
-  showProblems([{ pointer: inDocument ?? error.pointer, message: error.message }]);
-  say(where, inDocument !== null ? "The document has a problem (listed under it)." : error.message, true);
+  showProblems(error.problems.map((p) => ({ ...p, pointer: documentPointer(p.pointer) ?? p.pointer })));
+  say(where, inDocument !== null ? "The document has a problem (listed under it)." : error.message, "failed");
   if (inDocument !== null && state.drawing) $("drawing-caption").textContent = "The last drawing of a document that worked.";
 }
 
@@ -69,21 +93,73 @@ async function draw(deformed = null) {
   performance.mark("flexmech-drawn");
 }
 
-async function redraw() {
-  try { clearFrames(); await draw(); } catch (error) { report(error, "document-state"); }
+// The document drawn again; the Run menu offered anew for a new document (`fresh`) or after an
+// edit that changes what it can be asked.
+async function redraw(fresh = false) {
+  try {
+    clearFrames();
+    await draw();
+    const offers = JSON.stringify(state.drawing.offers || null);
+    if (fresh || offers !== state.offers) { state.offers = offers; offerChoices(null, fresh); }
+  } catch (error) { report(error, "document-state"); }
+}
+
+// On a narrow screen the results are below the form: the card is scrolled into view.
+function revealCard() {
+  const box = $("result-card").getBoundingClientRect();
+  if (box.top > window.innerHeight || box.bottom < 0) $("result-card").scrollIntoView({ block: "start" });
+}
+
+function formatSeconds(seconds) {
+  return seconds < 1 ? `${+(seconds * 1000).toPrecision(3)} ms` : `${+seconds.toPrecision(3)} s`;
+}
+
+// Another document: the last one's result, errors and job are not shown with it.
+function newDocument() {
+  clearResults();
+  showProblems([]);
+  say("run-state", "");
+  say("document-state", "");
+  $("job").hidden = true;
+  state.jobId = null;
 }
 
 async function openExample(name) {
   const doc = await get(`/v1/examples/${encodeURIComponent(name)}`);
+  newDocument();
   setText(JSON.stringify(doc, null, 2));
   $("example-select").value = name;
-  state.result = null; state.view = null;
-  await redraw();
-  renderForm($("options"), currentChoice(), state.doc);
+  await redraw(true);
 }
 
 function currentChoice() {
   return state.choices.find((c) => c.id === $("analysis").value) || state.choices[0];
+}
+
+// The Run menu: what the open document can be asked first; the rest greyed, each saying why
+// not (the service's offers, drawn with the document). `wanted` is chosen if offered; a
+// `fresh` document gets its own first analysis, an edited one keeps the chosen one if it can.
+function offerChoices(wanted = null, fresh = false) {
+  const offers = state.drawing && state.drawing.offers;
+  const open = state.choices.filter((c) => !whyNot(c, offers)), shut = state.choices.filter((c) => whyNot(c, offers));
+  const kept = wanted || $("analysis").value;
+  const items = open.map((c) => new Option(c.label, c.id));
+  if (shut.length) {
+    const group = document.createElement("optgroup");
+    group.label = "Not for this document";
+    for (const c of shut) {
+      const reason = whyNot(c, offers);
+      const option = new Option(`${c.label}: ${reason.split(": ")[0].slice(0, 80)}`, c.id);
+      option.title = reason;
+      option.disabled = true;
+      group.append(option);
+    }
+    items.push(group);
+  }
+  $("analysis").replaceChildren(...items);
+  $("analysis").value = (wanted || !fresh) && open.some((c) => c.id === kept) ? kept : (defaultChoice(open, state.doc) || open[0] || {}).id;
+  renderForm($("options"), currentChoice(), state.doc);
+  document.body.dataset.offered = state.name; // the menu and the form are the document's (tests wait for it)
 }
 
 function showView(view, result) {
@@ -106,8 +182,9 @@ async function runSolve(choice, request) {
   const report = await post("/v1/solve", request);
   showView(resultView("solve", report, state.drawing), report);
   if (report.analysis === "modes" && state.drawing) wireModeRows($("panel-table"), state.drawing, state.view.frames, playFrames);
-  say("run-state", `${choice.analysis}: ${report.status}${report.seconds ? ` in ${report.seconds.toPrecision(3)} s` : ""}`,
-      !["converged", "finished"].includes(report.status));
+  const took = report.seconds ? `in ${formatSeconds(report.seconds)}` : "";
+  showCard(`solve:${choice.analysis}`, choice.analysis, report.status, report, took);
+  say("run-state", `${choice.analysis}: ${report.status}${took ? ` ${took}` : ""}`, statusStyle(report.status));
   if (DEFORMING.includes(choice.analysis)) {
     const overrides = { ...(request.overrides || {}) };
     if (report.target && report.target.value !== null) overrides[report.target.path] = report.target.value;
@@ -138,7 +215,9 @@ async function showJobResult(id, status) {
   showView(view, answer.result);
   if (view.design && state.doc) await draw({ overrides: view.design }); // the optimum, deformed
   if (status.kind === "sweep") await sweepFrames(answer.result);
-  say("run-state", `job ${status.status}${status.error ? `: ${status.error}` : ""}`, status.status !== "succeeded");
+  showCard(`job:${status.kind}`, `${status.kind.replace(/_/g, " ")} job`, status.status, answer.result, status.error || "");
+  showRecentJobs();
+  say("run-state", `job ${status.status}${status.error ? `: ${status.error}` : ""}`, statusStyle(status.status));
 }
 
 // While a job runs, its points so far (tables and curves), read again at most every
@@ -155,22 +234,35 @@ function partialResults(id) {
       shownDone = status.progress.done;
       const view = jobView(status.kind, answer.result, state.drawing);
       showView({ ...view, frames: [] }, answer.result); // the animation comes with the whole result
+      showCard(`job:${status.kind}`, `${status.kind.replace(/_/g, " ")} job`, "running", answer.result, `${Math.round(100 * status.progress.fraction)} %`);
+      if (view.frames.length && state.drawing) {  // the latest state drawn while it runs (the slider goes back)
+        setFrames(state.drawing, view.frames);
+        $("drawing-caption").textContent = `Running: the latest of ${view.frames.length} states so far, over the undeformed mechanism (dashed).`;
+      }
     } catch { /* the final result follows; a missed partial read changes nothing */ } finally { reading = false; }
   };
+}
+
+// The job's page in the address bar (reload or a bookmark comes back to it).
+function showJobPage(id) {
+  if (location.pathname !== `/jobs/${id}`) history.pushState({ job: id }, "", `/jobs/${id}`);
+  showRecentJobs();
 }
 
 async function runJob(choice, request) {
   const status = await post(choice.endpoint, request);
   state.jobId = status.id;
+  state.running.source = `job:${status.kind}`;
+  showJobPage(status.id);
   showProgress(status);
-  say("run-state", `${choice.label} running`);
+  say("run-state", `${choice.label} running`, "running");
   const last = await follow(status.id, partialResults(status.id));
   await showJobResult(status.id, last);
 }
 
 async function run() {
   if (state.busy) return;
-  state.busy = true; $("run").disabled = true;
+  state.busy = true; $("run").setAttribute("aria-disabled", "true"); // not `disabled`: Enter on Run keeps the focus there
   try {
     let extra;
     try { extra = JSON.parse($("extra").value || "{}"); } catch (error) { throw new ApiProblem(422, `/extra: not JSON (${error.message})`, "/extra"); }
@@ -179,24 +271,29 @@ async function run() {
     const choice = currentChoice();
     const request = buildRequest(choice, $("options"), state.doc, $("model").value, extra);
     state.overrides = request.overrides || {};
-    say("run-state", `${choice.label}: running…`);
+    clearResults("Running: the outputs show when the first result comes.");
+    state.running = { source: choice.kind === "solve" ? `solve:${choice.analysis}` : `job:${choice.job}`, title: choice.label };
+    showCard(state.running.source, choice.label, "running", null);
+    revealCard();
+    say("run-state", `${choice.label}: running…`, "running");
     if (choice.kind === "solve") await runSolve(choice, request);
     else await runJob(choice, request);
   } catch (error) {
     report(error);
   } finally {
-    state.busy = false; $("run").disabled = false;
+    state.busy = false; $("run").removeAttribute("aria-disabled");
   }
 }
 
 async function cancelJob() {
   if (!state.jobId) return;
-  try { await cancel(state.jobId); say("run-state", "cancelling…"); } catch (error) { report(error); }
+  try { await cancel(state.jobId); say("run-state", "cancelling…", "cancelled"); } catch (error) { report(error); }
 }
 
 // The analyses (with their options' schemas) and the job kinds (the API's own schema).
 async function offered() {
-  const [analyses, openapi] = await Promise.all([get("/v1/analyses"), get("/openapi.json")]);
+  const [analyses, openapi, kinds] = await Promise.all([get("/v1/analyses"), get("/openapi.json"), get("/v1/job-kinds")]);
+  state.jobKinds = kinds;
   return choices(analyses, openapi);
 }
 
@@ -206,13 +303,26 @@ async function examples() {
   return list;
 }
 
+// A job's page: its document and model, the menus set to what it runs, its progress, results
+// as they come and the whole result at its end.
 async function followJobPage(id) {
   const asked = await jobRequest(id);
   state.overrides = asked.overrides || {};
   setText(JSON.stringify(asked.document, null, 2));
   if (asked.model) $("model").value = asked.model;
+  const example = [...$("example-select").options].find((o) => o.title === asked.document.name);
+  $("example-select").value = example ? example.value : "";
   await redraw();
+  const kind = state.jobKinds.find((k) => k.name === asked.kind);
+  const choice = kind && state.choices.find((c) => c.endpoint === kind.route);
+  offerChoices(choice ? choice.id : null);
   state.jobId = id;
+  state.running = { source: `job:${asked.kind}`, title: `${asked.kind.replace(/_/g, " ")} job` };
+  showCard(state.running.source, state.running.title, "running", null);
+  followToTheEnd(id).catch(report); // the page is ready while the job goes on
+}
+
+async function followToTheEnd(id) {
   const last = await follow(id, partialResults(id));
   await showJobResult(id, last);
 }
@@ -223,14 +333,19 @@ function wire() {
     setApiKey($("api-key").value.trim());
     if (!state.loaded) start(); // the first load needed the key
   });
-  $("open-example").addEventListener("click", () => openExample($("example-select").value).catch(report));
+  $("open-example").addEventListener("click", () => {
+    const name = $("example-select").value;
+    if (location.pathname !== "/" || new URLSearchParams(location.search).get("example") !== name) history.pushState({ example: name }, "", `/?example=${encodeURIComponent(name)}`);
+    openExample(name).catch(report);
+  });
+  window.addEventListener("popstate", () => location.reload()); // back and forward: the page of that address
   $("draw").addEventListener("click", redraw);
   $("run").addEventListener("click", run);
   $("cancel").addEventListener("click", cancelJob);
   $("analysis").addEventListener("change", () => { renderForm($("options"), currentChoice(), state.doc); });
   $("upload").addEventListener("change", async () => {
     const file = $("upload").files[0];
-    if (file) { setText(await file.text()); await redraw(); renderForm($("options"), currentChoice(), state.doc); }
+    if (file) { newDocument(); setText(await file.text()); await redraw(true); }
   });
   let timer = null;
   $("editor").addEventListener("input", () => { clearTimeout(timer); timer = setTimeout(redraw, REDRAW_AFTER_MS); });
@@ -245,6 +360,7 @@ async function load() {
   const [offer] = await Promise.all([offered(), examples()]);
   state.choices = offer;
   $("analysis").replaceChildren(...state.choices.map((c) => new Option(c.label, c.id)));
+  showRecentJobs();
   const job = location.pathname.match(/^\/jobs\/([0-9a-f]{32})$/);
   const wanted = new URLSearchParams(location.search).get("example") || DEFAULT_EXAMPLE;
   state.loaded = true;

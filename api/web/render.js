@@ -39,22 +39,20 @@ function summaryOf(v) {
   return list;
 }
 
-function targetOf(target) {
-  const box = document.createElement("p");
-  box.className = "target";
-  box.id = "target";
-  const value = document.createElement("strong");
-  value.id = "target-value";
-  value.textContent = target.value === null ? "–" : target.value.toFixed(Math.max(0, 4 - Math.floor(Math.log10(Math.abs(target.value) || 1))));
-  box.append(`Target reached at ${target.path} = `, value, ` ${target.unit} (${target.status})`);
-  return box;
-}
-
+// The tables, then the run's diagnostics folded (status, iterations, residuals: the result card
+// above has the headline and the warnings).
 export function renderTables(v) {
   const panel = $("panel-table");
-  panel.replaceChildren(summaryOf(v));
-  if (v.target) panel.append(targetOf(v.target));
+  panel.replaceChildren();
   for (const table of v.tables) if (table && table.rows.length) panel.append(tableOf(table));
+  if (v.summary.length) {
+    const folded = document.createElement("details");
+    folded.className = "diagnostics";
+    const title = document.createElement("summary");
+    title.textContent = "Diagnostics";
+    folded.append(title, summaryOf(v));
+    panel.append(folded);
+  }
 }
 
 function label(v, name) {

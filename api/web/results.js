@@ -3,9 +3,11 @@
 // the animation (element centre lines and body poses per state, see scene.js).
 
 import { contactFrame } from "./contactframes.js";
+import { formatNumber } from "./plot.js";
 import { posesAtElementEnds } from "./scene.js";
 import { modeFrames, modesTable, recordsTable, responseSeries } from "./vibration.js";
 
+const MAX_IMPACT_ROWS = 200;
 const isNumberList = (value) => Array.isArray(value) && value.length > 0 && value.every((v) => v === null || typeof v === "number");
 
 function view() {
@@ -22,12 +24,12 @@ function solveView(report) {
   v.summary.push(["status", report.status], ["analysis", report.analysis]);
   if (report.message) v.summary.push(["message", report.message]);
   if (report.iterations) v.summary.push(["iterations", report.iterations]);
-  if (report.residual_norm !== null && report.residual_norm !== undefined) v.summary.push(["largest unbalanced force", `${report.residual_norm} ${report.residual_unit || ""}`]);
-  if (report.target) v.target = report.target;
-  for (const warning of report.warnings || []) v.summary.push(["warning", warning]);
+  if (report.residual_norm !== null && report.residual_norm !== undefined) v.summary.push(["largest unbalanced force", quantity(report.residual_norm, report.residual_unit)]);
+  if (report.residual_moment !== null && report.residual_moment !== undefined) v.summary.push(["largest unbalanced moment", quantity(report.residual_moment, report.residual_moment_unit)]);
   v.tables.push(outputsTable("Outputs", report.outputs, report.output_units), outputsTable("Displacements", report.displacements, report.displacement_units));
   if (report.pairs) {
-    v.tables.push({ caption: `Contact pairs (${(report.units || {}).force || ""})`, columns: ["pair", "state", "normal force", "friction force", "point", "gap"],
+    const u = report.units || {};
+    v.tables.push({ caption: "Contact pairs", columns: ["pair", "state", `normal force [${u.force}]`, `friction force [${u.force}]`, `point [${u.length}]`, `gap [${u.length}]`],
                     rows: Object.entries(report.pairs).map(([name, p]) => [name, p.state, p.normal_force, p.friction_force, p.point ? p.point.map((x) => +x.toPrecision(6)).join(", ") : "–", p.gap]) });
   }
   if (report.wrenches) {
@@ -36,38 +38,72 @@ function solveView(report) {
                     rows: Object.entries(report.wrenches).map(([name, w]) => [name, w.Fx, w.Fy, w.M]) });
   }
   for (const [key, value] of Object.entries(report)) {  // an analysis' own numbers (a plugin's too)
-    if (typeof value === "number" && !SHOWN_NUMBERS.has(key)) v.summary.push([key.replace(/_/g, " "), `${value} ${report[`${key}_unit`] || ""}`.trim()]);
+    if (typeof value === "number" && !SHOWN_NUMBERS.has(key)) v.summary.push([key.replace(/_/g, " "), quantity(value, report[`${key}_unit`] ?? UNITS_OF[key] ?? "")]);
   }
   if (report.stiffness && report.stiffness.coordinates) {
     const k = report.stiffness;
-    v.tables.push({ caption: "Tangent stiffness K_T", columns: ["", ...k.coordinates], rows: k.K.map((row, i) => [`${k.coordinates[i]} [${k.row_units[i]}]`, ...row]) });
+    const per = (unit) => (unit ? `per ${unit}` : "per unit");
+    v.tables.push({ caption: "Tangent stiffness K_T (a row's force or moment per a column's displacement)",
+                    columns: ["row [unit]", ...k.coordinates.map((c, j) => `${c} [${per((k.column_units || [])[j])}]`)],
+                    rows: k.K.map((row, i) => [`${k.coordinates[i]} [${k.row_units[i]}]`, ...row]) });
   }
   return v;
 }
 
-// Numbers of a report the view shows in its own way (or not at all).
-const SHOWN_NUMBERS = new Set(["iterations", "residual_norm", "residual_moment", "solver_residual"]);
+// Numbers of a report the view shows in its own way (or not at all), and the units of the
+// rest that carry none of their own (a count, a ratio: "1").
+const SHOWN_NUMBERS = new Set(["iterations", "residual_norm", "residual_moment"]);
+const UNITS_OF = { seconds: "s", solver_residual: "1", kkt_residual: "1", approach_steps: "1", unknowns: "1", available: "1",
+                   time_reached: "s", step: "s", energy_balance_error: "1", trial_steps: "1", steps: "1", rescued_steps: "1",
+                   damping: "1/s", clearance: "" };
+
+// A number with its unit, four significant digits: "4.698e-13 uN".
+export function quantity(value, unit) {
+  return `${formatNumber(value)}${unit && unit !== "1" ? ` ${unit}` : ""}`;
+}
 
 export function simulationView(report, drawing) {
   const v = view();
-  v.summary.push(["status", report.status], ["message", report.message || ""], ["reached", `${report.time_reached} s`], ["steps", report.steps]);
-  if (report.energy_balance_error !== undefined) v.summary.push(["energy balance error", report.energy_balance_error]);
+  v.summary.push(["status", report.status], ["message", report.message || "–"], ["reached", quantity(report.time_reached, "s")], ["steps", report.steps ?? "–"]);
+  if (typeof report.energy_balance_error === "number") v.summary.push(["energy balance error", quantity(100 * report.energy_balance_error, "%")]);
   const times = report.times || [];
   v.series.time = times; v.units.time = "s";
   for (const [name, values] of Object.entries(report.outputs || {})) if (isNumberList(values)) { v.series[name] = values; v.units[name] = (report.output_units || {})[name] || ""; }
-  for (const [name, values] of Object.entries(report.coordinates || {})) { v.series[name] = values; v.units[name] = name.endsWith(".theta") ? report.units.angle : report.units.length; }
-  for (const [pair, values] of Object.entries(report.contacts || {})) for (const [name, list] of Object.entries(values)) if (isNumberList(list)) { v.series[`${pair}.${name}`] = list; }
-  for (const [name, values] of Object.entries(report.constraint_forces || {})) if (isNumberList(values)) v.series[name] = values;
-  const names = Object.keys(v.series).filter((n) => n !== "time");
-  v.defaultCurve = names.length ? ["time", names[0]] : null;
+  const units = report.series_units || {};
+  for (const [name, values] of Object.entries(report.coordinates || {})) { v.series[name] = values; v.units[name] = units[name] || (name.endsWith(".theta") ? report.units.angle : report.units.length); }
+  for (const [pair, values] of Object.entries(report.contacts || {})) for (const [name, list] of Object.entries(values)) if (isNumberList(list)) { v.series[`${pair}.${name}`] = list; v.units[`${pair}.${name}`] = units[`${pair}.${name}`] || ""; }
+  for (const group of ["constraint_forces", "motion_forces"]) {
+    for (const [name, values] of Object.entries(report[group] || {})) if (isNumberList(values)) { v.series[name] = values; v.units[name] = units[name] || ""; }
+  }
+  const moving = mostMoving(v, [...Object.keys(report.outputs || {}), ...Object.keys(report.coordinates || {})], (report.units || {}).length);
+  v.defaultCurve = moving ? ["time", moving] : null;
   if (report.energies) v.energies = { time: times, series: report.energies, unit: (report.units || {}).energy || "" };
   v.frames = simulationFrames(report, drawing);
   v.frameUnit = "s";
-  if (report.impacts && report.impacts.length) {
-    v.tables.push({ caption: "Impacts", columns: Object.keys(report.impacts[0]), rows: report.impacts.slice(0, 200).map((i) => Object.values(i).map((x) => (typeof x === "object" ? JSON.stringify(x) : x))) });
+  const impacts = report.impacts || [];
+  if (impacts.length) {
+    const shown = impacts.slice(0, MAX_IMPACT_ROWS);
+    const caption = shown.length < impacts.length ? `Impacts (the first ${shown.length}; ${impacts.length - shown.length} more in the JSON)` : "Impacts";
+    v.tables.push(recordsTable(caption, shown, report.event_units || {}));
   }
   v.tables.push(lastValues(v));
   return v;
+}
+
+// The series that moves most over the run, of `names`: lengths (`lengthUnit`) before others,
+// user-named points before the bodies' and elements' own outputs; null if none moves.
+export function mostMoving(v, names, lengthUnit) {
+  let best = null, bestScore = [-1, -1, 0];
+  for (const name of names) {
+    const values = (v.series[name] || []).filter((x) => typeof x === "number" && Number.isFinite(x));
+    if (values.length < 2) continue;
+    const range = Math.max(...values) - Math.min(...values);
+    if (!(range > 0)) continue;
+    const score = [v.units[name] === lengthUnit ? 1 : 0, /^(bodies|elements)\./.test(name) ? 0 : 1, range];
+    const better = score[0] !== bestScore[0] ? score[0] > bestScore[0] : score[1] !== bestScore[1] ? score[1] > bestScore[1] : score[2] > bestScore[2];
+    if (better) { best = name; bestScore = score; }
+  }
+  return best;
 }
 
 function lastValues(v) {
@@ -82,9 +118,11 @@ function simulationFrames(report, drawing) {
   const times = report.times || [];
   if (!drawing) return [];
   if (report.shapes && report.shapes.length) {
+    const loads = loadsInTime(report, drawing);
     return report.shapes.map((shape, k) => {
       const elements = Object.fromEntries(Object.entries(shape).map(([name, [xs, ys]]) => [name, xs.map((x, i) => [x, ys[i]])]));
-      return { elements, poses: posesAtElementEnds(drawing, elements), about: "reference", label: `t = ${+(+times[k]).toPrecision(4)} s` };
+      return { elements, poses: posesAtElementEnds(drawing, elements), about: "reference", label: `t = ${+(+times[k]).toPrecision(4)} s`,
+               time: times[k], loads: loads.at(k), largestLoad: loads.largest };
     });
   }
   if (report.coordinates) {
@@ -95,10 +133,30 @@ function simulationFrames(report, drawing) {
         const x = report.coordinates[`${name}.x`];
         if (x) poses[name] = [x[k], report.coordinates[`${name}.y`][k], report.coordinates[`${name}.theta`][k] * rad];
       }
-      return { poses, about: "centre", blend: true, label: `t = ${+(+t).toPrecision(4)} s` };
+      return { poses, about: "centre", blend: true, label: `t = ${+(+t).toPrecision(4)} s`, time: t };
     });
   }
   return [];
+}
+
+// The loads that histories drive (the report's `varying`: values at each kept state), as a
+// frame draws them: at(k) gives {name: {vector} or {value}} of state k; `largest` is the
+// largest force of the run, drawn or varying, so arrows keep one scale.
+function loadsInTime(report, drawing) {
+  const values = (report.varying || {}).values || {};
+  const varying = drawing.loads.filter((l) => (l.kind === "force" ? [0, 1].some((i) => values[`/loads/${l.name}/force/${i}`]) : values[`/loads/${l.name}/moment`]));
+  const at = (k) => {
+    if (!varying.length) return undefined;
+    return Object.fromEntries(varying.map((l) => [l.name, l.kind === "force"
+      ? { vector: [0, 1].map((i) => (values[`/loads/${l.name}/force/${i}`] || [])[k] ?? l.vector[i]) }
+      : { value: values[`/loads/${l.name}/moment`][k] }]));
+  };
+  let largest = Math.max(0, ...drawing.loads.filter((l) => l.kind === "force" && !varying.includes(l)).map((l) => Math.hypot(...l.vector)));
+  for (const l of varying.filter((l) => l.kind === "force")) {
+    const xs = values[`/loads/${l.name}/force/0`], ys = values[`/loads/${l.name}/force/1`];
+    for (let k = 0; k < (xs || ys).length; k += 1) largest = Math.max(largest, Math.hypot(xs ? xs[k] : l.vector[0], ys ? ys[k] : l.vector[1]));
+  }
+  return { at, largest: largest || undefined };
 }
 
 function traceView(report) {
@@ -116,7 +174,7 @@ function traceView(report) {
                                                  label: `${field} = ${+(+f.value).toPrecision(5)} ${report.unit || ""} (point ${f.point})` }));
   v.frameUnit = report.unit || "";
   if (report.limit_points && report.limit_points.length) {
-    v.tables.push({ caption: "Limit points", columns: ["kind", field, "after point"], rows: report.limit_points.map((lp) => [lp.kind, lp.value, lp.after_point]) });
+    v.tables.push({ caption: "Limit points", columns: ["kind", `${field} [${report.unit || ""}]`, "after point"], rows: report.limit_points.map((lp) => [lp.kind, lp.value, lp.after_point]) });
   }
   return v;
 }

@@ -186,32 +186,35 @@ function drawConnectors(layer, drawing, frame, view) {
   }
 }
 
-function arrow(layer, tail, head, color, label) {
+function arrow(layer, tail, head, color, label, load = null) {
   const [tx, ty] = tail, [hx, hy] = head;
   const length = Math.hypot(hx - tx, hy - ty);
   if (length < 1) return;
   const ux = (hx - tx) / length, uy = (hy - ty) / length;
-  const g = node("g", { class: "arrow" }, layer);
+  const g = node("g", load === null ? { class: "arrow" } : { class: "arrow", "data-load": load }, layer);
   node("line", { x1: tx, y1: ty, x2: hx - 8 * ux, y2: hy - 8 * uy, stroke: color, "stroke-width": "2" }, g);
   node("path", { d: `M${hx},${hy}L${hx - 10 * ux - 4 * uy},${hy - 10 * uy + 4 * ux}L${hx - 10 * ux + 4 * uy},${hy - 10 * uy - 4 * ux}Z`, fill: color }, g);
   if (label) node("text", { x: tx - 4 * ux, y: ty - 4 * uy - 3, "font-size": "11", fill: color, "text-anchor": ux > 0 ? "end" : "start" }, g).textContent = label;
 }
 
+// A frame's loads are the drawing's, less those its `loads` give at its time (histories);
+// `largestLoad` (the largest force of a whole animation) keeps the arrows' scale from frame to frame.
 function drawLoads(layer, drawing, frame, view) {
-  const forces = drawing.loads.filter((l) => l.kind === "force");
-  const largest = Math.max(0, ...forces.map((l) => Math.hypot(...l.vector)));
+  const loads = drawing.loads.map((l) => ({ ...l, ...((frame && frame.loads && frame.loads[l.name]) || {}) }));
+  const forces = loads.filter((l) => l.kind === "force");
+  const largest = (frame && frame.largestLoad) || Math.max(0, ...forces.map((l) => Math.hypot(...l.vector)));
   const pixels = ARROW_SPAN * (WIDTH - MARGIN.left - MARGIN.right);
-  for (const load of drawing.loads) {
+  for (const load of loads) {
     const head = view.map(placed(drawing, frame, load.body, load.point));
     if (load.kind === "force") {
       const size = Math.hypot(...load.vector);
       if (!size) continue;
       const tail = [head[0] - (pixels * load.vector[0]) / largest, head[1] + (pixels * load.vector[1]) / largest];
-      arrow(layer, tail, head, COLORS.load, `${load.name} ${formatNumber(size)} ${drawing.units.force}`);
+      arrow(layer, tail, head, COLORS.load, `${load.name} ${formatNumber(size)} ${drawing.units.force}`, load.name);
     } else {
       const r = 16, sweep = load.value >= 0 ? 0 : 1;
       node("path", { d: `M${head[0] + r},${head[1]}A${r},${r} 0 1 ${sweep} ${head[0]},${head[1] + (sweep ? r : -r)}`, fill: "none", stroke: COLORS.load, "stroke-width": "2" }, layer);
-      node("text", { x: head[0] + r + 3, y: head[1] - r, "font-size": "11", fill: COLORS.load }, layer).textContent = `${load.name} ${formatNumber(load.value)} ${drawing.units.moment}`;
+      node("text", { x: head[0] + r + 3, y: head[1] - r, "font-size": "11", fill: COLORS.load, "data-load": load.name }, layer).textContent = `${load.name} ${formatNumber(load.value)} ${drawing.units.moment}`;
     }
   }
 }

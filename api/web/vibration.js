@@ -87,7 +87,12 @@ export function responseSeries(v, report) {
     first = first || name;
   }
   v.defaultCurve = first ? ["log10 frequency", `${first} dB`] : null;
-  if ((report.resonances || []).length) v.tables.push(recordsTable("Resonances", report.resonances, { frequency: "Hz", bandwidth: "Hz" }));
+  const peaks = report.resonances || [];
+  if (peaks.length) {
+    const amplitudeUnits = new Set(peaks.map((peak) => ((report.responses || {})[peak.output] || {}).unit));
+    const amplitude = amplitudeUnits.size === 1 ? [...amplitudeUnits][0] : "the output's unit";
+    v.tables.push(recordsTable("Resonances", peaks, { frequency: "Hz", bandwidth: "Hz", phase: "deg", quality: "1", amplitude }));
+  }
 }
 
 // A mode's row in the table animates that mode alone (click, or Enter when focused).

@@ -16,11 +16,14 @@ from workbench import (  # noqa: F401 (fixtures by name)
     assert_local_and_quiet,
     browser,
     choose,
+    document_text,
     log,
     open_example,
     page,
     run_and_wait,
+    selected_text,
     server,
+    set_document_text,
     simulate_to_the_first_frame,
 )
 
@@ -164,17 +167,13 @@ def test_an_unknown_body_is_shown_at_its_pointer(page, log):
     log.answered = (422,)
     document = json.loads((EXAMPLES / "gripper.json").read_text())
     document["elements"]["c"]["to"] = "folower"
-    page.fill("#editor", json.dumps(document, indent=2))
+    set_document_text(page, json.dumps(document, indent=2))
     page.click("#draw")
     problem = page.locator('#problems li[data-pointer="/elements/c/to"]')
     problem.wait_for(timeout=30_000)
     assert "unknown body 'folower'" in problem.text_content()
     problem.locator("button").click()  # selects the field in the text
-    selected = page.evaluate(
-        "(() => { const e = document.getElementById('editor'); "
-        "return e.value.slice(e.selectionStart, e.selectionEnd); })()"
-    )
-    assert selected == '"folower"'
+    assert selected_text(page) == '"folower"'
     screenshot(page, "06-unknown-body")
 
 
@@ -252,7 +251,8 @@ def test_a_running_job_is_cancelled_from_the_page(page):
     job_page = page.get_attribute("#job-link", "href")
     assert re.fullmatch(r"/jobs/[0-9a-f]{32}", job_page)
     screenshot(page, "13-job-cancelled")
-    page.goto(page.url.rstrip("/") + job_page)  # the job's own page, for a design tool to link to
+    assert page.evaluate("() => location.pathname") == job_page  # the address bar has had it since the run
+    page.goto(page.url.split("/jobs/")[0] + job_page)  # the job's own page, for a design tool to link to
     page.wait_for_function(
         "() => document.getElementById('progress-text').textContent.includes('cancelled')", timeout=60_000
     )
@@ -332,7 +332,7 @@ def test_a_yaml_upload_is_drawn_and_downloads_are_made(page, tmp_path, closing_f
     path.write_text(yaml.safe_dump(document, sort_keys=False))
     page.set_input_files("#upload", str(path))
     page.wait_for_function("() => document.getElementById('mechanism-name').textContent === 'uploaded gripper'")
-    assert page.input_value("#editor").startswith("schema_version: 1")
+    assert document_text(page).startswith("schema_version: 1")
     run_and_wait(page, "equilibrium: converged")
     downloads = {}
     for kind in ("json", "csv", "svg", "png"):

@@ -1,0 +1,156 @@
+// The result card's headline: per analysis and job kind, the one or two quantities an engineer
+// reads first (the force that reaches a target, the first frequency, the peak contact force,
+// the energy balance), named in words, with their units and four significant digits. Each
+// reader takes the service's report (or a job's result) and returns
+// {items: [{name, value, unit, note, id}], warnings: [...]}; the card (card.js) draws it.
+
+import { formatNumber } from "./plot.js";
+
+const finite = (x) => typeof x === "number" && Number.isFinite(x);
+
+// "/loads/actuation/force/1" -> "actuation force (y)", "/sections/flexure/h" -> "flexure h".
+export function fieldLabel(pointer) {
+  const parts = (pointer || "").split("/").filter(Boolean);
+  if (!parts.length) return pointer || "";
+  const component = /^[0-2]$/.test(parts[parts.length - 1]) ? ["x", "y", "z"][Number(parts.pop())] : null;
+  const named = parts.length >= 2 ? parts.slice(1).join(" ") : parts[0];
+  return component ? `${named} (${component})` : named;
+}
+
+function largestBy(entries, size) {
+  let best = null;
+  for (const entry of entries) if (finite(size(entry)) && (!best || Math.abs(size(entry)) > Math.abs(size(best)))) best = entry;
+  return best;
+}
+
+// The output that moves most, as a displacement ("end_effector.x moves -0.2575 mm").
+function largestDisplacement(report) {
+  const units = report.displacement_units || {};
+  const lengths = Object.entries(report.displacements || {}).filter(([name]) => !/angle|theta/.test(name) && units[name]);
+  const best = largestBy(lengths, ([, value]) => value);
+  return best ? { name: `largest travel (${best[0]})`, value: best[1], unit: units[best[0]] } : null;
+}
+
+function equilibrium(report) {
+  const items = [];
+  const target = report.target;
+  if (target) {
+    const reaches = target.output ? `${target.output} = ${formatNumber(target.equals)} ${target.output_unit || ""}`.trim() : "the target";
+    items.push({ id: "target", name: fieldLabel(target.path), value: target.value, unit: target.unit,
+                 note: target.status === "converged" ? `brings ${reaches} (${target.path})` : `target ${target.status.replace(/_/g, " ")}` });
+  }
+  const travel = largestDisplacement(report);
+  if (travel) items.push(travel);
+  else {  // nothing free to move (every body held): what holds it
+    const units = report.output_units || {};
+    const reactions = Object.entries(report.outputs || {}).filter(([name]) => /^reactions\..*\.F[xy]$/.test(name));
+    const best = largestBy(reactions, ([, value]) => value);
+    if (best) items.push({ name: `largest reaction (${best[0].replace(/^reactions\./, "")})`, value: best[1], unit: units[best[0]] || "" });
+  }
+  return items;
+}
+
+function trace(report) {
+  const limits = report.limit_points || [];
+  if (limits.length) {
+    return limits.slice(0, 2).map((lp, k) => ({ name: `${k ? "second" : "first"} limit load (${lp.kind})`, value: lp.value, unit: report.unit,
+                                             note: `${fieldLabel(report.path)}, after point ${lp.after_point}` }));
+  }
+  const values = report.values || [];
+  return [{ name: `${fieldLabel(report.path)} reached`, value: values[values.length - 1], unit: report.unit, note: `${values.length} points, no limit point` }];
+}
+
+function contactItems(pairs, unit) {
+  const forces = Object.entries(pairs || {}).map(([name, pair]) => [name, pair.normal_force]);
+  const best = largestBy(forces, ([, force]) => force);
+  if (!best) return [];
+  const closed = Object.values(pairs).filter((pair) => pair.state && pair.state !== "open").length;
+  return [{ name: "peak contact force", value: best[1], unit, note: `pair ${best[0]}; ${closed} of ${forces.length} pairs in contact` }];
+}
+
+function modes(report) {
+  const elastic = (report.modes || []).filter((mode) => finite(mode.frequency) && mode.kind === "elastic");
+  const items = elastic.slice(0, 2).map((mode, k) => ({ name: k ? "second frequency" : "first frequency", value: mode.frequency,
+                                                       unit: (report.units || {}).frequency || "Hz", note: `mode ${mode.mode}` }));
+  if (report.total_mass) items.push({ name: "moving mass", value: report.total_mass, unit: report.total_mass_unit });
+  return items;
+}
+
+function frequencyResponse(report) {
+  const peaks = report.resonances || [];
+  const units = report.units || {};
+  return peaks.slice(0, 2).map((peak, k) => ({ name: k ? "second resonance" : "first resonance", value: peak.frequency, unit: units.frequency || "Hz",
+                                               note: finite(peak.amplitude) ? `amplitude ${formatNumber(peak.amplitude)} ${units.amplitude || ""}`.trim() : "" }));
+}
+
+function simulation(report) {
+  const items = [];
+  const units = report.units || {};
+  if (finite(report.time_reached)) items.push({ name: "time reached", value: report.time_reached, unit: "s", note: finite(report.steps) ? `${report.steps} steps` : "" });
+  if (finite(report.energy_balance_error)) items.push({ name: "energy balance error", value: 100 * report.energy_balance_error, unit: "%", note: "of the largest energy" });
+  const impacts = report.impacts || [];
+  if (impacts.length) {
+    const peak = largestBy(impacts, (impact) => impact.peak_force);
+    items.push({ name: "impacts", value: impacts.length, unit: "", note: peak ? `peak force ${formatNumber(peak.peak_force)} ${units.force}` : "" });
+  }
+  return items;
+}
+
+function sweep(result) {
+  const points = result.points || [];
+  const field = (result.parameters || [])[0];
+  const last = points[points.length - 1];
+  if (!field || !last) return [];
+  const items = [{ name: `${fieldLabel(field.path)} at the last point`, value: last.values[0], unit: field.unit, note: `${points.length} points` }];
+  const units = result.output_units || {};
+  const moved = largestBy(Object.keys(last.outputs || {}).map((name) => [name, last.outputs[name] - ((points[0].outputs || {})[name] ?? 0)]), ([, change]) => change);
+  if (moved) items.push({ name: `${moved[0]} there`, value: last.outputs[moved[0]], unit: units[moved[0]] || "" });
+  return items;
+}
+
+function contactPath(result) {
+  let best = null;
+  for (const point of result.points || []) {
+    for (const [name, pair] of Object.entries(point.pairs || {})) {
+      if (finite(pair.normal_force) && (!best || pair.normal_force > best.force)) best = { name, force: pair.normal_force, at: point.values[0] };
+    }
+  }
+  const field = (result.parameters || [])[0] || {};
+  return best ? [{ name: "peak contact force", value: best.force, unit: result.force_unit, note: `pair ${best.name} at ${fieldLabel(field.path)} = ${formatNumber(best.at)} ${field.unit || ""}` }] : [];
+}
+
+function optimization(result) {
+  if (!result || !result.design) return [];
+  const units = result.units || {};
+  return [{ name: "objective at the optimum", value: result.objective, unit: units.objective || "", note: `${result.iterations ?? "–"} iterations` },
+          ...Object.entries(result.design).slice(0, 2).map(([path, value]) => ({ name: fieldLabel(path), value, unit: units[path] || "" }))];
+}
+
+function impactStudy(result) {
+  const ranking = result.ranking || [];
+  return ranking.length ? [{ name: "fields ranked", value: ranking.length, unit: "", note: `earliest departure: ${ranking[0].field ?? Object.values(ranking[0])[0]}` }] : [];
+}
+
+const READERS = {
+  "solve:equilibrium": equilibrium,
+  "solve:linearization": equilibrium,
+  "solve:energy": (r) => [...equilibrium(r), ...(finite(r.energy) ? [{ name: "strain energy", value: r.energy, unit: r.energy_unit || "" }] : [])],
+  "solve:inverse": equilibrium,
+  "solve:trace": trace,
+  "solve:contact": (r) => [...contactItems(r.pairs, (r.units || {}).force), ...equilibrium(r)],
+  "solve:modes": modes,
+  "solve:frequency_response": frequencyResponse,
+  "solve:simulate": simulation,
+  "job:simulation": simulation,
+  "job:sweep": sweep,
+  "job:contact": contactPath,
+  "job:optimize": optimization,
+  "job:impact_study": impactStudy,
+};
+
+// The headline of a result: `source` is "solve:<analysis>" or "job:<kind>".
+export function headline(source, result) {
+  const read = READERS[source];
+  const items = (read && result ? read(result) : []).filter((item) => item && finite(item.value));
+  return { items, warnings: (result && result.warnings) || [] };
+}
