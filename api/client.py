@@ -28,6 +28,7 @@ from api.drawing_schemas import DrawingRequest
 from api.job_schemas import (
     ContactPathRequest,
     ImpactStudyRequest,
+    JobListResponse,
     JobRequest,
     JobResultResponse,
     JobStatusResponse,
@@ -228,6 +229,10 @@ class Client:
     def job(self, job_id: str) -> JobStatusResponse:
         return _parse(self._http.get(f"/v1/jobs/{job_id}"), JobStatusResponse)
 
+    def recent_jobs(self, limit: int = 20) -> JobListResponse:
+        """This key's newest jobs first, with status, progress and the document's name."""
+        return _parse(self._http.get("/v1/jobs", params={"limit": limit}), JobListResponse)
+
     def job_request(self, job_id: str) -> dict:
         """What the job was asked: its document and fields."""
         return _parse(self._http.get(f"/v1/jobs/{job_id}/request"), dict)
@@ -329,6 +334,9 @@ class AsyncClient:
 
     async def job(self, job_id: str) -> JobStatusResponse:
         return _parse(await self._http.get(f"/v1/jobs/{job_id}"), JobStatusResponse)
+
+    async def recent_jobs(self, limit: int = 20) -> JobListResponse:
+        return _parse(await self._http.get("/v1/jobs", params={"limit": limit}), JobListResponse)
 
     async def job_request(self, job_id: str) -> dict:
         return _parse(await self._http.get(f"/v1/jobs/{job_id}/request"), dict)

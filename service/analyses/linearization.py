@@ -12,7 +12,7 @@ from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult
 from service.requests import under
 from service.solvers.equilibrium import solve_equilibrium
 from service.solvers.newton import NewtonOptions
-from service.solvers.reports import plain, stiffness_dict
+from service.solvers.reports import coordinate_units, output_units, plain, stiffness_dict
 
 
 def linearization_report(mech: Mechanism, options: NewtonOptions, at: str = "equilibrium") -> dict:
@@ -26,7 +26,7 @@ def linearization_report(mech: Mechanism, options: NewtonOptions, at: str = "equ
             result = solve_equilibrium(mech, options)
         except MechanismError as exc:
             raise under("/document", exc) from None
-        report.update(result.summary())
+        report.update(result.summary(), output_units=output_units(mech), displacement_units=coordinate_units(mech))
         if not result.converged:
             return plain(report)
         z = result.z

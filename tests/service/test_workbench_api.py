@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from conftest import EXAMPLES, Deployment
 
+from api.client import Client
 from models import compile_mechanism, load_document
 from service.analyses import ANALYSES
 from service.analysis import run_analysis
@@ -98,6 +99,8 @@ def test_a_key_lists_its_own_jobs_newest_first(server):
     assert listed[1]["name"] == "MEMS gripper with curved-beam flexures (silicon)"
     assert {"status", "progress", "timings", "kind"} <= set(listed[0])
     assert call(server, "GET", "/v1/jobs?limit=0").status_code == 422
+    with Client(server.url, api_key=KEYS[1]) as client:  # the client reads the same list
+        assert [job.id for job in client.recent_jobs(limit=5).jobs] == [other.json()["id"]]
 
 
 def _finished(server, job_id: str, seconds: float = 240) -> dict:
