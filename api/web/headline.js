@@ -101,10 +101,18 @@ function sweep(result) {
   const field = (result.parameters || [])[0];
   const last = points[points.length - 1];
   if (!field || !last) return [];
-  const items = [{ name: `${fieldLabel(field.path)} at the last point`, value: last.values[0], unit: field.unit, note: `${points.length} points` }];
   const units = result.output_units || {};
-  const moved = largestBy(Object.keys(last.outputs || {}).map((name) => [name, last.outputs[name] - ((points[0].outputs || {})[name] ?? 0)]), ([, change]) => change);
-  if (moved) items.push({ name: `${moved[0]} there`, value: last.outputs[moved[0]], unit: units[moved[0]] || "" });
+  const until = result.until;
+  const reached = until && finite(until.value);  // swept until an output reached a value: where it did
+  const items = [reached
+    ? { name: `${fieldLabel(until.path)} at ${until.output} = ${formatNumber(until.equals)} ${units[until.output] || ""}`.trim(), value: until.value, unit: until.unit, note: `${points.length} points` }
+    : { name: `${fieldLabel(field.path)} at the last point`, value: last.values[0], unit: field.unit, note: `${points.length} points` }];
+  const target = result.until && result.until.output;  // a sweep until an output reaches a value: that output
+  const lengthUnit = units[Object.keys(units).find((name) => /\.(x|y)$/.test(name))];
+  const changes = Object.keys(last.outputs || {}).filter((name) => units[name] === lengthUnit)
+    .map((name) => [name, last.outputs[name] - ((points[0].outputs || {})[name] ?? 0)]);
+  const moved = target && target in (last.outputs || {}) ? [target] : largestBy(changes, ([, change]) => change);
+  if (moved && !reached) items.push({ name: `${moved[0]} there`, value: last.outputs[moved[0]], unit: units[moved[0]] || "" });
   return items;
 }
 
