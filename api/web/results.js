@@ -170,7 +170,7 @@ function traceView(report) {
   const moving = Object.keys(v.series).filter((n) => n !== field && new Set(v.series[n]).size > 1);
   const first = moving.find((n) => n.endsWith(".dy")) || moving[0];
   v.defaultCurve = first ? [first, field] : null;
-  v.frames = (report.frames || []).map((f) => ({ elements: f.elements, poses: f.poses, about: "reference",
+  v.frames = (report.frames || []).map((f) => ({ elements: f.elements, poses: f.poses, about: "reference", stresses: f.stresses,
                                                  label: `${field} = ${+(+f.value).toPrecision(5)} ${report.unit || ""} (point ${f.point})` }));
   v.frameUnit = report.unit || "";
   if (report.limit_points && report.limit_points.length) {

@@ -1,9 +1,12 @@
 // The mechanism drawn to scale in SVG: equal axes in the document's length unit, ticks and
 // axis labels with the unit; undeformed dashed and grey under the deformed state of a frame.
 // A frame is {elements: {name: points}, poses: {body: [dx, dy, rotation]}, about, overlay}:
-// bodies' outlines, skeletons, joints, points and loads follow their body's pose.
+// bodies' outlines, skeletons, joints, points and loads follow their body's pose. A frame's
+// `stresses` colour its elements (stressmap.js); the view zooms and pans (zoom.js).
 
 import { formatNumber, niceTicks } from "./plot.js";
+import { drawColourBar, drawStressedElement, stressScale } from "./stressmap.js";
+import { drawn, viewedBounds } from "./zoom.js";
 
 const SVG = "http://www.w3.org/2000/svg";
 const WIDTH = 820, HEIGHT = 560, MARGIN = { left: 64, right: 16, top: 16, bottom: 46 };
@@ -68,8 +71,9 @@ function transform(bounds) {
   const cx = (bounds[0] + bounds[2]) / 2, cy = (bounds[1] + bounds[3]) / 2;
   const x0 = MARGIN.left + width / 2, y0 = MARGIN.top + height / 2;
   const map = (p) => [x0 + (p[0] - cx) * scale, y0 - (p[1] - cy) * scale];
+  const unmap = (q) => [cx + (q[0] - x0) / scale, cy - (q[1] - y0) / scale];
   const visible = [cx - width / 2 / scale, cy - height / 2 / scale, cx + width / 2 / scale, cy + height / 2 / scale];
-  return { map, scale, visible };
+  return { map, unmap, scale, visible };
 }
 
 function pathOf(points, map, closed = false) {
@@ -124,12 +128,18 @@ function blended(drawing, frame, element) {
   });
 }
 
-function drawElements(layer, drawing, frame, view) {
+function drawElements(layer, drawing, frame, view, scale) {
   for (const element of drawing.elements) {
     node("path", { d: pathOf(element.points, view.map), fill: "none", stroke: COLORS.undeformed, "stroke-width": "1",
                    "stroke-dasharray": "4 3" }, layer);
     if (frame && frame.hideElements) continue; // the frame's overlay draws them
-    const now = (frame && frame.elements && frame.elements[element.name]) || (frame && frame.blend && blended(drawing, frame, element));
+    const shape = frame && frame.elements && frame.elements[element.name];
+    const stresses = scale && shape && frame.stresses[element.name];
+    if (stresses && stresses.length === shape.length && shape.length > 1) {
+      drawStressedElement(layer, element, shape, stresses, scale, (points) => pathOf(points, view.map));
+      continue;
+    }
+    const now = shape || (frame && frame.blend && blended(drawing, frame, element));
     const path = node("path", { d: pathOf(now || element.points, view.map), fill: "none", stroke: COLORS.element,
                                 "stroke-width": "2.2", "stroke-linecap": "round", "data-element": element.name }, layer);
     node("title", {}, path).textContent = `element ${element.name} (${element.from} to ${element.to})`;
@@ -247,17 +257,28 @@ export function drawScene(container, drawing, frame = null, bounds = null) {
                             "aria-label": `${drawing.name}, drawn to scale in ${drawing.units.length}` });
   node("title", {}, svg).textContent = drawing.name;
   node("rect", { x: 0, y: 0, width: WIDTH, height: HEIGHT, fill: "#fff" }, svg);
-  const view = transform(bounds || sceneBounds(drawing, [null, frame]));
+  const whole = bounds || sceneBounds(drawing, [null, frame]);
+  const viewed = viewedBounds(container, drawing, whole, () => drawScene(container, drawing, frame, bounds));
+  const view = transform(viewed);
   drawAxes(svg, view, drawing.units.length);
   const layer = node("g", {}, svg);
+  if (viewed.some((v, i) => v !== whole[i])) { // zoomed or panned: nothing drawn over the axes
+    const clip = node("clipPath", { id: "plot-area" }, node("defs", {}, svg));
+    node("rect", { x: MARGIN.left, y: MARGIN.top, width: WIDTH - MARGIN.left - MARGIN.right, height: HEIGHT - MARGIN.top - MARGIN.bottom }, clip);
+    layer.setAttribute("clip-path", "url(#plot-area)");
+  }
+  const scale = stressScale(drawing, frame);
   drawOutlines(layer, drawing, frame, view);
-  drawElements(layer, drawing, frame, view);
+  drawElements(layer, drawing, frame, view, scale);
   drawConnectors(layer, drawing, frame, view);
   drawBodies(layer, drawing, frame, view);
   drawPoints(layer, drawing, frame, view);
   drawLoads(layer, drawing, frame, view);
   drawOverlay(layer, frame && frame.overlay, view);
+  const grow = Math.min(2, Math.max(1, 560 / (container.clientWidth || WIDTH))); // legible on a phone
+  if (scale) drawColourBar(svg, scale, { right: WIDTH - MARGIN.right, top: MARGIN.top, grow });
   if (frame && frame.label) node("text", { x: WIDTH - MARGIN.right - 6, y: MARGIN.top + 16, "text-anchor": "end", "font-size": "13", fill: COLORS.body, class: "frame-label" }, svg).textContent = frame.label;
   container.replaceChildren(svg);
+  drawn(container, view, svg);
   return svg;
 }

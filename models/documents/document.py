@@ -26,6 +26,7 @@ from models.documents.simulation_spec import SimulateSpec
 from models.elements import FAMILIES
 from models.elements.link_schema import SHAPE_TYPES
 from models.errors import MechanismError, pointer_of
+from models.units import quantity_to_si
 
 
 class Units(StrictModel):
@@ -45,6 +46,28 @@ class Material(StrictModel):
     density: Number | None = Field(
         default=None, description="mass per volume: links made of it have mass (and weight under gravity)"
     )
+    stress_limit: Number | None = Field(
+        default=None,
+        description="allowable stress (document stress units, positive): the drawing marks it on its "
+        "stress scale and flags the parts of a flexure or link above it; no analysis enforces it",
+    )
+
+    @field_validator("stress_limit")
+    @classmethod
+    def _positive_stress(cls, value: float | str | None) -> float | str | None:
+        """A stress (a bare number, or a quantity with a unit of stress) above zero; its
+        magnitude in the document's unit is checked where it is used (service.drawings.stresses)."""
+        if value is None:
+            return None
+        try:
+            si = quantity_to_si(value, "stress", "Pa", "/stress_limit")
+        except MechanismError as exc:
+            raise ValueError(exc.problem) from None
+        if si <= 0:
+            raise ValueError(
+                f"must be positive, got {value:g}" if isinstance(value, float) else f"must be positive, got {value}"
+            )
+        return value
 
 
 class Body(StrictModel):

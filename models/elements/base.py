@@ -175,7 +175,10 @@ class ElementFamily(Protocol):
     kernel_chain and energy_form_counts(topology) (it runs as a chain of element kernels, and
     its own variables and equalities: models.kernels.layout); split_contribution (Cammarata et
     al.'s K_T terms: models.graph.tangent_split); flexure_outputs (a flexures table's columns);
-    impact_flexure, impact_constraint, impact_by_statics (models.impacts.families)."""
+    impact_flexure, impact_constraint, impact_by_statics (models.impacts.families);
+    stress_along(P, topology, outputs, points) -> array | None (the outer-fibre stress at each
+    deformed centre-line sample of a solved state, nondimensional; P numeric Params, outputs its
+    own by short name: models.elements.fibre_stress)."""
 
     type: str
     schema: builtins.type[TwoBodyElement] | None  # builtins': `type` is the family's name here

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 import casadi as ca
+import numpy as np
 from pydantic import Field
 
 from models.beams import curved_beam_closed_form as kernel
@@ -195,6 +196,23 @@ class CurvedBeamFamily:
 
     def unknowns(self, t: FlexureTopology) -> list[tuple[str, str]]:
         return []
+
+    def stress_along(self, P, t: FlexureTopology, outputs: dict[str, float], points) -> np.ndarray:
+        """The bending stress at each drawn sample of the arc (models.elements.fibre_stress): the
+        samples stress_max takes its peak over (the segment from the section to the end balanced
+        on the undeformed arc, kernel.internal_moment), and at the start section the moment the
+        model balances there (stress_start: Eq. 17 with the tip displacement in the partial
+        non-linear model). Their largest is stress_max, unless the undeformed balance at the
+        start section exceeds every drawn sample. The drawn deformed line is a display blend of
+        the bodies' motions; the stresses are the model's."""
+        base, section = f"/elements/{t.name}", f"/sections/{t.section}"
+        r, theta_f = P[f"{base}/radius"], P[f"{base}/arc_angle"]
+        modulus = 6 / (P[f"{section}/b"] * P[f"{section}/h"] ** 2)
+        w = [outputs[k] for k in ("Fx", "Fy", "M")]
+        n = len(points)
+        along = [abs(float(kernel.internal_moment(r, theta_f * (1 - k / (n - 1)), w))) * modulus for k in range(n)]
+        along[0] = outputs["stress_start"]
+        return np.array(along)
 
     def energy_form_problem(self, t: FlexureTopology) -> str | None:
         if t.model == "conservative":

@@ -19,6 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 
 import casadi as ca
+import numpy as np
 
 from models.beams.link_shooting import LinkProperties, LinkShooting, LinkSolution
 from models.documents.expression import compile_expression, finite_on
@@ -33,6 +34,7 @@ from models.elements.base import (
     SiValues,
     beam_discretization,
 )
+from models.elements.fibre_stress import link_stresses
 from models.elements.link_schema import Link
 from models.errors import MechanismError
 from models.graph.context import AssemblyContext
@@ -220,6 +222,12 @@ class LinkFamily:
             _centre_line(shooting, sol, samples),
             merged=shooting.uniform,
         )
+
+    def stress_along(self, P, t: LinkTopology, outputs: dict[str, float], points) -> np.ndarray | None:
+        """The bending stress at each centre-line sample (models.elements.fibre_stress): the
+        samples lie evenly in u, where stress_max takes its peak."""
+        us = np.linspace(0.0, 1.0, len(points))
+        return link_stresses(P, t, outputs, points, us)
 
     def unknowns(self, t: LinkTopology) -> list[tuple[str, str]]:
         """h, v, rotation_start, M_start, then nodeK.psi, .m, .dx, .dy of the inner nodes."""

@@ -13,10 +13,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import casadi as ca
+import numpy as np
 
-from models.beams.link_fe import LinkElements, LinkKinematics
+from models.beams.link_fe import LinkElements, LinkKinematics, element_rule
 from models.documents.sections import section_properties
 from models.elements.base import CentreLine, Contribution, EnergyTerms, InertiaPoint, NoMassForm, ScaleHint, SiValues
+from models.elements.fibre_stress import link_stresses
 from models.elements.link import LINK, LinkElementsTopology, link_properties
 from models.elements.link_schema import Link
 from models.elements.surfaces import ElementSurfaces, SurfacePoint
@@ -174,6 +176,15 @@ class LinkElementsFamily:
         return Contribution(
             {i: on_start, j: on_end}, rows, outputs, energy, CentreLine(deformed, undeformed, thickness)
         )
+
+    def stress_along(self, P, t: LinkElementsTopology, outputs: dict[str, float], points) -> np.ndarray | None:
+        """The bending stress at each drawn point, nodes and contact points in u order
+        (models.elements.fibre_stress), from the end conditions' reactions: exact statics of
+        the discrete solution, where the curvature of its rotations is one order less accurate."""
+        rule, h = element_rule(t.degree), 1.0 / t.intervals
+        inner = [e * h + h * xi for e in range(t.intervals) for xi in rule.at_contact.xi]
+        us = sorted([k * h for k in range(t.intervals + 1)] + inner)
+        return link_stresses(P, t, outputs, points, us) if len(us) == len(points) else None
 
     def unknowns(self, t: LinkElementsTopology) -> list[tuple[str, str]]:
         first = 0 if t.start == "pinned" else 1

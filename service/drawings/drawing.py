@@ -1,7 +1,8 @@
 """The drawing of a mechanism as data (document units), for the browser workbench: every
-element's centre line (undeformed, and deformed at a solution), the bodies' reference points
-and skeletons, joints and springs, contact objects and impact surfaces as outlines, loads as
-arrows, and the units of the axes.
+element's centre line (undeformed, and deformed at a solution, with the stress along it), the
+bodies' reference points and skeletons, joints and springs, contact objects and impact surfaces
+as outlines, loads as arrows, the units of the axes and stresses, and each element's allowable
+stress (its material's stress_limit).
 
 Whatever a body carries is drawn in its undeformed place and listed with the body's name; a
 pose [dx, dy, rotation] moves it: p -> about + (dx, dy) + R(rotation) (p - about), `about`
@@ -17,6 +18,7 @@ from models import Mechanism, MechanismError
 from models.elements import FAMILIES
 from service.drawings.configuration_plot import load_point
 from service.drawings.outlines import circle_sites, contact_objects, document_length, in_body, turned
+from service.drawings.stresses import frame_stresses, stress_limits
 
 
 def mechanism_drawing(mech: Mechanism, z: np.ndarray | None = None, outputs: dict | None = None) -> dict:
@@ -33,9 +35,13 @@ def mechanism_drawing(mech: Mechanism, z: np.ndarray | None = None, outputs: dic
         for body, point in zip(ends, (points[0], points[-1])):
             bodies[body]["skeleton"].append(point.tolist())
         elements.append({"name": name, "from": ends[0], "to": ends[1], "points": points.tolist()})
+    limits = stress_limits(mech)
+    for element in elements:
+        if element["name"] in limits:
+            element["stress_limit"] = limits[element["name"]]
     drawing = {
         "name": mech.document.name,
-        "units": {kind: mech.doc_unit(kind) for kind in ("length", "force", "moment", "angle")},
+        "units": {kind: mech.doc_unit(kind) for kind in ("length", "force", "moment", "angle", "stress")},
         "radians_per_angle_unit": mech.doc_factor("angle"),
         "bodies": bodies,
         "elements": elements,
@@ -54,15 +60,23 @@ def mechanism_drawing(mech: Mechanism, z: np.ndarray | None = None, outputs: dic
 
 def state_frame(mech: Mechanism, z: np.ndarray, p: np.ndarray, outputs: dict) -> dict:
     """A state of the mechanism as the page animates it: every element's deformed centre
-    line and every body's pose (document units; outputs of the state in document units)."""
-    deformed = np.asarray(mech.graphs.shapes(z, p)[0], dtype=float) / mech.nd_per_doc("length")
-    return {
+    line and every body's pose (document units; outputs of the state in document units); and,
+    given its outputs, `stresses`: per beam element the outer-fibre bending stress at each point
+    of its deformed line (the document's stress unit; service.drawings.stresses says which
+    elements have them and how they are found)."""
+    shapes = np.asarray(mech.graphs.shapes(z, p)[0], dtype=float)
+    deformed = shapes / mech.nd_per_doc("length")
+    frame = {
         "elements": {
             name: deformed[:, first : first + count].T.tolist()
             for name, first, count, _, _ in mech.graphs.shape_segments
         },
         "poses": poses_from_outputs(mech, outputs),
     }
+    stresses = frame_stresses(mech, p, outputs, shapes)
+    if stresses:
+        frame["stresses"] = stresses
+    return frame
 
 
 def poses_from_outputs(mech: Mechanism, outputs: dict) -> dict[str, list[float]]:
