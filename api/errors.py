@@ -25,6 +25,7 @@ from __future__ import annotations
 import difflib
 import logging
 import re
+import typing
 
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
@@ -145,6 +146,17 @@ def _request_field_names() -> tuple[str, ...]:
     return tuple(sorted(_fields_of(models + [a.Options for a in ANALYSES] + kinds)))
 
 
+def _home_within(key: str, analysis: str) -> str:
+    """' (it belongs under trace: /trace/path)' when a group of the analysis' own options
+    has the field, as a misplaced top-level field usually does."""
+    options = next((a.Options for a in ANALYSES if a.name == analysis), None)
+    for name, field in (options.model_fields if options else {}).items():
+        for inner in typing.get_args(field.annotation) or (field.annotation,):
+            if isinstance(inner, type) and issubclass(inner, BaseModel) and key in inner.model_fields:
+                return f" (it belongs under {name}: /{name}/{key})"
+    return ""
+
+
 def _taken_by(key: str, analysis: str | None) -> str:
     """' (the trace analysis takes it)' when another analysis' options have the field."""
     takers = [a.name for a in ANALYSES if a.name != analysis and key in a.Options.model_fields]
@@ -165,10 +177,13 @@ def _message(first: dict) -> str:
         key = str(loc[-1])
         analysis = next((p.strip("[]") for p in loc if isinstance(p, str) and p.startswith("[")), None)
         if analysis is not None and len(loc) <= 3:  # a top-level field of a solve request
-            taken = _taken_by(key, analysis)
+            taken = _home_within(key, analysis) or _taken_by(key, analysis)
             if taken:
                 return f"unknown field '{key}' for the {analysis} analysis{taken}"
-        close = difflib.get_close_matches(key, _request_field_names(), n=1, cutoff=0.75)
+        others = [
+            name for name in _request_field_names() if name != key
+        ]  # a field of that name elsewhere is no suggestion
+        close = difflib.get_close_matches(key, others, n=1, cutoff=0.75)
         return f"unknown field '{key}'" + (f" (did you mean '{close[0]}'?)" if close else "")
     return message[len("Value error, ") :] if message.startswith("Value error, ") else message
 

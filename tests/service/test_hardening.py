@@ -367,6 +367,23 @@ def test_a_document_posted_unwrapped_is_named_as_such(server):
     assert error(r)["message"].startswith('body: this is a mechanism document itself: send it as {"document": ')
 
 
+def test_a_field_put_outside_its_group_is_told_where_it_belongs(server):
+    """A trace's path given at the top level, and a target's value that is not a field: no
+    request field suggests its own name back ("did you mean 'path'?")."""
+    r = httpx.post(
+        server.url + "/v1/solve", json={"example": "snap_through_arch", "analysis": "trace", "path": "/loads/P/force/1"}
+    )
+    assert r.status_code == 422 and error(r)["pointer"] == "/path"
+    assert (
+        error(r)["message"]
+        == "/path: unknown field 'path' for the trace analysis (it belongs under trace: /trace/path)"
+    )
+    target = {"path": "/loads/actuation/force/1", "output": "end_effector.x", "equals": 0, "value": 3}
+    r = httpx.post(server.url + "/v1/solve", json={"example": "gripper", "target": target})
+    assert r.status_code == 422 and error(r)["pointer"] == "/target/value"
+    assert "did you mean 'value'" not in error(r)["message"], error(r)["message"]
+
+
 def test_a_misspelled_key_is_named(server):
     r = httpx.post(server.url + "/v1/solve", json={"exmaple": "gripper"})
     assert r.status_code == 422 and error(r)["pointer"] == "/exmaple"
