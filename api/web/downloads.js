@@ -15,11 +15,12 @@ function save(blob, name) {
 
 const slug = (text) => (text || "flexmech").toLowerCase().replace(/[^a-z0-9]+/g, "-").replace(/^-|-$/g, "").slice(0, 60);
 
-// The figure of the open tab: the curve or the energies, else the mechanism.
+// The figure of the open tab: the curve (with the runs kept for comparison on it) or the
+// energies, else the mechanism; the kept runs' small colour samples are not figures.
 function visibleFigure() {
   const tab = document.querySelector('[role=tab][aria-selected=true]');
   const panel = tab && document.getElementById(tab.getAttribute("aria-controls"));
-  return (panel && panel.querySelector("svg")) || document.querySelector("#drawing svg");
+  return (panel && panel.querySelector("svg.line-plot")) || document.querySelector("#drawing svg");
 }
 
 export function wireDownloads(state) {

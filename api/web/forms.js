@@ -4,9 +4,11 @@
 // its hint; its starting value is the open document's field at its `document_default` (a JSON
 // pointer), else its `form_default`, else its schema default, so an example runs as its
 // author meant. An input's id is "option-" and the field's JSON pointer in the request with
-// "-" between its parts: the pointer of a 422 finds its input.
+// "-" between its parts: the pointer of a 422 finds its input. A field asking for numeric
+// fields of the document by JSON pointer has a menu of them beside it (pickers.js).
 
 import { ApiProblem } from "./api.js";
+import { withPicker } from "./pickers.js";
 
 // The fields every request has, set elsewhere on the page (the editor, the model menu, Extra).
 const COMMON = new Set(["document", "example", "model", "overrides", "options", "analysis"]);
@@ -83,6 +85,15 @@ export function choices(analyses, openapi) {
 
 const inputId = (path) => `option-${path.join("-")}`;
 
+// A field that asks for numeric fields of the document by JSON pointer (one, or a list): its
+// description says so, or its schema's example is a pointer. It gets a picker (pickers.js).
+function asksForPointer(field) {
+  if (field.kind !== "text" && field.kind !== "names") return false;
+  const example = (field.schema.examples || [])[0];
+  const first = Array.isArray(example) ? example[0] : example;
+  return /JSON pointer|field pointer/i.test(field.schema.description || "") || (typeof first === "string" && first.startsWith("/"));
+}
+
 function hinted(element, field) {
   const help = field.schema.description || "";
   if (help) element.title = help;
@@ -115,7 +126,8 @@ function leafInput(field, doc, base) {
   }
   input.id = inputId(field.path);
   input.dataset.kind = field.kind;
-  wrapper.append(caption, hinted(input, field));
+  const control = hinted(input, field);
+  wrapper.append(caption, asksForPointer(field) ? withPicker(control, field.label, doc, field.kind === "names") : control);
   return wrapper;
 }
 

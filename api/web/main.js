@@ -12,11 +12,14 @@ import { csvOf, fillCurveChoices, renderCurve, renderEnergies, renderTables } fr
 import { resultView } from "./results.js";
 import { wireModeRows } from "./vibration.js";
 import { drawScene } from "./scene.js";
+import { resetView } from "./zoom.js";
 import { wireDownloads } from "./downloads.js";
 import { clearCard, showCard, statusStyle } from "./card.js";
 import { showRecentJobs } from "./recent.js";
 import { defaultChoice, whyNot } from "./offers.js";
 import { wireTabs } from "./tabs.js";
+import { wireCompare } from "./compare.js";
+import { refreshPickers, wirePickers } from "./pickers.js";
 
 const $ = (id) => document.getElementById(id);
 const DEFAULT_EXAMPLE = "gripper";
@@ -80,6 +83,7 @@ function report(error, where = "run-state") {
 async function draw(deformed = null) {
   const doc = await readDocument();
   state.doc = doc;
+  refreshPickers(doc); // the path fields' menus list this document's fields
   const model = $("model").value || undefined;
   const body = { document: doc, model, ...(deformed ? { state: "equilibrium", overrides: deformed.overrides || {} } : {}) };
   state.drawing = await post("/v1/drawings", body);
@@ -122,6 +126,7 @@ function newDocument() {
   say("document-state", "");
   $("job").hidden = true;
   state.jobId = null;
+  resetView($("drawing")); // the whole new mechanism, not the last one's zoom
 }
 
 async function openExample(name) {
@@ -163,6 +168,7 @@ function offerChoices(wanted = null, fresh = false) {
 }
 
 function showView(view, result) {
+  view.run = { title: state.running ? state.running.title : "", model: $("model").value, document: state.name, at: Date.now() }; // its label when kept
   state.view = view; state.result = result;
   renderTables(view);
   fillCurveChoices(view);
@@ -353,6 +359,8 @@ function wire() {
   wireAnimation();
   wireDownloads(state);
   wireTabs(() => { renderCurve(state.view); renderEnergies(state.view); });
+  wireCompare(() => state.view, () => renderCurve(state.view));
+  wirePickers($("drawing"));
 }
 
 // Examples, analyses, then the example asked for (?example=) or the job of the address.

@@ -5,7 +5,9 @@
 const SVG_NS = "http://www.w3.org/2000/svg";
 const FONT = "system-ui, -apple-system, 'Segoe UI', Roboto, Arial, sans-serif";
 // Okabe–Ito: distinguishable with the common colour-vision deficiencies; yellow last (faint on white).
-const PALETTE = ["#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#000000", "#F0E442"];
+export const PALETTE = ["#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#000000", "#F0E442"];
+// Dash patterns told apart at a glance (solid first), for series that share a colour family or a legend.
+export const DASHES = ["", "8 4", "2 3", "10 3 2 3"];
 const INK = "#222", MUTED = "#555", GRID = "#e6e6e6", FRAME = "#9a9a9a";
 const CHAR_WIDTH = 6.8; // rough width of a 12px sans-serif character, for layout before rendering
 const LINE_HEIGHT = 16;
@@ -81,7 +83,8 @@ function normalizeSeries(series) {
     const length = Math.min(x.length, y.length);
     const name = s && s.name !== undefined ? String(s.name) : `series ${index + 1}`;
     const color = (s && s.color) || PALETTE[index % PALETTE.length];
-    return { name, color, dashed: Boolean(s && s.dashed), x: x.slice(0, length), y: y.slice(0, length), order: xOrder(x, length) };
+    const dash = (s && s.dash) || (s && s.dashed ? "6 4" : "");
+    return { name, color, dash, x: x.slice(0, length), y: y.slice(0, length), order: xOrder(x, length) };
   });
 }
 
@@ -186,7 +189,7 @@ function drawSeries(svg, series, scales, area, points) {
   for (const s of series) {
     const decimate = s.x.length > 4 * area.width;
     const attributes = { d: pathData(s, scales, decimate), stroke: s.color, class: "plot-series" };
-    if (s.dashed) attributes["stroke-dasharray"] = "6 4";
+    if (s.dash) attributes["stroke-dasharray"] = s.dash;
     node("path", attributes, layer);
     if (!points || s.x.length > MAX_MARKERS) continue;
     const markers = node("g", { fill: s.color, stroke: "none" }, layer);
@@ -201,7 +204,7 @@ function drawLegend(svg, legend, titleHeight) {
   for (const { series: s, x, row } of legend.items) {
     const y = titleHeight + row * LINE_HEIGHT + 8;
     const sample = { x1: x, x2: x + 24, y1: y, y2: y, stroke: s.color, "stroke-width": 2 };
-    if (s.dashed) sample["stroke-dasharray"] = "6 4";
+    if (s.dash) sample["stroke-dasharray"] = s.dash;
     node("line", sample, group);
     node("text", { x: x + 30, y: y + 4 }, group).textContent = s.name;
   }
@@ -316,7 +319,8 @@ function emptyRoot({ width, height, label }) {
   return svg;
 }
 
-// series: [{name, x: number[], y: (number|null)[], color?, dashed?}]; returns an <svg> element.
+// series: [{name, x: number[], y: (number|null)[], color?, dash? (an SVG dash array), dashed?}];
+// returns an <svg> element.
 export function linePlot({ series = [], xLabel = "", yLabel = "", title = "", width = 640, height = 360, points = false } = {}) {
   const label = title || `${yLabel} against ${xLabel}`;
   const svg = emptyRoot({ width, height, label });

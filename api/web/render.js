@@ -1,6 +1,8 @@
 // A view (results.js) into the page: the summary and tables of the Outputs tab, curves of any
-// series against any other, energies against time, and CSV of what is shown.
+// series against any other (with the runs kept for comparison), energies against time, and CSV
+// of what is shown.
 
+import { overlaid } from "./compare.js";
 import { formatNumber, linePlot } from "./plot.js";
 
 const $ = (id) => document.getElementById(id);
@@ -69,12 +71,14 @@ export function fillCurveChoices(v) {
   $("tab-curves").disabled = names.length < 2;
 }
 
+// The curve of y against x, with the runs kept for comparison (compare.js) on the same axes.
 export function renderCurve(v) {
   const x = $("curve-x").value, y = $("curve-y").value;
   const box = $("curve");
-  if (!v || !v.series[x] || !v.series[y]) { box.replaceChildren(); return null; }
-  const svg = linePlot({ series: [{ name: y, x: v.series[x], y: v.series[y] }], xLabel: label(v, x), yLabel: label(v, y),
-                         title: `${y} against ${x}`, points: v.series[x].length <= 60 });
+  const series = overlaid(v, x, y);
+  if (!series.length) { box.replaceChildren(); return null; }
+  const svg = linePlot({ series, xLabel: label(v, x), yLabel: label(v, y),
+                         title: `${y} against ${x}`, points: Math.max(...series.map((s) => s.x.length)) <= 60 });
   box.replaceChildren(svg);
   return svg;
 }

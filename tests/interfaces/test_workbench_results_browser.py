@@ -165,8 +165,7 @@ def test_a_running_simulation_moves_the_drawing_and_its_page_survives_a_reload(p
     page.wait_for_function("() => document.getElementById('progress-text').textContent.includes('simulation running')")
     assert page.get_attribute("#result-card", "data-status") == "running"
     assert (
-        page.input_value("#analysis") == "job:simulation"
-        and page.input_value("#example-select") == "four_bar_dynamics"
+        page.input_value("#analysis") == "job:simulation" and page.input_value("#example-select") == "four_bar_dynamics"
     )
     recent = page.locator(f'#recent-list li[data-job="{job.split("/")[-1]}"]')
     recent.wait_for()
