@@ -63,17 +63,17 @@ function contactView(result, base) {
   return v;
 }
 
-// Every number of a result, with the unit its report gives the field (its `units` by the
-// field's last name), "1" for a count or a ratio it gives none.
+// Every number of a result with its unit: its sibling "<name>_unit" (a studied field's
+// change), else the report's `units` by the field's last name; "?" where the report names none.
 function numbersTable(caption, data) {
   const rows = [];
   const units = (data && data.units) || {};
-  const walk = (value, path, key) => {
-    if (rows.length >= MAX_TABLE_ROWS || key === "units") return;
-    if (value === null || typeof value !== "object") rows.push([path || "(value)", value, typeof value === "number" ? units[key] || "1" : ""]);
-    else for (const [inner, entry] of Object.entries(value)) walk(entry, path ? `${path}.${inner}` : inner, inner);
+  const walk = (value, path, key, unit) => {
+    if (rows.length >= MAX_TABLE_ROWS || key === "units" || key.endsWith("_unit")) return;
+    if (value === null || typeof value !== "object") rows.push([path || "(value)", value, typeof value === "number" ? unit || units[key] || "?" : ""]);
+    else for (const [inner, entry] of Object.entries(value)) walk(entry, path ? `${path}.${inner}` : inner, inner, value[`${inner}_unit`]);
   };
-  walk(data, "", "");
+  walk(data, "", "", "");
   return { caption, columns: ["field", "value", "unit"], rows };
 }
 

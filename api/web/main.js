@@ -287,7 +287,7 @@ async function run() {
   } catch (error) {
     report(error);
   } finally {
-    state.busy = false; $("run").removeAttribute("aria-disabled");
+    state.busy = false; state.running = null; $("run").removeAttribute("aria-disabled");
   }
 }
 
@@ -331,6 +331,7 @@ async function followJobPage(id) {
 async function followToTheEnd(id) {
   const last = await follow(id, partialResults(id));
   await showJobResult(id, last);
+  state.running = null;
 }
 
 function wire() {
@@ -345,7 +346,7 @@ function wire() {
     openExample(name).catch(report);
   });
   window.addEventListener("popstate", () => location.reload()); // back and forward: the page of that address
-  $("draw").addEventListener("click", redraw);
+  $("draw").addEventListener("click", () => redraw());
   $("run").addEventListener("click", run);
   $("cancel").addEventListener("click", cancelJob);
   $("analysis").addEventListener("change", () => { renderForm($("options"), currentChoice(), state.doc); });

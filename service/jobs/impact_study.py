@@ -116,7 +116,8 @@ class ImpactStudyJob:
         runs = _runs(spec)
         check_grid_size([len(runs)], limits, "/study/fields")
         check_cost(simulate, limits.max_simulation_steps)
-        check_memory(model_of(mech.document, simulate), simulate, RUN_BYTES)
+        model = model_of(mech.document, simulate)
+        check_memory(model, simulate, RUN_BYTES)
         return Plan(
             len(runs),
             {
@@ -125,6 +126,8 @@ class ImpactStudyJob:
                 "tolerance": tolerance,
                 "scheme": simulate.scheme,
                 "max_steps": limits.max_simulation_steps,
+                "field_units": {path: model.book.units.get(path, ("", 1.0))[0] for path, _ in runs if path is not None},
+                "force_unit": mech.doc_unit("force"),
             },
         )
 
@@ -182,6 +185,7 @@ class ImpactStudyJob:
                     )
                 entry[side] = {
                     "change": point["change"],
+                    "change_unit": plan.get("field_units", {}).get(point["path"], ""),
                     "status": point["status"],
                     "impacts": point["impacts"],
                     "contacts": point.get("contacts"),
@@ -198,8 +202,15 @@ class ImpactStudyJob:
             else {"impacts": nominal["impacts"], "seconds": nominal["seconds"], "contacts": nominal.get("contacts")},
             "fields": fields,
             "ranking": _ranking(fields),
-            # by a field's last name: departures and times in s; rms and max relative to the nominal range
+            # by a field's last name: departures and times in s; rms and max relative to the nominal
+            # range (a field's change is in its change_unit)
             "units": {
+                "impacts": "1",
+                "contacts": "1",
+                "first_contact": "s",
+                "first_separation": "s",
+                "peak_time": "s",
+                "peak_force": plan.get("force_unit", ""),
                 "until": "s",
                 "seconds": "s",
                 "departure": "s",

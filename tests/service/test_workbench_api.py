@@ -146,3 +146,35 @@ def test_an_impact_simulation_names_the_unit_of_every_series_and_event_field(ser
     assert report["impacts"], "the asymmetric impact strikes within 0.1 s"
     assert all(field in report["event_units"] for field in report["impacts"][0] if field != "pair")
     assert report["event_units"]["peak_force"] == "N" and report["event_units"]["impact_speed"] == "m/s"
+
+
+def test_an_impact_study_names_the_unit_of_every_number(server):
+    """Each studied field's change in the field's own unit, every other number by its name."""
+    study = {
+        "fields": [
+            {"path": "/contacts/pairs/conjugate/normal/restitution", "step": 0.05},
+            {"path": "/bodies/hinge/mass", "step": 0.01},
+        ]
+    }
+    posted = call(
+        server,
+        "POST",
+        "/v1/impact-studies",
+        json={"example": "csfh_central_impact", "simulate": {"until": 0.05}, "study": study},
+    )
+    assert posted.status_code == 202, posted.text
+    result = _finished(server, posted.json()["id"])["result"]
+    units = {path: field["+"]["change_unit"] for path, field in result["fields"].items()}
+    assert units == {"/contacts/pairs/conjugate/normal/restitution": "1", "/bodies/hinge/mass": "kg"}
+    unnamed = []
+
+    def walk(value, path: str, key: str, unit: str | None) -> None:
+        if isinstance(value, dict):
+            for name, inner in value.items():
+                if name != "units" and not name.endswith("_unit"):
+                    walk(inner, f"{path}/{name}", name, value.get(f"{name}_unit"))
+        elif isinstance(value, int | float) and not isinstance(value, bool) and not (unit or result["units"].get(key)):
+            unnamed.append(path)
+
+    walk(result, "", "", None)
+    assert unnamed == []
