@@ -32,6 +32,7 @@ export function viewedBounds(container, drawing, bounds, redraw) {
   if (key !== state.key) Object.assign(state, { zoom: 1, shift: [0, 0], key });
   state.redraw = redraw;
   state.base = bounds;
+  if (state.zoom === 1 && !state.shift[0] && !state.shift[1]) return bounds; // the whole drawing, exactly (scene.js clips only a zoomed view)
   const cx = (bounds[0] + bounds[2]) / 2 + state.shift[0], cy = (bounds[1] + bounds[3]) / 2 + state.shift[1];
   const hx = (bounds[2] - bounds[0]) / 2 / state.zoom, hy = (bounds[3] - bounds[1]) / 2 / state.zoom;
   return [cx - hx, cy - hy, cx + hx, cy + hy];
