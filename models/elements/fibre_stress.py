@@ -37,7 +37,9 @@ def section_fibres(P, section: SectionTopology, us) -> np.ndarray | None:
     fibre = section_properties(P, section).fibre
     if fibre is None:
         return None
-    return np.array([number(fibre(ca.SX(float(u)))) for u in us])
+    u = ca.SX.sym("u")
+    along = ca.Function("fibre", [u], [fibre(u)])  # one call for every u: a trace draws hundreds of states
+    return np.asarray(along(np.asarray(us, dtype=float).reshape(1, -1)), dtype=float).ravel() * np.ones(len(us))
 
 
 def moment_along(points: np.ndarray, m_start: float, force: np.ndarray) -> np.ndarray:
