@@ -32,12 +32,7 @@ def contact_sensitivities(
     pointer: str = "/sensitivities",
 ) -> tuple[Sensitivities, list[str]]:
     """d(outputs)/d(parameters) in document units, and warnings."""
-    slots = []
-    for k, path in enumerate(parameters):
-        try:
-            slots.append(mech.parameter_index(path))
-        except MechanismError as exc:
-            raise MechanismError(f"{pointer}/parameters/{k}", f"'{path}' is {exc.problem}") from None
+    slots = mech.parameter_indices(parameters, f"{pointer}/parameters")
     rows = []
     for k, name in enumerate(outputs):
         if name not in problem.output_names:
