@@ -66,8 +66,9 @@ def _mass(mech: Mechanism) -> str | None:
     """Mass where link dynamics integrates: every element it steps carries its own."""
     from service.dynamics.run import check_masses
 
-    if _some_mass(mech) or _impact_scheme(mech):
-        return _some_mass(mech)
+    missing = _some_mass(mech)
+    if missing or _impact_scheme(mech):  # rigid bodies in clearances: their own masses, no elements stepped
+        return missing
     try:
         check_masses(mech)
     except MechanismError as exc:

@@ -5,6 +5,7 @@
 // {items: [{name, value, unit, note, id}], warnings: [...]}; the card (card.js) draws it.
 
 import { formatNumber } from "./plot.js";
+import { lengthUnitOf } from "./results.js";
 
 const finite = (x) => typeof x === "number" && Number.isFinite(x);
 
@@ -108,7 +109,7 @@ function sweep(result) {
     ? { name: `${fieldLabel(until.path)} at ${until.output} = ${formatNumber(until.equals)} ${units[until.output] || ""}`.trim(), value: until.value, unit: until.unit, note: `${points.length} points` }
     : { name: `${fieldLabel(field.path)} at the last point`, value: last.values[0], unit: field.unit, note: `${points.length} points` }];
   const target = result.until && result.until.output;  // a sweep until an output reaches a value: that output
-  const lengthUnit = units[Object.keys(units).find((name) => /\.(x|y)$/.test(name))];
+  const lengthUnit = lengthUnitOf(units);
   const changes = Object.keys(last.outputs || {}).filter((name) => units[name] === lengthUnit)
     .map((name) => [name, last.outputs[name] - ((points[0].outputs || {})[name] ?? 0)]);
   const moved = target && target in (last.outputs || {}) ? [target] : largestBy(changes, ([, change]) => change);

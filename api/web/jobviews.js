@@ -3,7 +3,7 @@
 // anything else as a table of its numbers.
 
 import { contactFrame } from "./contactframes.js";
-import { mostMoving, simulationView } from "./results.js";
+import { lengthUnitOf, mostMoving, simulationView } from "./results.js";
 import { recordsTable } from "./vibration.js";
 
 const MAX_TABLE_ROWS = 500;
@@ -23,8 +23,7 @@ function pointSeries(v, result, points) {
     v.units[name] = (result.output_units || {})[name] || "";
   }
   const first = (result.parameters || [])[0];
-  const lengthUnit = v.units[[...outputs].find((name) => /\.(x|y)$/.test(name))];
-  const output = mostMoving(v, [...outputs], lengthUnit) || [...outputs][0];
+  const output = mostMoving(v, [...outputs], lengthUnitOf(result.output_units || {})) || [...outputs][0];
   v.defaultCurve = first && output ? [first.path, output] : null;
 }
 

@@ -90,6 +90,11 @@ export function simulationView(report, drawing) {
   return v;
 }
 
+// The length unit of a set of outputs: that of any coordinate output (a point's x or y).
+export function lengthUnitOf(units) {
+  return units[Object.keys(units).find((name) => /\.(x|y)$/.test(name))];
+}
+
 // The series that moves most over the run, of `names`: lengths (`lengthUnit`) before others,
 // user-named points before the bodies' and elements' own outputs; null if none moves.
 export function mostMoving(v, names, lengthUnit) {
