@@ -1,0 +1,193 @@
+"""The C sources of an export: the CasADi-generated kernels (made warning-free under
+-Wall -Wextra), and the driver, header, examples and build files filled from templates."""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+from importlib.resources import files
+from pathlib import Path
+
+import casadi as ca
+
+from service.export.kernels import ExportFunctions
+from service.export.plan import ExportPlan
+
+TEMPLATES = files("service.export") / "templates"
+_UNUSED = re.compile(r"^(?:static |CASADI_SYMBOL_EXPORT )[^;=]*?\b\w+\(([^()]*)\)\s*\{\s*$")
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """The sweep the example, the benchmark and the checks run: input `index` from start to
+    stop (document units) in `points` points."""
+
+    index: int
+    start: float
+    stop: float
+    points: int = 100
+
+
+def c_double(value: float) -> str:
+    if math.isinf(value):
+        return "INFINITY" if value > 0 else "-INFINITY"
+    return repr(float(value))
+
+
+def c_string(text: str) -> str:
+    return text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", " ")
+
+
+def _mark_unused(source: str) -> str:
+    """CasADi gives every function the same signature (arg, res, iw, w, mem) whether it reads
+    them or not; a (void) cast per parameter keeps -Wunused-parameter quiet without switching
+    any warning off."""
+    out = []
+    for line in source.splitlines(keepends=True):
+        out.append(line)
+        match = _UNUSED.match(line.rstrip("\n"))
+        if match and match.group(1).strip() not in ("", "void"):
+            names = [re.findall(r"\w+", a)[-1] for a in match.group(1).split(",")]
+            out.append("  " + " ".join(f"(void){n};" for n in names) + "\n")
+    return "".join(out)
+
+
+def write_kernels(functions: ExportFunctions, name: str, folder: Path) -> Path:
+    generator = ca.CodeGenerator(f"{name}_kernels.c", {"with_header": True, "casadi_int": "long long int"})
+    for f in functions.all():
+        generator.add(f)
+    generator.generate(str(folder) + "/")
+    source = folder / f"{name}_kernels.c"
+    source.write_text(_mark_unused(source.read_text()))
+    return source
+
+
+def work_sizes(functions: ExportFunctions) -> dict[str, int]:
+    fs = functions.all()
+    return {
+        "SZ_ARG": max(3, *(f.sz_arg() for f in fs)),
+        "SZ_RES": max(2, *(f.sz_res() for f in fs)),
+        "SZ_IW": max(1, *(f.sz_iw() for f in fs)),
+        "SZ_W": max(1, *(f.sz_w() for f in fs)),
+    }
+
+
+def fill(template: str, values: dict[str, str]) -> str:
+    text = (TEMPLATES / template).read_text()
+    for key, value in values.items():
+        text = text.replace(f"@{key}@", value)
+    left = sorted(set(re.findall(r"@[A-Z_0-9]+@", text)))
+    if left:
+        raise RuntimeError(f"template {template}: unfilled {', '.join(left)}")
+    return text
+
+
+def _lines(items: list[tuple[str, str]]) -> str:
+    return "\n".join(f"{a}{b}" for a, b in items)
+
+
+def template_values(
+    plan: ExportPlan, functions: ExportFunctions, p_default, coordinates, sweep: Sweep, meta: dict
+) -> dict[str, str]:
+    """Every @KEY@ of the templates."""
+    upper = plan.name.upper()
+    n = functions.eq_step.size1_in(0)
+    target = plan.target
+    sweep_input = plan.inputs[sweep.index]
+    values = {
+        "NAME": plan.name,
+        "UPPER": upper,
+        "TITLE": c_string(meta["title"]),
+        "VERSION": meta["version"],
+        "MODEL": plan.model,
+        "NP": str(len(p_default)),
+        "N": str(n),
+        "N1": str(n + 1),
+        "DEFAULT_P": ", ".join(c_double(v) for v in p_default),
+        "INPUT_SLOTS": ", ".join(str(i.slot) for i in plan.inputs),
+        "INPUT_SCALES": ", ".join(c_double(i.nd_per_unit) for i in plan.inputs),
+        "INPUT_LOWS": ", ".join(c_double(i.low) for i in plan.inputs),
+        "INPUT_HIGHS": ", ".join(c_double(i.high) for i in plan.inputs),
+        "INPUT_LOW_EXCLUDED": ", ".join(str(int(i.low_excluded)) for i in plan.inputs),
+        "INPUT_DEFAULTS": ", ".join(c_double(i.default) for i in plan.inputs),
+        "TOLERANCE": c_double(plan.options.tolerance),
+        "HALVINGS": str(plan.options.line_search_halvings),
+        "MAX_ITERATIONS": str(plan.options.max_iterations),
+        "N_INPUTS": str(len(plan.inputs)),
+        "N_OUTPUTS": str(len(plan.outputs)),
+        "N_COORDINATES": str(len(coordinates)),
+        "INPUT_LINES": _lines(
+            [
+                (f"#define {upper}_IN_{i.c_name.upper()} {k}", f" /* {i.pointer} [{i.unit}], {_range(i)} */")
+                for k, i in enumerate(plan.inputs)
+            ]
+        ),
+        "OUTPUT_LINES": _lines(
+            [
+                (f"#define {upper}_OUT_{o.c_name.upper()} {k}", f" /* {o.name} [{o.unit}] */")
+                for k, o in enumerate(plan.outputs)
+            ]
+        ),
+        "COORDINATE_LINES": _lines(
+            [(" *   ", f"{k}: {c['name']} [{c['unit']}], row: {c['force_unit']}") for k, c in enumerate(coordinates)]
+        ),
+        "OUTPUT_LABELS": ", ".join(f'"{c_string(o.name)} [{c_string(o.unit)}]"' for o in plan.outputs),
+        "SWEEP_NAME": sweep_input.c_name,
+        "SWEEP_LABEL": c_string(f"{sweep_input.c_name} [{sweep_input.unit}]"),
+        "SWEEP_UNIT": c_string(sweep_input.unit),
+        "SWEEP_INDEX": str(sweep.index),
+        "SWEEP_START": c_double(sweep.start),
+        "SWEEP_STOP": c_double(sweep.stop),
+        "SWEEP_POINTS": str(sweep.points),
+        "SZ_ARG": "",
+        "SZ_RES": "",
+        "SZ_IW": "",
+        "SZ_W": "",
+        "TARGET_GOAL": c_double(target.default_goal) if target else "0.0",
+        "TARGET_DESCRIPTION": (
+            f"the value of input {plan.inputs[target.input].c_name} [{plan.inputs[target.input].unit}] at which "
+            f"{target.output.name} [{target.output.unit}] equals goal."
+            if target
+            else "none in this export (returns NO_TARGET)."
+        ),
+    }
+    values.update({k: str(v) for k, v in work_sizes(functions).items()})
+    if target:
+        values.update(
+            TARGET_INPUT=plan.inputs[target.input].c_name,
+            TARGET_OUTPUT=c_string(target.output.name),
+            TARGET_OUTPUT_UNIT=c_string(target.output.unit),
+            TARGET_INDEX=str(target.input),
+            TARGET_FIRST_GUESS=c_double(plan.inputs[target.input].default),
+        )
+    return values
+
+
+def _range(item) -> str:
+    low = ("(" if item.low_excluded else "[") + (c_double(item.low) if math.isfinite(item.low) else "-inf")
+    high = (c_double(item.high) if math.isfinite(item.high) else "inf") + "]"
+    return f"range {low}, {high}"
+
+
+def write_sources(plan: ExportPlan, values: dict[str, str], folder: Path) -> list[Path]:
+    """The driver, header, example, benchmark, checks, build files and loader."""
+    has_target = plan.target is not None and plan.target.input == int(values["SWEEP_INDEX"])
+    target_code = fill("target.c.in" if plan.target else "no_target.c.in", values)
+    target_example = fill("main_target.c.in", values) if has_target else ""
+    written = {
+        f"{plan.name}.c": fill("driver.c.in", {**values, "TARGET_CODE": target_code}),
+        f"{plan.name}.h": fill("header.h.in", values),
+        "main.c": fill("main.c.in", {**values, "TARGET_EXAMPLE": target_example}),
+        "bench.c": fill("bench.c.in", values),
+        "check.c": fill("check.c.in", values),
+        "Makefile": fill("Makefile.in", values),
+        "CMakeLists.txt": fill("CMakeLists.txt.in", values),
+        "loader.py": fill("loader.py.in", values),
+    }
+    paths = []
+    for file_name, text in written.items():
+        path = folder / file_name
+        path.write_text(text)
+        paths.append(path)
+    return paths
