@@ -128,6 +128,8 @@ def _print_manifest(out, manifest: dict, folder: Path) -> None:
         f"{escape(worst['measured_over'])}: warm {worst['equilibrium_warm']}, cold {worst['equilibrium_cold']}"
         + (f", target from cold {worst['target_cold']}" if "target_cold" in worst else "")
     )
+    if manifest.get("contact") and "note" in manifest["contact"]:
+        out.print(escape(manifest["contact"]["note"]))
     size = sum(p.stat().st_size for p in folder.iterdir() if p.is_file())
     out.print(f"wrote {folder} ({size / 1e3:.0f} kB, {manifest['unknowns']} unknowns); build it with: make -C {folder}")
 

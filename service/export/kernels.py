@@ -20,6 +20,19 @@ from service.units import matrix_to_doc
 
 
 @dataclass(frozen=True)
+class ContactTask:
+    """The contact state's Functions (service.export.contact_kernels): step (v, p) -> (dv,
+    norm), outputs (v, p) -> y in document units, named `names` in `units`; n_v unknowns."""
+
+    step: ca.Function
+    outputs: ca.Function
+    names: tuple[str, ...]
+    units: tuple[str, ...]
+    n_v: int
+    start: ca.Function  # (p) -> the cold start
+
+
+@dataclass(frozen=True)
 class ExportFunctions:
     """Functions of one plan, each named <plan name>_kernel_<task>:
     eq_step (z, p) -> (dz, norm); outputs (z, p) -> y (document units);
@@ -31,9 +44,12 @@ class ExportFunctions:
     stiffness: ca.Function
     target_step: ca.Function | None
     n_body: int
+    contact: ContactTask | None = None
+    contact_note: str = ""  # why a contact document's export has no contact task
 
     def all(self) -> list[ca.Function]:
-        return [f for f in (self.eq_step, self.outputs, self.stiffness, self.target_step) if f is not None]
+        contact = (self.contact.step, self.contact.outputs, self.contact.start) if self.contact else ()
+        return [f for f in (self.eq_step, self.outputs, self.stiffness, self.target_step, *contact) if f is not None]
 
 
 def _direction(R: ca.MX, K: ca.MX) -> tuple[ca.MX, ca.MX]:
@@ -106,11 +122,38 @@ def export_functions(mech: Mechanism, plan: ExportPlan) -> ExportFunctions:
         stiffness=_stiffness(mech, z, p, K, f"{base}_stiffness"),
         target_step=_target_step(mech, plan, f"{base}_target_step", R, K, z, p),
         n_body=mech.n_body_coordinates,
+        **_contact(mech, plan, base),
     )
     for f in functions.all():
         if f.has_free():
             raise RuntimeError(f"export Function {f.name()} has free symbols {f.get_free()}")
     return functions
+
+
+def _contact(mech: Mechanism, plan: ExportPlan, base: str) -> dict:
+    """The contact task's fields of ExportFunctions, as plan.options.contact asks: "auto" exports
+    it when the document has contacts and its kernel is within bounds (else notes why), "yes"
+    insists (MechanismError), "no" leaves it out."""
+    from service.export.contact_kernels import contact_functions
+
+    choice = plan.options.contact
+    if choice == "no":
+        return {}
+    try:
+        found = contact_functions(mech, plan.options.contact_outputs, base)
+    except MechanismError as exc:
+        if choice == "yes" or exc.pointer == "/contact_outputs":
+            raise
+        return {"contact_note": f"no contact task: {exc.pointer}: {exc.problem}"}
+    if found is None:
+        if choice == "yes":
+            raise MechanismError("/contact", "the document has no contacts (contacts.pairs)")
+        return {}
+    if isinstance(found, str):
+        if choice == "yes":
+            raise MechanismError("/contact", f"the contact state cannot be exported: {found}")
+        return {"contact_note": f"no contact task: {found}"}
+    return {"contact": ContactTask(*found)}
 
 
 @dataclass
@@ -125,7 +168,10 @@ def iterate(step, x0: np.ndarray, args: tuple, plan: ExportPlan) -> Iteration:
     accepted when it lowers |R|_inf, or after line_search_halvings halvings."""
     options = plan.options
     x = np.array(x0, dtype=float)
-    dx, norm = (np.asarray(v).ravel() for v in step(x, *args))
+    try:
+        dx, norm = _evaluate(step, x, args)
+    except RuntimeError:  # the C kernel returns non-finite numbers: NOT_FINITE
+        return Iteration(4, x, 0)
     for k in range(options.max_iterations + 1):
         if not np.isfinite(norm[0]):
             return Iteration(4, x, k)
@@ -136,9 +182,17 @@ def iterate(step, x0: np.ndarray, args: tuple, plan: ExportPlan) -> Iteration:
         t = 1.0
         for halving in range(options.line_search_halvings + 1):
             trial = x - t * dx
-            dx_t, norm_t = (np.asarray(v).ravel() for v in step(trial, *args))
+            try:
+                dx_t, norm_t = _evaluate(step, trial, args)
+            except RuntimeError:
+                return Iteration(4, x, k)
             if (np.isfinite(norm_t[0]) and norm_t[0] < norm[0]) or halving == options.line_search_halvings:
                 break
             t *= 0.5
         x, dx, norm = trial, dx_t, norm_t
     return Iteration(1, x, options.max_iterations)
+
+
+def _evaluate(step, x: np.ndarray, args: tuple) -> tuple[np.ndarray, np.ndarray]:
+    dx, norm = step(x, *args)
+    return np.asarray(dx, dtype=float).ravel(), np.asarray(norm, dtype=float).ravel()

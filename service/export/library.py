@@ -12,16 +12,16 @@ import io
 import json
 import tarfile
 import time
-from dataclasses import asdict
 from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
 from models import Mechanism, MechanismDocument, compile_mechanism
-from service.export.kernels import ExportFunctions, export_functions, iterate
+from service.export.kernels import ExportFunctions, export_functions
+from service.export.measure import example_path, worst_iterations
 from service.export.plan import ExportOptions, ExportPlan, export_plan
-from service.export.sources import Sweep, template_values, write_kernels, write_sources
+from service.export.sources import ExamplePath, template_values, write_kernels, write_sources
 from service.units import coordinate_kinds
 
 STATUS_CODES = {
@@ -31,89 +31,8 @@ STATUS_CODES = {
     "OUT_OF_RANGE": 3,
     "NOT_FINITE": 4,
     "NO_TARGET": 5,
+    "NO_CONTACT": 6,
 }
-
-
-def parameters_at(mech: Mechanism, plan: ExportPlan, values: np.ndarray) -> np.ndarray:
-    """The nondimensional p with the inputs set to values (document units)."""
-    p = mech.p()
-    for item, value in zip(plan.inputs, values):
-        p[item.slot] = value * item.nd_per_unit
-    return p
-
-
-def _sweep(mech: Mechanism, plan: ExportPlan, functions: ExportFunctions) -> Sweep:
-    """The document's sweep when it moves an exported input (to its target when it has one),
-    else the first input from zero to its document value."""
-    spec = mech.document.sweep
-    pointers = [i.pointer for i in plan.inputs]
-    if spec is not None and spec.path in pointers:
-        index = pointers.index(spec.path)
-        start = mech.checked_si(spec.path, spec.start, "/sweep/start", own_checks=False) / mech.doc_factor(
-            plan.inputs[index].kind
-        )
-        if plan.target is not None and plan.target.input == index:
-            stop = target_twin(
-                mech, plan, functions, np.array([i.default for i in plan.inputs]), plan.target.default_goal
-            )
-            if stop is not None:
-                return Sweep(index, start, stop)
-        if spec.stop is not None:
-            stop = mech.checked_si(spec.path, spec.stop, "/sweep/stop", own_checks=False) / mech.doc_factor(
-                plan.inputs[index].kind
-            )
-            return Sweep(index, start, stop)
-    default = plan.inputs[0].default
-    return Sweep(0, 0.0 if default != 0 else -1.0, default if default != 0 else 1.0)
-
-
-def target_twin(mech: Mechanism, plan: ExportPlan, functions: ExportFunctions, inputs: np.ndarray, goal: float):
-    """The target task as the C library runs it from a cold start: the solved input (document
-    units) and the Newton steps, or None when it does not converge."""
-    found = target_iterations(mech, plan, functions, inputs, goal)
-    return None if found is None else found[0]
-
-
-def target_iterations(mech, plan, functions, inputs, goal):
-    p = parameters_at(mech, plan, inputs)
-    first = iterate(functions.eq_step, np.zeros(mech.n_free), (p,), plan)
-    if first.status != 0:
-        return None
-    k = plan.target.input
-    x0 = np.concatenate([first.x, [p[plan.inputs[k].slot]]])
-    found = iterate(functions.target_step, x0, (p, goal), plan)
-    if found.status != 0:
-        return None
-    return found.x[-1] / plan.inputs[k].nd_per_unit, first.iterations + found.iterations
-
-
-def worst_iterations(mech: Mechanism, plan: ExportPlan, functions: ExportFunctions, sweep: Sweep) -> dict:
-    """Newton steps of the twin over the sweep: warm (each point from the previous), cold
-    (each from undeformed), and the target's cold start."""
-    values = np.array([i.default for i in plan.inputs], dtype=float)
-    warm, cold, failed = [], [], 0
-    z = np.zeros(mech.n_free)
-    for v in np.linspace(sweep.start, sweep.stop, sweep.points):
-        values[sweep.index] = v
-        p = parameters_at(mech, plan, values)
-        a = iterate(functions.eq_step, z, (p,), plan)
-        b = iterate(functions.eq_step, np.zeros(mech.n_free), (p,), plan)
-        failed += (a.status != 0) + (b.status != 0)
-        z = a.x if a.status == 0 else z
-        warm.append(a.iterations)
-        cold.append(b.iterations)
-    out = {
-        "measured_over": f"{sweep.points} points of {plan.inputs[sweep.index].c_name} from {sweep.start:.10g} to {sweep.stop:.10g} {plan.inputs[sweep.index].unit}",
-        "equilibrium_warm": int(max(warm)),
-        "equilibrium_cold": int(max(cold)),
-        "failed_points": int(failed),
-    }
-    if plan.target is not None:
-        found = target_iterations(
-            mech, plan, functions, np.array([i.default for i in plan.inputs]), plan.target.default_goal
-        )
-        out["target_cold"] = None if found is None else int(found[1])
-    return out
 
 
 def _coordinates(mech: Mechanism) -> list[dict]:
@@ -124,8 +43,32 @@ def _coordinates(mech: Mechanism) -> list[dict]:
     ]
 
 
-def manifest_of(mech, plan: ExportPlan, functions: ExportFunctions, sweep: Sweep, meta: dict, iterations: dict) -> dict:
+def _path(plan: ExportPlan, path: ExamplePath) -> dict:
+    return {
+        "task": path.task,
+        "points": path.points,
+        "inputs": [
+            {"name": plan.inputs[k].c_name, "start": a, "stop": b, "unit": plan.inputs[k].unit}
+            for k, a, b in zip(path.indices, path.starts, path.stops)
+        ],
+    }
+
+
+def _contact(functions: ExportFunctions) -> dict | None:
+    if functions.contact is None:
+        return {"note": functions.contact_note} if functions.contact_note else None
+    return {
+        "outputs": [{"output": n, "unit": u} for n, u in zip(functions.contact.names, functions.contact.units)],
+        "unknowns": functions.contact.n_v,
+        "model": "frictionless; complementarity in Fischer-Burmeister form; forces are the multipliers",
+    }
+
+
+def manifest_of(
+    mech, plan: ExportPlan, functions: ExportFunctions, path: ExamplePath, meta: dict, iterations: dict
+) -> dict:
     target = plan.target
+    tasks = ["equilibrium", "stiffness"] + (["target"] if target else []) + (["contact"] if functions.contact else [])
     return {
         "name": plan.name,
         "title": meta["title"],
@@ -133,7 +76,7 @@ def manifest_of(mech, plan: ExportPlan, functions: ExportFunctions, sweep: Sweep
         "casadi": ca.__version__,
         "model": plan.model,
         "header": f"{plan.name}.h",
-        "tasks": ["equilibrium", "stiffness", "target"] if target else ["equilibrium", "stiffness"],
+        "tasks": tasks,
         "inputs": [
             {
                 "name": i.c_name,
@@ -159,6 +102,7 @@ def manifest_of(mech, plan: ExportPlan, functions: ExportFunctions, sweep: Sweep
             "goal": target.default_goal,
             "input": plan.inputs[target.input].c_name,
         },
+        "contact": _contact(functions),
         "status_codes": STATUS_CODES,
         "limits": {
             "max_iterations": plan.options.max_iterations,
@@ -168,7 +112,7 @@ def manifest_of(mech, plan: ExportPlan, functions: ExportFunctions, sweep: Sweep
         },
         "worst_case_iterations": iterations,
         "unknowns": mech.n_free,
-        "example_sweep": asdict(sweep) | {"input": plan.inputs[sweep.index].c_name},
+        "example_path": _path(plan, path),
     }
 
 
@@ -186,14 +130,14 @@ def export_library(mech: Mechanism, folder: Path, model: str, options: ExportOpt
     document = mech.document
     plan = export_plan(mech, model, options)
     functions = export_functions(mech, plan)
-    sweep = _sweep(mech, plan, functions)
+    path = example_path(mech, plan, functions)
     meta = {"title": document.name or plan.name, "version": _version()}
-    iterations = worst_iterations(mech, plan, functions, sweep)
+    iterations = worst_iterations(mech, plan, functions, path)
     folder.mkdir(parents=True, exist_ok=True)
     write_kernels(functions, plan.name, folder)
-    values = template_values(plan, functions, mech.p(), _coordinates(mech), sweep, meta)
+    values = template_values(plan, functions, mech.p(), _coordinates(mech), path, meta)
     write_sources(plan, values, folder)
-    manifest = manifest_of(mech, plan, functions, sweep, meta, iterations)
+    manifest = manifest_of(mech, plan, functions, path, meta, iterations)
     manifest["export_seconds"] = round(time.perf_counter() - started, 3)
     (folder / "manifest.json").write_text(json.dumps(manifest, indent=2) + "\n")
     return manifest

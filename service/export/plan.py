@@ -29,6 +29,8 @@ class ExportOptions:
     outputs: tuple[str, ...] = ()
     ranges: dict[str, tuple[float, float]] = field(default_factory=dict)
     target: tuple[str, float, str] | None = None
+    contact: str = "auto"  # auto | yes | no: the contact state task (service.export.kernels._contact)
+    contact_outputs: tuple[str, ...] = ()  # the contact task's (default: the document's contact path outputs)
     max_iterations: int = 30
     tolerance: float = 1e-12  # nondimensional |R|_inf
     line_search_halvings: int = 6
@@ -38,6 +40,8 @@ class ExportOptions:
             raise MechanismError("/max_iterations", f"must lie in 1..1000, got {self.max_iterations}")
         if not 0 < self.tolerance < 1e-3:
             raise MechanismError("/tolerance", f"must lie in (0, 1e-3), got {self.tolerance:g}")
+        if self.contact not in ("auto", "yes", "no"):
+            raise MechanismError("/contact", f"unknown choice '{self.contact}' (auto, yes, no)")
         if not 0 <= self.line_search_halvings <= 30:
             raise MechanismError("/line_search_halvings", f"must lie in 0..30, got {self.line_search_halvings}")
 
@@ -88,15 +92,21 @@ def c_identifier(text: str) -> str:
     return out if out and not out[0].isdigit() else f"x_{out}"
 
 
+_POSE = re.compile(r"^/contacts/objects/[^/]+/(centre/[01]|angle)$")
+
+
 def _default_inputs(mech: Mechanism) -> list[str]:
-    moving = [p.pointer for p in mech.parameters if p.pointer.startswith("/loads/")]
+    """Every load and prescribed motion, and the contact objects' poses."""
+    moving = [p.pointer for p in mech.parameters if p.pointer.startswith("/loads/") or _POSE.match(p.pointer)]
     if not moving:
-        raise MechanismError("/loads", "the document has no loads or prescribed motions to export as inputs")
+        raise MechanismError("/loads", "the document has no loads, prescribed motions or objects to export as inputs")
     return moving
 
 
 def _input_name(pointer: str) -> str:
     parts = pointer.strip("/").split("/")[1:]  # without the section: actuation/force/1
+    if parts and parts[0] == "objects":
+        parts = parts[1:]  # a contact object's pose: ellipse/centre/0
     if len(parts) >= 2 and parts[-1] in ("0", "1"):
         parts[-1] = "xy"[int(parts[-1])]
     return c_identifier("_".join(parts))
@@ -117,7 +127,7 @@ def _input(mech: Mechanism, pointer: str, where: str, given: tuple[float, float]
         if not (math.isfinite(g_low) and math.isfinite(g_high) and g_low < g_high):
             raise MechanismError(f"/ranges/{pointer}", f"expected low < high, both finite, got {given}")
         low, high, excluded = max(low, g_low), min(high, g_high), excluded and g_low <= low
-    name = _input_name(pointer) if pointer.startswith("/loads/") else c_identifier(pointer)
+    name = _input_name(pointer) if pointer.startswith(("/loads/", "/contacts/objects/")) else c_identifier(pointer)
     return Input(
         pointer, name, mech.doc_unit(param.kind), param.kind, k, per_unit, low, high, excluded, mech.value(pointer)
     )

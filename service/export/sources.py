@@ -12,21 +12,33 @@ from pathlib import Path
 import casadi as ca
 
 from service.export.kernels import ExportFunctions
-from service.export.plan import ExportPlan
+from service.export.plan import ExportPlan, c_identifier
 
 TEMPLATES = files("service.export") / "templates"
 _UNUSED = re.compile(r"^(?:static |CASADI_SYMBOL_EXPORT )[^;=]*?\b\w+\(([^()]*)\)\s*\{\s*$")
 
 
 @dataclass(frozen=True)
-class Sweep:
-    """The sweep the example, the benchmark and the checks run: input `index` from start to
-    stop (document units) in `points` points."""
+class ExamplePath:
+    """The path the example, the benchmark and the checks run through `task` (equilibrium or
+    contact): inputs `indices` move together from `starts` to `stops` (document units) in
+    `points` points."""
 
-    index: int
-    start: float
-    stop: float
+    indices: tuple[int, ...]
+    starts: tuple[float, ...]
+    stops: tuple[float, ...]
     points: int = 100
+    task: str = "equilibrium"
+
+    def values(self, defaults) -> list[list[float]]:
+        """The inputs at each point (defaults elsewhere)."""
+        rows = []
+        for t in [i / (self.points - 1) for i in range(self.points)]:
+            row = list(defaults)
+            for k, a, b in zip(self.indices, self.starts, self.stops):
+                row[k] = a + (b - a) * t
+            rows.append(row)
+        return rows
 
 
 def c_double(value: float) -> str:
@@ -87,17 +99,101 @@ def _lines(items: list[tuple[str, str]]) -> str:
     return "\n".join(f"{a}{b}" for a, b in items)
 
 
+def _io_values(plan: ExportPlan, coordinates) -> dict[str, str]:
+    """The header's lines naming every input, output and stiffness coordinate."""
+    upper = plan.name.upper()
+    return {
+        "INPUT_LINES": _lines(
+            [
+                (f"#define {upper}_IN_{i.c_name.upper()} {k}", f" /* {i.pointer} [{i.unit}], {_range(i)} */")
+                for k, i in enumerate(plan.inputs)
+            ]
+        ),
+        "OUTPUT_LINES": _lines(
+            [
+                (f"#define {upper}_OUT_{o.c_name.upper()} {k}", f" /* {o.name} [{o.unit}] */")
+                for k, o in enumerate(plan.outputs)
+            ]
+        ),
+        "COORDINATE_LINES": _lines(
+            [(" *   ", f"{k}: {c['name']} [{c['unit']}], row: {c['force_unit']}") for k, c in enumerate(coordinates)]
+        ),
+    }
+
+
+def _target_values(plan: ExportPlan) -> dict[str, str]:
+    target = plan.target
+    if target is None:
+        return {"TARGET_GOAL": "0.0", "TARGET_DESCRIPTION": "none in this export (returns NO_TARGET)."}
+    solved = plan.inputs[target.input]
+    return {
+        "TARGET_GOAL": c_double(target.default_goal),
+        "TARGET_DESCRIPTION": (
+            f"the value of input {solved.c_name} [{solved.unit}] at which {target.output.name} [{target.output.unit}] equals goal."
+        ),
+        "TARGET_INPUT": solved.c_name,
+        "TARGET_INPUT_UNIT": c_string(solved.unit),
+        "TARGET_OUTPUT": c_string(target.output.name),
+        "TARGET_OUTPUT_UNIT": c_string(target.output.unit),
+        "TARGET_INDEX": str(target.input),
+        "TARGET_FIRST_GUESS": c_double(solved.default),
+    }
+
+
+def _path_values(plan: ExportPlan, functions: ExportFunctions, path: ExamplePath) -> dict[str, str]:
+    """The example path: how main.c, bench.c and check.c set the inputs at fraction t."""
+    first = plan.inputs[path.indices[0]]
+    moved = ", ".join(
+        f"{plan.inputs[k].c_name} from {a:.10g} to {b:.10g} {plan.inputs[k].unit}"
+        for k, a, b in zip(path.indices, path.starts, path.stops)
+    )
+    if path.task == "contact" and functions.contact is not None:
+        labels = [f"{n} [{u}]" for n, u in zip(functions.contact.names, functions.contact.units)]
+        count = f"{plan.name.upper()}_N_CONTACT_OUTPUTS"
+    else:
+        labels = [f"{o.name} [{o.unit}]" for o in plan.outputs]
+        count = f"{plan.name.upper()}_N_OUTPUTS"
+    return {
+        "PATH_TASK": path.task,
+        "PATH_POINTS": str(path.points),
+        "PATH_FIRST": str(path.indices[0]),
+        "PATH_LABEL": c_string(f"{first.c_name} [{first.unit}]"),
+        "PATH_DESCRIPTION": c_string(f"{path.points} points: {moved}"),
+        "PATH_N_OUTPUTS": count,
+        "PATH_OUTPUT_LABELS": ", ".join(f'"{c_string(label)}"' for label in labels),
+        "SET_PATH": "\n".join(
+            f"    in[{k}] = {c_double(a)} + ({c_double(b)} - ({c_double(a)})) * t;"
+            for k, a, b in zip(path.indices, path.starts, path.stops)
+        ),
+    }
+
+
+def _contact_values(plan: ExportPlan, functions: ExportFunctions) -> dict[str, str]:
+    upper, contact = plan.name.upper(), functions.contact
+    names = contact.names if contact else ()
+    units = contact.units if contact else ()
+    return {
+        "HAS_CONTACT": "1" if contact else "0",
+        "NV": str(max(1, contact.n_v if contact else 0)),
+        "N_CONTACT_OUTPUTS": str(len(names)),
+        "CONTACT_OUTPUT_LINES": _lines(
+            [
+                (f"#define {upper}_CONTACT_{c_identifier(n).upper()} {k}", f" /* {n} [{u}] */")
+                for k, (n, u) in enumerate(zip(names, units))
+            ]
+        ),
+        "CONTACT_NOTE": "frictionless; forces are the contact multipliers" if contact else "none in this export",
+    }
+
+
 def template_values(
-    plan: ExportPlan, functions: ExportFunctions, p_default, coordinates, sweep: Sweep, meta: dict
+    plan: ExportPlan, functions: ExportFunctions, p_default, coordinates, path: ExamplePath, meta: dict
 ) -> dict[str, str]:
     """Every @KEY@ of the templates."""
-    upper = plan.name.upper()
     n = functions.eq_step.size1_in(0)
-    target = plan.target
-    sweep_input = plan.inputs[sweep.index]
     values = {
         "NAME": plan.name,
-        "UPPER": upper,
+        "UPPER": plan.name.upper(),
         "TITLE": c_string(meta["title"]),
         "VERSION": meta["version"],
         "MODEL": plan.model,
@@ -117,50 +213,13 @@ def template_values(
         "N_INPUTS": str(len(plan.inputs)),
         "N_OUTPUTS": str(len(plan.outputs)),
         "N_COORDINATES": str(len(coordinates)),
-        "INPUT_LINES": _lines(
-            [
-                (f"#define {upper}_IN_{i.c_name.upper()} {k}", f" /* {i.pointer} [{i.unit}], {_range(i)} */")
-                for k, i in enumerate(plan.inputs)
-            ]
-        ),
-        "OUTPUT_LINES": _lines(
-            [
-                (f"#define {upper}_OUT_{o.c_name.upper()} {k}", f" /* {o.name} [{o.unit}] */")
-                for k, o in enumerate(plan.outputs)
-            ]
-        ),
-        "COORDINATE_LINES": _lines(
-            [(" *   ", f"{k}: {c['name']} [{c['unit']}], row: {c['force_unit']}") for k, c in enumerate(coordinates)]
-        ),
-        "OUTPUT_LABELS": ", ".join(f'"{c_string(o.name)} [{c_string(o.unit)}]"' for o in plan.outputs),
-        "SWEEP_NAME": sweep_input.c_name,
-        "SWEEP_LABEL": c_string(f"{sweep_input.c_name} [{sweep_input.unit}]"),
-        "SWEEP_UNIT": c_string(sweep_input.unit),
-        "SWEEP_INDEX": str(sweep.index),
-        "SWEEP_START": c_double(sweep.start),
-        "SWEEP_STOP": c_double(sweep.stop),
-        "SWEEP_POINTS": str(sweep.points),
-        "SZ_ARG": "",
-        "SZ_RES": "",
-        "SZ_IW": "",
-        "SZ_W": "",
-        "TARGET_GOAL": c_double(target.default_goal) if target else "0.0",
-        "TARGET_DESCRIPTION": (
-            f"the value of input {plan.inputs[target.input].c_name} [{plan.inputs[target.input].unit}] at which "
-            f"{target.output.name} [{target.output.unit}] equals goal."
-            if target
-            else "none in this export (returns NO_TARGET)."
-        ),
+        **{k: str(v) for k, v in work_sizes(functions).items()},
+        **_io_values(plan, coordinates),
+        **_target_values(plan),
+        **_path_values(plan, functions, path),
+        **_contact_values(plan, functions),
     }
-    values.update({k: str(v) for k, v in work_sizes(functions).items()})
-    if target:
-        values.update(
-            TARGET_INPUT=plan.inputs[target.input].c_name,
-            TARGET_OUTPUT=c_string(target.output.name),
-            TARGET_OUTPUT_UNIT=c_string(target.output.unit),
-            TARGET_INDEX=str(target.input),
-            TARGET_FIRST_GUESS=c_double(plan.inputs[target.input].default),
-        )
+    values["NMAX"] = str(max(n + 1, int(values["NV"])))
     return values
 
 
@@ -172,11 +231,11 @@ def _range(item) -> str:
 
 def write_sources(plan: ExportPlan, values: dict[str, str], folder: Path) -> list[Path]:
     """The driver, header, example, benchmark, checks, build files and loader."""
-    has_target = plan.target is not None and plan.target.input == int(values["SWEEP_INDEX"])
     target_code = fill("target.c.in" if plan.target else "no_target.c.in", values)
-    target_example = fill("main_target.c.in", values) if has_target else ""
+    contact_code = fill("contact.c.in" if values["HAS_CONTACT"] == "1" else "no_contact.c.in", values)
+    target_example = fill("main_target.c.in", values) if plan.target is not None else ""
     written = {
-        f"{plan.name}.c": fill("driver.c.in", {**values, "TARGET_CODE": target_code}),
+        f"{plan.name}.c": fill("driver.c.in", {**values, "TARGET_CODE": target_code, "CONTACT_CODE": contact_code}),
         f"{plan.name}.h": fill("header.h.in", values),
         "main.c": fill("main.c.in", {**values, "TARGET_EXAMPLE": target_example}),
         "bench.c": fill("bench.c.in", values),

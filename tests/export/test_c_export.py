@@ -62,9 +62,10 @@ def test_the_library_compiles_with_strict_warnings_and_its_sweep_equals_flexmech
     passes through zero at the last point, where a pointwise ratio means nothing)."""
     model, folder, _ = library
     solver = _solver(folder, model)
-    plan = solver.manifest["example_sweep"]
-    assert plan["points"] == 100 and plan["input"] == "actuation_force_y"
-    values = np.linspace(plan["start"], plan["stop"], plan["points"])
+    plan = solver.manifest["example_path"]
+    (moved,) = plan["inputs"]
+    assert plan["points"] == 100 and moved["name"] == "actuation_force_y"
+    values = np.linspace(moved["start"], moved["stop"], plan["points"])
     mech = compile_mechanism(load_document(EXAMPLES / "gripper.json"), model)
     reference = sweep(mech, FORCE, values)
     assert all(s == "converged" for s in reference.status)
@@ -106,12 +107,12 @@ def test_the_target_task_gives_the_closing_forces(library):
 
 def test_the_shipped_checks_pass_no_allocation_nan_and_two_threads(library):
     """check.c (make check) wraps malloc/calloc/realloc/free at link time and counts them
-    during 301 calls, after proving the counter sees a deliberate allocation; a NaN input gives
+    during 401 calls (every task at 100 points, and the NaN call), after proving the counter sees a deliberate allocation; a NaN input gives
     BAD_INPUT and the struct then gives, to the bit, what a struct that never saw it gives; two
     threads with their own structs give, to the bit, what one thread gives."""
     _, _, log = library
     assert "a deliberate malloc and free while counting: 2 calls seen" in log
-    assert "allocations during 301 calls: 0 (0 failed calls)" in log
+    assert "allocations during 401 calls: 0 (0 failed calls)" in log
     assert "NaN input: status 2 (an input is NaN or infinite)" in log
     assert "after the NaN call the struct gives the results of one that never saw it: yes" in log
     assert log.count("with its own work struct equals one thread: yes") == 2
