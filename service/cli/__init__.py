@@ -3,6 +3,7 @@
     flexmech solve examples/gripper.json --set /loads/actuation/force/1=77 --stiffness
     flexmech solve examples/gripper.json --analysis linearization
     flexmech linearization examples/gripper.json --at undeformed   (a command per analysis)
+    flexmech linearize examples/rod_free_vibration.json --at undeformed --state-space rod.mat
     flexmech sweep examples/gripper.json --compare-models --plot sweep.png
     flexmech optimize examples/grasper_shape.json
     flexmech trace examples/snap_through_arch.json --path /loads/P/force/1 --stop -300 --step 20
@@ -33,8 +34,10 @@ from service.cli import batch  # noqa: F401
 from service.cli import serve  # noqa: F401
 from service.cli import contact  # noqa: F401
 from service.cli import simulate  # noqa: F401
+from service.cli import linearize  # noqa: F401
 from service.cli import build  # noqa: F401
 from service.cli import upgrade  # noqa: F401
+from service.cli import export  # noqa: F401
 from service.cli.leaving import main
 
 __all__ = ["app", "main"]

@@ -45,49 +45,58 @@ def _target(target: str | None, by: str | None):
         raise OptionError("--target", f"'{value}' is not a number") from None
 
 
+NameOpt = Annotated[str | None, typer.Option("--name", help="C prefix of the library (default: the file's name).")]
+InputOpt = Annotated[
+    list[str] | None,
+    typer.Option("--input", metavar="POINTER", help="An input field (default: every load). Repeatable."),
+]
+OutputOpt = Annotated[
+    list[str] | None,
+    typer.Option("--output", metavar="NAME", help="An output (default: the document's named outputs). Repeatable."),
+]
+RangeOpt = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--range",
+        metavar="POINTER=LOW:HIGH",
+        help="An input's range; outside it a call returns OUT_OF_RANGE. Repeatable.",
+    ),
+]
+TargetOpt = Annotated[
+    str | None,
+    typer.Option(
+        "--target",
+        metavar="OUTPUT=VALUE",
+        help="The target task's output and goal (default: the document's sweep 'until').",
+    ),
+]
+ByOpt = Annotated[str | None, typer.Option("--by", metavar="POINTER", help="The input the target task solves for.")]
+ContactOpt = Annotated[
+    str, typer.Option("--contact", help="The contact state task: auto (when it can be exported) | yes | no.")
+]
+IterationsOpt = Annotated[int, typer.Option("--max-iterations", help="Newton steps per call, at most.")]
+ToleranceOpt = Annotated[
+    float, typer.Option("--tolerance", help="Converged when the nondimensional |R|_inf is below it.")
+]
+BuildOpt = Annotated[bool, typer.Option("--build", help="Compile it (make), run its checks and its benchmark.")]
+
+
 @app.command()
 def export(
     document: DocArg,
     c: Annotated[Path, typer.Option("--c", metavar="DIR", help="Write the C library into this folder.")],
     model: ModelOpt = None,
     sets: SetOpt = None,
-    name: Annotated[
-        str | None, typer.Option("--name", help="C prefix of the library (default: the file's name).")
-    ] = None,
-    inputs: Annotated[
-        list[str] | None,
-        typer.Option("--input", metavar="POINTER", help="An input field (default: every load). Repeatable."),
-    ] = None,
-    outputs: Annotated[
-        list[str] | None,
-        typer.Option("--output", metavar="NAME", help="An output (default: the document's named outputs). Repeatable."),
-    ] = None,
-    ranges: Annotated[
-        list[str] | None,
-        typer.Option(
-            "--range",
-            metavar="POINTER=LOW:HIGH",
-            help="An input's range; outside it a call returns OUT_OF_RANGE. Repeatable.",
-        ),
-    ] = None,
-    target: Annotated[
-        str | None,
-        typer.Option(
-            "--target",
-            metavar="OUTPUT=VALUE",
-            help="The target task's output and goal (default: the document's sweep 'until').",
-        ),
-    ] = None,
-    by: Annotated[
-        str | None, typer.Option("--by", metavar="POINTER", help="The input the target task solves for.")
-    ] = None,
-    max_iterations: Annotated[int, typer.Option("--max-iterations", help="Newton steps per call, at most.")] = 30,
-    tolerance: Annotated[
-        float, typer.Option("--tolerance", help="Converged when the nondimensional |R|_inf is below it.")
-    ] = 1e-12,
-    build: Annotated[
-        bool, typer.Option("--build", help="Compile it (make), run its checks and its benchmark.")
-    ] = False,
+    name: NameOpt = None,
+    inputs: InputOpt = None,
+    outputs: OutputOpt = None,
+    ranges: RangeOpt = None,
+    target: TargetOpt = None,
+    by: ByOpt = None,
+    contact: ContactOpt = "auto",
+    max_iterations: IterationsOpt = 30,
+    tolerance: ToleranceOpt = 1e-12,
+    build: BuildOpt = False,
     json_out: JsonOpt = None,
 ) -> None:
     """Export the mechanism's solver as dependency-free C99 (CasADi code generation) for controllers."""
@@ -103,6 +112,7 @@ def export(
             outputs=tuple(outputs or ()),
             ranges=_ranges(ranges),
             target=_target(target, by),
+            contact=contact,
             max_iterations=max_iterations,
             tolerance=tolerance,
         )

@@ -54,7 +54,7 @@ def channel(mech: Mechanism, z: np.ndarray, system: ModalSystem, pointer: str, n
     else:
         force, C = _condensed(mech, z, p, k, dy, system.n_body)
     n = len(system.coordinates)
-    if not _moves_a_body(mech, pointer):
+    if not moves_a_body(mech, pointer):
         if not np.any(force):
             raise MechanismError(
                 "/input",
@@ -87,7 +87,7 @@ def _prescribed_motion(mech, z, p, k, system: ModalSystem, C, direct, dR):
     return np.zeros(len(quasi_static)), C, carried + coupling, direct + C @ quasi_static, carried
 
 
-def _moves_a_body(mech: Mechanism, pointer: str) -> bool:
+def moves_a_body(mech: Mechanism, pointer: str) -> bool:
     """Whether the field is a prescribed displacement of a body (it moves masses with it)."""
     return any(pointer in row for row in mech.structure.prescribed)
 

@@ -72,6 +72,26 @@ def test_the_analyses_answer_over_http_and_through_the_client(api_server):
         assert peaks[0]["frequency"] == pytest.approx(first.model_extra["modes"][0]["frequency"], rel=1e-3)
 
 
+def test_the_state_space_answers_over_http_and_a_bad_output_is_a_422_naming_it(api_server):
+    """The linearization analysis' state_space option (issue 29) on a carriage on a spring and a
+    wheel on a torsion spring: their damped poles, the carriage's static gain 1/k."""
+    from test_modes import body_on_springs
+
+    doc = body_on_springs(0.3, 0.002, 1200.0, 4.5)
+    doc["loads"] = {"push": {"type": "force", "body": "carriage", "force": [0, 0]}}
+    asked = {"inputs": ["/loads/push/force/0"], "outputs": ["bodies.carriage.x"], "damping_ratio": 0.1}
+    body = {"document": doc, "analysis": "linearization", "at": "undeformed", "state_space": asked}
+    answer = httpx.post(api_server.url + "/v1/solve", json=body, timeout=60)
+    assert answer.status_code == 200, answer.text
+    space = answer.json()["state_space"]
+    assert space["static_gain"] == [[pytest.approx(1 / 1200.0, rel=1e-12)]] and space["units"]["inputs"] == ["N"]
+    omegas = ((1200.0 / 0.3) ** 0.5, (4.5 / 0.002) ** 0.5)  # the carriage's and the wheel's
+    assert sorted(space["poles"]["real"]) == pytest.approx(sorted(-0.1 * w for w in omegas * 2), rel=1e-12)
+    wrong = {**body, "state_space": {**asked, "outputs": ["bodies.carriage.q"]}}
+    refused = httpx.post(api_server.url + "/v1/solve", json=wrong, timeout=60)
+    assert refused.status_code == 422 and refused.json()["error"]["pointer"] == "/state_space/outputs/0"
+
+
 def test_flexmech_batch_runs_the_modes_of_a_folder(tmp_path):
     folder = tmp_path / "in"
     folder.mkdir()

@@ -1,0 +1,76 @@
+"""`flexmech export DOC --c DIR` (issue 29): what it writes and says, and its option errors,
+each naming the option or field."""
+
+from __future__ import annotations
+
+import json
+
+from conftest import EXAMPLES
+from typer.testing import CliRunner
+
+from service.cli import app
+
+ENV = {"COLUMNS": "200", "NO_COLOR": "1"}
+
+
+def _invoke(*args: str):
+    return CliRunner().invoke(app, list(args), env=ENV)
+
+
+def test_export_writes_the_library_and_names_its_inputs_and_outputs(tmp_path):
+    folder = tmp_path / "c"
+    done = _invoke(
+        "export",
+        str(EXAMPLES / "gripper.json"),
+        "--c",
+        str(folder),
+        "--model",
+        "linear",
+        "--range",
+        "/loads/actuation/force/1=-100:100",
+        "--json",
+        str(tmp_path / "m.json"),
+    )
+    assert done.exit_code == 0, done.output
+    assert "actuation_force_y" in done.output and "/loads/actuation/force/1" in done.output
+    assert f"build it with: make -C {folder}" in done.output
+    names = {p.name for p in folder.iterdir()}
+    assert {
+        "gripper.c",
+        "gripper.h",
+        "gripper_kernels.c",
+        "Makefile",
+        "CMakeLists.txt",
+        "main.c",
+        "bench.c",
+        "check.c",
+        "loader.py",
+        "manifest.json",
+    } <= names
+    manifest = json.loads((tmp_path / "m.json").read_text())["manifest"]
+    assert manifest == json.loads((folder / "manifest.json").read_text())
+    force = next(i for i in manifest["inputs"] if i["name"] == "actuation_force_y")
+    assert (force["low"], force["high"], force["unit"]) == (-100.0, 100.0, "uN")
+    header = (folder / "gripper.h").read_text()
+    assert "#define GRIPPER_IN_ACTUATION_FORCE_Y 1 /* /loads/actuation/force/1 [uN], range [-100.0, 100.0] */" in header
+    assert "#define GRIPPER_OUT_END_EFFECTOR_X 0 /* end_effector.x [mm] */" in header
+
+
+def test_export_option_errors_name_what_is_wrong(tmp_path):
+    doc = str(EXAMPLES / "gripper.json")
+    bad_range = _invoke("export", doc, "--c", str(tmp_path / "a"), "--range", "/loads/actuation/force/1=5")
+    assert (
+        bad_range.exit_code == 2
+        and "--range: expected POINTER=LOW:HIGH, got '/loads/actuation/force/1=5'" in bad_range.output
+    )
+    half_target = _invoke("export", doc, "--c", str(tmp_path / "b"), "--target", "end_effector.x=0")
+    assert half_target.exit_code == 2 and "give both --target OUTPUT=VALUE and --by POINTER" in half_target.output
+    bad_output = _invoke("export", doc, "--c", str(tmp_path / "c"), "--output", "end_effector.q")
+    assert (
+        bad_output.exit_code == 2
+        and "/outputs/0" in bad_output.output
+        and "unknown output 'end_effector.q'" in bad_output.output
+    )
+    bad_contact = _invoke("export", doc, "--c", str(tmp_path / "d"), "--contact", "maybe")
+    assert bad_contact.exit_code == 2 and "unknown choice 'maybe'" in bad_contact.output
+    assert not any((tmp_path / x).exists() for x in "abcd")
