@@ -52,8 +52,11 @@ class ExportFunctions:
         return [f for f in (self.eq_step, self.outputs, self.stiffness, self.target_step, *contact) if f is not None]
 
 
-def _direction(R: ca.MX, K: ca.MX) -> tuple[ca.MX, ca.MX]:
-    return ca.solve(K, R, "qr"), ca.mmax(ca.fabs(R))
+def direction(R: ca.MX, K: ca.MX, tolerance: float) -> tuple[ca.MX, ca.MX]:
+    """The Newton direction K^-1 R and |R|_inf; at a converged point (|R|_inf <= tolerance, where
+    the driver stops) the factorization is skipped (a short-circuiting if_else)."""
+    norm = ca.mmax(ca.fabs(R))
+    return ca.if_else(norm <= tolerance, ca.MX.zeros(R.shape), ca.solve(K, R, "qr"), True), norm
 
 
 def _stiffness(mech: Mechanism, z: ca.MX, p: ca.MX, K: ca.MX, name: str) -> ca.Function:
@@ -103,7 +106,7 @@ def _target_step(
     value, column, row, corner = border(x[:n], p, x[n])
     G = ca.vertcat(R_at, value - goal)
     J = ca.blockcat([[K_at, column], [row, corner]])
-    dx, norm = _direction(G, J)
+    dx, norm = direction(G, J, plan.options.tolerance)
     return ca.Function(name, [x, p, goal], [dx, norm], ["x", "p", "goal"], ["dx", "norm"])
 
 
@@ -114,7 +117,7 @@ def export_functions(mech: Mechanism, plan: ExportPlan) -> ExportFunctions:
         )
     z, p = ca.MX.sym("z", mech.n_free), ca.MX.sym("p", len(mech.parameters))
     R, K = mech.graphs.residual_and_tangent(z, p)
-    dz, norm = _direction(R, K)
+    dz, norm = direction(R, K, plan.options.tolerance)
     base = f"{plan.name}_kernel"  # the tasks' own names (<name>_stiffness, ...) belong to the driver
     functions = ExportFunctions(
         eq_step=ca.Function(f"{base}_eq_step", [z, p], [dz, norm], ["z", "p"], ["dz", "norm"]),
@@ -140,7 +143,7 @@ def _contact(mech: Mechanism, plan: ExportPlan, base: str) -> dict:
     if choice == "no":
         return {}
     try:
-        found = contact_functions(mech, plan.options.contact_outputs, base)
+        found = contact_functions(mech, plan.options.contact_outputs, base, plan.options.tolerance)
     except MechanismError as exc:
         if choice == "yes" or exc.pointer == "/contact_outputs":
             raise

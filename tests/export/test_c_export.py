@@ -190,3 +190,17 @@ def test_export_choices_are_checked_and_named(tmp_path):
         export_document(mech_doc, tmp_path / "c", "linear", ExportOptions(ranges={"/sections/flexure/h": (1, 2)}))
     assert bad_range.value.pointer == "/ranges//sections/flexure/h" and "not an exported input" in str(bad_range.value)
     assert not (tmp_path / "a").exists()
+
+
+@pytest.mark.skipif(shutil.which("cmake") is None, reason="needs cmake")
+def test_the_cmake_build_runs_the_checks(tmp_path):
+    """The CMakeLists.txt builds the library, example, benchmark and checks; ctest runs the checks."""
+    source, build = tmp_path / "src", tmp_path / "build"
+    export_document(load_document(EXAMPLES / "gripper.json"), source, "linear", ExportOptions(name="gripper"))
+    for command in (["cmake", "-S", str(source), "-B", str(build)], ["cmake", "--build", str(build), "-j2"]):
+        done = subprocess.run(command, capture_output=True, text=True, timeout=300)
+        assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
+    tested = subprocess.run(["ctest", "--output-on-failure"], cwd=build, capture_output=True, text=True, timeout=300)
+    assert tested.returncode == 0 and "100% tests passed" in tested.stdout, tested.stdout[-2000:]
+    example = subprocess.run([str(build / "gripper_example")], capture_output=True, text=True, timeout=60, check=True)
+    assert "target: end_effector.x = 0 mm at actuation_force_y = 63.94690" in example.stdout
