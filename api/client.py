@@ -27,6 +27,7 @@ from api.analysis_methods import Analyses
 from api.drawing_schemas import DrawingRequest
 from api.job_schemas import (
     ContactPathRequest,
+    ExportRequest,
     ImpactStudyRequest,
     JobListResponse,
     JobRequest,
@@ -83,6 +84,12 @@ def _parse(response: httpx.Response, model: type[T] | TypeAdapter) -> T:
     if model in (dict, list):
         return data
     return model.model_validate(data)
+
+
+def _bytes(response: httpx.Response) -> bytes:
+    if response.status_code >= 400:
+        raise _error_of(response)
+    return response.content
 
 
 def _request_body(model: type[BaseModel], request: BaseModel | None, fields: dict[str, Any]) -> dict:
@@ -217,6 +224,23 @@ class Client:
             JobStatusResponse,
         )
 
+    def export(self, request: ExportRequest | None = None, **fields: Any) -> JobStatusResponse:
+        """Start an export of the mechanism's solver as a C99 library; fields as in ExportRequest
+        (document or example, model, name, inputs, outputs, ranges, target {output, equals, by},
+        max_iterations, tolerance). Its archive: `export_archive(job.id)`."""
+        return _parse(
+            self._http.post("/v1/exports", json=_request_body(ExportRequest, request, fields)), JobStatusResponse
+        )
+
+    def archive(self, job_id: str) -> bytes:
+        """The job's archive (.tar.gz bytes); FlexmechError 409 while it is not stored."""
+        return _bytes(self._http.get(f"/v1/jobs/{job_id}/archive"))
+
+    def export_archive(self, job_id: str, timeout: float | None = None, poll: float = 0.2) -> bytes:
+        """Wait for an export job, then its archive (.tar.gz bytes); FlexmechError if it failed."""
+        self.wait(job_id, timeout, poll)
+        return self.archive(job_id)
+
     def drawing(self, request: DrawingRequest | None = None, **fields: Any) -> dict:
         """The mechanism drawn to scale as data; fields as in DrawingRequest (state
         undeformed, equilibrium or path)."""
@@ -325,6 +349,17 @@ class AsyncClient:
     async def impact_study(self, request: ImpactStudyRequest | None = None, **fields: Any) -> JobStatusResponse:
         body = _request_body(ImpactStudyRequest, request, fields)
         return _parse(await self._http.post("/v1/impact-studies", json=body), JobStatusResponse)
+
+    async def export(self, request: ExportRequest | None = None, **fields: Any) -> JobStatusResponse:
+        body = _request_body(ExportRequest, request, fields)
+        return _parse(await self._http.post("/v1/exports", json=body), JobStatusResponse)
+
+    async def archive(self, job_id: str) -> bytes:
+        return _bytes(await self._http.get(f"/v1/jobs/{job_id}/archive"))
+
+    async def export_archive(self, job_id: str, timeout: float | None = None, poll: float = 0.2) -> bytes:
+        await self.wait(job_id, timeout, poll)
+        return await self.archive(job_id)
 
     async def drawing(self, request: DrawingRequest | None = None, **fields: Any) -> dict:
         return _parse(await self._http.post("/v1/drawings", json=_request_body(DrawingRequest, request, fields)), dict)

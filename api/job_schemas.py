@@ -23,13 +23,16 @@ class JobRequest(DocumentRequest):
 
 
 # The client's names for the requests of the built-in kinds (their fields: the server's schema).
-SweepRequest = ContactPathRequest = OptimizeRequest = SimulationRequest = ImpactStudyRequest = JobRequest
+SweepRequest = ContactPathRequest = OptimizeRequest = SimulationRequest = ImpactStudyRequest = ExportRequest = (
+    JobRequest
+)
 
 
 # --- responses ------------------------------------------------------------------------------
 class JobLinks(BaseModel):
     self: str
     result: str
+    archive: str | None = Field(None, description="the result's files as .tar.gz (an export's C library)")
 
 
 class JobProgress(BaseModel):

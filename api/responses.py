@@ -8,7 +8,7 @@ _TEXT = {
     400: "Malformed JSON",
     401: "Missing or unknown API key (when the server has keys)",
     404: "No such job or example (jobs of other keys are not found either)",
-    409: "The job has finished",
+    409: "The job is not in a state for it (cancelling a finished job; the archive of a job not succeeded)",
     413: "Request body over the size limit",
     422: "The request or its mechanism cannot be used; `pointer` names the field",
 }

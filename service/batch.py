@@ -1,7 +1,8 @@
 """Batch runs for containers: every mechanism document in a folder run through the analysis it
 declares (its `optimize` section, else its `inverse` section, else its `sweep`, else the
 equilibrium under its loads), or through one analysis of the registry with its typed options
-for all of them; one result file per document and a summary.
+for all of them, or exported as a C library each (service.export, the export job's fields: its
+folder c/<result stem>/ beside the results); one result file per document and a summary.
 
 A document that cannot be read or modelled (not UTF-8, nested too deep, not a mapping, an
 invalid field) is one failed row; the others still run and the summary is still written.
@@ -23,6 +24,7 @@ from service.analyses import Analysis, AnalysisOptions, AnalysisRequest
 from service.analyses.equilibrium import equilibrium_report
 from service.design.optimize import optimize
 from service.design.problem import design_problem
+from service.jobs.export import ExportJobOptions, export_options
 from service.solvers.equilibrium import NewtonOptions
 from service.solvers.inverse_links import inverse_links
 from service.solvers.reports import plain
@@ -37,6 +39,7 @@ SUCCESS = {
     "inverse": ("converged",),
     "sweep": ("converged",),
     "equilibrium": ("converged",),
+    "export": ("exported",),
 }
 REGISTRY_SUCCESS = ("converged", "finished")
 
@@ -136,15 +139,43 @@ class Chosen:
     options: AnalysisOptions
 
 
-def run_document(path: Path, options: NewtonOptions, chosen: Chosen | None = None) -> dict:
-    """The result of one document, by the analysis it declares (or the one chosen). Carries
-    `analysis` (None when the document could not be read or modelled), `status` (the
-    analysis's own, or error) and `message`."""
+@dataclass(frozen=True)
+class Export:
+    """Every document exported as a C library instead of analysed: the export job's own fields
+    (service.jobs.export.ExportJobOptions: name, inputs, outputs, ranges, target, ...), each
+    library written to <out>/c/<result stem>/."""
+
+    options: ExportJobOptions
+
+
+LIBRARIES = "c"  # the folder of the exported libraries in the results' folder
+
+
+def export_report(mech: Mechanism, path: Path, export: Export, folder: Path) -> dict:
+    """The document's C library written to `folder` (named after the document's file unless
+    the fields name it); its manifest."""
+    from service.export.library import export_library
+
+    options = export_options(export.options.model_copy(update={"name": export.options.name or path.stem}))
+    manifest = export_library(mech, folder, "as in the document", options)
+    library = f"{folder.parent.name}/{folder.name}"
+    return {"analysis": "export", "status": "exported", "message": "", "library": library, "manifest": manifest}
+
+
+def run_document(
+    path: Path, options: NewtonOptions, chosen: Chosen | Export | None = None, out: Path | None = None
+) -> dict:
+    """The result of one document, by the analysis it declares (or the one chosen, or its
+    export into `out`, the library's folder). Carries `analysis` (None when the document could
+    not be read or modelled), `status` (the analysis's own, or error) and `message`."""
     started = time.perf_counter()
     analysis = None
     try:
         mech = compile_mechanism(load_document(path))
-        if chosen is not None:
+        if isinstance(chosen, Export):
+            analysis = "export"
+            payload = export_report(mech, path, chosen, out or Path(LIBRARIES) / path.stem)
+        elif chosen is not None:
             analysis = chosen.analysis.name
             payload = chosen.analysis.run(mech, AnalysisRequest(options, chosen.options))
         else:
@@ -161,7 +192,7 @@ def run_batch(
     out: Path,
     options: NewtonOptions = NewtonOptions(),
     progress: Callable[[Path, dict], None] | None = None,
-    chosen: Chosen | None = None,
+    chosen: Chosen | Export | None = None,
 ) -> dict:
     """Write out/<result name> for each document (see result_names) and out/summary.json;
     return the summary. ValueError if `out` is `directory` (the results would replace it)."""
@@ -172,7 +203,8 @@ def run_batch(
     names = result_names(documents)
     rows = []
     for path in documents:
-        payload = run_document(path, options, chosen)
+        library = out / LIBRARIES / names[path].removesuffix(".json")
+        payload = run_document(path, options, chosen, library)
         result_file = out / names[path]
         result_file.write_text(json.dumps({"document": path.name, **payload}, indent=2))
         ok = succeeded(payload.get("analysis"), payload["status"])

@@ -123,6 +123,7 @@ JOB_CHECKS: dict[str, Check] = {
     "contact": _contact,
     "simulation": _simulation_job,
     "impact_study": _impact_study,
+    "export": _statics,
 }
 
 

@@ -5,14 +5,14 @@ from __future__ import annotations
 from datetime import UTC, datetime
 from typing import Any
 
-from fastapi import APIRouter, Path, Query
+from fastapi import APIRouter, Path, Query, Response
 from fastapi.concurrency import run_in_threadpool
 
 from api.deps import OwnerDep, ServicesDep
 from api.errors import ApiError, not_found
 from api.job_schemas import JobListResponse, JobResultResponse, JobStatusResponse, JobSummary
 from api.responses import errors
-from service.jobs.kinds import kind_named
+from service.jobs.kinds import job_kinds, kind_named
 from service.jobs.store import FINAL, Job
 
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"])
@@ -42,7 +42,11 @@ def job_status(job: Job) -> JobStatusResponse:
             "finished_at": job.finished_at,
             "elapsed_seconds": elapsed,
         },
-        links={"self": f"/v1/jobs/{job.id}", "result": f"/v1/jobs/{job.id}/result"},
+        links={
+            "self": f"/v1/jobs/{job.id}",
+            "result": f"/v1/jobs/{job.id}/result",
+            "archive": f"/v1/jobs/{job.id}/archive" if hasattr(job_kinds().get(job.kind), "archive") else None,
+        },
     )
 
 
@@ -136,6 +140,42 @@ async def get_job_request(services: ServicesDep, owner: OwnerDep, job_id: str = 
     fields), so a page or a tool can show the mechanism of a job it did not start."""
     job = await run_in_threadpool(_owned, services, job_id, owner)
     return {"id": job.id, "kind": job.kind, **job.spec}
+
+
+def _archive(services, job: Job) -> tuple[str, bytes]:
+    """The job's archive: 404 for a kind without one, 409 until it is stored."""
+    make = getattr(kind_named(job.kind), "archive", None)
+    if make is None:
+        raise not_found(f"a {job.kind} job has no archive (an export job has)")
+    found = make(job.spec, job.plan, services.store.points(job.id))
+    if found is None:
+        if job.status in FINAL:
+            raise ApiError(409, "conflict", f"job '{job.id}' has {job.status} without an archive")
+        raise ApiError(409, "conflict", f"job '{job.id}' is {job.status}: its archive comes when it has succeeded")
+    return found
+
+
+@router.get(
+    "/{job_id}/archive",
+    operation_id="get_job_archive",
+    response_class=Response,
+    responses={
+        200: {
+            "description": "The archive (.tar.gz), its file name in Content-Disposition",
+            "content": {"application/gzip": {"schema": {"type": "string", "format": "binary"}}},
+        },
+        **errors(401, 404, 409),
+    },
+    summary="The job's files as a .tar.gz archive (an export's C library)",
+)
+async def get_job_archive(services: ServicesDep, owner: OwnerDep, job_id: str = JobId) -> Response:
+    """The files of a job whose result is files (an export job: its folder, under the library's
+    name); 409 while the job has not stored them."""
+    job = await run_in_threadpool(_owned, services, job_id, owner)
+    name, data = await run_in_threadpool(_archive, services, job)
+    return Response(
+        data, media_type="application/gzip", headers={"Content-Disposition": f'attachment; filename="{name}"'}
+    )
 
 
 @router.delete(

@@ -84,6 +84,25 @@ def build_functions(structure: Structure) -> tuple[dict[str, ca.Function], dict]
     return functions, meta
 
 
+def residual_by_rows(structure: Structure) -> list[tuple[list[int], ca.Function]]:
+    """R and its tangent K by row groups: the free body rows, then each element's own rows, as
+    (rows, (z, p) -> (R[rows], K[rows, :])). For generated code: a C compiler's optimizer takes
+    more than linearly longer over one large function than over its parts (the exact gripper's
+    whole R and K: 54 s at gcc -O2; by rows, 9% more code: 13 s)."""
+    ctx, z, d, parts, applied = _symbolic(structure)
+    R = residual_of(ctx, parts, applied)
+    K = jacobian(R, z)
+    n_body = len(structure.free)
+    groups = [list(range(n_body))] if n_body else []
+    groups += [
+        list(range(o, o + t.unknowns)) for t, o in zip(structure.elements, structure.element_offsets) if t.unknowns
+    ]
+    return [
+        (rows, ca.Function(f"residual_rows_{k}", [z, ctx.p], [R[rows], K[rows, :]], ["z", "p"], ["R", "K"]))
+        for k, rows in enumerate(groups)
+    ]
+
+
 def _body_wrenches(ctx: AssemblyContext) -> ca.Function:
     """(d, p) -> (elastic, applied), 3 per body, d: every body's displacement. Elastic: the
     wrenches bodies apply to the elements that own no unknowns (their force follows from

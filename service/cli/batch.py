@@ -60,14 +60,40 @@ def print_summary(console: Console, summary: dict, out: Path) -> None:
     console.print(f"wrote {escape(str(out / 'summary.json'))}")
 
 
+def _given(text: str | None) -> dict:
+    import json
+
+    try:
+        given = json.loads(text) if text is not None else {}
+    except json.JSONDecodeError as exc:
+        raise OptionError("--options", f"not JSON: {exc.msg}") from None
+    if not isinstance(given, dict):
+        raise OptionError("--options", "expected a JSON object")
+    return given
+
+
+def chosen_export(text: str | None):
+    """The export the flags choose: --options are the fields of POST /v1/exports (name, inputs,
+    outputs, ranges, target, max_iterations, tolerance, line_search_halvings)."""
+    from pydantic import ValidationError
+
+    from models.errors import pointer_of
+    from service.batch import Export
+    from service.jobs.export import ExportJobOptions
+
+    try:
+        return Export(ExportJobOptions.model_validate(_given(text)))
+    except ValidationError as exc:
+        first = exc.errors()[0]
+        raise OptionError(f"--options {pointer_of(tuple(first['loc']))}", first["msg"]) from None
+
+
 def chosen_analysis(name: str | None, text: str | None):
     """The analysis and its typed options the flags choose (None: each document's own)."""
     if name is None:
         if text is not None:
             raise OptionError("--options", "options are those of an analysis: give --analysis too")
         return None
-    import json
-
     from models import MechanismError
     from service.analyses import ANALYSES
     from service.batch import Chosen
@@ -76,14 +102,40 @@ def chosen_analysis(name: str | None, text: str | None):
         analysis = ANALYSES.named(name)
     except MechanismError as exc:
         raise OptionError("--analysis", exc.problem) from None
-    try:
-        given = json.loads(text) if text is not None else {}
-    except json.JSONDecodeError as exc:
-        raise OptionError("--options", f"not JSON: {exc.msg}") from None
+    given = _given(text)
     try:
         return Chosen(analysis, analysis.options_of(given))
     except MechanismError as exc:
         raise OptionError(f"--options {exc.pointer}", exc.problem) from None
+
+
+AnalysisOpt = Annotated[
+    str | None,
+    typer.Option(
+        "--analysis",
+        help="Run this analysis of every document instead of the one each declares "
+        "(any of `flexmech solve --analysis`, a plugin's included).",
+        show_default=False,
+    ),
+]
+OptionsOpt = Annotated[
+    str | None,
+    typer.Option(
+        "--options",
+        metavar="JSON",
+        help="The analysis' options (its fields of POST /v1/solve), or with --export the export's (its "
+        "fields of POST /v1/exports), as a JSON object.",
+        show_default=False,
+    ),
+]
+ExportOpt = Annotated[
+    bool,
+    typer.Option(
+        "--export",
+        help="Export every document's solver as a C99 library (as `flexmech export`) into OUT/c/<stem>/ "
+        "instead of analysing it (build one with make -C OUT/c/<stem>).",
+    ),
+]
 
 
 @app.command()
@@ -95,28 +147,13 @@ def batch(
     jacobian: JacobianOpt = "full",
     line_search: LineSearchOpt = True,
     max_iterations: MaxIterOpt = 50,
-    analysis: Annotated[
-        str | None,
-        typer.Option(
-            "--analysis",
-            help="Run this analysis of every document instead of the one each declares "
-            "(any of `flexmech solve --analysis`, a plugin's included).",
-            show_default=False,
-        ),
-    ] = None,
-    analysis_options: Annotated[
-        str | None,
-        typer.Option(
-            "--options",
-            metavar="JSON",
-            help="The analysis' options (its fields of POST /v1/solve), as a JSON object.",
-            show_default=False,
-        ),
-    ] = None,
+    analysis: AnalysisOpt = None,
+    analysis_options: OptionsOpt = None,
+    export: ExportOpt = False,
 ) -> None:
     """Run every document of a folder through the analysis it declares (its optimize section,
     else its inverse section, else its sweep, else the equilibrium), or through --analysis with
-    --options; write one result file per
+    --options, or export each as a C library (--export); write one result file per
     document (<stem>.json, or <file name>.json when stems clash) and summary.json. Exit 1 if
     any document failed; the others are still written. Exit 2 if --out is the input folder."""
     from service.batch import batch_documents, same_folder
@@ -126,7 +163,9 @@ def batch(
         if not directory.is_dir():
             raise OptionError("DIRECTORY", f"'{directory}' is not a folder")
         options = newton_options(jacobian, line_search, max_iterations)
-        chosen = chosen_analysis(analysis, analysis_options)
+        if export and analysis is not None:
+            raise OptionError("--export", "an export is the run of every document: give --export or --analysis")
+        chosen = chosen_export(analysis_options) if export else chosen_analysis(analysis, analysis_options)
         documents = batch_documents(directory)
         if not documents:
             raise OptionError("DIRECTORY", f"no documents (*.json, *.yaml) in '{directory}'")

@@ -21,7 +21,7 @@ import casadi as ca
 import numpy as np
 
 from models import Mechanism, MechanismError
-from service.export.kernels import direction
+from service.export.direction import direction
 
 GAP_FLOOR = 1e-300  # below it r counts as zero
 FORCE_FLOOR = 1e-10  # nondimensional: a row carrying less is apart for its axis (rounding leaves ~1e-16)

@@ -15,6 +15,7 @@ import casadi as ca
 import numpy as np
 
 from models import Mechanism, MechanismError
+from service.export.direction import direction
 from service.export.plan import ExportPlan
 from service.units import matrix_to_doc
 
@@ -50,13 +51,6 @@ class ExportFunctions:
     def all(self) -> list[ca.Function]:
         contact = (self.contact.step, self.contact.outputs, self.contact.start) if self.contact else ()
         return [f for f in (self.eq_step, self.outputs, self.stiffness, self.target_step, *contact) if f is not None]
-
-
-def direction(R: ca.MX, K: ca.MX, tolerance: float) -> tuple[ca.MX, ca.MX]:
-    """The Newton direction K^-1 R and |R|_inf; at a converged point (|R|_inf <= tolerance, where
-    the driver stops) the factorization is skipped (a short-circuiting if_else)."""
-    norm = ca.mmax(ca.fabs(R))
-    return ca.if_else(norm <= tolerance, ca.MX.zeros(R.shape), ca.solve(K, R, "qr"), True), norm
 
 
 def _stiffness(mech: Mechanism, z: ca.MX, p: ca.MX, K: ca.MX, name: str) -> ca.Function:
@@ -110,13 +104,22 @@ def _target_step(
     return ca.Function(name, [x, p, goal], [dx, norm], ["x", "p", "goal"], ["dx", "norm"])
 
 
+def _residual_and_tangent(mech: Mechanism, z: ca.MX, p: ca.MX) -> tuple[ca.MX, ca.MX]:
+    """R and K from their row groups (models.graph.assembly.residual_by_rows): the same numbers
+    as graphs.residual_and_tangent, in generated functions a compiler optimizes in seconds."""
+    from models.graph.assembly import residual_by_rows
+
+    pieces = [f(z, p) for _, f in residual_by_rows(mech.structure)]
+    return ca.vertcat(*[r for r, _ in pieces]), ca.vertcat(*[k for _, k in pieces])
+
+
 def export_functions(mech: Mechanism, plan: ExportPlan) -> ExportFunctions:
     if mech.n_free == 0:
         raise MechanismError(
             "/bodies", "nothing moves: every body is fixed or prescribed, there is no equilibrium to export"
         )
     z, p = ca.MX.sym("z", mech.n_free), ca.MX.sym("p", len(mech.parameters))
-    R, K = mech.graphs.residual_and_tangent(z, p)
+    R, K = _residual_and_tangent(mech, z, p)
     dz, norm = direction(R, K, plan.options.tolerance)
     base = f"{plan.name}_kernel"  # the tasks' own names (<name>_stiffness, ...) belong to the driver
     functions = ExportFunctions(

@@ -10,6 +10,8 @@ persisted when it finishes. A kind says:
   run(spec, task)                    in a worker process: [(index, point data)]
   failed(point)                      whether a stored point counts as failed (progress.failed_points)
   result(spec, plan, finished)       the job's result from its points (a page of them, if paged)
+  archive(spec, plan, finished)      optional: (file name, .tar.gz bytes) of a result that is files
+                                     (None until stored), served at GET /v1/jobs/{id}/archive
 Tasks and point data are JSON-able dicts, so they travel to process pools and Dask workers
 and are stored as they are. The runner and the store know nothing else about a kind.
 

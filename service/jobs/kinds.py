@@ -37,6 +37,7 @@ def job_kinds() -> dict[str, JobKind]:
 @lru_cache(maxsize=1)
 def _built_in() -> dict[str, JobKind]:
     from service.jobs.contact import CONTACT
+    from service.jobs.export import EXPORT
     from service.jobs.impact_study import IMPACT_STUDY
     from service.jobs.optimize import OPTIMIZE
     from service.jobs.simulation import SIMULATION
@@ -50,6 +51,7 @@ def _built_in() -> dict[str, JobKind]:
             CONTACT,
             SIMULATION,
             IMPACT_STUDY,
+            EXPORT,
         )
     }
 
