@@ -100,7 +100,7 @@ def _best_line(problem, v, gaps, rows: list[int], first: int):
     return (ca.SX(0), unit), (site - other, ca.jacobian(site - other, v))
 
 
-def contact_functions(mech: Mechanism, names: tuple[str, ...], base: str, tolerance: float):
+def contact_functions(mech: Mechanism, names: tuple[str, ...], base: str):
     """(step (v, p) -> (dv, norm), outputs (v, p) -> y in document units, output names, units,
     n_v, start (p) -> v0: undeformed and apart, each separating axis at its guess) of the contact
     state; None without contacts; a str (why) when it is too large."""
@@ -117,7 +117,7 @@ def contact_functions(mech: Mechanism, names: tuple[str, ...], base: str, tolera
         )
     vm, pm = ca.MX.sym("v", v.numel()), ca.MX.sym("p", p.numel())
     Fm, Jm = system(vm, pm)
-    step = ca.Function(f"{base}_contact_step", [vm, pm], [*direction(Fm, Jm, tolerance)], ["v", "p"], ["dv", "norm"])
+    step = ca.Function(f"{base}_contact_step", [vm, pm], [*direction(Fm, Jm)], ["v", "p"], ["dv", "norm"])
     chosen = tuple(names) or _default_outputs(mech, problem)
     missing = [n for n in chosen if n not in problem.output_names]
     if missing:

@@ -100,7 +100,7 @@ def _target_step(
     value, column, row, corner = border(x[:n], p, x[n])
     G = ca.vertcat(R_at, value - goal)
     J = ca.blockcat([[K_at, column], [row, corner]])
-    dx, norm = direction(G, J, plan.options.tolerance)
+    dx, norm = direction(G, J)
     return ca.Function(name, [x, p, goal], [dx, norm], ["x", "p", "goal"], ["dx", "norm"])
 
 
@@ -120,7 +120,7 @@ def export_functions(mech: Mechanism, plan: ExportPlan) -> ExportFunctions:
         )
     z, p = ca.MX.sym("z", mech.n_free), ca.MX.sym("p", len(mech.parameters))
     R, K = _residual_and_tangent(mech, z, p)
-    dz, norm = direction(R, K, plan.options.tolerance)
+    dz, norm = direction(R, K)
     base = f"{plan.name}_kernel"  # the tasks' own names (<name>_stiffness, ...) belong to the driver
     functions = ExportFunctions(
         eq_step=ca.Function(f"{base}_eq_step", [z, p], [dz, norm], ["z", "p"], ["dz", "norm"]),
@@ -146,7 +146,7 @@ def _contact(mech: Mechanism, plan: ExportPlan, base: str) -> dict:
     if choice == "no":
         return {}
     try:
-        found = contact_functions(mech, plan.options.contact_outputs, base, plan.options.tolerance)
+        found = contact_functions(mech, plan.options.contact_outputs, base)
     except MechanismError as exc:
         if choice == "yes" or exc.pointer == "/contact_outputs":
             raise
