@@ -77,8 +77,9 @@ def _target_step(
 ) -> ca.Function | None:
     """The Newton step of the equilibrium augmented with "output = goal", unknowns x = [z; input].
     Its Jacobian reuses the equilibrium's K (the same generated kernel, called at the input's
-    and one more row from the output's gradient: about half the code of differentiating the
-    augmented system whole."""
+    value) and borders it with one more column (dR/d input) and one more row (the output's
+    gradient), differentiated in SX in the input's one direction (for a load, a few nodes):
+    about half the code of differentiating the augmented system whole."""
     if plan.target is None:
         return None
     n, np_ = mech.n_free, len(mech.parameters)

@@ -46,6 +46,22 @@ def _contact_path(mech: Mechanism, plan: ExportPlan) -> ExamplePath | None:
 
 
 def example_path(mech: Mechanism, plan: ExportPlan, functions: ExportFunctions) -> ExamplePath:
+    """The path of _example_path, checked against the inputs' ranges (the example, benchmark
+    and checks run it)."""
+    path = _example_path(mech, plan, functions)
+    for k, a, b in zip(path.indices, path.starts, path.stops):
+        item = plan.inputs[k]
+        low, high = min(a, b), max(a, b)
+        if low < item.low or high > item.high or (item.low_excluded and low == item.low):
+            raise MechanismError(
+                f"/ranges/{item.pointer}",
+                f"the example path takes {item.c_name} from {a:.10g} to {b:.10g} {item.unit}, outside its range "
+                f"[{item.low:g}, {item.high:g}]: widen it",
+            )
+    return path
+
+
+def _example_path(mech: Mechanism, plan: ExportPlan, functions: ExportFunctions) -> ExamplePath:
     """A contact document's contact path (when its fields are inputs); else the document's
     sweep when it moves an input (to the target when it has one); else the first input from
     zero to its document value."""

@@ -186,6 +186,9 @@ def test_export_choices_are_checked_and_named(tmp_path):
     with pytest.raises(MechanismError) as bad_range:
         export_document(mech_doc, tmp_path / "c", "linear", ExportOptions(ranges={"/sections/flexure/h": (1, 2)}))
     assert bad_range.value.pointer == "/ranges//sections/flexure/h" and "not an exported input" in str(bad_range.value)
+    with pytest.raises(MechanismError) as narrow:
+        export_document(mech_doc, tmp_path / "d", "linear", ExportOptions(ranges={FORCE: (0.0, 100.0)}))
+    assert narrow.value.pointer == f"/ranges/{FORCE}" and "from -60 to 63.94690" in narrow.value.problem
     assert not (tmp_path / "a").exists()
 
 
