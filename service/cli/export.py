@@ -74,6 +74,14 @@ ByOpt = Annotated[str | None, typer.Option("--by", metavar="POINTER", help="The 
 ContactOpt = Annotated[
     str, typer.Option("--contact", help="The contact state task: auto (when it can be exported) | yes | no.")
 ]
+ContactOutputOpt = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--contact-output",
+        metavar="NAME",
+        help="An output of the contact task (default: the document's contact path outputs). Repeatable.",
+    ),
+]
 IterationsOpt = Annotated[int, typer.Option("--max-iterations", help="Newton steps per call, at most.")]
 ToleranceOpt = Annotated[
     float, typer.Option("--tolerance", help="Converged when the nondimensional |R|_inf is below it.")
@@ -94,6 +102,7 @@ def export(
     target: TargetOpt = None,
     by: ByOpt = None,
     contact: ContactOpt = "auto",
+    contact_outputs: ContactOutputOpt = None,
     max_iterations: IterationsOpt = 30,
     tolerance: ToleranceOpt = 1e-12,
     build: BuildOpt = False,
@@ -113,6 +122,7 @@ def export(
             ranges=_ranges(ranges),
             target=_target(target, by),
             contact=contact,
+            contact_outputs=tuple(contact_outputs or ()),
             max_iterations=max_iterations,
             tolerance=tolerance,
         )

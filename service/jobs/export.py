@@ -85,6 +85,11 @@ class ExportJobOptions(JobOptions):
         description="the contact state task of a contact document: auto (exported when it can be, else the manifest's "
         "contact.note says why), yes (the job fails saying why when it cannot), no",
     )
+    contact_outputs: list[OutputName] = Field(
+        default_factory=list,
+        max_length=64,
+        description="outputs of the contact task, by name (default: the document's contact path outputs)",
+    )
     max_iterations: int = Field(30, ge=1, le=1000, description="Newton steps per call of the library, at most")
     tolerance: float = Field(1e-12, gt=0, lt=1e-3, description="converged when the nondimensional |R|_inf is below it")
     line_search_halvings: int = Field(6, ge=0, le=30, description="halvings of a Newton step that does not lower |R|")
@@ -104,7 +109,16 @@ EXAMPLES = [
     },
 ]
 
-_OWN_FIELDS = {"name", "inputs", "outputs", "contact", "max_iterations", "tolerance", "line_search_halvings"}
+_OWN_FIELDS = {
+    "name",
+    "inputs",
+    "outputs",
+    "contact",
+    "contact_outputs",
+    "max_iterations",
+    "tolerance",
+    "line_search_halvings",
+}
 
 
 def _in_request(pointer: str, spec: ExportSpec) -> str:
@@ -133,6 +147,7 @@ def export_options(spec: ExportJobOptions) -> ExportOptions:
         ranges={pointer: (low, high) for pointer, (low, high) in spec.ranges.items()},
         target=None if target is None else (target.output, target.equals, target.by),
         contact=spec.contact,
+        contact_outputs=tuple(spec.contact_outputs),
         max_iterations=spec.max_iterations,
         tolerance=spec.tolerance,
         line_search_halvings=spec.line_search_halvings,

@@ -74,3 +74,18 @@ def test_export_option_errors_name_what_is_wrong(tmp_path):
     bad_contact = _invoke("export", doc, "--c", str(tmp_path / "d"), "--contact", "maybe")
     assert bad_contact.exit_code == 2 and "unknown choice 'maybe'" in bad_contact.output
     assert not any((tmp_path / x).exists() for x in "abcd")
+
+
+def test_a_contact_documents_export_chooses_its_contact_outputs(tmp_path):
+    doc = str(EXAMPLES / "gripper_jaw_contact.json")
+    chosen = _invoke("export", doc, "--c", str(tmp_path / "jaw"), "--contact-output", "contacts.insertion.normal_force")
+    assert chosen.exit_code == 0, chosen.output
+    manifest = json.loads((tmp_path / "jaw" / "manifest.json").read_text())
+    assert manifest["contact"]["outputs"] == [{"output": "contacts.insertion.normal_force", "unit": "N"}]
+    header = (tmp_path / "jaw" / "gripper_jaw_contact.h").read_text()
+    assert (
+        "#define GRIPPER_JAW_CONTACT_CONTACT_INSERTION_NORMAL_FORCE 0 /* contacts.insertion.normal_force [N] */"
+        in header
+    )
+    wrong = _invoke("export", doc, "--c", str(tmp_path / "bad"), "--contact-output", "contacts.insertion.grip")
+    assert wrong.exit_code == 2 and "/contact_outputs" in wrong.output and "'contacts.insertion.grip'" in wrong.output
