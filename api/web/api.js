@@ -43,6 +43,19 @@ async function call(method, path, body) {
   return data;
 }
 
+// A file the service sends (a job's archive): its bytes and the name it gives in Content-Disposition.
+export async function getFile(path) {
+  const headers = apiKey() ? { "X-API-Key": apiKey() } : {};
+  const response = await fetch(path, { headers });
+  if (!response.ok) {
+    let message = `${response.status} ${response.statusText}`;
+    try { message = (await response.json()).error.message || message; } catch { /* not JSON */ }
+    throw new ApiProblem(response.status, message, null);
+  }
+  const named = /filename="([^"]+)"/.exec(response.headers.get("Content-Disposition") || "");
+  return { blob: await response.blob(), name: named ? named[1] : "download" };
+}
+
 export const get = (path) => call("GET", path);
 export const post = (path, body) => call("POST", path, body);
 export const remove = (path) => call("DELETE", path);

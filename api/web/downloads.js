@@ -1,6 +1,7 @@
 // Downloads of what the page shows: the result as JSON, its series or table as CSV, and the
 // visible figure (drawing, curve or energies) as SVG or PNG. Files are made in the browser.
 
+import { getFile } from "./api.js";
 import { svgMarkup, svgToPngBlob } from "./plot.js";
 
 function save(blob, name) {
@@ -37,4 +38,19 @@ export function wireDownloads(state) {
     const svg = visibleFigure();
     if (svg) save(await svgToPngBlob(svg), `${name()}.png`);
   });
+}
+
+// A job whose result is files (an export's C library): its archive, fetched with the API key.
+// link: the job's links.archive, or null to hide the button.
+export function offerArchive(link, onProblem) {
+  const button = document.getElementById("download-archive");
+  button.hidden = !link;
+  button.onclick = !link ? null : async () => {
+    try {
+      const file = await getFile(link);
+      save(file.blob, file.name);
+    } catch (problem) {
+      onProblem(problem.message);
+    }
+  };
 }

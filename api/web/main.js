@@ -13,7 +13,7 @@ import { resultView } from "./results.js";
 import { wireModeRows } from "./vibration.js";
 import { drawScene } from "./scene.js";
 import { resetView } from "./zoom.js";
-import { wireDownloads } from "./downloads.js";
+import { offerArchive, wireDownloads } from "./downloads.js";
 import { clearCard, showCard, statusStyle } from "./card.js";
 import { showRecentJobs } from "./recent.js";
 import { defaultChoice, whyNot } from "./offers.js";
@@ -52,6 +52,7 @@ function clearResults(message = "Run an analysis to see its outputs.") {
   $("energy-plot").replaceChildren();
   $("raw").textContent = "";
   $("download-json").disabled = true;
+  offerArchive(null);
   $("download-csv").disabled = true;
   $("tab-curves").disabled = true;
   $("tab-energies").disabled = true;
@@ -222,6 +223,7 @@ async function showJobResult(id, status) {
   if (view.design && state.doc) await draw({ overrides: view.design }); // the optimum, deformed
   if (status.kind === "sweep") await sweepFrames(answer.result);
   showCard(`job:${status.kind}`, `${status.kind.replace(/_/g, " ")} job`, status.status, answer.result, status.error || "");
+  offerArchive(status.status === "succeeded" && status.links ? status.links.archive : null, (message) => say("run-state", message, "error"));
   showRecentJobs();
   say("run-state", `job ${status.status}${status.error ? `: ${status.error}` : ""}`, statusStyle(status.status));
 }

@@ -414,3 +414,25 @@ def test_a_frequency_response_plots_its_amplitude_in_db_and_tables_its_resonance
     page.click("#tab-curves")
     assert page.locator("#curve svg path").count() >= 1
     screenshot(page, "22-frequency-response")
+
+
+def test_an_export_job_offers_its_c_library_for_download(page):
+    """The export job (issue 29) from the page: when it succeeds the card offers the archive,
+    fetched with the key; it holds the library's header and manifest with the closing force's
+    sweep."""
+    import io
+    import tarfile
+
+    assert page.is_hidden("#download-archive")
+    choose(page, "job:export")
+    run_and_wait(page, "job succeeded", timeout=120_000)
+    page.wait_for_selector("#download-archive", state="visible")
+    with page.expect_download() as info:
+        page.click("#download-archive")
+    assert info.value.suggested_filename.endswith(".tar.gz")
+    with tarfile.open(fileobj=io.BytesIO(info.value.path().read_bytes()), mode="r:gz") as tar:
+        names = tar.getnames()
+        manifest = json.loads(tar.extractfile(next(n for n in names if n.endswith("manifest.json"))).read())
+    assert any(n.endswith(".h") for n in names) and any(n.endswith("_kernels.c") for n in names)
+    assert manifest["target"]["output"] == "end_effector.x"
+    assert [i["name"] for i in manifest["inputs"]] == ["actuation_force_x", "actuation_force_y"]
