@@ -178,7 +178,10 @@ def _contact_values(plan: ExportPlan, functions: ExportFunctions) -> dict[str, s
         "N_CONTACT_OUTPUTS": str(len(names)),
         "CONTACT_OUTPUT_LINES": _lines(
             [
-                (f"#define {upper}_CONTACT_{c_identifier(n.removeprefix('contacts.')).upper()} {k}", f" /* {n} [{u}] */")
+                (
+                    f"#define {upper}_CONTACT_{c_identifier(n.removeprefix('contacts.')).upper()} {k}",
+                    f" /* {n} [{u}] */",
+                )
                 for k, (n, u) in enumerate(zip(names, units))
             ]
         ),
