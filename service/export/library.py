@@ -22,6 +22,7 @@ from service.export.kernels import ExportFunctions, export_functions
 from service.export.measure import example_path, worst_iterations
 from service.export.plan import ExportOptions, ExportPlan, export_plan
 from service.export.sources import ExamplePath, template_values, write_kernels, write_sources
+from service.solvers.equilibrium import check_constrained
 from service.units import coordinate_kinds
 
 STATUS_CODES = {
@@ -129,6 +130,7 @@ def export_library(mech: Mechanism, folder: Path, model: str, options: ExportOpt
     started = time.perf_counter()
     document = mech.document
     plan = export_plan(mech, model, options)
+    check_constrained(mech)  # a free motion has no static equilibrium: named, as flexmech solve names it
     functions = export_functions(mech, plan)
     path = example_path(mech, plan, functions)
     meta = {"title": document.name or plan.name, "version": _version()}

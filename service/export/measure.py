@@ -63,8 +63,8 @@ def example_path(mech: Mechanism, plan: ExportPlan, functions: ExportFunctions) 
 
 def _example_path(mech: Mechanism, plan: ExportPlan, functions: ExportFunctions) -> ExamplePath:
     """A contact document's contact path (when its fields are inputs); else the document's
-    sweep when it moves an input (to the target when it has one); else the first input from
-    zero to its document value."""
+    sweep when it moves an input (to the target when it has one); else the inputs the document
+    sets to a value other than zero, ramped together from zero to it (its loads applied)."""
     if functions.contact is not None:
         found = _contact_path(mech, plan)
         if found is not None:
@@ -80,8 +80,10 @@ def _example_path(mech: Mechanism, plan: ExportPlan, functions: ExportFunctions)
                 return ExamplePath((k,), (start,), (found[0],))
         if spec.stop is not None:
             return ExamplePath((k,), (start,), (_doc(mech, plan, k, spec.stop, "/sweep/stop"),))
-    value = plan.inputs[0].default
-    return ExamplePath((0,), (0.0 if value != 0 else -1.0,), (value if value != 0 else 1.0,))
+    loaded = tuple(k for k, item in enumerate(plan.inputs) if item.default != 0)
+    if not loaded:  # nothing to ramp: the document's state, held
+        return ExamplePath((0,), (0.0,), (0.0,))
+    return ExamplePath(loaded, tuple(0.0 for _ in loaded), tuple(plan.inputs[k].default for k in loaded))
 
 
 def target_iterations(mech, plan: ExportPlan, functions: ExportFunctions, inputs, goal: float):
@@ -144,8 +146,12 @@ def worst_iterations(mech: Mechanism, plan: ExportPlan, functions: ExportFunctio
     if plan.target is not None:
         found = target_iterations(mech, plan, functions, defaults(plan), plan.target.default_goal)
         out["target_cold"] = None if found is None else int(found[1])
-    if out["failed_points"] and functions.contact is None:
+    failed = out["failed_points"] + out.get("contact_failed_points", 0)
+    if failed:
         raise MechanismError(
-            "/inputs", f"the exported iteration fails at {out['failed_points']} points of {out['measured_over']}"
+            "/inputs",
+            f"the exported iteration (at most {plan.options.max_iterations} steps, warm or from undeformed) fails "
+            f"{failed} times over its example path ({out['measured_over']}): the library would not solve its own "
+            "example; choose inputs it converges along, or a document sweep without limit points",
         )
     return out

@@ -186,6 +186,9 @@ def test_export_choices_are_checked_and_named(tmp_path):
     with pytest.raises(MechanismError) as bad_range:
         export_document(mech_doc, tmp_path / "c", "linear", ExportOptions(ranges={"/sections/flexure/h": (1, 2)}))
     assert bad_range.value.pointer == "/ranges//sections/flexure/h" and "not an exported input" in str(bad_range.value)
+    with pytest.raises(MechanismError) as free:  # a linkage's free motion has no static equilibrium
+        export_document(load_document(EXAMPLES / "four_bar_dynamics.json"), tmp_path / "e", None, ExportOptions())
+    assert free.value.pointer == "/bodies" and "under-constrained" in free.value.problem
     with pytest.raises(MechanismError) as narrow:
         export_document(mech_doc, tmp_path / "d", "linear", ExportOptions(ranges={FORCE: (0.0, 100.0)}))
     assert narrow.value.pointer == f"/ranges/{FORCE}" and "from -60 to 63.94690" in narrow.value.problem
@@ -204,3 +207,14 @@ def test_the_cmake_build_runs_the_checks(tmp_path):
     assert tested.returncode == 0 and "100% tests passed" in tested.stdout, tested.stdout[-2000:]
     example = subprocess.run([str(build / "gripper_example")], capture_output=True, text=True, timeout=60, check=True)
     assert "target: end_effector.x = 0 mm at actuation_force_y = 63.94690" in example.stdout
+
+
+def test_without_a_sweep_the_example_path_applies_the_documents_loads(tmp_path):
+    """The rod has no sweep: its example ramps both hold-force components from 0 to their
+    document values together, and the manifest says so."""
+    manifest = export_document(
+        load_document(EXAMPLES / "rod_free_vibration.json"), tmp_path / "rod", None, ExportOptions()
+    )
+    moved = {item["name"]: (item["start"], item["stop"]) for item in manifest["example_path"]["inputs"]}
+    assert moved == {"hold_force_x": (0.0, 7.919276), "hold_force_y": (0.0, 10.998155)}
+    assert manifest["worst_case_iterations"]["failed_points"] == 0
