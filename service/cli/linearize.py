@@ -144,6 +144,24 @@ def _flagged(exc: MechanismError, asked: dict[str, Any]) -> Exception:
 def print_state_space(out: Console, space: dict[str, Any]) -> None:
     """Its size, the lowest modes' frequencies and damping ratios, and the static gain."""
     units = space["units"]
+    if not space["states"]:
+        out.print(
+            f"state space: no states (the mechanism has no mass: the model is its static response D), "
+            f"{len(space['inputs'])} inputs, {len(space['outputs'])} outputs"
+        )
+    else:
+        _print_modes(out, space)
+    gain = space["static_gain"]
+    if gain is None:
+        out.print("static gain: none (a rigid mode: no static equilibrium)")
+        return
+    table = table_of("static gain (output per input)", "output", *space["inputs"])
+    for name, unit, row in zip(space["outputs"], units["outputs"], gain):
+        table.add_row(escape(name), *(number(v, f"{unit}/{u}") for v, u in zip(row, units["inputs"])))
+    out.print(table)
+
+
+def _print_modes(out: Console, space: dict[str, Any]) -> None:
     out.print(
         f"state space: {len(space['states'])} states (the modes' coordinates and rates), "
         f"{len(space['inputs'])} inputs, {len(space['outputs'])} outputs; time in s"
@@ -155,11 +173,3 @@ def print_state_space(out: Console, space: dict[str, Any]) -> None:
     out.print(table)
     if len(space["kinds"]) > SHOWN_MODES:
         out.print(f"... and {len(space['kinds']) - SHOWN_MODES} more modes (the file has them all)", style="dim")
-    gain = space["static_gain"]
-    if gain is None:
-        out.print("static gain: none (a rigid mode: no static equilibrium)")
-        return
-    table = table_of("static gain (output per input)", "output", *space["inputs"])
-    for name, unit, row in zip(space["outputs"], units["outputs"], gain):
-        table.add_row(escape(name), *(number(v, f"{unit}/{u}") for v, u in zip(row, units["inputs"])))
-    out.print(table)

@@ -104,7 +104,13 @@ class StateSpaceModel:
         arrays: dict[str, Any] = {name: np.asarray(data[name], dtype=float) for name in MATRICES}
         arrays["G"] = arrays["G"].reshape(-1, len(data["coordinates"]))
         arrays["shapes"] = arrays["shapes"].reshape(len(data["coordinates"]), -1)
-        for name, rows, columns in (("B", "states", "inputs"), ("C", "outputs", "states"), ("D", "outputs", "inputs")):
+        shapes = (
+            ("A", "states", "states"),
+            ("B", "states", "inputs"),
+            ("C", "outputs", "states"),
+            ("D", "outputs", "inputs"),
+        )
+        for name, rows, columns in shapes:
             arrays[name] = arrays[name].reshape(len(data[rows]), len(data[columns]))
         names: dict[str, Any] = {name: [str(n) for n in data[name]] for name in NAMES}
         return cls(**arrays, **names, units=dict(data["units"]), kinds=[str(k) for k in data["kinds"]])
@@ -129,6 +135,11 @@ def state_space_model(
     if not outputs:
         raise MechanismError(f"{pointer}/outputs", "no outputs: name at least one (as in a solve's outputs)")
     system = modal_system(mech, z)
+    if not np.any(system.M):  # seed 000's gripper: no mass, so the model is its static response
+        if modes:
+            raise MechanismError(f"{pointer}/modes", "the mechanism has no mass: it has no modes to keep")
+        F, Y, direct = _channels(mech, z, system, inputs, outputs, pointer)
+        return _static_model(mech, system, (F, Y, direct), (inputs, outputs))
     eigen = vibration_eigen(system.K, system.M, system.G, None)  # every mode: the truncation's rest is exact
     kept = eigen.available if modes is None else modes
     if kept > eigen.available:
@@ -221,6 +232,25 @@ def _static_rest(
         raise MechanismError(f"{pointer}/modes", "a rigid mode cannot be left out: keep more modes")
     rest = Y @ Phi[:, kept:] @ ((Psi[:, kept:].T @ F) / values[kept:, None])
     return np.asarray(rest + (Y @ eigen.feedthrough @ F if eigen.feedthrough is not None else 0.0))
+
+
+def _static_model(
+    mech: Mechanism, system: ModalSystem, channels: tuple[np.ndarray, ...], names: tuple[list[str], list[str]]
+) -> StateSpaceModel:
+    """A massless mechanism's linear model: no states, D its static response Y K^-1 F about the
+    state (within the constraints G x = 0), plus the outputs' direct dependence on the inputs."""
+    F, Y, direct = channels
+    inputs, outputs = names
+    n = len(system.coordinates)
+    Z = null_space(system.G) if system.G is not None and system.G.size else np.eye(n)
+    Kr = Z.T @ system.K @ Z
+    if np.linalg.svd(Kr, compute_uv=False).min(initial=1.0) <= 1e-12 * max(np.abs(Kr).max(), 1e-300):
+        raise MechanismError("/bodies", "the mechanism has neither mass nor stiffness in some motion: nothing holds it")
+    D = direct + Y @ Z @ np.linalg.solve(Kr, Z.T @ F)
+    none = np.zeros((0, 0))
+    state_space = (none, np.zeros((0, len(inputs))), np.zeros((len(outputs), 0)), D)
+    second = (system.M, system.K, np.zeros_like(system.K), _constraints(system), np.zeros((n, 0)))
+    return _in_document_units(mech, system, state_space, second, ([], inputs, outputs), [])
 
 
 def _constraints(system: ModalSystem) -> np.ndarray:

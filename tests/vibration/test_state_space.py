@@ -180,7 +180,32 @@ def test_bad_input_is_named_by_its_field(rod):
         with pytest.raises(MechanismError) as err:
             linearize(rod, **state_space)
         assert err.value.pointer == pointer and words in err.value.problem
-    gripper = compile_mechanism(load_document(EXAMPLES / "gripper.json"))  # massless: nothing vibrates
-    with pytest.raises(MechanismError) as err:
-        linearize(gripper)
-    assert err.value.pointer == "/bodies" and "no mass that can move" in err.value.problem
+
+
+def test_the_massless_gripper_is_its_static_response_about_its_operating_point(tmp_path):
+    """Seed 000's gripper has no mass: its linear model for a controller is D alone, the jaw's
+    response to the actuation force about the equilibrium under 50 uN. It equals central
+    differences of flexmech's own equilibrium (+-0.01 uN) to 1e-7, and python-control takes it
+    as a static gain."""
+    from service.solvers.equilibrium import solve_equilibrium
+    from service.solvers.newton import NewtonOptions
+
+    mech = compile_mechanism(load_document(EXAMPLES / "gripper.json"))
+    force, outputs = "/loads/actuation/force/1", ["end_effector.x", "end_effector.y"]
+    operating = solve_equilibrium(mech, NewtonOptions())
+    model = state_space_model(mech, operating.z, [force], outputs)
+    assert model.A.shape == (0, 0) and model.B.shape == (0, 1) and model.C.shape == (2, 0) and model.states == []
+    moved = []
+    for value in (50.01, 49.99):
+        found = solve_equilibrium(mech.with_values({force: value}), NewtonOptions()).outputs()
+        moved.append([found[name] for name in outputs])
+    expected = (np.array(moved[0]) - np.array(moved[1])) / 0.02
+    assert np.allclose(model.D[:, 0], expected, rtol=1e-7, atol=0)
+    assert model.units["inputs"] == ["uN"] and model.units["outputs"] == ["mm", "mm"]
+    path = tmp_path / "gripper.mat"
+    write_state_space(model, path)
+    assert np.array_equal(read_state_space(path).D, model.D)
+    assert np.allclose(np.asarray(control_system(model).dcgain()).reshape(model.D.shape), model.D, rtol=1e-12)
+    with pytest.raises(MechanismError) as no_modes:
+        state_space_model(mech, operating.z, [force], outputs, modes=2)
+    assert no_modes.value.pointer == "/state_space/modes" and "no mass" in no_modes.value.problem
