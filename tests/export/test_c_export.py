@@ -5,11 +5,11 @@ survives a NaN input. The library is loaded through the loader it ships (ctypes)
 from __future__ import annotations
 
 import importlib.util
-import shutil
 import subprocess
 
 import numpy as np
 import pytest
+from c_tools import ensure_c_tools
 from conftest import EXAMPLES
 
 from models import MechanismError, compile_mechanism, load_document
@@ -18,9 +18,11 @@ from service.export.plan import ExportOptions
 from service.solvers.stiffness import tangent_stiffness
 from service.solvers.sweep import solve_for_target, sweep
 
-pytestmark = pytest.mark.skipif(
-    shutil.which("gcc") is None or shutil.which("make") is None, reason="needs gcc and make"
-)
+
+@pytest.fixture(scope="module", autouse=True)
+def c_tools():
+    ensure_c_tools()
+
 
 STRICT = "-std=c99 -O2 -Wall -Wextra -Werror"  # the issue's flags, also the Makefile's own
 CLOSING_FORCE = {"linear": 63.9469, "partial_nonlinear": 77.0346, "exact": 69.8573}  # uN, README and seed 000
@@ -195,7 +197,6 @@ def test_export_choices_are_checked_and_named(tmp_path):
     assert not (tmp_path / "a").exists()
 
 
-@pytest.mark.skipif(shutil.which("cmake") is None, reason="needs cmake")
 def test_the_cmake_build_runs_the_checks(tmp_path):
     """The CMakeLists.txt builds the library, example, benchmark and checks; ctest runs the checks."""
     source, build = tmp_path / "src", tmp_path / "build"

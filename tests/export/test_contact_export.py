@@ -6,11 +6,11 @@ contact state cannot be exported say why and still export the rest."""
 from __future__ import annotations
 
 import importlib.util
-import shutil
 import subprocess
 
 import numpy as np
 import pytest
+from c_tools import ensure_c_tools
 from conftest import EXAMPLES
 
 from models import MechanismError, compile_mechanism, load_document
@@ -19,9 +19,11 @@ from service.contact.solve import solve_state
 from service.export.library import export_document
 from service.export.plan import ExportOptions
 
-pytestmark = pytest.mark.skipif(
-    shutil.which("gcc") is None or shutil.which("make") is None, reason="needs gcc and make"
-)
+
+@pytest.fixture(scope="module", autouse=True)
+def c_tools():
+    ensure_c_tools()
+
 
 FIXTURE = "/contacts/objects/fixture/centre/0"
 
