@@ -44,7 +44,6 @@ class ExportFunctions:
     outputs: ca.Function
     stiffness: ca.Function
     target_step: ca.Function | None
-    n_body: int
     contact: ContactTask | None = None
     contact_note: str = ""  # why a contact document's export has no contact task
 
@@ -110,7 +109,8 @@ def _residual_and_tangent(mech: Mechanism, z: ca.MX, p: ca.MX) -> tuple[ca.MX, c
     as graphs.residual_and_tangent, in generated functions a compiler optimizes in seconds."""
     from models.graph.assembly import residual_by_rows
 
-    pieces = [f(z, p) for _, f in residual_by_rows(mech.structure)]
+    # the structure without names: its expressions are the ones the graphs were built from
+    pieces = [f(z, p) for _, f in residual_by_rows(mech.structure.unnamed)]
     return ca.vertcat(*[r for r, _ in pieces]), ca.vertcat(*[k for _, k in pieces])
 
 
@@ -128,7 +128,6 @@ def export_functions(mech: Mechanism, plan: ExportPlan) -> ExportFunctions:
         outputs=_outputs(mech, plan, f"{base}_outputs"),
         stiffness=_stiffness(mech, z, p, K, f"{base}_stiffness"),
         target_step=_target_step(mech, plan, f"{base}_target_step", R, K, z, p),
-        n_body=mech.n_body_coordinates,
         **_contact(mech, plan, base),
     )
     for f in functions.all():

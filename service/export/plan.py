@@ -134,7 +134,7 @@ def _input(mech: Mechanism, pointer: str, where: str, given: tuple[float, float]
 
 
 def _outputs(mech: Mechanism, chosen: tuple[str, ...]) -> list[Output]:
-    names, kinds = mech.graphs.output_names, mech.graphs.output_kinds
+    names = mech.graphs.output_names
     if not chosen:
         own = tuple(n for n in names if not n.startswith(("bodies.", "reactions.", "elements.")) and n != "energy")
         chosen = own or tuple(mech.structure.coordinate_name(b, c).replace("/", ".") for b, c in mech.structure.free)
@@ -143,9 +143,14 @@ def _outputs(mech: Mechanism, chosen: tuple[str, ...]) -> list[Output]:
     for k, name in enumerate(chosen):
         if name not in names:
             raise MechanismError(f"/outputs/{k}", f"unknown output '{name}' (outputs: {', '.join(names[:12])}, ...)")
-        j = names.index(name)
-        out.append(Output(name, c_identifier(name), mech.doc_unit(kinds[j]), j, 1.0 / mech.nd_per_doc(kinds[j])))
+        out.append(_output(mech, name))
     return out
+
+
+def _output(mech: Mechanism, name: str) -> Output:
+    j = mech.graphs.output_names.index(name)
+    kind = mech.graphs.output_kinds[j]
+    return Output(name, c_identifier(name), mech.doc_unit(kind), j, 1.0 / mech.nd_per_doc(kind))
 
 
 def _target(mech: Mechanism, options: ExportOptions, inputs: list[Input], outputs: list[Output]) -> Target | None:
@@ -162,10 +167,7 @@ def _target(mech: Mechanism, options: ExportOptions, inputs: list[Input], output
     names = mech.graphs.output_names
     if output not in names:
         raise MechanismError("/target/output", f"unknown output '{output}'")
-    j = names.index(output)
-    kind = mech.graphs.output_kinds[j]
-    reached = Output(output, c_identifier(output), mech.doc_unit(kind), j, 1.0 / mech.nd_per_doc(kind))
-    return Target(reached, by[0], goal)
+    return Target(_output(mech, output), by[0], goal)
 
 
 def export_plan(mech: Mechanism, model: str, options: ExportOptions) -> ExportPlan:
