@@ -14,7 +14,9 @@ For each curved-beam model (linear, partial_nonlinear, exact):
 Each timing is the best of 3, the two sides run alternately. The same physics on both sides:
 the same model, unknowns and sweep; the closing force from the
 C target task and from flexmech's solve_for_target, and the largest difference of the outputs
-over the sweep (relative to each output's largest magnitude). Run from the repository root:
+over the sweep (relative to each output's largest magnitude). The peer is flexmech itself (no
+install); the C side needs gcc and make (scripts/c-tools-for-tests installs them). Run from the
+repository root:
 
     python3 -m benchmarks.export [--rounds 50] [--models linear,partial_nonlinear,exact]
 """

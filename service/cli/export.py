@@ -164,7 +164,7 @@ def _build(out, err, folder: Path) -> dict:
     results: dict = {"passed": True}
     for label, command in steps.items():
         try:
-            done = subprocess.run(command, capture_output=True, text=True, timeout=BUILD_SECONDS)
+            done = _run_in_own_group(command)
         except (OSError, subprocess.TimeoutExpired) as exc:
             err.print(f"[red]{label}: {escape(str(exc))}[/red]")
             results["passed"] = False
@@ -177,3 +177,26 @@ def _build(out, err, folder: Path) -> dict:
         if label != "make":
             out.print(escape(done.stdout.strip()))
     return results
+
+
+def _run_in_own_group(command: list[str]) -> subprocess.CompletedProcess:
+    """command in a process group of its own that dies with this process: a time-out or an
+    interrupt kills make and every compiler it started, not make alone."""
+    import os
+    import signal
+
+    from service.kernels.build import die_with_parent
+
+    proc = subprocess.Popen(
+        command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, process_group=0, preexec_fn=die_with_parent
+    )
+    try:
+        stdout, stderr = proc.communicate(timeout=BUILD_SECONDS)
+    except BaseException:  # TimeoutExpired, KeyboardInterrupt: nothing it started outlives it
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+        proc.wait()
+        raise
+    return subprocess.CompletedProcess(command, proc.returncode, stdout, stderr)

@@ -89,3 +89,26 @@ def test_a_contact_documents_export_chooses_its_contact_outputs(tmp_path):
     )
     wrong = _invoke("export", doc, "--c", str(tmp_path / "bad"), "--contact-output", "contacts.insertion.grip")
     assert wrong.exit_code == 2 and "/contact_outputs" in wrong.output and "'contacts.insertion.grip'" in wrong.output
+
+
+def test_a_build_past_its_time_ends_every_process_it_started(monkeypatch, tmp_path):
+    """--build runs make in a process group of its own: at its time limit the whole group is
+    killed (here a shell and the sleeper it started, standing for make and its compilers)."""
+    import os
+    import subprocess
+
+    import pytest
+
+    from service.cli import export as export_command
+
+    monkeypatch.setattr(export_command, "BUILD_SECONDS", 0.5)
+    marker = tmp_path / "pid"
+    with pytest.raises(subprocess.TimeoutExpired):
+        export_command._run_in_own_group(["sh", "-c", f"sleep 60 & echo $! > {marker}; wait"])
+    sleeper = int(marker.read_text())
+    try:
+        os.kill(sleeper, 0)
+        state = open(f"/proc/{sleeper}/stat").read().split()[2]
+    except (ProcessLookupError, FileNotFoundError):
+        state = "gone"
+    assert state in ("gone", "Z"), f"the sleeper survived its group's kill (state {state})"
