@@ -7,10 +7,9 @@ iteration, so the factors' age changes the rate of convergence only. Each iterat
 accelerated by Anderson's mixing with the one before (a secant step): it recovers much of
 what old factors lose on the stiff shear and axial modes, whose accelerations change sign
 from step to step. Iterations run while the residual is above the tolerance, up to
-MAX_ITERATIONS: once it is below, the kernels of the remaining iterations are gated off
-(models.kernels.chunks) and their results keep the last ones; kernels that run interpreted
-(no compiled library yet) run each iteration as one expanded Function, gated as a whole
-(Stepper.gated_iteration). A step left above the tolerance is reported by its residual: the
+MAX_ITERATIONS: once it is below, the remaining iterations are skipped as a whole (a Switch,
+Stepper.gated_iteration); kernels that run interpreted (no compiled library yet) run each
+iteration as one expanded Function. A step left above the tolerance is reported by its residual: the
 caller cuts the window there and starts the next one, with fresh factors, from the last good
 step.
 
@@ -162,7 +161,7 @@ class Stepper:
         else:
             ev = sys.evaluate(Z, ca.MX(1), si, factors.kept_reverse)
         carry = [Z, ca.MX.zeros(sys.n_z), ca.MX.zeros(sys.n_z), ca.MX(0), ca.MX(0), *ev.parts()]
-        iterate = self.gated_iteration if self.expanded else self.iteration_function
+        iterate = self.gated_iteration
         for _ in range(MAX_ITERATIONS):  # one Function called again and again: its code is generated once
             carry = iterate(*factors.parts(), state, h, p, pdot, pddot, damping, mask, *data, *carry)
         Z, used, ev = carry[0], carry[4], Evaluation.of(carry[5:], self.n_groups)
@@ -177,62 +176,43 @@ class Stepper:
         """(factors..., state, h, p, pdot, pddot, damping, mask, data..., Z, previous,
         g_previous, have, used, evaluation...) -> (the same carry, one iteration on): the chord
         step on the window's factors, accelerated by Anderson's mixing with the iteration before
-        (a secant step); nothing is computed once the residual is below the tolerance (the
-        evaluation's parts keep the last ones that ran)."""
+        (a secant step). It computes unconditionally: gated_iteration runs it only while the
+        carried residual is above the tolerance."""
         sys = self.system
         f, (state, h, p, pdot, pddot, damping, mask, data), si = self._iteration_symbols()
         Z, previous, g_previous = (ca.MX.sym(name, sys.n_z) for name in ("Z", "previous", "g_previous"))
         have, used = ca.MX.sym("have"), ca.MX.sym("used")
-        shapes = [part.shape for part in sys.evaluate(Z, ca.MX(1), si, f.kept_reverse).parts()]
+        one = ca.MX(1)
+        shapes = [part.shape for part in sys.evaluate(Z, one, si, f.kept_reverse).parts()]
         parts = [ca.MX.sym(f"evaluation{i}", *shape) for i, shape in enumerate(shapes)]
         ev = Evaluation.of(parts, self.n_groups)
-        go = ev.norm > NEWTON_TOLERANCE
-        g = -sys.solve(ev, go, f)  # the chord step
+        g = -sys.solve(ev, one, f)  # the chord step
         dZ, dg = Z - previous, g - g_previous
         gamma = have * ca.dot(dg, g) / (ca.dot(dg, dg) + 1e-300)
         Z_next = Z + g - gamma * (dZ + dg)
-        ev_next = sys.evaluate(Z_next, go, si, f.kept_reverse)
-        # a gated evaluation computes nothing: keep what the monitor and the test need from the
-        # last one that ran (the eliminated blocks and right-hand side only feed a solve, gated too)
-        kept = Evaluation(
-            ev_next.y,
-            ev_next.rhs,
-            *[
-                ca.if_else(go, new, old)
-                for new, old in zip(
-                    [ev_next.all_rows, ev_next.routed, ev_next.energies, ev_next.global_energies, ev_next.norm],
-                    [ev.all_rows, ev.routed, ev.energies, ev.global_energies, ev.norm],
-                )
-            ],
-        )
-        carry = [
-            ca.if_else(go, Z_next, Z),
-            ca.if_else(go, Z, previous),
-            ca.if_else(go, g, g_previous),
-            ca.if_else(go, 1, have),
-            used + go,
-            *kept.parts(),
-        ]
+        ev_next = sys.evaluate(Z_next, one, si, f.kept_reverse)
         return ca.Function(
             "kernel_iteration",
             [*f.parts(), state, h, p, pdot, pddot, damping, mask, *data, Z, previous, g_previous, have, used, *parts],
-            carry,
+            [Z_next, Z, g, one, used + 1, *ev_next.parts()],
         )
 
     @cached_property
     def gated_iteration(self) -> ca.Function:
-        """iteration_function expanded into one SX Function and gated as a whole (nothing runs
-        once the carried norm is below the tolerance), for kernels that run interpreted: CasADi's
-        SX machine then runs the step's arithmetic without the MX machine's calls and copies, and
-        the padding items (constant flags) drop out. The same operations in the same order (the
-        same results), 1.7x faster on the rod and the four-bar (benchmarks.dynamics, interpreted
-        rows); 64 elements build in 1 s instead of 0.6 and hold 50 MB more. Compiled kernels
-        cannot be expanded, nor need to be."""
+        """iteration_function gated as a whole: a Switch between it and a pass-through of the
+        carry, on the carried norm being above the tolerance, so that a converged step's
+        remaining iterations cost a branch and a copy of the carry (gating each kernel item
+        instead cost the rod's step 12% more: 146 against 129 us, benchmarks.dynamics).
+        Kernels that run interpreted (no compiled library yet) have the iteration expanded into
+        one SX Function: CasADi's SX machine then runs the step's arithmetic without the MX
+        machine's calls and copies, and the padding items (constant flags) drop out; 1.7x faster
+        on the rod and the four-bar (interpreted rows); 64 elements build in 1 s instead of 0.6
+        and hold 50 MB more. Compiled kernels cannot be expanded, nor need to be."""
         fn = self.iteration_function
         n_carry = fn.n_out()  # the carry is the last n_carry inputs, the norm last of all
         symbols = [ca.SX.sym(fn.name_in(i), fn.sparsity_in(i)) for i in range(fn.n_in())]
         idle = ca.Function("kernel_iteration_idle", symbols, symbols[-n_carry:])
-        switch = ca.Function.if_else("kernel_iteration_switch", fn.expand(), idle)
+        switch = ca.Function.if_else("kernel_iteration_switch", fn.expand() if self.expanded else fn, idle)
         inputs = [ca.MX.sym(fn.name_in(i), fn.sparsity_in(i)) for i in range(fn.n_in())]
         return ca.Function("kernel_iteration_gated", inputs, switch(inputs[-1] > NEWTON_TOLERANCE, *inputs))
 
