@@ -28,6 +28,16 @@ import casadi as ca
 from service.kernels.cache import FLAGS, compiler
 
 PR_SET_PDEATHSIG = 1
+# how gcc ends when its address-space limit refuses memory, depending on where it asked: an
+# allocation's message, cc1 crashing (a stack or mmap it could not get), or the loader unable to
+# map cc1's libraries at all
+OUT_OF_MEMORY = (
+    "out of memory",
+    "virtual memory exhausted",
+    "Cannot allocate",
+    "signal terminated program",
+    "failed to map segment from shared object",
+)
 
 
 @dataclass(frozen=True)
@@ -129,21 +139,21 @@ class Compiler:
         peak = usage.ru_maxrss * 1024 if usage is not None else 0
         if timed_out:
             return Outcome(False, f"the compiler exceeded its time limit of {limits.seconds:g} s", 0, seconds, peak)
+        mib = f"{limits.memory_bytes / 2**20:.0f} MiB"
         if os.WIFSIGNALED(status):
             why = signal.Signals(os.WTERMSIG(status)).name
             return Outcome(
                 False,
-                f"the compiler was killed by {why} (memory limit {limits.memory_bytes / 2**20:.0f} MiB, or CPU time)",
+                f"the compiler was killed by {why}: its memory limit of {mib} or its CPU time ran out",
                 0,
                 seconds,
                 peak,
             )
         if os.WEXITSTATUS(status) != 0:
             text = log.read_text(errors="replace")[-2000:]
-            memory = "out of memory" in text or "virtual memory exhausted" in text or "Cannot allocate" in text
             reason = (
-                f"the compiler ran out of its memory limit of {limits.memory_bytes / 2**20:.0f} MiB"
-                if memory
+                f"the compiler ran out of its memory limit of {mib}"
+                if any(sign in text for sign in OUT_OF_MEMORY)
                 else f"the compiler failed (exit {os.WEXITSTATUS(status)}): {text.strip()[-400:]}"
             )
             return Outcome(False, reason, 0, seconds, peak)
