@@ -59,3 +59,19 @@ class StepInputs:
     element_constants: list  # per group: (k, damping, gravity rows)
     data: list  # per group (n_data x padded elements)
     affine_global: ca.MX  # (global coordinates x 3)
+
+    def parts(self) -> list[ca.MX]:
+        constants = [c for group in self.element_constants for c in group]
+        scalars = [self.k, self.p, self.pdot, self.pddot, self.damping, self.mask]
+        return [*self.affine, *scalars, *self.element_affine, *constants, *self.data, self.affine_global]
+
+    def symbols(self) -> StepInputs:
+        """Symbols of the same shapes: the inputs of a Function that takes a step's inputs made once."""
+        fresh = iter([ca.MX.sym(f"step_input{i}", part.sparsity()) for i, part in enumerate(self.parts())])
+        groups = len(self.element_affine)
+        affine = tuple(next(fresh) for _ in self.affine)
+        k, p, pdot, pddot, damping, mask = (next(fresh) for _ in range(6))
+        element_affine = [next(fresh) for _ in range(groups)]
+        constants = [tuple(next(fresh) for _ in group) for group in self.element_constants]
+        data = [next(fresh) for _ in self.data]
+        return StepInputs(affine, k, p, pdot, pddot, damping, mask, element_affine, constants, data, next(fresh))

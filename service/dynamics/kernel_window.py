@@ -163,7 +163,7 @@ class Stepper:
         carry = [Z, ca.MX.zeros(sys.n_z), ca.MX.zeros(sys.n_z), ca.MX(0), ca.MX(0), *ev.parts()]
         iterate = self.gated_iteration
         for _ in range(MAX_ITERATIONS):  # one Function called again and again: its code is generated once
-            carry = iterate(*factors.parts(), state, h, p, pdot, pddot, damping, mask, *data, *carry)
+            carry = iterate(*factors.parts(), *si.parts(), *carry)
         Z, used, ev = carry[0], carry[4], Evaluation.of(carry[5:], self.n_groups)
         n_x = self.state.n_x
         u = Z[:n_x]
@@ -173,13 +173,15 @@ class Stepper:
 
     @cached_property
     def iteration_function(self) -> ca.Function:
-        """(factors..., state, h, p, pdot, pddot, damping, mask, data..., Z, previous,
-        g_previous, have, used, evaluation...) -> (the same carry, one iteration on): the chord
+        """(factors..., the step's inputs..., Z, previous, g_previous, have, used,
+        evaluation...) -> (the same carry, one iteration on): the chord
         step on the window's factors, accelerated by Anderson's mixing with the iteration before
         (a secant step). It computes unconditionally: gated_iteration runs it only while the
-        carried residual is above the tolerance."""
+        carried residual is above the tolerance. The step's inputs come made (the predictor's
+        affine parts gathered per element), once per step instead of once per iteration."""
         sys = self.system
-        f, (state, h, p, pdot, pddot, damping, mask, data), si = self._iteration_symbols()
+        f, _, made = self._iteration_symbols()
+        si = made.symbols()
         Z, previous, g_previous = (ca.MX.sym(name, sys.n_z) for name in ("Z", "previous", "g_previous"))
         have, used = ca.MX.sym("have"), ca.MX.sym("used")
         one = ca.MX(1)
@@ -193,7 +195,7 @@ class Stepper:
         ev_next = sys.evaluate(Z_next, one, si, f.kept_reverse)
         return ca.Function(
             "kernel_iteration",
-            [*f.parts(), state, h, p, pdot, pddot, damping, mask, *data, Z, previous, g_previous, have, used, *parts],
+            [*f.parts(), *si.parts(), Z, previous, g_previous, have, used, *parts],
             [Z_next, Z, g, one, used + 1, *ev_next.parts()],
         )
 
