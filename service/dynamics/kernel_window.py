@@ -9,9 +9,9 @@ what old factors lose on the stiff shear and axial modes, whose accelerations ch
 from step to step. Iterations run while the residual is above the tolerance, up to
 MAX_ITERATIONS: once it is below, the remaining iterations are skipped as a whole (a Switch,
 Stepper.gated_iteration); kernels that run interpreted (no compiled library yet) run each
-iteration as one expanded Function. A step left above the tolerance is reported by its residual: the
-caller cuts the window there and starts the next one, with fresh factors, from the last good
-step.
+iteration as one expanded Function. A step left above the tolerance is reported by its
+residual: the caller cuts the window there and starts the next one, with fresh factors, from
+the last good step.
 
 The state carried from step to step is [x; v; a; qdd; lam] (the energy form's coordinates,
 rates, the scheme's acceleration-like variable, accelerations, multipliers). Per step the
@@ -174,8 +174,8 @@ class Stepper:
     @cached_property
     def iteration_function(self) -> ca.Function:
         """(factors..., the step's inputs..., Z, previous, g_previous, have, used,
-        evaluation...) -> (the same carry, one iteration on): the chord
-        step on the window's factors, accelerated by Anderson's mixing with the iteration before
+        evaluation...) -> (the same carry, one iteration on): the chord step on the window's
+        factors, accelerated by Anderson's mixing with the iteration before
         (a secant step). It computes unconditionally: gated_iteration runs it only while the
         carried residual is above the tolerance. The step's inputs come made (the predictor's
         affine parts gathered per element), once per step instead of once per iteration."""
@@ -204,7 +204,7 @@ class Stepper:
         """iteration_function gated as a whole: a Switch between it and a pass-through of the
         carry, on the carried norm being above the tolerance, so that a converged step's
         remaining iterations cost a branch and a copy of the carry (gating each kernel item
-        instead cost the rod's step 12% more: 146 against 129 us, benchmarks.dynamics).
+        instead cost the rod's warm step 146 us against 129, measured back to back).
         Kernels that run interpreted (no compiled library yet) have the iteration expanded into
         one SX Function: CasADi's SX machine then runs the step's arithmetic without the MX
         machine's calls and copies, and the padding items (constant flags) drop out; 1.7x faster
