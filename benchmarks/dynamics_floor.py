@@ -163,7 +163,9 @@ def floor_row(mech, until: float) -> dict:
     evaluate = solve = factor = 0.0
     timings = {}
     for group in layout_of(mech.structure).groups:
-        t = timings.setdefault(group.signature, time_kernels(group.signature))
+        if group.signature not in timings:
+            timings[group.signature] = time_kernels(group.signature)
+        t = timings[group.signature]
         evaluate += group.n_elements * t["sweep"] + group.n_blocks * t["backward"]
         solve += group.n_blocks * t["substitute"]
         factor += group.n_elements * t["jacobian"] + group.n_blocks * t["factor"]
