@@ -93,6 +93,20 @@ class Deployment:
         return ApiServer({**self.env, **extra}, self.logs / f"server{self._count}.log", access_log=access_log)
 
 
+def sqlite_server(tmp_path_factory, name: str, workers: int = 2, keys: tuple[str, ...] = (), **settings: str):
+    """A started server on SQLite with a process pool of `workers`, in a directory of its own
+    named `name`; `keys` its API keys (none: open), `settings` more FLEXMECH_* variables."""
+    tmp = tmp_path_factory.mktemp(name)
+    env = {
+        "FLEXMECH_DATA_DIR": str(tmp / "data"),
+        "FLEXMECH_WORKERS": str(workers),
+        "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES),
+        "FLEXMECH_API_KEYS": ",".join(keys),
+        **settings,
+    }
+    return Deployment("sqlite", env, tmp).start()
+
+
 def make_deployment(backend: str, request, tmp_dir: Path) -> Deployment:
     env = {
         "FLEXMECH_DATA_DIR": str(tmp_dir / "data"),

@@ -10,22 +10,14 @@ from urllib.parse import urlsplit
 
 import pytest
 from browser import CHROMIUM_FLAGS, PageLog, chromium_path
-from conftest import EXAMPLES, Deployment
+from conftest import EXAMPLES, sqlite_server
 
 KEY = "workbench-test-key"
 
 
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
-    tmp = tmp_path_factory.mktemp("workbench")
-    env = {
-        "FLEXMECH_DATA_DIR": str(tmp / "data"),
-        "FLEXMECH_WORKERS": "2",
-        "FLEXMECH_CHUNK_SIZE": "2",
-        "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES),
-        "FLEXMECH_API_KEYS": KEY,
-    }
-    server = Deployment("sqlite", env, tmp).start()
+    server = sqlite_server(tmp_path_factory, "workbench", keys=(KEY,), FLEXMECH_CHUNK_SIZE="2")
     yield server
     server.stop()
 

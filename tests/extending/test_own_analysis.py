@@ -146,17 +146,9 @@ PLUGIN = {"FLEXMECH_PLUGINS": "tests.extending.test_own_analysis"}
 
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
-    from conftest import EXAMPLES, Deployment
+    from conftest import sqlite_server
 
-    tmp = tmp_path_factory.mktemp("own-analysis")
-    env = {
-        "FLEXMECH_DATA_DIR": str(tmp / "data"),
-        "FLEXMECH_WORKERS": "1",
-        "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES),
-        "FLEXMECH_API_KEYS": "",
-        **PLUGIN,
-    }
-    server = Deployment("sqlite", env, tmp).start()
+    server = sqlite_server(tmp_path_factory, "own-analysis", workers=1, **PLUGIN)
     yield server
     server.stop()
 

@@ -12,7 +12,7 @@ import tarfile
 
 import httpx
 import pytest
-from conftest import ACTUATION, EXAMPLES, Deployment
+from conftest import ACTUATION, EXAMPLES, sqlite_server
 from typer.testing import CliRunner
 
 from api.client import Client, FlexmechError
@@ -24,14 +24,7 @@ CLOSING_FORCE = 77.0346  # uN: the gripper's target (end_effector.x = 0), solved
 
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
-    tmp = tmp_path_factory.mktemp("export-api")
-    env = {
-        "FLEXMECH_DATA_DIR": str(tmp / "data"),
-        "FLEXMECH_WORKERS": "1",
-        "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES),
-        "FLEXMECH_API_KEYS": ",".join(KEYS),
-    }
-    server = Deployment("sqlite", env, tmp).start()
+    server = sqlite_server(tmp_path_factory, "export-api", workers=1, keys=KEYS)
     yield server
     server.stop()
 

@@ -9,7 +9,7 @@ import time
 import httpx
 import numpy as np
 import pytest
-from conftest import EXAMPLES, Deployment
+from conftest import EXAMPLES, sqlite_server
 
 from api.client import Client
 from models import compile_mechanism, load_document
@@ -22,14 +22,7 @@ KEYS = ("workbench-first-key", "workbench-second-key")
 
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
-    tmp = tmp_path_factory.mktemp("workbench-api")
-    env = {
-        "FLEXMECH_DATA_DIR": str(tmp / "data"),
-        "FLEXMECH_WORKERS": "2",
-        "FLEXMECH_EXAMPLES_DIR": str(EXAMPLES),
-        "FLEXMECH_API_KEYS": ",".join(KEYS),
-    }
-    server = Deployment("sqlite", env, tmp).start()
+    server = sqlite_server(tmp_path_factory, "workbench-api", keys=KEYS)
     yield server
     server.stop()
 
