@@ -35,6 +35,7 @@ class Limits:
     max_contact_rotations: int = 128  # rotations of the links (intervals x degree, summed) of a contact problem
     max_simulation_steps: int = 1_000_000  # time steps of a simulation job
     max_export_unknowns: int = 400  # unknowns of an exported C library (its C grows about 10 kB per unknown)
+    max_response_bytes: int = 20_000_000  # the JSON of one /v1/solve answer (larger: an analysis job, stored)
 
 
 def discretizations(doc: MechanismDocument, model: str | None) -> list[tuple[str, Discretization]]:
@@ -172,4 +173,52 @@ def check_result_size(points: int, per_point: int, limits: Limits, pointer: str 
             pointer,
             f"{points} points x {per_point} stored values = {points * per_point}: the "
             f"limit is {limits.max_result_values}; keep fewer outputs or points",
+        )
+
+
+# The longest a float64 takes in JSON with its separator (-1.2345678901234567e-308,): a report's
+# numbers times this bounds its encoded size from above, whatever the values turn out to be.
+BYTES_PER_NUMBER = 25
+ANALYSIS_JOBS = "POST /v1/analysis-jobs"  # where a report too large to answer runs, stored
+
+
+def _megabytes(count: int) -> str:
+    return f"{count / 1e6:.3g} MB"
+
+
+def check_report_size(size, limits: Limits, answered: bool = True) -> None:
+    """MechanismError at the field that drives a report's size (service.analyses.base.ReportSize)
+    when its numbers cannot be answered in one response (`answered`: /v1/solve) or stored by a
+    job, saying what to change."""
+    stored_ok = size.numbers <= limits.max_result_values
+    encoded = size.numbers * BYTES_PER_NUMBER
+    if answered and encoded > limits.max_response_bytes:
+        counted = (
+            f"the report would hold {size.numbers} numbers ({size.terms}), up to {_megabytes(encoded)} of JSON: an "
+            f"answer is at most {_megabytes(limits.max_response_bytes)}"
+        )
+        if stored_ok:
+            message = (
+                f"{counted}; {size.change}, or run it as a job ({ANALYSIS_JOBS} with the same body), whose report is "
+                f"stored (up to {limits.max_result_values} numbers)"
+            )
+        else:
+            message = f"{counted} and a job stores at most {limits.max_result_values} numbers; {size.change}"
+        raise MechanismError(size.pointer, message)
+    if not answered and not stored_ok:
+        raise MechanismError(
+            size.pointer,
+            f"the report would hold {size.numbers} numbers ({size.terms}): a job stores at most "
+            f"{limits.max_result_values}; {size.change}",
+        )
+
+
+def check_response_bytes(encoded: int, limits: Limits, pointer: str) -> None:
+    """The answer as encoded, against the bound: the count before the work is an estimate (a
+    name's length, an impact run's onsets), this is the measure."""
+    if encoded > limits.max_response_bytes:
+        raise MechanismError(
+            pointer,
+            f"the report is {_megabytes(encoded)} of JSON: an answer is at most "
+            f"{_megabytes(limits.max_response_bytes)}; ask for less, or run it as a job ({ANALYSIS_JOBS})",
         )

@@ -64,6 +64,9 @@ class Settings(BaseSettings):
     max_contact_rotations: int = Field(128, ge=1, description="rotations of a contact problem's links")
     max_simulation_steps: int = Field(1_000_000, ge=1, description="time steps of a simulation job")
     max_export_unknowns: int = Field(400, ge=1, description="unknowns of a mechanism exported as a C library")
+    max_response_bytes: int = Field(
+        20_000_000, ge=100_000, description="bytes of JSON in one /v1/solve answer (larger reports run as jobs)"
+    )
     solve_time_limit: float = Field(10.0, gt=0, description="seconds of Newton per /v1/solve")
     job_time_limit: float = Field(3600.0, gt=0, description="seconds of wall time per job")
     chunk_size: int = Field(8, ge=1, le=10_000, description="points per task sent to a worker")
@@ -115,6 +118,7 @@ class Settings(BaseSettings):
             max_contact_rotations=self.max_contact_rotations,
             max_simulation_steps=self.max_simulation_steps,
             max_export_unknowns=self.max_export_unknowns,
+            max_response_bytes=self.max_response_bytes,
         )
 
     def resolved_database_url(self) -> str:

@@ -6,23 +6,47 @@ client's methods, the workbench's forms and generated clients are made from."""
 # No `from __future__ import annotations`: the body's type is built at run time and FastAPI
 # reads the endpoint's annotations as objects.
 
-from fastapi import APIRouter
+import json
+
+from fastapi import APIRouter, Response
 
 from api.analysis_requests import options_of, solve_request_type
 from api.deps import OwnerDep, ServicesDep
 from api.documents import request_document
 from api.parsed_route import ParsedBodyRoute
 from api.responses import ERRORS
+from api.routers.analysis_jobs import add_analysis_job_route
 from api.schemas import DocumentRequest, SolveResponse
 from service.analyses import ANALYSES, AnalysisOptions, AnalysisRequest
+from service.costs import check_report_size, check_response_bytes
 from service.requests import Limits, compile_request, newton_options
+from service.solvers.reports import plain
 
 
-def _solve(name: str, given: AnalysisOptions, request: DocumentRequest, document: dict, limits: Limits) -> dict:
-    """In a solver worker: the analysis by name (the worker has the same registry)."""
+def json_bytes(report: dict) -> bytes:
+    """A report as the answer's body: compact UTF-8 JSON, as FastAPI's JSONResponse writes it."""
+    try:
+        text = json.dumps(report, ensure_ascii=False, allow_nan=False, separators=(",", ":"))
+    except (TypeError, ValueError):  # a plugin's report with numpy values or NaN: made plain first
+        text = json.dumps(plain(report), ensure_ascii=False, allow_nan=False, separators=(",", ":"))
+    return text.encode("utf-8")
+
+
+def _solve(name: str, given: AnalysisOptions, request: DocumentRequest, document: dict, limits: Limits) -> bytes:
+    """In a solver worker: the analysis by name (the worker has the same registry), costed by
+    the size of its report before it runs, and its report checked against its Result model and
+    encoded here, so the server's event loop only passes bytes on."""
     options = newton_options(request.options.given() if request.options else None, limits.solve_time_limit)
     mech = compile_request(document, request.model, request.overrides, limits)
-    return ANALYSES.named(name).run(mech, AnalysisRequest(options, given))
+    analysis = ANALYSES.named(name)
+    typed = analysis.options_of(given)
+    size = analysis.report_size(mech, typed)
+    check_report_size(size, limits)
+    report = analysis.run(mech, AnalysisRequest(options, typed))
+    analysis.Result.model_validate(report)  # a report that does not fit its own model is a bug: a 500
+    body = json_bytes(report)
+    check_response_bytes(len(body), limits, size.pointer)
+    return body
 
 
 def solve_router() -> APIRouter:
@@ -38,14 +62,15 @@ def solve_router() -> APIRouter:
         responses={**ERRORS, 200: {"model": SolveResponse, "description": "The analysis' report"}},
         summary=f"Solve one mechanism: {', '.join(ANALYSES.names())}",
     )
-    async def solve(request: body, services: ServicesDep, _owner: OwnerDep) -> dict:  # type: ignore[valid-type]
+    async def solve(request: body, services: ServicesDep, _owner: OwnerDep) -> Response:  # type: ignore[valid-type]
         """Runs in a solver worker (api.solver_pool). Non-convergence is a 200 with `status` and
-        diagnostics; a document that cannot be modelled is a 422 naming the field."""
+        diagnostics; a document that cannot be modelled is a 422 naming the field; a report
+        larger than the response limit is a 422 before any work, saying what to change."""
         analysis = ANALYSES.named(request.analysis)
         document = request_document(request, services)
         # the common fields travel as a plain DocumentRequest: the request's own class is made here
         common = DocumentRequest.model_construct(**{n: getattr(request, n) for n in DocumentRequest.model_fields})
-        report = await services.solver.call(
+        answer = await services.solver.call(
             _solve,
             analysis.name,
             options_of(analysis, request),
@@ -55,8 +80,9 @@ def solve_router() -> APIRouter:
             time_limit=services.limits.solve_time_limit,
             large=analysis.long,
         )
-        analysis.Result.model_validate(report)  # a report that does not fit its own model is a bug: a 500
-        return report
+        return Response(answer, media_type="application/json")
+
+    add_analysis_job_route(router, body)
 
     @router.get("/analyses", operation_id="list_analyses", summary="The analyses /v1/solve runs, with their options")
     async def analyses() -> list[dict]:

@@ -11,6 +11,9 @@ holds). It says:
   point(mech, p, guess, newton)           one point of a sweep: an EquilibriumResult at the
                                           nondimensional parameters p from the state `guess`
                                           (sweepable analyses only)
+  report_size(mech, options)              how many numbers its report will hold, counted from the
+                                          request before any work (service.costs bounds a
+                                          response and a stored job by it)
 A new analysis is one module with a subclass and one line `ANALYSES.register(...)`.
 """
 
@@ -52,6 +55,29 @@ class AnalysisResult(BaseModel):
     )
     message: str = ""
     warnings: list[str] = Field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class ReportSize:
+    """The numbers a report will hold, counted before any work: `numbers` in all, `terms` saying
+    what they are made of (60 outputs x 100400 frequencies x 2), and the request field that
+    drives them (`pointer`) with what to change there (`change`)."""
+
+    numbers: int
+    terms: str
+    pointer: str
+    change: str
+
+
+def state_numbers(mech: Mechanism) -> int:
+    """A solved state's share of a report: every output, every body displacement (with units)."""
+    return 2 * len(mech.graphs.output_names) + 2 * mech.n_body_coordinates
+
+
+def drawn_numbers(mech: Mechanism) -> int:
+    """One drawn state: x and y of every centre-line point and its stress, and every body's pose."""
+    points: int = sum(count for _, _, count, _, _ in mech.graphs.shape_segments)
+    return 3 * points + 3 * len(mech.structure.bodies)
 
 
 @dataclass(frozen=True)
@@ -97,6 +123,12 @@ class Analysis(ABC):
         except ValidationError as exc:
             first = exc.errors()[0]
             raise MechanismError(pointer_of(tuple(first["loc"])), first["msg"]) from None
+
+    def report_size(self, mech: Mechanism, options: Any) -> ReportSize:
+        """The numbers the report of `mech` under these typed options will hold (before any
+        work). The default is a solved state's; an analysis whose report grows with its options
+        (points, modes, outputs, steps) counts them."""
+        return ReportSize(state_numbers(mech), "the outputs and displacements of one state", "/document", "")
 
     def point(self, mech: Mechanism, p: np.ndarray, guess: np.ndarray, options: NewtonOptions) -> EquilibriumResult:
         raise MechanismError(

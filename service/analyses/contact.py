@@ -12,7 +12,7 @@ import numpy as np
 from pydantic import Field
 
 from models import Mechanism, MechanismError
-from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult
+from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult, ReportSize, drawn_numbers, state_numbers
 from service.analyses.shared_options import Sensitivities
 from service.contact.drawing import state_drawing
 from service.contact.problem import ContactProblem, contact_problem
@@ -130,6 +130,18 @@ class ContactAnalysis(Analysis):
             )
             report["thesis_recovery"] = recovered_forces(mech, state_report(mech, problem, plain_state), report)
         return plain(report)
+
+    def report_size(self, mech: Mechanism, given: ContactAnalysisOptions) -> ReportSize:
+        """A state, its drawing, each pair's state and forces, and the sensitivities asked."""
+        pairs = len(mech.document.contacts.pairs) if mech.document.contacts is not None else 0
+        asked = given.sensitivities
+        sensitivities = 2 * len(asked.outputs) * len(asked.parameters) if asked is not None else 0
+        return ReportSize(
+            2 * state_numbers(mech) + drawn_numbers(mech) + 40 * pairs + sensitivities,
+            f"one state and its drawing, {pairs} pairs" + (", sensitivities" if asked is not None else ""),
+            "/sensitivities/outputs",
+            "ask for fewer sensitivities",
+        )
 
 
 CONTACT = ContactAnalysis()

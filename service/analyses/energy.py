@@ -7,8 +7,8 @@ import numpy as np
 from pydantic import Field
 
 from models import Mechanism, MechanismError
-from service.analyses.base import Analysis, AnalysisOptions
-from service.analyses.equilibrium import EquilibriumReport, solution_report
+from service.analyses.base import Analysis, AnalysisOptions, ReportSize
+from service.analyses.equilibrium import EquilibriumReport, solution_report, solution_size
 from service.requests import under
 from service.solvers.energy import minimize_energy
 from service.solvers.equilibrium import EquilibriumResult
@@ -39,6 +39,9 @@ class EnergyAnalysis(Analysis):
         if options.stiffness and result.converged:
             report["stiffness"] = stiffness_dict(mech, result.z)
         return plain(report)
+
+    def report_size(self, mech: Mechanism, options: EnergyOptions) -> ReportSize:
+        return solution_size(mech, options.stiffness, None)
 
     def point(self, mech: Mechanism, p: np.ndarray, guess: np.ndarray, options: NewtonOptions) -> EquilibriumResult:
         return minimize_energy(mech, options, mech.graphs.energy_form.x_of_state(guess), p)

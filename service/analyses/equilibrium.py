@@ -8,7 +8,7 @@ import numpy as np
 from pydantic import Field
 
 from models import Mechanism, MechanismError
-from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult
+from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult, ReportSize, state_numbers
 from service.analyses.shared_options import Sensitivities, Target
 from service.requests import under
 from service.solvers.equilibrium import EquilibriumResult, newton, solve_equilibrium
@@ -91,6 +91,20 @@ def equilibrium_report(
     return plain(report)
 
 
+def solution_size(mech: Mechanism, stiffness: bool, sensitivities: Sensitivities | None) -> ReportSize:
+    """A state's report with K_T (and its three terms) and sensitivities (values and units)."""
+    body = mech.n_body_coordinates
+    numbers, terms = state_numbers(mech), ["one state"]
+    if stiffness:
+        numbers += 4 * body * body
+        terms.append(f"K_T and its terms over {body} coordinates")
+    if sensitivities is not None:
+        pairs = len(sensitivities.outputs) * len(sensitivities.parameters)
+        numbers += 2 * pairs
+        terms.append(f"{len(sensitivities.outputs)} outputs x {len(sensitivities.parameters)} parameters")
+    return ReportSize(numbers, ", ".join(terms), "/sensitivities/outputs", "ask for fewer sensitivities")
+
+
 class EquilibriumOptions(AnalysisOptions):
     target: Target | None = Field(
         None,
@@ -126,6 +140,9 @@ class EquilibriumAnalysis(Analysis):
 
     def report(self, mech: Mechanism, newton: NewtonOptions, options: EquilibriumOptions) -> dict:
         return equilibrium_report(mech, newton, options.stiffness, options.target, options.sensitivities)
+
+    def report_size(self, mech: Mechanism, options: EquilibriumOptions) -> ReportSize:
+        return solution_size(mech, options.stiffness, options.sensitivities)
 
     def point(self, mech: Mechanism, p: np.ndarray, guess: np.ndarray, options: NewtonOptions) -> EquilibriumResult:
         return newton(mech, p, guess, options)

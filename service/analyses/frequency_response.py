@@ -15,11 +15,12 @@ import numpy as np
 from pydantic import BaseModel, Field, ValidationInfo, field_validator
 
 from models import Mechanism, MechanismError
-from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult
+from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult, ReportSize
+from service.analyses.shared_options import MAX_NAMES, Names
 from service.solvers.newton import NewtonOptions
 from service.solvers.reports import plain
 from service.vibration.eigen import vibration_eigen
-from service.vibration.frf import TWO_PI, Damping, frequency_grid, modal_response, resonances
+from service.vibration.frf import RESONANCE_POINTS, TWO_PI, Damping, frequency_grid, modal_response, resonances
 from service.vibration.harmonic import channel
 from service.vibration.modes import modal_system
 from service.vibration.state import vibration_state
@@ -31,8 +32,11 @@ class FrequencyResponseOptions(AnalysisOptions):
         "displacement's (JSON pointer)",
         examples=["/loads/actuation/force/1"],
     )
-    outputs: list[str] = Field(
-        min_length=1, description="the outputs to watch (names as in a solve's outputs)", examples=[["bodies.input.y"]]
+    outputs: Names = Field(
+        min_length=1,
+        max_length=MAX_NAMES,
+        description="the outputs to watch (names as in a solve's outputs; each once)",
+        examples=[["bodies.input.y"]],
     )
     start: float | None = Field(
         None,
@@ -157,6 +161,20 @@ class FrequencyResponseAnalysis(Analysis):
 
     def report(self, mech: Mechanism, newton: NewtonOptions, options: FrequencyResponseOptions) -> dict[str, Any]:
         return frequency_response_report(mech, newton, options)
+
+    def report_size(self, mech: Mechanism, options: FrequencyResponseOptions) -> ReportSize:
+        """Amplitude and phase per output and frequency: the asked points and up to
+        RESONANCE_POINTS more across each mode's resonance; each mode's peaks per output."""
+        modes, outputs = mech.n_free, len(options.outputs)
+        frequencies = options.points + RESONANCE_POINTS * modes
+        numbers = 2 * outputs * frequencies + frequencies + modes * (1 + 7 * outputs)
+        pointer = "/outputs" if outputs > options.points else "/points"
+        return ReportSize(
+            numbers,
+            f"{outputs} outputs x {frequencies} frequencies x 2 (amplitude, phase)",
+            pointer,
+            "use fewer points or outputs",
+        )
 
     def draw(
         self,

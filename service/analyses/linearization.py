@@ -10,13 +10,14 @@ from typing import Any, Literal
 from pydantic import BaseModel, ConfigDict, Field
 
 from models import Mechanism, MechanismError
-from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult
+from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult, ReportSize, state_numbers
+from service.analyses.shared_options import MAX_NAMES, Names
 from service.requests import under
 from service.solvers.equilibrium import solve_equilibrium
 from service.solvers.newton import NewtonOptions
 from service.solvers.reports import coordinate_units, output_units, plain, stiffness_dict
 from service.vibration.frf import Damping
-from service.vibration.state_space import state_space_model
+from service.vibration.state_space import default_inputs, default_outputs, state_space_model
 
 
 def linearization_report(
@@ -61,16 +62,18 @@ class StateSpaceOptions(BaseModel):
 
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
-    inputs: list[str] | None = Field(
+    inputs: Names | None = Field(
         None,
         min_length=1,
+        max_length=MAX_NAMES,
         description="the inputs, one document unit each: load components (JSON pointers; default: every "
         "force and moment component of the document's loads)",
         examples=[["/loads/hold/force/1"]],
     )
-    outputs: list[str] | None = Field(
+    outputs: Names | None = Field(
         None,
         min_length=1,
+        max_length=MAX_NAMES,
         description="the outputs (names as in a solve's outputs; default: the positions and rotations among the "
         "document's named outputs, else every free body coordinate)",
         examples=[["bodies.tip.y"]],
@@ -114,6 +117,27 @@ class LinearizationAnalysis(Analysis):
 
     def report(self, mech: Mechanism, newton: NewtonOptions, options: LinearizationOptions) -> dict:
         return linearization_report(mech, newton, options.at, options.state_space)
+
+    def report_size(self, mech: Mechanism, options: LinearizationOptions) -> ReportSize:
+        """K_T and its terms; with a state space, A, B, C, D over the kept modes' states, and M,
+        damping, K, G and the shapes over the modal coordinates (at most the unknowns)."""
+        body = mech.n_body_coordinates
+        numbers = state_numbers(mech) + 4 * body * body
+        asked = options.state_space
+        if asked is None:
+            return ReportSize(numbers, f"K_T and its terms over {body} coordinates", "/document", "")
+        n = mech.n_free
+        kept = min(asked.modes or n, n)
+        states = 2 * kept
+        inputs = len(asked.inputs) if asked.inputs is not None else len(default_inputs(mech))
+        outputs = len(asked.outputs) if asked.outputs is not None else len(default_outputs(mech))
+        numbers += (states + outputs) * (states + inputs) + 4 * n * n + n * kept + outputs * inputs + 8 * kept
+        return ReportSize(
+            numbers,
+            f"a state space of {states} states, {inputs} inputs, {outputs} outputs over {n} coordinates",
+            "/state_space/outputs" if outputs >= inputs else "/state_space/inputs",
+            "name fewer outputs or inputs, or keep fewer modes (state_space.modes)",
+        )
 
 
 LINEARIZATION = LinearizationAnalysis()

@@ -11,7 +11,8 @@ import numpy as np
 from pydantic import BaseModel, Field
 
 from models import Mechanism, MechanismError
-from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult
+from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult, ReportSize, drawn_numbers
+from service.analyses.shared_options import MAX_NAMES, Names
 from service.solvers.newton import NewtonOptions
 from service.solvers.reports import plain
 from service.vibration.contact_state import contact_system
@@ -30,8 +31,9 @@ class ModesOptions(AnalysisOptions):
         "state (the frictionless minimum under the document's contacts, its closed contacts held)",
     )
     shapes: bool = Field(True, description="report each mode's shape (bodies and the elements' mass points)")
-    sensitivities: list[str] = Field(
+    sensitivities: Names = Field(
         default_factory=list,
+        max_length=MAX_NAMES,
         description="numeric fields (JSON pointers) to differentiate each frequency by, exactly",
         examples=[["/sections/rod/h"]],
     )
@@ -135,6 +137,23 @@ class ModesAnalysis(Analysis):
 
     def report(self, mech: Mechanism, newton: NewtonOptions, options: ModesOptions) -> dict[str, Any]:
         return modes_analysis_report(mech, newton, options)
+
+    def report_size(self, mech: Mechanism, options: ModesOptions) -> ReportSize:
+        """Per mode its figures (frequencies, effective masses, energy shares per element and
+        body, sensitivities) and, with shapes, every coordinate and mass point and its centre
+        lines; the drawn state once."""
+        count = min(options.count, mech.n_free)
+        owners = len(mech.document.elements) + len(mech.structure.bodies)
+        per_mode = 12 + owners + len(options.sensitivities)
+        drawn = drawn_numbers(mech)
+        if options.shapes:
+            per_mode += 3 * mech.n_free + drawn
+        return ReportSize(
+            count * per_mode + drawn,
+            f"{count} modes x {per_mode} numbers",
+            "/count",
+            "ask for fewer modes, or leave out their shapes (shapes: false)",
+        )
 
     def draw(
         self,

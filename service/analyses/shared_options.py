@@ -2,9 +2,27 @@
 
 from __future__ import annotations
 
-from pydantic import Field
+from typing import Annotated, Any
+
+from pydantic import BeforeValidator, Field
 
 from service.analyses.base import AnalysisOptions
+
+MAX_NAMES = 1000  # distinct outputs or fields one request may watch
+
+
+def _distinct(value: Any) -> Any:
+    """A name given twice is watched once: duplicates are dropped, first places kept. A report
+    keys its values by name, so 500 copies of one output once computed 500 columns (2.5 GB in a
+    worker) to answer one."""
+    if isinstance(value, list) and all(isinstance(item, str) for item in value):
+        return list(dict.fromkeys(value))
+    return value
+
+
+Names = Annotated[list[str], BeforeValidator(_distinct)]
+"""A list of output names or JSON pointers, each kept once (its limits, checked after, count
+distinct names)."""
 
 
 class Target(AnalysisOptions):
@@ -25,7 +43,7 @@ class Sensitivities(AnalysisOptions):
     """Exact derivatives of outputs with respect to numeric fields at the solution (with a
     target: the target's field follows, and may be named among the outputs)."""
 
-    parameters: list[str] = Field(
+    parameters: Names = Field(
         min_length=1, max_length=64, description="JSON pointers of numeric fields", examples=[["/sections/flexure/h"]]
     )
-    outputs: list[str] = Field(min_length=1, max_length=256, description="output names", examples=[["end_effector.x"]])
+    outputs: Names = Field(min_length=1, max_length=256, description="output names", examples=[["end_effector.x"]])

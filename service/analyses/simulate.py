@@ -5,6 +5,7 @@ response, so its steps are bounded (SYNC_STEPS)."""
 from __future__ import annotations
 
 import copy
+import math
 from typing import Any
 
 from pydantic import Field, JsonValue, create_model
@@ -13,9 +14,9 @@ from pydantic.fields import FieldInfo
 from models import Mechanism
 from models.documents.fields import StrictModel
 from models.documents.simulation_spec import IMPACT_SCHEMES, SimulateSpec
-from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult
+from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult, ReportSize, drawn_numbers, state_numbers
 from service.deadline import ends_after, passed
-from service.dynamics.run import run_simulation, simulation_spec
+from service.dynamics.run import run_simulation, simulation_spec, wanted_outputs
 from service.impacts.run import run_impacts
 from service.solvers.newton import NewtonOptions
 from service.solvers.reports import plain
@@ -98,6 +99,30 @@ class SimulateAnalysis(Analysis):
             report["status"] = "time_limit"
             report["message"] += f" (the time limit of {limit:g} s; a simulation job has more time)"
         return plain(report)
+
+    def report_size(self, mech: Mechanism, options: SimulateOptions) -> ReportSize:
+        """Per kept state its time, outputs, constraint and motion forces, energies and (with
+        shapes) centre lines; link dynamics keep every `every`-th of at most SYNC_STEPS steps, an
+        impact run at most its max_points (and the states about each contact's onset and end)."""
+        given: dict[str, Any] = options.simulate.model_dump(exclude_none=True) if options.simulate is not None else {}
+        spec = simulation_spec(mech, given)
+        if spec.until is None:
+            return super().report_size(mech, options)  # the run refuses it, naming the field
+        if spec.scheme in IMPACT_SCHEMES:
+            kept = 2 * min(spec.max_points, SYNC_KEPT)
+            outputs = len(spec.outputs) if spec.outputs is not None else len(mech.graphs.output_names)
+        else:
+            steps = SYNC_STEPS if spec.adaptive else min(SYNC_STEPS, math.ceil(spec.until / spec.step))
+            kept = steps // spec.every + 2
+            outputs = len(wanted_outputs(mech, spec))
+        per_state = 8 + outputs + mech.n_free + (drawn_numbers(mech) if spec.shapes else 0)
+        return ReportSize(
+            kept * per_state + state_numbers(mech),
+            f"{kept} kept states x {per_state} numbers",
+            "/simulate/every" if not spec.shapes else "/simulate/shapes",
+            "keep fewer states (a larger `every`, a shorter `until`)"
+            + (" or leave out the shapes (shapes: false)" if spec.shapes else ""),
+        )
 
 
 SIMULATE = SimulateAnalysis()

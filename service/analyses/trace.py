@@ -25,7 +25,7 @@ from pydantic import Field
 
 from models import Mechanism, MechanismError
 from models.units import quantity_to_si
-from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult
+from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult, ReportSize, drawn_numbers, state_numbers
 from service.deadline import ends_after, passed
 from service.drawings.drawing import state_frame
 from service.requests import under
@@ -202,6 +202,19 @@ class TraceAnalysis(Analysis):
 
     def report(self, mech: Mechanism, newton: NewtonOptions, options: TraceOptions) -> dict:
         return trace_report(mech, newton, options.trace)
+
+    def report_size(self, mech: Mechanism, options: TraceOptions) -> ReportSize:
+        """Up to max_points points, each with every output by name and as a column, and the body
+        stiffness' eigenvalues; up to MAX_FRAMES drawn states."""
+        points = options.trace.max_points if options.trace is not None else DEFAULT_POINTS
+        per_point = 4 + 3 * len(mech.graphs.output_names) + mech.n_body_coordinates
+        frames = min(points, MAX_FRAMES) * drawn_numbers(mech)
+        return ReportSize(
+            points * per_point + frames + state_numbers(mech),
+            f"{points} points x {per_point} numbers, {min(points, MAX_FRAMES)} drawn states",
+            "/trace/max_points",
+            "allow fewer points (max_points) or take longer steps",
+        )
 
 
 TRACE = TraceAnalysis()

@@ -90,15 +90,18 @@ def modal_response(
     )
 
 
+RESONANCE_POINTS = 40  # frequencies added across each resonance in the range
+
+
 def frequency_grid(start: float, stop: float, points: int, resonances: list[tuple[float, float]]) -> np.ndarray:
-    """Hz: `points` log-spaced from start to stop, and 40 more across each resonance (f_k, zeta_k)
-    in the range (+-3 bandwidths, or +-0.1 % undamped)."""
+    """Hz: `points` log-spaced from start to stop, and RESONANCE_POINTS more across each resonance
+    (f_k, zeta_k) in the range (+-3 bandwidths, or +-0.1 % undamped)."""
     grid = [np.geomspace(start, stop, points)]
     for f_k, zeta in resonances:
         if start < f_k < stop:
             half = 3 * zeta if zeta > 0 else 1e-3
             grid.append(
-                f_k * np.linspace(max(1 - half, 0.5), 1 + half, 40)
+                f_k * np.linspace(max(1 - half, 0.5), 1 + half, RESONANCE_POINTS)
             )  # even: f_k itself left out (undamped, infinite)
     f = np.unique(np.concatenate(grid))
     return f[(f >= start) & (f <= stop)]

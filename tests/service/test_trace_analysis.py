@@ -112,12 +112,12 @@ def test_the_time_limit_stops_a_path_with_its_points_so_far(api_server):
             "example": "snap_through_arch",
             "analysis": "trace",
             "options": {"time_limit": 0.5},
-            "trace": {"path": LOAD, "stop": STOP, "step": 1e-4, "max_points": 100_000},
+            "trace": {"path": LOAD, "stop": STOP, "step": 1e-4, "max_points": 4000},  # its report fits an answer
         },
     )
     answer = r.json()
     assert r.status_code == 200 and answer["status"] == "time_limit" and answer["path_status"] == "stopped"
-    assert answer["message"].startswith("stopped after ") and 1 <= len(answer["values"]) < 100_000
+    assert answer["message"].startswith("stopped after ") and 1 <= len(answer["values"]) < 4000
     assert answer["values"][-1] > -1.0  # 1e-4 N steps: nowhere near the stop in half a second
 
 
