@@ -90,7 +90,7 @@ def options_of(analysis: Analysis, request: DocumentRequest) -> AnalysisOptions:
 
 
 def documented(schema: dict) -> dict:
-    """The OpenAPI document with /v1/solve's body named SolveRequest and its discriminator
+    """The OpenAPI document with /v1/solve's body (and the analysis job's) named SolveRequest and its discriminator
     mapped (pydantic leaves a run-time tag without one), and each analysis' result model among
     the 200 answers' schemas."""
     post = schema.get("paths", {}).get("/v1/solve", {}).get("post")
@@ -104,7 +104,12 @@ def documented(schema: dict) -> dict:
         "title": "SolveRequest",
         "discriminator": {"propertyName": "analysis", "mapping": mapping},
     }
-    post["requestBody"]["content"]["application/json"]["schema"] = {"$ref": "#/components/schemas/SolveRequest"}
+    for path in ("/v1/solve", "/v1/analysis-jobs"):  # the analysis job takes the same body
+        taking = schema["paths"].get(path, {}).get("post")
+        if taking is not None:
+            taking["requestBody"]["content"]["application/json"]["schema"] = {
+                "$ref": "#/components/schemas/SolveRequest"
+            }
     results = {}
     for a in ANALYSES:
         result = a.Result.model_json_schema(ref_template="#/components/schemas/{model}")

@@ -81,7 +81,8 @@ def describe(kind: JobKind) -> dict[str, Any]:
 def job_router() -> APIRouter:
     router = APIRouter(prefix="/v1", tags=["jobs"], route_class=ParsedBodyRoute)
     for kind in job_kinds().values():
-        _add_route(router, kind)
+        if not getattr(kind, "own_route", False):  # the analysis job takes /v1/solve's body: api.routers.solve
+            _add_route(router, kind)
 
     @router.get("/job-kinds", operation_id="list_job_kinds", summary="The job kinds, with their options")
     async def job_kind_list() -> list[dict[str, Any]]:

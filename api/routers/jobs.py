@@ -121,11 +121,18 @@ async def get_job_result(
     job_id: str = JobId,
     offset: int = Query(0, ge=0, le=10**9, description="points to skip (in index order)"),
     limit: int = Query(PAGE, ge=1, le=MAX_PAGE, description="points in the page"),
-) -> JobResultResponse:
+) -> Response:
     """A sweep's points come a page at a time (`page` says which; ask again with offset +
     limit while page.returned == limit); an optimization's result is whole."""
     job = await run_in_threadpool(_owned, services, job_id, owner)
-    return await run_in_threadpool(_result, services, job, offset, limit)
+    encoded = await run_in_threadpool(_encoded_result, services, job, offset, limit)
+    return Response(encoded, media_type="application/json")
+
+
+def _encoded_result(services, job: Job, offset: int, limit: int) -> bytes:
+    """The result read, checked and encoded in a thread: a stored result may be megabytes (an
+    analysis job's report), which the event loop must never validate or encode."""
+    return _result(services, job, offset, limit).model_dump_json(by_alias=True).encode("utf-8")
 
 
 @router.get(

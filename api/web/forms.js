@@ -76,6 +76,7 @@ export function choices(analyses, openapi) {
     const post = operations.post;
     if (!post || !post.responses || !post.responses["202"]) continue;
     const body = resolved(post.requestBody.content["application/json"].schema, openapi);
+    if (!body.properties) continue; // a union: the analysis job takes /v1/solve's body, whose analyses the menu has
     const id = (post.operationId || path.split("/").pop()).replace(/^create_/, "");
     jobs.push({ id: `job:${id}`, label: `${id.replace(/_/g, " ")} (job)`, kind: "job", job: id, endpoint: path,
                 summary: post.summary || "", fields: fieldsOf(body, openapi) });

@@ -36,6 +36,7 @@ def job_kinds() -> dict[str, JobKind]:
 
 @lru_cache(maxsize=1)
 def _built_in() -> dict[str, JobKind]:
+    from service.jobs.analysis import ANALYSIS_JOB
     from service.jobs.contact import CONTACT
     from service.jobs.export import EXPORT
     from service.jobs.impact_study import IMPACT_STUDY
@@ -52,6 +53,7 @@ def _built_in() -> dict[str, JobKind]:
             SIMULATION,
             IMPACT_STUDY,
             EXPORT,
+            ANALYSIS_JOB,
         )
     }
 

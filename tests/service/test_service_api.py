@@ -174,6 +174,7 @@ def test_openapi_operation_ids_are_stable(api_server):
         "create_simulation",
         "create_impact_study",
         "create_export",
+        "create_analysis_job",
         "draw",
         "parse_document",
         "upgrade_document",
