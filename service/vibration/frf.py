@@ -21,6 +21,10 @@ from service.vibration.eigen import Eigen
 TWO_PI = 2 * math.pi
 
 
+RESONANCE_POINTS = 40  # frequencies added across each resonance in the range
+FREQUENCY_BLOCK = 4096  # frequencies evaluated at once (memory: modes x block complex numbers, a few times)
+
+
 @dataclass(frozen=True)
 class Damping:
     ratio: float = 0.0  # zeta, on every mode
@@ -50,8 +54,15 @@ class ModalResponse:
     dragged: np.ndarray  # modes: alpha Phi^T M x_qs, the forcing of alpha's drag on a carried motion, times -i omega
 
     def at(self, omega: np.ndarray) -> np.ndarray:
-        """H (outputs x frequencies) at the circular frequencies omega (rad/s)."""
+        """H (outputs x frequencies) at the circular frequencies omega (rad/s), a block of
+        frequencies at a time: a modes x frequencies complex array of 400 modes and 100000
+        frequencies is 0.64 GB, and the expression makes several."""
         omega = np.asarray(omega, dtype=float)
+        if omega.size <= FREQUENCY_BLOCK:
+            return self._at(omega)
+        return np.hstack([self._at(block) for block in np.array_split(omega, -(-omega.size // FREQUENCY_BLOCK))])
+
+    def _at(self, omega: np.ndarray) -> np.ndarray:
         denominator = self.omega_squared[:, None] - omega[None, :] ** 2 + 1j * omega[None, :] * self.rates[:, None]
         forcing = (
             self.forcing[:, None]
@@ -88,9 +99,6 @@ def modal_response(
         eigen.left.T @ inertial,
         damping.mass * (eigen.left.T @ carried),
     )
-
-
-RESONANCE_POINTS = 40  # frequencies added across each resonance in the range
 
 
 def frequency_grid(start: float, stop: float, points: int, resonances: list[tuple[float, float]]) -> np.ndarray:

@@ -53,6 +53,21 @@ def test_a_damped_mass_on_a_spring_responds_as_the_closed_form():
     assert np.sum(np.abs(f - omega_n / (2 * math.pi)) < 3 * zeta * omega_n / (2 * math.pi)) >= 40  # refined there
 
 
+def test_a_response_over_many_blocks_of_frequencies_is_the_closed_form_at_each():
+    """20000 points are evaluated a block of FREQUENCY_BLOCK at a time: every one as exact."""
+    from service.vibration.frf import FREQUENCY_BLOCK
+
+    zeta = 0.02
+    report = respond(
+        shaken(), input="/loads/shake/force/0", outputs=["bodies.carriage.x"], damping_ratio=zeta, points=20_000
+    )
+    f = np.array(report["frequencies"])
+    assert len(f) > 4 * FREQUENCY_BLOCK
+    omega = 2 * math.pi * f
+    exact = 1 / (K - M * omega**2 + 2j * zeta * math.sqrt(K * M) * omega)
+    assert report["responses"]["bodies.carriage.x"]["amplitude"] == pytest.approx(np.abs(exact), rel=1e-9)
+
+
 def test_rayleighs_mass_term_damps_as_a_dashpot_of_alpha_m():
     alpha = 3.0
     report = respond(
