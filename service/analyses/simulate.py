@@ -14,9 +14,9 @@ from pydantic.fields import FieldInfo
 from models import Mechanism
 from models.documents.fields import StrictModel
 from models.documents.simulation_spec import IMPACT_SCHEMES, SimulateSpec
-from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult, ReportSize, drawn_numbers, state_numbers
+from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult, ReportSize, state_numbers
 from service.deadline import ends_after, passed
-from service.dynamics.run import run_simulation, simulation_spec, wanted_outputs
+from service.dynamics.run import kept_state_numbers, run_simulation, simulation_spec
 from service.impacts.run import run_impacts
 from service.solvers.newton import NewtonOptions
 from service.solvers.reports import plain
@@ -108,14 +108,14 @@ class SimulateAnalysis(Analysis):
         spec = simulation_spec(mech, given)
         if spec.until is None:
             return super().report_size(mech, options)  # the run refuses it, naming the field
-        if spec.scheme in IMPACT_SCHEMES:
+        if spec.scheme in IMPACT_SCHEMES:  # rigid bodies: their own outputs, a few of each body
             kept = 2 * min(spec.max_points, SYNC_KEPT)
             outputs = len(spec.outputs) if spec.outputs is not None else len(mech.graphs.output_names)
+            per_state = 8 + 2 * outputs + mech.n_free
         else:
             steps = SYNC_STEPS if spec.adaptive else min(SYNC_STEPS, math.ceil(spec.until / spec.step))
             kept = steps // spec.every + 2
-            outputs = len(wanted_outputs(mech, spec))
-        per_state = 8 + outputs + mech.n_free + (drawn_numbers(mech) if spec.shapes else 0)
+            per_state = kept_state_numbers(mech, spec)
         return ReportSize(
             kept * per_state + state_numbers(mech),
             f"{kept} kept states x {per_state} numbers",

@@ -250,6 +250,17 @@ def shapes_of(mech: Mechanism, states: np.ndarray, parameters: list) -> list[dic
     return out
 
 
+def kept_state_numbers(mech: Mechanism, spec: SimulateSpec) -> int:
+    """The numbers records() keeps of one state: its time, the wanted outputs, the constraint
+    forces, the prescribed motions' reactions and varying fields, six energies and (with shapes)
+    every drawn centre-line point."""
+    numbers = 7 + len(wanted_outputs(mech, spec)) + len(mech.graphs.energy_form.equality_names)
+    numbers += 2 * len(spec.histories)  # a varying field's value, a prescribed motion's reaction
+    if spec.shapes:
+        numbers += 2 * sum(count for _, _, count, _, _ in mech.graphs.shape_segments)
+    return numbers
+
+
 def wanted_outputs(mech: Mechanism, spec: SimulateSpec) -> list[str]:
     names = mech.graphs.output_names
     if spec.outputs is None:

@@ -28,6 +28,7 @@ from service.dynamics.run import (
     check_masses,
     check_scheme,
     check_steps,
+    kept_state_numbers,
     records,
     scheme_of,
     scheme_summary,
@@ -105,10 +106,7 @@ class SimulationJob(InOrder):
         read_histories(mech, simulate.histories, simulate.until, "/simulate/histories")
         outputs = wanted_outputs(mech, simulate)
         kept = steps // simulate.every + 2
-        per_state = len(outputs) + len(mech.graphs.energy_form.equality_names) + 7  # time and six energies
-        if simulate.shapes:
-            per_state += 2 * sum(count for _, _, count, _, _ in mech.graphs.shape_segments)
-        check_result_size(kept, per_state, limits, "/simulate/every")
+        check_result_size(kept, kept_state_numbers(mech, simulate), limits, "/simulate/every")
         if simulate.adaptive:
             windows = WINDOWS
             span = simulate.until / windows
