@@ -16,6 +16,7 @@ from fastapi_offline import FastAPIOffline
 
 from api import body_parsing
 from api.analysis_requests import documented
+from api.answer_cache import AnswerCache
 from api.errors import install_error_handlers
 from api.headers import SecurityHeaders
 from api.limits import BodySizeLimit
@@ -108,6 +109,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     for module in (jobs, examples, drawings, health):
         app.include_router(module.router)
     mount_workbench(app)
+    app.add_middleware(AnswerCache, max_bytes=settings.answer_cache_bytes)  # inside the body guard: it reads the body
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_request_bytes, read_timeout=settings.request_read_timeout)
     app.add_middleware(SecurityHeaders)  # outermost: even the body guard's answers carry them
     _list_analyses_in_schema(app)

@@ -19,6 +19,7 @@ from __future__ import annotations
 import asyncio
 import time
 
+from api.answer_cache import RAW_BODY
 from api.body_parsing import parse_body
 from api.errors import error_response
 from api.parsed_route import PARSED_BODY
@@ -96,6 +97,7 @@ class BodySizeLimit:
             if kind == "malformed_json":
                 return await error_response(400, "malformed_json", value)(scope, receive, send)
             scope[PARSED_BODY] = value
+            scope[RAW_BODY] = body  # the answer cache's key (api.answer_cache)
         replayed = False
 
         async def replay():

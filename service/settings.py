@@ -67,6 +67,9 @@ class Settings(BaseSettings):
     max_response_bytes: int = Field(
         20_000_000, ge=100_000, description="bytes of JSON in one /v1/solve answer (larger reports run as jobs)"
     )
+    answer_cache_bytes: int = Field(
+        64_000_000, ge=0, description="memory for /v1/solve answers kept for the same request and key (0: none)"
+    )
     solve_time_limit: float = Field(10.0, gt=0, description="seconds of Newton per /v1/solve")
     job_time_limit: float = Field(3600.0, gt=0, description="seconds of wall time per job")
     chunk_size: int = Field(8, ge=1, le=10_000, description="points per task sent to a worker")

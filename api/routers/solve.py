@@ -8,9 +8,10 @@ client's methods, the workbench's forms and generated clients are made from."""
 
 import json
 
-from fastapi import APIRouter, Response
+from fastapi import APIRouter, Request, Response
 
 from api.analysis_requests import options_of, solve_request_type
+from api.answer_cache import REPEATABLE
 from api.deps import OwnerDep, ServicesDep
 from api.documents import request_document
 from api.parsed_route import ParsedBodyRoute
@@ -22,6 +23,8 @@ from service.costs import check_report_size, check_response_bytes
 from service.requests import Limits, compile_request, newton_options
 from service.solvers.reports import plain
 
+REPEATABLE_STATUSES = ("converged", "finished")  # a time limit's or a failure's report may differ next time
+
 
 def json_bytes(report: dict) -> bytes:
     """A report as the answer's body: compact UTF-8 JSON, as FastAPI's JSONResponse writes it."""
@@ -32,10 +35,13 @@ def json_bytes(report: dict) -> bytes:
     return text.encode("utf-8")
 
 
-def _solve(name: str, given: AnalysisOptions, request: DocumentRequest, document: dict, limits: Limits) -> bytes:
+def _solve(
+    name: str, given: AnalysisOptions, request: DocumentRequest, document: dict, limits: Limits
+) -> tuple[bytes, bool]:
     """In a solver worker: the analysis by name (the worker has the same registry), costed by
     the size of its report before it runs, and its report checked against its Result model and
-    encoded here, so the server's event loop only passes bytes on."""
+    encoded here, so the server's event loop only passes bytes on; and whether the same request
+    would give the same report (converged or finished: api.answer_cache may keep it)."""
     options = newton_options(request.options.given() if request.options else None, limits.solve_time_limit)
     mech = compile_request(document, request.model, request.overrides, limits)
     analysis = ANALYSES.named(name)
@@ -46,7 +52,7 @@ def _solve(name: str, given: AnalysisOptions, request: DocumentRequest, document
     analysis.Result.model_validate(report)  # a report that does not fit its own model is a bug: a 500
     body = json_bytes(report)
     check_response_bytes(len(body), limits, size.pointer)
-    return body
+    return body, report.get("status") in REPEATABLE_STATUSES
 
 
 def solve_router() -> APIRouter:
@@ -62,7 +68,7 @@ def solve_router() -> APIRouter:
         responses={**ERRORS, 200: {"model": SolveResponse, "description": "The analysis' report"}},
         summary=f"Solve one mechanism: {', '.join(ANALYSES.names())}",
     )
-    async def solve(request: body, services: ServicesDep, _owner: OwnerDep) -> Response:  # type: ignore[valid-type]
+    async def solve(request: body, services: ServicesDep, _owner: OwnerDep, http: Request) -> Response:  # type: ignore[valid-type]
         """Runs in a solver worker (api.solver_pool). Non-convergence is a 200 with `status` and
         diagnostics; a document that cannot be modelled is a 422 naming the field; a report
         larger than the response limit is a 422 before any work, saying what to change."""
@@ -70,7 +76,7 @@ def solve_router() -> APIRouter:
         document = request_document(request, services)
         # the common fields travel as a plain DocumentRequest: the request's own class is made here
         common = DocumentRequest.model_construct(**{n: getattr(request, n) for n in DocumentRequest.model_fields})
-        answer = await services.solver.call(
+        answer, repeatable = await services.solver.call(
             _solve,
             analysis.name,
             options_of(analysis, request),
@@ -80,6 +86,7 @@ def solve_router() -> APIRouter:
             time_limit=services.limits.solve_time_limit,
             large=analysis.long,
         )
+        http.scope[REPEATABLE] = repeatable
         return Response(answer, media_type="application/json")
 
     add_analysis_job_route(router, body)
