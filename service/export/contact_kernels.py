@@ -101,9 +101,10 @@ def _best_line(problem, v, gaps, rows: list[int], first: int):
 
 
 def contact_functions(mech: Mechanism, names: tuple[str, ...], base: str):
-    """(step (v, p) -> (dv, norm), outputs (v, p) -> y in document units, output names, units,
-    n_v, start (p) -> v0: undeformed and apart, each separating axis at its guess) of the contact
-    state; None without contacts; a str (why) when it is too large."""
+    """(step (v, p) -> (dv, norm), outputs (v, p) -> y in document units named `names` (as
+    service.export.plan.contact_outputs chose them), units, n_v, start (p) -> v0: undeformed and
+    apart, each separating axis at its guess) of the contact state; None without contacts; a str
+    (why) when it is too large."""
     if mech.structure.contacts is None or not mech.structure.contacts.pairs:
         return None
     problem = _checked_problem(mech)
@@ -118,7 +119,7 @@ def contact_functions(mech: Mechanism, names: tuple[str, ...], base: str):
     vm, pm = ca.MX.sym("v", v.numel()), ca.MX.sym("p", p.numel())
     Fm, Jm = system(vm, pm)
     step = ca.Function(f"{base}_contact_step", [vm, pm], [*direction(Fm, Jm)], ["v", "p"], ["dv", "norm"])
-    chosen = tuple(names) or _default_outputs(mech, problem)
+    chosen = tuple(names)
     missing = [n for n in chosen if n not in problem.output_names]
     if missing:
         raise MechanismError(
@@ -134,10 +135,3 @@ def contact_functions(mech: Mechanism, names: tuple[str, ...], base: str):
     start = ca.vertcat(x, problem.axes_guess(x, pm), ca.MX.zeros(problem.n_eq + problem.n_in))
     first = ca.Function(f"{base}_contact_start", [pm], [ca.densify(start)], ["p"], ["v0"])
     return step, outputs, chosen, tuple(mech.doc_unit(k) for k in kinds), v.numel(), first
-
-
-def _default_outputs(mech: Mechanism, problem) -> tuple[str, ...]:
-    path = mech.document.contacts.path if mech.document.contacts is not None else None
-    if path is not None and path.outputs:
-        return tuple(path.outputs)
-    return tuple(n for n in problem.output_names if n.startswith("contacts."))

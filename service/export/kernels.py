@@ -146,7 +146,7 @@ def _contact(mech: Mechanism, plan: ExportPlan, base: str) -> dict:
     if choice == "no":
         return {}
     try:
-        found = contact_functions(mech, plan.options.contact_outputs, base)
+        found = contact_functions(mech, tuple(c.name for c in plan.contact_outputs), base)
     except MechanismError as exc:
         if choice == "yes" or exc.pointer == "/contact_outputs":
             raise

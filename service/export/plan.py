@@ -1,13 +1,21 @@
 """What an export holds: the inputs a caller sets, the outputs it reads, the target task and
-the iteration limits; every choice checked against the mechanism, problems named by field."""
+the iteration limits; every choice checked against the mechanism, problems named by field.
+
+The C names come from the document's names by one mangling (service.export.encoders.c_identifier),
+which is not injective: two inputs, outputs or contact outputs that meet in one C name (or in a
+macro of the header's own), and a library name that is a file, target or header of the build,
+are refused here, naming the fields."""
 
 from __future__ import annotations
 
 import math
 import re
 from dataclasses import dataclass, field
+from functools import cache
+from importlib.resources import files
 
 from models import Mechanism, MechanismError
+from service.export.encoders import c_identifier
 
 _DEFAULT_RANGES = {  # a field's own check (models.graph.collector) as (low, high, low excluded)
     "positive": (0.0, math.inf, True),
@@ -70,6 +78,13 @@ class Output:
 
 
 @dataclass(frozen=True)
+class ContactOutput:
+    name: str
+    c_name: str
+    field: str  # the pointer that chose it: /contact_outputs/k, or the document's contact path or pair
+
+
+@dataclass(frozen=True)
 class Target:
     output: Output
     input: int  # index into the plan's inputs: the input the target task solves for
@@ -84,12 +99,87 @@ class ExportPlan:
     outputs: tuple[Output, ...]
     target: Target | None
     options: ExportOptions
+    contact_outputs: tuple[ContactOutput, ...] = ()  # of the contact task, when the document has contact pairs
 
 
-def c_identifier(text: str) -> str:
-    """A C identifier from a name or pointer: letters, digits and underscores, lower case."""
-    out = re.sub(r"[^0-9a-zA-Z]+", "_", text).strip("_").lower()
-    return out if out and not out[0].isdigit() else f"x_{out}"
+MAX_NAME = 40  # characters of the library's name
+_OWN_FILES = ("main", "bench", "check", "example")  # main.c, bench.c, check.c; the programs example, bench
+_BUILD_TARGETS = (  # make's and CMake's own targets (CMake refuses a library named as one)
+    "all clean install test help preinstall package package_source edit_cache rebuild_cache "
+    "list_install_components depend"
+).split()
+_SYSTEM_LIBRARIES = ("c", "m", "pthread", "dl", "rt")  # linked, or linked implicitly
+# <name>.h in a folder on the include path (CMake's target_include_directories) would stand for
+# these headers: the C standard's and the POSIX ones the library, its programs and libc include
+_SYSTEM_HEADERS = (
+    "assert complex ctype errno fenv float inttypes iso646 limits locale math setjmp signal stdalign "
+    "stdarg stdatomic stdbool stddef stdint stdio stdlib stdnoreturn string tgmath threads time uchar "
+    "wchar wctype pthread sched unistd features alloca endian strings"
+).split()
+_HELPERS = ("solve", "casadi")  # solve_equilibrium is the driver's own; casadi_* the kernels' helpers
+
+
+def _reserved(name: str) -> str | None:
+    """Why `name` cannot name the library (None: it can)."""
+    if name in _OWN_FILES:
+        return f"'{name}' is a file of the export's own ({name}.c or the program {name})"
+    if name in _BUILD_TARGETS:
+        return f"'{name}' is a target of make or CMake"
+    if name in _SYSTEM_LIBRARIES:
+        return f"'{name}' is a system library the build links (lib{name})"
+    if name in _SYSTEM_HEADERS:
+        return f"{name}.h would stand for the system header <{name}.h> on an include path"
+    if name in _HELPERS:
+        return f"'{name}' would give functions named as the library's internal ones ({name}_...)"
+    return None
+
+
+def _library_name(mech: Mechanism, given: str) -> str:
+    """The library's C name (its functions' and files' prefix): the given name mangled, at most
+    MAX_NAME characters; without one, the document's name's (or "mechanism" when that gives no
+    usable name: a title in another script, or one of the reserved names)."""
+    name = c_identifier(given or mech.document.name or "mechanism")[:MAX_NAME].rstrip("_")
+    why = _reserved(name)
+    if not given:
+        return "mechanism" if why or not re.search("[0-9A-Za-z]", mech.document.name) else name
+    if not re.search("[0-9A-Za-z]", given):
+        raise MechanismError(
+            "/name", f"'{given}' has no ASCII letter or digit to make the library's C name of: give one that has"
+        )
+    if why:
+        raise MechanismError("/name", f"{why}: choose another name for the library")
+    return name
+
+
+@cache
+def _header_suffixes() -> frozenset[str]:
+    """The header's own macros after <NAME>_ (OK, OUT_OF_RANGE, N_INPUTS, ...), read from its template."""
+    text = (files("service.export") / "templates" / "header.h.in").read_text()
+    return frozenset(re.findall(r"#define @UPPER@_(\w+)", text))
+
+
+def _distinct(items: list[tuple[str, str, str]], macro: str) -> None:
+    """items: (field, name, C name) of one namespace (inputs, outputs or contact outputs), whose
+    header macros are <NAME>_<macro>_<C NAME>. Two that meet in one C name, or one whose macro
+    is one of the header's own, are a MechanismError naming both fields."""
+    own = _header_suffixes()
+    seen: dict[str, tuple[str, str]] = {}
+    for where, name, c_name in items:
+        suffix = f"{macro}_{c_name.upper()}"
+        if suffix in own:
+            raise MechanismError(
+                where, f"'{name}' becomes the macro <NAME>_{suffix}, one of the header's own: rename it"
+            )
+        if c_name in seen:
+            first_where, first = seen[c_name]
+            problem = f"'{name}' and '{first}'{_at(first_where, first)} both become the C name {c_name}: rename one"
+            other = f"'{first}' and '{name}'{_at(where, name)} both become the C name {c_name}: rename one"
+            raise MechanismError(where, problem, ((where, problem), (first_where, other)))
+        seen[c_name] = (where, name)
+
+
+def _at(where: str, name: str) -> str:
+    return "" if where == name else f" ({where})"
 
 
 _POSE = re.compile(r"^/contacts/objects/[^/]+/(centre/[01]|angle)$")
@@ -133,18 +223,30 @@ def _input(mech: Mechanism, pointer: str, where: str, given: tuple[float, float]
     )
 
 
-def _outputs(mech: Mechanism, chosen: tuple[str, ...]) -> list[Output]:
+def _outputs(mech: Mechanism, chosen: tuple[str, ...]) -> list[tuple[str, Output]]:
+    """(field, output) of the chosen outputs: field /outputs/k of the given ones; of the default
+    ones (the document's named outputs, else the free body coordinates), the document's output
+    or body they belong to."""
     names = mech.graphs.output_names
     if not chosen:
-        own = tuple(n for n in names if not n.startswith(("bodies.", "reactions.", "elements.")) and n != "energy")
-        chosen = own or tuple(mech.structure.coordinate_name(b, c).replace("/", ".") for b, c in mech.structure.free)
-        chosen = tuple(n if n in names else f"bodies.{n}" for n in chosen)
+        own = [n for n in names if not n.startswith(("bodies.", "reactions.", "elements.")) and n != "energy"]
+        if own:  # an output's name has no '.': the part before the first one is its name
+            return [(f"/outputs/{n.split('.')[0]}", _output(mech, n)) for n in own]
+        bodies = mech.structure.bodies
+        return [
+            (f"/bodies/{bodies[b]}", _output(mech, _as_output(names, mech.structure.coordinate_name(b, c))))
+            for b, c in mech.structure.free
+        ]
     out = []
     for k, name in enumerate(chosen):
         if name not in names:
             raise MechanismError(f"/outputs/{k}", f"unknown output '{name}' (outputs: {', '.join(names[:12])}, ...)")
-        out.append(_output(mech, name))
+        out.append((f"/outputs/{k}", _output(mech, name)))
     return out
+
+
+def _as_output(names: tuple[str, ...], coordinate: str) -> str:
+    return coordinate if coordinate in names else f"bodies.{coordinate}"
 
 
 def _output(mech: Mechanism, name: str) -> Output:
@@ -170,19 +272,43 @@ def _target(mech: Mechanism, options: ExportOptions, inputs: list[Input], output
     return Target(_output(mech, output), by[0], goal)
 
 
+def contact_outputs(mech: Mechanism, options: ExportOptions) -> tuple[ContactOutput, ...]:
+    """The contact task's outputs: the given ones, else the document's contact path outputs,
+    else every pair's results (service.contact.outputs.PAIR_OUTPUTS) and any output of the
+    structure's named "contacts." (as the contact problem names them); none without pairs or
+    with contact "no"."""
+    from service.contact.outputs import PAIR_OUTPUTS
+
+    structure = mech.structure.contacts
+    if options.contact == "no" or structure is None or not structure.pairs:
+        return ()
+    path = mech.document.contacts.path
+    if options.contact_outputs:
+        chosen = [(f"/contact_outputs/{k}", n) for k, n in enumerate(options.contact_outputs)]
+    elif path is not None and path.outputs:
+        chosen = [(f"/contacts/path/outputs/{k}", n) for k, n in enumerate(path.outputs)]
+    else:
+        chosen = [
+            (f"/contacts/pairs/{p.name}", f"contacts.{p.name}.{q}") for p in structure.pairs for q, _ in PAIR_OUTPUTS
+        ]
+        chosen += [("/outputs/contacts", n) for n in mech.graphs.output_names if n.startswith("contacts.")]
+    return tuple(ContactOutput(n, c_identifier(n.removeprefix("contacts.")), where) for where, n in chosen)
+
+
 def export_plan(mech: Mechanism, model: str, options: ExportOptions) -> ExportPlan:
     """The plan of an export of `mech` (compiled with `model`), or MechanismError naming the field."""
+    name = _library_name(mech, options.name)
+    given = bool(options.inputs)
     pointers = list(options.inputs) or _default_inputs(mech)
     unknown = [p for p in options.ranges if p not in pointers]
     if unknown:
         raise MechanismError(f"/ranges/{unknown[0]}", "a range for a field that is not an exported input")
     inputs = [_input(mech, p, f"/inputs/{k}", options.ranges.get(p)) for k, p in enumerate(pointers)]
-    outputs = _outputs(mech, options.outputs)
-    for group in (inputs, outputs):
-        seen: set[str] = set()
-        for item in group:
-            if item.c_name in seen:
-                raise MechanismError("/inputs" if group is inputs else "/outputs", f"'{item.c_name}' is named twice")
-            seen.add(item.c_name)
-    name = c_identifier(options.name or mech.document.name or "mechanism")[:40]
-    return ExportPlan(name, model, tuple(inputs), tuple(outputs), _target(mech, options, inputs, outputs), options)
+    _distinct([(f"/inputs/{k}" if given else i.pointer, i.pointer, i.c_name) for k, i in enumerate(inputs)], "IN")
+    placed = _outputs(mech, options.outputs)
+    _distinct([(where, o.name, o.c_name) for where, o in placed], "OUT")
+    outputs = [o for _, o in placed]
+    contact = contact_outputs(mech, options)
+    _distinct([(c.field, c.name, c.c_name) for c in contact], "CONTACT")
+    target = _target(mech, options, inputs, outputs)
+    return ExportPlan(name, model, tuple(inputs), tuple(outputs), target, options, contact)

@@ -1,5 +1,11 @@
 """The C sources of an export: the CasADi-generated kernels (made warning-free under
--Wall -Wextra), and the driver, header, examples and build files filled from templates."""
+-Wall -Wextra), and the driver, header, examples and build files filled from templates.
+
+Every template value made of a document's string goes through one encoder of
+service.export.encoders, chosen by where it lands; its key says which: *_COMMENT (C comment),
+*_STRING (C string literal), *_MAKE (Makefile and CMake comment), *_DOC (Python docstring);
+NAME, UPPER and the lines of macros are made of C identifiers. A template is filled in one pass,
+so a value is never read again for placeholders."""
 
 from __future__ import annotations
 
@@ -11,11 +17,14 @@ from pathlib import Path
 
 import casadi as ca
 
+from service.export.encoders import c_comment, c_macro, c_string, hash_comment, python_docstring
 from service.export.kernels import ExportFunctions
-from service.export.plan import ExportPlan, c_identifier
+from service.export.plan import ExportPlan
 
 TEMPLATES = files("service.export") / "templates"
 _UNUSED = re.compile(r"^(?:static |CASADI_SYMBOL_EXPORT )[^;=]*?\b\w+\(([^()]*)\)\s*\{\s*$")
+_PLACEHOLDER = re.compile(r"@([A-Z_0-9]+)@")
+DESCRIPTION_LIMIT = 2000  # characters of a comment the export composes (paths, targets): names of 64 at most
 
 
 @dataclass(frozen=True)
@@ -45,10 +54,6 @@ def c_double(value: float) -> str:
     if math.isinf(value):
         return "INFINITY" if value > 0 else "-INFINITY"
     return repr(float(value))
-
-
-def c_string(text: str) -> str:
-    return text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", " ")
 
 
 def _mark_unused(source: str) -> str:
@@ -86,13 +91,13 @@ def work_sizes(functions: ExportFunctions) -> dict[str, int]:
 
 
 def fill(template: str, values: dict[str, str]) -> str:
+    """The template with every @KEY@ replaced by its value, in one pass: a value that holds
+    "@KEY@" (a title can) stays as it is."""
     text = (TEMPLATES / template).read_text()
-    for key, value in values.items():
-        text = text.replace(f"@{key}@", value)
-    left = sorted(set(re.findall(r"@[A-Z_0-9]+@", text)))
+    left = sorted({key for key in _PLACEHOLDER.findall(text) if key not in values})
     if left:
         raise RuntimeError(f"template {template}: unfilled {', '.join(left)}")
-    return text
+    return _PLACEHOLDER.sub(lambda match: values[match.group(1)], text)
 
 
 def _lines(items: list[tuple[str, str]]) -> str:
@@ -100,23 +105,29 @@ def _lines(items: list[tuple[str, str]]) -> str:
 
 
 def _io_values(plan: ExportPlan, coordinates) -> dict[str, str]:
-    """The header's lines naming every input, output and stiffness coordinate."""
-    upper = plan.name.upper()
+    """The header's lines naming every input, output and stiffness coordinate: macros of C
+    identifiers, comments of the document's pointers, names and units."""
     return {
         "INPUT_LINES": _lines(
             [
-                (f"#define {upper}_IN_{i.c_name.upper()} {k}", f" /* {i.pointer} [{i.unit}], {_range(i)} */")
+                (
+                    f"#define {c_macro(plan.name, 'in', i.c_name)} {k}",
+                    f" /* {c_comment(f'{i.pointer} [{i.unit}], {_range(i)}')} */",
+                )
                 for k, i in enumerate(plan.inputs)
             ]
         ),
         "OUTPUT_LINES": _lines(
             [
-                (f"#define {upper}_OUT_{o.c_name.upper()} {k}", f" /* {o.name} [{o.unit}] */")
+                (f"#define {c_macro(plan.name, 'out', o.c_name)} {k}", f" /* {c_comment(f'{o.name} [{o.unit}]')} */")
                 for k, o in enumerate(plan.outputs)
             ]
         ),
         "COORDINATE_LINES": _lines(
-            [(" *   ", f"{k}: {c['name']} [{c['unit']}], row: {c['force_unit']}") for k, c in enumerate(coordinates)]
+            [
+                (" *   ", c_comment(f"{k}: {c['name']} [{c['unit']}], row: {c['force_unit']}"))
+                for k, c in enumerate(coordinates)
+            ]
         ),
     }
 
@@ -124,17 +135,18 @@ def _io_values(plan: ExportPlan, coordinates) -> dict[str, str]:
 def _target_values(plan: ExportPlan) -> dict[str, str]:
     target = plan.target
     if target is None:
-        return {"TARGET_GOAL": "0.0", "TARGET_DESCRIPTION": "none in this export (returns NO_TARGET)."}
-    solved = plan.inputs[target.input]
+        return {"TARGET_GOAL": "0.0", "TARGET_COMMENT": "none in this export (returns NO_TARGET)."}
+    solved, output = plan.inputs[target.input], target.output
     return {
         "TARGET_GOAL": c_double(target.default_goal),
-        "TARGET_DESCRIPTION": (
-            f"the value of input {solved.c_name} [{solved.unit}] at which {target.output.name} [{target.output.unit}] equals goal."
+        "TARGET_COMMENT": c_comment(
+            f"the value of input {solved.c_name} [{solved.unit}] at which {output.name} [{output.unit}] equals goal.",
+            DESCRIPTION_LIMIT,
         ),
-        "TARGET_INPUT": solved.c_name,
-        "TARGET_INPUT_UNIT": c_string(solved.unit),
-        "TARGET_OUTPUT": c_string(target.output.name),
-        "TARGET_OUTPUT_UNIT": c_string(target.output.unit),
+        "TARGET_INPUT_STRING": c_string(solved.c_name),
+        "TARGET_INPUT_UNIT_STRING": c_string(solved.unit),
+        "TARGET_OUTPUT_STRING": c_string(output.name),
+        "TARGET_OUTPUT_UNIT_STRING": c_string(output.unit),
         "TARGET_INDEX": str(target.input),
         "TARGET_FIRST_GUESS": c_double(solved.default),
     }
@@ -149,18 +161,18 @@ def _path_values(plan: ExportPlan, functions: ExportFunctions, path: ExamplePath
     )
     if path.task == "contact" and functions.contact is not None:
         labels = [f"{n} [{u}]" for n, u in zip(functions.contact.names, functions.contact.units)]
-        count = f"{plan.name.upper()}_N_CONTACT_OUTPUTS"
+        count = c_macro(plan.name, "n_contact_outputs")
     else:
         labels = [f"{o.name} [{o.unit}]" for o in plan.outputs]
-        count = f"{plan.name.upper()}_N_OUTPUTS"
+        count = c_macro(plan.name, "n_outputs")
     return {
         "PATH_TASK": path.task,
         "PATH_POINTS": str(path.points),
         "PATH_FIRST": str(path.indices[0]),
-        "PATH_LABEL": c_string(f"{first.c_name} [{first.unit}]"),
-        "PATH_DESCRIPTION": c_string(f"{path.points} points: {moved}"),
+        "PATH_LABEL_STRING": c_string(f"{first.c_name} [{first.unit}]"),
+        "PATH_COMMENT": c_comment(f"{path.points} points: {moved}", DESCRIPTION_LIMIT),
         "PATH_N_OUTPUTS": count,
-        "PATH_OUTPUT_LABELS": ", ".join(f'"{c_string(label)}"' for label in labels),
+        "PATH_OUTPUT_STRINGS": ", ".join(c_string(label) for label in labels),
         "SET_PATH": "\n".join(
             f"    in[{k}] = {c_double(a)} + ({c_double(b)} - ({c_double(a)})) * t;"
             for k, a, b in zip(path.indices, path.starts, path.stops)
@@ -169,20 +181,19 @@ def _path_values(plan: ExportPlan, functions: ExportFunctions, path: ExamplePath
 
 
 def _contact_values(plan: ExportPlan, functions: ExportFunctions) -> dict[str, str]:
-    upper, contact = plan.name.upper(), functions.contact
-    names = contact.names if contact else ()
+    contact = functions.contact
+    chosen = plan.contact_outputs if contact else ()
     units = contact.units if contact else ()
+    if contact and tuple(c.name for c in chosen) != tuple(contact.names):
+        raise RuntimeError(f"the contact task's outputs {contact.names} are not the plan's")
     return {
         "HAS_CONTACT": "1" if contact else "0",
         "NV": str(max(1, contact.n_v if contact else 0)),
-        "N_CONTACT_OUTPUTS": str(len(names)),
+        "N_CONTACT_OUTPUTS": str(len(chosen)),
         "CONTACT_OUTPUT_LINES": _lines(
             [
-                (
-                    f"#define {upper}_CONTACT_{c_identifier(n.removeprefix('contacts.')).upper()} {k}",
-                    f" /* {n} [{u}] */",
-                )
-                for k, (n, u) in enumerate(zip(names, units))
+                (f"#define {c_macro(plan.name, 'contact', c.c_name)} {k}", f" /* {c_comment(f'{c.name} [{u}]')} */")
+                for k, (c, u) in enumerate(zip(chosen, units))
             ]
         ),
         "CONTACT_NOTE": "frictionless; forces are the contact multipliers" if contact else "none in this export",
@@ -196,10 +207,12 @@ def template_values(
     n = functions.eq_step.size1_in(0)
     values = {
         "NAME": plan.name,
-        "UPPER": plan.name.upper(),
-        "TITLE": c_string(meta["title"]),
+        "UPPER": c_macro(plan.name),
+        "TITLE_COMMENT": c_comment(meta["title"]),
+        "TITLE_MAKE": hash_comment(meta["title"]),
+        "TITLE_DOC": python_docstring(meta["title"]),
         "VERSION": meta["version"],
-        "MODEL": plan.model,
+        "MODEL_COMMENT": c_comment(plan.model),
         "NP": str(len(p_default)),
         "N": str(n),
         "N1": str(n + 1),

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import base64
 import hashlib
+import re
 import tempfile
 from collections.abc import Mapping
 from pathlib import Path
@@ -124,7 +125,8 @@ _OWN_FIELDS = {
 def _in_request(pointer: str, spec: ExportSpec) -> str:
     """The request's field an export problem names: the export's own fields as they are (a
     range's input pointer escaped as one part; the target's input is `by`), the document's under
-    /document (the target taken from the document's sweep: /document/sweep)."""
+    /document (the target taken from the document's sweep: /document/sweep; an output of the
+    document's when the request chose none: /document/outputs/<name>)."""
     first = pointer.split("/")[1] if pointer.count("/") else ""
     if first == "ranges":
         return "/ranges/" + escape_pointer_part(pointer.removeprefix("/ranges/"))
@@ -132,6 +134,8 @@ def _in_request(pointer: str, spec: ExportSpec) -> str:
         if spec.target is None:
             return "/document/sweep/until"
         return "/target/by" if pointer == "/target/input" else pointer
+    if first == "outputs" and not (spec.outputs and re.fullmatch(r"/outputs(/\d+)?", pointer)):
+        return "/document" + pointer
     return pointer if first in _OWN_FIELDS else "/document" + pointer
 
 
