@@ -137,10 +137,10 @@ def export(
 
 def _print_manifest(out, manifest: dict, folder: Path) -> None:
     table = table_of(f"{manifest['name']}: inputs and outputs", "", "name", "field", "unit", text=4)
-    for item in manifest["inputs"]:
-        table.add_row("input", item["name"], item["pointer"], item["unit"])
+    for item in manifest["inputs"]:  # a document's names are text, never markup
+        table.add_row("input", item["name"], escape(item["pointer"]), escape(item["unit"]))
     for item in manifest["outputs"]:
-        table.add_row("output", item["name"], item["output"], item["unit"])
+        table.add_row("output", item["name"], escape(item["output"]), escape(item["unit"]))
     out.print(table)
     worst = manifest["worst_case_iterations"]
     out.print(
