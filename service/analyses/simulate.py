@@ -6,8 +6,11 @@ from __future__ import annotations
 
 import copy
 import math
+import time
+from collections.abc import Callable
 from typing import Any
 
+import numpy as np
 from pydantic import Field, JsonValue, create_model
 from pydantic.fields import FieldInfo
 
@@ -66,6 +69,36 @@ class SimulateReport(AnalysisResult):
     output_units: dict[str, str] = Field(default_factory=dict)
 
 
+REPORT_RESERVE = 3.0  # times the measured cost of making one kept state's records
+
+
+def _leaving_time_for_the_report(
+    mech: Mechanism, spec: SimulateSpec, end: float
+) -> tuple[Callable[[], bool], Callable[[float, int], None]]:
+    """(stop, progress) for a link simulation under a time limit: the stepping stops early
+    enough that the report of its kept states is made before `end` too. Making it costs about
+    one outputs evaluation (and one centre-line drawing) per kept state: 6500 states of a
+    64-element rod once took 0.8 s after the stepping had used the whole limit, and the server
+    replaced the worker (a 503 instead of a time_limit report)."""
+    x0, p = np.zeros(mech.graphs.outputs.size1_in(0)), mech.p()  # a state as records() evaluates them
+    timed = [mech.graphs.outputs] + ([mech.graphs.shapes] if spec.shapes else [])
+    for fn in timed:
+        fn(x0, p)  # a first call may set things up: not a kept state's cost
+    started = time.perf_counter()
+    for fn in timed:
+        fn(x0, p)
+    per_state = time.perf_counter() - started
+    steps = [0]
+
+    def progress(t: float, done: int) -> None:
+        steps[0] = done
+
+    def stop() -> bool:
+        return passed(end - REPORT_RESERVE * per_state * steps[0] / spec.every)
+
+    return stop, progress
+
+
 class SimulateAnalysis(Analysis):
     name = "simulate"
     summary = (
@@ -94,7 +127,8 @@ class SimulateAnalysis(Analysis):
                 max_bytes=SYNC_IMPACT_BYTES,
             )
         else:
-            _, report = run_simulation(mech, spec, stop=stop, max_steps=SYNC_STEPS)
+            stop, progress = _leaving_time_for_the_report(mech, spec, end) if limit else (None, None)
+            _, report = run_simulation(mech, spec, stop=stop, progress=progress, max_steps=SYNC_STEPS)
         if report["status"] == "stopped":
             report["status"] = "time_limit"
             report["message"] += f" (the time limit of {limit:g} s; a simulation job has more time)"

@@ -87,3 +87,22 @@ def test_the_state_map_is_the_energy_forms(example):
     rng = np.random.default_rng(4)
     x, lam = rng.standard_normal(len(form.x_in_state)), rng.standard_normal(len(form.multipliers_in_state))
     np.testing.assert_array_equal(light.to_state(x, lam), form.to_state(x, lam))
+
+
+def test_a_time_limited_run_stops_stepping_early_enough_to_make_its_report():
+    """The stepping's stop leaves REPORT_RESERVE times the measured cost of one kept state's
+    records per state kept so far: 6500 states of a 64-element rod once took 0.8 s to report
+    after the stepping had used the whole limit, and the server replaced its worker."""
+    import time
+
+    from service.analyses.simulate import _leaving_time_for_the_report
+
+    mech = compile_mechanism(load_document(EXAMPLES / "rod_free_vibration.json"))
+    spec = simulation_spec(mech, {"until": 1.0, "every": 2})
+    end = time.monotonic() + 3600.0  # an hour left
+    stop, progress = _leaving_time_for_the_report(mech, spec, end)
+    assert not stop()  # nothing kept yet: the whole hour is the stepping's
+    progress(0.5, 1000)
+    assert not stop()  # 500 kept states take far less than an hour to report
+    progress(0.9, 10**12)  # so many kept states that their report would outlast the hour
+    assert stop()
