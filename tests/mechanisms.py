@@ -111,3 +111,45 @@ def example_one(x_o: float | None = None, mu: float = 0.0, intervals: int = 8, d
     doc["contacts"]["pairs"]["insertion"]["friction"] = mu
     doc["elements"]["finger"].update(intervals=intervals, degree=degree)
     return doc
+
+
+def sprung_bodies(bodies: list[str], ground: str = "ground") -> dict:
+    """Bodies on springs, each held alone: body k sits at (3 (k + 1), 0) mm, tied to `ground` by
+    a translational spring along x and one along y (100 N/mm each) and a torsional spring
+    (50 N mm/rad); three unknowns per body, so an export of it compiles in about a second.
+    Loads and outputs are the caller's (units: mm, N, rad)."""
+    doc: dict = {
+        "name": "sprung bodies",
+        "units": {"length": "mm", "force": "N", "angle": "rad"},
+        "bodies": {ground: {"fixed": True, "position": [0, 0]}},
+        "elements": {},
+        "loads": {},
+        "outputs": {},
+    }
+    for k, body in enumerate(bodies):
+        x = 3.0 * (k + 1)
+        doc["bodies"][body] = {"position": [x, 0]}
+        doc["elements"][f"along x {k}"] = {
+            "type": "spring",
+            "from": ground,
+            "to": body,
+            "from_at": [x - 1, 0],
+            "to_at": [x, 0],
+            "stiffness": 100,
+        }
+        doc["elements"][f"along y {k}"] = {
+            "type": "spring",
+            "from": ground,
+            "to": body,
+            "from_at": [x, -1],
+            "to_at": [x, 0],
+            "stiffness": 100,
+        }
+        doc["elements"][f"turn {k}"] = {
+            "type": "spring",
+            "kind": "torsional",
+            "from": ground,
+            "to": body,
+            "stiffness": 50,
+        }
+    return doc
