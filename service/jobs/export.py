@@ -57,7 +57,8 @@ class ExportJobOptions(JobOptions):
         "",
         max_length=64,
         description="C prefix of the library's functions and files, made a C identifier of at most 40 characters "
-        "(default: from the document's name)",
+        "(default: from the document's name); refused when it has no ASCII letter or digit or is a name of the "
+        "build's own (main, bench, check, all, test, m, math, ...)",
     )
     inputs: list[Pointer] = Field(
         default_factory=list,
