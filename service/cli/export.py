@@ -6,6 +6,7 @@ compiles it (make) and runs its checks and benchmark here."""
 from __future__ import annotations
 
 import subprocess
+import unicodedata
 from pathlib import Path
 from typing import Annotated
 
@@ -137,10 +138,10 @@ def export(
 
 def _print_manifest(out, manifest: dict, folder: Path) -> None:
     table = table_of(f"{manifest['name']}: inputs and outputs", "", "name", "field", "unit", text=4)
-    for item in manifest["inputs"]:  # a document's names are text, never markup
-        table.add_row("input", item["name"], escape(item["pointer"]), escape(item["unit"]))
+    for item in manifest["inputs"]:
+        table.add_row("input", item["name"], _text(item["pointer"]), _text(item["unit"]))
     for item in manifest["outputs"]:
-        table.add_row("output", item["name"], escape(item["output"]), escape(item["unit"]))
+        table.add_row("output", item["name"], _text(item["output"]), _text(item["unit"]))
     out.print(table)
     worst = manifest["worst_case_iterations"]
     out.print(
@@ -152,6 +153,12 @@ def _print_manifest(out, manifest: dict, folder: Path) -> None:
         out.print(escape(manifest["contact"]["note"]))
     size = sum(p.stat().st_size for p in folder.iterdir() if p.is_file())
     out.print(f"wrote {folder} ({size / 1e3:.0f} kB, {manifest['unknowns']} unknowns); build it with: make -C {folder}")
+
+
+def _text(value: str) -> str:
+    """A document's string for the terminal: text, never rich markup, and its control characters
+    as spaces (an escape sequence in a name would be a command to the terminal)."""
+    return escape("".join(" " if unicodedata.category(c) == "Cc" else c for c in value))
 
 
 def _build(out, err, folder: Path) -> dict:

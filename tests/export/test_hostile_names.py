@@ -155,6 +155,7 @@ def hostile(server, tmp_path_factory) -> Hostile:
         app, ["export", str(root / "hostile.json"), "--c", str(root / "cli"), "--name", LIBRARY], env=CLI_ENV
     )
     assert done.exit_code == 0, done.output
+    assert "n20[bold][link=x]" in done.output and "\x1b" not in done.output  # text, no markup, no terminal escape
     http = root / "http" / LIBRARY
     return Hostile(canary, http, root / "cli", json.loads((http / "manifest.json").read_text()))
 
