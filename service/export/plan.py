@@ -103,7 +103,12 @@ class ExportPlan:
 
 
 MAX_NAME = 40  # characters of the library's name
-_OWN_FILES = ("main", "bench", "check", "example")  # main.c, bench.c, check.c; the programs example, bench
+_OWN_FILES = {
+    "main": "main.c, the example's source",
+    "bench": "bench.c and the benchmark program bench",
+    "check": "check.c and make's target check",
+    "example": "the example program",
+}
 _BUILD_TARGETS = (  # make's and CMake's own targets (CMake refuses a library named as one)
     "all clean install test help preinstall package package_source edit_cache rebuild_cache "
     "list_install_components depend"
@@ -122,7 +127,7 @@ _HELPERS = ("solve", "casadi")  # solve_equilibrium is the driver's own; casadi_
 def _reserved(name: str) -> str | None:
     """Why `name` cannot name the library (None: it can)."""
     if name in _OWN_FILES:
-        return f"'{name}' is a file of the export's own ({name}.c or the program {name})"
+        return f"'{name}' names a file of the export's own ({_OWN_FILES[name]})"
     if name in _BUILD_TARGETS:
         return f"'{name}' is a target of make or CMake"
     if name in _SYSTEM_LIBRARIES:
