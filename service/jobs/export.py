@@ -169,8 +169,15 @@ def _checked(spec: ExportSpec, mech: Mechanism, limits: Limits) -> ExportPlan:
     try:
         return export_plan(mech, spec.model or AS_IN_THE_DOCUMENT, export_options(spec))
     except MechanismError as exc:
-        problems = tuple((_in_request(p, spec), m) for p, m in exc.problems)
-        raise MechanismError(_in_request(exc.pointer, spec), exc.problem, problems) from None
+        fields = {p: _in_request(p, spec) for p, _ in exc.problems} | {exc.pointer: _in_request(exc.pointer, spec)}
+
+        def said(message: str) -> str:  # another field a message names, "(/outputs/tip)", as the request's too
+            for plan_field, request_field in fields.items():
+                message = message.replace(f"({plan_field})", f"({request_field})")
+            return message
+
+        problems = tuple((fields[p], said(m)) for p, m in exc.problems)
+        raise MechanismError(fields[exc.pointer], said(exc.problem), problems) from None
 
 
 def _mechanism(spec: ExportSpec, limits: Limits = Limits()) -> Mechanism:

@@ -390,7 +390,7 @@ def _force(x: float, y: float) -> dict:
             {"outputs": {"tip": {"type": "point", "body": "b"}, "Tip": {"type": "point", "body": "b"}}},
             {},
             "/document/outputs/Tip",
-            "'Tip.x' and 'tip.x' (/outputs/tip) both become the C name tip_x: rename one",
+            "'Tip.x' and 'tip.x' (/document/outputs/tip) both become the C name tip_x: rename one",
         ),
         (
             {"outputs": {"tip": {"type": "point", "body": "b"}, "Tip": {"type": "point", "body": "b"}}},
