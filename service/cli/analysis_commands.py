@@ -20,12 +20,20 @@ import typer
 import typer.main
 from pydantic import ValidationError
 from rich.console import Console
-from rich.markup import escape
 
 from service.analyses import Analysis, AnalysisRequest
 from service.analyses.base import Analyses
 from service.cli.catalog import command_names
-from service.cli.common import EXIT_NOT_CONVERGED, OptionError, consoles, number, table_of, user_errors, write_json
+from service.cli.common import (
+    EXIT_NOT_CONVERGED,
+    OptionError,
+    consoles,
+    number,
+    shown,
+    table_of,
+    user_errors,
+    write_json,
+)
 from service.cli.options import (
     DocArg,
     JacobianOpt,
@@ -151,18 +159,18 @@ def print_report(out: Console, report: dict) -> None:
             continue
         if isinstance(value, (int, float)) and not isinstance(value, bool):
             unit = report.get(f"{key}_unit") or report.get(f"{key.rsplit('_', 1)[0]}_unit")
-            out.print(f"{escape(key)}: {number(value, unit if isinstance(unit, str) else None)}")
+            out.print(f"{shown(key)}: {number(value, unit if isinstance(unit, str) else None)}")
         elif isinstance(value, str):
-            out.print(f"{escape(key)}: {escape(value)}")
+            out.print(f"{shown(key)}: {shown(value)}")
         elif isinstance(value, dict) and "value" in value and "unit" in value:
             status = f" ({value['status']})" if "status" in value else ""
-            out.print(f"{escape(key)}: {number(value['value'], value['unit'])}{escape(status)}")
+            out.print(f"{shown(key)}: {number(value['value'], value['unit'])}{shown(status)}")
         elif _named_numbers(value):
             units = report.get(f"{key.removesuffix('s')}_units") or {}
             table = table_of(key, "name", "value", "unit", text=1)
             for name, v in value.items():
                 table.add_row(
-                    escape(name), number(v), escape(str(units.get(name, "") if isinstance(units, dict) else ""))
+                    shown(name), number(v), shown(str(units.get(name, "") if isinstance(units, dict) else ""))
                 )
             out.print(table)
         elif is_records(value):
@@ -173,9 +181,9 @@ def print_report(out: Console, report: dict) -> None:
         elif value not in (None, [], {}):
             rest.append(key)
     for note in report.get("warnings", []):
-        out.print(f"[yellow]warning:[/yellow] {escape(note)}")
+        out.print(f"[yellow]warning:[/yellow] {shown(note)}")
     if rest:
-        out.print(f"also in the report (--json): {escape(', '.join(rest))}")
+        out.print(f"also in the report (--json): {shown(', '.join(rest))}")
 
 
 def run_command(
@@ -197,15 +205,15 @@ def run_command(
         newton = newton_options(jacobian, line_search, max_iterations)
         mech = mechanism(document, model, sets)
         report = analysis.run(mech, AnalysisRequest(newton, options))
-        out.print(f"[bold]{escape(mech.document.name)}[/bold]  ({escape(str(document))}): {analysis.name}")
+        out.print(f"[bold]{shown(mech.document.name)}[/bold]  ({shown(str(document))}): {analysis.name}")
         print_report(out, report)
         if json_out is not None:
             write_json(json_out, {"document": str(document), "model": model, **report})
-            out.print(f"wrote {escape(str(json_out))}")
+            out.print(f"wrote {shown(str(json_out))}")
         if report.get("status") in FINE:
             for flag, path in wanted.items():
                 analysis.draw(mech, newton, options, report, flag, path)
-                out.print(f"wrote {escape(str(path))}")
+                out.print(f"wrote {shown(str(path))}")
     if report.get("status") not in FINE:
         raise typer.Exit(EXIT_NOT_CONVERGED)
 

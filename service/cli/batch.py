@@ -8,10 +8,9 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich.console import Console
-from rich.markup import escape
 
 from service.cli.application import app
-from service.cli.common import EXIT_NOT_CONVERGED, OptionError, consoles, table_of, user_errors
+from service.cli.common import EXIT_NOT_CONVERGED, OptionError, consoles, shown, table_of, user_errors
 from service.cli.options import JacobianOpt, LineSearchOpt, MaxIterOpt, newton_options
 
 if TYPE_CHECKING:  # the solvers are imported when the command runs
@@ -48,16 +47,16 @@ def print_summary(console: Console, summary: dict, out: Path) -> None:
     for row, ok in rows:
         colour = "green" if ok else "red"
         table.add_row(
-            escape(row["document"]),
+            shown(row["document"]),
             str(row["analysis"] or "-"),
-            f"[{colour}]{escape(row['status'])}[/{colour}]",
-            escape(row["result"]),
+            f"[{colour}]{shown(row['status'])}[/{colour}]",
+            shown(row["result"]),
             f"{row['seconds']:.3g}",
         )
     console.print(table)
     for row in (row for row, ok in rows if not ok):
-        console.print(f"[red]{escape(row['document'])}:[/red] {escape(row['message'])}")
-    console.print(f"wrote {escape(str(out / 'summary.json'))}")
+        console.print(f"[red]{shown(row['document'])}:[/red] {shown(row['message'])}")
+    console.print(f"wrote {shown(str(out / 'summary.json'))}")
 
 
 def _given(text: str | None) -> dict:

@@ -9,10 +9,9 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.markup import escape
 
 from service.cli.application import app
-from service.cli.common import EXIT_NOT_CONVERGED, OptionError, consoles, table_of, user_errors, write_json
+from service.cli.common import EXIT_NOT_CONVERGED, OptionError, consoles, shown, table_of, user_errors, write_json
 from service.cli.options import JsonOpt, mechanism
 
 
@@ -60,11 +59,11 @@ def build(
                 if "c_bytes" in r
                 else ["", "", ""]
             )
-            table.add_row(escape(r["document"]), r["kernel"], r["part"], r["status"], *numbers)
+            table.add_row(shown(r["document"]), r["kernel"], r["part"], r["status"], *numbers)
         out.print(table)
         for r in rows:
             if r["status"] == "abandoned":
-                out.print(f"{r['kernel']} {r['part']}: {escape(r['message'])}")
+                out.print(f"{r['kernel']} {r['part']}: {shown(r['message'])}")
         if json_out is not None:
             write_json(json_out, {"kernels": rows})
     if failed:

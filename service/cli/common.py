@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import os
 import sys
+import unicodedata
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -46,15 +47,29 @@ def consoles() -> tuple[Console, Console]:
     return out, Console(stderr=True, highlight=False)
 
 
+class _TextTable(Table):
+    """A table whose text cells never carry a control character to the terminal, whoever forgot
+    to pass a document's name through shown()."""
+
+    def add_row(self, *renderables, **options) -> None:  # type: ignore[override]
+        super().add_row(*(_without_controls(r) if isinstance(r, str) else r for r in renderables), **options)
+
+
+def _without_controls(text: str) -> str:
+    if text.isprintable():
+        return text
+    return "".join(c if c in "\n\t" or unicodedata.category(c) != "Cc" else " " for c in text)
+
+
 def table_of(title: str | None, *columns: str, text: int = 1) -> Table:
     """A table whose first `text` columns are words and the others numbers (right-aligned,
     folded rather than cut when the console is narrow)."""
-    table = Table(title=escape(title) if title else None, title_justify="left")
+    table = _TextTable(title=shown(title) if title else None, title_justify="left")
     for k, head in enumerate(columns):
         if k < text:
-            table.add_column(escape(head))
+            table.add_column(shown(head))
         else:
-            table.add_column(escape(head), justify="right", overflow="fold")
+            table.add_column(shown(head), justify="right", overflow="fold")
     return table
 
 
@@ -74,34 +89,41 @@ def user_errors(err: Console) -> Iterator[None]:
         raise typer.Exit(EXIT_ERROR) from None
 
 
+def shown(text: str) -> str:
+    """A string from a document, a report or a message, for the terminal: text, never rich
+    markup, its control characters as spaces (an escape sequence in a name would be a command
+    to the terminal: a title, the clipboard, lines overwritten), its line ends and tabs kept."""
+    return escape(_without_controls(text))
+
+
 def print_error(err: Console, text: str) -> None:
     """The one line "error: <where>: <problem>"."""
-    err.print(f"[bold red]error:[/bold red] {escape(text)}", soft_wrap=True)
+    err.print(f"[bold red]error:[/bold red] {shown(text)}", soft_wrap=True)
 
 
-def spread(count: int, shown: int) -> list[int]:
-    """The indices of at most `shown` of `count` rows, spread evenly, the first and the last
-    among them (every row when there are no more than `shown`)."""
-    if count <= shown:
+def spread(count: int, kept: int) -> list[int]:
+    """The indices of at most `kept` of `count` rows, spread evenly, the first and the last
+    among them (every row when there are no more than `kept`)."""
+    if count <= kept:
         return list(range(count))
-    return sorted({round(k * (count - 1) / (shown - 1)) for k in range(shown)})
+    return sorted({round(k * (count - 1) / (kept - 1)) for k in range(kept)})
 
 
-def left_out(shown: int, total: int, what: str, spread_out: bool = False) -> str | None:
-    """The line under a table that shows `shown` of `total` rows (None when it shows them all):
+def left_out(kept: int, total: int, what: str, spread_out: bool = False) -> str | None:
+    """The line under a table that shows `kept` of `total` rows (None when it shows them all):
     "... and 14 more impacts (--json has them all)", or for rows spread over the whole
     ("12 of 400 points shown, spread evenly (--json has them all)")."""
-    if shown >= total:
+    if kept >= total:
         return None
     if spread_out:
-        return f"{shown} of {total} {what} shown, spread evenly (--json has them all)"
-    return f"... and {total - shown} more {what} (--json has them all)"
+        return f"{kept} of {total} {what} shown, spread evenly (--json has them all)"
+    return f"... and {total - kept} more {what} (--json has them all)"
 
 
-def print_left_out(out: Console, shown: int, total: int, what: str, spread_out: bool = False) -> None:
-    line = left_out(shown, total, what, spread_out)
+def print_left_out(out: Console, kept: int, total: int, what: str, spread_out: bool = False) -> None:
+    line = left_out(kept, total, what, spread_out)
     if line is not None:
-        out.print(escape(line), style="dim")
+        out.print(shown(line), style="dim")
 
 
 def number(value: float | None, unit: str | None = None) -> str:

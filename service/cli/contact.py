@@ -9,7 +9,6 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.markup import escape
 
 from service.cli.application import app
 from service.cli.common import (
@@ -19,6 +18,7 @@ from service.cli.common import (
     consoles,
     number,
     print_left_out,
+    shown,
     table_of,
     user_errors,
     write_json,
@@ -116,7 +116,7 @@ def _single_state(out, mech, problem, options, json_out) -> bool:
     except MechanismError as exc:
         raise MechanismError(exc.pointer.removeprefix("/document"), exc.problem) from None
     out.print(
-        f"[bold]{escape(mech.document.name)}[/bold]: {report['status']} in {report['iterations']} iterations, "
+        f"[bold]{shown(mech.document.name)}[/bold]: {report['status']} in {report['iterations']} iterations, "
         f"{report['seconds'] * 1e3:.1f} ms"
     )
     table = table_of(None, "pair", "state", "F_x", "F_y", "normal", "friction", "point x", "point y", text=2)
@@ -124,7 +124,7 @@ def _single_state(out, mech, problem, options, json_out) -> bool:
     for name, pair in report["pairs"].items():
         point = pair["point"] or [None, None]
         table.add_row(
-            escape(name),
+            shown(name),
             pair["state"],
             number(pair["force"][0], f),
             number(pair["force"][1], f),
@@ -135,7 +135,7 @@ def _single_state(out, mech, problem, options, json_out) -> bool:
         )
     out.print(table)
     for note in report["warnings"]:
-        out.print(f"[yellow]warning:[/yellow] {escape(note)}")
+        out.print(f"[yellow]warning:[/yellow] {shown(note)}")
     if json_out is not None:
         write_json(json_out, report)
     return report["status"] == "converged"
@@ -220,11 +220,11 @@ def _print_path(out, mech, fields, records, y_name, problem, label: str) -> None
     converged = [r for r in records if r["status"] == "converged"]
     seconds = sum(r["seconds"] for r in records)
     out.print(
-        f"[bold]{escape(mech.document.name)}[/bold]{escape(', ' + label) if label else ''}: "
+        f"[bold]{shown(mech.document.name)}[/bold]{shown(', ' + label) if label else ''}: "
         f"{len(converged)} of {len(records)} states converged, "
         f"{seconds:.3f} s ({1e3 * seconds / max(len(records), 1):.1f} ms per state)"
     )
-    table = table_of(None, escape(fields.pointers[0]), "pairs", escape(y_name), text=2)
+    table = table_of(None, shown(fields.pointers[0]), "pairs", shown(y_name), text=2)
     step = max(1, len(records) // SHOWN_STATES)
     for r in records[::step]:
         states = ", ".join(f"{name} {pair['state']}" for name, pair in r["pairs"].items())
@@ -235,12 +235,12 @@ def _print_path(out, mech, fields, records, y_name, problem, label: str) -> None
     if np.isfinite(values).any():
         k = int(np.nanargmax(np.abs(values)))
         out.print(
-            f"largest |{escape(y_name)}| = {number(abs(values[k]), y_unit)} at {escape(fields.pointers[0])} = "
+            f"largest |{shown(y_name)}| = {number(abs(values[k]), y_unit)} at {shown(fields.pointers[0])} = "
             f"{number(records[k]['values'][0], unit)}"
         )
     failed = [r for r in records if r["status"] != "converged"]
     for r in failed[:3]:
-        out.print(f"[yellow]not converged[/yellow] at {number(r['values'][0], unit)}: {escape(r['message'])}")
+        out.print(f"[yellow]not converged[/yellow] at {number(r['values'][0], unit)}: {shown(r['message'])}")
     print_left_out(out, min(3, len(failed)), len(failed), "states that did not converge")
 
 

@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import json
 
-from rich.markup import escape
 from rich.table import Table
 
 from service.cli.application import app
-from service.cli.common import OptionError, consoles, user_errors
+from service.cli.common import OptionError, consoles, shown, user_errors
 from service.examples import examples_directory
 
 
@@ -29,5 +28,5 @@ def examples() -> None:
                 name = data.get("name", "") if isinstance(data, dict) else "(not a mechanism document)"
             except (OSError, json.JSONDecodeError) as exc:
                 name = f"(unreadable: {exc})"
-            table.add_row(file.name, escape(str(name)))
+            table.add_row(file.name, shown(str(name)))
         out.print(table)

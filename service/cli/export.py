@@ -6,15 +6,13 @@ compiles it (make) and runs its checks and benchmark here."""
 from __future__ import annotations
 
 import subprocess
-import unicodedata
 from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.markup import escape
 
 from service.cli.application import app
-from service.cli.common import EXIT_NOT_CONVERGED, OptionError, consoles, table_of, user_errors, write_json
+from service.cli.common import EXIT_NOT_CONVERGED, OptionError, consoles, shown, table_of, user_errors, write_json
 from service.cli.options import DocArg, JsonOpt, ModelOpt, SetOpt, mechanism
 
 BUILD_SECONDS = 600  # a large exact model's kernels take about a minute at -O2
@@ -139,26 +137,20 @@ def export(
 def _print_manifest(out, manifest: dict, folder: Path) -> None:
     table = table_of(f"{manifest['name']}: inputs and outputs", "", "name", "field", "unit", text=4)
     for item in manifest["inputs"]:
-        table.add_row("input", item["name"], _text(item["pointer"]), _text(item["unit"]))
+        table.add_row("input", item["name"], shown(item["pointer"]), shown(item["unit"]))
     for item in manifest["outputs"]:
-        table.add_row("output", item["name"], _text(item["output"]), _text(item["unit"]))
+        table.add_row("output", item["name"], shown(item["output"]), shown(item["unit"]))
     out.print(table)
     worst = manifest["worst_case_iterations"]
     out.print(
         f"Newton steps per call at most {manifest['limits']['max_iterations']}; measured over "
-        f"{escape(worst['measured_over'])}: warm {worst['equilibrium_warm']}, cold {worst['equilibrium_cold']}"
+        f"{shown(worst['measured_over'])}: warm {worst['equilibrium_warm']}, cold {worst['equilibrium_cold']}"
         + (f", target from cold {worst['target_cold']}" if "target_cold" in worst else "")
     )
     if manifest.get("contact") and "note" in manifest["contact"]:
-        out.print(escape(manifest["contact"]["note"]))
+        out.print(shown(manifest["contact"]["note"]))
     size = sum(p.stat().st_size for p in folder.iterdir() if p.is_file())
     out.print(f"wrote {folder} ({size / 1e3:.0f} kB, {manifest['unknowns']} unknowns); build it with: make -C {folder}")
-
-
-def _text(value: str) -> str:
-    """A document's string for the terminal: text, never rich markup, and its control characters
-    as spaces (an escape sequence in a name would be a command to the terminal)."""
-    return escape("".join(" " if unicodedata.category(c) == "Cc" else c for c in value))
 
 
 def _build(out, err, folder: Path) -> dict:
@@ -173,16 +165,16 @@ def _build(out, err, folder: Path) -> dict:
         try:
             done = _run_in_own_group(command)
         except (OSError, subprocess.TimeoutExpired) as exc:
-            err.print(f"[red]{label}: {escape(str(exc))}[/red]")
+            err.print(f"[red]{label}: {shown(str(exc))}[/red]")
             results["passed"] = False
             break
         results[label] = done.stdout.strip().splitlines()[-8:]
         if done.returncode != 0:
-            err.print(f"[red]{label} failed:[/red]\n{escape(done.stdout[-2000:] + done.stderr[-2000:])}")
+            err.print(f"[red]{label} failed:[/red]\n{shown(done.stdout[-2000:] + done.stderr[-2000:])}")
             results["passed"] = False
             break
         if label != "make":
-            out.print(escape(done.stdout.strip()))
+            out.print(shown(done.stdout.strip()))
     return results
 
 

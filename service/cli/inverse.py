@@ -6,10 +6,18 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich.console import Console
-from rich.markup import escape
 
 from service.cli.application import app
-from service.cli.common import EXIT_NOT_CONVERGED, OptionError, consoles, number, table_of, user_errors, write_json
+from service.cli.common import (
+    EXIT_NOT_CONVERGED,
+    OptionError,
+    consoles,
+    number,
+    shown,
+    table_of,
+    user_errors,
+    write_json,
+)
 from service.cli.options import DocArg, JsonOpt, MaxIterOpt, SetOpt, mechanism
 
 if TYPE_CHECKING:  # the link inverse is imported when the command runs
@@ -39,21 +47,21 @@ def print_link_inverse(out: Console, mech: Mechanism, forces: dict, result: Link
         for name, values in forces.items()
         for c, v in values.items()
     )
-    out.print(f"given internal forces: {escape(given)}")
+    out.print(f"given internal forces: {shown(given)}")
     out.print(
         f"status: {result.status} after {result.iterations} iterations"
-        + (f" ({escape(result.message)})" if result.message else "")
+        + (f" ({shown(result.message)})" if result.message else "")
     )
     if not result.converged:
         return
     table = table_of("unknown loads", "field", "value")
     for pointer, value in result.loads.items():
-        table.add_row(pointer, number(value, mech.doc_unit(mech.parameter_kind(pointer))))
+        table.add_row(shown(pointer), number(value, mech.doc_unit(mech.parameter_kind(pointer))))
     out.print(table)
     table = table_of("links", "link", "h", "v", "M start", "M end", "eta(0) [rad]", "eta(1) [rad]")
     for name, values in result.links.items():
         table.add_row(
-            name,
+            shown(name),
             *(number(values[k]) for k in ("h", "v", "M_start", "M_end")),
             number(values["eta"][0]),
             number(values["eta"][-1]),
@@ -94,13 +102,13 @@ def inverse(
         result = inverse_links(
             mech, spec.shapes, forces, spec.unknown_loads, NewtonOptions(max_iterations=max_iterations)
         )
-        out.print(f"[bold]{escape(mech.document.name)}[/bold]  ({escape(str(document))}): link inverse")
+        out.print(f"[bold]{shown(mech.document.name)}[/bold]  ({shown(str(document))}): link inverse")
         print_link_inverse(out, mech, forces, result)
         if json_out is not None:
             write_json(
                 json_out,
                 {"document": str(document), "name": mech.document.name, "internal_forces": forces, **result.__dict__},
             )
-            out.print(f"wrote {escape(str(json_out))}")
+            out.print(f"wrote {shown(str(json_out))}")
     if not result.converged:
         raise typer.Exit(EXIT_NOT_CONVERGED)

@@ -10,10 +10,18 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 from rich.console import Console
-from rich.markup import escape
 
 from service.cli.application import app
-from service.cli.common import EXIT_NOT_CONVERGED, OptionError, consoles, number, table_of, user_errors, write_json
+from service.cli.common import (
+    EXIT_NOT_CONVERGED,
+    OptionError,
+    consoles,
+    number,
+    shown,
+    table_of,
+    user_errors,
+    write_json,
+)
 from service.cli.options import DocArg, JsonOpt, ModelOpt, SetOpt, choice, mechanism
 
 if TYPE_CHECKING:  # the models are imported when the command runs
@@ -86,11 +94,11 @@ def linearize(
             "stiffness_damping": stiffness_damping,
         }
         report = _run(mechanism(document, model, sets), at, asked)
-        out.print(f"[bold]{escape(report['name'])}[/bold]  ({escape(str(document))}): linear model at {at}")
+        out.print(f"[bold]{shown(report['name'])}[/bold]  ({shown(str(document))}): linear model at {at}")
         _print_and_write(out, report, state_space)
         if json_out is not None:
             write_json(json_out, {"document": str(document), "model": model, **report})
-            out.print(f"wrote {escape(str(json_out))}")
+            out.print(f"wrote {shown(str(json_out))}")
     if report.get("status") != "converged":
         raise typer.Exit(EXIT_NOT_CONVERGED)
 
@@ -101,7 +109,7 @@ def _print_and_write(out: Console, report: dict[str, Any], path: Path | None) ->
 
     print_status(out, report)
     for note in report.get("warnings", []):
-        out.print(f"[yellow]warning:[/yellow] {escape(note)}")
+        out.print(f"[yellow]warning:[/yellow] {shown(note)}")
     if "state_space" not in report:
         return
     print_state_space(out, report["state_space"])
@@ -113,7 +121,7 @@ def _print_and_write(out: Console, report: dict[str, Any], path: Path | None) ->
             write_state_space(StateSpaceModel.from_dict(report["state_space"]), path)
         except OSError as exc:
             raise OptionError("--state-space", f"cannot write {path}: {exc.strerror}") from None
-        out.print(f"wrote {escape(str(path))}")
+        out.print(f"wrote {shown(str(path))}")
 
 
 def _run(mech: Any, at: str, asked: dict[str, Any]) -> dict[str, Any]:
@@ -157,7 +165,7 @@ def print_state_space(out: Console, space: dict[str, Any]) -> None:
         return
     table = table_of("static gain (output per input)", "output", *space["inputs"])
     for name, unit, row in zip(space["outputs"], units["outputs"], gain):
-        table.add_row(escape(name), *(number(v, f"{unit}/{u}") for v, u in zip(row, units["inputs"])))
+        table.add_row(shown(name), *(number(v, f"{unit}/{u}") for v, u in zip(row, units["inputs"])))
     out.print(table)
 
 

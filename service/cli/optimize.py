@@ -6,10 +6,9 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich.console import Console
-from rich.markup import escape
 
 from service.cli.application import app
-from service.cli.common import EXIT_NOT_CONVERGED, consoles, number, table_of, user_errors, write_json
+from service.cli.common import EXIT_NOT_CONVERGED, consoles, number, shown, table_of, user_errors, write_json
 from service.cli.options import DocArg, JsonOpt, SetOpt, mechanism
 
 if TYPE_CHECKING:  # the optimizer is imported when the command runs
@@ -42,7 +41,7 @@ def print_optimum(out: Console, problem: DesignProblem, best: StartResult) -> No
     for k, path in enumerate(problem.paths):
         unit = mech.doc_unit(mech.parameter_kind(path))
         table.add_row(
-            path,
+            shown(path),
             number(best.design_start[path], unit),
             number(best.design[path], unit),
             number(problem.lower[k]),
@@ -54,8 +53,8 @@ def print_optimum(out: Console, problem: DesignProblem, best: StartResult) -> No
         table = table_of("constraints", "output", "case", "value", "lower", "upper", "active", "multiplier")
         for row in best.constraints:
             table.add_row(
-                row["output"],
-                row["case"],
+                shown(row["output"]),
+                shown(row["case"]),
                 number(row["value"]),
                 "-" if row["lower"] is None else number(row["lower"]),
                 "-" if row["upper"] is None else number(row["upper"]),
@@ -72,7 +71,7 @@ def print_sensitivities(out: Console, prepared: Prepared, best: StartResult, fie
     sens = optimum_sensitivities(prepared, best, fields)
     table = table_of("sensitivities of the optimum", "of", *fields)
     for name, row, row_units in zip(sens.outputs, sens.matrix, sens.units):
-        table.add_row(name, *(number(v, u) for v, u in zip(row, row_units)))
+        table.add_row(shown(name), *(number(v, u) for v, u in zip(row, row_units)))
     out.print(table)
     return sens.to_dict()
 
@@ -110,8 +109,8 @@ def optimize(
         prepared = prepare(problem)
         result = run_starts(err, prepared, spec.starts)
         best = result.best
-        out.print(f"[bold]{escape(mech.document.name)}[/bold]  ({escape(str(document))}): optimize")
-        out.print(f"status: {result.status}" + (f" ({escape(result.message)})" if result.message else ""))
+        out.print(f"[bold]{shown(mech.document.name)}[/bold]  ({shown(str(document))}): optimize")
+        out.print(f"status: {result.status}" + (f" ({shown(result.message)})" if result.message else ""))
         report = result.summary()
         if best is not None:
             print_optimum(out, problem, best)
@@ -119,6 +118,6 @@ def optimize(
                 report["sensitivities"] = print_sensitivities(out, prepared, best, list(sensitivity))
         if json_out is not None:
             write_json(json_out, {"document": str(document), **report})
-            out.print(f"wrote {escape(str(json_out))}")
+            out.print(f"wrote {shown(str(json_out))}")
     if result.status not in ("optimal", "acceptable"):
         raise typer.Exit(EXIT_NOT_CONVERGED)

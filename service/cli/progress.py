@@ -15,8 +15,9 @@ from collections.abc import Callable
 from types import TracebackType
 
 from rich.console import Console
-from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+from service.cli.common import shown
 
 LINE_SECONDS = 5.0
 LINES_PER_RUN = 10  # a line per tenth of the simulated time
@@ -90,9 +91,7 @@ class SimulationProgress:
         if self.bar is not None:
             self.bar.update(self.task, description=name, total=None, detail="")
             return
-        self.console.print(
-            f"{self.label}: {escape(name)} ({seconds_text(now - self.started)} elapsed)", highlight=False
-        )
+        self.console.print(f"{self.label}: {shown(name)} ({seconds_text(now - self.started)} elapsed)", highlight=False)
 
     def finish(self, summary: str = "done") -> None:
         """The last line: `summary`, the whole time, and what the stepping and each part took."""
@@ -104,7 +103,7 @@ class SimulationProgress:
             f"{name} {seconds_text(end - start)}" for (name, start), (_, end) in zip(marks, marks[1:] + [("", now)])
         ]
         self.console.print(
-            f"{self.label}: {escape(summary)} in {seconds_text(now - self.started)} ({', '.join(parts)})",
+            f"{self.label}: {shown(summary)} in {seconds_text(now - self.started)} ({', '.join(parts)})",
             soft_wrap=True,
             highlight=False,
         )

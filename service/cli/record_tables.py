@@ -7,10 +7,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from rich.markup import escape
 from rich.table import Table
 
-from service.cli.common import number, table_of
+from service.cli.common import number, shown, table_of
 
 
 def _scalar(value: Any) -> bool:
@@ -47,6 +46,6 @@ def records_table(title: str, rows: list[dict], units: dict[str, str]) -> Table:
         cells = []
         for key, entry in columns:
             value = row.get(key) if entry is None else row[key].get(entry)
-            cells.append(escape(value) if isinstance(value, str) else number(value))
+            cells.append(shown(value) if isinstance(value, str) else number(value))
         table.add_row(*cells)
     return table

@@ -4,12 +4,11 @@ the compiled mechanism (which bodies, supports and flexures there are)."""
 from __future__ import annotations
 
 from rich.console import Console
-from rich.markup import escape
 from rich.table import Table
 
 from models import Mechanism
 from models.elements import FAMILIES
-from service.cli.common import number, table_of
+from service.cli.common import number, shown, table_of
 from service.drawings.plotting import output_unit
 
 
@@ -27,7 +26,7 @@ def print_status(out: Console, report: dict) -> None:
         line += f", {report['seconds']:.3g} s"
     out.print(line)
     if not converged:
-        line = f"diagnostics: {escape(report.get('message') or 'no message')}"
+        line = f"diagnostics: {shown(report.get('message') or 'no message')}"
         if report.get("history"):
             line += f"; residual history (nondimensional) {', '.join(number(h) for h in report['history'][-6:])}"
         out.print(line)
@@ -70,7 +69,7 @@ def bodies_table(mech: Mechanism, values: dict) -> Table:
         x, y, angle = (values[f"bodies.{name}.{c}"] for c in ("x", "y", "angle"))
         x0, y0 = mech.value(f"/bodies/{name}/position/0"), mech.value(f"/bodies/{name}/position/1")
         angle0 = mech.value(f"/bodies/{name}/angle")
-        table.add_row(name, support, *(number(v) for v in (x, y, angle, x - x0, y - y0, angle - angle0)))
+        table.add_row(shown(name), support, *(number(v) for v in (x, y, angle, x - x0, y - y0, angle - angle0)))
     return table
 
 
@@ -81,7 +80,7 @@ def outputs_table(mech: Mechanism, values: dict) -> Table | None:
     table.columns[2].overflow = "ellipsis"
     for name in mech.graphs.output_names:
         if name.split(".", 1)[0] in mech.document.outputs:
-            table.add_row(name, number(values[name]), escape(output_unit(mech, name)))
+            table.add_row(shown(name), number(values[name]), shown(output_unit(mech, name)))
     return table if table.row_count else None
 
 
@@ -96,7 +95,7 @@ def reactions_table(mech: Mechanism, values: dict) -> Table | None:
         "support reactions (about the body's reference point)", "body", f"Fx [{F}]", f"Fy [{F}]", f"M [{M}]"
     )
     for name in supported:
-        table.add_row(name, *(number(values[f"reactions.{name}.{q}"]) for q in ("Fx", "Fy", "M")))
+        table.add_row(shown(name), *(number(values[f"reactions.{name}.{q}"]) for q in ("Fx", "Fy", "M")))
     return table
 
 
@@ -123,7 +122,7 @@ def flexures_table(mech: Mechanism, values: dict) -> Table | None:
     )
     for f in beams:
         e = f"elements.{f.name}"
-        cells = [f.name, f"{structure.bodies[f.start_body]}→{structure.bodies[f.end_body]}"]
+        cells = [shown(f.name), shown(f"{structure.bodies[f.start_body]}→{structure.bodies[f.end_body]}")]
         cells += [f.model] if mixed else []
         cells += [number(values[f"{e}.{q}"]) for q in FAMILIES.of(f).flexure_outputs]
         table.add_row(*cells)
@@ -145,7 +144,7 @@ def print_stiffness(out: Console, stiffness: dict) -> None:
     K[i][j] in (row unit)/(column unit). Then each of its terms I, II, III and load that is
     not zero (curved-beam mechanisms without links have them), titled, in the same units."""
     out.print(
-        escape(
+        shown(
             "tangent stiffness K_T = dR/dz at the solution: row i is the generalized force on "
             "coordinate i, column j a displacement; K[i, j] in (row unit)/(column unit)"
         )
@@ -155,7 +154,7 @@ def print_stiffness(out: Console, stiffness: dict) -> None:
     nonzero = {name for name, term in terms.items() if any(value != 0 for row in term for value in row)}
     for name, title in STIFFNESS_TERMS.items():
         if name in nonzero:
-            out.print(escape(f"{title} (same units; the terms sum to K_T)"))
+            out.print(shown(f"{title} (same units; the terms sum to K_T)"))
             print_matrix(out, stiffness, terms[name])
     zero = [name for name in STIFFNESS_TERMS if name in terms and name not in nonzero]
     if zero:
@@ -173,7 +172,7 @@ def print_matrix(out: Console, stiffness: dict, K: list[list[float | None]]) -> 
         block = range(first, min(n, first + per_block))
         table = table_of(None, "R \\ z", *(f"{coordinates[j]} [{columns[j]}]" for j in block))
         for i in range(n):
-            table.add_row(escape(f"{coordinates[i]} [{rows[i]}]"), *(number(K[i][j]) for j in block))
+            table.add_row(shown(f"{coordinates[i]} [{rows[i]}]"), *(number(K[i][j]) for j in block))
         out.print(table)
 
 
@@ -188,5 +187,5 @@ def print_wrenches(out: Console, report: dict) -> None:
         f"M [{units['M']}]",
     )
     for body, wrench in report["wrenches"].items():
-        table.add_row(body, *(number(wrench[q]) for q in ("Fx", "Fy", "M")))
+        table.add_row(shown(body), *(number(wrench[q]) for q in ("Fx", "Fy", "M")))
     out.print(table)

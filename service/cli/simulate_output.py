@@ -10,9 +10,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rich.console import Console
-from rich.markup import escape
 
-from service.cli.common import OptionError, number, print_left_out, table_of, write_json
+from service.cli.common import OptionError, number, print_left_out, shown, table_of, write_json
 from service.cli.progress import SimulationProgress
 
 if TYPE_CHECKING:  # the models and the dynamics are imported when a run is written
@@ -39,12 +38,12 @@ def print_run(out: Console, report: dict[str, Any]) -> None:
     """A run of links, bodies and joints: its status, steps and energy balance, and the first
     outputs' start, end and range."""
     out.print(
-        f"[bold]{escape(report['name'])}[/bold]: {report['status']} at t = {report['time_reached']:g} s, "
+        f"[bold]{shown(report['name'])}[/bold]: {report['status']} at t = {report['time_reached']:g} s, "
         f"{report['steps']} steps in {report['seconds']:.2f} s; energy balance error "
         f"{report['energy_balance_error']:.2e}"
     )
     if report["message"]:
-        out.print(escape(report["message"]))
+        out.print(shown(report["message"]))
     units = report.get("output_units", {})
     table = table_of(None, "output", "start", "end", "min", "max", "unit", text=1)
     table.columns[5].justify = "left"
@@ -52,7 +51,7 @@ def print_run(out: Console, report: dict[str, Any]) -> None:
     for name, values in outputs[:SHOWN_OUTPUTS]:
         if values:
             numbers = (number(v) for v in (values[0], values[-1], min(values), max(values)))
-            table.add_row(escape(name), *numbers, escape(units.get(name, "")))
+            table.add_row(shown(name), *numbers, shown(units.get(name, "")))
     out.print(table)
     print_left_out(out, min(SHOWN_OUTPUTS, len(outputs)), len(outputs), "outputs")
 
@@ -61,7 +60,7 @@ def print_impacts(out: Console, report: dict[str, Any], scheme: str) -> None:
     """A run of rigid bodies with impacts: its status, steps and energy balance, the first
     impacts and the end state's sensitivities."""
     out.print(
-        f"[bold]{escape(report['name'])}[/bold]: {report['status']} at t = {report['time_reached']:g} s, "
+        f"[bold]{shown(report['name'])}[/bold]: {report['status']} at t = {report['time_reached']:g} s, "
         f"{report['steps']} steps ({scheme}) in {report['seconds']:.3f} s; energy balance error "
         f"{report['energy_balance_error']:.2e}"
     )
@@ -84,7 +83,7 @@ def print_impacts(out: Console, report: dict[str, Any], scheme: str) -> None:
     for k, hit in enumerate(impacts[:SHOWN_IMPACTS]):
         table.add_row(
             str(k + 1),
-            escape(hit["pair"]),
+            shown(hit["pair"]),
             f"{hit['time']:.7f}",
             *(number(hit[key], "") for key in ("impact_speed", "exit_speed", "rebound_ratio")),
         )
@@ -107,10 +106,10 @@ def print_sensitivities(out: Console, sensitivities: dict[str, Any]) -> None:
     )
     for pointer, values in fields.items():
         row = [number(values["coordinates"][name], "") for name in names]
-        table.add_row(escape(pointer), escape(values["unit"]), *row)
+        table.add_row(shown(pointer), shown(values["unit"]), *row)
     out.print(table)
     for warning in sensitivities["warnings"]:
-        out.print(f"[yellow]warning:[/yellow] {escape(warning)}")
+        out.print(f"[yellow]warning:[/yellow] {shown(warning)}")
 
 
 def write_files(

@@ -9,7 +9,6 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich.console import Console
-from rich.markup import escape
 
 from service.cli.application import app
 from service.cli.catalog import analysis_names
@@ -20,6 +19,7 @@ from service.cli.common import (
     consoles,
     number,
     save_plot,
+    shown,
     table_of,
     user_errors,
     write_json,
@@ -107,7 +107,7 @@ def print_report(out: Console, mech: Mechanism, report: dict, stiffness: bool) -
         if report["status"] == "converged":
             print_solution(out, mech, report)
             for note in report["warnings"]:
-                out.print(f"[yellow]warning:[/yellow] {escape(note)}")
+                out.print(f"[yellow]warning:[/yellow] {shown(note)}")
         else:
             out.print("[yellow]no equilibrium found: the last iterate is not reported as a solution[/yellow]")
     if "limit_points" in report:
@@ -126,7 +126,7 @@ def print_path_summary(out: Console, report: dict) -> None:
     values, unit, limits = report["values"], report["unit"], report["limit_points"]
     if values:
         out.print(
-            f"path of {escape(report['path'])} (from the {report['source']}): {len(values)} points from "
+            f"path of {shown(report['path'])} (from the {report['source']}): {len(values)} points from "
             f"{number(values[0], unit)} to {number(values[-1], unit)}, {len(limits)} limit points"
         )
     if limits:
@@ -174,17 +174,17 @@ def solve(
         mech = mechanism(document, model, sets)
         result, report = run_analysis(mech, chosen, options, stiffness)
 
-        out.print(f"[bold]{escape(mech.document.name)}[/bold]  ({escape(str(document))})")
+        out.print(f"[bold]{shown(mech.document.name)}[/bold]  ({shown(str(document))})")
         for pointer in overrides(sets):
             out.print(f"  {pointer} = {number(mech.value(pointer), mech.doc_unit(mech.parameter_kind(pointer)))}")
         print_report(out, mech, report, stiffness)
         if json_out is not None:
             write_json(json_out, {"document": str(document), "model": model, "overrides": overrides(sets), **report})
-            out.print(f"wrote {escape(str(json_out))}")
+            out.print(f"wrote {shown(str(json_out))}")
         if plot is not None:
             from service.drawings.plotting import plot_configuration
 
             save_plot(plot_configuration, result, plot)
-            out.print(f"wrote {escape(str(plot))}")
+            out.print(f"wrote {shown(str(plot))}")
     if report["status"] != "converged":
         raise typer.Exit(EXIT_NOT_CONVERGED)

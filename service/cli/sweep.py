@@ -9,11 +9,10 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich.console import Console
-from rich.markup import escape
 
 from service.cli.application import app
 from service.cli.catalog import COMPARED_MODEL_NAMES
-from service.cli.common import EXIT_NOT_CONVERGED, consoles, save_plot, user_errors, write_json
+from service.cli.common import EXIT_NOT_CONVERGED, consoles, save_plot, shown, user_errors, write_json
 from service.cli.options import (
     RESTARTS,
     DocArg,
@@ -113,8 +112,8 @@ def sweep(
 def _print_heading(out: Console, first: Mechanism, document: Path, swept: str, plan: SweepPlan) -> None:
     """The document, the swept field and its unit, and the restart."""
     out.print(
-        f"[bold]{escape(first.document.name)}[/bold]  ({escape(str(document))}): "
-        f"sweeping {escape(f'{swept} [{plan.unit}]')}, restart from {plan.restart}"
+        f"[bold]{shown(first.document.name)}[/bold]  ({shown(str(document))}): "
+        f"sweeping {shown(f'{swept} [{plan.unit}]')}, restart from {plan.restart}"
     )
 
 
@@ -145,15 +144,15 @@ def _write_files(
                 "curves": records,
             },
         )
-        out.print(f"wrote {escape(str(json_out))}")
+        out.print(f"wrote {shown(str(json_out))}")
     if csv_out is not None:
         from service.cli.csv_files import sweep_columns, write_csv
         from service.solvers.reports import output_units
 
         write_csv(csv_out, sweep_columns(swept, plan.unit, output_units(first), records))
-        out.print(f"wrote {escape(str(csv_out))}")
+        out.print(f"wrote {shown(str(csv_out))}")
     if plot is not None and curves:
         from service.drawings.plotting import plot_sweeps
 
         save_plot(plot_sweeps, curves, plan.x_output, plan.y_output, swept, plot, secant=plan.stiffness)
-        out.print(f"wrote {escape(str(plot))}")
+        out.print(f"wrote {shown(str(plot))}")

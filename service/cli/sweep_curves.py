@@ -5,12 +5,11 @@ Imported when the command runs."""
 from __future__ import annotations
 
 from rich.console import Console
-from rich.markup import escape
 from rich.table import Table
 
 from models import Mechanism
 from models.elements import FAMILIES
-from service.cli.common import number, print_left_out, spread, table_of
+from service.cli.common import number, print_left_out, shown, spread, table_of
 from service.cli.sweep_plan import SweepPlan
 from service.drawings.figures import field_label, output_unit
 from service.solvers.newton import NewtonOptions
@@ -130,16 +129,16 @@ def print_stiffness(out: Console, label: str, record: dict, plan: SweepPlan) -> 
     in document units and SI."""
 
     def both(k: float) -> str:
-        return f"[bold]{escape(number(k, record['unit']))}[/bold] ({si_number(k * record['si_per_unit'])} {record['si_unit']})"
+        return f"[bold]{shown(number(k, record['unit']))}[/bold] ({si_number(k * record['si_per_unit'])} {record['si_unit']})"
 
     first, last, start = record["first_step"], record["last"], record["start"]
     out.print(
-        f"{escape(label)}: secant stiffness {escape(record['output'])} / {escape(field_label(plan.spec.path))}: "
+        f"{shown(label)}: secant stiffness {shown(record['output'])} / {shown(field_label(plan.spec.path))}: "
         f"{both(first)} at the first step, {both(last)} at the last ({100 * (last / first - 1):+.2f} %)"
     )
     if start is not None:
         out.print(
-            f"{escape(label)}: stiffness at the start {both(start)} (secant over "
+            f"{shown(label)}: stiffness at the start {both(start)} (secant over "
             f"{number(record['start_step'], plan.unit)}); the last secant (at "
             f"{number(record['at_last'], plan.unit)}) is {100 * (last / start - 1):+.2f} % relative to it"
         )
@@ -159,7 +158,7 @@ def run_curve(
             f"{label}: target {plan.goal} not reached: status "
             f"[bold red]{target.status}[/bold red] after {eq.iterations} iterations, "
             f"residual {number(eq.residual_norm_force, mech.doc_unit('force'))}; "
-            f"{escape(eq.message or 'no message')}"
+            f"{shown(eq.message or 'no message')}"
         )
         return None, {"label": label, "model": model, "target": target_dict(target, plan)}, True
     record = {

@@ -7,7 +7,6 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich.console import Console
-from rich.markup import escape
 
 from service.cli.application import app
 from service.cli.common import (
@@ -19,6 +18,7 @@ from service.cli.common import (
     number,
     print_left_out,
     save_plot,
+    shown,
     spread,
     table_of,
     user_errors,
@@ -47,11 +47,11 @@ def print_path(out: Console, mech: Mechanism, path: str, result: PathResult) -> 
     point output (shown_output) and their stability."""
     from service.drawings.plotting import output_unit
 
-    shown = shown_output(mech)
-    field, output = f"{path} [{result.unit}]", f"{shown} [{output_unit(mech, shown)}]"
+    watched = shown_output(mech)
+    field, output = f"{path} [{result.unit}]", f"{watched} [{output_unit(mech, watched)}]"
     table = table_of("limit points", "kind", field, output, "after point")
     for lp in result.limit_points:
-        table.add_row(lp.kind, number(lp.value), number(lp.outputs[shown]), str(lp.after_point))
+        table.add_row(lp.kind, number(lp.value), number(lp.outputs[watched]), str(lp.after_point))
     out.print(table)
     table = table_of("path", "point", field, output, "stable")
     rows = spread(len(result.points), SHOWN_POINTS)
@@ -60,7 +60,7 @@ def print_path(out: Console, mech: Mechanism, path: str, result: PathResult) -> 
         table.add_row(
             str(i),
             number(pt.value),
-            number(pt.outputs[shown]),
+            number(pt.outputs[watched]),
             {True: "yes", False: "no", None: "?"}[pt.stability.stable],
         )
     out.print(table)
@@ -102,19 +102,19 @@ def trace(
         if not step > 0:
             raise OptionError("--step", f"must be positive, got {step:g}")
         result = trace_path(mech, path, stop, step, max_points)
-        out.print(f"[bold]{escape(mech.document.name)}[/bold]  ({escape(str(document))}): path of {path}")
+        out.print(f"[bold]{shown(mech.document.name)}[/bold]  ({shown(str(document))}): path of {path}")
         out.print(
             f"status: {result.status}, {len(result.points)} points, {result.seconds:.3g} s"
-            + (f" ({escape(result.message)})" if result.message else "")
+            + (f" ({shown(result.message)})" if result.message else "")
         )
         print_path(out, mech, path, result)
         if json_out is not None:
             write_json(json_out, {"document": str(document), **result.to_dict()})
-            out.print(f"wrote {escape(str(json_out))}")
+            out.print(f"wrote {shown(str(json_out))}")
         if plot is not None and result.points:
             from service.drawings.plotting import plot_trace
 
             save_plot(plot_trace, mech, result, shown_output(mech), plot)
-            out.print(f"wrote {escape(str(plot))}")
+            out.print(f"wrote {shown(str(plot))}")
     if result.status != "completed":
         raise typer.Exit(EXIT_NOT_CONVERGED)

@@ -8,10 +8,9 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.markup import escape
 
 from service.cli.application import app
-from service.cli.common import OptionError, consoles, user_errors
+from service.cli.common import OptionError, consoles, shown, user_errors
 
 
 @app.command()
@@ -52,7 +51,7 @@ def upgrade(
                     "--output" if output is not None else "--in-place", f"cannot write {target}: {exc.strerror}"
                 ) from None
         for change in changes:
-            err.print(escape(change))
+            err.print(shown(change))
         err.print(
             f"{len(changes)} change{'s' if len(changes) != 1 else ''}"
             + ("" if changes else ": the document is in today's shape")
