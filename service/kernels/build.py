@@ -4,27 +4,32 @@ The C is generated in this process (CasADi's code generator: small for kernels, 
 most); the compiler runs as a child in a process group of its own, limited in address space
 (RLIMIT_AS, which its own children, cc1 and as, inherit) and in CPU time (so that even a
 compiler orphaned by a crash cannot run long), niced, and sent SIGKILL with its whole group at
-the wall-time limit. It also dies with this process (PR_SET_PDEATHSIG). The library is
-installed by an atomic rename: a reader never loads half a file.
+the wall-time limit. It also dies with this process (PR_SET_PDEATHSIG). The C, the log and the
+library are made in a folder of the build's own under <cache>/building/, outside every section
+the cache's size bound evicts (models.caches.disk_cache), and the library is installed by an
+atomic rename: a reader never loads half a file.
 
 A build that fails or exceeds its limits is reported as an Outcome with the reason; the
-caller (service.kernels.queue) notes it and does not try that key again.
+caller (service.kernels.queue) notes it and does not try that key again, unless the failure
+came from files removed under the build (its folder, a library it links against: `retry`).
 """
 
 from __future__ import annotations
 
 import ctypes
+import errno
 import os
 import resource
+import shutil
 import signal
 import subprocess
-import tempfile
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import casadi as ca
 
+from models.caches.disk_cache import building_folder
 from service.kernels.cache import FLAGS, compiler
 
 PR_SET_PDEATHSIG = 1
@@ -53,6 +58,7 @@ class Outcome:
     c_bytes: int = 0
     seconds: float = 0.0  # compiler wall time
     peak_bytes: int = 0  # the compiler's largest resident set (cc1 included)
+    retry: bool = False  # failed because files were removed under the build: not the Function's fault
 
     def to_json(self) -> dict:
         return asdict(self)
@@ -64,6 +70,24 @@ def die_with_parent(sig: int = signal.SIGKILL) -> None:
         ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, int(sig), 0, 0, 0)
     except (OSError, AttributeError):  # not Linux: the CPU limit still bounds an orphan
         pass
+
+
+def _missing(link) -> list[str]:
+    return [path for path in link if not os.path.exists(path)]
+
+
+def _install(partial: Path, target: Path) -> None:
+    """Move a built library to its place at once (its folder made again if the cache's bound
+    removed it meanwhile; across file systems, copied beside it first)."""
+    target.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        os.replace(partial, target)
+    except OSError as exc:
+        if exc.errno != errno.EXDEV:
+            raise
+        staged = target.with_name(f".{target.name}.{os.getpid()}.tmp")
+        shutil.copyfile(partial, staged)
+        os.replace(staged, target)
 
 
 def _limited(limits: BuildLimits):
@@ -96,21 +120,40 @@ class Compiler:
         self, fn: ca.Function, target: Path, limits: BuildLimits = BuildLimits(), link: list[str] | tuple[str, ...] = ()
     ) -> Outcome:
         """Generate fn's C and compile it to `target` (installed atomically), linked against the
-        libraries `link` (the compiled kernels a window calls)."""
+        libraries `link` (the compiled kernels a window calls). Whatever fails is the Outcome's
+        reason, never an exception: with `retry` when the build's folder or a library it links
+        against was removed under it."""
         cc = compiler()
         if cc is None:
             return Outcome(False, "no C compiler (set FLEXMECH_CC or CC, or install gcc)")
-        target.parent.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryDirectory(dir=target.parent, prefix=".build-") as tmp:
-            generator = ca.CodeGenerator(f"{fn.name()}.c", {"with_header": False})
-            generator.add(fn)
-            source = Path(generator.generate(tmp + os.sep))
-            c_bytes = source.stat().st_size
-            partial = Path(tmp) / "library.so"
-            outcome = self._run([cc, *FLAGS, str(source), *link, "-o", str(partial), "-lm"], limits, Path(tmp) / "log")
-            outcome.c_bytes = c_bytes
-            if outcome.ok:
-                os.replace(partial, target)
+        if _missing(link):
+            return Outcome(False, f"a library it links against is gone: {_missing(link)[0]}", retry=True)
+        try:
+            work = building_folder(fn.name())
+        except OSError as exc:
+            return Outcome(False, f"no build folder: {exc}")
+        try:
+            return self._build_in(work, cc, fn, target, limits, link)
+        except (OSError, RuntimeError) as exc:  # RuntimeError: CasADi's code generator writing the C
+            removed = isinstance(exc, FileNotFoundError) or not work.is_dir() or bool(_missing(link))
+            why = "files it needs were removed during the build" if removed else "the build failed"
+            return Outcome(False, f"{why}: {type(exc).__name__}: {exc}", retry=removed)
+        finally:
+            shutil.rmtree(work, ignore_errors=True)
+
+    def _build_in(self, work: Path, cc: str, fn: ca.Function, target: Path, limits: BuildLimits, link) -> Outcome:
+        generator = ca.CodeGenerator(f"{fn.name()}.c", {"with_header": False})
+        generator.add(fn)
+        source = Path(generator.generate(str(work) + os.sep))
+        c_bytes = source.stat().st_size
+        partial = work / "library.so"
+        outcome = self._run([cc, *FLAGS, str(source), *link, "-o", str(partial), "-lm"], limits, work / "log")
+        outcome.c_bytes = c_bytes
+        if outcome.ok:
+            _install(partial, target)
+        elif not work.is_dir() or _missing(link):
+            outcome.message = f"files it needs were removed during the build: {outcome.message}"
+            outcome.retry = True
         return outcome
 
     def _run(self, command: list[str], limits: BuildLimits, log: Path) -> Outcome:

@@ -67,18 +67,26 @@ _lock = threading.Lock()
 
 
 def compiled_for(signatures) -> dict[ChainSignature, Chunks]:
-    """The compiled chunks of those signatures that have them (loaded once per process)."""
+    """The compiled chunks of those signatures that have them (loaded once per process). Loaded
+    kernels whose libraries the cache's bound has since removed still run here, and are asked
+    for again (a window that calls them links against their files)."""
+    from service.kernels.queue import request_chain
+
     out = {}
     for signature in signatures:
         key = str(folder(signature))
         with _lock:
             loaded = _loaded.get(key)
-            if loaded is None and is_compiled(signature):
+            on_disk = is_compiled(signature)
+            if loaded is None and on_disk:
                 loaded = _load(signature)
                 if loaded is not None:
                     _loaded[key] = loaded
         if loaded is not None:
-            touch(folder(signature))
+            if on_disk:
+                touch(folder(signature))
+            else:
+                request_chain(signature)
             out[signature] = loaded
     return out
 
