@@ -58,13 +58,15 @@ def _services(settings: Settings) -> Services:
 
 
 def _builder(settings: Settings) -> BuilderProcess | None:
-    """The build queue's process (service.kernels.queue), when kernels are built here."""
+    """The build queue's process (service.kernels.queue), when kernels are built here: watched,
+    and started again when it ends (/v1/health says "degraded" meanwhile)."""
     if not settings.build_kernels or compiler() is None:
         return None
     builder = BuilderProcess(
         {
             "FLEXMECH_BUILD_SECONDS": str(settings.build_seconds),
             "FLEXMECH_BUILD_MEMORY_BYTES": str(int(settings.build_memory_mb * 2**20)),
+            "FLEXMECH_BUILD_QUEUE_MAX": str(settings.build_queue_max),  # the workers' requests keep to it too
         }
     )
     builder.start()

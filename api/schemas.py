@@ -184,9 +184,16 @@ class ExampleSummary(BaseModel):
 
 
 class HealthResponse(BaseModel):
-    status: Literal["ok"]
+    status: Literal["ok", "degraded"] = Field(
+        description="ok; degraded while the kernel builder is down (the server starts it again, with backoff: "
+        "requests are answered, with kernels interpreted, and builds wait in the queue)"
+    )
     version: str
     database: str = Field(description="sqlite or postgresql")
     executor: str
     active_jobs: int
-    builder: dict[str, int | bool] | None = Field(None, description="its kernel build queue: pid, running, queued")
+    builder: dict[str, int | bool | str | None] | None = Field(
+        None,
+        description="its kernel build queue (none when kernels are not built here): pid, running, queued (requests "
+        "waiting), restarts (times the server started it again), and while it is down, reason",
+    )

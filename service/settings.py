@@ -80,6 +80,12 @@ class Settings(BaseSettings):
     )
     build_seconds: float = Field(60.0, gt=0, description="time limit of one kernel compile")
     build_memory_mb: float = Field(1024.0, gt=64, description="memory limit (MiB) of one kernel compile")
+    build_queue_max: int = Field(
+        32,
+        ge=1,
+        le=10_000,
+        description="builds the kernel build queue holds at most: over it the least recently asked is dropped (logged)",
+    )
     cache_max_bytes: int | None = Field(
         None,
         ge=1_000_000,

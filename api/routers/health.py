@@ -1,4 +1,5 @@
-"""GET /v1/health: liveness for load balancers and container health checks (no key needed)."""
+"""GET /v1/health: liveness for load balancers and container health checks (no key needed);
+"degraded" (still 200: requests are answered) while the kernel builder is down."""
 
 from __future__ import annotations
 
@@ -24,10 +25,9 @@ def _version() -> str:
 @router.get("/health", operation_id="health", response_model=HealthResponse, summary="Is the service up")
 async def health(services: ServicesDep) -> HealthResponse:
     active = await run_in_threadpool(services.store.active)
-    b = services.builder
-    builder = {"pid": b.pid, "running": b.running(), "queued": b.queued()} if b is not None else None
+    builder = services.builder.state() if services.builder is not None else None
     return HealthResponse(
-        status="ok",
+        status="degraded" if builder is not None and not builder["running"] else "ok",
         version=_version(),
         database=make_url(services.store.url).get_backend_name(),
         executor=services.executor.description,
