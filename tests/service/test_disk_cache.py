@@ -4,14 +4,16 @@ structure's graphs after its answer."""
 
 from __future__ import annotations
 
+import json
 import os
+import socket
 
 import numpy as np
 from conftest import EXAMPLES
 
 from models import compile_mechanism, load_document
 from models.caches import graph_cache
-from models.caches.disk_cache import bound, entries, touch
+from models.caches.disk_cache import bound, building_folder, entries, queue_dir, touch, usage
 from models.caches.graph_cache import GraphStore
 from models.graph.assembly import FUNCTIONS, build_functions
 
@@ -43,6 +45,44 @@ def test_the_bound_is_a_setting(tmp_path, monkeypatch):
     kept = _entry(tmp_path, "libraries", "b", 3000, 2_000)
     gone = _entry(tmp_path, "libraries", "a", 3000, 1_000)
     assert bound() == [gone] and kept.exists()
+
+
+def _queued(name: str, size: int, asked: float, serialized: bool = True) -> None:
+    """A queued build as service.kernels.queue writes one: its serialized Function, then its request."""
+    queue_dir().mkdir(parents=True, exist_ok=True)
+    item = {"kind": "function", "library": f"/nowhere/{name}.so"}
+    if serialized:
+        (queue_dir() / f"{name}.casadi").write_bytes(b"x" * size)
+        item["serialized"] = str(queue_dir() / f"{name}.casadi")
+    (queue_dir() / f"{name}.json").write_text(json.dumps(item))
+    os.utime(queue_dir() / f"{name}.json", (asked, asked))
+
+
+def test_the_queue_and_builds_in_progress_count_and_the_least_recently_asked_build_goes_whole(tmp_path, monkeypatch):
+    """The queue is bounded with the sections (a queued build by when it was asked, its request
+    and serialized Function together); a build in progress counts but stays; a dead process's
+    build folder goes; a request naming a file that is gone goes at once."""
+    monkeypatch.setenv("FLEXMECH_CACHE_DIR", str(tmp_path))
+    library = _entry(tmp_path, "libraries", "old.so", 3000, 1_000)
+    _queued("asked_first", 4000, 2_000)
+    _queued("asked_last", 4000, 4_000)
+    kernels = _entry(tmp_path, "kernels/v1", "chain_a", 3000, 3_000)
+    _queued("dangling", 10, 5_000)
+    (queue_dir() / "dangling.casadi").unlink()
+    working = building_folder("window")
+    (working / "window.c").write_bytes(b"x" * 5000)
+    dead = tmp_path / "building" / f"999999999@{socket.gethostname()}-window-x"
+    dead.mkdir()
+    (dead / "window.c").write_bytes(b"x" * 5000)
+    removed = bound(13_000)  # 3000 + 4000 + 4000 + 3000 + 5000 in progress: the library and the first asked go
+    assert set(removed) == {library, queue_dir() / "asked_first.json", queue_dir() / "dangling.json", dead}
+    assert sorted(p.name for p in queue_dir().iterdir() if not p.name.startswith(".")) == [
+        "asked_last.casadi",
+        "asked_last.json",
+    ]
+    assert kernels.exists() and (working / "window.c").exists()
+    assert usage() == 4000 + 3000 + 5000 + len((queue_dir() / "asked_last.json").read_bytes())
+    assert bound(1000) and (working / "window.c").exists()  # never a live process's build
 
 
 def test_deferred_graphs_are_written_at_the_flush_and_then_loaded(tmp_path, monkeypatch):
