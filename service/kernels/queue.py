@@ -214,6 +214,8 @@ class Builder:
             log.exception("build %s failed", name)
             outcome = Outcome(False, f"the build failed: {type(exc).__name__}: {exc}")
             item = claimed[1] if claimed is not None else None
+            if claimed is None:  # failed taking it: dropped, or the loop would meet it again at once
+                request.unlink(missing_ok=True)
         finally:
             if claimed is not None:
                 shutil.rmtree(claimed[0], ignore_errors=True)
@@ -243,19 +245,22 @@ class Builder:
                 request.unlink(missing_ok=True)
                 raise Gone("its request is not a JSON object")
             work = building_folder(request.stem)
-            serialized = item.get("serialized")
-            taken = {**item, "name": request.stem, "asked": asked}
-            if serialized is not None:
-                taken["serialized"] = str(work / "function.casadi")
-            (work / "request.json").write_text(json.dumps(taken))
-            if serialized is not None:
-                try:
-                    os.replace(serialized, work / "function.casadi")
-                except FileNotFoundError:
-                    request.unlink(missing_ok=True)
-                    shutil.rmtree(work, ignore_errors=True)
-                    raise Gone("its serialized Function is gone (dropped from the queue)") from None
-            request.unlink(missing_ok=True)
+            try:
+                serialized = item.get("serialized")
+                taken = {**item, "name": request.stem, "asked": asked}
+                if serialized is not None:
+                    taken["serialized"] = str(work / "function.casadi")
+                (work / "request.json").write_text(json.dumps(taken))
+                if serialized is not None:
+                    try:
+                        os.replace(serialized, work / "function.casadi")
+                    except FileNotFoundError:
+                        request.unlink(missing_ok=True)
+                        raise Gone("its serialized Function is gone (dropped from the queue)") from None
+                request.unlink(missing_ok=True)
+            except BaseException:
+                shutil.rmtree(work, ignore_errors=True)
+                raise
         return work, taken
 
     def _build(self, item: dict) -> Outcome:
