@@ -86,7 +86,8 @@ def _build(b, document: str, compiler, limits, rows: list, seen: set, err) -> in
         outcome = compiler.build(fn, target, limits, link=b.link)
         if not outcome.ok:
             failed += 1
-            note_abandoned(b.note, outcome)
+            if not outcome.retry:  # its files removed under it (the cache's bound): not the Function's fault
+                note_abandoned(b.note, outcome)
         rows.append(
             {
                 "document": document,

@@ -37,7 +37,8 @@ class FastOptions:
 
 
 def compile_function(fn: ca.Function, key: str) -> tuple[ca.Function, bool]:
-    """(compiled copy of fn, True), cached at <cache_dir>/<name>_<hash>.so; (fn, False) when
+    """(compiled copy of fn, True), cached at <cache_dir>/libraries/<name>_<hash>.so (a section the
+    cache's bound counts); (fn, False) when
     no compiler is available or compilation fails."""
     target = compiled_library(fn, key)
     if target is None:
@@ -51,7 +52,7 @@ def compiled_library(fn: ca.Function, key: str) -> Path | None:
     if cc is None:
         return None
     digest = hashlib.sha256(f"{key}|{ca.__version__}|{_VERSION}|{cc}".encode()).hexdigest()[:16]
-    target = cache_dir() / f"{fn.name()}_{digest}.so"
+    target = cache_dir() / "libraries" / f"{fn.name()}_{digest}.so"
     if not target.exists():
         target.parent.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryDirectory() as tmp:
