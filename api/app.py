@@ -32,8 +32,8 @@ from service.jobs.executors import make_executor
 from service.jobs.kinds import job_kinds
 from service.jobs.runner import JobRunner
 from service.jobs.store import JobStore
+from service.kernels.builder_process import BuilderProcess
 from service.kernels.cache import compiler
-from service.kernels.queue import BuilderProcess
 from service.settings import Settings
 
 log = logging.getLogger("flexmech.api")

@@ -10,7 +10,7 @@ from service.examples import ExampleLibrary
 from service.jobs.executors import TaskExecutor
 from service.jobs.runner import JobRunner
 from service.jobs.store import JobStore
-from service.kernels.queue import BuilderProcess
+from service.kernels.builder_process import BuilderProcess
 from service.requests import Limits
 from service.settings import Settings
 

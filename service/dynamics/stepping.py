@@ -24,6 +24,7 @@ from service.dynamics.engine import WINDOW_ACCEPTANCE, Engine, engine_for
 from service.dynamics.histories import Histories
 from service.dynamics.onsets import Onsets, crossing, step_onto_onset
 from service.kernels import compiled_for
+from service.kernels.cache import is_compiled
 from service.kernels.queue import request_chain
 
 WINDOW = 20  # steps per call
@@ -101,7 +102,7 @@ def engine_of(structure: Structure, scheme, histories: Histories) -> Engine:
     signatures = [g.signature for g in layout_of(structure).groups]
     compiled = compiled_for(signatures)
     for signature in signatures:
-        if signature not in compiled:
+        if signature not in compiled or not is_compiled(signature):  # missing, or loaded but evicted since
             request_chain(signature)
     return engine_for(structure, scheme, histories.moving, compiled)
 

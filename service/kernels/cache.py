@@ -68,10 +68,8 @@ _lock = threading.Lock()
 
 def compiled_for(signatures) -> dict[ChainSignature, Chunks]:
     """The compiled chunks of those signatures that have them (loaded once per process). Loaded
-    kernels whose libraries the cache's bound has since removed still run here, and are asked
-    for again (a window that calls them links against their files)."""
-    from service.kernels.queue import request_chain
-
+    kernels whose libraries the cache's bound has since removed still run here (their callers
+    ask for them again: a window that calls them links against their files)."""
     out = {}
     for signature in signatures:
         key = str(folder(signature))
@@ -85,8 +83,6 @@ def compiled_for(signatures) -> dict[ChainSignature, Chunks]:
         if loaded is not None:
             if on_disk:
                 touch(folder(signature))
-            else:
-                request_chain(signature)
             out[signature] = loaded
     return out
 

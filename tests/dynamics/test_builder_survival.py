@@ -33,9 +33,9 @@ from service.dynamics.histories import read_histories
 from service.dynamics.run import scheme_of, simulation_spec
 from service.dynamics.stepping import WINDOW, engine_of
 from service.kernels.build import BuildLimits, Compiler
+from service.kernels.builder_process import BuilderProcess
 from service.kernels.needs import builds_of, window_builds
 from service.kernels.queue import (
-    BuilderProcess,
     accept_requests,
     function_library,
     note_of,
