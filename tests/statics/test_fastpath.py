@@ -23,7 +23,7 @@ def test_compiled_solve_equals_python_newton(gripper, private_cache):
     mech = gripper.with_values({ACTUATION: 65.0})
     fast = FastPath(mech)
     assert fast.compiled
-    assert len(list(private_cache.glob("fast_solve_*.so"))) == 1
+    assert len(list(private_cache.glob("libraries/fast_solve_*.so"))) == 1
     z, norm = fast.solve()
     assert norm < 1e-10
     np.testing.assert_allclose(z, solve_equilibrium(mech).z, atol=1e-12)
@@ -31,12 +31,12 @@ def test_compiled_solve_equals_python_newton(gripper, private_cache):
 
 def test_library_is_reused_from_the_disk_cache(gripper_pnl, private_cache):
     FastPath(gripper_pnl)
-    (library,) = private_cache.glob("fast_solve_*.so")
+    (library,) = private_cache.glob("libraries/fast_solve_*.so")
     stamp = library.stat().st_mtime_ns
     other_numbers = gripper_pnl.with_values({"/sections/flexure/h": "6 um", ACTUATION: 10.0})
     again = FastPath(other_numbers)  # same structure: no new compilation
     assert library.stat().st_mtime_ns == stamp
-    assert len(list(private_cache.glob("fast_solve_*.so"))) == 1
+    assert len(list(private_cache.glob("libraries/fast_solve_*.so"))) == 1
     np.testing.assert_allclose(again.solve()[0], solve_equilibrium(other_numbers).z, atol=1e-12)
 
 
