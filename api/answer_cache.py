@@ -8,8 +8,8 @@ back from memory, without validation, a worker or a solve: a gripper solve took 
 server's interpreter, its repeat takes what an unknown path's 404 takes. Only answers the route
 marks as repeatable are kept (a converged or finished report, never a time limit's or an
 error), at most ENTRY_BYTES each and `max_bytes` in all, least recently used first out. The key
-is the request's bytes and its API key's digest: one key never learns what another asked, not
-even from how fast it is answered. A kept answer says so in `X-Flexmech-Answer: kept`.
+is the request's bytes, media type and its API key's digest: one key never learns what another
+asked, not even from how fast it is answered. It answers before the body is parsed (api.limits.JsonBody). A kept answer says so in `X-Flexmech-Answer: kept`.
 """
 
 from __future__ import annotations
@@ -35,8 +35,9 @@ class AnswerCache:
         body = scope.get(RAW_BODY)
         if self.max_bytes <= 0 or body is None or scope.get("path") != CACHED_PATH or scope.get("method") != "POST":
             return None
-        api_key = next((value for name, value in scope.get("headers") or [] if name == b"x-api-key"), b"")
-        digest = hashlib.sha256(hashlib.sha256(api_key).digest() + body)
+        headers = dict(scope.get("headers") or [])
+        said = hashlib.sha256(headers.get(b"x-api-key", b"")).digest() + headers.get(b"content-type", b"")
+        digest = hashlib.sha256(said + b"\0" + body)
         return digest.digest()
 
     async def __call__(self, scope, receive, send):

@@ -19,7 +19,7 @@ from api.analysis_requests import documented
 from api.answer_cache import AnswerCache
 from api.errors import install_error_handlers
 from api.headers import SecurityHeaders
-from api.limits import BodySizeLimit
+from api.limits import BodySizeLimit, JsonBody
 from api.routers import drawings, examples, health, jobs
 from api.routers.job_routes import job_router
 from api.routers.solve import solve_router
@@ -111,6 +111,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     for module in (jobs, examples, drawings, health):
         app.include_router(module.router)
     mount_workbench(app)
+    app.add_middleware(JsonBody)  # the body parsed, once no kept answer was given
     app.add_middleware(AnswerCache, max_bytes=settings.answer_cache_bytes)  # inside the body guard: it reads the body
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_request_bytes, read_timeout=settings.request_read_timeout)
     app.add_middleware(SecurityHeaders)  # outermost: even the body guard's answers carry them

@@ -3,11 +3,11 @@
 - Size: counted as it arrives, so a chunked request without Content-Length is stopped too (413).
 - Time: the whole body must arrive within read_timeout seconds; a client that declares more
   than it sends no longer holds a connection forever (408).
-- JSON: parsed once here with the document reader's bounds (models.documents.reading): nesting deeper
+- JSON (JsonBody, inside the answer cache): parsed once with the document reader's bounds (models.documents.reading): nesting deeper
   than 64 levels or an integer of thousands of digits is malformed_json (400), a key given
   twice in one object is duplicate_key (422: the text is JSON, its meaning is not), never a
-  merged object, a recursion error or a 500. The parse runs on one thread beside the
-  event loop, or for a large body in a parser process (api.body_parsing: its duplicate check
+  merged object, a recursion error or a 500. A small body parses on the loop, a larger one on
+  one thread beside it, a large one in a parser process (api.body_parsing: its duplicate check
   is Python, 0.26 s for a megabyte of small objects, which on the loop held every other
   request, /v1/health included), and the routes take the parsed value from the scope
   (api.parsed_route) instead of parsing the body again on the loop.
@@ -88,16 +88,7 @@ class BodySizeLimit:
         body = await self._read(scope, receive, send)
         if body is None:
             return
-        if body.strip() and scope.get("method") in _WITH_BODY and is_json(headers.get(b"content-type")):
-            kind, value = await parse_body(body)
-            if kind == "duplicate_key":
-                return await error_response(
-                    422, "duplicate_key", f"the body gives the key '{value}' twice in one object"
-                )(scope, receive, send)
-            if kind == "malformed_json":
-                return await error_response(400, "malformed_json", value)(scope, receive, send)
-            scope[PARSED_BODY] = value
-            scope[RAW_BODY] = body  # the answer cache's key (api.answer_cache)
+        scope[RAW_BODY] = body  # for the answer cache's key (api.answer_cache) and JsonBody
         replayed = False
 
         async def replay():
@@ -108,3 +99,26 @@ class BodySizeLimit:
             return await receive()
 
         return await self.app(scope, replay, send)
+
+
+class JsonBody:
+    """The body the guard has read, parsed as JSON (off the event loop when large) into the scope
+    for the routes (api.parsed_route); a duplicate key is a 422, malformed JSON a 400. Inside the
+    answer cache: a kept answer is given without parsing its request again."""
+
+    def __init__(self, app):
+        self.app = app
+
+    async def __call__(self, scope, receive, send):
+        body = scope.get(RAW_BODY) if scope["type"] == "http" else None
+        headers = dict(scope.get("headers") or []) if body is not None else {}
+        if body and body.strip() and scope.get("method") in _WITH_BODY and is_json(headers.get(b"content-type")):
+            kind, value = await parse_body(body)
+            if kind == "duplicate_key":
+                return await error_response(
+                    422, "duplicate_key", f"the body gives the key '{value}' twice in one object"
+                )(scope, receive, send)
+            if kind == "malformed_json":
+                return await error_response(400, "malformed_json", value)(scope, receive, send)
+            scope[PARSED_BODY] = value
+        return await self.app(scope, receive, send)
