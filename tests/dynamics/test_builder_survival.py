@@ -85,7 +85,7 @@ def _holding_compiler(folder: Path, name: str) -> dict[str, str]:
         "#!/bin/sh\n"
         'for arg in "$@"; do\n'
         '  case "$arg" in\n'
-        f'    */{name}.c) echo "$arg" > "{started}"; n=0\n'
+        f'    */{name}.c) echo "$arg" > "{started}.part" && mv "{started}.part" "{started}"; n=0\n'
         f'      while [ -e "{hold}" ] && [ -d "$(dirname "$arg")" ] && [ $n -lt 400 ]; do sleep 0.05; n=$((n+1)); done;;\n'
         "  esac\n"
         "done\n"
@@ -94,6 +94,16 @@ def _holding_compiler(folder: Path, name: str) -> dict[str, str]:
     script.chmod(0o755)
     hold.touch()
     return {"FLEXMECH_CC": str(script)}
+
+
+def _held_source(folder: Path) -> Path | None:
+    """The held compile's source, once the script has written its whole path (the shell creates
+    `started` before it writes into it: an empty read once made the test remove its own folder)."""
+    try:
+        text = (folder / "started").read_text().strip()
+    except OSError:
+        return None
+    return Path(text) if text.endswith(".c") and Path(text).is_absolute() else None
 
 
 def _bytes(folder: Path) -> int:
@@ -200,8 +210,10 @@ def test_a_build_whose_inputs_vanish_or_do_not_load_fails_alone(cache, tmp_path,
     builder.start()
     try:
         pid = builder.pid
-        _wait((tmp_path / "started").exists, 60, "the held compile", lambda: capfd.readouterr().err)
-        shutil.rmtree(Path((tmp_path / "started").read_text().strip()).parent)  # its build folder, mid-compile
+        _wait(lambda: _held_source(tmp_path) is not None, 60, "the held compile", lambda: capfd.readouterr().err)
+        folder = _held_source(tmp_path).parent
+        assert folder.is_relative_to(cache / "building"), folder  # never anything but a build folder
+        shutil.rmtree(folder)  # its build folder, mid-compile
         _wait(sound.exists, 60, "the sound build", lambda: capfd.readouterr().err)
         assert builder.running() and builder.pid == pid and builder.restarts == 0
         log = capfd.readouterr().err
