@@ -10,10 +10,9 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal, Union
 
+from flexmech.api.schemas import DocumentRequest
+from flexmech.service.analyses import ANALYSES, Analysis, AnalysisOptions
 from pydantic import ConfigDict, Discriminator, Field, Tag
-
-from api.schemas import DocumentRequest
-from service.analyses import ANALYSES, Analysis, AnalysisOptions
 
 DEFAULT_ANALYSIS = "equilibrium"
 

@@ -13,28 +13,27 @@ from contextlib import asynccontextmanager
 
 from fastapi import FastAPI
 from fastapi_offline import FastAPIOffline
-
-from api import body_parsing
-from api.analysis_requests import documented
-from api.answer_cache import AnswerCache
-from api.errors import install_error_handlers
-from api.headers import SecurityHeaders
-from api.limits import BodySizeLimit, JsonBody
-from api.routers import drawings, examples, health, jobs
-from api.routers.job_routes import job_router
-from api.routers.solve import solve_router
-from api.routers.workbench import mount_workbench
-from api.solver_pool import SolverPool
-from api.state import Services
-from service.analyses import ANALYSES
-from service.examples import ExampleLibrary, examples_directory
-from service.jobs.executors import make_executor
-from service.jobs.kinds import job_kinds
-from service.jobs.runner import JobRunner
-from service.jobs.store import JobStore
-from service.kernels.builder_process import BuilderProcess
-from service.kernels.cache import compiler
-from service.settings import Settings
+from flexmech.api import body_parsing
+from flexmech.api.analysis_requests import documented
+from flexmech.api.answer_cache import AnswerCache
+from flexmech.api.errors import install_error_handlers
+from flexmech.api.headers import SecurityHeaders
+from flexmech.api.limits import BodySizeLimit, JsonBody
+from flexmech.api.routers import drawings, examples, health, jobs
+from flexmech.api.routers.job_routes import job_router
+from flexmech.api.routers.solve import solve_router
+from flexmech.api.routers.workbench import mount_workbench
+from flexmech.api.solver_pool import SolverPool
+from flexmech.api.state import Services
+from flexmech.service.analyses import ANALYSES
+from flexmech.service.examples import ExampleLibrary, examples_directory
+from flexmech.service.jobs.executors import make_executor
+from flexmech.service.jobs.kinds import job_kinds
+from flexmech.service.jobs.runner import JobRunner
+from flexmech.service.jobs.store import JobStore
+from flexmech.service.kernels.builder_process import BuilderProcess
+from flexmech.service.kernels.cache import compiler
+from flexmech.service.settings import Settings
 
 log = logging.getLogger("flexmech.api")
 

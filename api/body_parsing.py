@@ -16,9 +16,9 @@ import asyncio
 import logging
 from concurrent.futures import ThreadPoolExecutor
 
-from api.errors import ApiError
-from models import MechanismError
-from models.documents.reading import DuplicateKey, parse_json
+from flexmech.api.errors import ApiError
+from flexmech.models import MechanismError
+from flexmech.models.documents.reading import DuplicateKey, parse_json
 
 log = logging.getLogger("flexmech.bodies")
 
@@ -54,7 +54,7 @@ async def parse_body(body: bytes) -> tuple:
         return parsed_outcome(body)
     if len(body) >= LARGE_BODY:
         if _parser is None:
-            from api.solver_pool import SolverPool
+            from flexmech.api.solver_pool import SolverPool
 
             _parser = SolverPool(1, build_allowance=0.0, name=PARSER_NAME)
         try:

@@ -21,11 +21,9 @@ from collections.abc import Callable
 from typing import Any, TypeVar
 
 import httpx
-from pydantic import BaseModel, TypeAdapter
-
-from api.analysis_methods import Analyses
-from api.drawing_schemas import DrawingRequest
-from api.job_schemas import (
+from flexmech.api.analysis_methods import Analyses
+from flexmech.api.drawing_schemas import DrawingRequest
+from flexmech.api.job_schemas import (
     ContactPathRequest,
     ExportRequest,
     ImpactStudyRequest,
@@ -37,7 +35,8 @@ from api.job_schemas import (
     SimulationRequest,
     SweepRequest,
 )
-from api.schemas import AnalysisReport, ExampleSummary, HealthResponse, SolveRequest, SolveResponse
+from flexmech.api.schemas import AnalysisReport, ExampleSummary, HealthResponse, SolveRequest, SolveResponse
+from pydantic import BaseModel, TypeAdapter
 
 T = TypeVar("T")
 Progress = Callable[[JobStatusResponse], None]

@@ -7,9 +7,8 @@ from typing import Annotated
 
 from fastapi import Depends, Request
 from fastapi.security import APIKeyHeader
-
-from api.errors import ApiError
-from api.state import Services
+from flexmech.api.errors import ApiError
+from flexmech.api.state import Services
 
 _api_key_header = APIKeyHeader(
     name="X-API-Key", auto_error=False, description="Required when the server has FLEXMECH_API_KEYS set"

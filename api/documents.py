@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from api.errors import ApiError
-from api.schemas import DocumentRequest
-from api.state import Services
+from flexmech.api.errors import ApiError
+from flexmech.api.schemas import DocumentRequest
+from flexmech.api.state import Services
 
 
 def request_document(request: DocumentRequest, services: Services) -> dict:

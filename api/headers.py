@@ -5,7 +5,7 @@ security policy on its page and on every file it loads, whichever path serves th
 
 from __future__ import annotations
 
-from api.routers.workbench import POLICY
+from flexmech.api.routers.workbench import POLICY
 
 NOSNIFF = (b"x-content-type-options", b"nosniff")
 CSP = (b"content-security-policy", POLICY.encode())

@@ -5,10 +5,9 @@ from __future__ import annotations
 
 from fastapi import Response
 from fastapi.concurrency import run_in_threadpool
-
-from api.job_schemas import JobStatusResponse
-from api.routers.jobs import job_status
-from service.jobs.kinds import kind_named
+from flexmech.api.job_schemas import JobStatusResponse
+from flexmech.api.routers.jobs import job_status
+from flexmech.service.jobs.kinds import kind_named
 
 # OpenAPI links: what a generated client (or schemathesis' stateful tests) can do with the new job
 JOB_LINKS = {

@@ -6,9 +6,8 @@ from __future__ import annotations
 from datetime import datetime
 from typing import Any, Literal
 
+from flexmech.api.schemas import ContactPairOut, DocumentRequest, PointStatus, ResponseModel
 from pydantic import BaseModel, ConfigDict, Field
-
-from api.schemas import ContactPairOut, DocumentRequest, PointStatus, ResponseModel
 
 JobStatusName = Literal["queued", "running", "succeeded", "failed", "cancelled"]
 

@@ -19,10 +19,10 @@ from __future__ import annotations
 import asyncio
 import time
 
-from api.answer_cache import RAW_BODY
-from api.body_parsing import parse_body
-from api.errors import error_response
-from api.parsed_route import PARSED_BODY
+from flexmech.api.answer_cache import RAW_BODY
+from flexmech.api.body_parsing import parse_body
+from flexmech.api.errors import error_response
+from flexmech.api.parsed_route import PARSED_BODY
 
 _WITH_BODY = {"POST", "PUT", "PATCH"}
 

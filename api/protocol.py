@@ -22,7 +22,7 @@ from uvicorn.protocols.http.auto import AutoHTTPProtocol
 
 @cache
 def header_seconds() -> float:
-    from service.settings import Settings
+    from flexmech.service.settings import Settings
 
     return Settings().header_read_timeout
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from api.schemas import ErrorResponse
+from flexmech.api.schemas import ErrorResponse
 
 _TEXT = {
     400: "Malformed JSON",

@@ -32,10 +32,10 @@ import pickle
 import signal
 from concurrent.futures import ThreadPoolExecutor
 
-from api.errors import ApiError
-from models import MechanismError
-from models.caches.graph_cache import defer_saves, flush_saves
-from service.deadline import call_scope
+from flexmech.api.errors import ApiError
+from flexmech.models import MechanismError
+from flexmech.models.caches.graph_cache import defer_saves, flush_saves
+from flexmech.service.deadline import call_scope
 
 log = logging.getLogger("flexmech.solvers")
 
@@ -80,8 +80,8 @@ def _serve(connection, name: bytes = WORKER_NAME, deadline=None) -> None:
     publishing each call's deadline in `deadline` (a shared double; 0: no loop started)."""
     die_with_parent(name)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C in a terminal goes to the server, which ends us
-    from service.jobs.kinds import job_kinds
-    from service.threads import single_threaded_blas
+    from flexmech.service.jobs.kinds import job_kinds
+    from flexmech.service.threads import single_threaded_blas
 
     single_threaded_blas()
     job_kinds()  # the solvers' imports now, not in the first request
@@ -137,15 +137,15 @@ class _Worker:
 
 # What the fork server imports once, so that no worker imports it again.
 PRELOAD = [
-    "api.solver_pool",
-    "api.routers.solve",
-    "api.routers.drawings",
-    "service.analyses",
-    "service.jobs.contact",
-    "service.jobs.impact_study",
-    "service.jobs.optimize",
-    "service.jobs.simulation",
-    "service.jobs.sweep",
+    "flexmech.api.solver_pool",
+    "flexmech.api.routers.solve",
+    "flexmech.api.routers.drawings",
+    "flexmech.service.analyses",
+    "flexmech.service.jobs.contact",
+    "flexmech.service.jobs.impact_study",
+    "flexmech.service.jobs.optimize",
+    "flexmech.service.jobs.simulation",
+    "flexmech.service.jobs.sweep",
 ]
 
 

@@ -5,14 +5,14 @@ from __future__ import annotations
 import hashlib
 from dataclasses import dataclass
 
-from api.solver_pool import SolverPool
-from service.examples import ExampleLibrary
-from service.jobs.executors import TaskExecutor
-from service.jobs.runner import JobRunner
-from service.jobs.store import JobStore
-from service.kernels.builder_process import BuilderProcess
-from service.requests import Limits
-from service.settings import Settings
+from flexmech.api.solver_pool import SolverPool
+from flexmech.service.examples import ExampleLibrary
+from flexmech.service.jobs.executors import TaskExecutor
+from flexmech.service.jobs.runner import JobRunner
+from flexmech.service.jobs.store import JobStore
+from flexmech.service.kernels.builder_process import BuilderProcess
+from flexmech.service.requests import Limits
+from flexmech.service.settings import Settings
 
 
 @dataclass

@@ -131,7 +131,7 @@ def blank_keys() -> tuple[int, float, str]:
     """(exit code, seconds, last line) of `flexmech serve` with FLEXMECH_API_KEYS=" "."""
     started = time.perf_counter()
     done = subprocess.run(
-        [sys.executable, "-m", "service.cli", "serve", "--port", "1"],
+        [sys.executable, "-m", "flexmech.api.cli", "serve", "--port", "1"],
         capture_output=True,
         text=True,
         env={**os.environ, "FLEXMECH_API_KEYS": " "},

@@ -34,9 +34,8 @@ from pathlib import Path
 
 import httpx
 import numpy as np
-
-from models import compile_mechanism, load_document
-from service import solve_equilibrium
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service import solve_equilibrium
 
 REPO = Path(__file__).resolve().parents[1]
 EXAMPLE = REPO / "examples" / "gripper.json"
@@ -60,7 +59,9 @@ def start_server(data_dir: str, settings: dict[str, str] | None = None) -> tuple
         **(settings or {}),
     }
     proc = subprocess.Popen(
-        [sys.executable, "-m", "service.cli", "serve", "--host", "127.0.0.1", "--port", str(port)], cwd=REPO, env=env
+        [sys.executable, "-m", "flexmech.api.cli", "serve", "--host", "127.0.0.1", "--port", str(port)],
+        cwd=REPO,
+        env=env,
     )
     url = f"http://127.0.0.1:{port}"
     for _ in range(600):

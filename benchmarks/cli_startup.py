@@ -6,7 +6,7 @@ Each row is the median wall time of several fresh processes, run one after the o
   flexmech solve --help        one command's options
   flexmech modes --help        a command made from an analysis' options: it imports the registry
 The `flexmech` script next to this Python is run (not a version manager's shim, which adds its
-own start); without one, `python -m service.cli`. Run from the repository root:
+own start); without one, `python -m flexmech.api.cli`. Run from the repository root:
 
     python3 -m benchmarks.cli_startup [--repeats 9]
 """
@@ -26,7 +26,7 @@ ROOT = Path(__file__).resolve().parents[1]
 def flexmech() -> list[str]:
     """The command that starts the CLI: the installed script, else the package's __main__."""
     script = Path(sys.executable).parent / "flexmech"
-    return [str(script)] if script.exists() else [sys.executable, "-m", "service.cli"]
+    return [str(script)] if script.exists() else [sys.executable, "-m", "flexmech.api.cli"]
 
 
 def median_seconds(command: list[str], repeats: int) -> float:

@@ -44,7 +44,7 @@ ROD_UNTIL, BAR_UNTIL = 5.0, 1.0
 
 
 def document(example: str, edit=None):
-    from models import compile_mechanism, load_document
+    from flexmech.models import compile_mechanism, load_document
 
     data = json.loads((EXAMPLES / example).read_text())
     if edit is not None:
@@ -55,8 +55,8 @@ def document(example: str, edit=None):
 def compile_kernels(mech) -> float:
     """Compile the kernels the mechanism runs on, then the window that calls them (if not yet):
     seconds of compiling."""
-    from service.kernels.build import Compiler
-    from service.kernels.needs import builds_of, window_builds
+    from flexmech.service.kernels.build import Compiler
+    from flexmech.service.kernels.needs import builds_of, window_builds
 
     seconds = 0.0
     compiler = Compiler()
@@ -74,7 +74,7 @@ def compile_kernels(mech) -> float:
 def flexmech_run(mech, **fields) -> tuple[dict, float]:
     """(report, seconds of the engine's build in a first short run); the report's `seconds`
     is the integration of the timed run alone (no static start, no report)."""
-    from service.dynamics.run import run_simulation, simulation_spec
+    from flexmech.service.dynamics.run import run_simulation, simulation_spec
 
     started = time.perf_counter()
     run_simulation(mech, simulation_spec(mech, {**fields, "until": 20 * fields.get("step", 1e-3)}))
@@ -110,7 +110,7 @@ def cold_process_seconds() -> float:
             [
                 sys.executable,
                 "-m",
-                "service.cli",
+                "flexmech.api.cli",
                 "simulate",
                 str(EXAMPLES / "rod_free_vibration.json"),
                 "--until",
@@ -132,7 +132,7 @@ def rod(interpreted: dict) -> None:
     shipped = document("rod_free_vibration.json")
     fine = document("rod_free_vibration.json", intervals(16))
     compiled = compile_kernels(shipped)
-    from service.dynamics.engine import _engines
+    from flexmech.service.dynamics.engine import _engines
 
     _engines.clear()  # the engines built on interpreted kernels go: the next run loads the compiled ones
     warm, built = flexmech_run(shipped, until=ROD_UNTIL, every=1)
@@ -183,7 +183,7 @@ def four_bar(interpreted: dict) -> None:
 
     shipped = document("four_bar_dynamics.json")
     compiled = compile_kernels(shipped)
-    from service.dynamics.engine import _engines
+    from flexmech.service.dynamics.engine import _engines
 
     _engines.clear()
     warm, built = flexmech_run(shipped, until=BAR_UNTIL, every=1)

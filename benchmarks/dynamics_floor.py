@@ -40,9 +40,9 @@ TIMED_SECONDS = 0.3  # per kernel and repetition
 
 def kernel_functions(signature) -> dict:
     """The single-item kernels of a chain signature, by name."""
-    from models.kernels.chain_solver import solver_functions
-    from models.kernels.chain_sweep import sweep_function
-    from models.kernels.link_chain import jacobian_function
+    from flexmech.models.kernels.chain_solver import solver_functions
+    from flexmech.models.kernels.chain_sweep import sweep_function
+    from flexmech.models.kernels.link_chain import jacobian_function
 
     solver = solver_functions(signature)
     return {
@@ -132,10 +132,11 @@ def time_kernels(signature) -> dict[str, float]:
 def counted_run(mech, until: float) -> tuple[dict, int, float]:
     """(the warm run's report, its number of windows: factorizations, seconds of compiling its
     kernels and window first)."""
+    from flexmech.service.dynamics.engine import _engines
+    from flexmech.service.dynamics.run import run_simulation, simulation_spec
+    from flexmech.service.dynamics.stepping import StepRunner
+
     from benchmarks.dynamics import compile_kernels, flexmech_run
-    from service.dynamics.engine import _engines
-    from service.dynamics.run import run_simulation, simulation_spec
-    from service.dynamics.stepping import StepRunner
 
     compiled = compile_kernels(mech)
     _engines.clear()
@@ -157,7 +158,7 @@ def counted_run(mech, until: float) -> tuple[dict, int, float]:
 
 def floor_row(mech, until: float) -> dict:
     """The example's kernel timings, counts, floor and measured run (seconds per simulated second)."""
-    from models.kernels.layout import layout_of
+    from flexmech.models.kernels.layout import layout_of
 
     report, windows, compiled = counted_run(mech, until)
     steps, iterations = report["steps"], report["iterations"]

@@ -35,9 +35,9 @@ def stepping(mech, until: float) -> tuple[float, float, float, float]:
     """(wall seconds per step, Newton iterations per step, the tip's start height in m, seconds
     of the report) of the document's run to `until`, after a first short run that builds the
     engine and its window."""
-    from service.dynamics.histories import read_histories
-    from service.dynamics.integrate import integrate
-    from service.dynamics.run import report, scheme_of, simulated, simulation_spec, start_shape
+    from flexmech.service.dynamics.histories import read_histories
+    from flexmech.service.dynamics.integrate import integrate
+    from flexmech.service.dynamics.run import report, scheme_of, simulated, simulation_spec, start_shape
 
     spec = simulation_spec(mech, {"until": until})
     histories = read_histories(mech, spec.histories, spec.until)
@@ -58,8 +58,8 @@ def stepping(mech, until: float) -> tuple[float, float, float, float]:
 
 def first_statics_solve(mech) -> float:
     """Seconds of the first statics solve of the structure (its residual form built anew)."""
-    from models.graph.assembly import _symbolic
-    from service.solvers.equilibrium import solve_equilibrium
+    from flexmech.models.graph.assembly import _symbolic
+    from flexmech.service.solvers.equilibrium import solve_equilibrium
 
     _symbolic.cache_clear()  # the report's expressions are not reused: a structure new to the process
     started = time.perf_counter()

@@ -33,14 +33,13 @@ import time
 from pathlib import Path
 
 import numpy as np
-
-from models import compile_mechanism, load_document
-from service.export.library import export_document
-from service.export.plan import ExportOptions
-from service.solvers.equilibrium import newton
-from service.solvers.fastpath import FastPath
-from service.solvers.newton import NewtonOptions
-from service.solvers.sweep import solve_for_target, sweep
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service.export.library import export_document
+from flexmech.service.export.plan import ExportOptions
+from flexmech.service.solvers.equilibrium import newton
+from flexmech.service.solvers.fastpath import FastPath
+from flexmech.service.solvers.newton import NewtonOptions
+from flexmech.service.solvers.sweep import solve_for_target, sweep
 
 ROOT = Path(__file__).resolve().parents[1]
 FORCE = "/loads/actuation/force/1"

@@ -19,11 +19,10 @@ import time
 from pathlib import Path
 
 import numpy as np
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service import NewtonOptions, solve_equilibrium, solve_for_target, sweep
+from flexmech.service.solvers.fastpath import FastPath
 from scipy.optimize import root
-
-from models import compile_mechanism, load_document
-from service import NewtonOptions, solve_equilibrium, solve_for_target, sweep
-from service.solvers.fastpath import FastPath
 
 try:
     from benchmarks.numpy_peer import NumpyGripperResidual

@@ -43,12 +43,11 @@ from pathlib import Path
 
 import casadi as ca
 import numpy as np
-
-from models.beams.curved_beam_closed_form import stiffness
-from models.contact.laws.penalty import hertz_stiffness
-from models.documents.document import MechanismDocument
-from models.documents.simulation_spec import SimulateSpec
-from service.impacts.run import model_of, run_impacts
+from flexmech.models.beams.curved_beam_closed_form import stiffness
+from flexmech.models.contact.laws.penalty import hertz_stiffness
+from flexmech.models.documents.document import MechanismDocument
+from flexmech.models.documents.simulation_spec import SimulateSpec
+from flexmech.service.impacts.run import model_of, run_impacts
 
 ROOT = Path(__file__).resolve().parents[1]
 PEER = ["/usr/bin/python3", str(ROOT / "benchmarks" / "siconos_peer.py")]
@@ -97,9 +96,9 @@ def run(doc: dict, repeat: int = 3) -> tuple[dict, float, int]:
 
 def compile_chunk(doc: dict) -> float:
     """Compile the document's step chunk as `flexmech build` does: the compiler's seconds."""
-    from models import compile_mechanism, load_document
-    from service.kernels.build import BuildLimits, Compiler
-    from service.kernels.needs import builds_of
+    from flexmech.models import compile_mechanism, load_document
+    from flexmech.service.kernels.build import BuildLimits, Compiler
+    from flexmech.service.kernels.needs import builds_of
 
     seconds = 0.0
     for build in builds_of(compile_mechanism(load_document(copy.deepcopy(doc)))):
@@ -197,9 +196,10 @@ def state_at(report: dict, t: float) -> list[float]:
 
 def scipy_peer(doc: dict) -> dict:
     """The event-driven document run by scipy's solve_ivp on flexmech's right-hand side."""
+    from flexmech.service.impacts.run import MAX_STEP_PARTS, start_state
+    from flexmech.service.impacts.stepping import event_settings
+
     from benchmarks.scipy_events_peer import ScipyEvents
-    from service.impacts.run import MAX_STEP_PARTS, start_state
-    from service.impacts.stepping import event_settings
 
     began = time.perf_counter()
     parsed = MechanismDocument.model_validate(doc)

@@ -42,9 +42,9 @@ class Totals:
 
 
 def main() -> None:
-    from models import compile_mechanism, load_document
-    from service.kernels.build import Compiler
-    from service.kernels.needs import builds_of, window_builds
+    from flexmech.models import compile_mechanism, load_document
+    from flexmech.service.kernels.build import Compiler
+    from flexmech.service.kernels.needs import builds_of, window_builds
 
     compiler = Compiler()
     print(

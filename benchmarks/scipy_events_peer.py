@@ -14,10 +14,9 @@ import time
 
 import casadi as ca
 import numpy as np
+from flexmech.models.impacts.model import WORKS, ImpactModel
+from flexmech.service.impacts.event_driven import MIN_IMPACT_SPEED, rhs_function, violations
 from scipy.integrate import solve_ivp
-
-from models.impacts.model import WORKS, ImpactModel
-from service.impacts.event_driven import MIN_IMPACT_SPEED, rhs_function, violations
 
 
 class ScipyEvents:

@@ -33,8 +33,8 @@ REPEATED = "gripper_exact"
 PROBE = r"""
 import json, statistics, sys, time
 started = time.perf_counter()
-from models import compile_mechanism, load_document
-from service.solvers.equilibrium import solve_equilibrium
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service.solvers.equilibrium import solve_equilibrium
 imported = time.perf_counter()
 path, repeats = sys.argv[1], int(sys.argv[2])
 try:

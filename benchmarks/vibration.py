@@ -54,9 +54,9 @@ def _rod_document(intervals: int) -> dict:
 
 
 def flexmech_rod(intervals: int) -> dict:
-    from models import compile_mechanism, load_document
-    from service.analyses import ANALYSES
-    from service.analyses.base import AnalysisRequest
+    from flexmech.models import compile_mechanism, load_document
+    from flexmech.service.analyses import ANALYSES
+    from flexmech.service.analyses.base import AnalysisRequest
 
     modes = ANALYSES.named("modes")
     request = AnalysisRequest(given={"count": COUNT, "at": "undeformed", "shapes": False})
@@ -102,9 +102,9 @@ def exudyn_rod(elements: int) -> dict:
 
 
 def gripper() -> dict:
-    from models import compile_mechanism, load_document
-    from service.analyses import ANALYSES
-    from service.analyses.base import AnalysisRequest
+    from flexmech.models import compile_mechanism, load_document
+    from flexmech.service.analyses import ANALYSES
+    from flexmech.service.analyses.base import AnalysisRequest
 
     mech = compile_mechanism(load_document(EXAMPLES / "gripper_modes.json"))
     modes = ANALYSES.named("modes")

@@ -17,9 +17,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-
-from models import COMPARED_MODELS, compile_mechanism, load_document
-from service import solve_for_target, sweep
+from flexmech.models import COMPARED_MODELS, compile_mechanism, load_document
+from flexmech.service import solve_for_target, sweep
 
 HERE = Path(__file__).resolve().parent
 ACTUATION = "/loads/actuation/force/1"

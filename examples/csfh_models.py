@@ -20,10 +20,10 @@ import copy
 import json
 from pathlib import Path
 
-from models.documents.document import MechanismDocument
-from models.documents.simulation_spec import SimulateSpec
-from service.impacts.figures import plot_impacts
-from service.impacts.run import run_impacts
+from flexmech.models.documents.document import MechanismDocument
+from flexmech.models.documents.simulation_spec import SimulateSpec
+from flexmech.service.impacts.figures import plot_impacts
+from flexmech.service.impacts.run import run_impacts
 
 HERE = Path(__file__).resolve().parent
 SCENARIOS = {"6.1": "csfh_central_impact.json", "6.2": "csfh_asymmetric_impact.json", "6.3": "csfh.json"}

@@ -6,10 +6,10 @@ Public surface:
     MechanismError: every problem with a document, naming the field by JSON pointer.
 """
 
-from models.documents.document import MechanismDocument, load_document
-from models.elements import COMPARED_MODELS, MODELS
-from models.errors import MechanismError
-from models.graph.mechanism import Mechanism, compile_mechanism
+from flexmech.models.documents.document import MechanismDocument, load_document
+from flexmech.models.elements import COMPARED_MODELS, MODELS
+from flexmech.models.errors import MechanismError
+from flexmech.models.graph.mechanism import Mechanism, compile_mechanism
 
 __all__ = [
     "MechanismError",

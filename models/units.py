@@ -22,8 +22,8 @@ from collections import Counter
 from functools import cache, lru_cache
 from pathlib import Path
 
-from models.caches.disk_cache import cache_dir
-from models.errors import MechanismError
+from flexmech.models.caches.disk_cache import cache_dir
+from flexmech.models.errors import MechanismError
 
 
 def pint_module():

@@ -54,7 +54,7 @@ def names() -> list[str]:
 
 def main() -> None:
     sys.path.insert(0, str(TABLE.parents[1]))  # this checkout's models, installed or not
-    from models import units
+    from flexmech.models import units
 
     table = {}
     for name in names():

@@ -9,22 +9,22 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from service.solvers.equilibrium import EquilibriumResult, solve_equilibrium
-    from service.solvers.inverse import inverse_wrenches
-    from service.solvers.newton import NewtonOptions
-    from service.solvers.stiffness import tangent_stiffness
-    from service.solvers.sweep import SweepResult, solve_for_target, sweep
+    from flexmech.service.solvers.equilibrium import EquilibriumResult, solve_equilibrium
+    from flexmech.service.solvers.inverse import inverse_wrenches
+    from flexmech.service.solvers.newton import NewtonOptions
+    from flexmech.service.solvers.stiffness import tangent_stiffness
+    from flexmech.service.solvers.sweep import SweepResult, solve_for_target, sweep
 
 # name -> the module that defines it
 _PUBLIC = {
-    "EquilibriumResult": "service.solvers.equilibrium",
-    "NewtonOptions": "service.solvers.newton",
-    "solve_equilibrium": "service.solvers.equilibrium",
-    "inverse_wrenches": "service.solvers.inverse",
-    "SweepResult": "service.solvers.sweep",
-    "solve_for_target": "service.solvers.sweep",
-    "sweep": "service.solvers.sweep",
-    "tangent_stiffness": "service.solvers.stiffness",
+    "EquilibriumResult": "flexmech.service.solvers.equilibrium",
+    "NewtonOptions": "flexmech.service.solvers.newton",
+    "solve_equilibrium": "flexmech.service.solvers.equilibrium",
+    "inverse_wrenches": "flexmech.service.solvers.inverse",
+    "SweepResult": "flexmech.service.solvers.sweep",
+    "solve_for_target": "flexmech.service.solvers.sweep",
+    "sweep": "flexmech.service.solvers.sweep",
+    "tangent_stiffness": "flexmech.service.solvers.stiffness",
 }
 
 __all__ = [

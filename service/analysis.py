@@ -11,14 +11,14 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from models import Mechanism
-from service.analyses import ANALYSES, AnalysisOptions, AnalysisRequest
-from service.analyses.equilibrium import equilibrium_report
-from service.analyses.inverse import inverse_report
-from service.analyses.linearization import linearization_report
-from service.requests import Limits, compile_request, escape_pointer_part, newton_options, under
-from service.solvers.newton import NewtonOptions
-from service.solvers.reports import coordinate_units, output_units, plain, stiffness_dict
+from flexmech.models import Mechanism
+from flexmech.service.analyses import ANALYSES, AnalysisOptions, AnalysisRequest
+from flexmech.service.analyses.equilibrium import equilibrium_report
+from flexmech.service.analyses.inverse import inverse_report
+from flexmech.service.analyses.linearization import linearization_report
+from flexmech.service.requests import Limits, compile_request, escape_pointer_part, newton_options, under
+from flexmech.service.solvers.newton import NewtonOptions
+from flexmech.service.solvers.reports import coordinate_units, output_units, plain, stiffness_dict
 
 
 def run_analysis(

@@ -19,16 +19,16 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from models import Mechanism, MechanismDocument, MechanismError, compile_mechanism, load_document
-from service.analyses import Analysis, AnalysisOptions, AnalysisRequest
-from service.analyses.equilibrium import equilibrium_report
-from service.design.optimize import optimize
-from service.design.problem import design_problem
-from service.jobs.export import ExportJobOptions, export_options
-from service.solvers.equilibrium import NewtonOptions
-from service.solvers.inverse_links import inverse_links
-from service.solvers.reports import plain
-from service.solvers.sweep import document_sweep
+from flexmech.models import Mechanism, MechanismDocument, MechanismError, compile_mechanism, load_document
+from flexmech.service.analyses import Analysis, AnalysisOptions, AnalysisRequest
+from flexmech.service.analyses.equilibrium import equilibrium_report
+from flexmech.service.design.optimize import optimize
+from flexmech.service.design.problem import design_problem
+from flexmech.service.jobs.export import ExportJobOptions, export_options
+from flexmech.service.solvers.equilibrium import NewtonOptions
+from flexmech.service.solvers.inverse_links import inverse_links
+from flexmech.service.solvers.reports import plain
+from flexmech.service.solvers.sweep import document_sweep
 
 DOCUMENT_SUFFIXES = (".json", ".yaml", ".yml")
 SUMMARY = "summary.json"
@@ -154,7 +154,7 @@ LIBRARIES = "c"  # the folder of the exported libraries in the results' folder
 def export_report(mech: Mechanism, path: Path, export: Export, folder: Path) -> dict:
     """The document's C library written to `folder` (named after the document's file unless
     the fields name it); its manifest."""
-    from service.export.library import export_library
+    from flexmech.service.export.library import export_library
 
     options = export_options(export.options.model_copy(update={"name": export.options.name or path.stem}))
     manifest = export_library(mech, folder, "as in the document", options)

@@ -11,10 +11,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from models import MechanismError
-from models.documents.document import MechanismDocument
-from models.elements import FAMILIES
-from models.elements.base import Discretization
+from flexmech.models import MechanismError
+from flexmech.models.documents.document import MechanismDocument
+from flexmech.models.elements import FAMILIES
+from flexmech.models.elements.base import Discretization
 
 
 @dataclass(frozen=True)

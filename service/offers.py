@@ -17,10 +17,10 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from models import Mechanism, MechanismError
-from models.documents.simulation_spec import IMPACT_SCHEMES
-from models.graph.forms import energy_form_problem
-from service.analyses import ANALYSES
+from flexmech.models import Mechanism, MechanismError
+from flexmech.models.documents.simulation_spec import IMPACT_SCHEMES
+from flexmech.models.graph.forms import energy_form_problem
+from flexmech.service.analyses import ANALYSES
 
 Check = Callable[[Mechanism], str | None]
 
@@ -64,7 +64,7 @@ def _some_mass(mech: Mechanism) -> str | None:
 
 def _mass(mech: Mechanism) -> str | None:
     """Mass where link dynamics integrates: every element it steps carries its own."""
-    from service.dynamics.run import check_masses
+    from flexmech.service.dynamics.run import check_masses
 
     missing = _some_mass(mech)
     if missing or _impact_scheme(mech):  # rigid bodies in clearances: their own masses, no elements stepped
@@ -132,7 +132,7 @@ def offers(mech: Mechanism) -> dict[str, dict[str, str | None]]:
     its POST's operation (contact_path for POST /v1/contact-paths); an analysis or a job kind of
     a plugin, with no check here, is offered."""
     analyses = {a.name: ANALYSIS_CHECKS.get(a.name, lambda _: None)(mech) for a in ANALYSES}
-    from service.jobs.kinds import job_kinds
+    from flexmech.service.jobs.kinds import job_kinds
 
     jobs = {
         getattr(kind, "operation_id", name).removeprefix("create_"): JOB_CHECKS.get(name, lambda _: None)(mech)

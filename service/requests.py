@@ -10,10 +10,10 @@ from collections import OrderedDict
 from dataclasses import fields
 from typing import Any
 
-from models import MODELS, Mechanism, MechanismError, compile_mechanism
-from models.documents.document import parse_document
-from service.costs import Limits, check_document_cost
-from service.solvers.newton import NewtonOptions
+from flexmech.models import MODELS, Mechanism, MechanismError, compile_mechanism
+from flexmech.models.documents.document import parse_document
+from flexmech.service.costs import Limits, check_document_cost
+from flexmech.service.solvers.newton import NewtonOptions
 
 __all__ = ["Limits", "compile_request", "escape_pointer_part", "newton_options", "under"]
 

@@ -11,10 +11,9 @@ import os
 from pathlib import Path
 from typing import Annotated, Literal
 
+from flexmech.service.costs import Limits
 from pydantic import Field, field_validator
 from pydantic_settings import BaseSettings, NoDecode, SettingsConfigDict
-
-from service.costs import Limits
 
 
 def default_data_dir() -> Path:

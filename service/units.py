@@ -3,8 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
-
-from models import Mechanism
+from flexmech.models import Mechanism
 
 _ROW_KINDS = ("force", "force", "moment")
 _COL_KINDS = ("length", "length", "angle")

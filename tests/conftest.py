@@ -7,8 +7,7 @@ import shutil
 from pathlib import Path
 
 import pytest
-
-from models import compile_mechanism, load_document
+from flexmech.models import compile_mechanism, load_document
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 ACTUATION = "/loads/actuation/force/1"

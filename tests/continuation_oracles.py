@@ -6,9 +6,8 @@ exists, and Newton either fails or jumps to another branch."""
 from __future__ import annotations
 
 import numpy as np
-
-from service.solvers.continuation import body_stability
-from service.solvers.equilibrium import NewtonOptions, newton
+from flexmech.service.solvers.continuation import body_stability
+from flexmech.service.solvers.equilibrium import NewtonOptions, newton
 
 OPTIONS = NewtonOptions(max_iterations=200, tol_residual=1e-11)
 

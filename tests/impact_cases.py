@@ -7,8 +7,8 @@ import copy
 import json
 from pathlib import Path
 
-from models.documents.document import MechanismDocument
-from models.documents.simulation_spec import SimulateSpec
+from flexmech.models.documents.document import MechanismDocument
+from flexmech.models.documents.simulation_spec import SimulateSpec
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 

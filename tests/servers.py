@@ -78,7 +78,7 @@ class ApiServer(Process):
         self.url = f"http://127.0.0.1:{self.port}"
         level = "info" if access_log else "warning"
         super().__init__(
-            [sys.executable, "-m", "service.cli", "serve", "--host", "127.0.0.1", "--port", str(self.port)],
+            [sys.executable, "-m", "flexmech.api.cli", "serve", "--host", "127.0.0.1", "--port", str(self.port)],
             log,
             {"FLEXMECH_LOG_LEVEL": level, **env},
         )

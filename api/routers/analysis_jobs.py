@@ -9,15 +9,14 @@ the analyses, which only the solve route's maker has."""
 from typing import Any
 
 from fastapi import APIRouter, Response
-
-from api.analysis_requests import options_of
-from api.deps import OwnerDep, ServicesDep
-from api.documents import request_document
-from api.job_creation import JOB_LINKS, create_job
-from api.job_schemas import JobStatusResponse
-from api.responses import ERRORS
-from service.analyses import ANALYSES
-from service.jobs.kinds import kind_named
+from flexmech.api.analysis_requests import options_of
+from flexmech.api.deps import OwnerDep, ServicesDep
+from flexmech.api.documents import request_document
+from flexmech.api.job_creation import JOB_LINKS, create_job
+from flexmech.api.job_schemas import JobStatusResponse
+from flexmech.api.responses import ERRORS
+from flexmech.service.analyses import ANALYSES
+from flexmech.service.jobs.kinds import kind_named
 
 
 def add_analysis_job_route(router: APIRouter, body: Any) -> None:

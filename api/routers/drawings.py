@@ -8,21 +8,20 @@ from typing import Any
 
 from fastapi import APIRouter
 from fastapi.concurrency import run_in_threadpool
-
-from api.deps import OwnerDep, ServicesDep
-from api.documents import request_document
-from api.drawing_schemas import DocumentText, DocumentUpgrade, DrawingRequest
-from api.parsed_route import ParsedBodyRoute
-from api.responses import ERRORS
-from models import MechanismError
-from models.documents.reading import parse_json, parse_yaml
-from models.documents.upgrade import upgraded
-from service.analyses.equilibrium import solve_state
-from service.drawings.drawing import mechanism_drawing
-from service.drawings.path import path_frames
-from service.offers import offers
-from service.requests import Limits, compile_request, newton_options
-from service.solvers.reports import plain
+from flexmech.api.deps import OwnerDep, ServicesDep
+from flexmech.api.documents import request_document
+from flexmech.api.drawing_schemas import DocumentText, DocumentUpgrade, DrawingRequest
+from flexmech.api.parsed_route import ParsedBodyRoute
+from flexmech.api.responses import ERRORS
+from flexmech.models import MechanismError
+from flexmech.models.documents.reading import parse_json, parse_yaml
+from flexmech.models.documents.upgrade import upgraded
+from flexmech.service.analyses.equilibrium import solve_state
+from flexmech.service.drawings.drawing import mechanism_drawing
+from flexmech.service.drawings.path import path_frames
+from flexmech.service.offers import offers
+from flexmech.service.requests import Limits, compile_request, newton_options
+from flexmech.service.solvers.reports import plain
 
 router = APIRouter(prefix="/v1", tags=["workbench"], route_class=ParsedBodyRoute)
 

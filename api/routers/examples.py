@@ -5,11 +5,10 @@ from __future__ import annotations
 from typing import Any
 
 from fastapi import APIRouter, Path
-
-from api.deps import OwnerDep, ServicesDep
-from api.errors import not_found
-from api.responses import errors
-from api.schemas import ExampleSummary
+from flexmech.api.deps import OwnerDep, ServicesDep
+from flexmech.api.errors import not_found
+from flexmech.api.responses import errors
+from flexmech.api.schemas import ExampleSummary
 
 router = APIRouter(prefix="/v1/examples", tags=["examples"])
 

@@ -7,10 +7,9 @@ from importlib.metadata import PackageNotFoundError, version
 
 from fastapi import APIRouter
 from fastapi.concurrency import run_in_threadpool
+from flexmech.api.deps import ServicesDep
+from flexmech.api.schemas import HealthResponse
 from sqlalchemy.engine import make_url
-
-from api.deps import ServicesDep
-from api.schemas import HealthResponse
 
 router = APIRouter(prefix="/v1", tags=["health"])
 

@@ -9,17 +9,16 @@ is served, documented in /openapi.json and offered by the workbench's Run menu."
 from typing import Any
 
 from fastapi import APIRouter, Response
+from flexmech.api.deps import OwnerDep, ServicesDep
+from flexmech.api.documents import request_document
+from flexmech.api.job_creation import JOB_LINKS, create_job
+from flexmech.api.job_schemas import JobStatusResponse
+from flexmech.api.parsed_route import ParsedBodyRoute
+from flexmech.api.responses import ERRORS
+from flexmech.api.schemas import DocumentRequest
+from flexmech.service.jobs.base import JobKind
+from flexmech.service.jobs.kinds import job_kinds
 from pydantic import ConfigDict
-
-from api.deps import OwnerDep, ServicesDep
-from api.documents import request_document
-from api.job_creation import JOB_LINKS, create_job
-from api.job_schemas import JobStatusResponse
-from api.parsed_route import ParsedBodyRoute
-from api.responses import ERRORS
-from api.schemas import DocumentRequest
-from service.jobs.base import JobKind
-from service.jobs.kinds import job_kinds
 
 
 def request_model(kind: JobKind) -> type[DocumentRequest]:

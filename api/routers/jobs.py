@@ -7,13 +7,12 @@ from typing import Any
 
 from fastapi import APIRouter, Path, Query, Response
 from fastapi.concurrency import run_in_threadpool
-
-from api.deps import OwnerDep, ServicesDep
-from api.errors import ApiError, not_found
-from api.job_schemas import JobListResponse, JobResultResponse, JobStatusResponse, JobSummary
-from api.responses import errors
-from service.jobs.kinds import job_kinds, kind_named
-from service.jobs.store import FINAL, Job
+from flexmech.api.deps import OwnerDep, ServicesDep
+from flexmech.api.errors import ApiError, not_found
+from flexmech.api.job_schemas import JobListResponse, JobResultResponse, JobStatusResponse, JobSummary
+from flexmech.api.responses import errors
+from flexmech.service.jobs.kinds import job_kinds, kind_named
+from flexmech.service.jobs.store import FINAL, Job
 
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"])
 

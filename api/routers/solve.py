@@ -9,19 +9,18 @@ client's methods, the workbench's forms and generated clients are made from."""
 import json
 
 from fastapi import APIRouter, Request, Response
-
-from api.analysis_requests import options_of, solve_request_type
-from api.answer_cache import REPEATABLE
-from api.deps import OwnerDep, ServicesDep
-from api.documents import request_document
-from api.parsed_route import ParsedBodyRoute
-from api.responses import ERRORS
-from api.routers.analysis_jobs import add_analysis_job_route
-from api.schemas import DocumentRequest, SolveResponse
-from service.analyses import ANALYSES, AnalysisOptions, AnalysisRequest
-from service.costs import check_report_size, check_response_bytes
-from service.requests import Limits, compile_request, newton_options
-from service.solvers.reports import plain
+from flexmech.api.analysis_requests import options_of, solve_request_type
+from flexmech.api.answer_cache import REPEATABLE
+from flexmech.api.deps import OwnerDep, ServicesDep
+from flexmech.api.documents import request_document
+from flexmech.api.parsed_route import ParsedBodyRoute
+from flexmech.api.responses import ERRORS
+from flexmech.api.routers.analysis_jobs import add_analysis_job_route
+from flexmech.api.schemas import DocumentRequest, SolveResponse
+from flexmech.service.analyses import ANALYSES, AnalysisOptions, AnalysisRequest
+from flexmech.service.costs import check_report_size, check_response_bytes
+from flexmech.service.requests import Limits, compile_request, newton_options
+from flexmech.service.solvers.reports import plain
 
 REPEATABLE_STATUSES = ("converged", "finished")  # a time limit's or a failure's report may differ next time
 

@@ -11,8 +11,7 @@ from pathlib import Path
 from fastapi import APIRouter, FastAPI
 from fastapi.responses import FileResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
-
-from models.documents.document import MechanismDocument
+from flexmech.models.documents.document import MechanismDocument
 
 WEB = Path(__file__).resolve().parents[1] / "web"
 # The page loads nothing from elsewhere: the browser refuses any other origin.

@@ -12,8 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import casadi as ca
-
-from models.graph.planar import J, rot, unit
+from flexmech.models.graph.planar import J, rot, unit
 
 
 def compliance(radius, arc_angle, EI) -> ca.SX:

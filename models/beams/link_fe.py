@@ -29,8 +29,7 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
-
-from models.beams.link_shooting import LinkProperties
+from flexmech.models.beams.link_shooting import LinkProperties
 
 
 def _lagrange(nodes: np.ndarray, xi: float) -> tuple[np.ndarray, np.ndarray]:

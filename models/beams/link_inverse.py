@@ -27,16 +27,15 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
-
-from models.beams.link_shooting import LinkShooting, inverse_rhs_function
-from models.elements import FAMILIES
-from models.elements.base import Contribution
-from models.elements.link import LinkTopology, link_shooting
-from models.graph.context import AssemblyContext
-from models.graph.loads import applied_wrenches
-from models.graph.planar import cross, rot
-from models.graph.residual import residual_of
-from models.graph.structure import Structure
+from flexmech.models.beams.link_shooting import LinkShooting, inverse_rhs_function
+from flexmech.models.elements import FAMILIES
+from flexmech.models.elements.base import Contribution
+from flexmech.models.elements.link import LinkTopology, link_shooting
+from flexmech.models.graph.context import AssemblyContext
+from flexmech.models.graph.loads import applied_wrenches
+from flexmech.models.graph.planar import cross, rot
+from flexmech.models.graph.residual import residual_of
+from flexmech.models.graph.structure import Structure
 
 
 @dataclass(frozen=True)

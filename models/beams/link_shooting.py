@@ -34,8 +34,7 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import casadi as ca
-
-from models.beams.link_steps import general_step, local_form
+from flexmech.models.beams.link_steps import general_step, local_form
 
 STATE = ("psi", "m", "x", "y", "e", "mu")  # mu only for links with mass
 

@@ -26,9 +26,8 @@ from functools import lru_cache
 from pathlib import Path
 
 import casadi as ca
-
-from models.caches.disk_cache import bound, cache_dir, touch
-from models.graph.structure import Structure
+from flexmech.models.caches.disk_cache import bound, cache_dir, touch
+from flexmech.models.graph.structure import Structure
 
 log = logging.getLogger("flexmech.graphs")
 
@@ -37,7 +36,7 @@ def code_version() -> str:
     """A hash of the models package's sources, of every registered element family's (one
     registered from elsewhere, a plug-in or a test, is outside the package) and the CasADi
     version."""
-    from models.elements import FAMILIES
+    from flexmech.models.elements import FAMILIES
 
     return _code_version(FAMILIES.sources())
 

@@ -6,17 +6,16 @@ of a link whose thickness is unknown; unsafe implicit expressions."""
 from __future__ import annotations
 
 import numpy as np
-
-from models.contact.elastic_pairs import DAMPED_LAWS, ELASTIC_LAWS
-from models.contact.laws import friction_law, normal_law
-from models.contact.pair_forces import REGULARIZED
-from models.contact.polygons import convex_pieces, self_intersection, signed_area
-from models.contact.schema import Contacts, FrictionFields, JawSite
-from models.contact.topology import ContactTopology, ObjectTopology, PairTopology, SiteTopology
-from models.documents.expression import compile_expression, finite_on
-from models.elements import FAMILIES
-from models.errors import MechanismError
-from models.graph.structure import ElementTopology
+from flexmech.models.contact.elastic_pairs import DAMPED_LAWS, ELASTIC_LAWS
+from flexmech.models.contact.laws import friction_law, normal_law
+from flexmech.models.contact.pair_forces import REGULARIZED
+from flexmech.models.contact.polygons import convex_pieces, self_intersection, signed_area
+from flexmech.models.contact.schema import Contacts, FrictionFields, JawSite
+from flexmech.models.contact.topology import ContactTopology, ObjectTopology, PairTopology, SiteTopology
+from flexmech.models.documents.expression import compile_expression, finite_on
+from flexmech.models.elements import FAMILIES
+from flexmech.models.errors import MechanismError
+from flexmech.models.graph.structure import ElementTopology
 
 IMPLICIT_PROBES = ((0.0, 0.0), (1.0, 0.5), (-0.7, 1.3))  # where g must be a finite number (object frame)
 

@@ -23,11 +23,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import casadi as ca
-
-from models.contact.topology import ContactTopology, ObjectTopology, SiteTopology
-from models.documents.expression import compile_expression
-from models.errors import MechanismError
-from models.graph.planar import rot
+from flexmech.models.contact.topology import ContactTopology, ObjectTopology, SiteTopology
+from flexmech.models.documents.expression import compile_expression
+from flexmech.models.errors import MechanismError
+from flexmech.models.graph.planar import rot
 
 SAMPLES_PER_EDGE = 8  # points per jaw edge checked against an implicit curve
 QUASI_STATIC_CIRCLE_TOUCHES = ("circle", "hole", "half_plane")  # distances exact here

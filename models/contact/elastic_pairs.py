@@ -18,8 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import casadi as ca
-
-from models.contact.circle_contact import (
+from flexmech.models.contact.circle_contact import (
     against_circle,
     against_half_plane,
     against_hole,
@@ -27,14 +26,14 @@ from models.contact.circle_contact import (
     closest_on_ellipse,
     closest_on_polygon,
 )
-from models.contact.constraints import ContactGeometry
-from models.contact.laws import FRICTION_LAWS, NORMAL_LAWS, check_law
-from models.contact.laws.penalty import elastic_power
-from models.contact.schema import FrictionFields
-from models.contact.topology import ContactTopology, PairTopology
-from models.errors import MechanismError
-from models.graph.context import AssemblyContext
-from models.graph.planar import rot
+from flexmech.models.contact.constraints import ContactGeometry
+from flexmech.models.contact.laws import FRICTION_LAWS, NORMAL_LAWS, check_law
+from flexmech.models.contact.laws.penalty import elastic_power
+from flexmech.models.contact.schema import FrictionFields
+from flexmech.models.contact.topology import ContactTopology, PairTopology
+from flexmech.models.errors import MechanismError
+from flexmech.models.graph.context import AssemblyContext
+from flexmech.models.graph.planar import rot
 
 # normal laws with an elastic part K q^n, a potential: the statics and link dynamics take them;
 # the damped ones' damping acts in link dynamics (models.contact.pair_forces). The linear law's

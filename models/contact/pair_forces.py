@@ -28,11 +28,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import casadi as ca
-
-from models.contact.elastic_pairs import DAMPED_LAWS, ElasticPair, elastic_pairs, law_numbers
-from models.contact.laws import FRICTION_LAWS, NORMAL_LAWS
-from models.graph.context import AssemblyContext
-from models.graph.planar import cross
+from flexmech.models.contact.elastic_pairs import DAMPED_LAWS, ElasticPair, elastic_pairs, law_numbers
+from flexmech.models.contact.laws import FRICTION_LAWS, NORMAL_LAWS
+from flexmech.models.graph.context import AssemblyContext
+from flexmech.models.graph.planar import cross
 
 REGULARIZED = ("ambrosio",)  # friction laws of the slip speed that link dynamics takes
 

@@ -15,18 +15,17 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Annotated, Any, Literal, Union
 
+from flexmech.models.contact.schema import OBJECT_TYPES, SITE_TYPES, Contacts
+from flexmech.models.documents.fields import MAX_QUANTITY_CHARS, Number, StrictModel, Vec2
+from flexmech.models.documents.optimize_spec import OptimizeSpec
+from flexmech.models.documents.reading import parse_json, parse_yaml
+from flexmech.models.documents.sections import Section
+from flexmech.models.documents.simulation_spec import SimulateSpec
+from flexmech.models.elements import FAMILIES
+from flexmech.models.elements.link_schema import SHAPE_TYPES
+from flexmech.models.errors import MechanismError, pointer_of
+from flexmech.models.units import quantity_to_si
 from pydantic import Field, ValidationError, field_validator, model_validator
-
-from models.contact.schema import OBJECT_TYPES, SITE_TYPES, Contacts
-from models.documents.fields import MAX_QUANTITY_CHARS, Number, StrictModel, Vec2
-from models.documents.optimize_spec import OptimizeSpec
-from models.documents.reading import parse_json, parse_yaml
-from models.documents.sections import Section
-from models.documents.simulation_spec import SimulateSpec
-from models.elements import FAMILIES
-from models.elements.link_schema import SHAPE_TYPES
-from models.errors import MechanismError, pointer_of
-from models.units import quantity_to_si
 
 
 class Units(StrictModel):

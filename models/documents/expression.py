@@ -14,8 +14,7 @@ import math
 from collections.abc import Callable
 
 import casadi as ca
-
-from models.errors import MechanismError
+from flexmech.models.errors import MechanismError
 
 FUNCTIONS: dict[str, Callable] = {
     "sin": ca.sin,

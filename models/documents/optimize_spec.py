@@ -5,9 +5,8 @@ from __future__ import annotations
 
 from typing import Literal
 
+from flexmech.models.documents.fields import Number, StrictModel
 from pydantic import Field, model_validator
-
-from models.documents.fields import Number, StrictModel
 
 
 class DesignVariable(StrictModel):

@@ -14,14 +14,13 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Annotated, Literal
 
 import casadi as ca
+from flexmech.models.documents.expression import compile_expression, finite_on
+from flexmech.models.documents.fields import Number, StrictModel
 from pydantic import Discriminator, Field, Tag
 
-from models.documents.expression import compile_expression, finite_on
-from models.documents.fields import Number, StrictModel
-
 if TYPE_CHECKING:
-    from models.graph.collector import Collector
-    from models.graph.context import Params
+    from flexmech.models.graph.collector import Collector
+    from flexmech.models.graph.context import Params
 
 
 class RectangularSection(StrictModel):

@@ -6,9 +6,8 @@ from __future__ import annotations
 
 from typing import Any, Literal
 
+from flexmech.models.documents.fields import StrictModel
 from pydantic import Field, ValidationInfo, field_validator
-
-from models.documents.fields import StrictModel
 
 
 class BodyStart(StrictModel):

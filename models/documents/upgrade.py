@@ -16,7 +16,7 @@ from __future__ import annotations
 import copy
 from typing import Any
 
-from models.errors import MechanismError
+from flexmech.models.errors import MechanismError
 
 OBJECT_TYPES = {"circle": "circle", "hole": "hole", "line": "half_plane"}
 OLD_NORMAL_LAW = "lankarani_nikravesh"  # the old section's defaults, written out

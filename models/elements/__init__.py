@@ -5,13 +5,13 @@ models.elements.base for the contract). The document schema, the collector and t
 assembly ask this registry; none of them names an element type.
 """
 
-from models.elements.base import Families
-from models.elements.curved_beam import COMPARED_MODELS, CURVED_BEAM, MODELS
-from models.elements.link import LINK
-from models.elements.link_elements import LINK_ELEMENTS
-from models.elements.pin import PIN
-from models.elements.slider import SLIDER
-from models.elements.spring import SPRING
+from flexmech.models.elements.base import Families
+from flexmech.models.elements.curved_beam import COMPARED_MODELS, CURVED_BEAM, MODELS
+from flexmech.models.elements.link import LINK
+from flexmech.models.elements.link_elements import LINK_ELEMENTS
+from flexmech.models.elements.pin import PIN
+from flexmech.models.elements.slider import SLIDER
+from flexmech.models.elements.spring import SPRING
 
 FAMILIES = Families(
     [

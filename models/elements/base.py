@@ -34,14 +34,13 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol
 
 import casadi as ca
+from flexmech.models.documents.fields import StrictModel
+from flexmech.models.graph.structure import ElementTopology
 from pydantic import Field
 
-from models.documents.fields import StrictModel
-from models.graph.structure import ElementTopology
-
 if TYPE_CHECKING:
-    from models.graph.collector import Collector
-    from models.graph.context import AssemblyContext
+    from flexmech.models.graph.collector import Collector
+    from flexmech.models.graph.context import AssemblyContext
 
 
 class TwoBodyElement(StrictModel):

@@ -20,12 +20,10 @@ from typing import Literal
 
 import casadi as ca
 import numpy as np
-from pydantic import Field
-
-from models.beams import curved_beam_closed_form as kernel
-from models.documents.fields import Number, Vec2
-from models.documents.sections import RectangularSection, SectionTopology, nominal_EI
-from models.elements.base import (
+from flexmech.models.beams import curved_beam_closed_form as kernel
+from flexmech.models.documents.fields import Number, Vec2
+from flexmech.models.documents.sections import RectangularSection, SectionTopology, nominal_EI
+from flexmech.models.elements.base import (
     CentreLine,
     Contribution,
     Discretization,
@@ -36,10 +34,11 @@ from models.elements.base import (
     TwoBodyElement,
     beam_discretization,
 )
-from models.errors import MechanismError
-from models.graph.context import AssemblyContext
-from models.graph.planar import cross, rot
-from models.graph.structure import ElementTopology
+from flexmech.models.errors import MechanismError
+from flexmech.models.graph.context import AssemblyContext
+from flexmech.models.graph.planar import cross, rot
+from flexmech.models.graph.structure import ElementTopology
+from pydantic import Field
 
 MODELS = ("linear", "partial_nonlinear", "exact", "conservative")
 COMPARED_MODELS = MODELS[:3]  # seed 000's three, which model comparisons draw side by side
@@ -109,7 +108,7 @@ class CurvedBeamFamily:
         unknowns of their own."""
         return beam_discretization(el) if (model or el.model) == "exact" else None
 
-    # what a flexures table reports of each (elements.<name>.<output>; service.cli.report_tables)
+    # what a flexures table reports of each (elements.<name>.<output>; api.cli.report_tables)
     flexure_outputs = ("rotation", "M", "stress_start", "stress_end", "stress_max")
 
     def model_name(self, el: CurvedBeam) -> str:
@@ -175,7 +174,7 @@ class CurvedBeamFamily:
         c.holds_rotation(i)
         c.holds_rotation(j)
         if model == "exact":
-            from models.elements.link import exact_arc  # the exact model is a link
+            from flexmech.models.elements.link import exact_arc  # the exact model is a link
 
             return exact_arc(
                 c, name, el, start, end, ArcGeometry(name, reversed_), SectionTopology(el.section, "rectangle")

@@ -19,8 +19,7 @@ from __future__ import annotations
 
 import casadi as ca
 import numpy as np
-
-from models.documents.sections import SectionTopology, section_properties
+from flexmech.models.documents.sections import SectionTopology, section_properties
 
 
 def number(value) -> float:

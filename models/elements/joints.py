@@ -13,10 +13,8 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass
 
 import casadi as ca
-from pydantic import Field
-
-from models.documents.fields import Vec2
-from models.elements.base import (
+from flexmech.models.documents.fields import Vec2
+from flexmech.models.elements.base import (
     Connector,
     Contribution,
     EnergyTerms,
@@ -25,9 +23,10 @@ from models.elements.base import (
     TwoBodyElement,
     constraint_wrenches,
 )
-from models.errors import MechanismError
-from models.graph.context import AssemblyContext
-from models.graph.structure import ElementTopology
+from flexmech.models.errors import MechanismError
+from flexmech.models.graph.context import AssemblyContext
+from flexmech.models.graph.structure import ElementTopology
+from pydantic import Field
 
 
 class RigidJoint(TwoBodyElement):

@@ -20,11 +20,16 @@ from dataclasses import dataclass, fields
 
 import casadi as ca
 import numpy as np
-
-from models.beams.link_shooting import LinkProperties, LinkShooting, LinkSolution
-from models.documents.expression import compile_expression, finite_on
-from models.documents.sections import GeneralSection, SectionTopology, nominal_EI, section_properties, section_topology
-from models.elements.base import (
+from flexmech.models.beams.link_shooting import LinkProperties, LinkShooting, LinkSolution
+from flexmech.models.documents.expression import compile_expression, finite_on
+from flexmech.models.documents.sections import (
+    GeneralSection,
+    SectionTopology,
+    nominal_EI,
+    section_properties,
+    section_topology,
+)
+from flexmech.models.elements.base import (
     CentreLine,
     Contribution,
     Discretization,
@@ -34,12 +39,12 @@ from models.elements.base import (
     SiValues,
     beam_discretization,
 )
-from models.elements.fibre_stress import link_stresses
-from models.elements.link_schema import Link
-from models.errors import MechanismError
-from models.graph.context import AssemblyContext
-from models.graph.planar import cross
-from models.graph.structure import ElementTopology
+from flexmech.models.elements.fibre_stress import link_stresses
+from flexmech.models.elements.link_schema import Link
+from flexmech.models.errors import MechanismError
+from flexmech.models.graph.context import AssemblyContext
+from flexmech.models.graph.planar import cross
+from flexmech.models.graph.structure import ElementTopology
 
 # Samples per shooting interval of a link, for stresses and drawing.
 SAMPLES_PER_INTERVAL = 4

@@ -14,18 +14,25 @@ from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
-
-from models.beams.link_fe import LinkElements, LinkKinematics, element_rule
-from models.documents.sections import section_properties
-from models.elements.base import CentreLine, Contribution, EnergyTerms, InertiaPoint, NoMassForm, ScaleHint, SiValues
-from models.elements.fibre_stress import link_stresses
-from models.elements.link import LINK, LinkElementsTopology, link_properties
-from models.elements.link_schema import Link
-from models.elements.surfaces import ElementSurfaces, SurfacePoint
-from models.elements.variational import variational_parts
-from models.errors import MechanismError
-from models.graph.context import AssemblyContext
-from models.graph.planar import cross
+from flexmech.models.beams.link_fe import LinkElements, LinkKinematics, element_rule
+from flexmech.models.documents.sections import section_properties
+from flexmech.models.elements.base import (
+    CentreLine,
+    Contribution,
+    EnergyTerms,
+    InertiaPoint,
+    NoMassForm,
+    ScaleHint,
+    SiValues,
+)
+from flexmech.models.elements.fibre_stress import link_stresses
+from flexmech.models.elements.link import LINK, LinkElementsTopology, link_properties
+from flexmech.models.elements.link_schema import Link
+from flexmech.models.elements.surfaces import ElementSurfaces, SurfacePoint
+from flexmech.models.elements.variational import variational_parts
+from flexmech.models.errors import MechanismError
+from flexmech.models.graph.context import AssemblyContext
+from flexmech.models.graph.planar import cross
 
 
 @dataclass

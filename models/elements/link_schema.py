@@ -5,10 +5,9 @@ from __future__ import annotations
 
 from typing import Literal
 
+from flexmech.models.documents.fields import Number, StrictModel, Vec2
+from flexmech.models.elements.base import TwoBodyElement
 from pydantic import Field
-
-from models.documents.fields import Number, StrictModel, Vec2
-from models.elements.base import TwoBodyElement
 
 
 class StraightShape(StrictModel):

@@ -10,8 +10,7 @@ from __future__ import annotations
 from typing import Literal
 
 import casadi as ca
-
-from models.elements.joints import JointFamily, JointTopology, RigidJoint, joint_points
+from flexmech.models.elements.joints import JointFamily, JointTopology, RigidJoint, joint_points
 
 
 class Pin(RigidJoint):

@@ -12,10 +12,9 @@ from __future__ import annotations
 from typing import Literal
 
 import casadi as ca
-
-from models.documents.fields import Number
-from models.elements.base import Connector
-from models.elements.joints import JointFamily, JointTopology, RigidJoint, collect_joint, joint_points
+from flexmech.models.documents.fields import Number
+from flexmech.models.elements.base import Connector
+from flexmech.models.elements.joints import JointFamily, JointTopology, RigidJoint, collect_joint, joint_points
 
 
 class Slider(RigidJoint):

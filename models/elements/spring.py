@@ -23,15 +23,14 @@ from typing import Literal
 
 import casadi as ca
 import numpy as np
+from flexmech.models.documents.expression import CONSTANTS, FUNCTIONS, compile_expression, finite_on
+from flexmech.models.documents.fields import Number, Vec2
+from flexmech.models.elements.base import Connector, Contribution, EnergyTerms, ScaleHint, SiValues, TwoBodyElement
+from flexmech.models.errors import MechanismError
+from flexmech.models.graph.context import AssemblyContext
+from flexmech.models.graph.planar import cross
+from flexmech.models.graph.structure import ElementTopology
 from pydantic import Field, model_validator
-
-from models.documents.expression import CONSTANTS, FUNCTIONS, compile_expression, finite_on
-from models.documents.fields import Number, Vec2
-from models.elements.base import Connector, Contribution, EnergyTerms, ScaleHint, SiValues, TwoBodyElement
-from models.errors import MechanismError
-from models.graph.context import AssemblyContext
-from models.graph.planar import cross
-from models.graph.structure import ElementTopology
 
 QUADRATURE_NODES = 24
 _NODES, _WEIGHTS = np.polynomial.legendre.leggauss(QUADRATURE_NODES)

@@ -12,8 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import casadi as ca
-
-from models.elements.base import EnergyTerms
+from flexmech.models.elements.base import EnergyTerms
 
 
 def variational_parts(

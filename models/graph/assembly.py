@@ -18,16 +18,15 @@ import logging
 from functools import cached_property, lru_cache
 
 import casadi as ca
-
-from models.caches.graph_cache import GraphStore
-from models.documents.naming import named
-from models.elements import FAMILIES
-from models.graph.context import AssemblyContext
-from models.graph.loads import applied_wrenches
-from models.graph.outputs import output_graph, shape_graph
-from models.graph.residual import contributions, held_wrenches, residual_of
-from models.graph.split_jacobian import jacobian
-from models.graph.structure import Structure
+from flexmech.models.caches.graph_cache import GraphStore
+from flexmech.models.documents.naming import named
+from flexmech.models.elements import FAMILIES
+from flexmech.models.graph.context import AssemblyContext
+from flexmech.models.graph.loads import applied_wrenches
+from flexmech.models.graph.outputs import output_graph, shape_graph
+from flexmech.models.graph.residual import contributions, held_wrenches, residual_of
+from flexmech.models.graph.split_jacobian import jacobian
+from flexmech.models.graph.structure import Structure
 
 log = logging.getLogger("flexmech.graphs")
 
@@ -185,7 +184,7 @@ class Graphs:
     def energy_form(self):
         """The total potential and its constraints (models.graph.forms.EnergyForm); MechanismError
         naming the first element whose model has none."""
-        from models.graph.forms import energy_form
+        from flexmech.models.graph.forms import energy_form
 
         return energy_form(self.structure)
 
@@ -193,21 +192,21 @@ class Graphs:
     def modal_form(self):
         """The stiffness, constraints and masses of small vibration (models.graph.modal);
         MechanismError as energy_form's."""
-        from models.graph.modal import modal_form
+        from flexmech.models.graph.modal import modal_form
 
         return modal_form(self.structure)
 
     @cached_property
     def mass_matrix(self) -> ca.Function:
         """(z, p) -> M (models.graph.forms.mass_matrix)."""
-        from models.graph.forms import mass_matrix
+        from flexmech.models.graph.forms import mass_matrix
 
         return mass_matrix(self.structure)
 
     @cached_property
     def tangent_terms(self) -> ca.Function:
         """(z, p) -> (K_I, K_II, K_III, K_load): the split of K_T of seed 000 (Eqs. 26-28)."""
-        from models.graph.tangent_split import tangent_terms
+        from flexmech.models.graph.tangent_split import tangent_terms
 
         return tangent_terms(self.structure)
 

@@ -9,9 +9,8 @@ shear; A for shear, axial strain and mass; the density for mass).
 from __future__ import annotations
 
 import numpy as np
-
-from models.contact.collect_contacts import collect_contacts
-from models.documents.document import (
+from flexmech.models.contact.collect_contacts import collect_contacts
+from flexmech.models.documents.document import (
     ForceLoad,
     MechanismDocument,
     MomentLoad,
@@ -19,12 +18,12 @@ from models.documents.document import (
     PrescribedDisplacement,
     ReactionOutput,
 )
-from models.documents.sections import collect_section
-from models.elements import FAMILIES, MODELS
-from models.errors import MechanismError, pointer_of
-from models.graph.collector import Collector
-from models.graph.structure import COORDINATES, InertiaTopology, LoadTopology, PointTopology, Structure
-from models.units import document_unit, unit_factor
+from flexmech.models.documents.sections import collect_section
+from flexmech.models.elements import FAMILIES, MODELS
+from flexmech.models.errors import MechanismError, pointer_of
+from flexmech.models.graph.collector import Collector
+from flexmech.models.graph.structure import COORDINATES, InertiaTopology, LoadTopology, PointTopology, Structure
+from flexmech.models.units import document_unit, unit_factor
 
 DISPLACEMENT_FIELDS = (("dx", "length"), ("dy", "length"), ("rotation", "angle"))
 MAX_NAME = 64

@@ -7,9 +7,9 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from models.errors import MechanismError
-from models.graph.structure import Parameter
-from models.units import document_unit, quantity_to_si, unit_factor
+from flexmech.models.errors import MechanismError
+from flexmech.models.graph.structure import Parameter
+from flexmech.models.units import document_unit, quantity_to_si, unit_factor
 
 # Numbers of any kind, in SI, lie within these magnitudes (or are zero): beyond them a
 # document holds a typo, and the solver's nondimensional numbers would overflow or vanish.

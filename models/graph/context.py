@@ -9,9 +9,8 @@ rot(theta_hat + d[2]) @ local.
 from __future__ import annotations
 
 import casadi as ca
-
-from models.graph.planar import rot
-from models.graph.structure import Structure
+from flexmech.models.graph.planar import rot
+from flexmech.models.graph.structure import Structure
 
 
 class Params:

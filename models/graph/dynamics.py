@@ -20,10 +20,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import casadi as ca
-
-from models.graph.forms import symbolic_energy
-from models.graph.loads import kinetic_energy
-from models.graph.structure import Structure
+from flexmech.models.graph.forms import symbolic_energy
+from flexmech.models.graph.loads import kinetic_energy
+from flexmech.models.graph.structure import Structure
 
 
 @dataclass(frozen=True)

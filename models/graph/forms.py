@@ -18,13 +18,12 @@ from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
-
-from models.elements import FAMILIES
-from models.elements.base import NoEnergyForm, NoMassForm
-from models.errors import MechanismError
-from models.graph.context import AssemblyContext
-from models.graph.loads import kinetic_energy, load_potential
-from models.graph.structure import Structure
+from flexmech.models.elements import FAMILIES
+from flexmech.models.elements.base import NoEnergyForm, NoMassForm
+from flexmech.models.errors import MechanismError
+from flexmech.models.graph.context import AssemblyContext
+from flexmech.models.graph.loads import kinetic_energy, load_potential
+from flexmech.models.graph.structure import Structure
 
 
 @dataclass(frozen=True)

@@ -11,10 +11,9 @@ potential, so every form sees them alike.
 from __future__ import annotations
 
 import casadi as ca
-
-from models.contact.elastic_pairs import contact_potential, contact_wrenches
-from models.graph.context import AssemblyContext
-from models.graph.planar import cross
+from flexmech.models.contact.elastic_pairs import contact_potential, contact_wrenches
+from flexmech.models.graph.context import AssemblyContext
+from flexmech.models.graph.planar import cross
 
 
 def _center_of_mass(ctx: AssemblyContext, b: int, center: bool) -> ca.SX:

@@ -14,15 +14,14 @@ from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 import numpy as np
-
-from models.documents.document import MechanismDocument
-from models.elements import FAMILIES
-from models.elements.base import SiValues
-from models.errors import MechanismError
-from models.graph.collect import collect
-from models.graph.collector import check_value
-from models.graph.structure import COORDINATES, Parameter, Structure
-from models.units import document_unit, quantity_to_si, unit_factor
+from flexmech.models.documents.document import MechanismDocument
+from flexmech.models.elements import FAMILIES
+from flexmech.models.elements.base import SiValues
+from flexmech.models.errors import MechanismError
+from flexmech.models.graph.collect import collect
+from flexmech.models.graph.collector import check_value
+from flexmech.models.graph.structure import COORDINATES, Parameter, Structure
+from flexmech.models.units import document_unit, quantity_to_si, unit_factor
 
 __all__ = ["COORDINATES", "Mechanism", "Scales", "compile_mechanism"]
 
@@ -109,7 +108,7 @@ class Mechanism:
 
     @cached_property
     def graphs(self):
-        from models.graph.assembly import graphs_for
+        from flexmech.models.graph.assembly import graphs_for
 
         return graphs_for(self.structure)
 

@@ -22,10 +22,9 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import casadi as ca
-
-from models.graph.forms import symbolic_energy
-from models.graph.loads import body_kinetic_energies, mass_centres
-from models.graph.structure import Structure
+from flexmech.models.graph.forms import symbolic_energy
+from flexmech.models.graph.loads import body_kinetic_energies, mass_centres
+from flexmech.models.graph.structure import Structure
 
 
 @dataclass(frozen=True)
@@ -104,8 +103,8 @@ def state_mass(structure: Structure) -> ca.Function:
     """(z, p) -> M_z: the mass matrix over the residual form's unknowns z (the energy form's
     masses placed at their unknowns, the multipliers massless; without an energy form, the
     bodies' masses of models.graph.forms.mass_matrix)."""
-    from models.errors import MechanismError
-    from models.graph.forms import mass_matrix
+    from flexmech.models.errors import MechanismError
+    from flexmech.models.graph.forms import mass_matrix
 
     try:
         form = modal_form(structure)

@@ -8,11 +8,10 @@ energy, and the document's point and reaction outputs.
 from __future__ import annotations
 
 import casadi as ca
-
-from models.contact.elastic_pairs import contact_outputs
-from models.elements.base import Contribution
-from models.graph.context import AssemblyContext
-from models.graph.residual import held_wrenches
+from flexmech.models.contact.elastic_pairs import contact_outputs
+from flexmech.models.elements.base import Contribution
+from flexmech.models.graph.context import AssemblyContext
+from flexmech.models.graph.residual import held_wrenches
 
 REACTION_QUANTITIES = (("Fx", "force"), ("Fy", "force"), ("M", "moment"))
 

@@ -7,11 +7,10 @@ from __future__ import annotations
 from dataclasses import replace
 
 import casadi as ca
-
-from models.elements import FAMILIES
-from models.elements.base import Contribution
-from models.graph.context import AssemblyContext
-from models.graph.structure import Structure
+from flexmech.models.elements import FAMILIES
+from flexmech.models.elements.base import Contribution
+from flexmech.models.graph.context import AssemblyContext
+from flexmech.models.graph.structure import Structure
 
 
 def contributions(ctx: AssemblyContext, z: ca.SX, d: list[ca.SX]) -> list[Contribution]:

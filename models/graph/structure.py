@@ -88,7 +88,7 @@ class Structure:
     def without_names(self) -> tuple[Structure, tuple[str, ...]]:
         """(this structure with its names replaced by tokens, the names in token order):
         models.documents.naming."""
-        from models.documents.naming import anonymous
+        from flexmech.models.documents.naming import anonymous
 
         return anonymous(self)
 

@@ -12,12 +12,11 @@ paper, whose loads sit at mass centres). The four sum to K_T.
 from __future__ import annotations
 
 import casadi as ca
-
-from models.elements import FAMILIES
-from models.graph.context import AssemblyContext
-from models.graph.loads import applied_wrenches
-from models.graph.residual import residual_of
-from models.graph.structure import Structure
+from flexmech.models.elements import FAMILIES
+from flexmech.models.graph.context import AssemblyContext
+from flexmech.models.graph.loads import applied_wrenches
+from flexmech.models.graph.residual import residual_of
+from flexmech.models.graph.structure import Structure
 
 TERMS = ("psi", "N", "T", "load")
 

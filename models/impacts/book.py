@@ -6,10 +6,9 @@ from __future__ import annotations
 
 import casadi as ca
 import numpy as np
-
-from models.documents.document import MechanismDocument
-from models.errors import MechanismError
-from models.units import document_unit, quantity_to_si
+from flexmech.models.documents.document import MechanismDocument
+from flexmech.models.errors import MechanismError
+from flexmech.models.units import document_unit, quantity_to_si
 
 
 class ParameterBook:

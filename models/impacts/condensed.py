@@ -21,17 +21,16 @@ from __future__ import annotations
 
 import casadi as ca
 import numpy as np
-
-from models.errors import MechanismError
-from models.graph.planar import rot
-from models.impacts.coordinates import NOT_SECTIONS, BodyCoordinates, parameters_of
+from flexmech.models.errors import MechanismError
+from flexmech.models.graph.planar import rot
+from flexmech.models.impacts.coordinates import NOT_SECTIONS, BodyCoordinates, parameters_of
 
 UNDEFORMED_TOLERANCE = 1e-10  # the residual at z = 0 (nondimensional): the element is unloaded as drawn
 
 
 def condensed_flexure(rb: BodyCoordinates, name: str) -> tuple[ca.SX, ca.SX, ca.SX]:
     """(1/2 psi.K.psi, psi, K) of element `name`, as an impact_flexure hook gives them."""
-    from models.graph.mechanism import compile_mechanism
+    from flexmech.models.graph.mechanism import compile_mechanism
 
     doc, base = rb.book.document, f"/elements/{name}"
     element = doc.elements[name]

@@ -17,12 +17,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import casadi as ca
-
-from models.errors import MechanismError
-from models.graph.context import AssemblyContext
-from models.graph.loads import kinetic_energy, load_potential
-from models.graph.planar import rot
-from models.impacts.book import ParameterBook
+from flexmech.models.errors import MechanismError
+from flexmech.models.graph.context import AssemblyContext
+from flexmech.models.graph.loads import kinetic_energy, load_potential
+from flexmech.models.graph.planar import rot
+from flexmech.models.impacts.book import ParameterBook
 
 NOT_SECTIONS = {
     "loads": {},
@@ -60,7 +59,7 @@ def parameters_of(rb: BodyCoordinates, mech, scaled: bool = True) -> ca.SX:
 
 class BodyCoordinates:
     def __init__(self, book: ParameterBook):
-        from models.graph.mechanism import compile_mechanism
+        from flexmech.models.graph.mechanism import compile_mechanism
 
         self.book = book
         doc = book.document

@@ -17,14 +17,13 @@ so the energy's value in SI is the statics energy times the energy scale."""
 from __future__ import annotations
 
 import casadi as ca
-
-from models.elements import FAMILIES
-from models.elements.base import NoEnergyForm
-from models.errors import MechanismError
-from models.graph.context import AssemblyContext
-from models.graph.planar import rot
-from models.impacts.condensed import condensed_flexure
-from models.impacts.coordinates import NOT_SECTIONS, BodyCoordinates, parameters_of
+from flexmech.models.elements import FAMILIES
+from flexmech.models.elements.base import NoEnergyForm
+from flexmech.models.errors import MechanismError
+from flexmech.models.graph.context import AssemblyContext
+from flexmech.models.graph.planar import rot
+from flexmech.models.impacts.condensed import condensed_flexure
+from flexmech.models.impacts.coordinates import NOT_SECTIONS, BodyCoordinates, parameters_of
 
 
 def bridged(element) -> bool:
@@ -39,7 +38,7 @@ def element_energy(rb: BodyCoordinates) -> tuple[ca.SX, str, tuple[str, ...]]:
     """The strain energy (SI) of every bridged element of rb's document without unknowns of its
     own, at the bodies' poses; what shapes its graph (the elements' topologies: a spring's law
     is one); and the bridged elements with unknowns of their own (flexures() condenses them)."""
-    from models.graph.mechanism import compile_mechanism
+    from flexmech.models.graph.mechanism import compile_mechanism
 
     doc = rb.book.document
     names = [name for name, element in doc.elements.items() if bridged(element)]

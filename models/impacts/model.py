@@ -16,15 +16,14 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import casadi as ca
-
-from models.documents.document import MechanismDocument
-from models.errors import MechanismError
-from models.graph.planar import rot
-from models.impacts.book import ParameterBook
-from models.impacts.coordinates import BodyCoordinates
-from models.impacts.families import element_energy, joint_constraints, turning_force
-from models.impacts.families import flexures as flexures_of
-from models.impacts.pairs import PairModel, pair_model
+from flexmech.models.documents.document import MechanismDocument
+from flexmech.models.errors import MechanismError
+from flexmech.models.graph.planar import rot
+from flexmech.models.impacts.book import ParameterBook
+from flexmech.models.impacts.coordinates import BodyCoordinates
+from flexmech.models.impacts.families import element_energy, joint_constraints, turning_force
+from flexmech.models.impacts.families import flexures as flexures_of
+from flexmech.models.impacts.pairs import PairModel, pair_model
 
 DAMPING = "/simulate/damping"  # mass-proportional, as the link dynamics'; a parameter of the graphs
 WORKS = ("contact_work", "friction_work", "flexure_work", "damping_work", "input_work")  # integrated with the motion

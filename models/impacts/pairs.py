@@ -11,8 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import casadi as ca
-
-from models.contact.circle_contact import (
+from flexmech.models.contact.circle_contact import (
     against_circle,
     against_half_plane,
     against_hole,
@@ -20,12 +19,12 @@ from models.contact.circle_contact import (
     closest_on_ellipse,
     closest_on_polygon,
 )
-from models.contact.laws import FRICTION_LAWS, FrictionLaw, NormalLaw, friction_law, normal_law
-from models.contact.laws.penalty import hertz_stiffness
-from models.contact.schema import ContactPair, Contacts, FrictionFields, NormalLawFields
-from models.errors import MechanismError
-from models.graph.planar import rot
-from models.impacts.coordinates import BodyCoordinates
+from flexmech.models.contact.laws import FRICTION_LAWS, FrictionLaw, NormalLaw, friction_law, normal_law
+from flexmech.models.contact.laws.penalty import hertz_stiffness
+from flexmech.models.contact.schema import ContactPair, Contacts, FrictionFields, NormalLawFields
+from flexmech.models.errors import MechanismError
+from flexmech.models.graph.planar import rot
+from flexmech.models.impacts.coordinates import BodyCoordinates
 
 ONE, SPEED = ("1", 1.0), ("m/s", 1.0)  # units of the laws' numbers (seed 004 gives v0, v1 in m/s)
 IMPACT_OBJECTS = ("circle", "hole", "half_plane", "polygon", "ellipse")

@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import cached_property
 
-from models.kernels.rules import ElementPoints, element_points
+from flexmech.models.kernels.rules import ElementPoints, element_points
 
 NODE = 8  # rho, v, a, F: 2 each
 

@@ -44,8 +44,7 @@ from functools import cache, cached_property
 
 import casadi as ca
 import numpy as np
-
-from models.kernels.chain_signature import NODE, ChainSignature
+from flexmech.models.kernels.chain_signature import NODE, ChainSignature
 
 BORDER = 6
 FLAGS = ("first", "last")  # per block: the chain's first block (B_0), its last (B_N)

@@ -6,9 +6,8 @@ only each element's packed rows."""
 from __future__ import annotations
 
 import casadi as ca
-
-from models.kernels.chain_signature import NODE, ChainSignature
-from models.kernels.link_chain import ElementEquations, ElementSymbols, element_symbols
+from flexmech.models.kernels.chain_signature import NODE, ChainSignature
+from flexmech.models.kernels.link_chain import ElementEquations, ElementSymbols, element_symbols
 
 SWEEP_INPUTS = ["node", "u", "affine", "k", "damping", "gravity", "data", "start", "start_node"]
 SWEEP_OUTPUTS = ["next", "packed", "energies"]

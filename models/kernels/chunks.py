@@ -19,11 +19,10 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import casadi as ca
-
-from models.kernels.chain_signature import ChainSignature
-from models.kernels.chain_solver import solver_functions
-from models.kernels.chain_sweep import sweep_function
-from models.kernels.link_chain import jacobian_function
+from flexmech.models.kernels.chain_signature import ChainSignature
+from flexmech.models.kernels.chain_solver import solver_functions
+from flexmech.models.kernels.chain_sweep import sweep_function
+from flexmech.models.kernels.link_chain import jacobian_function
 
 CHUNK = 8
 

@@ -23,14 +23,13 @@ from __future__ import annotations
 
 import casadi as ca
 import numpy as np
-
-from models.contact.pair_forces import contact_forces
-from models.elements import FAMILIES
-from models.graph.context import AssemblyContext
-from models.graph.loads import kinetic_energy, load_potential
-from models.kernels.chain_signature import data_layout
-from models.kernels.layout import KernelLayout
-from models.kernels.link_data import link_data
+from flexmech.models.contact.pair_forces import contact_forces
+from flexmech.models.elements import FAMILIES
+from flexmech.models.graph.context import AssemblyContext
+from flexmech.models.graph.loads import kinetic_energy, load_potential
+from flexmech.models.kernels.chain_signature import data_layout
+from flexmech.models.kernels.layout import KernelLayout
+from flexmech.models.kernels.link_data import link_data
 
 INPUTS = ("uG", "affine", "k", "starts", "ends", "p", "pdot", "pddot", "damping", "mask")
 OUTPUTS = ("rows", "J", "start_rows", "start_C", "start_W", "end_theta", "energies")

@@ -18,13 +18,12 @@ from dataclasses import dataclass, field
 from functools import cached_property, lru_cache
 
 import numpy as np
-
-from models.elements import FAMILIES
-from models.elements.link import LinkElementsTopology
-from models.graph.structure import Structure
-from models.kernels.chain_signature import NODE, ChainSignature
-from models.kernels.chain_solver import BORDER, BlockLayout
-from models.kernels.link_data import signature_of
+from flexmech.models.elements import FAMILIES
+from flexmech.models.elements.link import LinkElementsTopology
+from flexmech.models.graph.structure import Structure
+from flexmech.models.kernels.chain_signature import NODE, ChainSignature
+from flexmech.models.kernels.chain_solver import BORDER, BlockLayout
+from flexmech.models.kernels.link_data import signature_of
 
 
 def own_counts(t) -> tuple[int, int]:

@@ -7,11 +7,10 @@ from __future__ import annotations
 
 import casadi as ca
 import numpy as np
-
-from models.documents.sections import section_properties
-from models.elements.link import LinkElementsTopology, link_properties
-from models.graph.context import AssemblyContext
-from models.kernels.chain_signature import ChainSignature, data_layout
+from flexmech.models.documents.sections import section_properties
+from flexmech.models.elements.link import LinkElementsTopology, link_properties
+from flexmech.models.graph.context import AssemblyContext
+from flexmech.models.kernels.chain_signature import ChainSignature, data_layout
 
 
 def signature_of(t: LinkElementsTopology, rule: str = "interpolated") -> ChainSignature:

@@ -3,16 +3,16 @@ the registry: one module each, registered here (one line per analysis). A new an
 new module and a line (or, outside the package, `ANALYSES.register(...)` in a plugin module
 named by FLEXMECH_PLUGINS)."""
 
-from service.analyses.base import Analyses, Analysis, AnalysisOptions, AnalysisRequest, AnalysisResult
-from service.analyses.contact import CONTACT
-from service.analyses.energy import ENERGY
-from service.analyses.equilibrium import EQUILIBRIUM
-from service.analyses.frequency_response import FREQUENCY_RESPONSE
-from service.analyses.inverse import INVERSE
-from service.analyses.linearization import LINEARIZATION
-from service.analyses.modes import MODES
-from service.analyses.simulate import SIMULATE
-from service.analyses.trace import TRACE
+from flexmech.service.analyses.base import Analyses, Analysis, AnalysisOptions, AnalysisRequest, AnalysisResult
+from flexmech.service.analyses.contact import CONTACT
+from flexmech.service.analyses.energy import ENERGY
+from flexmech.service.analyses.equilibrium import EQUILIBRIUM
+from flexmech.service.analyses.frequency_response import FREQUENCY_RESPONSE
+from flexmech.service.analyses.inverse import INVERSE
+from flexmech.service.analyses.linearization import LINEARIZATION
+from flexmech.service.analyses.modes import MODES
+from flexmech.service.analyses.simulate import SIMULATE
+from flexmech.service.analyses.trace import TRACE
 
 ANALYSES = Analyses(
     [
@@ -29,7 +29,7 @@ ANALYSES = Analyses(
 )
 
 # Last: a plugin module registers on ANALYSES, which exists by now.
-from service.plugins import load_plugins  # noqa: E402
+from flexmech.service.plugins import load_plugins  # noqa: E402
 
 load_plugins()
 

@@ -26,12 +26,11 @@ from pathlib import Path
 from typing import Any, ClassVar
 
 import numpy as np
+from flexmech.models import Mechanism, MechanismError
+from flexmech.models.errors import pointer_of
+from flexmech.service.solvers.equilibrium import EquilibriumResult
+from flexmech.service.solvers.newton import NewtonOptions
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
-
-from models import Mechanism, MechanismError
-from models.errors import pointer_of
-from service.solvers.equilibrium import EquilibriumResult
-from service.solvers.newton import NewtonOptions
 
 
 class AnalysisOptions(BaseModel):

@@ -9,20 +9,26 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
+from flexmech.models import Mechanism, MechanismError
+from flexmech.service.analyses.base import (
+    Analysis,
+    AnalysisOptions,
+    AnalysisResult,
+    ReportSize,
+    drawn_numbers,
+    state_numbers,
+)
+from flexmech.service.analyses.shared_options import Sensitivities
+from flexmech.service.contact.drawing import state_drawing
+from flexmech.service.contact.problem import ContactProblem, contact_problem
+from flexmech.service.contact.recovery import recovered_forces
+from flexmech.service.contact.report import friction_coefficients, penetration_error, state_report
+from flexmech.service.contact.sensitivity import contact_sensitivities
+from flexmech.service.contact.solve import ContactOptions, PenetratingStart, solve_state
+from flexmech.service.requests import under
+from flexmech.service.solvers.newton import NewtonOptions
+from flexmech.service.solvers.reports import output_units, plain
 from pydantic import Field
-
-from models import Mechanism, MechanismError
-from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult, ReportSize, drawn_numbers, state_numbers
-from service.analyses.shared_options import Sensitivities
-from service.contact.drawing import state_drawing
-from service.contact.problem import ContactProblem, contact_problem
-from service.contact.recovery import recovered_forces
-from service.contact.report import friction_coefficients, penetration_error, state_report
-from service.contact.sensitivity import contact_sensitivities
-from service.contact.solve import ContactOptions, PenetratingStart, solve_state
-from service.requests import under
-from service.solvers.newton import NewtonOptions
-from service.solvers.reports import output_units, plain
 
 
 def problem_of(mech: Mechanism) -> ContactProblem:

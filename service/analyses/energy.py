@@ -4,16 +4,15 @@
 from __future__ import annotations
 
 import numpy as np
+from flexmech.models import Mechanism, MechanismError
+from flexmech.service.analyses.base import Analysis, AnalysisOptions, ReportSize
+from flexmech.service.analyses.equilibrium import EquilibriumReport, solution_report, solution_size
+from flexmech.service.requests import under
+from flexmech.service.solvers.energy import minimize_energy
+from flexmech.service.solvers.equilibrium import EquilibriumResult
+from flexmech.service.solvers.newton import NewtonOptions
+from flexmech.service.solvers.reports import plain, stiffness_dict
 from pydantic import Field
-
-from models import Mechanism, MechanismError
-from service.analyses.base import Analysis, AnalysisOptions, ReportSize
-from service.analyses.equilibrium import EquilibriumReport, solution_report, solution_size
-from service.requests import under
-from service.solvers.energy import minimize_energy
-from service.solvers.equilibrium import EquilibriumResult
-from service.solvers.newton import NewtonOptions
-from service.solvers.reports import plain, stiffness_dict
 
 
 class EnergyOptions(AnalysisOptions):

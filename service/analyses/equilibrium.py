@@ -5,16 +5,15 @@ the tangent stiffness and sensitivities at the solution."""
 from __future__ import annotations
 
 import numpy as np
+from flexmech.models import Mechanism, MechanismError
+from flexmech.service.analyses.base import Analysis, AnalysisOptions, AnalysisResult, ReportSize, state_numbers
+from flexmech.service.analyses.shared_options import Sensitivities, Target
+from flexmech.service.requests import under
+from flexmech.service.solvers.equilibrium import EquilibriumResult, newton, solve_equilibrium
+from flexmech.service.solvers.newton import NewtonOptions
+from flexmech.service.solvers.reports import coordinate_units, output_units, plain, stiffness_dict
+from flexmech.service.solvers.sweep import TargetResult, solve_for_target
 from pydantic import Field
-
-from models import Mechanism, MechanismError
-from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult, ReportSize, state_numbers
-from service.analyses.shared_options import Sensitivities, Target
-from service.requests import under
-from service.solvers.equilibrium import EquilibriumResult, newton, solve_equilibrium
-from service.solvers.newton import NewtonOptions
-from service.solvers.reports import coordinate_units, output_units, plain, stiffness_dict
-from service.solvers.sweep import TargetResult, solve_for_target
 
 
 def solution_report(mech: Mechanism, result: EquilibriumResult, analysis: str) -> dict:
@@ -79,7 +78,7 @@ def equilibrium_report(
     if stiffness and result.converged:
         report["stiffness"] = stiffness_dict(mech, result.z)
     if sensitivities is not None and result.converged:
-        from service.design.sensitivity import equilibrium_sensitivities
+        from flexmech.service.design.sensitivity import equilibrium_sensitivities
 
         try:
             following = (target.path, target.output) if target is not None else None

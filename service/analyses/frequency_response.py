@@ -12,18 +12,17 @@ from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
+from flexmech.models import Mechanism, MechanismError
+from flexmech.service.analyses.base import Analysis, AnalysisOptions, AnalysisResult, ReportSize
+from flexmech.service.analyses.shared_options import MAX_NAMES, Names
+from flexmech.service.solvers.newton import NewtonOptions
+from flexmech.service.solvers.reports import plain
+from flexmech.service.vibration.eigen import vibration_eigen
+from flexmech.service.vibration.frf import RESONANCE_POINTS, TWO_PI, Damping, frequency_grid, modal_response, resonances
+from flexmech.service.vibration.harmonic import channel
+from flexmech.service.vibration.modes import modal_system
+from flexmech.service.vibration.state import vibration_state
 from pydantic import BaseModel, Field, ValidationInfo, field_validator
-
-from models import Mechanism, MechanismError
-from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult, ReportSize
-from service.analyses.shared_options import MAX_NAMES, Names
-from service.solvers.newton import NewtonOptions
-from service.solvers.reports import plain
-from service.vibration.eigen import vibration_eigen
-from service.vibration.frf import RESONANCE_POINTS, TWO_PI, Damping, frequency_grid, modal_response, resonances
-from service.vibration.harmonic import channel
-from service.vibration.modes import modal_system
-from service.vibration.state import vibration_state
 
 
 class FrequencyResponseOptions(AnalysisOptions):
@@ -185,7 +184,7 @@ class FrequencyResponseAnalysis(Analysis):
         figure: str,
         path: Path,
     ) -> None:
-        from service.vibration.figures import plot_bode
+        from flexmech.service.vibration.figures import plot_bode
 
         plot_bode(report, path)
 

@@ -7,17 +7,16 @@ from __future__ import annotations
 
 from typing import Any, Literal
 
+from flexmech.models import Mechanism, MechanismError
+from flexmech.service.analyses.base import Analysis, AnalysisOptions, AnalysisResult, ReportSize, state_numbers
+from flexmech.service.analyses.shared_options import MAX_NAMES, Names
+from flexmech.service.requests import under
+from flexmech.service.solvers.equilibrium import solve_equilibrium
+from flexmech.service.solvers.newton import NewtonOptions
+from flexmech.service.solvers.reports import coordinate_units, output_units, plain, stiffness_dict
+from flexmech.service.vibration.frf import Damping
+from flexmech.service.vibration.state_space import default_inputs, default_outputs, state_space_model
 from pydantic import BaseModel, ConfigDict, Field
-
-from models import Mechanism, MechanismError
-from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult, ReportSize, state_numbers
-from service.analyses.shared_options import MAX_NAMES, Names
-from service.requests import under
-from service.solvers.equilibrium import solve_equilibrium
-from service.solvers.newton import NewtonOptions
-from service.solvers.reports import coordinate_units, output_units, plain, stiffness_dict
-from service.vibration.frf import Damping
-from service.vibration.state_space import default_inputs, default_outputs, state_space_model
 
 
 def linearization_report(

@@ -8,19 +8,18 @@ from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
+from flexmech.models import Mechanism, MechanismError
+from flexmech.service.analyses.base import Analysis, AnalysisOptions, AnalysisResult, ReportSize, drawn_numbers
+from flexmech.service.analyses.shared_options import MAX_NAMES, Names
+from flexmech.service.solvers.newton import NewtonOptions
+from flexmech.service.solvers.reports import plain
+from flexmech.service.vibration.contact_state import contact_system
+from flexmech.service.vibration.eigen import vibration_eigen
+from flexmech.service.vibration.modes import MechanismModes, mechanism_modes
+from flexmech.service.vibration.report import modes_report
+from flexmech.service.vibration.sensitivity import frequency_sensitivities
+from flexmech.service.vibration.state import vibration_state
 from pydantic import BaseModel, Field
-
-from models import Mechanism, MechanismError
-from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult, ReportSize, drawn_numbers
-from service.analyses.shared_options import MAX_NAMES, Names
-from service.solvers.newton import NewtonOptions
-from service.solvers.reports import plain
-from service.vibration.contact_state import contact_system
-from service.vibration.eigen import vibration_eigen
-from service.vibration.modes import MechanismModes, mechanism_modes
-from service.vibration.report import modes_report
-from service.vibration.sensitivity import frequency_sensitivities
-from service.vibration.state import vibration_state
 
 
 class ModesOptions(AnalysisOptions):
@@ -164,7 +163,7 @@ class ModesAnalysis(Analysis):
         figure: str,
         path: Path,
     ) -> None:
-        from service.vibration.figures import animate_mode, plot_modes
+        from flexmech.service.vibration.figures import animate_mode, plot_modes
 
         if figure == "plot":
             plot_modes(report, path, mech.doc_unit("length"))

@@ -4,9 +4,8 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
+from flexmech.service.analyses.base import AnalysisOptions
 from pydantic import BeforeValidator, Field
-
-from service.analyses.base import AnalysisOptions
 
 MAX_NAMES = 1000  # distinct outputs or fields one request may watch
 

@@ -11,18 +11,17 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
+from flexmech.models import Mechanism
+from flexmech.models.documents.fields import StrictModel
+from flexmech.models.documents.simulation_spec import IMPACT_SCHEMES, SimulateSpec
+from flexmech.service.analyses.base import Analysis, AnalysisOptions, AnalysisResult, ReportSize, state_numbers
+from flexmech.service.deadline import ends_after, passed
+from flexmech.service.dynamics.run import kept_state_numbers, run_simulation, simulation_spec
+from flexmech.service.impacts.run import run_impacts
+from flexmech.service.solvers.newton import NewtonOptions
+from flexmech.service.solvers.reports import plain
 from pydantic import Field, JsonValue, create_model
 from pydantic.fields import FieldInfo
-
-from models import Mechanism
-from models.documents.fields import StrictModel
-from models.documents.simulation_spec import IMPACT_SCHEMES, SimulateSpec
-from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult, ReportSize, state_numbers
-from service.deadline import ends_after, passed
-from service.dynamics.run import kept_state_numbers, run_simulation, simulation_spec
-from service.impacts.run import run_impacts
-from service.solvers.newton import NewtonOptions
-from service.solvers.reports import plain
 
 SYNC_STEPS = 20_000
 SYNC_IMPACT_STEPS = 2_000_000  # a microsecond each: a few seconds of a compiled impact model

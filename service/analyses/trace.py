@@ -21,17 +21,23 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from flexmech.models import Mechanism, MechanismError
+from flexmech.models.units import quantity_to_si
+from flexmech.service.analyses.base import (
+    Analysis,
+    AnalysisOptions,
+    AnalysisResult,
+    ReportSize,
+    drawn_numbers,
+    state_numbers,
+)
+from flexmech.service.deadline import ends_after, passed
+from flexmech.service.drawings.drawing import state_frame
+from flexmech.service.requests import under
+from flexmech.service.solvers.continuation import PathResult, trace_path
+from flexmech.service.solvers.newton import NewtonOptions
+from flexmech.service.solvers.reports import output_units, plain
 from pydantic import Field
-
-from models import Mechanism, MechanismError
-from models.units import quantity_to_si
-from service.analyses.base import Analysis, AnalysisOptions, AnalysisResult, ReportSize, drawn_numbers, state_numbers
-from service.deadline import ends_after, passed
-from service.drawings.drawing import state_frame
-from service.requests import under
-from service.solvers.continuation import PathResult, trace_path
-from service.solvers.newton import NewtonOptions
-from service.solvers.reports import output_units, plain
 
 DEFAULT_POINTS = 400
 MAX_FRAMES = 400  # states of the path drawn for the animation

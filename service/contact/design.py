@@ -10,14 +10,13 @@ from __future__ import annotations
 import time
 
 import numpy as np
+from flexmech.service.contact.kkt import split
+from flexmech.service.contact.problem import contact_problem
+from flexmech.service.contact.report import friction_coefficients
+from flexmech.service.contact.sensitivity import contact_sensitivities
+from flexmech.service.contact.solve import ContactState, PenetratingStart, solve_state
+from flexmech.service.design.problem import DesignProblem, OutputRef
 from scipy.optimize import minimize
-
-from service.contact.kkt import split
-from service.contact.problem import contact_problem
-from service.contact.report import friction_coefficients
-from service.contact.sensitivity import contact_sensitivities
-from service.contact.solve import ContactState, PenetratingStart, solve_state
-from service.design.problem import DesignProblem, OutputRef
 
 CONTACT_SOURCE = "contact"
 

@@ -6,12 +6,11 @@ pair report already."""
 from __future__ import annotations
 
 import numpy as np
-
-from models import Mechanism
-from service.contact.kkt import split
-from service.contact.problem import ContactProblem
-from service.contact.solve import ContactState
-from service.drawings.outlines import boundary_line, ellipse, turned
+from flexmech.models import Mechanism
+from flexmech.service.contact.kkt import split
+from flexmech.service.contact.problem import ContactProblem
+from flexmech.service.contact.solve import ContactState
+from flexmech.service.drawings.outlines import boundary_line, ellipse, turned
 
 # A half-plane's boundary is drawn this many times the links' extent across.
 HALF_PLANE_REACH = 3.0

@@ -8,8 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-
-from service.contact.problem import ContactProblem
+from flexmech.service.contact.problem import ContactProblem
 
 NEWTON_TOLERANCE = 1e-11  # on the nondimensional KKT residual
 ROUNDING_FLOOR = 1e-8  # below this, a residual that no longer falls has reached rounding (ill-conditioned KKT)

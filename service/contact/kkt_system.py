@@ -5,9 +5,8 @@ relative to the objects from the reference state."""
 from __future__ import annotations
 
 import casadi as ca
-
-from models.graph.planar import rot
-from service.contact.wrenches import friction_force
+from flexmech.models.graph.planar import rot
+from flexmech.service.contact.wrenches import friction_force
 
 
 def kkt_functions(V, g_eq, h_in, constraints, x, a, p, n_pairs: int, n_objects: int):

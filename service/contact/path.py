@@ -9,14 +9,13 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-
-from models import Mechanism, MechanismError
-from models.contact.schema import PathParameter
-from service.contact.drawing import state_drawing
-from service.contact.problem import ContactProblem
-from service.contact.report import friction_coefficients, pairs_report
-from service.contact.solve import ContactOptions, ContactState, empty_mode, solve_state
-from service.jobs.grids import Ranged, parameter_values, value_count
+from flexmech.models import Mechanism, MechanismError
+from flexmech.models.contact.schema import PathParameter
+from flexmech.service.contact.drawing import state_drawing
+from flexmech.service.contact.problem import ContactProblem
+from flexmech.service.contact.report import friction_coefficients, pairs_report
+from flexmech.service.contact.solve import ContactOptions, ContactState, empty_mode, solve_state
+from flexmech.service.jobs.grids import Ranged, parameter_values, value_count
 
 
 @dataclass(frozen=True)

@@ -8,23 +8,21 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
-
-from service.drawings.figures import check_plot_path, new_figure, save_figure, set_labels
+from flexmech.service.drawings.figures import check_plot_path, new_figure, save_figure, set_labels
 
 if TYPE_CHECKING:
+    from flexmech.models import Mechanism
+    from flexmech.service.contact.problem import ContactProblem
+    from flexmech.service.contact.solve import ContactState
     from matplotlib.figure import Figure
-
-    from models import Mechanism
-    from service.contact.problem import ContactProblem
-    from service.contact.solve import ContactState
 
 ARROW_SPAN = 0.15  # the largest force's arrow, as a fraction of the drawing's span
 IMPLICIT_GRID = 201
 
 
 def states_figure(mech: Mechanism, problem: ContactProblem, states: list[ContactState], labels: list[str]) -> Figure:
-    from service.contact.kkt import split
-    from service.contact.report import pair_values
+    from flexmech.service.contact.kkt import split
+    from flexmech.service.contact.report import pair_values
 
     fig = new_figure(7.5, 6.0)
     ax = fig.add_subplot()
@@ -128,8 +126,7 @@ def _draw_half_plane(ax, mech, obj, p, origin, angle, color, span: float) -> Non
 def _draw_implicit(ax, obj, origin, angle, color, centre: np.ndarray, span: float) -> None:
     """The region g < 0 around the drawing (g in the object's frame, document units)."""
     import casadi as ca
-
-    from models.documents.expression import compile_expression
+    from flexmech.models.documents.expression import compile_expression
 
     x, y = ca.SX.sym("x"), ca.SX.sym("y")
     g = ca.Function("g", [x, y], [ca.SX(compile_expression(obj.expression, "", "x", ("y",))(x, {"y": y}))])

@@ -27,16 +27,15 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
-
-from models.contact.constraints import ContactGeometry, contact_constraints, substituted
-from models.contact.laws import FRICTION_LAWS, NORMAL_LAWS, check_law
-from models.errors import MechanismError
-from models.graph.assembly import graphs_for
-from models.graph.forms import symbolic_energy
-from models.graph.structure import Structure
-from service.contact.kkt_system import kkt_functions
-from service.contact.outputs import PAIR_OUTPUTS
-from service.contact.wrenches import contact_wrenches, friction_force, with_contact_wrenches
+from flexmech.models.contact.constraints import ContactGeometry, contact_constraints, substituted
+from flexmech.models.contact.laws import FRICTION_LAWS, NORMAL_LAWS, check_law
+from flexmech.models.errors import MechanismError
+from flexmech.models.graph.assembly import graphs_for
+from flexmech.models.graph.forms import symbolic_energy
+from flexmech.models.graph.structure import Structure
+from flexmech.service.contact.kkt_system import kkt_functions
+from flexmech.service.contact.outputs import PAIR_OUTPUTS
+from flexmech.service.contact.wrenches import contact_wrenches, friction_force, with_contact_wrenches
 
 
 @dataclass(frozen=True)

@@ -11,9 +11,8 @@ consistent analysis is service.contact.solve. sigma is the consistent state's di
 from __future__ import annotations
 
 import numpy as np
-
-from models import Mechanism
-from models.elements import FAMILIES
+from flexmech.models import Mechanism
+from flexmech.models.elements import FAMILIES
 
 METHOD = (
     "Lan 2005 Eqs. 6.6-6.10: the frictionless shape, the force recovered from the clamp moment and split "

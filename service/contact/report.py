@@ -5,12 +5,11 @@ gap; the structure's outputs (reactions included) at the state; diagnostics."""
 from __future__ import annotations
 
 import numpy as np
-
-from models import Mechanism, MechanismError
-from service.contact.kkt import inequality_values, split
-from service.contact.problem import ContactProblem
-from service.contact.solve import ContactState, PenetratingStart
-from service.units import outputs_in_doc_units
+from flexmech.models import Mechanism, MechanismError
+from flexmech.service.contact.kkt import inequality_values, split
+from flexmech.service.contact.problem import ContactProblem
+from flexmech.service.contact.solve import ContactState, PenetratingStart
+from flexmech.service.units import outputs_in_doc_units
 
 
 def friction_coefficients(mech: Mechanism, problem: ContactProblem, p: np.ndarray | None = None) -> np.ndarray:

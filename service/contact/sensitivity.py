@@ -10,12 +10,11 @@ are one-sided: none is given, and the answer says which pair and why."""
 from __future__ import annotations
 
 import numpy as np
-
-from models import Mechanism, MechanismError
-from service.contact.kkt import inequality_values, split
-from service.contact.problem import ContactProblem
-from service.contact.solve import ContactState
-from service.design.sensitivity_table import Sensitivities
+from flexmech.models import Mechanism, MechanismError
+from flexmech.service.contact.kkt import inequality_values, split
+from flexmech.service.contact.problem import ContactProblem
+from flexmech.service.contact.solve import ContactState
+from flexmech.service.design.sensitivity_table import Sensitivities
 
 WEAK = 1e-8
 # a gap (nondimensional) below which a pair is about to touch: the solve's accuracy (an open

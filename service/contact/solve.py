@@ -17,10 +17,9 @@ import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-
-from service.contact.kkt import CONSISTENCY, Mode, consistent_active_set, split
-from service.contact.problem import ContactProblem
-from service.solvers import ipopt
+from flexmech.service.contact.kkt import CONSISTENCY, Mode, consistent_active_set, split
+from flexmech.service.contact.problem import ContactProblem
+from flexmech.service.solvers import ipopt
 
 IPOPT_OPTIONS = {"tol": 1e-12, "constr_viol_tol": 1e-12, "acceptable_tol": 1e-9, "max_iter": 500}
 WARM = {

@@ -10,10 +10,9 @@ entries stay near one whatever the units."""
 from __future__ import annotations
 
 import numpy as np
-
-from models import MechanismError
-from service.design.problem import DesignProblem, OutputRef
-from service.vibration.sensitivity import state_mode
+from flexmech.models import MechanismError
+from flexmech.service.design.problem import DesignProblem, OutputRef
+from flexmech.service.vibration.sensitivity import state_mode
 
 AGREEMENT = 1e-6  # relative: the NLP's frequency and a fresh modes run's at the optimum
 
@@ -96,7 +95,7 @@ def _followed(problem: DesignProblem, ref: OutputRef, v: np.ndarray, zs, ps) -> 
 
 
 def _mass(problem: DesignProblem):
-    from models.graph.modal import state_mass
+    from flexmech.models.graph.modal import state_mass
 
     function = state_mass(problem.mechanism.structure)
     return lambda z, p: np.asarray(function(z, p), dtype=float)
@@ -123,7 +122,7 @@ def response_factor(problem: DesignProblem, ref: OutputRef) -> float:
 
 def response_value(problem: DesignProblem, ref: OutputRef, z: np.ndarray, p: np.ndarray) -> float:
     """The response's amplitude at (z, p), in its unit."""
-    from service.vibration.harmonic import output_derivatives
+    from flexmech.service.vibration.harmonic import output_derivatives
 
     row = np.asarray(output_derivatives(problem.mechanism.structure)[0](z, p), dtype=float)[ref.index]
     return float(abs(row @ _response_system(problem, ref, z, p)) * response_factor(problem, ref))

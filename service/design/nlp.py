@@ -22,10 +22,9 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
-
-from models.graph.assembly import graphs_for
-from service.design.problem import DesignProblem, OutputRef
-from service.solvers.ipopt import nlp_solver, solve
+from flexmech.models.graph.assembly import graphs_for
+from flexmech.service.design.problem import DesignProblem, OutputRef
+from flexmech.service.solvers.ipopt import nlp_solver, solve
 
 
 @dataclass(frozen=True, eq=False)
@@ -158,7 +157,7 @@ def _responses(structure, responses, zs, ps, amplitudes, scales) -> tuple[list[c
     document units (scales: a factor per response, then alpha and beta)."""
     if not responses:
         return [], []
-    from models.graph.modal import state_mass
+    from flexmech.models.graph.modal import state_mass
 
     graphs, mass = graphs_for(structure), state_mass(structure)
     alpha, beta = scales[len(responses)], scales[len(responses) + 1]
@@ -191,7 +190,7 @@ def _eigenproblems(structure, frequencies, zs, ps, modes, scales) -> tuple[list[
     """Per frequency: its eigenproblem's rows and omega (rad/s), from its mode's unknowns."""
     if not frequencies:
         return [], []
-    from models.graph.modal import state_mass
+    from flexmech.models.graph.modal import state_mass
 
     graphs, mass = graphs_for(structure), state_mass(structure)
     rows, omegas = [], []

@@ -18,13 +18,18 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
-
-from service.contact.design import run_contact_start, uses_contact
-from service.design.frequencies import disagreements, eigen_scales, response_scales, unknown_bounds, vibration_start
-from service.design.nlp import DesignNlp, design_nlp, least_violation, solver_for
-from service.design.problem import DesignProblem, OutputRef
-from service.design.states import case_outputs, case_params, equilibria, output_value, polished_states
-from service.solvers.ipopt import solve
+from flexmech.service.contact.design import run_contact_start, uses_contact
+from flexmech.service.design.frequencies import (
+    disagreements,
+    eigen_scales,
+    response_scales,
+    unknown_bounds,
+    vibration_start,
+)
+from flexmech.service.design.nlp import DesignNlp, design_nlp, least_violation, solver_for
+from flexmech.service.design.problem import DesignProblem, OutputRef
+from flexmech.service.design.states import case_outputs, case_params, equilibria, output_value, polished_states
+from flexmech.service.solvers.ipopt import solve
 
 # A constraint counts as active within this (scaled) distance of its bound.
 ACTIVE_TOLERANCE = 1e-7

@@ -18,11 +18,10 @@ import re
 from dataclasses import dataclass
 
 import numpy as np
-
-from models import Mechanism, MechanismError
-from models.documents.optimize_spec import OptimizeSpec
-from models.graph.structure import COORDINATES
-from service.contact.outputs import PAIR_OUTPUTS
+from flexmech.models import Mechanism, MechanismError
+from flexmech.models.documents.optimize_spec import OptimizeSpec
+from flexmech.models.graph.structure import COORDINATES
+from flexmech.service.contact.outputs import PAIR_OUTPUTS
 
 STIFFNESS_PREFIX = "stiffness."
 FREQUENCY_PREFIX = "frequency."

@@ -15,12 +15,11 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
-
-from models import Mechanism, MechanismError
-from models.graph.assembly import graphs_for
-from models.graph.structure import Structure
-from service.design.optimize import ACTIVE_TOLERANCE, Prepared, StartResult
-from service.design.sensitivity_table import Sensitivities  # noqa: F401 (re-exported)
+from flexmech.models import Mechanism, MechanismError
+from flexmech.models.graph.assembly import graphs_for
+from flexmech.models.graph.structure import Structure
+from flexmech.service.design.optimize import ACTIVE_TOLERANCE, Prepared, StartResult
+from flexmech.service.design.sensitivity_table import Sensitivities  # noqa: F401 (re-exported)
 
 
 @lru_cache(maxsize=16)

@@ -7,12 +7,11 @@ from __future__ import annotations
 import re
 
 import numpy as np
-
-from models import Mechanism
-from service.design.frequencies import frequency_value, response_value
-from service.design.problem import DesignProblem, OutputRef
-from service.solvers.equilibrium import newton
-from service.solvers.newton import NewtonOptions
+from flexmech.models import Mechanism
+from flexmech.service.design.frequencies import frequency_value, response_value
+from flexmech.service.design.problem import DesignProblem, OutputRef
+from flexmech.service.solvers.equilibrium import newton
+from flexmech.service.solvers.newton import NewtonOptions
 
 
 def case_params(problem: DesignProblem, design: np.ndarray) -> list[np.ndarray]:
@@ -72,7 +71,7 @@ def polished_states(problem: DesignProblem, design: np.ndarray, zs: list[np.ndar
 
 
 def case_outputs(problem: DesignProblem, x: np.ndarray) -> dict[str, dict[str, float]]:
-    from service.units import outputs_in_doc_units
+    from flexmech.service.units import outputs_in_doc_units
 
     mech: Mechanism = problem.mechanism
     n_design = len(problem.slots)

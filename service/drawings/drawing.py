@@ -13,12 +13,11 @@ transformation thus animates every kind of result.
 from __future__ import annotations
 
 import numpy as np
-
-from models import Mechanism, MechanismError
-from models.elements import FAMILIES
-from service.drawings.configuration_plot import load_point
-from service.drawings.outlines import circle_sites, contact_objects, document_length, in_body, turned
-from service.drawings.stresses import frame_stresses, stress_limits
+from flexmech.models import Mechanism, MechanismError
+from flexmech.models.elements import FAMILIES
+from flexmech.service.drawings.configuration_plot import load_point
+from flexmech.service.drawings.outlines import circle_sites, contact_objects, document_length, in_body, turned
+from flexmech.service.drawings.stresses import frame_stresses, stress_limits
 
 
 def mechanism_drawing(mech: Mechanism, z: np.ndarray | None = None, outputs: dict | None = None) -> dict:

@@ -7,9 +7,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-
-from models import Mechanism
-from models.units import quantity_to_si
+from flexmech.models import Mechanism
+from flexmech.models.units import quantity_to_si
 
 CIRCLE_SAMPLES = 72
 # A half-plane or a line surface is drawn across this multiple of the drawing's span.

@@ -5,12 +5,11 @@ a continuation sweep solves them), and each state becomes a frame (service.drawi
 from __future__ import annotations
 
 import numpy as np
-
-from models import Mechanism, MechanismError
-from service.deadline import ends_after, passed
-from service.drawings.drawing import state_frame
-from service.solvers.equilibrium import newton
-from service.solvers.newton import NewtonOptions
+from flexmech.models import Mechanism, MechanismError
+from flexmech.service.deadline import ends_after, passed
+from flexmech.service.drawings.drawing import state_frame
+from flexmech.service.solvers.equilibrium import newton
+from flexmech.service.solvers.newton import NewtonOptions
 
 MAX_FRAMES = 400
 

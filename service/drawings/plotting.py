@@ -14,9 +14,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
-
-from service.drawings.configuration_plot import configuration_figure, load_point, plot_configuration
-from service.drawings.figures import (
+from flexmech.service.drawings.configuration_plot import configuration_figure, load_point, plot_configuration
+from flexmech.service.drawings.figures import (
     PLOT_SUFFIXES,
     check_plot_path,
     field_label,
@@ -27,11 +26,10 @@ from service.drawings.figures import (
 )
 
 if TYPE_CHECKING:
+    from flexmech.models import Mechanism
+    from flexmech.service.solvers.continuation import PathResult
+    from flexmech.service.solvers.sweep import SweepResult
     from matplotlib.figure import Figure
-
-    from models import Mechanism
-    from service.solvers.continuation import PathResult
-    from service.solvers.sweep import SweepResult
 
 __all__ = [
     "PLOT_SUFFIXES",

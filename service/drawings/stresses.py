@@ -14,12 +14,11 @@ element of a state given without its outputs.
 from __future__ import annotations
 
 import numpy as np
-
-from models import Mechanism
-from models.elements import FAMILIES
-from models.graph.collector import check_value
-from models.graph.context import Params
-from models.units import quantity_to_si
+from flexmech.models import Mechanism
+from flexmech.models.elements import FAMILIES
+from flexmech.models.graph.collector import check_value
+from flexmech.models.graph.context import Params
+from flexmech.models.units import quantity_to_si
 
 
 def _stressed(mech: Mechanism):

@@ -19,9 +19,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-
-from service.dynamics.onsets import crossing, step_onto_onset
-from service.dynamics.stepping import History, Resume, StepRunner
+from flexmech.service.dynamics.onsets import crossing, step_onto_onset
+from flexmech.service.dynamics.stepping import History, Resume, StepRunner
 
 SAFETY = 0.9
 ADAPTIVE_WINDOW = 50  # steps per window of one step size: the step controller adapts once per window

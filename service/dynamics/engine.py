@@ -16,15 +16,14 @@ from functools import cached_property
 
 import casadi as ca
 import numpy as np
-
-from models.graph.context import AssemblyContext
-from models.graph.structure import Structure
-from models.kernels.link_data import link_data
-from service.dynamics.kernel_groups import padded
-from service.dynamics.kernel_records import Factors
-from service.dynamics.kernel_system import NEWTON_TOLERANCE, StepSystem
-from service.dynamics.kernel_window import Stepper
-from service.dynamics.schemes import Scheme
+from flexmech.models.graph.context import AssemblyContext
+from flexmech.models.graph.structure import Structure
+from flexmech.models.kernels.link_data import link_data
+from flexmech.service.dynamics.kernel_groups import padded
+from flexmech.service.dynamics.kernel_records import Factors
+from flexmech.service.dynamics.kernel_system import NEWTON_TOLERANCE, StepSystem
+from flexmech.service.dynamics.kernel_window import Stepper
+from flexmech.service.dynamics.schemes import Scheme
 
 WINDOW_ACCEPTANCE = 10 * NEWTON_TOLERANCE  # a window's step whose residual is below this counts
 RESCUE_ITERATIONS = 16  # full Newton, for a step that the window's factors do not settle
@@ -91,7 +90,7 @@ class Engine:
         signatures = [g.signature for g in self.system.layout.groups]
         if not signatures or any(s not in self.compiled for s in signatures):
             return None
-        from service.kernels.windows import compiled_window, window_key
+        from flexmech.service.kernels.windows import compiled_window, window_key
 
         glue = self.glue_window(steps)
         if steps not in self._keys:

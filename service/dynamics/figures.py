@@ -6,10 +6,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-
-from models import Mechanism
-from service.dynamics.integrate import History
-from service.dynamics.state_map import state_map
+from flexmech.models import Mechanism
+from flexmech.service.dynamics.integrate import History
+from flexmech.service.dynamics.state_map import state_map
 
 
 def plot_history(report: dict, outputs: list[str], path: Path) -> None:

@@ -19,9 +19,8 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
-
-from models import Mechanism, MechanismError
-from models.documents.expression import compile_expression
+from flexmech.models import Mechanism, MechanismError
+from flexmech.models.documents.expression import compile_expression
 
 MAX_TABLE = 100_000
 MAX_INLINE_TABLE = 200  # a table inside a step graph (impact simulations)

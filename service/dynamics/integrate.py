@@ -6,12 +6,11 @@ from __future__ import annotations
 import time
 
 import numpy as np
-
-from models.graph.structure import Structure
-from service.dynamics.adaptive import AdaptiveRunner, Tolerance
-from service.dynamics.histories import Histories, no_histories
-from service.dynamics.schemes import Scheme
-from service.dynamics.stepping import History, Resume, StepRunner, start_of
+from flexmech.models.graph.structure import Structure
+from flexmech.service.dynamics.adaptive import AdaptiveRunner, Tolerance
+from flexmech.service.dynamics.histories import Histories, no_histories
+from flexmech.service.dynamics.schemes import Scheme
+from flexmech.service.dynamics.stepping import History, Resume, StepRunner, start_of
 
 __all__ = ["History", "Resume", "Tolerance", "integrate", "start_of"]
 

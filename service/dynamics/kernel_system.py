@@ -25,15 +25,14 @@ from __future__ import annotations
 
 import casadi as ca
 import numpy as np
-
-from models.graph.structure import Structure
-from models.kernels.chain_solver import BORDER
-from models.kernels.chain_sweep import packed_size
-from models.kernels.chunks import CHUNK, Chunks, chunks
-from models.kernels.global_part import global_part, start_nodes
-from models.kernels.layout import layout_of
-from service.dynamics.kernel_groups import UNSET_AFFINE, GroupIndex, group_index
-from service.dynamics.kernel_records import Evaluation, Factors, StepInputs
+from flexmech.models.graph.structure import Structure
+from flexmech.models.kernels.chain_solver import BORDER
+from flexmech.models.kernels.chain_sweep import packed_size
+from flexmech.models.kernels.chunks import CHUNK, Chunks, chunks
+from flexmech.models.kernels.global_part import global_part, start_nodes
+from flexmech.models.kernels.layout import layout_of
+from flexmech.service.dynamics.kernel_groups import UNSET_AFFINE, GroupIndex, group_index
+from flexmech.service.dynamics.kernel_records import Evaluation, Factors, StepInputs
 
 NEWTON_TOLERANCE = 1e-10  # nondimensional forces
 CONSTRAINT_TOLERANCE = 1e-13  # and lengths, angles

@@ -26,11 +26,10 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import casadi as ca
-
-from service.dynamics.kernel_groups import padded
-from service.dynamics.kernel_records import Evaluation, Factors, StepInputs
-from service.dynamics.kernel_system import NEWTON_TOLERANCE, StepSystem
-from service.dynamics.schemes import Scheme
+from flexmech.service.dynamics.kernel_groups import padded
+from flexmech.service.dynamics.kernel_records import Evaluation, Factors, StepInputs
+from flexmech.service.dynamics.kernel_system import NEWTON_TOLERANCE, StepSystem
+from flexmech.service.dynamics.schemes import Scheme
 
 MAX_ITERATIONS = 8
 

@@ -8,10 +8,9 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
+from flexmech.models.graph.dynamics import DynamicsForm, dynamics_form
+from flexmech.models.graph.structure import Structure
 from scipy.linalg import eigh, null_space
-
-from models.graph.dynamics import DynamicsForm, dynamics_form
-from models.graph.structure import Structure
 
 
 @lru_cache(maxsize=16)
@@ -29,7 +28,7 @@ class Modes:
 
 @lru_cache(maxsize=16)
 def _hessian(structure: Structure) -> ca.Function:
-    from models.graph.forms import symbolic_energy
+    from flexmech.models.graph.forms import symbolic_energy
 
     s = symbolic_energy(structure)
     g = ca.vertcat(*[row for _, row in s.equalities]) if s.equalities else ca.SX(0, 1)

@@ -14,12 +14,11 @@ from __future__ import annotations
 
 import casadi as ca
 import numpy as np
-
-from models.contact.elastic_pairs import DAMPED_LAWS, elastic_pairs
-from models.contact.pair_forces import contact_forces
-from models.graph.context import AssemblyContext
-from models.graph.structure import Structure
-from service.dynamics.engine import WINDOW_ACCEPTANCE
+from flexmech.models.contact.elastic_pairs import DAMPED_LAWS, elastic_pairs
+from flexmech.models.contact.pair_forces import contact_forces
+from flexmech.models.graph.context import AssemblyContext
+from flexmech.models.graph.structure import Structure
+from flexmech.service.dynamics.engine import WINDOW_ACCEPTANCE
 
 GRID_SLACK = 1e-10  # of the step: the onset is located within this much of it (and a rest this short is none)
 LANDING_ITERATIONS = 60

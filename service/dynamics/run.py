@@ -9,24 +9,23 @@ end's multipliers are the force (and moment) its end body exerts on it, exact in
 from __future__ import annotations
 
 import numpy as np
+from flexmech.models import Mechanism, MechanismError
+from flexmech.models.contact.elastic_pairs import check_link_dynamics
+from flexmech.models.documents.simulation_spec import SimulateSpec, critical_step_factor
+from flexmech.models.elements import FAMILIES
+from flexmech.models.graph.residual import unknown_names
+from flexmech.service.costs import Limits
+from flexmech.service.dynamics.adaptive import Tolerance
+from flexmech.service.dynamics.histories import Histories, read_histories, varying_values
+from flexmech.service.dynamics.integrate import History, integrate
+from flexmech.service.dynamics.onsets import Onsets
+from flexmech.service.dynamics.schemes import Scheme, generalized_alpha, newmark
+from flexmech.service.dynamics.state_map import state_map
+from flexmech.service.dynamics.static_start import static_shape
+from flexmech.service.dynamics.stepping import engine_of
+from flexmech.service.solvers.energy import minimize_energy
+from flexmech.service.solvers.reports import output_units
 from pydantic import ValidationError
-
-from models import Mechanism, MechanismError
-from models.contact.elastic_pairs import check_link_dynamics
-from models.documents.simulation_spec import SimulateSpec, critical_step_factor
-from models.elements import FAMILIES
-from models.graph.residual import unknown_names
-from service.costs import Limits
-from service.dynamics.adaptive import Tolerance
-from service.dynamics.histories import Histories, read_histories, varying_values
-from service.dynamics.integrate import History, integrate
-from service.dynamics.onsets import Onsets
-from service.dynamics.schemes import Scheme, generalized_alpha, newmark
-from service.dynamics.state_map import state_map
-from service.dynamics.static_start import static_shape
-from service.dynamics.stepping import engine_of
-from service.solvers.energy import minimize_energy
-from service.solvers.reports import output_units
 
 MAX_STEPS = Limits().max_simulation_steps  # the service's limit: the CLI and Python apply the same
 STATIC_OUTPUTS = (".h", ".v", ".M_start", ".M_end")
@@ -107,7 +106,7 @@ def check_scheme(mech: Mechanism, spec: SimulateSpec, x0: np.ndarray | None = No
     mechanism's highest natural frequency at the start (x0; None: the undeformed state)."""
     if spec.scheme != "newmark" or spec.a2 >= spec.a1 - 1e-12:
         return  # nothing built for every other run
-    from service.dynamics.modes import highest_frequency
+    from flexmech.service.dynamics.modes import highest_frequency
 
     if x0 is None:
         x0 = np.zeros(len(mech.graphs.energy_form.unknowns))

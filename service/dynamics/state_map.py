@@ -8,9 +8,8 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
-
-from models.graph.structure import Structure
-from models.kernels.layout import own_counts
+from flexmech.models.graph.structure import Structure
+from flexmech.models.kernels.layout import own_counts
 
 
 @dataclass(frozen=True)

@@ -12,9 +12,8 @@ to minimizing the energy."""
 from __future__ import annotations
 
 import numpy as np
-
-from service.dynamics.engine import Engine
-from service.dynamics.kernel_system import NEWTON_TOLERANCE
+from flexmech.service.dynamics.engine import Engine
+from flexmech.service.dynamics.kernel_system import NEWTON_TOLERANCE
 
 MAX_ITERATIONS = 25  # per load level
 LOAD_LEVELS = (1, 4, 16)  # equal fractions of the loads tried, one count after another

@@ -15,17 +15,16 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-
-from models import MechanismError
-from models.graph.structure import Structure
-from models.kernels.layout import layout_of
-from service.buffered import BufferedCall
-from service.dynamics.engine import WINDOW_ACCEPTANCE, Engine, engine_for
-from service.dynamics.histories import Histories
-from service.dynamics.onsets import Onsets, crossing, step_onto_onset
-from service.kernels import compiled_for
-from service.kernels.cache import is_compiled
-from service.kernels.queue import request_chain
+from flexmech.models import MechanismError
+from flexmech.models.graph.structure import Structure
+from flexmech.models.kernels.layout import layout_of
+from flexmech.service.buffered import BufferedCall
+from flexmech.service.dynamics.engine import WINDOW_ACCEPTANCE, Engine, engine_for
+from flexmech.service.dynamics.histories import Histories
+from flexmech.service.dynamics.onsets import Onsets, crossing, step_onto_onset
+from flexmech.service.kernels import compiled_for
+from flexmech.service.kernels.cache import is_compiled
+from flexmech.service.kernels.queue import request_chain
 
 WINDOW = 20  # steps per call
 
@@ -109,7 +108,7 @@ def engine_of(structure: Structure, scheme, histories: Histories) -> Engine:
 
 def start_of(structure: Structure, p, x0, v0, histories: Histories, damping: float, scheme=None) -> Resume:
     """The run's state at t = 0: (x0, v0) with consistent accelerations."""
-    from service.dynamics.schemes import newmark
+    from flexmech.service.dynamics.schemes import newmark
 
     engine = engine_of(structure, scheme or newmark(), histories)
     x, v = np.asarray(x0, dtype=float).copy(), np.asarray(v0, dtype=float).copy()
@@ -138,9 +137,8 @@ def start_of(structure: Structure, p, x0, v0, histories: Histories, damping: flo
 def massless_coordinates(structure: Structure, x: np.ndarray, p: np.ndarray) -> list[str]:
     """The coordinates that move in the null space of [M G'; G 0] at x: free and without mass
     (a diagnosis on the dense form, only for a start that failed)."""
+    from flexmech.service.dynamics.modes import form_of
     from scipy.linalg import null_space
-
-    from service.dynamics.modes import form_of
 
     form = form_of(structure)
     n, m = len(form.unknowns), form.n_equalities

@@ -19,9 +19,8 @@ from __future__ import annotations
 
 import casadi as ca
 import numpy as np
-
-from models import Mechanism, MechanismError
-from service.export.direction import direction
+from flexmech.models import Mechanism, MechanismError
+from flexmech.service.export.direction import direction
 
 GAP_FLOOR = 1e-300  # below it r counts as zero
 FORCE_FLOOR = 1e-10  # nondimensional: a row carrying less is apart for its axis (rounding leaves ~1e-16)
@@ -30,7 +29,7 @@ MAX_INSTRUCTIONS = 200_000  # of the KKT kernel: about 2 MB of C, a few seconds 
 
 
 def _checked_problem(mech: Mechanism):
-    from service.contact.problem import contact_problem
+    from flexmech.service.contact.problem import contact_problem
 
     for pair in mech.structure.contacts.pairs:  # before the problem is built: seconds for a large one
         if mech.si_values[mech.parameter_index(pair.friction_pointer)] != 0:

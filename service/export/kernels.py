@@ -13,11 +13,10 @@ from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
-
-from models import Mechanism, MechanismError
-from service.export.direction import direction
-from service.export.plan import ExportPlan
-from service.units import matrix_to_doc
+from flexmech.models import Mechanism, MechanismError
+from flexmech.service.export.direction import direction
+from flexmech.service.export.plan import ExportPlan
+from flexmech.service.units import matrix_to_doc
 
 
 @dataclass(frozen=True)
@@ -107,7 +106,7 @@ def _target_step(
 def _residual_and_tangent(mech: Mechanism, z: ca.MX, p: ca.MX) -> tuple[ca.MX, ca.MX]:
     """R and K from their row groups (models.graph.assembly.residual_by_rows): the same numbers
     as graphs.residual_and_tangent, in generated functions a compiler optimizes in seconds."""
-    from models.graph.assembly import residual_by_rows
+    from flexmech.models.graph.assembly import residual_by_rows
 
     # the structure without names: its expressions are the ones the graphs were built from
     pieces = [f(z, p) for _, f in residual_by_rows(mech.structure.unnamed)]
@@ -140,7 +139,7 @@ def _contact(mech: Mechanism, plan: ExportPlan, base: str) -> dict:
     """The contact task's fields of ExportFunctions, as plan.options.contact asks: "auto" exports
     it when the document has contacts and its kernel is within bounds (else notes why), "yes"
     insists (MechanismError), "no" leaves it out."""
-    from service.export.contact_kernels import contact_functions
+    from flexmech.service.export.contact_kernels import contact_functions
 
     choice = plan.options.contact
     if choice == "no":

@@ -16,14 +16,13 @@ from pathlib import Path
 
 import casadi as ca
 import numpy as np
-
-from models import Mechanism, MechanismDocument, compile_mechanism
-from service.export.kernels import ExportFunctions, export_functions
-from service.export.measure import example_path, worst_iterations
-from service.export.plan import ExportOptions, ExportPlan, export_plan
-from service.export.sources import ExamplePath, template_values, write_kernels, write_sources
-from service.solvers.equilibrium import check_constrained
-from service.units import coordinate_kinds
+from flexmech.models import Mechanism, MechanismDocument, compile_mechanism
+from flexmech.service.export.kernels import ExportFunctions, export_functions
+from flexmech.service.export.measure import example_path, worst_iterations
+from flexmech.service.export.plan import ExportOptions, ExportPlan, export_plan
+from flexmech.service.export.sources import ExamplePath, template_values, write_kernels, write_sources
+from flexmech.service.solvers.equilibrium import check_constrained
+from flexmech.service.units import coordinate_kinds
 
 STATUS_CODES = {
     "OK": 0,

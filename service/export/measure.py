@@ -5,11 +5,10 @@ from the previous) and cold (each from the undeformed state)."""
 from __future__ import annotations
 
 import numpy as np
-
-from models import Mechanism, MechanismError
-from service.export.kernels import ExportFunctions, iterate
-from service.export.plan import ExportPlan
-from service.export.sources import ExamplePath
+from flexmech.models import Mechanism, MechanismError
+from flexmech.service.export.kernels import ExportFunctions, iterate
+from flexmech.service.export.plan import ExportPlan
+from flexmech.service.export.sources import ExamplePath
 
 
 def parameters_at(mech: Mechanism, plan: ExportPlan, values) -> np.ndarray:
@@ -30,7 +29,7 @@ def _doc(mech: Mechanism, plan: ExportPlan, index: int, value, pointer: str) -> 
 
 
 def _contact_path(mech: Mechanism, plan: ExportPlan) -> ExamplePath | None:
-    from service.contact.path import path_fields
+    from flexmech.service.contact.path import path_fields
 
     spec = mech.document.contacts.path if mech.document.contacts is not None else None
     if spec is None or not spec.parameters:

@@ -14,8 +14,8 @@ from dataclasses import dataclass, field
 from functools import cache
 from importlib.resources import files
 
-from models import Mechanism, MechanismError
-from service.export.encoders import c_identifier
+from flexmech.models import Mechanism, MechanismError
+from flexmech.service.export.encoders import c_identifier
 
 _DEFAULT_RANGES = {  # a field's own check (models.graph.collector) as (low, high, low excluded)
     "positive": (0.0, math.inf, True),
@@ -159,7 +159,7 @@ def _library_name(mech: Mechanism, given: str) -> str:
 @cache
 def _header_suffixes() -> frozenset[str]:
     """The header's own macros after <NAME>_ (OK, OUT_OF_RANGE, N_INPUTS, ...), read from its template."""
-    text = (files("service.export") / "templates" / "header.h.in").read_text()
+    text = (files("flexmech.service.export") / "templates" / "header.h.in").read_text()
     return frozenset(re.findall(r"#define @UPPER@_(\w+)", text))
 
 
@@ -282,7 +282,7 @@ def contact_outputs(mech: Mechanism, options: ExportOptions) -> tuple[ContactOut
     else every pair's results (service.contact.outputs.PAIR_OUTPUTS) and any output of the
     structure's named "contacts." (as the contact problem names them); none without pairs or
     with contact "no"."""
-    from service.contact.outputs import PAIR_OUTPUTS
+    from flexmech.service.contact.outputs import PAIR_OUTPUTS
 
     structure = mech.structure.contacts
     if options.contact == "no" or structure is None or not structure.pairs:

@@ -16,12 +16,11 @@ from importlib.resources import files
 from pathlib import Path
 
 import casadi as ca
+from flexmech.service.export.encoders import c_comment, c_macro, c_string, hash_comment, python_docstring
+from flexmech.service.export.kernels import ExportFunctions
+from flexmech.service.export.plan import ExportPlan
 
-from service.export.encoders import c_comment, c_macro, c_string, hash_comment, python_docstring
-from service.export.kernels import ExportFunctions
-from service.export.plan import ExportPlan
-
-TEMPLATES = files("service.export") / "templates"
+TEMPLATES = files("flexmech.service.export") / "templates"
 _UNUSED = re.compile(r"^(?:static |CASADI_SYMBOL_EXPORT )[^;=]*?\b\w+\(([^()]*)\)\s*\{\s*$")
 _PLACEHOLDER = re.compile(r"@([A-Z_0-9]+)@")
 DESCRIPTION_LIMIT = 2000  # characters of a comment the export composes (paths, targets): names of 64 at most

@@ -19,9 +19,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import casadi as ca
-
-from models.impacts.model import WORKS, ImpactModel
-from service.impacts.contact_forces import kinematics, regularized_forces
+from flexmech.models.impacts.model import WORKS, ImpactModel
+from flexmech.service.impacts.contact_forces import kinematics, regularized_forces
 
 # Dormand-Prince 5(4): nodes, stages, the fifth-order weights and the embedded fourth-order ones
 C = (0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1, 1)

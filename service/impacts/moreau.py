@@ -10,9 +10,8 @@ U_N = Dn.v (positive separating), and the impact law asks U_N+ >= -e_N U_N-."""
 from __future__ import annotations
 
 import casadi as ca
-
-from models.impacts.model import WORKS, ImpactModel
-from service.impacts.contact_forces import kinematics
+from flexmech.models.impacts.model import WORKS, ImpactModel
+from flexmech.service.impacts.contact_forces import kinematics
 
 GAUSS_SEIDEL_SWEEPS = 30  # several pairs only: one pair's local solve is exact
 

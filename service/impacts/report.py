@@ -12,12 +12,11 @@ from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
-
-from models.documents.simulation_spec import SimulateSpec
-from models.impacts.model import WORKS, ImpactModel
-from service.impacts.event_driven import EventLayout, rhs_function
-from service.impacts.kept_rows import reported_rows
-from service.impacts.stepping import Trace
+from flexmech.models.documents.simulation_spec import SimulateSpec
+from flexmech.models.impacts.model import WORKS, ImpactModel
+from flexmech.service.impacts.event_driven import EventLayout, rhs_function
+from flexmech.service.impacts.kept_rows import reported_rows
+from flexmech.service.impacts.stepping import Trace
 
 MAPS_KEPT = 64  # mapped Functions kept (per structure, size and thread)
 _MAPPED: dict[tuple, ca.Function] = {}

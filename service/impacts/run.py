@@ -8,19 +8,18 @@ import threading
 from collections import OrderedDict
 
 import numpy as np
-
-from models import MechanismError
-from models.contact.laws import FRICTION_LAWS, NORMAL_LAWS, check_law
-from models.contact.schema import FrictionFields
-from models.documents.document import MechanismDocument
-from models.documents.simulation_spec import SimulateSpec
-from models.impacts.model import DAMPING, WORKS, ImpactModel, impact_model
-from models.units import document_unit, quantity_to_si
-from service.dynamics.histories import history_expression
-from service.impacts.event_driven import EventLayout
-from service.impacts.report import Histories, depth_function, histories, report
-from service.impacts.state_sensitivity import check_fields, end_state_derivatives, parameter_directions
-from service.impacts.stepping import KEPT_EVENT_ROWS, Trace, run_events, run_moreau
+from flexmech.models import MechanismError
+from flexmech.models.contact.laws import FRICTION_LAWS, NORMAL_LAWS, check_law
+from flexmech.models.contact.schema import FrictionFields
+from flexmech.models.documents.document import MechanismDocument
+from flexmech.models.documents.simulation_spec import SimulateSpec
+from flexmech.models.impacts.model import DAMPING, WORKS, ImpactModel, impact_model
+from flexmech.models.units import document_unit, quantity_to_si
+from flexmech.service.dynamics.histories import history_expression
+from flexmech.service.impacts.event_driven import EventLayout
+from flexmech.service.impacts.report import Histories, depth_function, histories, report
+from flexmech.service.impacts.state_sensitivity import check_fields, end_state_derivatives, parameter_directions
+from flexmech.service.impacts.stepping import KEPT_EVENT_ROWS, Trace, run_events, run_moreau
 
 TRIALS_PER_STEP = 4  # event-driven: trial steps allowed per allowed step (rejections, event location)
 MAX_STEP_PARTS = 500  # event-driven: the default longest step, a part of the run (smooth histories to draw)

@@ -15,11 +15,10 @@ import threading
 
 import casadi as ca
 import numpy as np
-
-from models.errors import MechanismError
-from models.impacts.book import ParameterBook
-from models.impacts.model import ImpactModel
-from service.impacts.event_driven import EventLayout, event_step
+from flexmech.models.errors import MechanismError
+from flexmech.models.impacts.book import ParameterBook
+from flexmech.models.impacts.model import ImpactModel
+from flexmech.service.impacts.event_driven import EventLayout, event_step
 
 MAX_CACHED = 8  # chunk Functions kept in memory
 GRAZING_SPEED = 1e-6  # m/s: a contact that begins slower touches or misses with any change of the numbers

@@ -12,15 +12,14 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
-
-from models.elements import FAMILIES
-from models.impacts.model import WORKS, ImpactModel
-from service.impacts.event_driven import EventLayout, event_step
-from service.impacts.kept_rows import KeptRows
-from service.impacts.moreau import moreau_step
-from service.impacts.native import NativeFunction
-from service.impacts.state_sensitivity import SensitivityChunk
-from service.kernels.queue import function_library, request_function
+from flexmech.models.elements import FAMILIES
+from flexmech.models.impacts.model import WORKS, ImpactModel
+from flexmech.service.impacts.event_driven import EventLayout, event_step
+from flexmech.service.impacts.kept_rows import KeptRows
+from flexmech.service.impacts.moreau import moreau_step
+from flexmech.service.impacts.native import NativeFunction
+from flexmech.service.impacts.state_sensitivity import SensitivityChunk
+from flexmech.service.kernels.queue import function_library, request_function
 
 EVENT_CHUNK = 2000  # trial steps per call
 MOREAU_CHUNK = 5000
@@ -37,11 +36,11 @@ def _code_version(family_sources: tuple[str, ...]) -> str:
     import hashlib
     from pathlib import Path
 
-    import models.contact.laws as laws
-    import models.elements as families
-    import models.graph.context as statics_context  # the statics energies of models.impacts.families read it
-    import models.graph.loads as statics_loads  # the bodies' kinetic energy, gravity and loads (models.impacts.coordinates)
-    import models.impacts as built
+    import flexmech.models.contact.laws as laws
+    import flexmech.models.elements as families
+    import flexmech.models.graph.context as statics_context  # the statics energies of models.impacts.families read it
+    import flexmech.models.graph.loads as statics_loads  # the bodies' kinetic energy, gravity and loads (models.impacts.coordinates)
+    import flexmech.models.impacts as built
 
     here = Path(__file__).parent
     folders = [Path(module.__file__).parent for module in (built, laws, families)]

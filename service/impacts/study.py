@@ -25,11 +25,10 @@ from collections.abc import Sequence
 from typing import Protocol
 
 import numpy as np
-
-from models import MechanismError
-from models.documents.document import MechanismDocument
-from models.documents.simulation_spec import SimulateSpec
-from service.impacts.run import Histories, run_with_histories
+from flexmech.models import MechanismError
+from flexmech.models.documents.document import MechanismDocument
+from flexmech.models.documents.simulation_spec import SimulateSpec
+from flexmech.service.impacts.run import Histories, run_with_histories
 
 
 class StudyField(Protocol):

@@ -29,10 +29,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar, Protocol, TypeVar
 
+from flexmech.models.errors import MechanismError, pointer_of
+from flexmech.service.requests import Limits
 from pydantic import BaseModel, ConfigDict, ValidationError
-
-from models.errors import MechanismError, pointer_of
-from service.requests import Limits
 
 JSON = dict[str, Any]  # a stored spec, plan, task or point: JSON objects
 

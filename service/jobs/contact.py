@@ -15,11 +15,9 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Literal
 
-from pydantic import ConfigDict, Field
-
-from models import Mechanism, MechanismError
-from models.contact.schema import PathParameter
-from service.contact.path import (
+from flexmech.models import Mechanism, MechanismError
+from flexmech.models.contact.schema import PathParameter
+from flexmech.service.contact.path import (
     default_outputs,
     follow,
     parameters_at,
@@ -28,15 +26,16 @@ from service.contact.path import (
     resumed_state,
     state_record,
 )
-from service.contact.problem import contact_problem
-from service.contact.report import penetration_error
-from service.contact.solve import ContactOptions, PenetratingStart
-from service.costs import Limits, check_grid_size, check_result_size
-from service.jobs.base import JSON, InOrder, JobOptions, Plan, StoredJob, read_spec
-from service.jobs.control import TaskControl
-from service.jobs.sweep import mechanism_of
-from service.jobs.sweep_options import SweepParameter
-from service.requests import compile_request, newton_options, under
+from flexmech.service.contact.problem import contact_problem
+from flexmech.service.contact.report import penetration_error
+from flexmech.service.contact.solve import ContactOptions, PenetratingStart
+from flexmech.service.costs import Limits, check_grid_size, check_result_size
+from flexmech.service.jobs.base import JSON, InOrder, JobOptions, Plan, StoredJob, read_spec
+from flexmech.service.jobs.control import TaskControl
+from flexmech.service.jobs.sweep import mechanism_of
+from flexmech.service.jobs.sweep_options import SweepParameter
+from flexmech.service.requests import compile_request, newton_options, under
+from pydantic import ConfigDict, Field
 
 
 class ContactPathOptions(JobOptions):

@@ -10,7 +10,7 @@ import os
 import threading
 import time
 
-from service.threads import single_threaded_blas
+from flexmech.service.threads import single_threaded_blas
 
 CHECK_EVERY = 0.2  # seconds between looks at the stop signal (a Dask Event is a round trip)
 

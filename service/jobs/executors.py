@@ -23,7 +23,7 @@ from abc import ABC, abstractmethod
 from concurrent.futures import Executor, ProcessPoolExecutor
 from pathlib import Path
 
-from service.jobs.control import worker_started
+from flexmech.service.jobs.control import worker_started
 
 log = logging.getLogger("flexmech.executors")
 

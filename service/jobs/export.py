@@ -22,17 +22,16 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Literal
 
+from flexmech.models import Mechanism, MechanismError
+from flexmech.service.costs import Limits, check_export_unknowns
+from flexmech.service.jobs.base import JSON, JobOptions, Plan, StoredJob, read_spec
+from flexmech.service.jobs.control import TaskControl
+from flexmech.service.requests import compile_request, escape_pointer_part
+from flexmech.service.solvers.reports import plain
 from pydantic import BaseModel, ConfigDict, Field
 
-from models import Mechanism, MechanismError
-from service.costs import Limits, check_export_unknowns
-from service.jobs.base import JSON, JobOptions, Plan, StoredJob, read_spec
-from service.jobs.control import TaskControl
-from service.requests import compile_request, escape_pointer_part
-from service.solvers.reports import plain
-
 if TYPE_CHECKING:  # the export's code generation is imported when a job is prepared or run
-    from service.export.plan import ExportOptions, ExportPlan
+    from flexmech.service.export.plan import ExportOptions, ExportPlan
 
 Pointer = Annotated[str, Field(pattern=r"^/", max_length=256)]
 OutputName = Annotated[str, Field(min_length=1, max_length=128)]
@@ -142,7 +141,7 @@ def _in_request(pointer: str, spec: ExportSpec) -> str:
 
 def export_options(spec: ExportJobOptions) -> ExportOptions:
     """The request's service.export.plan.ExportOptions."""
-    from service.export.plan import ExportOptions
+    from flexmech.service.export.plan import ExportOptions
 
     target = spec.target
     return ExportOptions(
@@ -161,7 +160,7 @@ def export_options(spec: ExportJobOptions) -> ExportOptions:
 
 def _checked(spec: ExportSpec, mech: Mechanism, limits: Limits) -> ExportPlan:
     """The export's plan (service.export.plan.ExportPlan), or MechanismError naming the request's field."""
-    from service.export.plan import export_plan
+    from flexmech.service.export.plan import export_plan
 
     if mech.n_free == 0:
         raise MechanismError("/document/bodies", "nothing moves: every body is fixed or prescribed, nothing to export")
@@ -193,7 +192,7 @@ def export_point(spec: ExportSpec) -> JSON:
     """The export written into a temporary folder (named as the library) and archived: the
     manifest and the archive as stored (its bytes base64). The spec was checked when the job
     was created (ExportJob.prepare)."""
-    from service.export.library import archive, export_library
+    from flexmech.service.export.library import archive, export_library
 
     mech = _mechanism(spec)
     with tempfile.TemporaryDirectory(prefix="flexmech-export-") as scratch:

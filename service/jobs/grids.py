@@ -9,9 +9,8 @@ from collections.abc import Sequence
 from typing import Protocol
 
 import numpy as np
-
-from models import MechanismError
-from service.costs import Limits, check_grid_size
+from flexmech.models import MechanismError
+from flexmech.service.costs import Limits, check_grid_size
 
 
 class Ranged(Protocol):

@@ -13,18 +13,17 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from flexmech.models import MechanismError
+from flexmech.models.documents.simulation_spec import IMPACT_SCHEMES
+from flexmech.service.analyses.simulate import SimulateOverrides
+from flexmech.service.costs import Limits, check_grid_size
+from flexmech.service.dynamics.run import simulation_spec
+from flexmech.service.impacts.run import check_cost, check_memory, model_of
+from flexmech.service.impacts.study import legacy_influence, study_fields, study_point, with_overrides
+from flexmech.service.jobs.base import JSON, JobOptions, Plan, StoredJob, read_spec
+from flexmech.service.jobs.control import TaskControl
+from flexmech.service.requests import compile_request
 from pydantic import BaseModel, ConfigDict, Field
-
-from models import MechanismError
-from models.documents.simulation_spec import IMPACT_SCHEMES
-from service.analyses.simulate import SimulateOverrides
-from service.costs import Limits, check_grid_size
-from service.dynamics.run import simulation_spec
-from service.impacts.run import check_cost, check_memory, model_of
-from service.impacts.study import legacy_influence, study_fields, study_point, with_overrides
-from service.jobs.base import JSON, JobOptions, Plan, StoredJob, read_spec
-from service.jobs.control import TaskControl
-from service.requests import compile_request
 
 DEFAULT_TOLERANCE = 0.05
 RUN_BYTES = 192 * 2**20  # the memory one run's states may take (a task holds the nominal run's and one other)

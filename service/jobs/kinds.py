@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from functools import lru_cache
 
-from service.jobs.base import JobKind, Plan
-from service.threads import single_threaded_blas
+from flexmech.service.jobs.base import JobKind, Plan
+from flexmech.service.threads import single_threaded_blas
 
 __all__ = ["JobKind", "Plan", "job_kinds", "kind_named", "register_job_kind", "run_task"]
 
@@ -36,13 +36,13 @@ def job_kinds() -> dict[str, JobKind]:
 
 @lru_cache(maxsize=1)
 def _built_in() -> dict[str, JobKind]:
-    from service.jobs.analysis import ANALYSIS_JOB
-    from service.jobs.contact import CONTACT
-    from service.jobs.export import EXPORT
-    from service.jobs.impact_study import IMPACT_STUDY
-    from service.jobs.optimize import OPTIMIZE
-    from service.jobs.simulation import SIMULATION
-    from service.jobs.sweep import SWEEP
+    from flexmech.service.jobs.analysis import ANALYSIS_JOB
+    from flexmech.service.jobs.contact import CONTACT
+    from flexmech.service.jobs.export import EXPORT
+    from flexmech.service.jobs.impact_study import IMPACT_STUDY
+    from flexmech.service.jobs.optimize import OPTIMIZE
+    from flexmech.service.jobs.simulation import SIMULATION
+    from flexmech.service.jobs.sweep import SWEEP
 
     return {
         kind.name: kind

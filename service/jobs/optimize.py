@@ -16,16 +16,15 @@ from functools import lru_cache
 from typing import Any
 
 import numpy as np
+from flexmech.models import MechanismError
+from flexmech.models.documents.document import parse_optimize_spec
+from flexmech.service.design.optimize import Prepared, StartResult, combine, prepare, run_start
+from flexmech.service.design.problem import DesignProblem, design_problem
+from flexmech.service.jobs.base import JSON, JobOptions, Plan, StoredJob, read_spec
+from flexmech.service.jobs.control import TaskControl
+from flexmech.service.requests import Limits, compile_request, under
+from flexmech.service.solvers.reports import plain
 from pydantic import ConfigDict, Field
-
-from models import MechanismError
-from models.documents.document import parse_optimize_spec
-from service.design.optimize import Prepared, StartResult, combine, prepare, run_start
-from service.design.problem import DesignProblem, design_problem
-from service.jobs.base import JSON, JobOptions, Plan, StoredJob, read_spec
-from service.jobs.control import TaskControl
-from service.requests import Limits, compile_request, under
-from service.solvers.reports import plain
 
 
 class OptimizeOptions(JobOptions):

@@ -27,10 +27,10 @@ from concurrent.futures import FIRST_COMPLETED, Future, wait
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 
-from service.jobs.executors import TaskExecutor
-from service.jobs.kinds import JobKind, kind_named, run_task
-from service.jobs.store import Job, JobStore
-from service.jobs.store_guard import StoreGuard
+from flexmech.service.jobs.executors import TaskExecutor
+from flexmech.service.jobs.kinds import JobKind, kind_named, run_task
+from flexmech.service.jobs.store import Job, JobStore
+from flexmech.service.jobs.store_guard import StoreGuard
 
 log = logging.getLogger("flexmech.runner")
 

@@ -14,16 +14,14 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
-from pydantic import ConfigDict
-
-from models import MechanismError
-from models.contact.elastic_pairs import check_link_dynamics
-from models.documents.simulation_spec import IMPACT_SCHEMES
-from service.analyses.simulate import SimulateOptions
-from service.costs import Limits, check_result_size
-from service.dynamics.histories import read_histories
-from service.dynamics.integrate import Resume, integrate
-from service.dynamics.run import (
+from flexmech.models import MechanismError
+from flexmech.models.contact.elastic_pairs import check_link_dynamics
+from flexmech.models.documents.simulation_spec import IMPACT_SCHEMES
+from flexmech.service.analyses.simulate import SimulateOptions
+from flexmech.service.costs import Limits, check_result_size
+from flexmech.service.dynamics.histories import read_histories
+from flexmech.service.dynamics.integrate import Resume, integrate
+from flexmech.service.dynamics.run import (
     MAX_STEPS,
     check_masses,
     check_scheme,
@@ -41,12 +39,13 @@ from service.dynamics.run import (
     wanted_outputs,
     with_balance,
 )
-from service.dynamics.stepping import WINDOW
-from service.jobs.base import JSON, InOrder, JobOptions, Plan, StoredJob, read_spec
-from service.jobs.control import TaskControl
-from service.jobs.sweep import mechanism_of
-from service.requests import compile_request, under
-from service.solvers.reports import output_units
+from flexmech.service.dynamics.stepping import WINDOW
+from flexmech.service.jobs.base import JSON, InOrder, JobOptions, Plan, StoredJob, read_spec
+from flexmech.service.jobs.control import TaskControl
+from flexmech.service.jobs.sweep import mechanism_of
+from flexmech.service.requests import compile_request, under
+from flexmech.service.solvers.reports import output_units
+from pydantic import ConfigDict
 
 
 class SimulationOptions(JobOptions, SimulateOptions):

@@ -239,7 +239,7 @@ class JobStore:
         return len(new)
 
     def _kind_of(self, job_id: str):
-        from service.jobs.kinds import kind_named  # the kinds load the solvers: only when asked
+        from flexmech.service.jobs.kinds import kind_named  # the kinds load the solvers: only when asked
 
         job = self.get(job_id)
         if job is None:

@@ -29,19 +29,18 @@ from functools import lru_cache
 from typing import Any
 
 import numpy as np
-
-from models import Mechanism, MechanismError
-from service.analyses import ANALYSES
-from service.costs import Limits, check_result_size
-from service.jobs.base import JSON, Plan, StoredJob, read_spec
-from service.jobs.control import TaskControl
-from service.jobs.grids import grid_shape, grid_size, load_paths, point_values
-from service.jobs.sweep_options import SWEEP_EXAMPLES, SweepOptions, SweepSpec
-from service.requests import compile_request, newton_options
-from service.solvers.equilibrium import check_constrained
-from service.solvers.reports import output_units, plain
-from service.solvers.sweep import solve_for_target
-from service.units import residual_report
+from flexmech.models import Mechanism, MechanismError
+from flexmech.service.analyses import ANALYSES
+from flexmech.service.costs import Limits, check_result_size
+from flexmech.service.jobs.base import JSON, Plan, StoredJob, read_spec
+from flexmech.service.jobs.control import TaskControl
+from flexmech.service.jobs.grids import grid_shape, grid_size, load_paths, point_values
+from flexmech.service.jobs.sweep_options import SWEEP_EXAMPLES, SweepOptions, SweepSpec
+from flexmech.service.requests import compile_request, newton_options
+from flexmech.service.solvers.equilibrium import check_constrained
+from flexmech.service.solvers.reports import output_units, plain
+from flexmech.service.solvers.sweep import solve_for_target
+from flexmech.service.units import residual_report
 
 
 @lru_cache(maxsize=16)

@@ -5,9 +5,8 @@ from __future__ import annotations
 
 from typing import Literal
 
+from flexmech.service.jobs.base import JobOptions, StoredJob
 from pydantic import BaseModel, ConfigDict, Field, model_validator
-
-from service.jobs.base import JobOptions, StoredJob
 
 
 class SweepParameter(BaseModel):

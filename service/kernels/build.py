@@ -28,9 +28,8 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import casadi as ca
-
-from models.caches.disk_cache import building_folder
-from service.kernels.cache import FLAGS, compiler
+from flexmech.models.caches.disk_cache import building_folder
+from flexmech.service.kernels.cache import FLAGS, compiler
 
 PR_SET_PDEATHSIG = 1
 # how gcc ends when its address-space limit refuses memory, depending on where it asked: an

@@ -1,4 +1,4 @@
-"""The server's kernel builder (service.kernels.queue's main, `python -m service.kernels.queue`):
+"""The server's kernel builder (service.kernels.queue's main, `python -m flexmech.service.kernels.queue`):
 started in a session of its own with the server's lifespan, stopped with its whole group, and
 watched: a builder that ends is started again after 1, 2, 4 ... 60 s with its queue kept, and
 meanwhile /v1/health says "degraded" (state())."""
@@ -13,9 +13,9 @@ import sys
 import threading
 import time
 
-from models.caches.disk_cache import queue_dir
-from service.kernels.build import die_with_parent
-from service.kernels.queue import QUEUE_MAX, accept_requests
+from flexmech.models.caches.disk_cache import queue_dir
+from flexmech.service.kernels.build import die_with_parent
+from flexmech.service.kernels.queue import QUEUE_MAX, accept_requests
 
 log = logging.getLogger("flexmech.kernels")
 
@@ -47,7 +47,7 @@ class BuilderProcess:
 
     def _spawn(self) -> None:
         self.proc = subprocess.Popen(
-            [sys.executable, "-m", "service.kernels.queue"],
+            [sys.executable, "-m", "flexmech.service.kernels.queue"],
             env={**os.environ, **self.env},
             start_new_session=True,
             preexec_fn=lambda: (die_with_parent(signal.SIGTERM), os.nice(10)),

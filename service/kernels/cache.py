@@ -19,10 +19,9 @@ from functools import lru_cache
 from pathlib import Path
 
 import casadi as ca
-
-from models.caches.disk_cache import cache_dir, touch
-from models.kernels.chain_signature import ChainSignature
-from models.kernels.chunks import CHUNK, Chunks, chunks
+from flexmech.models.caches.disk_cache import cache_dir, touch
+from flexmech.models.kernels.chain_signature import ChainSignature
+from flexmech.models.kernels.chunks import CHUNK, Chunks, chunks
 
 KINDS = ("sweep", "jacobian", "factor", "backward", "substitute")
 FLAGS = ("-O2", "-fPIC", "-shared")

@@ -9,13 +9,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import casadi as ca
-
-from models import Mechanism, MechanismError
-from models.kernels.chain_signature import ChainSignature
-from models.kernels.chunks import chunks
-from models.kernels.layout import layout_of, runs_in_chains
-from service.kernels.cache import abandoned, library
-from service.kernels.queue import BUILD_ORDER, function_library, note_of
+from flexmech.models import Mechanism, MechanismError
+from flexmech.models.kernels.chain_signature import ChainSignature
+from flexmech.models.kernels.chunks import chunks
+from flexmech.models.kernels.layout import layout_of, runs_in_chains
+from flexmech.service.kernels.cache import abandoned, library
+from flexmech.service.kernels.queue import BUILD_ORDER, function_library, note_of
 
 
 @dataclass
@@ -44,8 +43,8 @@ def builds_of(mech: Mechanism) -> list[Build]:
         out += [chain_build(g.signature) for g in layout_of(mech.structure).groups]
     simulate = mech.document.simulate
     if simulate is not None and simulate.scheme in ("event_driven", "moreau"):
-        from service.impacts.run import check_laws, impact_model, timed_fields
-        from service.impacts.stepping import chunk_function
+        from flexmech.service.impacts.run import check_laws, impact_model, timed_fields
+        from flexmech.service.impacts.stepping import chunk_function
 
         model = impact_model(
             mech.document, timed_fields(mech.document, simulate), json.dumps(simulate.histories, sort_keys=True)
@@ -65,11 +64,11 @@ def window_builds(mech: Mechanism) -> list[Build]:
     """The window of time steps the document's link dynamics runs, compiled as a whole
     (service.kernels.windows): only once every kernel it calls is compiled, and none for a
     document without such a simulation."""
-    from service.dynamics.adaptive import ADAPTIVE_WINDOW
-    from service.dynamics.histories import read_histories
-    from service.dynamics.run import scheme_of, simulation_spec
-    from service.dynamics.stepping import WINDOW, engine_of
-    from service.kernels.windows import links, window_key
+    from flexmech.service.dynamics.adaptive import ADAPTIVE_WINDOW
+    from flexmech.service.dynamics.histories import read_histories
+    from flexmech.service.dynamics.run import scheme_of, simulation_spec
+    from flexmech.service.dynamics.stepping import WINDOW, engine_of
+    from flexmech.service.kernels.windows import links, window_key
 
     if mech.document.simulate is None or mech.document.simulate.scheme in ("event_driven", "moreau"):
         return []

@@ -20,7 +20,7 @@ a builder that ends is started again after 1, 2, 4 ... 60 s, with its queue kept
 it was building goes back once); meanwhile /v1/health says "degraded". Stopping the server
 kills the builder's group; a server killed outright takes the builder with it
 (PR_SET_PDEATHSIG, and the builder also looks at its parent every second), and the builder
-kills its compiler before it exits. `python -m service.kernels.queue` is the builder;
+kills its compiler before it exits. `python -m flexmech.service.kernels.queue` is the builder;
 `flexmech build` compiles in the foreground without a queue.
 """
 
@@ -37,8 +37,7 @@ import time
 from pathlib import Path
 
 import casadi as ca
-
-from models.caches.disk_cache import (
+from flexmech.models.caches.disk_cache import (
     bound,
     building_dir,
     building_folder,
@@ -51,10 +50,10 @@ from models.caches.disk_cache import (
     touch,
     usage,
 )
-from models.kernels.chain_signature import ChainSignature
-from models.kernels.chunks import chunks
-from service.kernels.build import BuildLimits, Compiler, Outcome
-from service.kernels.cache import KINDS, abandoned, folder, is_compiled, library
+from flexmech.models.kernels.chain_signature import ChainSignature
+from flexmech.models.kernels.chunks import chunks
+from flexmech.service.kernels.build import BuildLimits, Compiler, Outcome
+from flexmech.service.kernels.cache import KINDS, abandoned, folder, is_compiled, library
 
 log = logging.getLogger("flexmech.kernels")
 
@@ -139,7 +138,7 @@ def request_chain(signature: ChainSignature) -> bool:
 
 def function_library(fn: ca.Function, key: str) -> Path:
     """Where the compiled library of a whole Function (an impact model's chunk) lives."""
-    from service.kernels.cache import version
+    from flexmech.service.kernels.cache import version
 
     digest = hashlib.sha256(f"{key}|{version()}".encode()).hexdigest()[:16]
     return cache_dir() / "libraries" / f"{fn.name()}_{digest}.so"

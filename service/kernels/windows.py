@@ -16,11 +16,10 @@ import threading
 from collections import OrderedDict
 
 import casadi as ca
-
-from models.caches.disk_cache import touch
-from models.kernels.chain_signature import ChainSignature
-from service.kernels.cache import KINDS, library
-from service.kernels.queue import function_library, request_function
+from flexmech.models.caches.disk_cache import touch
+from flexmech.models.kernels.chain_signature import ChainSignature
+from flexmech.service.kernels.cache import KINDS, library
+from flexmech.service.kernels.queue import function_library, request_function
 
 LOADED = 32  # compiled windows kept loaded per process (one per structure and window length)
 _loaded: OrderedDict[str, ca.Function] = OrderedDict()

@@ -20,12 +20,11 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
-
-from models import Mechanism, MechanismError
-from models.graph.assembly import graphs_for
-from models.graph.structure import Structure
-from service.solvers.newton import NewtonOptions, iterate_dense
-from service.units import outputs_in_doc_units
+from flexmech.models import Mechanism, MechanismError
+from flexmech.models.graph.assembly import graphs_for
+from flexmech.models.graph.structure import Structure
+from flexmech.service.solvers.newton import NewtonOptions, iterate_dense
+from flexmech.service.units import outputs_in_doc_units
 
 CORRECTOR_ITERATIONS = 12
 
@@ -129,7 +128,7 @@ def _path_graphs(structure: Structure, slot: int) -> tuple[ca.Function, ca.Funct
 def body_stability(mech: Mechanism, K: np.ndarray) -> Stability:
     """Definiteness of the body stiffness (links condensed out) where it is symmetric, else
     the real parts of its eigenvalues."""
-    from service.solvers.stiffness import condensed
+    from flexmech.service.solvers.stiffness import condensed
 
     try:
         Kb = condensed(K, mech.n_body_coordinates)

@@ -13,11 +13,10 @@ from __future__ import annotations
 import time
 
 import numpy as np
-
-from models import Mechanism
-from service.solvers import ipopt
-from service.solvers.equilibrium import EquilibriumResult
-from service.solvers.newton import NewtonOptions
+from flexmech.models import Mechanism
+from flexmech.service.solvers import ipopt
+from flexmech.service.solvers.equilibrium import EquilibriumResult
+from flexmech.service.solvers.newton import NewtonOptions
 
 
 def _solver(mech: Mechanism, options: NewtonOptions):

@@ -14,13 +14,12 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
-
-from models import Mechanism, MechanismError
-from models.graph.assembly import graphs_for
-from models.graph.residual import unknown_names as element_unknowns
-from service.buffered import BufferedCall
-from service.solvers import ipopt
-from service.solvers.newton import (  # noqa: F401 (NewtonOptions, Status: re-exported)
+from flexmech.models import Mechanism, MechanismError
+from flexmech.models.graph.assembly import graphs_for
+from flexmech.models.graph.residual import unknown_names as element_unknowns
+from flexmech.service.buffered import BufferedCall
+from flexmech.service.solvers import ipopt
+from flexmech.service.solvers.newton import (  # noqa: F401 (NewtonOptions, Status: re-exported)
     NewtonOptions,
     Status,
     dense_solve,
@@ -29,7 +28,7 @@ from service.solvers.newton import (  # noqa: F401 (NewtonOptions, Status: re-ex
     sparse_direction,
     sparse_step,
 )
-from service.units import displacement_to_doc, outputs_in_doc_units, residual_report
+from flexmech.service.units import displacement_to_doc, outputs_in_doc_units, residual_report
 
 # Seed 000, Sec. 2: the constant-stiffness curved beam is faithful up to about +-20 deg.
 ROTATION_VALIDITY_DEG = 20.0

@@ -22,10 +22,9 @@ from pathlib import Path
 
 import casadi as ca
 import numpy as np
-
-from models import Mechanism, MechanismError
-from models.caches.disk_cache import cache_dir
-from service.kernels.cache import compiler
+from flexmech.models import Mechanism, MechanismError
+from flexmech.models.caches.disk_cache import cache_dir
+from flexmech.service.kernels.cache import compiler
 
 _VERSION = "1"  # bump when the generated Functions change shape
 

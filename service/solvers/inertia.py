@@ -3,8 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
-
-from models import Mechanism
+from flexmech.models import Mechanism
 
 
 def mass_matrix(mech: Mechanism, z: np.ndarray | None = None) -> tuple[list[str], np.ndarray]:

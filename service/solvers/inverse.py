@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import numpy as np
-
-from models import Mechanism, MechanismError
-from service.units import wrench_to_doc
+from flexmech.models import Mechanism, MechanismError
+from flexmech.service.units import wrench_to_doc
 
 _KINDS = ("length", "length", "angle")
 

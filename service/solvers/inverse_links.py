@@ -13,15 +13,14 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
-
-from models import Mechanism, MechanismError
-from models.beams.link_inverse import InverseLayout, PsiLayout, inverse_graphs_for
-from models.documents.document import PrescribedDisplacement
-from models.elements import FAMILIES
-from models.elements.link import attach, link_shooting
-from models.graph.context import AssemblyContext
-from models.graph.structure import Structure
-from service.solvers.newton import NewtonOptions, Status, iterate_dense
+from flexmech.models import Mechanism, MechanismError
+from flexmech.models.beams.link_inverse import InverseLayout, PsiLayout, inverse_graphs_for
+from flexmech.models.documents.document import PrescribedDisplacement
+from flexmech.models.elements import FAMILIES
+from flexmech.models.elements.link import attach, link_shooting
+from flexmech.models.graph.context import AssemblyContext
+from flexmech.models.graph.structure import Structure
+from flexmech.service.solvers.newton import NewtonOptions, Status, iterate_dense
 
 
 # --- forward dense output -------------------------------------------------------------------

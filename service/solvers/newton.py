@@ -18,9 +18,8 @@ from typing import Literal
 
 import casadi as ca
 import numpy as np
-
-from service.buffered import BufferedCall
-from service.deadline import ends_after, passed
+from flexmech.service.buffered import BufferedCall
+from flexmech.service.deadline import ends_after, passed
 
 Status = Literal["converged", "not_converged", "singular", "time_limit"]
 JacobianChoice = Literal["full", "first_term", "frozen"]

@@ -8,9 +8,8 @@ import math
 from typing import Any
 
 import numpy as np
-
-from models import Mechanism
-from service.solvers.stiffness import tangent_stiffness
+from flexmech.models import Mechanism
+from flexmech.service.solvers.stiffness import tangent_stiffness
 
 
 def plain(obj: Any) -> Any:

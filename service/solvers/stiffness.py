@@ -5,10 +5,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-
-from models import Mechanism, MechanismError
-from models.elements import FAMILIES
-from service.units import coordinate_kinds, matrix_to_doc
+from flexmech.models import Mechanism, MechanismError
+from flexmech.models.elements import FAMILIES
+from flexmech.service.units import coordinate_kinds, matrix_to_doc
 
 
 @dataclass

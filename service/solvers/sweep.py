@@ -15,14 +15,13 @@ from typing import Literal
 
 import casadi as ca
 import numpy as np
-
-from models import Mechanism, MechanismError
-from models.documents.document import SweepSpec
-from models.graph.assembly import Graphs
-from models.units import quantity_to_si
-from service.solvers.equilibrium import EquilibriumResult, NewtonOptions, check_constrained, newton
-from service.solvers.newton import iterate_dense
-from service.units import residual_report
+from flexmech.models import Mechanism, MechanismError
+from flexmech.models.documents.document import SweepSpec
+from flexmech.models.graph.assembly import Graphs
+from flexmech.models.units import quantity_to_si
+from flexmech.service.solvers.equilibrium import EquilibriumResult, NewtonOptions, check_constrained, newton
+from flexmech.service.solvers.newton import iterate_dense
+from flexmech.service.units import residual_report
 
 Start = Literal["previous", "undeformed"]
 

@@ -13,14 +13,13 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-
-from models import Mechanism, MechanismError
-from service.contact.problem import contact_problem
-from service.contact.report import penetration_error
-from service.contact.solve import ContactOptions, PenetratingStart, solve_state
-from service.solvers.newton import NewtonOptions
-from service.vibration.modes import ModalSystem, modal_system
-from service.vibration.state import check_modal_cost
+from flexmech.models import Mechanism, MechanismError
+from flexmech.service.contact.problem import contact_problem
+from flexmech.service.contact.report import penetration_error
+from flexmech.service.contact.solve import ContactOptions, PenetratingStart, solve_state
+from flexmech.service.solvers.newton import NewtonOptions
+from flexmech.service.vibration.modes import ModalSystem, modal_system
+from flexmech.service.vibration.state import check_modal_cost
 
 
 def contact_system(mech: Mechanism, newton: NewtonOptions, report: dict) -> tuple[ModalSystem, np.ndarray] | None:

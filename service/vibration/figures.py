@@ -11,9 +11,8 @@ import math
 from pathlib import Path
 
 import numpy as np
-
-from models import MechanismError
-from service.drawings.figures import field_label, new_figure, save_figure, set_labels
+from flexmech.models import MechanismError
+from flexmech.service.drawings.figures import field_label, new_figure, save_figure, set_labels
 
 SHOWN = 0.12  # the drawn amplitude, of the mechanism's size
 FRAMES = 40

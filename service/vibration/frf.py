@@ -14,9 +14,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from flexmech.service.vibration.eigen import Eigen
 from scipy.optimize import brentq, minimize_scalar
-
-from service.vibration.eigen import Eigen
 
 TWO_PI = 2 * math.pi
 

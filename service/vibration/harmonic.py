@@ -17,12 +17,11 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
-
-from models import Mechanism, MechanismError
-from models.graph.assembly import graphs_for
-from models.graph.modal import motion_coupling
-from models.graph.structure import Structure
-from service.vibration.modes import ModalSystem
+from flexmech.models import Mechanism, MechanismError
+from flexmech.models.graph.assembly import graphs_for
+from flexmech.models.graph.modal import motion_coupling
+from flexmech.models.graph.structure import Structure
+from flexmech.service.vibration.modes import ModalSystem
 
 
 @dataclass

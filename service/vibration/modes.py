@@ -19,11 +19,10 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
-
-from models import Mechanism, MechanismError
-from service.buffered import BufferedCall
-from service.solvers.stiffness import condensed
-from service.vibration.eigen import Eigen, vibration_eigen
+from flexmech.models import Mechanism, MechanismError
+from flexmech.service.buffered import BufferedCall
+from flexmech.service.solvers.stiffness import condensed
+from flexmech.service.vibration.eigen import Eigen, vibration_eigen
 
 
 @dataclass

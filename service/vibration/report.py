@@ -11,9 +11,8 @@ import math
 from typing import Any
 
 import numpy as np
-
-from models import Mechanism
-from service.vibration.modes import MechanismModes
+from flexmech.models import Mechanism
+from flexmech.service.vibration.modes import MechanismModes
 
 SHARE_SHOWN = 1e-4  # energy shares below this are left out of a mode's list
 
@@ -95,7 +94,7 @@ def _centre_line_modes(mech: Mechanism, found: MechanismModes, z: np.ndarray) ->
     """The drawn centre lines at the state (document units), and each mode's displacement of
     them (nondimensional modal amplitude): CasADi's forward derivative of the drawing along the
     mode over the residual form's unknowns."""
-    from service.vibration.sensitivity import state_vectors
+    from flexmech.service.vibration.sensitivity import state_vectors
 
     p = mech.p()
     K = np.asarray(mech.graphs.residual_and_tangent(z, p)[1], dtype=float)

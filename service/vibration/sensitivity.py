@@ -21,12 +21,11 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
-
-from models import Mechanism
-from models.graph.assembly import graphs_for
-from models.graph.modal import state_mass
-from models.graph.structure import Structure
-from service.vibration.modes import MechanismModes, mechanism_modes
+from flexmech.models import Mechanism
+from flexmech.models.graph.assembly import graphs_for
+from flexmech.models.graph.modal import state_mass
+from flexmech.models.graph.structure import Structure
+from flexmech.service.vibration.modes import MechanismModes, mechanism_modes
 
 REPEATED = 1e-6
 

@@ -7,11 +7,10 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-
-from models import Mechanism, MechanismError
-from service.requests import under
-from service.solvers.equilibrium import solve_equilibrium
-from service.solvers.newton import NewtonOptions
+from flexmech.models import Mechanism, MechanismError
+from flexmech.service.requests import under
+from flexmech.service.solvers.equilibrium import solve_equilibrium
+from flexmech.service.solvers.newton import NewtonOptions
 
 SHOWN = ("status", "message", "iterations", "residual_norm", "residual_moment", "residual_unit", "solver_residual")
 

@@ -29,15 +29,14 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from flexmech.models import Mechanism, MechanismError
+from flexmech.models.graph.residual import unknown_names
+from flexmech.service.vibration.eigen import Eigen, vibration_eigen
+from flexmech.service.vibration.frf import Damping
+from flexmech.service.vibration.harmonic import channel, moves_a_body
+from flexmech.service.vibration.modes import ModalSystem, modal_system
+from flexmech.service.vibration.state import check_modal_cost
 from scipy.linalg import null_space
-
-from models import Mechanism, MechanismError
-from models.graph.residual import unknown_names
-from service.vibration.eigen import Eigen, vibration_eigen
-from service.vibration.frf import Damping
-from service.vibration.harmonic import channel, moves_a_body
-from service.vibration.modes import ModalSystem, modal_system
-from service.vibration.state import check_modal_cost
 
 MATRICES = ("A", "B", "C", "D", "M", "K", "damping", "G", "shapes")
 NAMES = ("states", "inputs", "outputs", "coordinates")

@@ -14,8 +14,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-
-from service.vibration.state_space import MATRICES, NAMES, StateSpaceModel
+from flexmech.service.vibration.state_space import MATRICES, NAMES, StateSpaceModel
 
 SUFFIXES = (".json", ".npz", ".mat")
 LISTS = (*NAMES, "kinds")  # per mode: elastic, rigid or unstable
@@ -29,7 +28,7 @@ def write_state_space(model: StateSpaceModel, path: Path) -> None:
         raise ValueError(f"cannot tell the format of '{path}': use a name ending in {', '.join(SUFFIXES)}")
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     if suffix == ".json":
-        from service.solvers.reports import plain
+        from flexmech.service.solvers.reports import plain
 
         Path(path).write_text(json.dumps(plain(model.to_dict())))
         return

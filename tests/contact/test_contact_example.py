@@ -10,13 +10,12 @@ from functools import lru_cache
 
 import numpy as np
 import pytest
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service.contact.path import follow, path_fields
+from flexmech.service.contact.problem import contact_problem
+from flexmech.service.contact.report import pairs_report, structure_outputs
+from flexmech.service.contact.solve import ContactOptions
 from mechanisms import example_one
-
-from models import compile_mechanism, load_document
-from service.contact.path import follow, path_fields
-from service.contact.problem import contact_problem
-from service.contact.report import pairs_report, structure_outputs
-from service.contact.solve import ContactOptions
 
 FACE = float(np.hypot(19.0, 10.4598 - 1.6))  # |ab|, mm
 

@@ -9,12 +9,11 @@ with mu W the other way."""
 from __future__ import annotations
 
 import numpy as np
-
-from models import compile_mechanism, load_document
-from service.contact.path import follow, path_fields
-from service.contact.problem import contact_problem
-from service.contact.report import pairs_report, structure_outputs
-from service.contact.solve import ContactOptions
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service.contact.path import follow, path_fields
+from flexmech.service.contact.problem import contact_problem
+from flexmech.service.contact.report import pairs_report, structure_outputs
+from flexmech.service.contact.solve import ContactOptions
 
 W, K, MU = 10.0, 100.0, 0.52
 BLOCK_ON_FLOOR = {

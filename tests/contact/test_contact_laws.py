@@ -14,19 +14,18 @@ from pathlib import Path
 import casadi as ca
 import httpx
 import pytest
+from flexmech.api.cli import app
+from flexmech.api.client import Client
+from flexmech.models import MechanismError, compile_mechanism, load_document
+from flexmech.models.contact.laws import NORMAL_LAWS, NormalLaw, register_normal_law
+from flexmech.models.documents.upgrade import upgraded
+from flexmech.service.analyses.base import AnalysisRequest
+from flexmech.service.analyses.contact import CONTACT
+from flexmech.service.impacts.event_driven import HYSTERESIS
+from flexmech.service.impacts.run import run_impacts
+from flexmech.service.solvers.newton import NewtonOptions
 from impact_cases import EXAMPLES, csfh, parsed
 from typer.testing import CliRunner
-
-from api.client import Client
-from models import MechanismError, compile_mechanism, load_document
-from models.contact.laws import NORMAL_LAWS, NormalLaw, register_normal_law
-from models.documents.upgrade import upgraded
-from service.analyses.base import AnalysisRequest
-from service.analyses.contact import CONTACT
-from service.cli import app
-from service.impacts.event_driven import HYSTERESIS
-from service.impacts.run import run_impacts
-from service.solvers.newton import NewtonOptions
 
 OLD = Path(__file__).resolve().parents[1] / "old_documents"
 OLD_EXAMPLES = sorted(OLD.glob("*.json"))

@@ -10,14 +10,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from elastica_oracles import cantilever_tip
-
-from models import compile_mechanism, load_document
-from service.analyses.base import AnalysisRequest
-from service.analyses.contact import CONTACT
-from service.contact.kkt import split
-from service.contact.problem import contact_problem
-from service.contact.solve import solve_state
-from service.solvers.equilibrium import NewtonOptions, solve_equilibrium
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service.analyses.base import AnalysisRequest
+from flexmech.service.analyses.contact import CONTACT
+from flexmech.service.contact.kkt import split
+from flexmech.service.contact.problem import contact_problem
+from flexmech.service.contact.solve import solve_state
+from flexmech.service.solvers.equilibrium import NewtonOptions, solve_equilibrium
 
 E, B, H, L = 2e11, 0.01, 0.001, 0.1
 EI = E * B * H**3 / 12

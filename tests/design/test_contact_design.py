@@ -5,14 +5,13 @@ contact analyses finds independently."""
 
 from __future__ import annotations
 
+from flexmech.models import compile_mechanism, load_document
+from flexmech.models.documents.document import parse_optimize_spec
+from flexmech.service.analyses.base import AnalysisRequest
+from flexmech.service.analyses.contact import CONTACT
+from flexmech.service.design.optimize import optimize
+from flexmech.service.design.problem import design_problem
 from mechanisms import example_one
-
-from models import compile_mechanism, load_document
-from models.documents.document import parse_optimize_spec
-from service.analyses.base import AnalysisRequest
-from service.analyses.contact import CONTACT
-from service.design.optimize import optimize
-from service.design.problem import design_problem
 
 
 def normal_force(thickness: float) -> tuple[float, float]:

@@ -9,12 +9,11 @@ import json
 import numpy as np
 import pytest
 from conftest import EXAMPLES
-
-from models import MechanismError, compile_mechanism
-from models.documents.document import parse_document
-from service.design.optimize import optimize
-from service.design.problem import design_problem
-from service.solvers.equilibrium import solve_equilibrium
+from flexmech.models import MechanismError, compile_mechanism
+from flexmech.models.documents.document import parse_document
+from flexmech.service.design.optimize import optimize
+from flexmech.service.design.problem import design_problem
+from flexmech.service.solvers.equilibrium import solve_equilibrium
 
 GRASPER = json.loads((EXAMPLES / "grasper_shape.json").read_text())
 SECTIONS = json.loads((EXAMPLES / "gripper_sections.json").read_text())
@@ -179,7 +178,7 @@ def test_a_constraint_with_equals_and_bounds_is_refused_by_the_document():
 def test_a_stiffness_constraint_is_the_condensed_tangent_stiffness():
     """The thinnest flexures whose input stiffness K_T[y, y] reaches a target: the optimum
     meets it, and service.solvers.stiffness gives the same stiffness at the optimal design."""
-    from service.solvers.stiffness import tangent_stiffness
+    from flexmech.service.solvers.stiffness import tangent_stiffness
 
     data = json.loads((EXAMPLES / "gripper.json").read_text())
     data.pop("sweep")

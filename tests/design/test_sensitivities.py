@@ -7,14 +7,13 @@ import json
 
 import pytest
 from conftest import ACTUATION, EXAMPLES
-
-from models import compile_mechanism, load_document
-from models.documents.document import parse_document
-from service.design.optimize import prepare, run_start
-from service.design.problem import design_problem
-from service.design.sensitivity import equilibrium_sensitivities, optimum_sensitivities
-from service.solvers.equilibrium import solve_equilibrium
-from service.solvers.sweep import solve_for_target
+from flexmech.models import compile_mechanism, load_document
+from flexmech.models.documents.document import parse_document
+from flexmech.service.design.optimize import prepare, run_start
+from flexmech.service.design.problem import design_problem
+from flexmech.service.design.sensitivity import equilibrium_sensitivities, optimum_sensitivities
+from flexmech.service.solvers.equilibrium import solve_equilibrium
+from flexmech.service.solvers.sweep import solve_for_target
 
 H_PATH, E_PATH = "/sections/flexure/h", "/materials/silicon/E"
 
@@ -115,7 +114,7 @@ def test_optimum_sensitivities_with_strictly_inactive_inequalities_match_reoptim
 
 
 def test_sensitivities_name_bad_fields(gripper_pnl_mech):
-    from models import MechanismError
+    from flexmech.models import MechanismError
 
     z = solve_equilibrium(gripper_pnl_mech).z
     with pytest.raises(MechanismError) as info:

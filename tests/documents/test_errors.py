@@ -7,9 +7,8 @@ import json
 
 import pytest
 from conftest import ACTUATION
-
-from models import MechanismError, compile_mechanism, load_document
-from service import NewtonOptions, solve_equilibrium
+from flexmech.models import MechanismError, compile_mechanism, load_document
+from flexmech.service import NewtonOptions, solve_equilibrium
 
 
 def compile_modified(gripper_dict, edit):

@@ -11,13 +11,12 @@ import httpx
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+from flexmech.models import compile_mechanism, load_document
+from flexmech.models.documents.naming import anonymous
+from flexmech.models.graph.assembly import graphs_for
+from flexmech.service.solvers.equilibrium import solve_equilibrium
+from flexmech.service.solvers.sweep import solve_for_target
 from servers import ApiServer
-
-from models import compile_mechanism, load_document
-from models.documents.naming import anonymous
-from models.graph.assembly import graphs_for
-from service.solvers.equilibrium import solve_equilibrium
-from service.solvers.sweep import solve_for_target
 
 ACTUATION = "/loads/actuation/force/1"
 NAMED = ("materials", "sections", "bodies", "elements", "loads", "outputs")

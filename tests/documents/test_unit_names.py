@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import json
 
-from models import units
+from flexmech.models import units
 
 
 def test_every_name_in_the_table_is_pints_answer_to_the_last_bit():

@@ -6,8 +6,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 import pytest
-
-from service.buffered import BufferedCall
+from flexmech.service.buffered import BufferedCall
 
 
 def test_a_buffered_call_returns_what_the_ordinary_call_does():

@@ -5,7 +5,7 @@ does not load is that build's failure and the next builds go on; the queue count
 cache's bound and keeps to its cap; a builder killed mid-build is started again by the server,
 /v1/health says "degraded" meanwhile, and the build it was on and later ones complete.
 
-Real processes throughout: the builder is `python -m service.kernels.queue` (started by
+Real processes throughout: the builder is `python -m flexmech.service.kernels.queue` (started by
 BuilderProcess, as the server does, or by a real server), the compiler is gcc (in two tests
 behind a shell script that holds a chosen build until the test has acted on it)."""
 
@@ -24,24 +24,23 @@ import casadi as ca
 import httpx
 import pytest
 from conftest import EXAMPLES
-from servers import ApiServer
-
-from models import compile_mechanism, load_document
-from models.caches.disk_cache import building_dir, usage
-from service.dynamics import engine as engine_module
-from service.dynamics.histories import read_histories
-from service.dynamics.run import scheme_of, simulation_spec
-from service.dynamics.stepping import WINDOW, engine_of
-from service.kernels.build import BuildLimits, Compiler
-from service.kernels.builder_process import BuilderProcess
-from service.kernels.needs import builds_of, window_builds
-from service.kernels.queue import (
+from flexmech.models import compile_mechanism, load_document
+from flexmech.models.caches.disk_cache import building_dir, usage
+from flexmech.service.dynamics import engine as engine_module
+from flexmech.service.dynamics.histories import read_histories
+from flexmech.service.dynamics.run import scheme_of, simulation_spec
+from flexmech.service.dynamics.stepping import WINDOW, engine_of
+from flexmech.service.kernels.build import BuildLimits, Compiler
+from flexmech.service.kernels.builder_process import BuilderProcess
+from flexmech.service.kernels.needs import builds_of, window_builds
+from flexmech.service.kernels.queue import (
     accept_requests,
     function_library,
     note_of,
     queue_dir,
     request_function,
 )
+from servers import ApiServer
 
 BUILT = re.compile(r"build (\S+): (.*) \(cache (\d+) of (\d+) bytes\)")
 

@@ -11,15 +11,14 @@ from collections import OrderedDict
 import numpy as np
 import pytest
 from conftest import EXAMPLES
-
-from models import compile_mechanism, load_document
-from service.dynamics import engine as engine_module
-from service.dynamics.histories import read_histories
-from service.dynamics.run import scheme_of, simulation_spec, start_shape
-from service.dynamics.stepping import WINDOW, StepRunner, start_of
-from service.kernels.build import BuildLimits, Compiler
-from service.kernels.needs import builds_of, window_builds
-from service.kernels.queue import Builder, accept_requests, queue_dir
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service.dynamics import engine as engine_module
+from flexmech.service.dynamics.histories import read_histories
+from flexmech.service.dynamics.run import scheme_of, simulation_spec, start_shape
+from flexmech.service.dynamics.stepping import WINDOW, StepRunner, start_of
+from flexmech.service.kernels.build import BuildLimits, Compiler
+from flexmech.service.kernels.needs import builds_of, window_builds
+from flexmech.service.kernels.queue import Builder, accept_requests, queue_dir
 
 
 @pytest.fixture(scope="module")

@@ -12,10 +12,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
-from models import compile_mechanism, load_document
-from service.analysis import run_analysis
-from service.solvers.newton import NewtonOptions
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service.analysis import run_analysis
+from flexmech.service.solvers.newton import NewtonOptions
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
@@ -57,7 +56,7 @@ def test_the_gripper_strikes_the_part_and_settles_on_the_equilibrium_solve():
 def test_exact_curved_beams_by_elements_are_priced_as_elements():
     """The service's costing (service.costs) prices an exact beam by elements as a link by
     elements, intervals x (degree + 2)^2, not as shooting's intervals x order^2."""
-    from service.costs import link_work
+    from flexmech.service.costs import link_work
 
     doc = json.loads((EXAMPLES / "gripper_grasp_dynamics.json").read_text())
     beams = [name for name, element in doc["elements"].items() if element["type"] == "curved_beam"]

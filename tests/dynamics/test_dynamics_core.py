@@ -9,12 +9,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from models import compile_mechanism, load_document
-from service.dynamics.integrate import integrate
-from service.dynamics.modes import natural_modes
-from service.dynamics.schemes import generalized_alpha, newmark
-from service.solvers.energy import minimize_energy
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service.dynamics.integrate import integrate
+from flexmech.service.dynamics.modes import natural_modes
+from flexmech.service.dynamics.schemes import generalized_alpha, newmark
+from flexmech.service.solvers.energy import minimize_energy
 
 L, B, H, RHO, E = 1.11, 0.0127, 0.0032, 7850.0, 2e11
 EI, RHO_A = E * B * H**3 / 12, RHO * B * H

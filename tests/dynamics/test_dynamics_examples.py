@@ -11,10 +11,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
-from models import MechanismError, compile_mechanism, load_document
-from service.analyses import ANALYSES
-from service.analyses.base import AnalysisRequest
+from flexmech.models import MechanismError, compile_mechanism, load_document
+from flexmech.service.analyses import ANALYSES
+from flexmech.service.analyses.base import AnalysisRequest
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 

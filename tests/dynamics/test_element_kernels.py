@@ -10,16 +10,15 @@ import casadi as ca
 import numpy as np
 import pytest
 from conftest import EXAMPLES
-
-from models import compile_mechanism, load_document
-from models.kernels.chain_signature import ChainSignature
-from models.kernels.link_chain import jacobian_function, residual_function
-from service.dynamics.engine import Engine
-from service.dynamics.histories import read_histories
-from service.dynamics.kernel_system import NEWTON_TOLERANCE
-from service.dynamics.modes import form_of
-from service.dynamics.run import scheme_of, simulation_spec, start_shape
-from service.dynamics.stepping import start_of
+from flexmech.models import compile_mechanism, load_document
+from flexmech.models.kernels.chain_signature import ChainSignature
+from flexmech.models.kernels.link_chain import jacobian_function, residual_function
+from flexmech.service.dynamics.engine import Engine
+from flexmech.service.dynamics.histories import read_histories
+from flexmech.service.dynamics.kernel_system import NEWTON_TOLERANCE
+from flexmech.service.dynamics.modes import form_of
+from flexmech.service.dynamics.run import scheme_of, simulation_spec, start_shape
+from flexmech.service.dynamics.stepping import start_of
 
 
 @pytest.mark.parametrize(

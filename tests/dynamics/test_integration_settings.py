@@ -7,15 +7,14 @@ import json
 
 import numpy as np
 from conftest import EXAMPLES
+from flexmech.api.cli import app
+from flexmech.api.cli.progress import SimulationProgress
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service.analyses import ANALYSES
+from flexmech.service.analyses.base import AnalysisRequest
+from flexmech.service.dynamics.run import MAX_STEPS
 from impact_cases import csfh
 from typer.testing import CliRunner
-
-from models import compile_mechanism, load_document
-from service.analyses import ANALYSES
-from service.analyses.base import AnalysisRequest
-from service.cli import app
-from service.cli.progress import SimulationProgress
-from service.dynamics.run import MAX_STEPS
 
 ROD = EXAMPLES / "rod_free_vibration.json"
 
@@ -82,7 +81,7 @@ def test_an_impact_run_is_costed_before_it_starts_and_max_steps_raises_the_limit
         f"/simulate/until: 1e+06 s from a first step of 0.0001 s is costed at 1e+10 steps, over the limit of "
         f"{MAX_STEPS}"
     ) in " ".join(result.output.split())
-    import service.dynamics.run as run
+    import flexmech.service.dynamics.run as run
 
     monkeypatch.setattr(run, "MAX_STEPS", 100)
     moreau = tmp_path / "csfh_moreau.json"  # scenario 6.3 with the laws moreau takes

@@ -15,14 +15,13 @@ import httpx
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+from flexmech.models import compile_mechanism, load_document
+from flexmech.models.kernels.chain_signature import ChainSignature
+from flexmech.models.kernels.chunks import chunks
+from flexmech.service.kernels.build import BuildLimits, Compiler
+from flexmech.service.kernels.cache import abandoned, compiled_for, is_compiled
+from flexmech.service.kernels.queue import Builder, accept_requests, build_chain, queue_dir, request_chain
 from servers import ApiServer
-
-from models import compile_mechanism, load_document
-from models.kernels.chain_signature import ChainSignature
-from models.kernels.chunks import chunks
-from service.kernels.build import BuildLimits, Compiler
-from service.kernels.cache import abandoned, compiled_for, is_compiled
-from service.kernels.queue import Builder, accept_requests, build_chain, queue_dir, request_chain
 
 SMALL = ChainSignature(1, False, False)  # the cheapest kernels there are: a second or two of gcc
 
@@ -77,7 +76,7 @@ def test_compiled_kernels_compute_what_the_interpreted_ones_do(cache):
 
 def test_a_run_asks_for_its_kernels_and_goes_on_interpreted(cache):
     """The rod's run in a process that takes build requests: a request file, no library."""
-    from service.dynamics.run import run_simulation, simulation_spec
+    from flexmech.service.dynamics.run import run_simulation, simulation_spec
 
     accept_requests(True)
     mech = compile_mechanism(load_document(EXAMPLES / "rod_free_vibration.json"))

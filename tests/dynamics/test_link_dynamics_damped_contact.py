@@ -8,12 +8,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from models import MechanismError, compile_mechanism, load_document
-from models.contact.laws import NORMAL_LAWS
-from models.contact.laws.penalty import effective_restitution
-from service.analysis import run_analysis
-from service.solvers.newton import NewtonOptions
+from flexmech.models import MechanismError, compile_mechanism, load_document
+from flexmech.models.contact.laws import NORMAL_LAWS
+from flexmech.models.contact.laws.penalty import effective_restitution
+from flexmech.service.analysis import run_analysis
+from flexmech.service.solvers.newton import NewtonOptions
 
 MASS, HERTZ, PAD, GAP, KICK, KICK_TIME = 2.0, 2e6, 0.02, 0.03, 10.0, 0.1  # kg, N/m^1.5, m, m, N, s
 

@@ -14,10 +14,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from models import compile_mechanism, load_document
-from service.analysis import run_analysis
-from service.solvers.newton import NewtonOptions
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service.analysis import run_analysis
+from flexmech.service.solvers.newton import NewtonOptions
 
 MASS, RADIUS, MU, PUSH, HERTZ, EXPONENT, G = 2.0, 0.05, 0.3, 30.0, 1e7, 1.5, 9.81
 V0, V1, UNTIL = 1e-6, 1e-4, 0.4
@@ -87,7 +86,7 @@ def test_a_run_stored_before_friction_had_its_row_resumes_with_none():
     """A simulation job stored its Resume with two works (inputs, damping) and a monitor
     without the contacts' friction and damping powers; it goes on with their works and powers
     at zero, the prescribed motions' forces where they were."""
-    from service.dynamics.stepping import Resume
+    from flexmech.service.dynamics.stepping import Resume
 
     stored = {
         "step": 7,

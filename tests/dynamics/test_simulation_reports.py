@@ -10,12 +10,11 @@ import json
 import numpy as np
 import pytest
 from conftest import EXAMPLES
-
-from models import compile_mechanism, load_document
-from models.graph.assembly import build_functions
-from service.dynamics.run import run_simulation, simulation_spec
-from service.dynamics.state_map import state_map
-from service.solvers.equilibrium import solve_equilibrium
+from flexmech.models import compile_mechanism, load_document
+from flexmech.models.graph.assembly import build_functions
+from flexmech.service.dynamics.run import run_simulation, simulation_spec
+from flexmech.service.dynamics.state_map import state_map
+from flexmech.service.solvers.equilibrium import solve_equilibrium
 
 
 def _rod(intervals: int):
@@ -95,7 +94,7 @@ def test_a_time_limited_run_stops_stepping_early_enough_to_make_its_report():
     after the stepping had used the whole limit, and the server replaced its worker."""
     import time
 
-    from service.analyses.simulate import _leaving_time_for_the_report
+    from flexmech.service.analyses.simulate import _leaving_time_for_the_report
 
     mech = compile_mechanism(load_document(EXAMPLES / "rod_free_vibration.json"))
     spec = simulation_spec(mech, {"until": 1.0, "every": 2})

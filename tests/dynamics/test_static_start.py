@@ -10,13 +10,12 @@ import json
 import numpy as np
 import pytest
 from conftest import EXAMPLES
-
-from models import compile_mechanism, load_document
-from service.dynamics import static_start
-from service.dynamics.histories import read_histories
-from service.dynamics.run import scheme_of, simulation_spec, start_shape
-from service.dynamics.stepping import engine_of
-from service.solvers.energy import minimize_energy
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service.dynamics import static_start
+from flexmech.service.dynamics.histories import read_histories
+from flexmech.service.dynamics.run import scheme_of, simulation_spec, start_shape
+from flexmech.service.dynamics.stepping import engine_of
+from flexmech.service.solvers.energy import minimize_energy
 
 
 def _mechanism(example: str, change=None):

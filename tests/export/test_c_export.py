@@ -11,12 +11,11 @@ import numpy as np
 import pytest
 from c_tools import ensure_c_tools
 from conftest import EXAMPLES
-
-from models import MechanismError, compile_mechanism, load_document
-from service.export.library import export_document
-from service.export.plan import ExportOptions
-from service.solvers.stiffness import tangent_stiffness
-from service.solvers.sweep import solve_for_target, sweep
+from flexmech.models import MechanismError, compile_mechanism, load_document
+from flexmech.service.export.library import export_document
+from flexmech.service.export.plan import ExportOptions
+from flexmech.service.solvers.stiffness import tangent_stiffness
+from flexmech.service.solvers.sweep import solve_for_target, sweep
 
 
 @pytest.fixture(scope="module", autouse=True)

@@ -12,12 +12,11 @@ import numpy as np
 import pytest
 from c_tools import ensure_c_tools
 from conftest import EXAMPLES
-
-from models import MechanismError, compile_mechanism, load_document
-from service.contact.problem import contact_problem
-from service.contact.solve import solve_state
-from service.export.library import export_document
-from service.export.plan import ExportOptions
+from flexmech.models import MechanismError, compile_mechanism, load_document
+from flexmech.service.contact.problem import contact_problem
+from flexmech.service.contact.solve import solve_state
+from flexmech.service.export.library import export_document
+from flexmech.service.export.plan import ExportOptions
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -104,7 +103,7 @@ def test_contact_documents_the_export_cannot_hold_say_why(tmp_path, monkeypatch)
     with pytest.raises(MechanismError) as refused:
         export_document(two_fingers, tmp_path / "three", None, ExportOptions(name="three", contact="yes"))
     assert refused.value.pointer == "/contacts/pairs/left_grip/friction" and "frictionless" in refused.value.problem
-    monkeypatch.setattr("service.export.contact_kernels.MAX_INSTRUCTIONS", 1000)
+    monkeypatch.setattr("flexmech.service.export.contact_kernels.MAX_INSTRUCTIONS", 1000)
     jaw = export_document(
         load_document(EXAMPLES / "gripper_jaw_contact.json"), tmp_path / "j", None, ExportOptions(name="j")
     )

@@ -12,12 +12,11 @@ import httpx
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+from flexmech.api.client import Client
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service.solvers.energy import minimize_energy
 from mechanisms import chain
 from typer.testing import CliRunner
-
-from api.client import Client
-from models import compile_mechanism, load_document
-from service.solvers.energy import minimize_energy
 
 ROOT = Path(__file__).resolve().parents[2]
 ENV = {"COLUMNS": "200", "FORCE_COLOR": None, "TTY_COMPATIBLE": None, "NO_COLOR": "1"}
@@ -25,12 +24,12 @@ ENV = {"COLUMNS": "200", "FORCE_COLOR": None, "TTY_COMPATIBLE": None, "NO_COLOR"
 # In a fresh process: count graph builds, solve gripper_exact, print the count and the outputs.
 PROBE = """
 import json, sys
-import models.graph.assembly as assembly
+import flexmech.models.graph.assembly as assembly
 built = []
 build = assembly.build_functions
 assembly.build_functions = lambda structure: built.append(1) or build(structure)
-from models import compile_mechanism, load_document
-from service.solvers.equilibrium import solve_equilibrium
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service.solvers.equilibrium import solve_equilibrium
 result = solve_equilibrium(compile_mechanism(load_document(sys.argv[1])))
 print(json.dumps({"built": len(built), "status": result.status, "outputs": result.outputs()}))
 """
@@ -63,7 +62,7 @@ def test_a_new_process_loads_the_graphs_it_built_before(tmp_path):
 
 
 def test_ipopt_options_are_allowlisted_and_solvers_built_once():
-    from service.solvers import ipopt
+    from flexmech.service.solvers import ipopt
 
     with pytest.raises(
         ipopt.IpoptOptionError,
@@ -92,8 +91,8 @@ def test_ipopt_options_are_allowlisted_and_solvers_built_once():
 
 
 def test_bounded_equilibrium_reuses_its_solver():
-    from service.solvers import ipopt
-    from service.solvers.equilibrium import solve_bounded
+    from flexmech.service.solvers import ipopt
+    from flexmech.service.solvers.equilibrium import solve_bounded
 
     mech = compile_mechanism(load_document(EXAMPLES / "cantilever.json"))
     first = solve_bounded(mech, {"tip.x": (None, 200.0)})
@@ -155,7 +154,7 @@ def test_a_sweep_of_energy_minima_follows_newton(client):
     assert client.wait(job.id, timeout=120).status == "succeeded"
     result = client.result(job.id).result
     assert result.analysis == "energy"
-    from service.solvers.equilibrium import solve_equilibrium
+    from flexmech.service.solvers.equilibrium import solve_equilibrium
 
     mech = compile_mechanism(load_document(chain()))
     for point, value in zip(result.points, values):
@@ -165,7 +164,7 @@ def test_a_sweep_of_energy_minima_follows_newton(client):
 
 
 def test_the_cli_runs_any_analysis_of_the_registry(tmp_path):
-    from service.cli import app
+    from flexmech.api.cli import app
 
     path, out = tmp_path / "chain.json", tmp_path / "energy.json"
     path.write_text(json.dumps(chain()))

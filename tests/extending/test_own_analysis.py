@@ -20,15 +20,14 @@ from typing import Literal
 
 import numpy as np
 import pytest
+from flexmech.models import Mechanism, MechanismError
+from flexmech.service.analyses import ANALYSES, Analysis, AnalysisOptions, AnalysisRequest, AnalysisResult
+from flexmech.service.jobs.base import JSON, JobOptions, Plan, StoredJob, read_spec
+from flexmech.service.jobs.kinds import register_job_kind
+from flexmech.service.requests import Limits, compile_request
+from flexmech.service.solvers.newton import NewtonOptions
+from flexmech.service.solvers.stiffness import tangent_stiffness
 from pydantic import ConfigDict, Field
-
-from models import Mechanism, MechanismError
-from service.analyses import ANALYSES, Analysis, AnalysisOptions, AnalysisRequest, AnalysisResult
-from service.jobs.base import JSON, JobOptions, Plan, StoredJob, read_spec
-from service.jobs.kinds import register_job_kind
-from service.requests import Limits, compile_request
-from service.solvers.newton import NewtonOptions
-from service.solvers.stiffness import tangent_stiffness
 
 E, B, H, L = 2e11, 0.01, 0.001, 0.1  # Pa, m, m, m
 ACROSS = 3 * E * (B * H**3 / 12) / L**3  # 500 N/m
@@ -166,7 +165,7 @@ def test_the_analysis_is_in_the_openapi_schema_and_the_analyses_list(server):
 
 
 def test_it_runs_through_the_client_as_a_documented_method(server):
-    from api.client import Client, FlexmechError
+    from flexmech.api.client import Client, FlexmechError
 
     with Client(server.url) as client:
         method = client.analyze.body_stiffness
@@ -189,9 +188,8 @@ def test_it_runs_through_the_client_as_a_documented_method(server):
 
 
 def test_it_is_a_command_with_its_flags(tmp_path):
+    from flexmech.api.cli import app
     from typer.testing import CliRunner
-
-    from service.cli import app
 
     document = tmp_path / "link.json"
     document.write_text(json.dumps(CLAMPED_LINK))
@@ -213,7 +211,7 @@ def test_it_is_a_command_with_its_flags(tmp_path):
 
 
 def test_it_runs_in_batch(tmp_path):
-    from service.batch import Chosen, run_batch
+    from flexmech.service.batch import Chosen, run_batch
 
     folder = tmp_path / "in"
     folder.mkdir()
@@ -227,8 +225,7 @@ def test_it_runs_in_batch(tmp_path):
 
 def test_a_job_kind_of_its_own_is_a_route_and_a_client_method(server):
     import httpx
-
-    from api.client import Client
+    from flexmech.api.client import Client
 
     paths = httpx.get(server.url + "/openapi.json").json()["paths"]
     assert paths["/v1/stiffness-maps"]["post"]["operationId"] == "create_stiffness_map"

@@ -18,15 +18,14 @@ from typing import Literal
 import casadi as ca
 import numpy as np
 import pytest
+from flexmech.models import MechanismError, compile_mechanism, load_document
+from flexmech.models.documents.fields import Number
+from flexmech.models.elements import FAMILIES
+from flexmech.models.elements.base import Contribution, EnergyTerms, ScaleHint, TwoBodyElement
+from flexmech.models.graph.structure import ElementTopology
+from flexmech.service.analysis import run_analysis
+from flexmech.service.solvers.newton import NewtonOptions
 from impact_cases import csfh
-
-from models import MechanismError, compile_mechanism, load_document
-from models.documents.fields import Number
-from models.elements import FAMILIES
-from models.elements.base import Contribution, EnergyTerms, ScaleHint, TwoBodyElement
-from models.graph.structure import ElementTopology
-from service.analysis import run_analysis
-from service.solvers.newton import NewtonOptions
 
 K, KT, MASS, INERTIA = 400.0, 50.0, 10.0, 0.1617  # N/m, N m/rad, kg, kg m^2
 
@@ -197,7 +196,7 @@ def test_an_impact_run_meets_the_hole_when_the_harmonic_motion_reaches_the_clear
 def test_the_graph_caches_are_keyed_by_a_registered_familys_source():
     """Graphs on disk are named by the code they come from: a family registered from outside
     the models package brings its file into that key, so editing it never loads stale graphs."""
-    from models.caches.graph_cache import code_version
+    from flexmech.models.caches.graph_cache import code_version
 
     before = code_version()
     FAMILIES.register(BushingFamily())

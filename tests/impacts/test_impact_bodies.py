@@ -8,9 +8,8 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 import pytest
+from flexmech.models.impacts.model import impact_model
 from impact_cases import csfh, parsed
-
-from models.impacts.model import impact_model
 
 M, I_REF, C, ANGLE = 10.0, 0.25, np.array([0.03, -0.01]), 0.4  # mass, inertia about the reference point
 F, OFFSET, MOMENT, G = np.array([3.0, -2.0]), np.array([0.05, 0.02]), 0.7, np.array([0.0, -9.81])
@@ -72,7 +71,7 @@ def test_a_driven_bodys_weight_works_through_its_drive_and_leaves_the_motion_alo
     """A frame of mass m shaken by dy = A sin(w t) under gravity: its weight is part of the
     potential (the statics' load potential), its change is the input's work, m g dy at the
     end, and the pin moves as it does under a massless frame."""
-    from service.impacts.run import run_impacts
+    from flexmech.service.impacts.run import run_impacts
 
     A, w, until, mass = 0.03, 10.0, 0.15, 5.0
     reports = []

@@ -9,9 +9,8 @@ import math
 
 import numpy as np
 import pytest
+from flexmech.service.impacts.run import run_impacts
 from impact_cases import csfh, parsed
-
-from service.impacts.run import run_impacts
 
 G, MASS, CLEARANCE = 9.81, 10.0, 0.02
 ANGLE = 60.0  # deg: the slider's axis from the x axis, through the hole's centre
@@ -48,7 +47,7 @@ def test_an_element_without_a_finite_stiffness_at_its_end_is_refused_saying_why(
     """An element with unknowns of its own enters an impact model by its statics stiffness at
     its end (models.impacts.condensed): an inextensible straight link has none along itself
     (refused, saying so); given axial strain, the same link runs."""
-    from models import MechanismError
+    from flexmech.models import MechanismError
 
     doc = csfh("6.1", until=0.01)
     doc["materials"]["steel"] = {"E": 210, "nu": 0.3}

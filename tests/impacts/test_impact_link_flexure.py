@@ -12,10 +12,9 @@ import math
 
 import numpy as np
 import pytest
+from flexmech.service.impacts.run import run_impacts
+from flexmech.service.impacts.study import variant
 from impact_cases import csfh, parsed
-
-from service.impacts.run import run_impacts
-from service.impacts.study import variant
 
 ARC = 0.144 * math.radians(300)  # the example's flexure: radius 0.144 m, 300 deg from angle 0 about (0.22, 0.1)
 

@@ -9,14 +9,13 @@ from pathlib import Path
 import httpx
 import numpy as np
 import pytest
+from flexmech.api.cli import app
+from flexmech.models import MechanismError
+from flexmech.models.documents.document import MechanismDocument
+from flexmech.models.documents.simulation_spec import SimulateSpec
+from flexmech.service.impacts.run import run_impacts
+from flexmech.service.impacts.study import variant
 from typer.testing import CliRunner
-
-from models import MechanismError
-from models.documents.document import MechanismDocument
-from models.documents.simulation_spec import SimulateSpec
-from service.cli import app
-from service.impacts.run import run_impacts
-from service.impacts.study import variant
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 PAIR = "/contacts/pairs/conjugate"

@@ -5,9 +5,8 @@ each run's contacts from its events (service.impacts.study)."""
 from __future__ import annotations
 
 import pytest
+from flexmech.service.impacts.study import legacy_influence, nominal_run, study_point
 from impact_cases import csfh
-
-from service.impacts.study import legacy_influence, nominal_run, study_point
 
 TOLERANCE = 0.05
 STEP = 1e-5
@@ -73,7 +72,7 @@ def test_points_stored_with_sampled_series_are_still_compared():
 def test_a_job_resumed_across_versions_answers_with_the_points_it_can_compare():
     """An old point (sampled series) beside a nominal run stored by this version (numbers
     only) cannot be compared: its influence is empty, and the result is still made."""
-    from service.jobs.impact_study import IMPACT_STUDY
+    from flexmech.service.jobs.impact_study import IMPACT_STUDY
 
     plan = {
         "runs": [{"path": None, "change": 0.0}, {"path": "/a", "change": 1.0}, {"path": "/a", "change": -1.0}],

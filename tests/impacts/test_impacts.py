@@ -9,14 +9,13 @@ import math
 import casadi as ca
 import numpy as np
 import pytest
+from flexmech.models.contact.laws import NORMAL_LAWS
+from flexmech.models.contact.laws.penalty import effective_restitution
+from flexmech.models.impacts.model import impact_model
+from flexmech.service.impacts.run import run_impacts
 from impact_cases import as_moreau, csfh, parsed, with_pair
 from scipy.integrate import solve_ivp
 from scipy.special import ellipk
-
-from models.contact.laws import NORMAL_LAWS
-from models.contact.laws.penalty import effective_restitution
-from models.impacts.model import impact_model
-from service.impacts.run import run_impacts
 
 G = 9.81
 FALL = 0.03  # from y = 0.01 to the surface at y = -0.02
@@ -191,7 +190,7 @@ def test_a_load_that_grows_in_time_drives_the_body_to_the_surface(scheme):
 def test_a_history_is_checked_up_to_each_runs_own_end_time():
     """1 / (0.15 - t) is finite over a 0.1 s run and not over a 0.2 s one, also when the
     shorter run's model was built first."""
-    from models import MechanismError
+    from flexmech.models import MechanismError
 
     doc = csfh("6.1", until=0.1, scheme="moreau", step=1e-4, histories={"/loads/push/force/1": "1/(0.15 - t)"})
     doc["loads"] = {"push": {"type": "force", "body": "hinge", "force": [0, 0]}}
@@ -204,7 +203,7 @@ def test_a_history_is_checked_up_to_each_runs_own_end_time():
 
 
 def test_only_loads_and_gravity_follow_histories():
-    from models import MechanismError
+    from flexmech.models import MechanismError
 
     doc = csfh("6.1", until=0.1, histories={"/bodies/hinge/mass": "10 + t"})
     with pytest.raises(MechanismError) as caught:
@@ -247,7 +246,7 @@ def test_table_2_stiffnesses_follow_from_e_210_gpa_and_the_external_radius():
     """Seed 004 Table 2 (47.35 and 2.27 "GPa") reproduces with E = 210 GPa, R1 R2 / (R1 + R2)
     in Eq. 14 and L = b in Eq. 16 (../shared/notes/seed-004-csfh.md); Table 1's 100 GPa with
     the conformal radius R1 R2 / (R2 - R1) of a pin in a hole gives twice Table 2's spheres."""
-    from models.contact.laws.penalty import hertz_stiffness
+    from flexmech.models.contact.laws.penalty import hertz_stiffness
 
     assert hertz_stiffness("spheres", 210e9, 0.3, 210e9, 0.3, 0.18, 0.20, "external", None) == pytest.approx(
         47.353e9, rel=1e-4
@@ -263,9 +262,8 @@ def test_table_2_stiffnesses_follow_from_e_210_gpa_and_the_external_radius():
 def test_the_esdu_law_is_solved_exactly():
     """Eq. 18 inverted: F = b exp(1 + W_-1(-q / (a b e))) with scipy's Lambert W, and the
     tangent stiffness against a finite difference."""
+    from flexmech.models.contact.laws.penalty import esdu_force
     from scipy.special import lambertw
-
-    from models.contact.laws.penalty import esdu_force
 
     sigma, length, clearance = 2 * (1 - 0.09) / 100e9, 0.025, 0.02
     a, b = sigma / length, 4 * length * clearance / sigma

@@ -9,12 +9,11 @@ import math
 
 import httpx
 import pytest
+from flexmech.api.cli import app
+from flexmech.models import MechanismError
+from flexmech.service.impacts.run import run_impacts
 from impact_cases import csfh, parsed
 from typer.testing import CliRunner
-
-from models import MechanismError
-from service.cli import app
-from service.impacts.run import run_impacts
 
 
 def _broken(change) -> dict:
@@ -135,7 +134,7 @@ def test_the_cli_runs_an_impact_example_and_names_bad_fields(tmp_path):
 def test_the_impact_study_ranks_the_clearance_above_the_inertia(api_server):
     """Seed 004 Table 4 in numbers: the pin radius (the clearance) changes the motion from the
     first impact; a 0.001 kg m^2 inertia change barely does. Run as a job on the pool."""
-    from api.client import Client
+    from flexmech.api.client import Client
 
     with Client(api_server.url) as client:
         job = client.impact_study(
@@ -167,7 +166,7 @@ def test_the_impact_study_ranks_the_clearance_above_the_inertia(api_server):
 
 
 def test_one_response_bounds_the_states_it_keeps():
-    from service.impacts.run import run_impacts as run_bounded
+    from flexmech.service.impacts.run import run_impacts as run_bounded
 
     document, spec = parsed(csfh("6.1", scheme="moreau", step=1e-5, until=0.1))
     _, report = run_bounded(document, spec, max_kept=1000)
@@ -201,8 +200,8 @@ def test_the_default_report_of_a_long_moreau_run_is_bounded():
 def test_a_moreau_run_whose_states_would_not_fit_is_refused_before_it_starts():
     """The states a report needs are held in memory: 20 s of 1e-5 s steps (2 million, within
     the step limit) would take about 780 MiB at their peak."""
-    from service.analyses.simulate import SYNC_IMPACT_BYTES
-    from service.impacts.run import held_bytes, model_of
+    from flexmech.service.analyses.simulate import SYNC_IMPACT_BYTES
+    from flexmech.service.impacts.run import held_bytes, model_of
 
     document, spec = parsed(csfh("6.3", scheme="moreau", step=1e-5, until=20.0))
     needed = held_bytes(model_of(document, spec), spec)

@@ -8,13 +8,12 @@ import copy
 
 import numpy as np
 import pytest
+from flexmech.models.documents.simulation_spec import SimulateSpec
+from flexmech.service.analysis import run_analysis
+from flexmech.service.impacts.run import run_impacts
+from flexmech.service.requests import compile_request
+from flexmech.service.solvers.newton import NewtonOptions
 from impact_cases import csfh, parsed
-
-from models.documents.simulation_spec import SimulateSpec
-from service.analysis import run_analysis
-from service.impacts.run import run_impacts
-from service.requests import compile_request
-from service.solvers.newton import NewtonOptions
 
 
 def _resting_document() -> dict:

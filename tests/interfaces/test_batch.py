@@ -13,13 +13,12 @@ from pathlib import Path
 import pytest
 import yaml
 from conftest import EXAMPLES
+from flexmech.api.cli import app
+from flexmech.api.cli.batch import print_summary
+from flexmech.models import load_document
+from flexmech.service.batch import declared_analysis, result_names, run_batch, succeeded
 from rich.console import Console
 from typer.testing import CliRunner
-
-from models import load_document
-from service.batch import declared_analysis, result_names, run_batch, succeeded
-from service.cli import app
-from service.cli.batch import print_summary
 
 ENV = {"COLUMNS": "200", "NO_COLOR": "1"}
 

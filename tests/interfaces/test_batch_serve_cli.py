@@ -10,10 +10,9 @@ import time
 import httpx
 import pytest
 from conftest import EXAMPLES
+from flexmech.api.cli import app
 from servers import Process, free_port
 from typer.testing import CliRunner
-
-from service.cli import app
 
 ENV = {"COLUMNS": "200", "NO_COLOR": "1"}
 
@@ -54,7 +53,7 @@ def test_batch_of_a_folder_without_documents_is_an_error(tmp_path):
 def test_serve_answers_health_on_its_port(tmp_path):
     port = free_port()
     env = {"FLEXMECH_PORT": str(port), "FLEXMECH_DATA_DIR": str(tmp_path), "FLEXMECH_WORKERS": "1"}
-    server = Process([sys.executable, "-m", "service.cli", "serve"], tmp_path / "serve.log", env)
+    server = Process([sys.executable, "-m", "flexmech.api.cli", "serve"], tmp_path / "serve.log", env)
     try:
         for _ in range(300):
             try:

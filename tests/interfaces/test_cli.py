@@ -7,9 +7,8 @@ import json
 from pathlib import Path
 
 import pytest
+from flexmech.api.cli import app
 from typer.testing import CliRunner
-
-from service.cli import app
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 GRIPPER = str(EXAMPLES / "gripper.json")
@@ -147,7 +146,7 @@ def test_examples_lists_the_gripper(run):
 
 
 def test_compare_models_plots_both_curves(run, tmp_path):
-    plot, out = tmp_path / "models.svg", tmp_path / "models.json"
+    plot, out = tmp_path / "flexmech.models.svg", tmp_path / "flexmech.models.json"
     result = run(
         "sweep",
         GRIPPER,

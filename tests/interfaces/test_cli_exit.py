@@ -1,4 +1,4 @@
-"""The `flexmech` script leaves without Python's teardown (service.cli.leaving): what a command
+"""The `flexmech` script leaves without Python's teardown (api.cli.leaving): what a command
 printed and wrote is all there, its exit code is the documented one, and pint (imported without
 its dask support, models.units) leaves dask importable for the sweeps that use it."""
 
@@ -11,15 +11,14 @@ import sys
 
 import pytest
 from conftest import EXAMPLES
-
-from service.cli.leaving import exit_code
+from flexmech.api.cli.leaving import exit_code
 
 ROOT = EXAMPLES.parent
 
 
 def _flexmech(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run(
-        [sys.executable, "-m", "service.cli", *args],
+        [sys.executable, "-m", "flexmech.api.cli", *args],
         capture_output=True,
         text=True,
         cwd=ROOT,
@@ -51,7 +50,7 @@ def test_what_a_command_printed_is_flushed_before_the_exit():
     unset for the child): without the flush the lines would be lost."""
     buffered = {k: v for k, v in os.environ.items() if k != "PYTHONUNBUFFERED"}
     script = (
-        "import sys, service.cli.leaving as leaving\n"
+        "import sys, api.cli.leaving as leaving\n"
         "def app():\n    print('\\n'.join(f'line {i}' for i in range(100)))\n    sys.exit(3)\n"
         "leaving.app = app\nleaving.main()\n"
     )

@@ -14,17 +14,25 @@ from pathlib import Path
 
 import pytest
 from conftest import EXAMPLES
+from flexmech.api.cli import app
 from impact_cases import csfh
 from rich.console import Console
 from typer.testing import CliRunner
-
-from service.cli import app
 
 ROOT = Path(__file__).resolve().parents[2]
 ENV = {"COLUMNS": "200", "NO_COLOR": "1"}
 ROD = str(EXAMPLES / "rod_free_vibration.json")  # keeps every 5th step of 1 ms
 GRIPPER = str(EXAMPLES / "gripper.json")
-HEAVY = ("numpy", "casadi", "scipy", "models", "matplotlib", "httpx", "service.analyses", "service.solvers")
+HEAVY = (
+    "numpy",
+    "casadi",
+    "scipy",
+    "flexmech.models",
+    "matplotlib",
+    "httpx",
+    "flexmech.service.analyses",
+    "flexmech.service.solvers",
+)
 
 
 def fresh(code: str, *args: str) -> subprocess.CompletedProcess:
@@ -52,8 +60,8 @@ def test_help_imports_no_physics(args):
     """The list of commands and a command's options are answered before NumPy, CasADi, the
     models or the analyses registry are imported (they are what made --help take a second)."""
     done = fresh(
-        "import sys, json, service.cli\n"
-        "try:\n    service.cli.app(sys.argv[1:], prog_name='flexmech')\nexcept SystemExit:\n    pass\n"
+        "import sys, json, api.cli\n"
+        "try:\n    api.cli.app(sys.argv[1:], prog_name='flexmech')\nexcept SystemExit:\n    pass\n"
         f"print(json.dumps([m for m in {HEAVY!r} if m in sys.modules]))",
         *args,
     )
@@ -65,7 +73,9 @@ def test_help_imports_no_physics(args):
 def test_the_list_of_commands_is_the_registrys():
     """Before the registry is imported, the analyses' commands are listed from the catalog:
     the same names, order, summaries and aliases as the registry gives once imported."""
-    listing = "import sys, service.cli\ntry:\n    service.cli.app(['--help'], prog_name='flexmech')\nexcept SystemExit:\n    pass"
+    listing = (
+        "import sys, api.cli\ntry:\n    api.cli.app(['--help'], prog_name='flexmech')\nexcept SystemExit:\n    pass"
+    )
     light, loaded = fresh(listing), fresh("import service.analyses\n" + listing)
     assert light.returncode == loaded.returncode == 0, light.stderr + loaded.stderr
     assert "frequency-response" in light.stdout and "frf" in light.stdout and "modes" in light.stdout
@@ -73,9 +83,9 @@ def test_the_list_of_commands_is_the_registrys():
 
 
 def test_the_catalogs_names_are_the_models():
-    from models import COMPARED_MODELS, MODELS
-    from service.analyses import ANALYSES
-    from service.cli.catalog import ANALYSIS_NAMES, COMPARED_MODEL_NAMES, MODEL_NAMES
+    from flexmech.api.cli.catalog import ANALYSIS_NAMES, COMPARED_MODEL_NAMES, MODEL_NAMES
+    from flexmech.models import COMPARED_MODELS, MODELS
+    from flexmech.service.analyses import ANALYSES
 
     assert MODEL_NAMES == MODELS and COMPARED_MODEL_NAMES == COMPARED_MODELS
     built_in = [a.name for a in ANALYSES if type(a).__module__.startswith("service.analyses.")]
@@ -86,7 +96,7 @@ def test_a_listed_analysis_command_runs_with_its_options(tmp_path):
     """An analysis' command, listed from the catalog, takes its options once it runs."""
     out = tmp_path / "k.json"
     done = fresh(
-        "import sys, service.cli\nservice.cli.app(sys.argv[1:], prog_name='flexmech')",
+        "import sys, api.cli\napi.cli.app(sys.argv[1:], prog_name='flexmech')",
         "linearization",
         GRIPPER,
         "--at",
@@ -101,7 +111,7 @@ def test_a_listed_analysis_command_runs_with_its_options(tmp_path):
 
 # --- progress in a log -----------------------------------------------------------------------
 def test_progress_in_a_log_has_a_line_per_tenth():
-    from service.cli.progress import SimulationProgress
+    from flexmech.api.cli.progress import SimulationProgress
 
     log = StringIO()
     with SimulationProgress(Console(file=log, force_terminal=False, width=200), until=1.0) as progress:
@@ -146,7 +156,7 @@ def test_the_impacts_table_says_how_many_it_leaves_out(tmp_path):
 
 
 def test_the_outputs_table_says_how_many_it_leaves_out():
-    from service.cli.simulate_output import print_run
+    from flexmech.api.cli.simulate_output import print_run
 
     report = {
         "name": "many",

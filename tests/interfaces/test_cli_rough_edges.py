@@ -14,13 +14,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from flexmech.api.cli import app
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service import solve_equilibrium, sweep
+from flexmech.service.drawings.plotting import configuration_figure, load_point, sweeps_figure, trace_figure
+from flexmech.service.solvers.continuation import trace_path
 from typer.testing import CliRunner
-
-from models import compile_mechanism, load_document
-from service import solve_equilibrium, sweep
-from service.cli import app
-from service.drawings.plotting import configuration_figure, load_point, sweeps_figure, trace_figure
-from service.solvers.continuation import trace_path
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 GRIPPER = EXAMPLES / "gripper.json"

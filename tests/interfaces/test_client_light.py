@@ -16,7 +16,7 @@ SCRIPT = textwrap.dedent("""
     import importlib.util, sys
     for heavy in ("casadi", "fastapi", "numpy", "sqlalchemy", "uvicorn"):
         assert importlib.util.find_spec(heavy) is None, heavy + " is installed"
-    from api.client import Client, FlexmechError
+    from flexmech.api.client import Client, FlexmechError
     with Client(sys.argv[1]) as c:
         answer = c.solve(example="gripper", target={"path": sys.argv[2], "output": "end_effector.x", "equals": 0})
         try:

@@ -11,10 +11,9 @@ import httpx
 import numpy as np
 import pytest
 from conftest import EXAMPLES
-
-from models import compile_mechanism, load_document
-from service import solve_equilibrium
-from service.drawings.drawing import mechanism_drawing
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service import solve_equilibrium
+from flexmech.service.drawings.drawing import mechanism_drawing
 
 WEB = EXAMPLES.parent / "api" / "web"
 
@@ -137,9 +136,8 @@ def test_a_load_path_is_drawn_state_by_state(api_server, gripper_dict):
 
 
 def test_the_client_draws_and_reads_a_jobs_request(api_server):
+    from flexmech.api.client import Client
     from pydantic import ValidationError
-
-    from api.client import Client
 
     with Client(api_server.url) as flexmech:
         drawing = flexmech.drawing(example="gripper_jaw_contact")

@@ -7,10 +7,9 @@ import json
 
 import numpy as np
 from conftest import EXAMPLES
+from flexmech.api.cli import app
 from PIL import Image
 from typer.testing import CliRunner
-
-from service.cli import app
 
 ENV = {"COLUMNS": "200", "NO_COLOR": "1"}
 SPIN = str(EXAMPLES / "spinning_rod_case2.json")

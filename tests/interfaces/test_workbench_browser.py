@@ -11,6 +11,9 @@ import re
 import pytest
 from browser import screenshot
 from conftest import ACTUATION, EXAMPLES
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service import solve_for_target
+from flexmech.service.solvers.continuation import trace_path
 from workbench import (  # noqa: F401 (fixtures by name)
     KEY,
     assert_local_and_quiet,
@@ -26,10 +29,6 @@ from workbench import (  # noqa: F401 (fixtures by name)
     set_document_text,
     simulate_to_the_first_frame,
 )
-
-from models import compile_mechanism, load_document
-from service import solve_for_target
-from service.solvers.continuation import trace_path
 
 
 @pytest.fixture(scope="module")

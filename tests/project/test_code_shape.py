@@ -160,7 +160,7 @@ def test_no_element_type_is_compared_outside_its_family():
     assert {"LinkElementsTopology", "FlexureTopology", "CurvedBeam"} <= classes
     found = []
     for name, tree in trees().items():
-        if name.startswith("models.elements"):
+        if name.startswith("flexmech.models.elements"):
             continue
         for node in ast.walk(tree):
             if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == "isinstance":
@@ -192,7 +192,7 @@ def test_no_two_modules_of_models_share_a_name():
 
 # The one parser of the Newton options object (into NewtonOptions, naming a bad field), and
 # the document's inverse shapes (free-form in the document's schema: not a request's options).
-DICT_READERS_ALLOWED = {"service.requests", "service.solvers.inverse_links"}
+DICT_READERS_ALLOWED = {"flexmech.service.requests", "flexmech.service.solvers.inverse_links"}
 REQUEST_NAMES = ("spec", "request", "given", "options")
 
 
@@ -204,7 +204,7 @@ def test_no_module_outside_api_reads_request_options_from_a_dict():
     for name, tree in trees().items():
         if name.startswith("api") or name in DICT_READERS_ALLOWED:
             continue
-        names = REQUEST_NAMES + (("stored",) if name.startswith("service.jobs") else ())  # a kind's raw spec
+        names = REQUEST_NAMES + (("stored",) if name.startswith("flexmech.service.jobs") else ())  # a kind's raw spec
         for node in ast.walk(tree):
             read = None
             if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "get":

@@ -11,10 +11,9 @@ from typing import get_args
 import numpy as np
 import pytest
 from conftest import ACTUATION, EXAMPLES
+from flexmech.api.client import Client
+from flexmech.models import MODELS, compile_mechanism, load_document
 from typer.testing import CliRunner
-
-from api.client import Client
-from models import MODELS, compile_mechanism, load_document
 
 ROOT = Path(__file__).resolve().parents[2]
 ENV = {"COLUMNS": "200", "FORCE_COLOR": None, "TTY_COMPATIBLE": None, "NO_COLOR": "1"}
@@ -41,7 +40,7 @@ def test_an_optimal_start_is_not_a_failed_point(client):
 def test_the_exact_model_over_http_and_one_list_of_models(client):
     """POST /v1/solve refused "model": "exact" although the CLI took it: the client's schema
     kept its own list of models."""
-    from api.schemas import Model
+    from flexmech.api.schemas import Model
 
     assert tuple(get_args(Model)) == MODELS
     answer = client.solve(
@@ -55,8 +54,8 @@ def test_residual_norm_means_one_thing_in_a_solve_and_in_a_sweep_point():
     """A sweep point's residual_norm was the nondimensional norm of every row (moments and
     link rows included) divided by the force scale, while /v1/solve reported the largest
     unbalanced force; both were labelled with the force unit."""
-    from service.analysis import Limits, compile_request, equilibrium_report, newton_options
-    from service.jobs.kinds import kind_named
+    from flexmech.service.analysis import Limits, compile_request, equilibrium_report, newton_options
+    from flexmech.service.jobs.kinds import kind_named
 
     document = json.loads((EXAMPLES / "gripper.json").read_text())
     options = {"max_iterations": 1, "line_search": False}
@@ -94,7 +93,7 @@ def test_body_mass_and_inertia_are_not_ignored():
         "outputs": {"support": {"type": "reaction", "body": "ground"}},
     }
     mech = compile_mechanism(load_document(document))
-    from service.solvers.equilibrium import solve_equilibrium
+    from flexmech.service.solvers.equilibrium import solve_equilibrium
 
     result = solve_equilibrium(mech)
     assert result.converged
@@ -102,7 +101,7 @@ def test_body_mass_and_inertia_are_not_ignored():
     assert outputs["support.Fy"] == pytest.approx(2.0 * 9.81, rel=1e-9)
     # The weight at the centre of mass, 0.1 m from the pin, twists the torsional spring.
     assert outputs["elements.k.M"] == pytest.approx(-2.0 * 9.81 * 0.1, rel=1e-6)
-    from service.solvers.inertia import mass_matrix
+    from flexmech.service.solvers.inertia import mass_matrix
 
     coordinates, M = mass_matrix(mech)
     assert coordinates == ["block.x", "block.y", "block.angle"]
@@ -124,7 +123,7 @@ def test_material_density_is_not_ignored():
         },
     }
     mech = compile_mechanism(load_document(document))
-    from service.solvers.equilibrium import solve_equilibrium
+    from flexmech.service.solvers.equilibrium import solve_equilibrium
 
     result = solve_equilibrium(mech)
     outputs = result.outputs()
@@ -137,8 +136,8 @@ def test_material_density_is_not_ignored():
 
 def test_cli_stiffness_json_is_the_service_report(tmp_path):
     """`flexmech solve --stiffness --json` lacked `symmetric`, so it differed from /v1/solve."""
-    from service.analysis import compile_request, equilibrium_report, newton_options
-    from service.cli import app
+    from flexmech.api.cli import app
+    from flexmech.service.analysis import compile_request, equilibrium_report, newton_options
 
     out = tmp_path / "k.json"
     result = CliRunner().invoke(

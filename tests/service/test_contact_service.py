@@ -18,13 +18,12 @@ import httpx
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+from flexmech.api.cli import app
+from flexmech.models import MechanismError, compile_mechanism, load_document
+from flexmech.service import NewtonOptions
+from flexmech.service.analyses.base import AnalysisRequest
+from flexmech.service.analyses.contact import CONTACT
 from typer.testing import CliRunner
-
-from models import MechanismError, compile_mechanism, load_document
-from service import NewtonOptions
-from service.analyses.base import AnalysisRequest
-from service.analyses.contact import CONTACT
-from service.cli import app
 
 EXAMPLE = EXAMPLES / "gripper_jaw_contact.json"
 X_O = "/contacts/objects/fixture/centre/0"
@@ -571,8 +570,8 @@ def test_cli_bad_at_is_a_one_line_error(run, tmp_path):
 
 def test_the_python_client_runs_a_contact_path_and_reads_it_typed(api_server):
     """api.client: contact_path, wait, result parsed as a ContactPathResult (pairs typed)."""
-    from api.client import Client
-    from api.job_schemas import ContactPathResult
+    from flexmech.api.client import Client
+    from flexmech.api.job_schemas import ContactPathResult
 
     with Client(api_server.url) as client:
         job = client.contact_path(

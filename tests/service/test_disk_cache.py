@@ -10,12 +10,11 @@ import socket
 
 import numpy as np
 from conftest import EXAMPLES
-
-from models import compile_mechanism, load_document
-from models.caches import graph_cache
-from models.caches.disk_cache import bound, building_folder, entries, queue_dir, touch, usage
-from models.caches.graph_cache import GraphStore
-from models.graph.assembly import FUNCTIONS, build_functions
+from flexmech.models import compile_mechanism, load_document
+from flexmech.models.caches import graph_cache
+from flexmech.models.caches.disk_cache import bound, building_folder, entries, queue_dir, touch, usage
+from flexmech.models.caches.graph_cache import GraphStore
+from flexmech.models.graph.assembly import FUNCTIONS, build_functions
 
 
 def _entry(root, section: str, name: str, size: int, used: float):

@@ -13,10 +13,9 @@ import tarfile
 import httpx
 import pytest
 from conftest import ACTUATION, EXAMPLES, sqlite_server
+from flexmech.api.cli import app
+from flexmech.api.client import Client, FlexmechError
 from typer.testing import CliRunner
-
-from api.client import Client, FlexmechError
-from service.cli import app
 
 KEYS = ("export-first-key-0123", "export-second-key-0123")
 CLOSING_FORCE = 77.0346  # uN: the gripper's target (end_effector.x = 0), solved at export

@@ -14,10 +14,9 @@ import httpx
 import pytest
 from abuse_cases import gripper
 from conftest import EXAMPLES, Deployment
+from flexmech.api.client import Client
+from flexmech.models import MechanismError, compile_mechanism, load_document
 from typer.testing import CliRunner
-
-from api.client import Client
-from models import MechanismError, compile_mechanism, load_document
 
 
 @pytest.fixture(scope="module")
@@ -218,7 +217,7 @@ def test_nan_bounds_are_refused_at_post(server):
 # --- 7. security and transport -------------------------------------------------------------
 @pytest.mark.parametrize("keys", [" , ,", " ", "\t", ","])
 def test_api_keys_that_list_no_key_refuse_to_start(keys):
-    from service.cli import app
+    from flexmech.api.cli import app
 
     result = CliRunner().invoke(app, ["serve"], env={"FLEXMECH_API_KEYS": keys, "NO_COLOR": "1"})
     assert result.exit_code == 2
@@ -229,7 +228,7 @@ def test_api_keys_that_list_no_key_refuse_to_start(keys):
 
 
 def test_an_empty_key_list_runs_without_keys():
-    from service.settings import Settings
+    from flexmech.service.settings import Settings
 
     assert Settings(api_keys="").api_keys == []
 
@@ -245,7 +244,7 @@ def test_a_duplicate_key_is_refused_whatever_the_letter_case_of_the_media_type(s
 def test_a_large_body_is_read_as_strictly_in_the_parser_process(server):
     """Bodies from api.body_parsing.LARGE_BODY bytes parse in their own process: the same
     answers as on the server's thread (a duplicate key, malformed JSON, too deep, a good body)."""
-    from api.body_parsing import LARGE_BODY
+    from flexmech.api.body_parsing import LARGE_BODY
 
     pad = b'"' + b"x" * LARGE_BODY + b'"'
     cases = [
@@ -274,7 +273,7 @@ def test_a_large_body_is_read_as_strictly_in_the_parser_process(server):
 
 
 def test_a_body_of_another_media_type_is_not_read_as_json():
-    from api.limits import is_json
+    from flexmech.api.limits import is_json
 
     assert is_json(None) and is_json(b"application/json") and is_json(b" Application/Problem+JSON ;q=1")
     assert not is_json(b"text/plain") and not is_json(b"application/jsonp") and not is_json(b"multipart/form-data")
@@ -341,7 +340,7 @@ def test_docs_are_served_from_the_package(server):
 
 
 def test_health_does_not_show_the_dask_address(dask_address):
-    from service.jobs.executors import DaskCluster
+    from flexmech.service.jobs.executors import DaskCluster
 
     cluster = DaskCluster(dask_address)
     try:

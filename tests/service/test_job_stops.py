@@ -10,9 +10,8 @@ import time
 
 import pytest
 from conftest import EXAMPLES, Deployment
+from flexmech.api.client import Client
 from servers import ApiServer
-
-from api.client import Client
 
 # Points that each run Newton for seconds: the gripper with exact flexures far past any
 # equilibrium, 1000 iterations of a line search that keeps halving.
@@ -117,9 +116,9 @@ def test_the_job_time_limit_ends_running_tasks(tmp_path):
 def test_ipopt_stops_at_its_next_iteration_when_asked():
     import json
 
-    from models import compile_mechanism, load_document
-    from service.design.optimize import prepare, run_start
-    from service.design.problem import design_problem
+    from flexmech.models import compile_mechanism, load_document
+    from flexmech.service.design.optimize import prepare, run_start
+    from flexmech.service.design.problem import design_problem
 
     doc = load_document(json.loads((EXAMPLES / "grasper_shape.json").read_text()))
     prepared = prepare(design_problem(compile_mechanism(doc), doc.optimize))

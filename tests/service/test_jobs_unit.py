@@ -7,15 +7,14 @@ import json
 
 import pytest
 from conftest import ACTUATION, EXAMPLES
-
-from models import MechanismError
-from models.graph.assembly import graphs_for
-from service.analysis import Limits
-from service.jobs import sweep as sweep_kind
-from service.jobs.grids import grid_shape, load_paths
-from service.jobs.kinds import kind_named
-from service.jobs.store import JobStore
-from service.jobs.sweep_options import SweepSpec
+from flexmech.models import MechanismError
+from flexmech.models.graph.assembly import graphs_for
+from flexmech.service.analysis import Limits
+from flexmech.service.jobs import sweep as sweep_kind
+from flexmech.service.jobs.grids import grid_shape, load_paths
+from flexmech.service.jobs.kinds import kind_named
+from flexmech.service.jobs.store import JobStore
+from flexmech.service.jobs.sweep_options import SweepSpec
 
 H = "/sections/flexure/h"
 

@@ -7,13 +7,12 @@ import json
 
 import pytest
 from conftest import EXAMPLES
+from flexmech.api.cli import app
+from flexmech.api.client import Client, FlexmechError
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service.design.optimize import optimize
+from flexmech.service.design.problem import design_problem
 from typer.testing import CliRunner
-
-from api.client import Client, FlexmechError
-from models import compile_mechanism, load_document
-from service.cli import app
-from service.design.optimize import optimize
-from service.design.problem import design_problem
 
 ENV = {"COLUMNS": "200", "FORCE_COLOR": None, "TTY_COMPATIBLE": None, "NO_COLOR": "1"}
 GRASPER = EXAMPLES / "grasper_shape.json"
@@ -135,8 +134,8 @@ def test_cli_trace_reports_the_limit_points(tmp_path):
 
 
 def test_solve_returns_closing_force_sensitivities_equal_to_the_core(client):
-    from service.design.sensitivity import equilibrium_sensitivities
-    from service.solvers.sweep import solve_for_target
+    from flexmech.service.design.sensitivity import equilibrium_sensitivities
+    from flexmech.service.solvers.sweep import solve_for_target
 
     actuation = "/loads/actuation/force/1"
     answer = client.solve(

@@ -14,11 +14,10 @@ import httpx
 import numpy as np
 import pytest
 from conftest import sqlite_server
-
-from api.client import Client
-from models import MechanismError
-from service.analyses.base import ReportSize
-from service.costs import BYTES_PER_NUMBER, Limits, check_report_size, check_response_bytes
+from flexmech.api.client import Client
+from flexmech.models import MechanismError
+from flexmech.service.analyses.base import ReportSize
+from flexmech.service.costs import BYTES_PER_NUMBER, Limits, check_report_size, check_response_bytes
 
 FORCE = "/loads/actuation/force/1"
 # the positions and rotations of gripper_modes a frequency response can watch (48), and 12 of them again

@@ -6,11 +6,10 @@ from __future__ import annotations
 
 import copy
 
+import flexmech.service.requests as requests
 import pytest
-
-import service.requests as requests
-from service import solve_equilibrium
-from service.costs import Limits
+from flexmech.service import solve_equilibrium
+from flexmech.service.costs import Limits
 
 ACTUATION = "/loads/actuation/force/1"
 

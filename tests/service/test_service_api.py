@@ -9,10 +9,9 @@ import httpx
 import numpy as np
 import pytest
 from conftest import ACTUATION, EXAMPLES, Deployment
-
-from api.client import AsyncClient, Client, FlexmechError
-from models import compile_mechanism, load_document
-from service import inverse_wrenches, solve_equilibrium, solve_for_target, tangent_stiffness
+from flexmech.api.client import AsyncClient, Client, FlexmechError
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service import inverse_wrenches, solve_equilibrium, solve_for_target, tangent_stiffness
 
 CLOSING = {"path": ACTUATION, "output": "end_effector.x", "equals": 0.0}
 

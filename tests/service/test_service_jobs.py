@@ -13,10 +13,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import ACTUATION, EXAMPLES
-
-from api.client import Client
-from models import compile_mechanism, load_document
-from service import sweep
+from flexmech.api.client import Client
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service import sweep
 
 LOAD_PATH = {"path": ACTUATION, "start": -60.0, "stop": 60.0, "steps": 199}  # 200 points
 
@@ -86,7 +85,7 @@ def test_independent_points_over_a_cartesian_grid(deployment):
         server.stop()
     assert len(points) == 12
     base = compile_mechanism(load_document(EXAMPLES / "gripper.json"))
-    from service import solve_equilibrium
+    from flexmech.service import solve_equilibrium
 
     for p in points:
         force, h = p.values
@@ -190,7 +189,7 @@ def _sweep_in_a_fresh_process(spec: dict, indices: list[int]) -> dict[int, dict]
 def _pool_workers(server_pid: int) -> list[int]:
     """Process-pool workers of the server: its children started by multiprocessing's spawn, but
     its solver workers (api.solver_pool names them)."""
-    from api.solver_pool import WORKER_NAME
+    from flexmech.api.solver_pool import WORKER_NAME
 
     found = []
     for stat in Path("/proc").glob("[0-9]*/stat"):

@@ -9,9 +9,8 @@ import time
 
 import httpx
 import numpy as np
-
-from api.client import Client
-from service.dynamics.stepping import WINDOW
+from flexmech.api.client import Client
+from flexmech.service.dynamics.stepping import WINDOW
 
 
 def _wait_until(condition, timeout: float, what: str) -> None:

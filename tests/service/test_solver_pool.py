@@ -13,11 +13,10 @@ import time
 
 import httpx
 import pytest
-
-from api.errors import ApiError
-from api.solver_pool import WORKER_NAME, SolverPool
-from models import MechanismError
-from models.documents.reading import parse_json
+from flexmech.api.errors import ApiError
+from flexmech.api.solver_pool import WORKER_NAME, SolverPool
+from flexmech.models import MechanismError
+from flexmech.models.documents.reading import parse_json
 
 
 def _alive(pid: int) -> bool:
@@ -73,7 +72,7 @@ def test_a_call_past_its_time_limit_ends_its_worker_and_a_new_one_serves():
 
 
 def _a_loop_that_hangs(limit: float) -> None:
-    from service.deadline import ends_after
+    from flexmech.service.deadline import ends_after
 
     ends_after(limit)  # a solving loop starts the call's clock, then never checks it
     time.sleep(600)
@@ -106,7 +105,7 @@ def test_a_worker_past_its_loops_deadline_is_replaced_without_the_build_allowanc
 def test_loops_of_one_call_share_the_first_deadline():
     from multiprocessing import Value
 
-    from service.deadline import call_scope, ends_after
+    from flexmech.service.deadline import call_scope, ends_after
 
     shared = Value("d", 0.0, lock=False)
     outside = ends_after(5.0)
@@ -250,7 +249,7 @@ def test_a_killed_server_leaves_no_solver_worker(server):
     parses large bodies, end with it."""
     import signal
 
-    from api.body_parsing import LARGE_BODY, PARSER_NAME
+    from flexmech.api.body_parsing import LARGE_BODY, PARSER_NAME
 
     large = {
         "example": "gripper",
@@ -274,7 +273,7 @@ def test_ending_a_job_pool_spares_the_other_children_of_the_server():
     solver workers are its children too (they once died with it, failing their requests)."""
     import multiprocessing
 
-    from service.jobs.executors import ProcessPool
+    from flexmech.service.jobs.executors import ProcessPool
 
     bystander = multiprocessing.get_context("spawn").Process(target=time.sleep, args=(60,), name="bystander")
     bystander.start()

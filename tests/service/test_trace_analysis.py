@@ -12,10 +12,9 @@ import numpy as np
 import pytest
 from conftest import EXAMPLES
 from continuation_oracles import natural_limit
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service.solvers.continuation import trace_path
 from typer.testing import CliRunner
-
-from models import compile_mechanism, load_document
-from service.solvers.continuation import trace_path
 
 LOAD, STOP = "/loads/P/force/1", -300.0
 ARCH = EXAMPLES / "snap_through_arch.json"
@@ -154,7 +153,7 @@ def test_bad_trace_fields_are_422_naming_the_field(api_server, trace, pointer, m
 
 
 def test_the_cli_solve_command_runs_the_trace(tmp_path):
-    from service.cli import app
+    from flexmech.api.cli import app
 
     failed = CliRunner().invoke(app, ["solve", str(ARCH), "--analysis", "trace"], env=ENV)
     assert failed.exit_code == 2 and "Traceback" not in failed.output

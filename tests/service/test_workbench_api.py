@@ -10,12 +10,11 @@ import httpx
 import numpy as np
 import pytest
 from conftest import EXAMPLES, sqlite_server
-
-from api.client import Client
-from models import compile_mechanism, load_document
-from service.analysis import run_analysis
-from service.offers import offers
-from service.solvers.newton import NewtonOptions
+from flexmech.api.client import Client
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service.analysis import run_analysis
+from flexmech.service.offers import offers
+from flexmech.service.solvers.newton import NewtonOptions
 
 KEYS = ("workbench-first-key", "workbench-second-key")
 

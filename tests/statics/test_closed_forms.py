@@ -8,10 +8,9 @@ import math
 
 import numpy as np
 import pytest
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service import NewtonOptions, solve_equilibrium, tangent_stiffness
 from scipy.integrate import quad
-
-from models import compile_mechanism, load_document
-from service import NewtonOptions, solve_equilibrium, tangent_stiffness
 
 E, B, H = 200e9, 5e-3, 0.5e-3  # steel strip, SI
 EI = E * B * H**3 / 12
@@ -65,7 +64,7 @@ def document(bodies, elements, loads):
 
 @pytest.mark.parametrize("arc_deg", [60.0, 180.0, 300.0])
 def test_eq_2_equals_castigliano(arc_deg):
-    from models.beams.curved_beam_closed_form import compliance
+    from flexmech.models.beams.curved_beam_closed_form import compliance
 
     r, theta = 0.01, math.radians(arc_deg)
     C = np.array(compliance(r, theta, EI))

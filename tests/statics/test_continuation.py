@@ -6,9 +6,8 @@ import numpy as np
 import pytest
 from conftest import EXAMPLES
 from continuation_oracles import natural_limit
-
-from models import MechanismError, compile_mechanism, load_document
-from service.solvers.continuation import _path_graphs, body_stability, trace_path
+from flexmech.models import MechanismError, compile_mechanism, load_document
+from flexmech.service.solvers.continuation import _path_graphs, body_stability, trace_path
 
 LOAD = "/loads/P/force/1"
 

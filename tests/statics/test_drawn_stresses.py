@@ -9,10 +9,9 @@ import json
 import numpy as np
 import pytest
 from conftest import ACTUATION, EXAMPLES
-
-from models import MechanismError, compile_mechanism, load_document
-from service import solve_equilibrium
-from service.drawings.drawing import mechanism_drawing
+from flexmech.models import MechanismError, compile_mechanism, load_document
+from flexmech.service import solve_equilibrium
+from flexmech.service.drawings.drawing import mechanism_drawing
 
 TARGET_FORCE = 77.035  # uN: the gripper closes (end effector at x = 0), seed 000 Sec. 5.1
 SAME = 1e-9  # relative: one quantity computed twice from one state

@@ -8,11 +8,10 @@ import casadi as ca
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+from flexmech.models import MechanismError, compile_mechanism, load_document
+from flexmech.service.solvers.energy import minimize_energy
+from flexmech.service.solvers.equilibrium import NewtonOptions, solve_equilibrium
 from mechanisms import chain, four_bar
-
-from models import MechanismError, compile_mechanism, load_document
-from service.solvers.energy import minimize_energy
-from service.solvers.equilibrium import NewtonOptions, solve_equilibrium
 
 TIGHT = NewtonOptions(tol_residual=1e-13, tol_step=1e-12)
 

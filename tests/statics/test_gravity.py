@@ -5,10 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service.solvers.equilibrium import NewtonOptions, solve_equilibrium
 from scipy.integrate import solve_bvp
-
-from models import compile_mechanism, load_document
-from service.solvers.equilibrium import NewtonOptions, solve_equilibrium
 
 E, B, H, L, RHO, G = 200e9, 0.01, 0.001, 1.0, 7800.0, 9.81
 TIGHT = NewtonOptions(tol_residual=1e-13, tol_step=1e-12, max_iterations=100)
@@ -80,8 +79,8 @@ def test_a_tapered_strip_has_the_mass_of_its_section():
 
 
 def test_a_link_with_mass_needs_its_area_and_has_no_mass_matrix():
-    from models import MechanismError
-    from service.solvers.inertia import mass_matrix
+    from flexmech.models import MechanismError
+    from flexmech.service.solvers.inertia import mass_matrix
 
     document = hanging_strip({"shape": "general", "I": B * H**3 / 12})
     with pytest.raises(MechanismError) as info:

@@ -5,10 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from conftest import ACTUATION, EXAMPLES
-
-from models import compile_mechanism, load_document
-from service import NewtonOptions, inverse_wrenches, solve_equilibrium, solve_for_target, tangent_stiffness
-from service.solvers.inverse import configuration_of
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service import NewtonOptions, inverse_wrenches, solve_equilibrium, solve_for_target, tangent_stiffness
+from flexmech.service.solvers.inverse import configuration_of
 
 # Table 2: K_T of the partial non-linear model, undeformed (uN/mm, uN, uN mm/rad); 0 = not coupled.
 TABLE_2 = np.array(
@@ -163,7 +162,7 @@ def test_si_copy_gives_the_same_physics():
 @pytest.mark.parametrize("restart", ["previous", "undeformed"])
 def test_opening_closing_movement(gripper, restart):
     """Fig. 7/9: from -60 uN (open) until the end effector reaches x = 0 (closed)."""
-    from service.solvers.sweep import document_sweep
+    from flexmech.service.solvers.sweep import document_sweep
 
     result, closing = document_sweep(gripper, start=restart)
     assert result.all_converged and len(result.values) == 101

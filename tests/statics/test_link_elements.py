@@ -9,10 +9,9 @@ import casadi as ca
 import numpy as np
 import pytest
 from elastica_oracles import cantilever_tip
-
-from models import compile_mechanism, load_document
-from service.solvers.energy import minimize_energy
-from service.solvers.equilibrium import NewtonOptions, solve_equilibrium
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service.solvers.energy import minimize_energy
+from flexmech.service.solvers.equilibrium import NewtonOptions, solve_equilibrium
 
 TIGHT = NewtonOptions(tol_residual=1e-13, tol_step=1e-13)
 E, B, H, LENGTH = 2e11, 0.01, 0.001, 0.1

@@ -13,10 +13,10 @@ import math
 import numpy as np
 import pytest
 from elastica_oracles import cantilever_tip, circular_arc_tip, timoshenko_tip_deflection
+from flexmech.models.beams import curved_beam_closed_form as curved_beam
+from flexmech.service.solvers.equilibrium import NewtonOptions, solve_equilibrium
 
-import models
-from models.beams import curved_beam_closed_form as curved_beam
-from service.solvers.equilibrium import NewtonOptions, solve_equilibrium
+from flexmech import models
 
 # The thesis cantilever (Sec. 2.5.1): EI = 0.08 N m^2, L = 101.6 mm, F = 15 N.
 EI, L, F = 0.08, 0.1016, 15.0
@@ -210,7 +210,7 @@ def test_link_tangent_stiffness_equals_finite_differences_of_the_residual():
 def test_condensed_tangent_stiffness_of_a_link_is_the_beam_element_stiffness():
     """Unloaded, the tip's 3x3 K_T (links' unknowns condensed out) is the Euler-Bernoulli
     beam stiffness: EA/L axially, 12EI/L^3, -6EI/L^2, 4EI/L in bending."""
-    from service.solvers.stiffness import tangent_stiffness
+    from flexmech.service.solvers.stiffness import tangent_stiffness
 
     A = 1e-4
     mech = models.compile_mechanism(
@@ -233,10 +233,9 @@ def test_bounds_pick_the_buckled_branch_of_a_column():
     buckled elastica, whose tip rotation alpha solves k L = K(sin(alpha / 2)), k^2 = P / EI,
     with sideways deflection y* = 2 sin(alpha / 2) / k. (The bounds must put the start in
     the branch's basin: here the tip is held beyond 0.7 y*.)"""
+    from flexmech.service.solvers.equilibrium import solve_bounded
     from scipy.optimize import brentq
     from scipy.special import ellipk
-
-    from service.solvers.equilibrium import solve_bounded
 
     P = 1.2 * math.pi**2 * EI / (4 * L**2)
     k = math.sqrt(P / EI)

@@ -9,11 +9,10 @@ import json
 import casadi as ca
 import numpy as np
 from conftest import EXAMPLES
-
-from models import compile_mechanism, load_document
-from models.graph.assembly import _symbolic
-from models.graph.residual import residual_of
-from models.graph.split_jacobian import jacobian
+from flexmech.models import compile_mechanism, load_document
+from flexmech.models.graph.assembly import _symbolic
+from flexmech.models.graph.residual import residual_of
+from flexmech.models.graph.split_jacobian import jacobian
 
 
 def _values(K: ca.SX, z: ca.SX, p: ca.SX, at: np.ndarray, params: np.ndarray) -> np.ndarray:

@@ -6,9 +6,8 @@ from __future__ import annotations
 import math
 
 import pytest
-
-from models import MechanismError, compile_mechanism, load_document
-from service.solvers.equilibrium import NewtonOptions, solve_equilibrium
+from flexmech.models import MechanismError, compile_mechanism, load_document
+from flexmech.service.solvers.equilibrium import NewtonOptions, solve_equilibrium
 
 TIGHT = NewtonOptions(tol_residual=1e-13, tol_step=1e-12)
 
@@ -41,7 +40,7 @@ def test_a_nonlinear_law_matches_finite_differences_of_its_expression():
     out = result.outputs()
     x = out["elements.coil.rotation"]
     assert law(x) == pytest.approx(3.0, rel=1e-12)  # the spring holds the moment
-    from service.solvers.stiffness import tangent_stiffness
+    from flexmech.service.solvers.stiffness import tangent_stiffness
 
     (stiffness,) = tangent_stiffness(mech, result.z).K.ravel()  # arm.angle alone: N m per rad
     h = 1e-6

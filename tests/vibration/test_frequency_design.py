@@ -10,11 +10,10 @@ import math
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service.analyses import ANALYSES
+from flexmech.service.analyses.base import AnalysisRequest
 from test_modes import EULER, pinned_pinned, platform_on_a_flexure
-
-from models import compile_mechanism, load_document
-from service.analyses import ANALYSES
-from service.analyses.base import AnalysisRequest
 
 
 def modes_of(mech, **options) -> dict:
@@ -88,8 +87,8 @@ def test_the_stage_example_maximizes_its_first_frequency_under_its_stroke_and_th
     h (cubic elements are exact for the clamped-guided blade); the stroke constraint is active;
     its h is the linear theory's (F L^3 / (2 E b delta))^(1/3) but for the stroke's large-deflection
     stiffening (2e-4 measured)."""
-    from service.design.optimize import optimize
-    from service.design.problem import design_problem
+    from flexmech.service.design.optimize import optimize
+    from flexmech.service.design.problem import design_problem
 
     mech = compile_mechanism(load_document(EXAMPLES / "stage_frequency.json"))
     result = optimize(design_problem(mech, mech.document.optimize)).summary()
@@ -111,8 +110,8 @@ def test_the_stage_example_maximizes_its_first_frequency_under_its_stroke_and_th
 def test_a_frequency_response_bounds_a_design_at_the_closed_form():
     """The softest spring that keeps a 0.3 kg carriage's response to a 10 Hz force under 1 mm/N:
     undamped |H| = 1 / |k - m omega^2|, so k* = m omega^2 + 1000 N/m, the response's bound active."""
-    from service.design.optimize import optimize
-    from service.design.problem import design_problem
+    from flexmech.service.design.optimize import optimize
+    from flexmech.service.design.problem import design_problem
 
     m, limit, hertz = 0.3, 1e-3, 10.0
     doc = {
@@ -154,8 +153,8 @@ def test_a_frequency_response_bounds_a_design_at_the_closed_form():
     ],
 )
 def test_a_bad_vibration_output_in_a_design_is_named(output, words):
-    from models import MechanismError
-    from service.design.problem import design_problem
+    from flexmech.models import MechanismError
+    from flexmech.service.design.problem import design_problem
 
     doc = loaded_platform()
     doc["sections"]["blade"]["h"] = 0.0005
@@ -173,8 +172,8 @@ def test_a_frequency_constraint_holds_the_thinnest_blades_at_the_closed_form():
     """The stage unloaded: the thinnest blades whose first frequency is at least 30 Hz, h^3 =
     m (2 pi 30)^2 L^3 / (2 E b); the frequency constraint is the active one, its value confirmed
     by a fresh modes run."""
-    from service.design.optimize import optimize
-    from service.design.problem import design_problem
+    from flexmech.service.design.optimize import optimize
+    from flexmech.service.design.problem import design_problem
 
     doc = json.loads((EXAMPLES / "stage_frequency.json").read_text())
     doc["loads"]["drive"]["force"] = [0, 0]

@@ -10,13 +10,12 @@ import math
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+from flexmech.models import MechanismError, compile_mechanism, load_document
+from flexmech.service.analyses import ANALYSES
+from flexmech.service.analyses.base import AnalysisRequest
+from flexmech.service.solvers.equilibrium import solve_equilibrium
+from flexmech.service.units import outputs_in_doc_units
 from test_modes import body_on_springs, platform_on_a_flexure, strip
-
-from models import MechanismError, compile_mechanism, load_document
-from service.analyses import ANALYSES
-from service.analyses.base import AnalysisRequest
-from service.solvers.equilibrium import solve_equilibrium
-from service.units import outputs_in_doc_units
 
 M, J, K, K_TURN = 0.3, 0.002, 1200.0, 4.5
 
@@ -55,7 +54,7 @@ def test_a_damped_mass_on_a_spring_responds_as_the_closed_form():
 
 def test_a_response_over_many_blocks_of_frequencies_is_the_closed_form_at_each():
     """20000 points are evaluated a block of FREQUENCY_BLOCK at a time: every one as exact."""
-    from service.vibration.frf import FREQUENCY_BLOCK
+    from flexmech.service.vibration.frf import FREQUENCY_BLOCK
 
     zeta = 0.02
     report = respond(

@@ -11,13 +11,12 @@ import math
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+from flexmech.models import MechanismError, compile_mechanism, load_document
+from flexmech.service.analyses import ANALYSES
+from flexmech.service.analyses.base import AnalysisRequest
+from flexmech.service.vibration.eigen import vibration_eigen
 from scipy.linalg import eigh
 from scipy.optimize import brentq
-
-from models import MechanismError, compile_mechanism, load_document
-from service.analyses import ANALYSES
-from service.analyses.base import AnalysisRequest
-from service.vibration.eigen import vibration_eigen
 
 E, G_SHEAR, RHO = 2e11, 8e10, 7850.0
 B, H, L = 0.0127, 0.0003, 1.11  # a slender strip: its rotary inertia moves beta L by < 1e-7
@@ -319,8 +318,8 @@ def test_the_arch_snap_through_paths_stability_and_the_modes_agree_at_every_poin
     through both limit points: at each of the path's states (both branches) the continuation calls
     the state stable exactly when every mode is elastic, and omega_1^2 falls toward zero at the
     first limit point."""
-    from service.solvers.continuation import trace_path
-    from service.vibration.modes import mechanism_modes
+    from flexmech.service.solvers.continuation import trace_path
+    from flexmech.service.vibration.modes import mechanism_modes
 
     doc = json.loads((EXAMPLES / "snap_through_arch.json").read_text())
     doc["bodies"]["crown"].update(mass=0.01, inertia=1.0)

@@ -12,17 +12,16 @@ import numpy as np
 import pytest
 import scipy.io
 from conftest import EXAMPLES
+from flexmech.api.cli import app
+from flexmech.models import MechanismError, compile_mechanism, load_document
+from flexmech.service.analyses import ANALYSES
+from flexmech.service.analyses.base import AnalysisRequest
+from flexmech.service.solvers.stiffness import tangent_stiffness
+from flexmech.service.vibration.frf import Damping
+from flexmech.service.vibration.state_space import state_space_model
+from flexmech.service.vibration.state_space_files import MATRICES, control_system, read_state_space, write_state_space
 from test_modes import body_on_springs
 from typer.testing import CliRunner
-
-from models import MechanismError, compile_mechanism, load_document
-from service.analyses import ANALYSES
-from service.analyses.base import AnalysisRequest
-from service.cli import app
-from service.solvers.stiffness import tangent_stiffness
-from service.vibration.frf import Damping
-from service.vibration.state_space import state_space_model
-from service.vibration.state_space_files import MATRICES, control_system, read_state_space, write_state_space
 
 ROD = EXAMPLES / "rod_free_vibration.json"
 FX, FY = "/loads/hold/force/0", "/loads/hold/force/1"
@@ -73,7 +72,7 @@ def test_the_rods_poles_are_its_modes_and_its_static_gain_the_timoshenko_cantile
 
 def test_about_the_equilibrium_the_static_gain_is_the_tangent_compliance_there(rod):
     """The rod held bent by its hold force (prestress and large rotation): measured 1e-13."""
-    from service.solvers.equilibrium import solve_equilibrium
+    from flexmech.service.solvers.equilibrium import solve_equilibrium
 
     report = ANALYSES.named("linearization").run(
         rod, AnalysisRequest(given={"state_space": {"inputs": [FX, FY], "outputs": ["bodies.tip.x", "bodies.tip.y"]}})
@@ -144,8 +143,8 @@ def test_the_python_control_system_round_trips_through_every_file(rod, rod_model
 
 
 def test_flexmech_linearize_writes_a_mat_file_matlab_reads_and_names_a_bad_output(tmp_path):
-    from service.cli.linearize import SUFFIXES
-    from service.vibration import state_space_files
+    from flexmech.api.cli.linearize import SUFFIXES
+    from flexmech.service.vibration import state_space_files
 
     assert SUFFIXES == state_space_files.SUFFIXES
     out = tmp_path / "rod.mat"
@@ -187,8 +186,8 @@ def test_the_massless_gripper_is_its_static_response_about_its_operating_point(t
     response to the actuation force about the equilibrium under 50 uN. It equals central
     differences of flexmech's own equilibrium (+-0.01 uN) to 1e-7, and python-control takes it
     as a static gain."""
-    from service.solvers.equilibrium import solve_equilibrium
-    from service.solvers.newton import NewtonOptions
+    from flexmech.service.solvers.equilibrium import solve_equilibrium
+    from flexmech.service.solvers.newton import NewtonOptions
 
     mech = compile_mechanism(load_document(EXAMPLES / "gripper.json"))
     force, outputs = "/loads/actuation/force/1", ["end_effector.x", "end_effector.y"]

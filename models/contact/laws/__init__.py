@@ -1,10 +1,17 @@
 """Contact laws by name, each registered once, each naming the analyses that take it. A new
 law is a module defining it (a NormalLaw or FrictionLaw) and one registration line below."""
 
-from models.contact.laws.friction import Ambrosio, Coulomb, NoFriction
-from models.contact.laws.impulsive import Restitution, Unilateral
-from models.contact.laws.penalty import Flores, Hertz, HuntCrossley, LankaraniNikravesh, LinearSpringDashpot, LnaEsdu
-from models.contact.laws.registry import (
+from flexmech.models.contact.laws.friction import Ambrosio, Coulomb, NoFriction
+from flexmech.models.contact.laws.impulsive import Restitution, Unilateral
+from flexmech.models.contact.laws.penalty import (
+    Flores,
+    Hertz,
+    HuntCrossley,
+    LankaraniNikravesh,
+    LinearSpringDashpot,
+    LnaEsdu,
+)
+from flexmech.models.contact.laws.registry import (
     ANALYSES,
     FRICTION_LAWS,
     NORMAL_LAWS,

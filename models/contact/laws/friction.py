@@ -8,8 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import casadi as ca
-
-from models.contact.laws.registry import ANALYSES, FrictionLaw
+from flexmech.models.contact.laws.registry import ANALYSES, FrictionLaw
 
 
 @dataclass(frozen=True)

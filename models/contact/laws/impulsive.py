@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from models.contact.laws.registry import NormalLaw
+from flexmech.models.contact.laws.registry import NormalLaw
 
 
 @dataclass(frozen=True)

@@ -9,8 +9,7 @@ import math
 from dataclasses import dataclass
 
 import casadi as ca
-
-from models.contact.laws.registry import NormalLaw
+from flexmech.models.contact.laws.registry import NormalLaw
 
 EVENT_DRIVEN = frozenset({"event_driven"})
 POWER_LAW_NEEDS = ("stiffness", "exponent", "restitution")

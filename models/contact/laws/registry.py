@@ -9,7 +9,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, cast  # CasADi expressions are Any to mypy
 
-from models.errors import MechanismError
+from flexmech.models.errors import MechanismError
 
 # the analyses that use contact laws, and how a message names them
 ANALYSES = {

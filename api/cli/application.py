@@ -1,0 +1,16 @@
+"""The typer app every command module registers its command on (api.cli imports them); its
+group adds a command per analysis (api.cli.commands)."""
+
+from __future__ import annotations
+
+import typer
+from flexmech.api.cli.commands import Commands
+
+app = typer.Typer(
+    name="flexmech",
+    cls=Commands,
+    help="Kinetostatics of planar compliant mechanisms described by a mechanism document.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_show_locals=False,
+)

@@ -1,0 +1,31 @@
+"""`flexmech examples`: the example documents and their names."""
+
+from __future__ import annotations
+
+import json
+
+from flexmech.api.cli.application import app
+from flexmech.api.cli.common import OptionError, consoles, shown, user_errors
+from flexmech.service.examples import examples_directory
+from rich.table import Table
+
+
+@app.command()
+def examples() -> None:
+    """List the example documents and their names."""
+    out, err = consoles()
+    with user_errors(err):
+        directory = examples_directory()
+        if directory is None:
+            raise OptionError("examples", "no examples directory (looked in ./examples and next to the package)")
+        table = Table(title=f"examples in {directory}", title_justify="left")
+        table.add_column("file")
+        table.add_column("name")
+        for file in sorted(directory.glob("*.json")):
+            try:
+                data = json.loads(file.read_text())
+                name = data.get("name", "") if isinstance(data, dict) else "(not a mechanism document)"
+            except (OSError, json.JSONDecodeError) as exc:
+                name = f"(unreadable: {exc})"
+            table.add_row(file.name, shown(str(name)))
+        out.print(table)

@@ -1,0 +1,167 @@
+"""`flexmech simulate`: motion in time by the document's `simulate` section, with --until,
+--step and the scheme from the command line over it. Progress follows the whole run (the steps,
+then building the report and writing each file); --every keeps every n-th step in the report;
+--json writes the report, --csv its histories, --plot draws outputs and energies against time,
+--snapshots the links at six times, --animation the moving links (.gif, or .mp4 when ffmpeg is
+installed). The summary and files: api.cli.simulate_output."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from flexmech.api.cli.application import app
+from flexmech.api.cli.common import EXIT_NOT_CONVERGED, OptionError, check_plot_option, consoles, user_errors
+from flexmech.api.cli.options import DocArg, JsonOpt, PlotOpt, SetOpt, mechanism
+from flexmech.api.cli.progress import SimulationProgress
+from flexmech.api.cli.simulate_output import Files, print_impacts, print_run, write_files
+
+EveryOpt = Annotated[
+    int | None,
+    typer.Option(
+        "--every",
+        metavar="N",
+        help="Keep every N-th step in the report, its histories and frames (the first and the last "
+        "always; impacts: and the states around each contact event); the steps themselves are unchanged.",
+    ),
+]
+MaxPointsOpt = Annotated[
+    int | None,
+    typer.Option(
+        "--max-points",
+        help="Impacts (event_driven, moreau): the most states the report keeps, spread over the run "
+        "(after --every), besides those around each contact event.",
+    ),
+]
+CsvOpt = Annotated[
+    Path | None,
+    typer.Option(
+        "--csv",
+        metavar="OUT.csv",
+        help="Write the histories as CSV: the time and every output, a column each, units in the header.",
+    ),
+]
+
+
+@app.command()
+def simulate(
+    document: DocArg,
+    sets: SetOpt = None,
+    until: Annotated[float | None, typer.Option(help="End time (s).")] = None,
+    step: Annotated[float | None, typer.Option(help="Time step (s).")] = None,
+    scheme: Annotated[str | None, typer.Option(help="generalized_alpha | newmark | event_driven | moreau.")] = None,
+    damping: Annotated[float | None, typer.Option(help="Mass-proportional damping (1/s).")] = None,
+    max_steps: Annotated[
+        int | None,
+        typer.Option(
+            "--max-steps",
+            help="The most time steps (adaptive and "
+            "impacts: accepted steps); default the service's limit, "
+            "which this raises for a run on this machine.",
+        ),
+    ] = None,
+    sensitivity: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--sensitivity",
+            metavar="POINTER",
+            help="event_driven: differentiate the end state by this number "
+            "of the document, exactly (repeatable), e.g. /contacts/pairs/conjugate/normal/restitution.",
+        ),
+    ] = None,
+    compiled: Annotated[
+        bool,
+        typer.Option(
+            "--compiled",
+            hidden=True,
+            help="Deprecated and ignored: kernels compile in the build queue (flexmech build).",
+        ),
+    ] = False,
+    animation: Annotated[
+        Path | None, typer.Option("--animation", metavar="OUT.gif|mp4", help="Animate the links.")
+    ] = None,
+    snapshots: Annotated[
+        Path | None, typer.Option("--snapshots", metavar="OUT.png|svg", help="Draw the links at six times.")
+    ] = None,
+    every: EveryOpt = None,
+    max_points: MaxPointsOpt = None,
+    json_out: JsonOpt = None,
+    csv_out: CsvOpt = None,
+    plot: PlotOpt = None,
+) -> None:
+    """Motion in time: links, bodies and joints under loads and prescribed motions in time."""
+    out, err = consoles()
+    with user_errors(err):
+        _check_figures(plot, snapshots, animation)
+        mech = mechanism(document, None, sets)
+        given = {"until": until, "step": step, "scheme": scheme, "damping": damping, "max_steps": max_steps}
+        given |= {"every": every, "max_points": max_points, "sensitivities": sensitivity or None}
+        spec = _spec(mech, err, compiled, given)
+        files = Files(json_out, csv_out, plot, snapshots, animation)
+        report = _run(mech, spec, out, err, max_steps, files)
+    if report["status"] != "finished":
+        raise typer.Exit(EXIT_NOT_CONVERGED)
+
+
+def _spec(mech, err, compiled: bool, given: dict):
+    """The simulation spec: the document's `simulate` section with the command line's options
+    over it; a note on stderr that --compiled is ignored."""
+    from flexmech.service.dynamics.run import simulation_spec
+
+    if compiled:
+        err.print(
+            "--compiled is deprecated and ignored: element kernels are compiled by `flexmech build` (or "
+            "the server's build queue) and used once built"
+        )
+    return simulation_spec(mech, given)
+
+
+def _run(mech, spec, out, err, max_steps: int | None, files: Files) -> dict:
+    """The run under its progress (links, bodies and joints; or rigid bodies with impacts), its
+    files written, its summary printed; the report. The service's step limit applies unless
+    --max-steps raises it."""
+    from flexmech.models.documents.simulation_spec import IMPACT_SCHEMES
+    from flexmech.service.dynamics.run import MAX_STEPS
+
+    impacts = spec.scheme in IMPACT_SCHEMES
+    if impacts:
+        for option, value in (("--snapshots", files.snapshots), ("--animation", files.animation)):
+            if value is not None:
+                raise OptionError(
+                    option, f"{option} draws links; for impacts --plot draws the motion and contact forces"
+                )
+    with SimulationProgress(err, spec.until) as progress:
+        if impacts:
+            from flexmech.service.impacts.run import run_impacts
+
+            history = None
+            _, report = run_impacts(
+                mech.document, spec, progress=progress.stepping(), max_steps=spec.max_steps or MAX_STEPS
+            )
+        else:
+            from flexmech.service.dynamics.run import run_simulation
+
+            limit = max(MAX_STEPS, max_steps or 0)
+            history, report = run_simulation(mech, spec, progress=progress.stepping(), max_steps=limit)
+        write_files(progress, files, report, mech, history)
+        progress.finish(f"{report['status']} at t = {report['time_reached']:g} s, {report['steps']} steps")
+    if impacts:
+        print_impacts(out, report, spec.scheme)
+    else:
+        print_run(out, report)
+    return report
+
+
+def _check_figures(plot: Path | None, snapshots: Path | None, animation: Path | None) -> None:
+    """The figure options' formats, before anything runs."""
+    check_plot_option(plot)
+    if snapshots is not None and snapshots.suffix.lower() not in (".png", ".svg", ".pdf"):
+        raise OptionError("--snapshots", f"cannot tell the figure format of '{snapshots}': use .png, .svg or .pdf")
+    if animation is not None:
+        suffix = animation.suffix.lower()
+        if suffix not in (".gif", ".mp4"):
+            raise OptionError("--animation", f"cannot tell the format of '{animation}': use .gif or .mp4")
+        if suffix == ".mp4" and shutil.which("ffmpeg") is None:
+            raise OptionError("--animation", "an .mp4 needs ffmpeg, which is not installed: use .gif")

@@ -1,0 +1,1 @@
+"""flexmech: planar compliant mechanisms."""

@@ -1,5 +1,0 @@
-"""`python -m service.cli`: the flexmech command line."""
-
-from service.cli import main
-
-main()
