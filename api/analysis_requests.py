@@ -10,9 +10,10 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal, Union
 
+from pydantic import ConfigDict, Discriminator, Field, Tag
+
 from flexmech.api.schemas import DocumentRequest
 from flexmech.service.analyses import ANALYSES, Analysis, AnalysisOptions
-from pydantic import ConfigDict, Discriminator, Field, Tag
 
 DEFAULT_ANALYSIS = "equilibrium"
 

@@ -13,6 +13,7 @@ from contextlib import asynccontextmanager
 
 from fastapi import FastAPI
 from fastapi_offline import FastAPIOffline
+
 from flexmech.api import body_parsing
 from flexmech.api.analysis_requests import documented
 from flexmech.api.answer_cache import AnswerCache

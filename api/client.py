@@ -21,6 +21,8 @@ from collections.abc import Callable
 from typing import Any, TypeVar
 
 import httpx
+from pydantic import BaseModel, TypeAdapter
+
 from flexmech.api.analysis_methods import Analyses
 from flexmech.api.drawing_schemas import DrawingRequest
 from flexmech.api.job_schemas import (
@@ -36,7 +38,6 @@ from flexmech.api.job_schemas import (
     SweepRequest,
 )
 from flexmech.api.schemas import AnalysisReport, ExampleSummary, HealthResponse, SolveRequest, SolveResponse
-from pydantic import BaseModel, TypeAdapter
 
 T = TypeVar("T")
 Progress = Callable[[JobStatusResponse], None]

@@ -7,6 +7,7 @@ from typing import Annotated
 
 from fastapi import Depends, Request
 from fastapi.security import APIKeyHeader
+
 from flexmech.api.errors import ApiError
 from flexmech.api.state import Services
 

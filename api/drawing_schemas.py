@@ -5,8 +5,9 @@ from __future__ import annotations
 
 from typing import Any, Literal
 
-from flexmech.api.schemas import DocumentRequest
 from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from flexmech.api.schemas import DocumentRequest
 
 MAX_DOCUMENT_TEXT = 2_000_000  # characters; the request body limit applies as well
 

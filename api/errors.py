@@ -30,14 +30,15 @@ import typing
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
+from pydantic import BaseModel
+from sqlalchemy.exc import SQLAlchemyError
+from starlette.exceptions import HTTPException as StarletteHTTPException
+
 from flexmech.api import job_schemas, schemas
 from flexmech.models import MechanismError
 from flexmech.models.errors import pointer_of
 from flexmech.service.analyses import ANALYSES
 from flexmech.service.jobs.kinds import job_kinds
-from pydantic import BaseModel
-from sqlalchemy.exc import SQLAlchemyError
-from starlette.exceptions import HTTPException as StarletteHTTPException
 
 log = logging.getLogger("flexmech.api")
 

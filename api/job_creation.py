@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from fastapi import Response
 from fastapi.concurrency import run_in_threadpool
+
 from flexmech.api.job_schemas import JobStatusResponse
 from flexmech.api.routers.jobs import job_status
 from flexmech.service.jobs.kinds import kind_named

@@ -6,8 +6,9 @@ from __future__ import annotations
 from datetime import datetime
 from typing import Any, Literal
 
-from flexmech.api.schemas import ContactPairOut, DocumentRequest, PointStatus, ResponseModel
 from pydantic import BaseModel, ConfigDict, Field
+
+from flexmech.api.schemas import ContactPairOut, DocumentRequest, PointStatus, ResponseModel
 
 JobStatusName = Literal["queued", "running", "succeeded", "failed", "cancelled"]
 

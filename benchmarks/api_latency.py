@@ -34,6 +34,7 @@ from pathlib import Path
 
 import httpx
 import numpy as np
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service import solve_equilibrium
 

@@ -26,13 +26,12 @@ import statistics
 import time
 from pathlib import Path
 
+from benchmarks.thesis_slsqp import example_one_state
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service.contact.path import follow, parameters_at, path_fields
 from flexmech.service.contact.problem import contact_problem
 from flexmech.service.contact.report import friction_coefficients, pairs_report
 from flexmech.service.contact.solve import ContactOptions, solve_state
-
-from benchmarks.thesis_slsqp import example_one_state
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "gripper_jaw_contact.json"
 STATE, BEFORE = 67.81, 68.16  # mm

@@ -132,11 +132,10 @@ def time_kernels(signature) -> dict[str, float]:
 def counted_run(mech, until: float) -> tuple[dict, int, float]:
     """(the warm run's report, its number of windows: factorizations, seconds of compiling its
     kernels and window first)."""
+    from benchmarks.dynamics import compile_kernels, flexmech_run
     from flexmech.service.dynamics.engine import _engines
     from flexmech.service.dynamics.run import run_simulation, simulation_spec
     from flexmech.service.dynamics.stepping import StepRunner
-
-    from benchmarks.dynamics import compile_kernels, flexmech_run
 
     compiled = compile_kernels(mech)
     _engines.clear()

@@ -21,11 +21,11 @@ import statistics
 import time
 
 import numpy as np
+from scipy.integrate import solve_bvp
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service import NewtonOptions, solve_equilibrium
 from flexmech.service.solvers.fastpath import FastPath
-from scipy.integrate import solve_bvp
-
 from tests.elastica_oracles import cantilever_tip
 
 EI, L, F = 0.08, 0.1016, 15.0

@@ -33,6 +33,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service.export.library import export_document
 from flexmech.service.export.plan import ExportOptions

@@ -19,10 +19,11 @@ import time
 from pathlib import Path
 
 import numpy as np
+from scipy.optimize import root
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service import NewtonOptions, solve_equilibrium, solve_for_target, sweep
 from flexmech.service.solvers.fastpath import FastPath
-from scipy.optimize import root
 
 try:
     from benchmarks.numpy_peer import NumpyGripperResidual

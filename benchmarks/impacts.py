@@ -43,6 +43,7 @@ from pathlib import Path
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models.beams.curved_beam_closed_form import stiffness
 from flexmech.models.contact.laws.penalty import hertz_stiffness
 from flexmech.models.documents.document import MechanismDocument
@@ -196,10 +197,9 @@ def state_at(report: dict, t: float) -> list[float]:
 
 def scipy_peer(doc: dict) -> dict:
     """The event-driven document run by scipy's solve_ivp on flexmech's right-hand side."""
+    from benchmarks.scipy_events_peer import ScipyEvents
     from flexmech.service.impacts.run import MAX_STEP_PARTS, start_state
     from flexmech.service.impacts.stepping import event_settings
-
-    from benchmarks.scipy_events_peer import ScipyEvents
 
     began = time.perf_counter()
     parsed = MechanismDocument.model_validate(doc)

@@ -5,6 +5,7 @@ Mechanism (nondimensional parameters and topology) so both sides solve the same 
 from __future__ import annotations
 
 import numpy as np
+
 from flexmech.models import Mechanism
 
 _J = np.array([[0.0, -1.0], [1.0, 0.0]])

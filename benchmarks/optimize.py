@@ -24,12 +24,13 @@ import time
 from pathlib import Path
 
 import numpy as np
+from scipy.integrate import quad, solve_ivp
+from scipy.optimize import fsolve, minimize
+
 from flexmech.models import compile_mechanism
 from flexmech.models.documents.document import parse_document
 from flexmech.service.design.optimize import optimize
 from flexmech.service.design.problem import design_problem
-from scipy.integrate import quad, solve_ivp
-from scipy.optimize import fsolve, minimize
 
 DOCUMENT = Path(__file__).resolve().parents[1] / "examples" / "grasper_shape.json"
 E, W, H = 2.62e9, 0.04572, 0.001016

@@ -14,9 +14,10 @@ import time
 
 import casadi as ca
 import numpy as np
+from scipy.integrate import solve_ivp
+
 from flexmech.models.impacts.model import WORKS, ImpactModel
 from flexmech.service.impacts.event_driven import MIN_IMPACT_SPEED, rhs_function, violations
-from scipy.integrate import solve_ivp
 
 
 class ScipyEvents:

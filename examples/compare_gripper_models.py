@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
 from flexmech.models import COMPARED_MODELS, compile_mechanism, load_document
 from flexmech.service import solve_for_target, sweep
 

@@ -11,9 +11,10 @@ import os
 from pathlib import Path
 from typing import Annotated, Literal
 
-from flexmech.service.costs import Limits
 from pydantic import Field, field_validator
 from pydantic_settings import BaseSettings, NoDecode, SettingsConfigDict
+
+from flexmech.service.costs import Limits
 
 
 def default_data_dir() -> Path:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+
 from flexmech.models import Mechanism
 
 _ROW_KINDS = ("force", "force", "moment")

@@ -7,6 +7,7 @@ import shutil
 from pathlib import Path
 
 import pytest
+
 from flexmech.models import compile_mechanism, load_document
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"

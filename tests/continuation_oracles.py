@@ -6,6 +6,7 @@ exists, and Newton either fails or jumps to another branch."""
 from __future__ import annotations
 
 import numpy as np
+
 from flexmech.service.solvers.continuation import body_stability
 from flexmech.service.solvers.equilibrium import NewtonOptions, newton
 

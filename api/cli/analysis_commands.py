@@ -18,6 +18,9 @@ from typing import Annotated, Any, Literal
 
 import typer
 import typer.main
+from pydantic import ValidationError
+from rich.console import Console
+
 from flexmech.api.cli.catalog import command_names
 from flexmech.api.cli.common import (
     EXIT_NOT_CONVERGED,
@@ -44,8 +47,6 @@ from flexmech.api.cli.record_tables import is_records, records_table
 from flexmech.api.cli.report_tables import print_status
 from flexmech.service.analyses import Analysis, AnalysisRequest
 from flexmech.service.analyses.base import Analyses
-from pydantic import ValidationError
-from rich.console import Console
 
 FINE = ("converged", "finished")
 

@@ -4,6 +4,7 @@ group adds a command per analysis (api.cli.commands)."""
 from __future__ import annotations
 
 import typer
+
 from flexmech.api.cli.commands import Commands
 
 app = typer.Typer(

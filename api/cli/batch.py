@@ -7,10 +7,11 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
 import typer
+from rich.console import Console
+
 from flexmech.api.cli.application import app
 from flexmech.api.cli.common import EXIT_NOT_CONVERGED, OptionError, consoles, shown, table_of, user_errors
 from flexmech.api.cli.options import JacobianOpt, LineSearchOpt, MaxIterOpt, newton_options
-from rich.console import Console
 
 if TYPE_CHECKING:  # the solvers are imported when the command runs
     from flexmech.service.solvers.newton import NewtonOptions
@@ -20,8 +21,9 @@ def run_with_progress(
     err: Console, directory: Path, out: Path, options: NewtonOptions, count: int, chosen=None
 ) -> dict:
     """service.batch.run_batch with a progress bar on stderr; its summary."""
-    from flexmech.service.batch import run_batch
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from flexmech.service.batch import run_batch
 
     columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn())
     with Progress(*columns, console=err, transient=True) as bar:
@@ -72,10 +74,11 @@ def _given(text: str | None) -> dict:
 def chosen_export(text: str | None):
     """The export the flags choose: --options are the fields of POST /v1/exports (name, inputs,
     outputs, ranges, target, max_iterations, tolerance, line_search_halvings)."""
+    from pydantic import ValidationError
+
     from flexmech.models.errors import pointer_of
     from flexmech.service.batch import Export
     from flexmech.service.jobs.export import ExportJobOptions
-    from pydantic import ValidationError
 
     try:
         return Export(ExportJobOptions.model_validate(_given(text)))

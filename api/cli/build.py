@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
+
 from flexmech.api.cli.application import app
 from flexmech.api.cli.common import EXIT_NOT_CONVERGED, OptionError, consoles, shown, table_of, user_errors, write_json
 from flexmech.api.cli.options import JsonOpt, mechanism

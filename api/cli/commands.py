@@ -14,6 +14,7 @@ from collections.abc import Collection
 from typing import Any
 
 import typer.core
+
 from flexmech.api.cli.catalog import catalog_entries, command_names, loaded_registry
 
 

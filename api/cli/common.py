@@ -13,10 +13,11 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import typer
-from flexmech.service.drawings.figures import PLOT_SUFFIXES
 from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
+
+from flexmech.service.drawings.figures import PLOT_SUFFIXES
 
 if TYPE_CHECKING:  # the models are imported when a command runs
     from flexmech.models import Mechanism

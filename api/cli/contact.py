@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
+
 from flexmech.api.cli.application import app
 from flexmech.api.cli.common import (
     EXIT_NOT_CONVERGED,
@@ -197,8 +198,9 @@ def _path(out, mech, problem, options, parameters, output, json_out, plot, shape
 
 
 def _follow(out, mech, problem, fields, options, wanted, label):
-    from flexmech.service.contact.path import follow, state_record
     from rich.progress import Progress
+
+    from flexmech.service.contact.path import follow, state_record
 
     states, records = [], []
     with Progress(transient=True, console=out) as progress:
@@ -244,6 +246,7 @@ def _print_path(out, mech, fields, records, y_name, problem, label: str) -> None
 
 def _plot_path(mech, problem, fields, runs, y_name, plot) -> None:
     import numpy as np
+
     from flexmech.service.contact.plots import plot_path
     from flexmech.service.drawings.figures import field_label
 
@@ -278,6 +281,7 @@ def _chosen(at: str | None, states: int) -> list[int] | None:
 
 def _plot_shapes(mech, problem, states, fields, chosen, shapes) -> None:
     import numpy as np
+
     from flexmech.service.contact.plots import plot_states
     from flexmech.service.drawings.figures import field_label
 

@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import json
 
+from rich.table import Table
+
 from flexmech.api.cli.application import app
 from flexmech.api.cli.common import OptionError, consoles, shown, user_errors
 from flexmech.service.examples import examples_directory
-from rich.table import Table
 
 
 @app.command()

@@ -5,6 +5,8 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Annotated
 
 import typer
+from rich.console import Console
+
 from flexmech.api.cli.application import app
 from flexmech.api.cli.common import (
     EXIT_NOT_CONVERGED,
@@ -17,7 +19,6 @@ from flexmech.api.cli.common import (
     write_json,
 )
 from flexmech.api.cli.options import DocArg, JsonOpt, MaxIterOpt, SetOpt, mechanism
-from rich.console import Console
 
 if TYPE_CHECKING:  # the link inverse is imported when the command runs
     from flexmech.models import Mechanism

@@ -9,6 +9,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
+from rich.console import Console
+
 from flexmech.api.cli.application import app
 from flexmech.api.cli.common import (
     EXIT_NOT_CONVERGED,
@@ -21,7 +23,6 @@ from flexmech.api.cli.common import (
     write_json,
 )
 from flexmech.api.cli.options import DocArg, JsonOpt, ModelOpt, SetOpt, choice, mechanism
-from rich.console import Console
 
 if TYPE_CHECKING:  # the models are imported when the command runs
     from flexmech.models import MechanismError

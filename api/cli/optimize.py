@@ -5,10 +5,11 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Annotated
 
 import typer
+from rich.console import Console
+
 from flexmech.api.cli.application import app
 from flexmech.api.cli.common import EXIT_NOT_CONVERGED, consoles, number, shown, table_of, user_errors, write_json
 from flexmech.api.cli.options import DocArg, JsonOpt, SetOpt, mechanism
-from rich.console import Console
 
 if TYPE_CHECKING:  # the optimizer is imported when the command runs
     from flexmech.service.design.optimize import OptimizationResult, Prepared, StartResult

@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
 import typer
+
 from flexmech.api.cli.catalog import MODEL_NAMES
 from flexmech.api.cli.common import OptionError
 

@@ -14,9 +14,10 @@ import time
 from collections.abc import Callable
 from types import TracebackType
 
-from flexmech.api.cli.common import shown
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+from flexmech.api.cli.common import shown
 
 LINE_SECONDS = 5.0
 LINES_PER_RUN = 10  # a line per tenth of the simulated time

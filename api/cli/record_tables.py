@@ -7,8 +7,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from flexmech.api.cli.common import number, shown, table_of
 from rich.table import Table
+
+from flexmech.api.cli.common import number, shown, table_of
 
 
 def _scalar(value: Any) -> bool:

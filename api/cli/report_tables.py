@@ -3,12 +3,13 @@ the compiled mechanism (which bodies, supports and flexures there are)."""
 
 from __future__ import annotations
 
+from rich.console import Console
+from rich.table import Table
+
 from flexmech.api.cli.common import number, shown, table_of
 from flexmech.models import Mechanism
 from flexmech.models.elements import FAMILIES
 from flexmech.service.drawings.plotting import output_unit
-from rich.console import Console
-from rich.table import Table
 
 
 def print_status(out: Console, report: dict) -> None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Annotated
 
 import typer
+
 from flexmech.api.cli.application import app
 from flexmech.api.cli.common import EXIT_ERROR, consoles, print_error
 
@@ -19,8 +20,9 @@ def serve(
     """Run the HTTP API with uvicorn. Settings come from FLEXMECH_* environment variables
     (database, Dask address, API keys, limits); by default an SQLite file and a process pool."""
     import uvicorn
-    from flexmech.service.settings import Settings
     from pydantic import ValidationError
+
+    from flexmech.service.settings import Settings
 
     _, err = consoles()
     try:

@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
+
 from flexmech.api.cli.application import app
 from flexmech.api.cli.common import EXIT_NOT_CONVERGED, OptionError, check_plot_option, consoles, user_errors
 from flexmech.api.cli.options import DocArg, JsonOpt, PlotOpt, SetOpt, mechanism

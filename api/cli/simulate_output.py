@@ -9,9 +9,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from rich.console import Console
+
 from flexmech.api.cli.common import OptionError, number, print_left_out, shown, table_of, write_json
 from flexmech.api.cli.progress import SimulationProgress
-from rich.console import Console
 
 if TYPE_CHECKING:  # the models and the dynamics are imported when a run is written
     from flexmech.models import Mechanism

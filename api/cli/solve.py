@@ -8,6 +8,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
 import typer
+from rich.console import Console
+
 from flexmech.api.cli.application import app
 from flexmech.api.cli.catalog import analysis_names
 from flexmech.api.cli.common import (
@@ -35,7 +37,6 @@ from flexmech.api.cli.options import (
     newton_options,
     overrides,
 )
-from rich.console import Console
 
 if TYPE_CHECKING:  # the analyses and solvers are imported when the command runs
     from flexmech.models import Mechanism, MechanismError

@@ -8,6 +8,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
 import typer
+from rich.console import Console
+
 from flexmech.api.cli.application import app
 from flexmech.api.cli.catalog import COMPARED_MODEL_NAMES
 from flexmech.api.cli.common import EXIT_NOT_CONVERGED, consoles, save_plot, shown, user_errors, write_json
@@ -23,7 +25,6 @@ from flexmech.api.cli.options import (
     SetOpt,
     mechanism,
 )
-from rich.console import Console
 
 if TYPE_CHECKING:  # the models and the sweep are imported when the command runs
     from flexmech.api.cli.sweep_plan import SweepPlan

@@ -4,6 +4,9 @@ Imported when the command runs."""
 
 from __future__ import annotations
 
+from rich.console import Console
+from rich.table import Table
+
 from flexmech.api.cli.common import number, print_left_out, shown, spread, table_of
 from flexmech.api.cli.sweep_plan import SweepPlan
 from flexmech.models import Mechanism
@@ -11,8 +14,6 @@ from flexmech.models.elements import FAMILIES
 from flexmech.service.drawings.figures import field_label, output_unit
 from flexmech.service.solvers.newton import NewtonOptions
 from flexmech.service.solvers.sweep import SweepResult, TargetResult
-from rich.console import Console
-from rich.table import Table
 
 SI_UNITS = {"force": "N", "moment": "N*m", "length": "m", "angle": "rad"}
 

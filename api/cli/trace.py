@@ -6,6 +6,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
 import typer
+from rich.console import Console
+
 from flexmech.api.cli.application import app
 from flexmech.api.cli.common import (
     EXIT_NOT_CONVERGED,
@@ -23,7 +25,6 @@ from flexmech.api.cli.common import (
     write_json,
 )
 from flexmech.api.cli.options import DocArg, JsonOpt, SetOpt, mechanism
-from rich.console import Console
 
 if TYPE_CHECKING:  # continuation is imported when the command runs
     from flexmech.models import Mechanism

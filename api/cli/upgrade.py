@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
+
 from flexmech.api.cli.application import app
 from flexmech.api.cli.common import OptionError, consoles, shown, user_errors
 
@@ -22,6 +23,7 @@ def upgrade(
 ) -> None:
     """Convert a document of an older shape (an `impacts` section) to today's."""
     import yaml
+
     from flexmech.models.documents.reading import parse_json, parse_yaml
     from flexmech.models.documents.upgrade import upgraded
     from flexmech.models.errors import MechanismError

@@ -9,6 +9,7 @@ the analyses, which only the solve route's maker has."""
 from typing import Any
 
 from fastapi import APIRouter, Response
+
 from flexmech.api.analysis_requests import options_of
 from flexmech.api.deps import OwnerDep, ServicesDep
 from flexmech.api.documents import request_document

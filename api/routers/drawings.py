@@ -8,6 +8,7 @@ from typing import Any
 
 from fastapi import APIRouter
 from fastapi.concurrency import run_in_threadpool
+
 from flexmech.api.deps import OwnerDep, ServicesDep
 from flexmech.api.documents import request_document
 from flexmech.api.drawing_schemas import DocumentText, DocumentUpgrade, DrawingRequest

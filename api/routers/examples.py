@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from fastapi import APIRouter, Path
+
 from flexmech.api.deps import OwnerDep, ServicesDep
 from flexmech.api.errors import not_found
 from flexmech.api.responses import errors

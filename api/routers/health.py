@@ -7,9 +7,10 @@ from importlib.metadata import PackageNotFoundError, version
 
 from fastapi import APIRouter
 from fastapi.concurrency import run_in_threadpool
+from sqlalchemy.engine import make_url
+
 from flexmech.api.deps import ServicesDep
 from flexmech.api.schemas import HealthResponse
-from sqlalchemy.engine import make_url
 
 router = APIRouter(prefix="/v1", tags=["health"])
 

@@ -9,6 +9,8 @@ is served, documented in /openapi.json and offered by the workbench's Run menu."
 from typing import Any
 
 from fastapi import APIRouter, Response
+from pydantic import ConfigDict
+
 from flexmech.api.deps import OwnerDep, ServicesDep
 from flexmech.api.documents import request_document
 from flexmech.api.job_creation import JOB_LINKS, create_job
@@ -18,7 +20,6 @@ from flexmech.api.responses import ERRORS
 from flexmech.api.schemas import DocumentRequest
 from flexmech.service.jobs.base import JobKind
 from flexmech.service.jobs.kinds import job_kinds
-from pydantic import ConfigDict
 
 
 def request_model(kind: JobKind) -> type[DocumentRequest]:

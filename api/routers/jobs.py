@@ -7,6 +7,7 @@ from typing import Any
 
 from fastapi import APIRouter, Path, Query, Response
 from fastapi.concurrency import run_in_threadpool
+
 from flexmech.api.deps import OwnerDep, ServicesDep
 from flexmech.api.errors import ApiError, not_found
 from flexmech.api.job_schemas import JobListResponse, JobResultResponse, JobStatusResponse, JobSummary

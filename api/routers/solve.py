@@ -9,6 +9,7 @@ client's methods, the workbench's forms and generated clients are made from."""
 import json
 
 from fastapi import APIRouter, Request, Response
+
 from flexmech.api.analysis_requests import options_of, solve_request_type
 from flexmech.api.answer_cache import REPEATABLE
 from flexmech.api.deps import OwnerDep, ServicesDep

@@ -11,6 +11,7 @@ from pathlib import Path
 from fastapi import APIRouter, FastAPI
 from fastapi.responses import FileResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
+
 from flexmech.models.documents.document import MechanismDocument
 
 WEB = Path(__file__).resolve().parents[1] / "web"

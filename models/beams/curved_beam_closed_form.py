@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import casadi as ca
+
 from flexmech.models.graph.planar import J, rot, unit
 
 

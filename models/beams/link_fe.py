@@ -29,6 +29,7 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models.beams.link_shooting import LinkProperties
 
 

@@ -27,6 +27,7 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models.beams.link_shooting import LinkShooting, inverse_rhs_function
 from flexmech.models.elements import FAMILIES
 from flexmech.models.elements.base import Contribution

@@ -34,6 +34,7 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import casadi as ca
+
 from flexmech.models.beams.link_steps import general_step, local_form
 
 STATE = ("psi", "m", "x", "y", "e", "mu")  # mu only for links with mass

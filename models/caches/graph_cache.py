@@ -26,6 +26,7 @@ from functools import lru_cache
 from pathlib import Path
 
 import casadi as ca
+
 from flexmech.models.caches.disk_cache import bound, cache_dir, touch
 from flexmech.models.graph.structure import Structure
 

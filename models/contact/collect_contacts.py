@@ -6,6 +6,7 @@ of a link whose thickness is unknown; unsafe implicit expressions."""
 from __future__ import annotations
 
 import numpy as np
+
 from flexmech.models.contact.elastic_pairs import DAMPED_LAWS, ELASTIC_LAWS
 from flexmech.models.contact.laws import friction_law, normal_law
 from flexmech.models.contact.pair_forces import REGULARIZED

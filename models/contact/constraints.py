@@ -23,6 +23,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import casadi as ca
+
 from flexmech.models.contact.topology import ContactTopology, ObjectTopology, SiteTopology
 from flexmech.models.documents.expression import compile_expression
 from flexmech.models.errors import MechanismError

@@ -18,6 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import casadi as ca
+
 from flexmech.models.contact.circle_contact import (
     against_circle,
     against_half_plane,

@@ -28,6 +28,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import casadi as ca
+
 from flexmech.models.contact.elastic_pairs import DAMPED_LAWS, ElasticPair, elastic_pairs, law_numbers
 from flexmech.models.contact.laws import FRICTION_LAWS, NORMAL_LAWS
 from flexmech.models.graph.context import AssemblyContext

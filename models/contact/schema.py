@@ -23,8 +23,9 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from flexmech.models.documents.fields import Number, StrictModel, Vec2
 from pydantic import Field
+
+from flexmech.models.documents.fields import Number, StrictModel, Vec2
 
 MAX_VERTICES = 64
 

@@ -15,6 +15,8 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Annotated, Any, Literal, Union
 
+from pydantic import Field, ValidationError, field_validator, model_validator
+
 from flexmech.models.contact.schema import OBJECT_TYPES, SITE_TYPES, Contacts
 from flexmech.models.documents.fields import MAX_QUANTITY_CHARS, Number, StrictModel, Vec2
 from flexmech.models.documents.optimize_spec import OptimizeSpec
@@ -25,7 +27,6 @@ from flexmech.models.elements import FAMILIES
 from flexmech.models.elements.link_schema import SHAPE_TYPES
 from flexmech.models.errors import MechanismError, pointer_of
 from flexmech.models.units import quantity_to_si
-from pydantic import Field, ValidationError, field_validator, model_validator
 
 
 class Units(StrictModel):

@@ -14,6 +14,7 @@ import math
 from collections.abc import Callable
 
 import casadi as ca
+
 from flexmech.models.errors import MechanismError
 
 FUNCTIONS: dict[str, Callable] = {

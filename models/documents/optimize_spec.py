@@ -5,8 +5,9 @@ from __future__ import annotations
 
 from typing import Literal
 
-from flexmech.models.documents.fields import Number, StrictModel
 from pydantic import Field, model_validator
+
+from flexmech.models.documents.fields import Number, StrictModel
 
 
 class DesignVariable(StrictModel):

@@ -8,6 +8,7 @@ import json
 from typing import Any
 
 import yaml
+
 from flexmech.models.errors import MechanismError
 
 MAX_DEPTH = 64  # a mechanism document nests about 6 deep; requests a few more

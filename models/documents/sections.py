@@ -14,9 +14,10 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Annotated, Literal
 
 import casadi as ca
+from pydantic import Discriminator, Field, Tag
+
 from flexmech.models.documents.expression import compile_expression, finite_on
 from flexmech.models.documents.fields import Number, StrictModel
-from pydantic import Discriminator, Field, Tag
 
 if TYPE_CHECKING:
     from flexmech.models.graph.collector import Collector

@@ -6,8 +6,9 @@ from __future__ import annotations
 
 from typing import Any, Literal
 
-from flexmech.models.documents.fields import StrictModel
 from pydantic import Field, ValidationInfo, field_validator
+
+from flexmech.models.documents.fields import StrictModel
 
 
 class BodyStart(StrictModel):

@@ -34,9 +34,10 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol
 
 import casadi as ca
+from pydantic import Field
+
 from flexmech.models.documents.fields import StrictModel
 from flexmech.models.graph.structure import ElementTopology
-from pydantic import Field
 
 if TYPE_CHECKING:
     from flexmech.models.graph.collector import Collector

@@ -20,6 +20,8 @@ from typing import Literal
 
 import casadi as ca
 import numpy as np
+from pydantic import Field
+
 from flexmech.models.beams import curved_beam_closed_form as kernel
 from flexmech.models.documents.fields import Number, Vec2
 from flexmech.models.documents.sections import RectangularSection, SectionTopology, nominal_EI
@@ -38,7 +40,6 @@ from flexmech.models.errors import MechanismError
 from flexmech.models.graph.context import AssemblyContext
 from flexmech.models.graph.planar import cross, rot
 from flexmech.models.graph.structure import ElementTopology
-from pydantic import Field
 
 MODELS = ("linear", "partial_nonlinear", "exact", "conservative")
 COMPARED_MODELS = MODELS[:3]  # seed 000's three, which model comparisons draw side by side

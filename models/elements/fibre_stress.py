@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models.documents.sections import SectionTopology, section_properties
 
 

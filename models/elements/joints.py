@@ -13,6 +13,8 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass
 
 import casadi as ca
+from pydantic import Field
+
 from flexmech.models.documents.fields import Vec2
 from flexmech.models.elements.base import (
     Connector,
@@ -26,7 +28,6 @@ from flexmech.models.elements.base import (
 from flexmech.models.errors import MechanismError
 from flexmech.models.graph.context import AssemblyContext
 from flexmech.models.graph.structure import ElementTopology
-from pydantic import Field
 
 
 class RigidJoint(TwoBodyElement):

@@ -20,6 +20,7 @@ from dataclasses import dataclass, fields
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models.beams.link_shooting import LinkProperties, LinkShooting, LinkSolution
 from flexmech.models.documents.expression import compile_expression, finite_on
 from flexmech.models.documents.sections import (

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models.beams.link_fe import LinkElements, LinkKinematics, element_rule
 from flexmech.models.documents.sections import section_properties
 from flexmech.models.elements.base import (

@@ -5,9 +5,10 @@ from __future__ import annotations
 
 from typing import Literal
 
+from pydantic import Field
+
 from flexmech.models.documents.fields import Number, StrictModel, Vec2
 from flexmech.models.elements.base import TwoBodyElement
-from pydantic import Field
 
 
 class StraightShape(StrictModel):

@@ -10,6 +10,7 @@ from __future__ import annotations
 from typing import Literal
 
 import casadi as ca
+
 from flexmech.models.elements.joints import JointFamily, JointTopology, RigidJoint, joint_points
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 from typing import Literal
 
 import casadi as ca
+
 from flexmech.models.documents.fields import Number
 from flexmech.models.elements.base import Connector
 from flexmech.models.elements.joints import JointFamily, JointTopology, RigidJoint, collect_joint, joint_points

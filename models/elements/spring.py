@@ -23,6 +23,8 @@ from typing import Literal
 
 import casadi as ca
 import numpy as np
+from pydantic import Field, model_validator
+
 from flexmech.models.documents.expression import CONSTANTS, FUNCTIONS, compile_expression, finite_on
 from flexmech.models.documents.fields import Number, Vec2
 from flexmech.models.elements.base import Connector, Contribution, EnergyTerms, ScaleHint, SiValues, TwoBodyElement
@@ -30,7 +32,6 @@ from flexmech.models.errors import MechanismError
 from flexmech.models.graph.context import AssemblyContext
 from flexmech.models.graph.planar import cross
 from flexmech.models.graph.structure import ElementTopology
-from pydantic import Field, model_validator
 
 QUADRATURE_NODES = 24
 _NODES, _WEIGHTS = np.polynomial.legendre.leggauss(QUADRATURE_NODES)

@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import casadi as ca
+
 from flexmech.models.elements.base import EnergyTerms
 
 

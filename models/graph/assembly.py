@@ -18,6 +18,7 @@ import logging
 from functools import cached_property, lru_cache
 
 import casadi as ca
+
 from flexmech.models.caches.graph_cache import GraphStore
 from flexmech.models.documents.naming import named
 from flexmech.models.elements import FAMILIES

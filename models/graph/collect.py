@@ -9,6 +9,7 @@ shear; A for shear, axial strain and mass; the density for mass).
 from __future__ import annotations
 
 import numpy as np
+
 from flexmech.models.contact.collect_contacts import collect_contacts
 from flexmech.models.documents.document import (
     ForceLoad,

@@ -9,6 +9,7 @@ rot(theta_hat + d[2]) @ local.
 from __future__ import annotations
 
 import casadi as ca
+
 from flexmech.models.graph.planar import rot
 from flexmech.models.graph.structure import Structure
 

@@ -20,6 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import casadi as ca
+
 from flexmech.models.graph.forms import symbolic_energy
 from flexmech.models.graph.loads import kinetic_energy
 from flexmech.models.graph.structure import Structure

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models.elements import FAMILIES
 from flexmech.models.elements.base import NoEnergyForm, NoMassForm
 from flexmech.models.errors import MechanismError

@@ -11,6 +11,7 @@ potential, so every form sees them alike.
 from __future__ import annotations
 
 import casadi as ca
+
 from flexmech.models.contact.elastic_pairs import contact_potential, contact_wrenches
 from flexmech.models.graph.context import AssemblyContext
 from flexmech.models.graph.planar import cross

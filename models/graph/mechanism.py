@@ -14,6 +14,7 @@ from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 import numpy as np
+
 from flexmech.models.documents.document import MechanismDocument
 from flexmech.models.elements import FAMILIES
 from flexmech.models.elements.base import SiValues

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import casadi as ca
+
 from flexmech.models.graph.forms import symbolic_energy
 from flexmech.models.graph.loads import body_kinetic_energies, mass_centres
 from flexmech.models.graph.structure import Structure

@@ -8,6 +8,7 @@ energy, and the document's point and reaction outputs.
 from __future__ import annotations
 
 import casadi as ca
+
 from flexmech.models.contact.elastic_pairs import contact_outputs
 from flexmech.models.elements.base import Contribution
 from flexmech.models.graph.context import AssemblyContext

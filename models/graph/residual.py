@@ -7,6 +7,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 import casadi as ca
+
 from flexmech.models.elements import FAMILIES
 from flexmech.models.elements.base import Contribution
 from flexmech.models.graph.context import AssemblyContext

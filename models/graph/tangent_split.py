@@ -12,6 +12,7 @@ paper, whose loads sit at mass centres). The four sum to K_T.
 from __future__ import annotations
 
 import casadi as ca
+
 from flexmech.models.elements import FAMILIES
 from flexmech.models.graph.context import AssemblyContext
 from flexmech.models.graph.loads import applied_wrenches

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models.documents.document import MechanismDocument
 from flexmech.models.errors import MechanismError
 from flexmech.models.units import document_unit, quantity_to_si

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models.errors import MechanismError
 from flexmech.models.graph.planar import rot
 from flexmech.models.impacts.coordinates import NOT_SECTIONS, BodyCoordinates, parameters_of

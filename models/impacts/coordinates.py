@@ -17,6 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import casadi as ca
+
 from flexmech.models.errors import MechanismError
 from flexmech.models.graph.context import AssemblyContext
 from flexmech.models.graph.loads import kinetic_energy, load_potential

@@ -17,6 +17,7 @@ so the energy's value in SI is the statics energy times the energy scale."""
 from __future__ import annotations
 
 import casadi as ca
+
 from flexmech.models.elements import FAMILIES
 from flexmech.models.elements.base import NoEnergyForm
 from flexmech.models.errors import MechanismError

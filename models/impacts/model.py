@@ -16,6 +16,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import casadi as ca
+
 from flexmech.models.documents.document import MechanismDocument
 from flexmech.models.errors import MechanismError
 from flexmech.models.graph.planar import rot

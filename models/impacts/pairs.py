@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import casadi as ca
+
 from flexmech.models.contact.circle_contact import (
     against_circle,
     against_half_plane,

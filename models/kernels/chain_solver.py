@@ -44,6 +44,7 @@ from functools import cache, cached_property
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models.kernels.chain_signature import NODE, ChainSignature
 
 BORDER = 6

@@ -6,6 +6,7 @@ only each element's packed rows."""
 from __future__ import annotations
 
 import casadi as ca
+
 from flexmech.models.kernels.chain_signature import NODE, ChainSignature
 from flexmech.models.kernels.link_chain import ElementEquations, ElementSymbols, element_symbols
 

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import casadi as ca
+
 from flexmech.models.kernels.chain_signature import ChainSignature
 from flexmech.models.kernels.chain_solver import solver_functions
 from flexmech.models.kernels.chain_sweep import sweep_function

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models.contact.pair_forces import contact_forces
 from flexmech.models.elements import FAMILIES
 from flexmech.models.graph.context import AssemblyContext

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from functools import cached_property, lru_cache
 
 import numpy as np
+
 from flexmech.models.elements import FAMILIES
 from flexmech.models.elements.link import LinkElementsTopology
 from flexmech.models.graph.structure import Structure

@@ -41,6 +41,7 @@ from functools import cache
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models.kernels.chain_signature import NODE, ChainSignature, split_data
 
 ENERGIES = ("kinetic", "strain", "first_moment_x", "first_moment_y", "momentum_x", "momentum_y")

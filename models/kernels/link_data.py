@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models.documents.sections import section_properties
 from flexmech.models.elements.link import LinkElementsTopology, link_properties
 from flexmech.models.graph.context import AssemblyContext

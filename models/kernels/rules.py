@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
+
 from flexmech.models.beams.link_fe import element_rule
 
 INTERPOLATED_POINTS = {1: 5, 2: 6, 3: 8, 4: 9, 5: 10, 6: 11}  # by degree: exact to 1e-12 at moderate turning

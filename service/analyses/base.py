@@ -26,11 +26,12 @@ from pathlib import Path
 from typing import Any, ClassVar
 
 import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.models.errors import pointer_of
 from flexmech.service.solvers.equilibrium import EquilibriumResult
 from flexmech.service.solvers.newton import NewtonOptions
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 
 class AnalysisOptions(BaseModel):

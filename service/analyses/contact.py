@@ -9,6 +9,8 @@ from __future__ import annotations
 from typing import Literal
 
 import numpy as np
+from pydantic import Field
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.service.analyses.base import (
     Analysis,
@@ -28,7 +30,6 @@ from flexmech.service.contact.solve import ContactOptions, PenetratingStart, sol
 from flexmech.service.requests import under
 from flexmech.service.solvers.newton import NewtonOptions
 from flexmech.service.solvers.reports import output_units, plain
-from pydantic import Field
 
 
 def problem_of(mech: Mechanism) -> ContactProblem:

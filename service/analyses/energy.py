@@ -4,6 +4,8 @@
 from __future__ import annotations
 
 import numpy as np
+from pydantic import Field
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.service.analyses.base import Analysis, AnalysisOptions, ReportSize
 from flexmech.service.analyses.equilibrium import EquilibriumReport, solution_report, solution_size
@@ -12,7 +14,6 @@ from flexmech.service.solvers.energy import minimize_energy
 from flexmech.service.solvers.equilibrium import EquilibriumResult
 from flexmech.service.solvers.newton import NewtonOptions
 from flexmech.service.solvers.reports import plain, stiffness_dict
-from pydantic import Field
 
 
 class EnergyOptions(AnalysisOptions):

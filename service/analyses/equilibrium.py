@@ -5,6 +5,8 @@ the tangent stiffness and sensitivities at the solution."""
 from __future__ import annotations
 
 import numpy as np
+from pydantic import Field
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.service.analyses.base import Analysis, AnalysisOptions, AnalysisResult, ReportSize, state_numbers
 from flexmech.service.analyses.shared_options import Sensitivities, Target
@@ -13,7 +15,6 @@ from flexmech.service.solvers.equilibrium import EquilibriumResult, newton, solv
 from flexmech.service.solvers.newton import NewtonOptions
 from flexmech.service.solvers.reports import coordinate_units, output_units, plain, stiffness_dict
 from flexmech.service.solvers.sweep import TargetResult, solve_for_target
-from pydantic import Field
 
 
 def solution_report(mech: Mechanism, result: EquilibriumResult, analysis: str) -> dict:

@@ -12,6 +12,8 @@ from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
+from pydantic import BaseModel, Field, ValidationInfo, field_validator
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.service.analyses.base import Analysis, AnalysisOptions, AnalysisResult, ReportSize
 from flexmech.service.analyses.shared_options import MAX_NAMES, Names
@@ -22,7 +24,6 @@ from flexmech.service.vibration.frf import RESONANCE_POINTS, TWO_PI, Damping, fr
 from flexmech.service.vibration.harmonic import channel
 from flexmech.service.vibration.modes import modal_system
 from flexmech.service.vibration.state import vibration_state
-from pydantic import BaseModel, Field, ValidationInfo, field_validator
 
 
 class FrequencyResponseOptions(AnalysisOptions):

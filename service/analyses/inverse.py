@@ -5,12 +5,13 @@ from __future__ import annotations
 
 from typing import Any
 
+from pydantic import Field
+
 from flexmech.models import Mechanism
 from flexmech.service.analyses.base import Analysis, AnalysisOptions, AnalysisResult
 from flexmech.service.solvers.inverse import inverse_wrenches
 from flexmech.service.solvers.newton import NewtonOptions
 from flexmech.service.solvers.reports import plain
-from pydantic import Field
 
 
 def inverse_report(mech: Mechanism, displacements: dict[str, Any]) -> dict:

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 from typing import Any, Literal
 
+from pydantic import BaseModel, ConfigDict, Field
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.service.analyses.base import Analysis, AnalysisOptions, AnalysisResult, ReportSize, state_numbers
 from flexmech.service.analyses.shared_options import MAX_NAMES, Names
@@ -16,7 +18,6 @@ from flexmech.service.solvers.newton import NewtonOptions
 from flexmech.service.solvers.reports import coordinate_units, output_units, plain, stiffness_dict
 from flexmech.service.vibration.frf import Damping
 from flexmech.service.vibration.state_space import default_inputs, default_outputs, state_space_model
-from pydantic import BaseModel, ConfigDict, Field
 
 
 def linearization_report(

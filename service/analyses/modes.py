@@ -8,6 +8,8 @@ from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
+from pydantic import BaseModel, Field
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.service.analyses.base import Analysis, AnalysisOptions, AnalysisResult, ReportSize, drawn_numbers
 from flexmech.service.analyses.shared_options import MAX_NAMES, Names
@@ -19,7 +21,6 @@ from flexmech.service.vibration.modes import MechanismModes, mechanism_modes
 from flexmech.service.vibration.report import modes_report
 from flexmech.service.vibration.sensitivity import frequency_sensitivities
 from flexmech.service.vibration.state import vibration_state
-from pydantic import BaseModel, Field
 
 
 class ModesOptions(AnalysisOptions):

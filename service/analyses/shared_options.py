@@ -4,8 +4,9 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
-from flexmech.service.analyses.base import AnalysisOptions
 from pydantic import BeforeValidator, Field
+
+from flexmech.service.analyses.base import AnalysisOptions
 
 MAX_NAMES = 1000  # distinct outputs or fields one request may watch
 

@@ -11,6 +11,9 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
+from pydantic import Field, JsonValue, create_model
+from pydantic.fields import FieldInfo
+
 from flexmech.models import Mechanism
 from flexmech.models.documents.fields import StrictModel
 from flexmech.models.documents.simulation_spec import IMPACT_SCHEMES, SimulateSpec
@@ -20,8 +23,6 @@ from flexmech.service.dynamics.run import kept_state_numbers, run_simulation, si
 from flexmech.service.impacts.run import run_impacts
 from flexmech.service.solvers.newton import NewtonOptions
 from flexmech.service.solvers.reports import plain
-from pydantic import Field, JsonValue, create_model
-from pydantic.fields import FieldInfo
 
 SYNC_STEPS = 20_000
 SYNC_IMPACT_STEPS = 2_000_000  # a microsecond each: a few seconds of a compiled impact model

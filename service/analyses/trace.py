@@ -21,6 +21,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from pydantic import Field
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.models.units import quantity_to_si
 from flexmech.service.analyses.base import (
@@ -37,7 +39,6 @@ from flexmech.service.requests import under
 from flexmech.service.solvers.continuation import PathResult, trace_path
 from flexmech.service.solvers.newton import NewtonOptions
 from flexmech.service.solvers.reports import output_units, plain
-from pydantic import Field
 
 DEFAULT_POINTS = 400
 MAX_FRAMES = 400  # states of the path drawn for the animation

@@ -10,13 +10,14 @@ from __future__ import annotations
 import time
 
 import numpy as np
+from scipy.optimize import minimize
+
 from flexmech.service.contact.kkt import split
 from flexmech.service.contact.problem import contact_problem
 from flexmech.service.contact.report import friction_coefficients
 from flexmech.service.contact.sensitivity import contact_sensitivities
 from flexmech.service.contact.solve import ContactState, PenetratingStart, solve_state
 from flexmech.service.design.problem import DesignProblem, OutputRef
-from scipy.optimize import minimize
 
 CONTACT_SOURCE = "contact"
 

@@ -6,6 +6,7 @@ pair report already."""
 from __future__ import annotations
 
 import numpy as np
+
 from flexmech.models import Mechanism
 from flexmech.service.contact.kkt import split
 from flexmech.service.contact.problem import ContactProblem

@@ -8,6 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+
 from flexmech.service.contact.problem import ContactProblem
 
 NEWTON_TOLERANCE = 1e-11  # on the nondimensional KKT residual

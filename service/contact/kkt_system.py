@@ -5,6 +5,7 @@ relative to the objects from the reference state."""
 from __future__ import annotations
 
 import casadi as ca
+
 from flexmech.models.graph.planar import rot
 from flexmech.service.contact.wrenches import friction_force
 

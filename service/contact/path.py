@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.models.contact.schema import PathParameter
 from flexmech.service.contact.drawing import state_drawing

@@ -8,13 +8,15 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
+
 from flexmech.service.drawings.figures import check_plot_path, new_figure, save_figure, set_labels
 
 if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
     from flexmech.models import Mechanism
     from flexmech.service.contact.problem import ContactProblem
     from flexmech.service.contact.solve import ContactState
-    from matplotlib.figure import Figure
 
 ARROW_SPAN = 0.15  # the largest force's arrow, as a fraction of the drawing's span
 IMPLICIT_GRID = 201
@@ -126,6 +128,7 @@ def _draw_half_plane(ax, mech, obj, p, origin, angle, color, span: float) -> Non
 def _draw_implicit(ax, obj, origin, angle, color, centre: np.ndarray, span: float) -> None:
     """The region g < 0 around the drawing (g in the object's frame, document units)."""
     import casadi as ca
+
     from flexmech.models.documents.expression import compile_expression
 
     x, y = ca.SX.sym("x"), ca.SX.sym("y")

@@ -27,6 +27,7 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models.contact.constraints import ContactGeometry, contact_constraints, substituted
 from flexmech.models.contact.laws import FRICTION_LAWS, NORMAL_LAWS, check_law
 from flexmech.models.errors import MechanismError

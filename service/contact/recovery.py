@@ -11,6 +11,7 @@ consistent analysis is service.contact.solve. sigma is the consistent state's di
 from __future__ import annotations
 
 import numpy as np
+
 from flexmech.models import Mechanism
 from flexmech.models.elements import FAMILIES
 

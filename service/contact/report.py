@@ -5,6 +5,7 @@ gap; the structure's outputs (reactions included) at the state; diagnostics."""
 from __future__ import annotations
 
 import numpy as np
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.service.contact.kkt import inequality_values, split
 from flexmech.service.contact.problem import ContactProblem

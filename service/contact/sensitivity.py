@@ -10,6 +10,7 @@ are one-sided: none is given, and the answer says which pair and why."""
 from __future__ import annotations
 
 import numpy as np
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.service.contact.kkt import inequality_values, split
 from flexmech.service.contact.problem import ContactProblem

@@ -17,6 +17,7 @@ import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+
 from flexmech.service.contact.kkt import CONSISTENCY, Mode, consistent_active_set, split
 from flexmech.service.contact.problem import ContactProblem
 from flexmech.service.solvers import ipopt

@@ -15,6 +15,7 @@ own points."""
 from __future__ import annotations
 
 import casadi as ca
+
 from flexmech.models.graph.planar import cross
 
 REACTION_QUANTITIES = ("Fx", "Fy", "M")

@@ -10,6 +10,7 @@ entries stay near one whatever the units."""
 from __future__ import annotations
 
 import numpy as np
+
 from flexmech.models import MechanismError
 from flexmech.service.design.problem import DesignProblem, OutputRef
 from flexmech.service.vibration.sensitivity import state_mode

@@ -22,6 +22,7 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models.graph.assembly import graphs_for
 from flexmech.service.design.problem import DesignProblem, OutputRef
 from flexmech.service.solvers.ipopt import nlp_solver, solve

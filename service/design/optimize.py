@@ -18,6 +18,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
+
 from flexmech.service.contact.design import run_contact_start, uses_contact
 from flexmech.service.design.frequencies import (
     disagreements,

@@ -18,6 +18,7 @@ import re
 from dataclasses import dataclass
 
 import numpy as np
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.models.documents.optimize_spec import OptimizeSpec
 from flexmech.models.graph.structure import COORDINATES

@@ -15,6 +15,7 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.models.graph.assembly import graphs_for
 from flexmech.models.graph.structure import Structure

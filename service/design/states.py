@@ -7,6 +7,7 @@ from __future__ import annotations
 import re
 
 import numpy as np
+
 from flexmech.models import Mechanism
 from flexmech.service.design.frequencies import frequency_value, response_value
 from flexmech.service.design.problem import DesignProblem, OutputRef

@@ -7,13 +7,15 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
+
 from flexmech.service.drawings.figures import check_plot_path, new_figure, save_figure, set_labels
 
 if TYPE_CHECKING:  # matplotlib is imported when a figure is drawn, not with the package
-    from flexmech.models import Mechanism
-    from flexmech.service.solvers.equilibrium import EquilibriumResult
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
+
+    from flexmech.models import Mechanism
+    from flexmech.service.solvers.equilibrium import EquilibriumResult
 
 _UNDEFORMED = dict(color="0.65", linestyle="--", linewidth=1.0)
 _FLEXURE = dict(color="C0", linewidth=1.8)

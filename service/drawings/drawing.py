@@ -13,6 +13,7 @@ transformation thus animates every kind of result.
 from __future__ import annotations
 
 import numpy as np
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.models.elements import FAMILIES
 from flexmech.service.drawings.configuration_plot import load_point

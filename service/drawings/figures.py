@@ -8,9 +8,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # matplotlib is imported when a figure is drawn, not with the package
-    from flexmech.models import Mechanism
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
+
+    from flexmech.models import Mechanism
 
 PLOT_SUFFIXES = (".png", ".svg")
 

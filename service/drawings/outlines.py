@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
 from flexmech.models import Mechanism
 from flexmech.models.units import quantity_to_si
 

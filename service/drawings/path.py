@@ -5,6 +5,7 @@ a continuation sweep solves them), and each state becomes a frame (service.drawi
 from __future__ import annotations
 
 import numpy as np
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.service.deadline import ends_after, passed
 from flexmech.service.drawings.drawing import state_frame

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
+
 from flexmech.service.drawings.configuration_plot import configuration_figure, load_point, plot_configuration
 from flexmech.service.drawings.figures import (
     PLOT_SUFFIXES,
@@ -26,10 +27,11 @@ from flexmech.service.drawings.figures import (
 )
 
 if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
     from flexmech.models import Mechanism
     from flexmech.service.solvers.continuation import PathResult
     from flexmech.service.solvers.sweep import SweepResult
-    from matplotlib.figure import Figure
 
 __all__ = [
     "PLOT_SUFFIXES",

@@ -14,6 +14,7 @@ element of a state given without its outputs.
 from __future__ import annotations
 
 import numpy as np
+
 from flexmech.models import Mechanism
 from flexmech.models.elements import FAMILIES
 from flexmech.models.graph.collector import check_value

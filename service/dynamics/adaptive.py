@@ -19,6 +19,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+
 from flexmech.service.dynamics.onsets import crossing, step_onto_onset
 from flexmech.service.dynamics.stepping import History, Resume, StepRunner
 

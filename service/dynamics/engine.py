@@ -16,6 +16,7 @@ from functools import cached_property
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models.graph.context import AssemblyContext
 from flexmech.models.graph.structure import Structure
 from flexmech.models.kernels.link_data import link_data

@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+
 from flexmech.models import Mechanism
 from flexmech.service.dynamics.integrate import History
 from flexmech.service.dynamics.state_map import state_map

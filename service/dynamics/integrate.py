@@ -6,6 +6,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
+
 from flexmech.models.graph.structure import Structure
 from flexmech.service.dynamics.adaptive import AdaptiveRunner, Tolerance
 from flexmech.service.dynamics.histories import Histories, no_histories

@@ -8,6 +8,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+
 from flexmech.models.kernels.chunks import CHUNK
 
 UNSET_AFFINE = 10_000  # offset past n_x marking a padded item's affine index (set once the angles are known)

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models.graph.structure import Structure
 from flexmech.models.kernels.chain_solver import BORDER
 from flexmech.models.kernels.chain_sweep import packed_size

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import casadi as ca
+
 from flexmech.service.dynamics.kernel_groups import padded
 from flexmech.service.dynamics.kernel_records import Evaluation, Factors, StepInputs
 from flexmech.service.dynamics.kernel_system import NEWTON_TOLERANCE, StepSystem

@@ -8,9 +8,10 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
+from scipy.linalg import eigh, null_space
+
 from flexmech.models.graph.dynamics import DynamicsForm, dynamics_form
 from flexmech.models.graph.structure import Structure
-from scipy.linalg import eigh, null_space
 
 
 @lru_cache(maxsize=16)

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models.contact.elastic_pairs import DAMPED_LAWS, elastic_pairs
 from flexmech.models.contact.pair_forces import contact_forces
 from flexmech.models.graph.context import AssemblyContext

@@ -9,6 +9,8 @@ end's multipliers are the force (and moment) its end body exerts on it, exact in
 from __future__ import annotations
 
 import numpy as np
+from pydantic import ValidationError
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.models.contact.elastic_pairs import check_link_dynamics
 from flexmech.models.documents.simulation_spec import SimulateSpec, critical_step_factor
@@ -25,7 +27,6 @@ from flexmech.service.dynamics.static_start import static_shape
 from flexmech.service.dynamics.stepping import engine_of
 from flexmech.service.solvers.energy import minimize_energy
 from flexmech.service.solvers.reports import output_units
-from pydantic import ValidationError
 
 MAX_STEPS = Limits().max_simulation_steps  # the service's limit: the CLI and Python apply the same
 STATIC_OUTPUTS = (".h", ".v", ".M_start", ".M_end")

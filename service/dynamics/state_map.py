@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
+
 from flexmech.models.graph.structure import Structure
 from flexmech.models.kernels.layout import own_counts
 

@@ -12,6 +12,7 @@ to minimizing the energy."""
 from __future__ import annotations
 
 import numpy as np
+
 from flexmech.service.dynamics.engine import Engine
 from flexmech.service.dynamics.kernel_system import NEWTON_TOLERANCE
 

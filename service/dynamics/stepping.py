@@ -15,6 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+
 from flexmech.models import MechanismError
 from flexmech.models.graph.structure import Structure
 from flexmech.models.kernels.layout import layout_of
@@ -137,8 +138,9 @@ def start_of(structure: Structure, p, x0, v0, histories: Histories, damping: flo
 def massless_coordinates(structure: Structure, x: np.ndarray, p: np.ndarray) -> list[str]:
     """The coordinates that move in the null space of [M G'; G 0] at x: free and without mass
     (a diagnosis on the dense form, only for a start that failed)."""
-    from flexmech.service.dynamics.modes import form_of
     from scipy.linalg import null_space
+
+    from flexmech.service.dynamics.modes import form_of
 
     form = form_of(structure)
     n, m = len(form.unknowns), form.n_equalities

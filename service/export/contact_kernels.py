@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.service.export.direction import direction
 

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.service.export.direction import direction
 from flexmech.service.export.plan import ExportPlan

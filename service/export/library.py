@@ -16,6 +16,7 @@ from pathlib import Path
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models import Mechanism, MechanismDocument, compile_mechanism
 from flexmech.service.export.kernels import ExportFunctions, export_functions
 from flexmech.service.export.measure import example_path, worst_iterations

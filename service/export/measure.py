@@ -5,6 +5,7 @@ from the previous) and cold (each from the undeformed state)."""
 from __future__ import annotations
 
 import numpy as np
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.service.export.kernels import ExportFunctions, iterate
 from flexmech.service.export.plan import ExportPlan

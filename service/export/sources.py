@@ -16,6 +16,7 @@ from importlib.resources import files
 from pathlib import Path
 
 import casadi as ca
+
 from flexmech.service.export.encoders import c_comment, c_macro, c_string, hash_comment, python_docstring
 from flexmech.service.export.kernels import ExportFunctions
 from flexmech.service.export.plan import ExportPlan

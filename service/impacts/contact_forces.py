@@ -5,6 +5,7 @@ tangent forces; and the regularized contact forces the event-driven models apply
 from __future__ import annotations
 
 import casadi as ca
+
 from flexmech.models.impacts.model import ImpactModel
 
 

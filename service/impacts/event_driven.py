@@ -19,6 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import casadi as ca
+
 from flexmech.models.impacts.model import WORKS, ImpactModel
 from flexmech.service.impacts.contact_forces import kinematics, regularized_forces
 

@@ -10,6 +10,7 @@ U_N = Dn.v (positive separating), and the impact law asks U_N+ >= -e_N U_N-."""
 from __future__ import annotations
 
 import casadi as ca
+
 from flexmech.models.impacts.model import WORKS, ImpactModel
 from flexmech.service.impacts.contact_forces import kinematics
 

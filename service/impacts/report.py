@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models.documents.simulation_spec import SimulateSpec
 from flexmech.models.impacts.model import WORKS, ImpactModel
 from flexmech.service.impacts.event_driven import EventLayout, rhs_function

@@ -8,6 +8,7 @@ import threading
 from collections import OrderedDict
 
 import numpy as np
+
 from flexmech.models import MechanismError
 from flexmech.models.contact.laws import FRICTION_LAWS, NORMAL_LAWS, check_law
 from flexmech.models.contact.schema import FrictionFields

@@ -15,6 +15,7 @@ import threading
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models.errors import MechanismError
 from flexmech.models.impacts.book import ParameterBook
 from flexmech.models.impacts.model import ImpactModel

@@ -12,6 +12,7 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models.elements import FAMILIES
 from flexmech.models.impacts.model import WORKS, ImpactModel
 from flexmech.service.impacts.event_driven import EventLayout, event_step

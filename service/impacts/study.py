@@ -25,6 +25,7 @@ from collections.abc import Sequence
 from typing import Protocol
 
 import numpy as np
+
 from flexmech.models import MechanismError
 from flexmech.models.documents.document import MechanismDocument
 from flexmech.models.documents.simulation_spec import SimulateSpec

@@ -17,13 +17,14 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from pydantic import ConfigDict, Field
+
 from flexmech.service.analyses import ANALYSES, AnalysisRequest
 from flexmech.service.costs import Limits, check_report_size
 from flexmech.service.jobs.base import JSON, JobOptions, Plan, StoredJob, read_spec
 from flexmech.service.jobs.control import TaskControl
 from flexmech.service.jobs.sweep import mechanism_of
 from flexmech.service.requests import compile_request, newton_options
-from pydantic import ConfigDict, Field
 
 
 class AnalysisJobOptions(JobOptions):

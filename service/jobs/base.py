@@ -29,9 +29,10 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar, Protocol, TypeVar
 
+from pydantic import BaseModel, ConfigDict, ValidationError
+
 from flexmech.models.errors import MechanismError, pointer_of
 from flexmech.service.requests import Limits
-from pydantic import BaseModel, ConfigDict, ValidationError
 
 JSON = dict[str, Any]  # a stored spec, plan, task or point: JSON objects
 

@@ -15,6 +15,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Literal
 
+from pydantic import ConfigDict, Field
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.models.contact.schema import PathParameter
 from flexmech.service.contact.path import (
@@ -35,7 +37,6 @@ from flexmech.service.jobs.control import TaskControl
 from flexmech.service.jobs.sweep import mechanism_of
 from flexmech.service.jobs.sweep_options import SweepParameter
 from flexmech.service.requests import compile_request, newton_options, under
-from pydantic import ConfigDict, Field
 
 
 class ContactPathOptions(JobOptions):

@@ -22,13 +22,14 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Literal
 
+from pydantic import BaseModel, ConfigDict, Field
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.service.costs import Limits, check_export_unknowns
 from flexmech.service.jobs.base import JSON, JobOptions, Plan, StoredJob, read_spec
 from flexmech.service.jobs.control import TaskControl
 from flexmech.service.requests import compile_request, escape_pointer_part
 from flexmech.service.solvers.reports import plain
-from pydantic import BaseModel, ConfigDict, Field
 
 if TYPE_CHECKING:  # the export's code generation is imported when a job is prepared or run
     from flexmech.service.export.plan import ExportOptions, ExportPlan

@@ -9,6 +9,7 @@ from collections.abc import Sequence
 from typing import Protocol
 
 import numpy as np
+
 from flexmech.models import MechanismError
 from flexmech.service.costs import Limits, check_grid_size
 

@@ -13,6 +13,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from pydantic import BaseModel, ConfigDict, Field
+
 from flexmech.models import MechanismError
 from flexmech.models.documents.simulation_spec import IMPACT_SCHEMES
 from flexmech.service.analyses.simulate import SimulateOverrides
@@ -23,7 +25,6 @@ from flexmech.service.impacts.study import legacy_influence, study_fields, study
 from flexmech.service.jobs.base import JSON, JobOptions, Plan, StoredJob, read_spec
 from flexmech.service.jobs.control import TaskControl
 from flexmech.service.requests import compile_request
-from pydantic import BaseModel, ConfigDict, Field
 
 DEFAULT_TOLERANCE = 0.05
 RUN_BYTES = 192 * 2**20  # the memory one run's states may take (a task holds the nominal run's and one other)

@@ -16,6 +16,8 @@ from functools import lru_cache
 from typing import Any
 
 import numpy as np
+from pydantic import ConfigDict, Field
+
 from flexmech.models import MechanismError
 from flexmech.models.documents.document import parse_optimize_spec
 from flexmech.service.design.optimize import Prepared, StartResult, combine, prepare, run_start
@@ -24,7 +26,6 @@ from flexmech.service.jobs.base import JSON, JobOptions, Plan, StoredJob, read_s
 from flexmech.service.jobs.control import TaskControl
 from flexmech.service.requests import Limits, compile_request, under
 from flexmech.service.solvers.reports import plain
-from pydantic import ConfigDict, Field
 
 
 class OptimizeOptions(JobOptions):

@@ -14,6 +14,8 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
+from pydantic import ConfigDict
+
 from flexmech.models import MechanismError
 from flexmech.models.contact.elastic_pairs import check_link_dynamics
 from flexmech.models.documents.simulation_spec import IMPACT_SCHEMES
@@ -45,7 +47,6 @@ from flexmech.service.jobs.control import TaskControl
 from flexmech.service.jobs.sweep import mechanism_of
 from flexmech.service.requests import compile_request, under
 from flexmech.service.solvers.reports import output_units
-from pydantic import ConfigDict
 
 
 class SimulationOptions(JobOptions, SimulateOptions):

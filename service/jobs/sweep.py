@@ -29,6 +29,7 @@ from functools import lru_cache
 from typing import Any
 
 import numpy as np
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.service.analyses import ANALYSES
 from flexmech.service.costs import Limits, check_result_size

@@ -5,8 +5,9 @@ from __future__ import annotations
 
 from typing import Literal
 
-from flexmech.service.jobs.base import JobOptions, StoredJob
 from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from flexmech.service.jobs.base import JobOptions, StoredJob
 
 
 class SweepParameter(BaseModel):

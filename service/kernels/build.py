@@ -28,6 +28,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import casadi as ca
+
 from flexmech.models.caches.disk_cache import building_folder
 from flexmech.service.kernels.cache import FLAGS, compiler
 

@@ -19,6 +19,7 @@ from functools import lru_cache
 from pathlib import Path
 
 import casadi as ca
+
 from flexmech.models.caches.disk_cache import cache_dir, touch
 from flexmech.models.kernels.chain_signature import ChainSignature
 from flexmech.models.kernels.chunks import CHUNK, Chunks, chunks

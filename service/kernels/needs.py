@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import casadi as ca
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.models.kernels.chain_signature import ChainSignature
 from flexmech.models.kernels.chunks import chunks

@@ -37,6 +37,7 @@ import time
 from pathlib import Path
 
 import casadi as ca
+
 from flexmech.models.caches.disk_cache import (
     bound,
     building_dir,

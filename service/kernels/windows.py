@@ -16,6 +16,7 @@ import threading
 from collections import OrderedDict
 
 import casadi as ca
+
 from flexmech.models.caches.disk_cache import touch
 from flexmech.models.kernels.chain_signature import ChainSignature
 from flexmech.service.kernels.cache import KINDS, library

@@ -13,6 +13,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
+
 from flexmech.models import Mechanism
 from flexmech.service.solvers import ipopt
 from flexmech.service.solvers.equilibrium import EquilibriumResult

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.models.caches.disk_cache import cache_dir
 from flexmech.service.kernels.cache import compiler

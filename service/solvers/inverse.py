@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.service.units import wrench_to_doc
 

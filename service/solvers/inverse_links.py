@@ -13,6 +13,7 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.models.beams.link_inverse import InverseLayout, PsiLayout, inverse_graphs_for
 from flexmech.models.documents.document import PrescribedDisplacement

@@ -17,6 +17,7 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
+
 from flexmech.service.deadline import ends_after, passed
 
 LINEAR_SOLVERS = ("mumps", "spral")

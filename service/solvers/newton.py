@@ -18,6 +18,7 @@ from typing import Literal
 
 import casadi as ca
 import numpy as np
+
 from flexmech.service.buffered import BufferedCall
 from flexmech.service.deadline import ends_after, passed
 

@@ -8,6 +8,7 @@ import math
 from typing import Any
 
 import numpy as np
+
 from flexmech.models import Mechanism
 from flexmech.service.solvers.stiffness import tangent_stiffness
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.models.elements import FAMILIES
 from flexmech.service.units import coordinate_kinds, matrix_to_doc

@@ -15,6 +15,7 @@ from typing import Literal
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.models.documents.document import SweepSpec
 from flexmech.models.graph.assembly import Graphs

@@ -13,6 +13,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.service.contact.problem import contact_problem
 from flexmech.service.contact.report import penetration_error

@@ -28,9 +28,10 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-from flexmech.models import MechanismError
 from scipy.linalg import eig, eigh, null_space
 from scipy.sparse.linalg import eigsh
+
+from flexmech.models import MechanismError
 
 DENSE_LIMIT = 400
 RIGID = 1e-12  # |omega^2| below this fraction of the largest is a zero-frequency (rigid) mode

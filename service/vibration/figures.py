@@ -11,6 +11,7 @@ import math
 from pathlib import Path
 
 import numpy as np
+
 from flexmech.models import MechanismError
 from flexmech.service.drawings.figures import field_label, new_figure, save_figure, set_labels
 

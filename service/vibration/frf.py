@@ -14,8 +14,9 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from flexmech.service.vibration.eigen import Eigen
 from scipy.optimize import brentq, minimize_scalar
+
+from flexmech.service.vibration.eigen import Eigen
 
 TWO_PI = 2 * math.pi
 

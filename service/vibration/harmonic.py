@@ -17,6 +17,7 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.models.graph.assembly import graphs_for
 from flexmech.models.graph.modal import motion_coupling

@@ -19,6 +19,7 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.service.buffered import BufferedCall
 from flexmech.service.solvers.stiffness import condensed

@@ -11,6 +11,7 @@ import math
 from typing import Any
 
 import numpy as np
+
 from flexmech.models import Mechanism
 from flexmech.service.vibration.modes import MechanismModes
 

@@ -21,6 +21,7 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
+
 from flexmech.models import Mechanism
 from flexmech.models.graph.assembly import graphs_for
 from flexmech.models.graph.modal import state_mass

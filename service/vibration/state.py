@@ -7,6 +7,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.service.requests import under
 from flexmech.service.solvers.equilibrium import solve_equilibrium

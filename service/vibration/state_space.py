@@ -29,6 +29,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from scipy.linalg import null_space
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.models.graph.residual import unknown_names
 from flexmech.service.vibration.eigen import Eigen, vibration_eigen
@@ -36,7 +38,6 @@ from flexmech.service.vibration.frf import Damping
 from flexmech.service.vibration.harmonic import channel, moves_a_body
 from flexmech.service.vibration.modes import ModalSystem, modal_system
 from flexmech.service.vibration.state import check_modal_cost
-from scipy.linalg import null_space
 
 MATRICES = ("A", "B", "C", "D", "M", "K", "damping", "G", "shapes")
 NAMES = ("states", "inputs", "outputs", "coordinates")

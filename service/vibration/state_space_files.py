@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
 from flexmech.service.vibration.state_space import MATRICES, NAMES, StateSpaceModel
 
 SUFFIXES = (".json", ".npz", ".mat")

@@ -10,12 +10,13 @@ from functools import lru_cache
 
 import numpy as np
 import pytest
+from mechanisms import example_one
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service.contact.path import follow, path_fields
 from flexmech.service.contact.problem import contact_problem
 from flexmech.service.contact.report import pairs_report, structure_outputs
 from flexmech.service.contact.solve import ContactOptions
-from mechanisms import example_one
 
 FACE = float(np.hypot(19.0, 10.4598 - 1.6))  # |ab|, mm
 

@@ -20,14 +20,15 @@ from functools import lru_cache
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+from scipy.integrate import solve_ivp
+from scipy.optimize import fsolve
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service.contact.kkt import split
 from flexmech.service.contact.path import follow, path_fields
 from flexmech.service.contact.problem import contact_problem
 from flexmech.service.contact.report import pairs_report, structure_outputs
 from flexmech.service.contact.solve import ContactOptions
-from scipy.integrate import solve_ivp
-from scipy.optimize import fsolve
 
 ELLIPSE = "gripper_ellipse_contact.json"
 GRIP = "two_finger_grip.json"

@@ -9,6 +9,7 @@ with mu W the other way."""
 from __future__ import annotations
 
 import numpy as np
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service.contact.path import follow, path_fields
 from flexmech.service.contact.problem import contact_problem

@@ -14,6 +14,9 @@ from pathlib import Path
 import casadi as ca
 import httpx
 import pytest
+from impact_cases import EXAMPLES, csfh, parsed
+from typer.testing import CliRunner
+
 from flexmech.api.cli import app
 from flexmech.api.client import Client
 from flexmech.models import MechanismError, compile_mechanism, load_document
@@ -24,8 +27,6 @@ from flexmech.service.analyses.contact import CONTACT
 from flexmech.service.impacts.event_driven import HYSTERESIS
 from flexmech.service.impacts.run import run_impacts
 from flexmech.service.solvers.newton import NewtonOptions
-from impact_cases import EXAMPLES, csfh, parsed
-from typer.testing import CliRunner
 
 OLD = Path(__file__).resolve().parents[1] / "old_documents"
 OLD_EXAMPLES = sorted(OLD.glob("*.json"))

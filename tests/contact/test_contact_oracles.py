@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from elastica_oracles import cantilever_tip
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service.analyses.base import AnalysisRequest
 from flexmech.service.analyses.contact import CONTACT

@@ -11,10 +11,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.optimize import brentq
+
 from flexmech.models import MechanismError, compile_mechanism, load_document
 from flexmech.service.analysis import run_analysis
 from flexmech.service.solvers.newton import NewtonOptions
-from scipy.optimize import brentq
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 SPRING, HERTZ, EXPONENT, GAP, PAD, PUSH = 400.0, 2e6, 1.5, 0.01, 0.02, 10.0  # N/m, N/m^1.5, 1, m, m, N

@@ -5,13 +5,14 @@ contact analyses finds independently."""
 
 from __future__ import annotations
 
+from mechanisms import example_one
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.models.documents.document import parse_optimize_spec
 from flexmech.service.analyses.base import AnalysisRequest
 from flexmech.service.analyses.contact import CONTACT
 from flexmech.service.design.optimize import optimize
 from flexmech.service.design.problem import design_problem
-from mechanisms import example_one
 
 
 def normal_force(thickness: float) -> tuple[float, float]:

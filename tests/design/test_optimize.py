@@ -9,6 +9,7 @@ import json
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+
 from flexmech.models import MechanismError, compile_mechanism
 from flexmech.models.documents.document import parse_document
 from flexmech.service.design.optimize import optimize

@@ -7,6 +7,7 @@ import json
 
 import pytest
 from conftest import ACTUATION, EXAMPLES
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.models.documents.document import parse_document
 from flexmech.service.design.optimize import prepare, run_start

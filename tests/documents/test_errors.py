@@ -7,6 +7,7 @@ import json
 
 import pytest
 from conftest import ACTUATION
+
 from flexmech.models import MechanismError, compile_mechanism, load_document
 from flexmech.service import NewtonOptions, solve_equilibrium
 

@@ -11,12 +11,13 @@ import httpx
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+from servers import ApiServer
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.models.documents.naming import anonymous
 from flexmech.models.graph.assembly import graphs_for
 from flexmech.service.solvers.equilibrium import solve_equilibrium
 from flexmech.service.solvers.sweep import solve_for_target
-from servers import ApiServer
 
 ACTUATION = "/loads/actuation/force/1"
 NAMED = ("materials", "sections", "bodies", "elements", "loads", "outputs")

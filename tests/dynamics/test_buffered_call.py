@@ -6,6 +6,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 import pytest
+
 from flexmech.service.buffered import BufferedCall
 
 

@@ -24,6 +24,8 @@ import casadi as ca
 import httpx
 import pytest
 from conftest import EXAMPLES
+from servers import ApiServer
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.models.caches.disk_cache import building_dir, usage
 from flexmech.service.dynamics import engine as engine_module
@@ -40,7 +42,6 @@ from flexmech.service.kernels.queue import (
     queue_dir,
     request_function,
 )
-from servers import ApiServer
 
 BUILT = re.compile(r"build (\S+): (.*) \(cache (\d+) of (\d+) bytes\)")
 

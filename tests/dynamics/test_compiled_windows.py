@@ -11,6 +11,7 @@ from collections import OrderedDict
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service.dynamics import engine as engine_module
 from flexmech.service.dynamics.histories import read_histories

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service.analysis import run_analysis
 from flexmech.service.solvers.newton import NewtonOptions

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service.dynamics.integrate import integrate
 from flexmech.service.dynamics.modes import natural_modes

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
 from flexmech.models import MechanismError, compile_mechanism, load_document
 from flexmech.service.analyses import ANALYSES
 from flexmech.service.analyses.base import AnalysisRequest

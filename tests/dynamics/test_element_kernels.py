@@ -10,6 +10,7 @@ import casadi as ca
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.models.kernels.chain_signature import ChainSignature
 from flexmech.models.kernels.link_chain import jacobian_function, residual_function

@@ -7,14 +7,15 @@ import json
 
 import numpy as np
 from conftest import EXAMPLES
+from impact_cases import csfh
+from typer.testing import CliRunner
+
 from flexmech.api.cli import app
 from flexmech.api.cli.progress import SimulationProgress
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service.analyses import ANALYSES
 from flexmech.service.analyses.base import AnalysisRequest
 from flexmech.service.dynamics.run import MAX_STEPS
-from impact_cases import csfh
-from typer.testing import CliRunner
 
 ROD = EXAMPLES / "rod_free_vibration.json"
 

@@ -15,13 +15,14 @@ import httpx
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+from servers import ApiServer
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.models.kernels.chain_signature import ChainSignature
 from flexmech.models.kernels.chunks import chunks
 from flexmech.service.kernels.build import BuildLimits, Compiler
 from flexmech.service.kernels.cache import abandoned, compiled_for, is_compiled
 from flexmech.service.kernels.queue import Builder, accept_requests, build_chain, queue_dir, request_chain
-from servers import ApiServer
 
 SMALL = ChainSignature(1, False, False)  # the cheapest kernels there are: a second or two of gcc
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from flexmech.models import MechanismError, compile_mechanism, load_document
 from flexmech.models.contact.laws import NORMAL_LAWS
 from flexmech.models.contact.laws.penalty import effective_restitution

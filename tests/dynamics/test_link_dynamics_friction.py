@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service.analysis import run_analysis
 from flexmech.service.solvers.newton import NewtonOptions

@@ -10,6 +10,7 @@ import json
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.models.graph.assembly import build_functions
 from flexmech.service.dynamics.run import run_simulation, simulation_spec

@@ -10,6 +10,7 @@ import json
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service.dynamics import static_start
 from flexmech.service.dynamics.histories import read_histories

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from c_tools import ensure_c_tools
 from conftest import EXAMPLES
+
 from flexmech.models import MechanismError, compile_mechanism, load_document
 from flexmech.service.export.library import export_document
 from flexmech.service.export.plan import ExportOptions

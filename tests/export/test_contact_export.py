@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from c_tools import ensure_c_tools
 from conftest import EXAMPLES
+
 from flexmech.models import MechanismError, compile_mechanism, load_document
 from flexmech.service.contact.problem import contact_problem
 from flexmech.service.contact.solve import solve_state

@@ -4,6 +4,7 @@ mangling of names into C identifiers."""
 from __future__ import annotations
 
 import pytest
+
 from flexmech.service.export.encoders import (
     TEXT_LIMIT,
     c_comment,

@@ -6,8 +6,9 @@ from __future__ import annotations
 import json
 
 from conftest import EXAMPLES
-from flexmech.api.cli import app
 from typer.testing import CliRunner
+
+from flexmech.api.cli import app
 
 ENV = {"COLUMNS": "200", "NO_COLOR": "1"}
 
@@ -97,6 +98,7 @@ def test_a_build_past_its_time_ends_every_process_it_started(monkeypatch, tmp_pa
     import subprocess
 
     import pytest
+
     from flexmech.api.cli import export as export_command
 
     monkeypatch.setattr(export_command, "BUILD_SECONDS", 0.5)

@@ -23,13 +23,14 @@ from pathlib import Path
 import pytest
 from c_tools import ensure_c_tools
 from conftest import EXAMPLES, sqlite_server
+from mechanisms import example_one, sprung_bodies
+from typer.testing import CliRunner
+
 from flexmech.api.cli import app
 from flexmech.api.client import Client, FlexmechError
 from flexmech.models import MechanismError, compile_mechanism, load_document
 from flexmech.service.export.library import export_document
 from flexmech.service.export.plan import ExportOptions, _distinct, export_plan
-from mechanisms import example_one, sprung_bodies
-from typer.testing import CliRunner
 
 STRICT = "-std=c99 -O2 -Wall -Wextra -Werror"
 LIBRARY = "int"  # a C keyword as the library's name: int.c, int_work, INT_OK

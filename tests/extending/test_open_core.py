@@ -12,11 +12,12 @@ import httpx
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+from mechanisms import chain
+from typer.testing import CliRunner
+
 from flexmech.api.client import Client
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service.solvers.energy import minimize_energy
-from mechanisms import chain
-from typer.testing import CliRunner
 
 ROOT = Path(__file__).resolve().parents[2]
 ENV = {"COLUMNS": "200", "FORCE_COLOR": None, "TTY_COMPATIBLE": None, "NO_COLOR": "1"}

@@ -20,6 +20,8 @@ from typing import Literal
 
 import numpy as np
 import pytest
+from pydantic import ConfigDict, Field
+
 from flexmech.models import Mechanism, MechanismError
 from flexmech.service.analyses import ANALYSES, Analysis, AnalysisOptions, AnalysisRequest, AnalysisResult
 from flexmech.service.jobs.base import JSON, JobOptions, Plan, StoredJob, read_spec
@@ -27,7 +29,6 @@ from flexmech.service.jobs.kinds import register_job_kind
 from flexmech.service.requests import Limits, compile_request
 from flexmech.service.solvers.newton import NewtonOptions
 from flexmech.service.solvers.stiffness import tangent_stiffness
-from pydantic import ConfigDict, Field
 
 E, B, H, L = 2e11, 0.01, 0.001, 0.1  # Pa, m, m, m
 ACROSS = 3 * E * (B * H**3 / 12) / L**3  # 500 N/m
@@ -188,8 +189,9 @@ def test_it_runs_through_the_client_as_a_documented_method(server):
 
 
 def test_it_is_a_command_with_its_flags(tmp_path):
-    from flexmech.api.cli import app
     from typer.testing import CliRunner
+
+    from flexmech.api.cli import app
 
     document = tmp_path / "link.json"
     document.write_text(json.dumps(CLAMPED_LINK))
@@ -225,6 +227,7 @@ def test_it_runs_in_batch(tmp_path):
 
 def test_a_job_kind_of_its_own_is_a_route_and_a_client_method(server):
     import httpx
+
     from flexmech.api.client import Client
 
     paths = httpx.get(server.url + "/openapi.json").json()["paths"]

@@ -18,6 +18,8 @@ from typing import Literal
 import casadi as ca
 import numpy as np
 import pytest
+from impact_cases import csfh
+
 from flexmech.models import MechanismError, compile_mechanism, load_document
 from flexmech.models.documents.fields import Number
 from flexmech.models.elements import FAMILIES
@@ -25,7 +27,6 @@ from flexmech.models.elements.base import Contribution, EnergyTerms, ScaleHint, 
 from flexmech.models.graph.structure import ElementTopology
 from flexmech.service.analysis import run_analysis
 from flexmech.service.solvers.newton import NewtonOptions
-from impact_cases import csfh
 
 K, KT, MASS, INERTIA = 400.0, 50.0, 10.0, 0.1617  # N/m, N m/rad, kg, kg m^2
 

@@ -8,8 +8,9 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 import pytest
-from flexmech.models.impacts.model import impact_model
 from impact_cases import csfh, parsed
+
+from flexmech.models.impacts.model import impact_model
 
 M, I_REF, C, ANGLE = 10.0, 0.25, np.array([0.03, -0.01]), 0.4  # mass, inertia about the reference point
 F, OFFSET, MOMENT, G = np.array([3.0, -2.0]), np.array([0.05, 0.02]), 0.7, np.array([0.0, -9.81])

@@ -9,8 +9,9 @@ import math
 
 import numpy as np
 import pytest
-from flexmech.service.impacts.run import run_impacts
 from impact_cases import csfh, parsed
+
+from flexmech.service.impacts.run import run_impacts
 
 G, MASS, CLEARANCE = 9.81, 10.0, 0.02
 ANGLE = 60.0  # deg: the slider's axis from the x axis, through the hole's centre

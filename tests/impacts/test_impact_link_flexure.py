@@ -12,9 +12,10 @@ import math
 
 import numpy as np
 import pytest
+from impact_cases import csfh, parsed
+
 from flexmech.service.impacts.run import run_impacts
 from flexmech.service.impacts.study import variant
-from impact_cases import csfh, parsed
 
 ARC = 0.144 * math.radians(300)  # the example's flexure: radius 0.144 m, 300 deg from angle 0 about (0.22, 0.1)
 

@@ -9,12 +9,13 @@ import math
 
 import numpy as np
 import pytest
+from impact_cases import as_moreau, csfh
+from scipy.optimize import brentq, minimize_scalar
+
 from flexmech.models import MechanismError, compile_mechanism, load_document
 from flexmech.service.analysis import run_analysis
 from flexmech.service.impacts.study import variant
 from flexmech.service.solvers.newton import NewtonOptions
-from impact_cases import as_moreau, csfh
-from scipy.optimize import brentq, minimize_scalar
 
 G, RADIUS, TOP, CORNER = 9.81, 0.18, -0.3, 1.0  # the block's top at y = -0.3 m, its right edge at x = 1 m
 

@@ -9,13 +9,14 @@ from pathlib import Path
 import httpx
 import numpy as np
 import pytest
+from typer.testing import CliRunner
+
 from flexmech.api.cli import app
 from flexmech.models import MechanismError
 from flexmech.models.documents.document import MechanismDocument
 from flexmech.models.documents.simulation_spec import SimulateSpec
 from flexmech.service.impacts.run import run_impacts
 from flexmech.service.impacts.study import variant
-from typer.testing import CliRunner
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 PAIR = "/contacts/pairs/conjugate"

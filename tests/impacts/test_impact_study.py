@@ -5,8 +5,9 @@ each run's contacts from its events (service.impacts.study)."""
 from __future__ import annotations
 
 import pytest
-from flexmech.service.impacts.study import legacy_influence, nominal_run, study_point
 from impact_cases import csfh
+
+from flexmech.service.impacts.study import legacy_influence, nominal_run, study_point
 
 TOLERANCE = 0.05
 STEP = 1e-5

@@ -9,13 +9,14 @@ import math
 import casadi as ca
 import numpy as np
 import pytest
+from impact_cases import as_moreau, csfh, parsed, with_pair
+from scipy.integrate import solve_ivp
+from scipy.special import ellipk
+
 from flexmech.models.contact.laws import NORMAL_LAWS
 from flexmech.models.contact.laws.penalty import effective_restitution
 from flexmech.models.impacts.model import impact_model
 from flexmech.service.impacts.run import run_impacts
-from impact_cases import as_moreau, csfh, parsed, with_pair
-from scipy.integrate import solve_ivp
-from scipy.special import ellipk
 
 G = 9.81
 FALL = 0.03  # from y = 0.01 to the surface at y = -0.02
@@ -262,8 +263,9 @@ def test_table_2_stiffnesses_follow_from_e_210_gpa_and_the_external_radius():
 def test_the_esdu_law_is_solved_exactly():
     """Eq. 18 inverted: F = b exp(1 + W_-1(-q / (a b e))) with scipy's Lambert W, and the
     tangent stiffness against a finite difference."""
-    from flexmech.models.contact.laws.penalty import esdu_force
     from scipy.special import lambertw
+
+    from flexmech.models.contact.laws.penalty import esdu_force
 
     sigma, length, clearance = 2 * (1 - 0.09) / 100e9, 0.025, 0.02
     a, b = sigma / length, 4 * length * clearance / sigma

@@ -3,12 +3,13 @@
 
 from __future__ import annotations
 
-import flexmech.service.impacts.stepping as stepping
 import numpy as np
 import pytest
+from impact_cases import csfh, parsed
+
+import flexmech.service.impacts.stepping as stepping
 from flexmech.service.impacts.kept_rows import KeptRows
 from flexmech.service.impacts.run import run_impacts
-from impact_cases import csfh, parsed
 
 
 def test_kept_rows_stay_within_the_cap_spread_over_the_run_with_every_event():

@@ -9,11 +9,12 @@ import math
 
 import httpx
 import pytest
+from impact_cases import csfh, parsed
+from typer.testing import CliRunner
+
 from flexmech.api.cli import app
 from flexmech.models import MechanismError
 from flexmech.service.impacts.run import run_impacts
-from impact_cases import csfh, parsed
-from typer.testing import CliRunner
 
 
 def _broken(change) -> dict:

@@ -8,12 +8,13 @@ import copy
 
 import numpy as np
 import pytest
+from impact_cases import csfh, parsed
+
 from flexmech.models.documents.simulation_spec import SimulateSpec
 from flexmech.service.analysis import run_analysis
 from flexmech.service.impacts.run import run_impacts
 from flexmech.service.requests import compile_request
 from flexmech.service.solvers.newton import NewtonOptions
-from impact_cases import csfh, parsed
 
 
 def _resting_document() -> dict:

@@ -13,12 +13,13 @@ from pathlib import Path
 import pytest
 import yaml
 from conftest import EXAMPLES
+from rich.console import Console
+from typer.testing import CliRunner
+
 from flexmech.api.cli import app
 from flexmech.api.cli.batch import print_summary
 from flexmech.models import load_document
 from flexmech.service.batch import declared_analysis, result_names, run_batch, succeeded
-from rich.console import Console
-from typer.testing import CliRunner
 
 ENV = {"COLUMNS": "200", "NO_COLOR": "1"}
 

@@ -10,9 +10,10 @@ import time
 import httpx
 import pytest
 from conftest import EXAMPLES
-from flexmech.api.cli import app
 from servers import Process, free_port
 from typer.testing import CliRunner
+
+from flexmech.api.cli import app
 
 ENV = {"COLUMNS": "200", "NO_COLOR": "1"}
 

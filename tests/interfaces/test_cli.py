@@ -7,8 +7,9 @@ import json
 from pathlib import Path
 
 import pytest
-from flexmech.api.cli import app
 from typer.testing import CliRunner
+
+from flexmech.api.cli import app
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 GRIPPER = str(EXAMPLES / "gripper.json")

@@ -11,6 +11,7 @@ import sys
 
 import pytest
 from conftest import EXAMPLES
+
 from flexmech.api.cli.leaving import exit_code
 
 ROOT = EXAMPLES.parent
@@ -72,7 +73,7 @@ def test_pint_without_dask_leaves_dask_importable():
         [
             sys.executable,
             "-c",
-            "import sys; import models.units as u; pint = u.pint_module(); "
+            "import sys; import flexmech.models.units as u; pint = u.pint_module(); "
             "assert 'dask' not in sys.modules and not pint.compat.HAS_DASK; "
             "import dask.bag; print(u.parse_unit('N*m/rad')[0], dask.bag.__name__)",
         ],

@@ -8,8 +8,9 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from flexmech.api.cli import app
 from typer.testing import CliRunner
+
+from flexmech.api.cli import app
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 ENV = {"COLUMNS": "200", "FORCE_COLOR": None, "TTY_COMPATIBLE": None, "NO_COLOR": "1"}

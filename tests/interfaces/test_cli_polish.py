@@ -14,10 +14,11 @@ from pathlib import Path
 
 import pytest
 from conftest import EXAMPLES
-from flexmech.api.cli import app
 from impact_cases import csfh
 from rich.console import Console
 from typer.testing import CliRunner
+
+from flexmech.api.cli import app
 
 ROOT = Path(__file__).resolve().parents[2]
 ENV = {"COLUMNS": "200", "NO_COLOR": "1"}
@@ -60,8 +61,8 @@ def test_help_imports_no_physics(args):
     """The list of commands and a command's options are answered before NumPy, CasADi, the
     models or the analyses registry are imported (they are what made --help take a second)."""
     done = fresh(
-        "import sys, json, api.cli\n"
-        "try:\n    api.cli.app(sys.argv[1:], prog_name='flexmech')\nexcept SystemExit:\n    pass\n"
+        "import sys, json, flexmech.api.cli\n"
+        "try:\n    flexmech.api.cli.app(sys.argv[1:], prog_name='flexmech')\nexcept SystemExit:\n    pass\n"
         f"print(json.dumps([m for m in {HEAVY!r} if m in sys.modules]))",
         *args,
     )
@@ -73,10 +74,8 @@ def test_help_imports_no_physics(args):
 def test_the_list_of_commands_is_the_registrys():
     """Before the registry is imported, the analyses' commands are listed from the catalog:
     the same names, order, summaries and aliases as the registry gives once imported."""
-    listing = (
-        "import sys, api.cli\ntry:\n    api.cli.app(['--help'], prog_name='flexmech')\nexcept SystemExit:\n    pass"
-    )
-    light, loaded = fresh(listing), fresh("import service.analyses\n" + listing)
+    listing = "import sys, flexmech.api.cli\ntry:\n    flexmech.api.cli.app(['--help'], prog_name='flexmech')\nexcept SystemExit:\n    pass"
+    light, loaded = fresh(listing), fresh("import flexmech.service.analyses\n" + listing)
     assert light.returncode == loaded.returncode == 0, light.stderr + loaded.stderr
     assert "frequency-response" in light.stdout and "frf" in light.stdout and "modes" in light.stdout
     assert light.stdout == loaded.stdout
@@ -88,7 +87,7 @@ def test_the_catalogs_names_are_the_models():
     from flexmech.service.analyses import ANALYSES
 
     assert MODEL_NAMES == MODELS and COMPARED_MODEL_NAMES == COMPARED_MODELS
-    built_in = [a.name for a in ANALYSES if type(a).__module__.startswith("service.analyses.")]
+    built_in = [a.name for a in ANALYSES if type(a).__module__.startswith("flexmech.service.analyses.")]
     assert list(ANALYSIS_NAMES) == built_in
 
 
@@ -96,7 +95,7 @@ def test_a_listed_analysis_command_runs_with_its_options(tmp_path):
     """An analysis' command, listed from the catalog, takes its options once it runs."""
     out = tmp_path / "k.json"
     done = fresh(
-        "import sys, api.cli\napi.cli.app(sys.argv[1:], prog_name='flexmech')",
+        "import sys, flexmech.api.cli\nflexmech.api.cli.app(sys.argv[1:], prog_name='flexmech')",
         "linearization",
         GRIPPER,
         "--at",

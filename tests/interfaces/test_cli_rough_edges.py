@@ -14,12 +14,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from typer.testing import CliRunner
+
 from flexmech.api.cli import app
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service import solve_equilibrium, sweep
 from flexmech.service.drawings.plotting import configuration_figure, load_point, sweeps_figure, trace_figure
 from flexmech.service.solvers.continuation import trace_path
-from typer.testing import CliRunner
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 GRIPPER = EXAMPLES / "gripper.json"

@@ -11,6 +11,7 @@ import httpx
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service import solve_equilibrium
 from flexmech.service.drawings.drawing import mechanism_drawing
@@ -136,8 +137,9 @@ def test_a_load_path_is_drawn_state_by_state(api_server, gripper_dict):
 
 
 def test_the_client_draws_and_reads_a_jobs_request(api_server):
-    from flexmech.api.client import Client
     from pydantic import ValidationError
+
+    from flexmech.api.client import Client
 
     with Client(api_server.url) as flexmech:
         drawing = flexmech.drawing(example="gripper_jaw_contact")

@@ -7,9 +7,10 @@ import json
 
 import numpy as np
 from conftest import EXAMPLES
-from flexmech.api.cli import app
 from PIL import Image
 from typer.testing import CliRunner
+
+from flexmech.api.cli import app
 
 ENV = {"COLUMNS": "200", "NO_COLOR": "1"}
 SPIN = str(EXAMPLES / "spinning_rod_case2.json")

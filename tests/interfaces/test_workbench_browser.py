@@ -11,9 +11,6 @@ import re
 import pytest
 from browser import screenshot
 from conftest import ACTUATION, EXAMPLES
-from flexmech.models import compile_mechanism, load_document
-from flexmech.service import solve_for_target
-from flexmech.service.solvers.continuation import trace_path
 from workbench import (  # noqa: F401 (fixtures by name)
     KEY,
     assert_local_and_quiet,
@@ -29,6 +26,10 @@ from workbench import (  # noqa: F401 (fixtures by name)
     set_document_text,
     simulate_to_the_first_frame,
 )
+
+from flexmech.models import compile_mechanism, load_document
+from flexmech.service import solve_for_target
+from flexmech.service.solvers.continuation import trace_path
 
 
 @pytest.fixture(scope="module")

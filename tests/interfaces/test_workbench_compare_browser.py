@@ -9,9 +9,6 @@ from __future__ import annotations
 import pytest
 from browser import SCREENSHOTS, screenshot
 from conftest import ACTUATION, EXAMPLES
-from flexmech.models import COMPARED_MODELS, compile_mechanism, load_document
-from flexmech.service import solve_for_target
-from flexmech.service.solvers.continuation import trace_path
 from workbench import (  # noqa: F401 (fixtures by name)
     browser,
     choose,
@@ -21,6 +18,10 @@ from workbench import (  # noqa: F401 (fixtures by name)
     run_and_wait,
     server,
 )
+
+from flexmech.models import COMPARED_MODELS, compile_mechanism, load_document
+from flexmech.service import solve_for_target
+from flexmech.service.solvers.continuation import trace_path
 
 FOLD = {"width": 1400, "height": 900}
 MODEL_NAMES = {"linear": "linear model", "partial_nonlinear": "partial non-linear model", "exact": "exact model"}

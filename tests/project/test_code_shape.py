@@ -7,20 +7,21 @@ import ast
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-PACKAGES = ("models", "service", "api")
+FLOORS = ("models", "service", "api")  # folders of the repository, installed as flexmech.<floor>
 MAX_MODULE_LINES = 400
 MAX_FUNCTION_LINES = 60
 
 
 def modules() -> dict[str, Path]:
-    """Dotted module name -> file, for every module of the three packages."""
+    """Dotted module name (as installed: flexmech.service.jobs.sweep) -> file, for every module
+    of the package: the three floors and flexmech/ itself."""
     found = {}
-    for package in PACKAGES:
-        for path in sorted((ROOT / package).rglob("*.py")):
+    for folder in ("flexmech", *FLOORS):
+        for path in sorted((ROOT / folder).rglob("*.py")):
             parts = list(path.relative_to(ROOT).with_suffix("").parts)
             if parts[-1] == "__init__":
                 parts.pop()
-            found[".".join(parts)] = path
+            found[".".join(parts if folder == "flexmech" else ["flexmech", *parts])] = path
     return found
 
 
@@ -33,9 +34,9 @@ def imported(name: str, tree: ast.Module, known: set[str]) -> list[tuple[str, st
     out = []
     for node in ast.walk(tree):
         if isinstance(node, ast.Import):
-            out += [(alias.name, None) for alias in node.names if alias.name.split(".")[0] in PACKAGES]
+            out += [(alias.name, None) for alias in node.names if alias.name.split(".")[0] == "flexmech"]
         elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
-            if node.module.split(".")[0] not in PACKAGES:
+            if node.module.split(".")[0] != "flexmech":
                 continue
             for alias in node.names:
                 sub = f"{node.module}.{alias.name}"
@@ -106,6 +107,23 @@ def test_no_import_cycles():
         if name not in state:
             visit(name, [])
     assert not cycles
+
+
+def test_each_floor_imports_only_the_floors_below():
+    """models/ imports neither service/ nor api/, service/ never api/ (DESIGN.md: the floors);
+    the public surface flexmech/ may import any."""
+    below = {"models": {"models"}, "service": {"models", "service"}, "api": {"models", "service", "api"}}
+    known = set(modules())
+    found = []
+    for name, tree in trees().items():
+        parts = name.split(".")
+        if len(parts) < 2 or parts[1] not in below:
+            continue
+        for module, _ in imported(name, tree, known):
+            floor = module.split(".")[1] if module.count(".") else ""
+            if floor not in below[parts[1]]:
+                found.append(f"{name} imports {module}")
+    assert not found, found
 
 
 def element_types() -> set[str]:
@@ -185,7 +203,7 @@ def test_no_two_modules_of_models_share_a_name():
     """Rooms that show the shape (issue 26): a module's name says which one it is."""
     seen: dict[str, list[str]] = {}
     for name in modules():
-        if name.startswith("models.") and not name.endswith("__init__"):
+        if name.startswith("flexmech.models.") and not name.endswith("__init__"):
             seen.setdefault(name.rsplit(".", 1)[1], []).append(name)
     assert not {stem: names for stem, names in seen.items() if len(names) > 1}
 
@@ -202,7 +220,7 @@ def test_no_module_outside_api_reads_request_options_from_a_dict():
     a request's field out of a dict (`spec.get("x")`, `request["x"]`, ...)."""
     found = []
     for name, tree in trees().items():
-        if name.startswith("api") or name in DICT_READERS_ALLOWED:
+        if name.startswith("flexmech.api") or name in DICT_READERS_ALLOWED:
             continue
         names = REQUEST_NAMES + (("stored",) if name.startswith("flexmech.service.jobs") else ())  # a kind's raw spec
         for node in ast.walk(tree):

@@ -11,9 +11,10 @@ from typing import get_args
 import numpy as np
 import pytest
 from conftest import ACTUATION, EXAMPLES
+from typer.testing import CliRunner
+
 from flexmech.api.client import Client
 from flexmech.models import MODELS, compile_mechanism, load_document
-from typer.testing import CliRunner
 
 ROOT = Path(__file__).resolve().parents[2]
 ENV = {"COLUMNS": "200", "FORCE_COLOR": None, "TTY_COMPATIBLE": None, "NO_COLOR": "1"}

@@ -10,6 +10,7 @@ import asyncio
 import httpx
 import pytest
 from conftest import sqlite_server
+
 from flexmech.api.answer_cache import CACHED_PATH, RAW_BODY, REPEATABLE, AnswerCache
 
 KEYS = ("answer-first-key-0123", "answer-second-key-0123")

@@ -18,12 +18,13 @@ import httpx
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+from typer.testing import CliRunner
+
 from flexmech.api.cli import app
 from flexmech.models import MechanismError, compile_mechanism, load_document
 from flexmech.service import NewtonOptions
 from flexmech.service.analyses.base import AnalysisRequest
 from flexmech.service.analyses.contact import CONTACT
-from typer.testing import CliRunner
 
 EXAMPLE = EXAMPLES / "gripper_jaw_contact.json"
 X_O = "/contacts/objects/fixture/centre/0"

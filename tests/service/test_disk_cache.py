@@ -10,6 +10,7 @@ import socket
 
 import numpy as np
 from conftest import EXAMPLES
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.models.caches import graph_cache
 from flexmech.models.caches.disk_cache import bound, building_folder, entries, queue_dir, touch, usage

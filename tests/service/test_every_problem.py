@@ -9,6 +9,7 @@ import json
 import httpx
 import pytest
 from conftest import EXAMPLES
+
 from flexmech.models import MechanismError, load_document
 
 NUMBER = "expected a number (or a quantity string like '25 um', at most 100 characters), got true"

@@ -13,9 +13,10 @@ import tarfile
 import httpx
 import pytest
 from conftest import ACTUATION, EXAMPLES, sqlite_server
+from typer.testing import CliRunner
+
 from flexmech.api.cli import app
 from flexmech.api.client import Client, FlexmechError
-from typer.testing import CliRunner
 
 KEYS = ("export-first-key-0123", "export-second-key-0123")
 CLOSING_FORCE = 77.0346  # uN: the gripper's target (end_effector.x = 0), solved at export

@@ -14,9 +14,10 @@ import httpx
 import pytest
 from abuse_cases import gripper
 from conftest import EXAMPLES, Deployment
+from typer.testing import CliRunner
+
 from flexmech.api.client import Client
 from flexmech.models import MechanismError, compile_mechanism, load_document
-from typer.testing import CliRunner
 
 
 @pytest.fixture(scope="module")

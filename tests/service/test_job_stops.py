@@ -10,8 +10,9 @@ import time
 
 import pytest
 from conftest import EXAMPLES, Deployment
-from flexmech.api.client import Client
 from servers import ApiServer
+
+from flexmech.api.client import Client
 
 # Points that each run Newton for seconds: the gripper with exact flexures far past any
 # equilibrium, 1000 iterations of a line search that keeps halving.

@@ -7,6 +7,7 @@ import json
 
 import pytest
 from conftest import ACTUATION, EXAMPLES
+
 from flexmech.models import MechanismError
 from flexmech.models.graph.assembly import graphs_for
 from flexmech.service.analysis import Limits

@@ -7,12 +7,13 @@ import json
 
 import pytest
 from conftest import EXAMPLES
+from typer.testing import CliRunner
+
 from flexmech.api.cli import app
 from flexmech.api.client import Client, FlexmechError
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service.design.optimize import optimize
 from flexmech.service.design.problem import design_problem
-from typer.testing import CliRunner
 
 ENV = {"COLUMNS": "200", "FORCE_COLOR": None, "TTY_COMPATIBLE": None, "NO_COLOR": "1"}
 GRASPER = EXAMPLES / "grasper_shape.json"

@@ -14,6 +14,7 @@ import httpx
 import numpy as np
 import pytest
 from conftest import sqlite_server
+
 from flexmech.api.client import Client
 from flexmech.models import MechanismError
 from flexmech.service.analyses.base import ReportSize

@@ -6,8 +6,9 @@ from __future__ import annotations
 
 import copy
 
-import flexmech.service.requests as requests
 import pytest
+
+import flexmech.service.requests as requests
 from flexmech.service import solve_equilibrium
 from flexmech.service.costs import Limits
 

@@ -9,6 +9,7 @@ import httpx
 import numpy as np
 import pytest
 from conftest import ACTUATION, EXAMPLES, Deployment
+
 from flexmech.api.client import AsyncClient, Client, FlexmechError
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service import inverse_wrenches, solve_equilibrium, solve_for_target, tangent_stiffness

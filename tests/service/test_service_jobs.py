@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import ACTUATION, EXAMPLES
+
 from flexmech.api.client import Client
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service import sweep
@@ -171,7 +172,7 @@ def _sweep_in_a_fresh_process(spec: dict, indices: list[int]) -> dict[int, dict]
     import sys
 
     script = (
-        "import json, sys; from service.jobs.kinds import kind_named; spec = json.load(sys.stdin); "
+        "import json, sys; from flexmech.service.jobs.kinds import kind_named; spec = json.load(sys.stdin); "
         "points = kind_named('sweep').run(spec, {'indices': spec.pop('indices'), 'guess': None, 'line': 0}); "
         "json.dump([[i, p] for i, p in points], sys.stdout)"
     )

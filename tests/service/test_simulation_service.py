@@ -9,6 +9,7 @@ import time
 
 import httpx
 import numpy as np
+
 from flexmech.api.client import Client
 from flexmech.service.dynamics.stepping import WINDOW
 

@@ -13,6 +13,7 @@ import time
 
 import httpx
 import pytest
+
 from flexmech.api.errors import ApiError
 from flexmech.api.solver_pool import WORKER_NAME, SolverPool
 from flexmech.models import MechanismError

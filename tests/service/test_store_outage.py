@@ -13,6 +13,7 @@ from pathlib import Path
 
 import httpx
 from conftest import EXAMPLES, Deployment
+
 from flexmech.api.client import Client
 
 ACTUATION = "/loads/actuation/force/1"
@@ -141,12 +142,13 @@ def test_a_full_data_folder_loses_no_point(tmp_path):
 
 def _store_failing_on_purpose(tmp_path: Path) -> None:
     """The same promise, in-process: a store whose writes fail for 3 s mid-job."""
+    from sqlalchemy.exc import OperationalError
+
     from flexmech.service.jobs.executors import ProcessPool
     from flexmech.service.jobs.kinds import kind_named
     from flexmech.service.jobs.runner import JobRunner
     from flexmech.service.jobs.store import JobStore
     from flexmech.service.requests import Limits
-    from sqlalchemy.exc import OperationalError
 
     class FullDisk(JobStore):
         failing_until = 0.0

@@ -12,9 +12,10 @@ import numpy as np
 import pytest
 from conftest import EXAMPLES
 from continuation_oracles import natural_limit
+from typer.testing import CliRunner
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service.solvers.continuation import trace_path
-from typer.testing import CliRunner
 
 LOAD, STOP = "/loads/P/force/1", -300.0
 ARCH = EXAMPLES / "snap_through_arch.json"

@@ -10,6 +10,7 @@ import httpx
 import numpy as np
 import pytest
 from conftest import EXAMPLES, sqlite_server
+
 from flexmech.api.client import Client
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service.analysis import run_analysis

@@ -8,9 +8,10 @@ import math
 
 import numpy as np
 import pytest
+from scipy.integrate import quad
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service import NewtonOptions, solve_equilibrium, tangent_stiffness
-from scipy.integrate import quad
 
 E, B, H = 200e9, 5e-3, 0.5e-3  # steel strip, SI
 EI = E * B * H**3 / 12

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from conftest import EXAMPLES
 from continuation_oracles import natural_limit
+
 from flexmech.models import MechanismError, compile_mechanism, load_document
 from flexmech.service.solvers.continuation import _path_graphs, body_stability, trace_path
 

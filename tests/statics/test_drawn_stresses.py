@@ -9,6 +9,7 @@ import json
 import numpy as np
 import pytest
 from conftest import ACTUATION, EXAMPLES
+
 from flexmech.models import MechanismError, compile_mechanism, load_document
 from flexmech.service import solve_equilibrium
 from flexmech.service.drawings.drawing import mechanism_drawing

@@ -8,10 +8,11 @@ import casadi as ca
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+from mechanisms import chain, four_bar
+
 from flexmech.models import MechanismError, compile_mechanism, load_document
 from flexmech.service.solvers.energy import minimize_energy
 from flexmech.service.solvers.equilibrium import NewtonOptions, solve_equilibrium
-from mechanisms import chain, four_bar
 
 TIGHT = NewtonOptions(tol_residual=1e-13, tol_step=1e-12)
 

@@ -8,11 +8,11 @@ import json
 import numpy as np
 import pytest
 from conftest import ACTUATION, EXAMPLES
+
+from flexmech import models
 from flexmech.service.solvers.equilibrium import solve_equilibrium
 from flexmech.service.solvers.stiffness import tangent_stiffness
 from flexmech.service.solvers.sweep import solve_for_target
-
-from flexmech import models
 
 
 @pytest.fixture(scope="module")

@@ -6,11 +6,11 @@ import casadi as ca
 import numpy as np
 import pytest
 from conftest import ACTUATION
+
+from benchmarks.numpy_peer import NumpyGripperResidual
 from flexmech.models import MechanismError
 from flexmech.service import NewtonOptions, solve_equilibrium, sweep
 from flexmech.service.solvers.fastpath import FastPath
-
-from benchmarks.numpy_peer import NumpyGripperResidual
 
 
 @pytest.fixture()

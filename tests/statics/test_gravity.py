@@ -5,9 +5,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.integrate import solve_bvp
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service.solvers.equilibrium import NewtonOptions, solve_equilibrium
-from scipy.integrate import solve_bvp
 
 E, B, H, L, RHO, G = 200e9, 0.01, 0.001, 1.0, 7800.0, 9.81
 TIGHT = NewtonOptions(tol_residual=1e-13, tol_step=1e-12, max_iterations=100)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from conftest import ACTUATION, EXAMPLES
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service import NewtonOptions, inverse_wrenches, solve_equilibrium, solve_for_target, tangent_stiffness
 from flexmech.service.solvers.inverse import configuration_of

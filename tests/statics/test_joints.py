@@ -9,9 +9,10 @@ import math
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+from mechanisms import four_bar
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service.solvers.equilibrium import NewtonOptions, solve_equilibrium
-from mechanisms import four_bar
 
 TIGHT = NewtonOptions(tol_residual=1e-13, tol_step=1e-12)
 GAMMA, K_THETA, EI, L = 0.85, 2.65, 0.08, 0.1016  # Howell's 1R constants; the thesis cantilever

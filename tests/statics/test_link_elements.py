@@ -9,6 +9,7 @@ import casadi as ca
 import numpy as np
 import pytest
 from elastica_oracles import cantilever_tip
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service.solvers.energy import minimize_energy
 from flexmech.service.solvers.equilibrium import NewtonOptions, solve_equilibrium

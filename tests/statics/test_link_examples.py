@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 from conftest import EXAMPLES
 from elastica_oracles import cantilever_tip
+
+from flexmech import models
 from flexmech.service.solvers.equilibrium import NewtonOptions, solve_equilibrium
 from flexmech.service.solvers.inverse_links import inverse_links
 from flexmech.service.solvers.sweep import document_sweep
-
-from flexmech import models
 
 LINK_EXAMPLES = [
     "cantilever",

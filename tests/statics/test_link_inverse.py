@@ -7,11 +7,11 @@ import math
 
 import numpy as np
 import pytest
+
+from flexmech import models
 from flexmech.models import MechanismError
 from flexmech.service.solvers.equilibrium import NewtonOptions, solve_equilibrium
 from flexmech.service.solvers.inverse_links import inverse_links, link_states
-
-from flexmech import models
 
 TIGHT = NewtonOptions(tol_residual=1e-13, tol_step=1e-12)
 SI = {"length": "m", "force": "N", "stress": "Pa", "angle": "rad"}

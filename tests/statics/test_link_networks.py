@@ -9,10 +9,10 @@ import math
 import numpy as np
 import pytest
 from elastica_oracles import cantilever_tip
-from flexmech.models import MechanismError
-from flexmech.service.solvers.equilibrium import NewtonOptions, solve_equilibrium
 
 from flexmech import models
+from flexmech.models import MechanismError
+from flexmech.service.solvers.equilibrium import NewtonOptions, solve_equilibrium
 
 TIGHT = NewtonOptions(tol_residual=1e-13, tol_step=1e-12)
 SI = {"length": "m", "force": "N", "stress": "Pa", "angle": "rad"}

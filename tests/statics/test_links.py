@@ -13,10 +13,10 @@ import math
 import numpy as np
 import pytest
 from elastica_oracles import cantilever_tip, circular_arc_tip, timoshenko_tip_deflection
-from flexmech.models.beams import curved_beam_closed_form as curved_beam
-from flexmech.service.solvers.equilibrium import NewtonOptions, solve_equilibrium
 
 from flexmech import models
+from flexmech.models.beams import curved_beam_closed_form as curved_beam
+from flexmech.service.solvers.equilibrium import NewtonOptions, solve_equilibrium
 
 # The thesis cantilever (Sec. 2.5.1): EI = 0.08 N m^2, L = 101.6 mm, F = 15 N.
 EI, L, F = 0.08, 0.1016, 15.0
@@ -233,9 +233,10 @@ def test_bounds_pick_the_buckled_branch_of_a_column():
     buckled elastica, whose tip rotation alpha solves k L = K(sin(alpha / 2)), k^2 = P / EI,
     with sideways deflection y* = 2 sin(alpha / 2) / k. (The bounds must put the start in
     the branch's basin: here the tip is held beyond 0.7 y*.)"""
-    from flexmech.service.solvers.equilibrium import solve_bounded
     from scipy.optimize import brentq
     from scipy.special import ellipk
+
+    from flexmech.service.solvers.equilibrium import solve_bounded
 
     P = 1.2 * math.pi**2 * EI / (4 * L**2)
     k = math.sqrt(P / EI)

@@ -9,6 +9,7 @@ import json
 import casadi as ca
 import numpy as np
 from conftest import EXAMPLES
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.models.graph.assembly import _symbolic
 from flexmech.models.graph.residual import residual_of

@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 
 import pytest
+
 from flexmech.models import MechanismError, compile_mechanism, load_document
 from flexmech.service.solvers.equilibrium import NewtonOptions, solve_equilibrium
 

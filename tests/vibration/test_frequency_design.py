@@ -10,10 +10,11 @@ import math
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+from test_modes import EULER, pinned_pinned, platform_on_a_flexure
+
 from flexmech.models import compile_mechanism, load_document
 from flexmech.service.analyses import ANALYSES
 from flexmech.service.analyses.base import AnalysisRequest
-from test_modes import EULER, pinned_pinned, platform_on_a_flexure
 
 
 def modes_of(mech, **options) -> dict:

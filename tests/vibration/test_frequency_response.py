@@ -10,12 +10,13 @@ import math
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+from test_modes import body_on_springs, platform_on_a_flexure, strip
+
 from flexmech.models import MechanismError, compile_mechanism, load_document
 from flexmech.service.analyses import ANALYSES
 from flexmech.service.analyses.base import AnalysisRequest
 from flexmech.service.solvers.equilibrium import solve_equilibrium
 from flexmech.service.units import outputs_in_doc_units
-from test_modes import body_on_springs, platform_on_a_flexure, strip
 
 M, J, K, K_TURN = 0.3, 0.002, 1200.0, 4.5
 

@@ -11,12 +11,13 @@ import math
 import numpy as np
 import pytest
 from conftest import EXAMPLES
+from scipy.linalg import eigh
+from scipy.optimize import brentq
+
 from flexmech.models import MechanismError, compile_mechanism, load_document
 from flexmech.service.analyses import ANALYSES
 from flexmech.service.analyses.base import AnalysisRequest
 from flexmech.service.vibration.eigen import vibration_eigen
-from scipy.linalg import eigh
-from scipy.optimize import brentq
 
 E, G_SHEAR, RHO = 2e11, 8e10, 7850.0
 B, H, L = 0.0127, 0.0003, 1.11  # a slender strip: its rotary inertia moves beta L by < 1e-7

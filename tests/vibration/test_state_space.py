@@ -12,6 +12,9 @@ import numpy as np
 import pytest
 import scipy.io
 from conftest import EXAMPLES
+from test_modes import body_on_springs
+from typer.testing import CliRunner
+
 from flexmech.api.cli import app
 from flexmech.models import MechanismError, compile_mechanism, load_document
 from flexmech.service.analyses import ANALYSES
@@ -20,8 +23,6 @@ from flexmech.service.solvers.stiffness import tangent_stiffness
 from flexmech.service.vibration.frf import Damping
 from flexmech.service.vibration.state_space import state_space_model
 from flexmech.service.vibration.state_space_files import MATRICES, control_system, read_state_space, write_state_space
-from test_modes import body_on_springs
-from typer.testing import CliRunner
 
 ROD = EXAMPLES / "rod_free_vibration.json"
 FX, FY = "/loads/hold/force/0", "/loads/hold/force/1"

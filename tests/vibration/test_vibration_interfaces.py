@@ -9,10 +9,11 @@ import json
 import httpx
 import pytest
 from conftest import EXAMPLES
-from flexmech.api.cli import app
-from flexmech.api.client import Client
 from PIL import Image
 from typer.testing import CliRunner
+
+from flexmech.api.cli import app
+from flexmech.api.client import Client
 
 ENV = {"COLUMNS": "220", "FORCE_COLOR": None, "TTY_COMPATIBLE": None, "NO_COLOR": "1"}
 ROD = str(EXAMPLES / "rod_free_vibration.json")

@@ -8,6 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import casadi as ca
+
 from flexmech.models.contact.laws.registry import ANALYSES, FrictionLaw
 
 

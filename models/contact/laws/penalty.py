@@ -9,6 +9,7 @@ import math
 from dataclasses import dataclass
 
 import casadi as ca
+
 from flexmech.models.contact.laws.registry import NormalLaw
 
 EVENT_DRIVEN = frozenset({"event_driven"})
