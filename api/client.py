@@ -16,6 +16,7 @@ server uses before they are sent, and responses come back as those schemas' mode
 from __future__ import annotations
 
 import asyncio
+import os
 import time
 from collections.abc import Callable
 from typing import Any, TypeVar
@@ -116,6 +117,11 @@ def _page(offset: int, limit: int | None) -> dict[str, int]:
     return {"offset": offset} | ({"limit": limit} if limit is not None else {})
 
 
+def _where(base_url: str | None, api_key: str | None) -> tuple[str, str | None]:
+    """The server and key: as given, else $FLEXMECH_URL and $FLEXMECH_API_KEY, else the local server."""
+    return base_url or os.environ.get("FLEXMECH_URL") or DEFAULT_URL, api_key or os.environ.get("FLEXMECH_API_KEY")
+
+
 def _headers(api_key: str | None) -> dict[str, str]:
     return {"X-API-Key": api_key} if api_key else {}
 
@@ -125,12 +131,13 @@ class Client:
 
     def __init__(
         self,
-        base_url: str = DEFAULT_URL,
+        base_url: str | None = None,
         api_key: str | None = None,
         timeout: float = 60.0,
         transport: httpx.BaseTransport | None = None,
     ):
-        self._http = httpx.Client(base_url=base_url, headers=_headers(api_key), timeout=timeout, transport=transport)
+        url, key = _where(base_url, api_key)
+        self._http = httpx.Client(base_url=url, headers=_headers(key), timeout=timeout, transport=transport)
         self._analyze: Analyses | None = None
         self._jobs: Analyses | None = None
 
@@ -284,14 +291,13 @@ class AsyncClient:
 
     def __init__(
         self,
-        base_url: str = DEFAULT_URL,
+        base_url: str | None = None,
         api_key: str | None = None,
         timeout: float = 60.0,
         transport: httpx.AsyncBaseTransport | None = None,
     ):
-        self._http = httpx.AsyncClient(
-            base_url=base_url, headers=_headers(api_key), timeout=timeout, transport=transport
-        )
+        url, key = _where(base_url, api_key)
+        self._http = httpx.AsyncClient(base_url=url, headers=_headers(key), timeout=timeout, transport=transport)
 
     async def __aenter__(self) -> AsyncClient:
         return self

@@ -1,24 +1,38 @@
-"""The example mechanism documents shipped with flexmech (examples/*.json)."""
+"""The example mechanism documents shipped with flexmech (flexmech.examples: the repository's
+examples/, installed with the package), found by name everywhere: the CLI's document argument,
+flexmech.load, {"example": ...} over HTTP and the page."""
 
 from __future__ import annotations
 
 import json
 from dataclasses import dataclass
+from importlib.resources import files
 from pathlib import Path
+
+from flexmech.models import MechanismError
 
 
 def examples_directory(configured: Path | None = None) -> Path | None:
-    """`configured` if given, else examples/ of the current directory, else the one next to
-    the package sources."""
-    candidates = (
-        [configured]
-        if configured is not None
-        else [Path.cwd() / "examples", Path(__file__).resolve().parents[1] / "examples"]
-    )
-    for candidate in candidates:
-        if candidate.is_dir():
-            return candidate
-    return None
+    """`configured` if given, else the examples installed with the package."""
+    if configured is not None:
+        return configured if configured.is_dir() else None
+    shipped = Path(str(files("flexmech.examples")))
+    return shipped if shipped.is_dir() else None
+
+
+def document_path(given: str | Path) -> Path:
+    """A document's file: `given` when it is a path (it exists, or has a folder or a suffix),
+    else the shipped example of that name (gripper: .../examples/gripper.json). MechanismError
+    when it is neither, listing the examples."""
+    path = Path(given)
+    if path.exists() or path.suffix or len(path.parts) != 1:
+        return path
+    directory = examples_directory()
+    found = directory / f"{path.name}.json" if directory is not None else None
+    if found is not None and found.is_file():
+        return found
+    names = ", ".join(sorted(f.stem for f in directory.glob("*.json"))) if directory is not None else "none"
+    raise MechanismError("", f"no file '{given}' and no example of that name (examples: {names})")
 
 
 @dataclass(frozen=True)

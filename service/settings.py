@@ -38,7 +38,7 @@ class Settings(BaseSettings):
         le=64,
         description="processes that run /v1/solve, drawings and job preparation",
     )
-    examples_dir: Path | None = None  # None: ./examples, else the one beside the sources
+    examples_dir: Path | None = None  # None: the examples installed with the package
 
     # Access: with keys set, every /v1 request but /v1/health needs X-API-Key.
     api_keys: Annotated[list[str], NoDecode] = Field(default_factory=list)

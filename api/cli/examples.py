@@ -18,15 +18,15 @@ def examples() -> None:
     with user_errors(err):
         directory = examples_directory()
         if directory is None:
-            raise OptionError("examples", "no examples directory (looked in ./examples and next to the package)")
-        table = Table(title=f"examples in {directory}", title_justify="left")
-        table.add_column("file")
+            raise OptionError("examples", "the package's examples are missing (a broken install: reinstall flexmech)")
+        table = Table(title=f"examples (in {shown(str(directory))}): flexmech solve NAME", title_justify="left")
         table.add_column("name")
+        table.add_column("title")
         for file in sorted(directory.glob("*.json")):
             try:
                 data = json.loads(file.read_text())
                 name = data.get("name", "") if isinstance(data, dict) else "(not a mechanism document)"
             except (OSError, json.JSONDecodeError) as exc:
                 name = f"(unreadable: {exc})"
-            table.add_row(file.name, shown(str(name)))
+            table.add_row(file.stem, shown(str(name)))
         out.print(table)

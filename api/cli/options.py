@@ -18,7 +18,26 @@ if TYPE_CHECKING:  # the models and the solvers are imported when a command runs
 JACOBIANS = ("full", "first_term", "frozen")
 RESTARTS = ("previous", "undeformed")
 
-DocArg = Annotated[Path, typer.Argument(help="Mechanism document (JSON or YAML).", show_default=False)]
+
+def document_argument(given: str) -> Path:
+    """The DOCUMENT argument: a file, or the name of a shipped example (`flexmech examples`)."""
+    from flexmech.models import MechanismError
+    from flexmech.service.examples import document_path
+
+    try:
+        return document_path(given)
+    except MechanismError as exc:
+        raise typer.BadParameter(exc.problem) from None
+
+
+DocArg = Annotated[
+    Path,
+    typer.Argument(
+        help="Mechanism document (JSON or YAML), or an example's name (gripper: flexmech examples lists them).",
+        show_default=False,
+        parser=document_argument,
+    ),
+]
 ModelOpt = Annotated[
     str | None,
     typer.Option(
