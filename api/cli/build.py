@@ -12,12 +12,15 @@ import typer
 
 from flexmech.api.cli.application import app
 from flexmech.api.cli.common import EXIT_NOT_CONVERGED, OptionError, consoles, shown, table_of, user_errors, write_json
-from flexmech.api.cli.options import JsonOpt, mechanism
+from flexmech.api.cli.options import JsonOpt, document_argument, mechanism
 
 
 @app.command()
 def build(
-    documents: Annotated[list[Path] | None, typer.Argument(help="Mechanism documents.", show_default=False)] = None,
+    documents: Annotated[
+        list[Path] | None,
+        typer.Argument(help="Mechanism documents, or examples' names.", show_default=False, parser=document_argument),
+    ] = None,
     examples: Annotated[bool, typer.Option("--examples", help="Every shipped example.")] = False,
     seconds: Annotated[float, typer.Option("--seconds", help="Time limit of one compiler run (s).")] = 60.0,
     memory: Annotated[float, typer.Option("--memory", help="Memory limit of one compiler run (MiB).")] = 1024.0,
@@ -35,7 +38,9 @@ def build(
         if examples:
             directory = examples_directory()
             if directory is None:
-                raise OptionError("--examples", "no examples directory (looked in ./examples and next to the package)")
+                raise OptionError(
+                    "--examples", "the package's examples are missing (a broken install: reinstall flexmech)"
+                )
             paths += sorted(directory.glob("*.json"))
         if not paths:
             raise OptionError("DOCUMENTS", "name documents to build for, or --examples")

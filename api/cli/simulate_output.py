@@ -39,7 +39,8 @@ def print_run(out: Console, report: dict[str, Any]) -> None:
     outputs' start, end and range."""
     out.print(
         f"[bold]{shown(report['name'])}[/bold]: {report['status']} at t = {report['time_reached']:g} s, "
-        f"{report['steps']} steps in {report['seconds']:.2f} s; energy balance error "
+        f"{report['steps']} steps in {report['seconds']:.2f} s ({report.get('kernels') or 'interpreted'}); "
+        "energy balance error "
         f"{report['energy_balance_error']:.2e}"
     )
     if report["message"]:

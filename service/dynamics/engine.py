@@ -73,6 +73,15 @@ class Engine:
         out = out if isinstance(out, (list, tuple)) else [out]
         return [np.asarray(q, dtype=float) for q in out]
 
+    def kernels(self) -> str:
+        """How its windows ran: "compiled" (kernels and windows), "kernels compiled" (their glue
+        interpreted) or "interpreted"."""
+        signatures = [g.signature for g in self.system.layout.groups]
+        if not signatures or any(s not in self.compiled for s in signatures):
+            return "interpreted"
+        windows = [compiled for _, compiled in self._windows.values()]
+        return "compiled" if windows and all(windows) else "kernels compiled"
+
     # ---- Functions ----------------------------------------------------------------------------------
     def window(self, steps: int) -> ca.Function:
         """The window of `steps` (see glue_window), compiled as a whole once the build queue has

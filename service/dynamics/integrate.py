@@ -60,5 +60,6 @@ def integrate(
         if progress is not None:
             progress(resume.time, resume.step)
     history.steps, history.resume = resume.step, resume
+    history.kernels = runner.engine.kernels()
     history.seconds = time.perf_counter() - started
     return history

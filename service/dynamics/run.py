@@ -315,6 +315,7 @@ def report(mech: Mechanism, spec: SimulateSpec, history: History, histories, sta
         "iterations": history.iterations,
         "rescued_steps": history.newton_iterations,
         "seconds": history.seconds,
+        "kernels": history.kernels,
         "start": start_note,
         "scheme": scheme_summary(spec),
         "step": spec.step,

@@ -52,6 +52,7 @@ class History:
     steps: int = 0
     seconds: float = 0.0
     resume: Resume | None = None
+    kernels: str = ""  # how its windows ran (service.dynamics.engine.Engine.kernels)
 
 
 @dataclass
