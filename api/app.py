@@ -2,7 +2,7 @@
 whose lifespan opens the job store, starts the executor and the job runner (which takes up
 jobs a previous process left running), and closes them again at shutdown.
 
-    uvicorn --factory api.app:create_app          (or: flexmech serve)
+    uvicorn --factory flexmech.api.app:create_app          (or: flexmech serve)
 """
 
 from __future__ import annotations

@@ -35,10 +35,10 @@ def serve(
     # The app is named by import string so that the service layer never imports the api package.
     # The protocol adds a deadline for a request's headers (api.protocol), which uvicorn lacks.
     uvicorn.run(
-        "api.app:create_app",
+        "flexmech.api.app:create_app",
         factory=True,
         host=host or settings.host,
         port=port or settings.port,
         log_level=settings.log_level,
-        http="api.protocol:HeaderTimeoutProtocol",
+        http="flexmech.api.protocol:HeaderTimeoutProtocol",
     )
