@@ -19,9 +19,12 @@ app = typer.Typer(
 
 def _version(asked: bool) -> None:
     if asked:
-        from flexmech import __version__
+        from importlib.metadata import PackageNotFoundError, version
 
-        typer.echo(f"flexmech {__version__}")
+        try:
+            typer.echo(f"flexmech {version('flexmech')}")
+        except PackageNotFoundError:  # the sources without an install
+            typer.echo("flexmech (not installed)")
         raise typer.Exit()
 
 

@@ -46,6 +46,16 @@ CsvOpt = Annotated[
 ]
 
 
+BuildOpt = Annotated[
+    bool,
+    typer.Option(
+        "--build/--no-build",
+        help="Compile the document's kernels beside the run when they are missing: a long run restarts "
+        "compiled, a short one finishes interpreted and leaves them compiled for the next.",
+    ),
+]
+
+
 @app.command()
 def simulate(
     document: DocArg,
@@ -80,14 +90,7 @@ def simulate(
             help="Deprecated and ignored: kernels compile in the build queue (flexmech build).",
         ),
     ] = False,
-    build: Annotated[
-        bool,
-        typer.Option(
-            "--build/--no-build",
-            help="Compile the document's kernels beside the run when they are missing: a long run restarts "
-            "compiled, a short one finishes interpreted and leaves them compiled for the next.",
-        ),
-    ] = True,
+    build: BuildOpt = True,
     animation: Annotated[
         Path | None, typer.Option("--animation", metavar="OUT.gif|mp4", help="Animate the links.")
     ] = None,

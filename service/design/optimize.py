@@ -6,9 +6,8 @@ an optimum whose equilibrium is not the one reached by loading the mechanism), t
 in document units, the multipliers, IPOPT's iterations and history, and, when the problem is
 infeasible, how far each constraint stays from its bounds.
 
-Multipliers follow CasADi's sign convention (positive on an active upper bound, negative on
-an active lower bound) in document units: raising an active bound by one unit changes the
-optimal objective by minus the multiplier.
+Multipliers follow CasADi's sign (positive on an active upper bound, negative on a lower one),
+in document units: raising an active bound by one unit changes the optimum by minus it.
 """
 
 from __future__ import annotations

@@ -109,6 +109,26 @@ def test_no_import_cycles():
     assert not cycles
 
 
+def test_every_import_of_ours_goes_through_the_one_package():
+    """`from flexmech.models import ...`, never `from models import ...`: a checkout's floors are
+    importable as top-level packages only from its root (tests, a developer's shell), never where
+    the package is installed, so such an import works here and fails for users. The tests,
+    benchmarks, scripts and examples are read too."""
+    found = []
+    for folder in ("flexmech", *FLOORS, "tests", "benchmarks", "examples"):
+        for path in sorted((ROOT / folder).rglob("*.py")):
+            for node in ast.walk(ast.parse(path.read_text(), str(path))):
+                names = (
+                    [a.name for a in node.names]
+                    if isinstance(node, ast.Import)
+                    else [node.module]
+                    if isinstance(node, ast.ImportFrom) and node.module and node.level == 0
+                    else []
+                )
+                found += [f"{path.relative_to(ROOT)}:{node.lineno} {n}" for n in names if n.split(".")[0] in FLOORS]
+    assert not found, found
+
+
 def test_each_floor_imports_only_the_floors_below():
     """models/ imports neither service/ nor api/, service/ never api/ (DESIGN.md: the floors);
     the public surface flexmech/ may import any."""
