@@ -9,8 +9,6 @@ from dataclasses import dataclass
 from importlib.resources import files
 from pathlib import Path
 
-from flexmech.models import MechanismError
-
 
 def examples_directory(configured: Path | None = None) -> Path | None:
     """`configured` if given, else the examples installed with the package."""
@@ -24,6 +22,8 @@ def document_path(given: str | Path) -> Path:
     """A document's file: `given` when it is a path (it exists, or has a folder or a suffix),
     else the shipped example of that name (gripper: .../examples/gripper.json). MechanismError
     when it is neither, listing the examples."""
+    from flexmech.models import MechanismError  # here: the CLI's --help imports this module, never the physics
+
     path = Path(given)
     if path.exists() or path.suffix or len(path.parts) != 1:
         return path

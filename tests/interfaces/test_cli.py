@@ -139,11 +139,15 @@ def test_far_load_does_not_converge_and_exits_1(run):
     assert "Traceback" not in result.output
 
 
-def test_examples_lists_the_gripper(run):
+def test_examples_lists_the_gripper_by_the_name_a_command_takes(run):
     result = run("examples")
     assert result.exit_code == 0, result.output
-    assert "gripper.json" in result.stdout
-    assert "MEMS gripper with curved-beam flexures (silicon)" in result.stdout
+    row = next(
+        line for line in result.stdout.splitlines() if "MEMS gripper with curved-beam flexures (silicon)" in line
+    )
+    assert row.split()[1] == "gripper" and "flexmech solve NAME" in result.stdout
+    solved = run("solve", "gripper")
+    assert solved.exit_code == 0 and "converged" in solved.stdout
 
 
 def test_compare_models_plots_both_curves(run, tmp_path):
