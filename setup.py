@@ -22,6 +22,6 @@ setup(
         "flexmech.models": ["*.json"],
         "flexmech.service": ["export/templates/*"],
         "flexmech.api": ["web/*.html", "web/*.js", "web/*.css", "web/*.svg", "web/vendor/*.js", "web/vendor/*.txt"],
-        "flexmech.examples": ["*.json", "*.py"],
+        "flexmech.examples": ["*.json", "*.py", "old_documents/*.json"],
     },
 )
