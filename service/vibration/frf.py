@@ -4,8 +4,8 @@ proportional damping), with modal damping ratios from a constant ratio and Rayle
     H(omega) = sum_k (C phi_k)(phi_k . f) / (omega_k^2 - omega^2 + i omega c_k),
     c_k = 2 zeta omega_k + alpha + beta omega_k^2    (D = alpha M + beta K, plus zeta on each mode)
 
-Resonances: each elastic mode's peak of |H| per output, searched near omega_k, with its
-half-power bandwidth (|H| = peak / sqrt 2 on both sides) and quality factor f / bandwidth."""
+Resonances: each elastic mode's peak of |H| per output, the local maximum nearest omega_k, with
+its half-power bandwidth (|H| = peak / sqrt 2 on both sides) and quality factor f / bandwidth."""
 
 from __future__ import annotations
 
@@ -116,29 +116,70 @@ def frequency_grid(start: float, stop: float, points: int, resonances: list[tupl
 
 
 def resonances(response: ModalResponse, kinds: list[str], start: float, stop: float) -> list[dict[str, Any]]:
-    """Per elastic mode in [start, stop] (Hz) and per output it moves: the peak and its bandwidth
-    (a peak that lies beyond its mode's window, drowned by a neighbour's, is left out). The
-    peak and the half-power points are solved for (bounded search, Brent's roots) between
-    samples of the mode's window."""
+    """Per elastic mode in [start, stop] (Hz) and per output it moves: its peak and bandwidth.
+
+    The peak is the local maximum of |H| nearest the mode's natural frequency within its window
+    (+-4 zeta) and within its own share of the axis (nearer its frequency than any other mode's),
+    solved for (bounded search) between samples of the window; the half-power points by Brent's
+    roots. A neighbour's larger flank in the window does not hide it (two modes 4 % apart at
+    zeta = 1 % overlap so). A mode the output moves but whose peak a neighbour drowns (no local
+    maximum of its own) is given at its natural frequency, without bandwidth."""
     found = []
     shares = np.abs(response.participation * (response.forcing + response.inertial * response.omega_squared)[None, :])
+    omegas = np.sqrt(np.maximum(response.omega_squared, 0.0))
+    elastic = omegas[[k for k, kind in enumerate(kinds) if kind == "elastic"]]
     for k, kind in enumerate(kinds):
-        omega_k = math.sqrt(max(response.omega_squared[k], 0.0))
+        omega_k = float(omegas[k])
         if kind != "elastic" or not start <= omega_k / TWO_PI <= stop or response.rates[k] <= 0:
             continue
         zeta = response.rates[k] / (2 * omega_k)
         window = omega_k * np.linspace(max(1 - 4 * zeta, 0.05), 1 + 4 * zeta, 161)
         H = np.abs(response.at(window))
+        own = _own_share(window, omega_k, elastic)
         for output, row in enumerate(H):
-            top = int(np.argmax(row))
-            if shares[output, k] <= 1e-9 * shares[output].max(initial=0.0) or not 0 < top < len(window) - 1:
-                continue  # the mode does not move this output, or its peak is a neighbour's
+            if shares[output, k] <= 1e-9 * shares[output].max(initial=0.0):
+                continue  # the mode does not move this output
 
             def magnitude(omega: float, output: int = output) -> float:
                 return float(abs(response.at(np.array([omega]))[output, 0]))
 
-            found.append({"mode": k + 1, "output": output, **_peak(window, row, top, magnitude, response, output)})
+            top = _nearest_maximum(row, own, window, omega_k)
+            if top is None:
+                found.append({"mode": k + 1, "output": output, **_drowned(omega_k, response, output)})
+            else:
+                found.append({"mode": k + 1, "output": output, **_peak(window, row, top, magnitude, response, output)})
     return found
+
+
+def _own_share(window: np.ndarray, omega_k: float, elastic: np.ndarray) -> np.ndarray:
+    """Which samples of a mode's window are nearer its frequency than any other mode's
+    (relatively: the midpoint on a log axis); the mode's own frequency appears once in
+    `elastic`, and a mode of the same frequency shares the whole window."""
+    others = elastic[np.abs(elastic - omega_k) > 1e-12 * omega_k]
+    below, above = others[others < omega_k], others[others > omega_k]
+    low = math.sqrt(omega_k * below.max()) if below.size else 0.0
+    high = math.sqrt(omega_k * above.min()) if above.size else math.inf
+    return (window > low) & (window < high)
+
+
+def _nearest_maximum(row: np.ndarray, own: np.ndarray, window: np.ndarray, omega_k: float) -> int | None:
+    """The index of the interior local maximum of `row` in the mode's own share nearest omega_k."""
+    inner = np.arange(1, len(row) - 1)
+    peaks = inner[(row[inner] >= row[inner - 1]) & (row[inner] > row[inner + 1]) & own[inner]]
+    if not peaks.size:
+        return None
+    return int(peaks[np.argmin(np.abs(window[peaks] - omega_k))])
+
+
+def _drowned(omega_k: float, response: ModalResponse, output: int) -> dict[str, Any]:
+    at = complex(response.at(np.array([omega_k]))[output, 0])
+    return {
+        "frequency": omega_k / TWO_PI,
+        "amplitude": abs(at),
+        "phase": float(np.degrees(np.angle(at))),
+        "bandwidth": None,
+        "quality": None,
+    }
 
 
 def _peak(

@@ -236,3 +236,56 @@ def test_a_cantilever_on_a_shaken_clamp_has_the_tip_transmissibility_of_euler_be
     assert away.sum() > 25
     assert signed[away] == pytest.approx(exact[away], rel=1e-5)
     assert response["static"] == pytest.approx(1.0, rel=1e-12)
+
+
+def two_modes(f1: float, f2: float, zeta: float, shares: tuple[float, float]):
+    """H(omega) = sum_k share_k / (omega_k^2 - omega^2 + 2 i zeta omega_k omega): two modes,
+    one output, no direct part."""
+    from flexmech.service.vibration.frf import ModalResponse
+
+    omega = 2 * math.pi * np.array([f1, f2])
+    return ModalResponse(
+        omega_squared=omega**2,
+        participation=np.array([list(shares)]),
+        forcing=np.ones(2),
+        rates=2 * zeta * omega,
+        direct=np.zeros(1),
+        inertial=np.zeros(2),
+        dragged=np.zeros(2),
+    )
+
+
+def test_a_small_peak_beside_a_larger_mode_is_a_resonance_of_its_own():
+    """Two modes 4.6 % apart at zeta = 1 % (the gripper's modes 2 and 3, 7077 and 7401 Hz): the
+    larger mode's flank at the edge of the smaller's window (+-4 zeta) is higher than the
+    smaller's peak; the peak found is the smaller mode's own local maximum, its frequency and
+    height those of the sampled curve."""
+    from flexmech.service.vibration.frf import TWO_PI, resonances
+
+    response = two_modes(7077.0, 7401.0, 0.01, (0.6, 4.0))
+    peaks = resonances(response, ["elastic", "elastic"], 1000.0, 20000.0)
+    assert [p["mode"] for p in peaks] == [1, 2]
+    f = np.linspace(6800.0, 7300.0, 200_001)
+    curve = np.abs(response.at(TWO_PI * f))[0]
+    inner = np.nonzero((curve[1:-1] > curve[:-2]) & (curve[1:-1] > curve[2:]))[0] + 1
+    (own,) = inner[np.abs(f[inner] - 7077.0) < 100]  # the curve's one local maximum near mode 1
+    assert peaks[0]["frequency"] == pytest.approx(f[own], abs=0.01)
+    assert peaks[0]["amplitude"] == pytest.approx(curve[own], rel=1e-9)
+    edge = np.abs(response.at(np.array([TWO_PI * 7077.0 * 1.04])))[0, 0]
+    assert edge > peaks[0]["amplitude"]  # what hid it: the neighbour's flank in its window
+
+
+def test_a_mode_drowned_by_its_neighbour_is_listed_at_its_natural_frequency():
+    """A mode whose peak a much larger neighbour 2 % away swallows (no local maximum of its
+    own) is still in the list: at its natural frequency, the response there, no bandwidth; the
+    neighbour's peak is not counted twice."""
+    from flexmech.service.vibration.frf import TWO_PI, resonances
+
+    response = two_modes(1000.0, 1020.0, 0.02, (0.01, 10.0))
+    peaks = resonances(response, ["elastic", "elastic"], 100.0, 5000.0)
+    assert [p["mode"] for p in peaks] == [1, 2]
+    drowned, peak = peaks
+    assert drowned["frequency"] == pytest.approx(1000.0, rel=1e-12)
+    assert drowned["bandwidth"] is None and drowned["quality"] is None
+    assert drowned["amplitude"] == pytest.approx(abs(response.at(np.array([TWO_PI * 1000.0]))[0, 0]), rel=1e-12)
+    assert peak["frequency"] == pytest.approx(1020.0, rel=1e-3) and peak["bandwidth"] is not None
