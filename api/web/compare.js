@@ -5,6 +5,7 @@
 // a legend, while the run has both quantities in the axes' units. The list under the plot
 // names every kept run, says why one is not drawn, and removes one or all.
 
+import { seriesName } from "./names.js";
 import { DASHES, PALETTE } from "./plot.js";
 
 const $ = (id) => document.getElementById(id);
@@ -48,9 +49,9 @@ export function keep(view) {
 function whyNot(run, x, y, units) {
   if (!x || !y) return "no curve is shown";
   for (const [name, unit] of [[x, units.x], [y, units.y]]) {
-    if (!run.view.series[name]) return `it has no ${name}`;
+    if (!run.view.series[name]) return `it has no ${seriesName(run.view, name)}`;
     const own = run.view.units[name] || "";
-    if (own !== unit) return `its ${name} is in ${own || "no unit"}, the axis in ${unit || "no unit"}`;
+    if (own !== unit) return `its ${seriesName(run.view, name)} is in ${own || "no unit"}, the axis in ${unit || "no unit"}`;
   }
   return "";
 }
@@ -99,7 +100,7 @@ export function overlaid(view, x, y) {
   const shown = kept.filter((_, k) => !reasons[k]).map((run) => ({ name: run.label, x: run.view.series[x], y: run.view.series[y],
                                                                   color: run.color, dash: run.dash }));
   if (isKept(view)) return shown;
-  const current = { name: shown.length ? `this run: ${runLabel(view.run)}` : y, x: view.series[x], y: view.series[y], color: PALETTE[0] };
+  const current = { name: shown.length ? `this run: ${runLabel(view.run)}` : seriesName(view, y), x: view.series[x], y: view.series[y], color: PALETTE[0] };
   return [current, ...shown];
 }
 

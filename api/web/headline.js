@@ -4,19 +4,11 @@
 // reader takes the service's report (or a job's result) and returns
 // {items: [{name, value, unit, note, id}], warnings: [...]}; the card (card.js) draws it.
 
+import { fieldName } from "./names.js";
 import { formatNumber } from "./plot.js";
 import { lengthUnitOf } from "./results.js";
 
 const finite = (x) => typeof x === "number" && Number.isFinite(x);
-
-// "/loads/actuation/force/1" -> "actuation force (y)", "/sections/flexure/h" -> "flexure h".
-export function fieldLabel(pointer) {
-  const parts = (pointer || "").split("/").filter(Boolean);
-  if (!parts.length) return pointer || "";
-  const component = /^[0-2]$/.test(parts[parts.length - 1]) ? ["x", "y", "z"][Number(parts.pop())] : null;
-  const named = parts.length >= 2 ? parts.slice(1).join(" ") : parts[0];
-  return component ? `${named} (${component})` : named;
-}
 
 function largestBy(entries, size) {
   let best = null;
@@ -37,7 +29,7 @@ function equilibrium(report) {
   const target = report.target;
   if (target) {
     const reaches = target.output ? `${target.output} = ${formatNumber(target.equals)} ${target.output_unit || ""}`.trim() : "the target";
-    items.push({ id: "target", name: fieldLabel(target.path), value: target.value, unit: target.unit,
+    items.push({ id: "target", name: fieldName(target.path), value: target.value, unit: target.unit,
                  note: target.status === "converged" ? `brings ${reaches} (${target.path})` : `target ${target.status.replace(/_/g, " ")}` });
   }
   const travel = largestDisplacement(report);
@@ -55,10 +47,10 @@ function trace(report) {
   const limits = report.limit_points || [];
   if (limits.length) {
     return limits.slice(0, 2).map((lp, k) => ({ name: `${k ? "second" : "first"} limit load (${lp.kind})`, value: lp.value, unit: report.unit,
-                                             note: `${fieldLabel(report.path)}, after point ${lp.after_point}` }));
+                                             note: `${fieldName(report.path)}, after point ${lp.after_point}` }));
   }
   const values = report.values || [];
-  return [{ name: `${fieldLabel(report.path)} reached`, value: values[values.length - 1], unit: report.unit, note: `${values.length} points, no limit point` }];
+  return [{ name: `${fieldName(report.path)} reached`, value: values[values.length - 1], unit: report.unit, note: `${values.length} points, no limit point` }];
 }
 
 function contactItems(pairs, unit) {
@@ -106,8 +98,8 @@ function sweep(result) {
   const until = result.until;
   const reached = until && finite(until.value);  // swept until an output reached a value: where it did
   const items = [reached
-    ? { name: `${fieldLabel(until.path)} at ${until.output} = ${formatNumber(until.equals)} ${units[until.output] || ""}`.trim(), value: until.value, unit: until.unit, note: `${points.length} points` }
-    : { name: `${fieldLabel(field.path)} at the last point`, value: last.values[0], unit: field.unit, note: `${points.length} points` }];
+    ? { name: `${fieldName(until.path)} at ${until.output} = ${formatNumber(until.equals)} ${units[until.output] || ""}`.trim(), value: until.value, unit: until.unit, note: `${points.length} points` }
+    : { name: `${fieldName(field.path)} at the last point`, value: last.values[0], unit: field.unit, note: `${points.length} points` }];
   const target = result.until && result.until.output;  // a sweep until an output reaches a value: that output
   const lengthUnit = lengthUnitOf(units);
   const changes = Object.keys(last.outputs || {}).filter((name) => units[name] === lengthUnit)
@@ -125,14 +117,14 @@ function contactPath(result) {
     }
   }
   const field = (result.parameters || [])[0] || {};
-  return best ? [{ name: "peak contact force", value: best.force, unit: result.force_unit, note: `pair ${best.name} at ${fieldLabel(field.path)} = ${formatNumber(best.at)} ${field.unit || ""}` }] : [];
+  return best ? [{ name: "peak contact force", value: best.force, unit: result.force_unit, note: `pair ${best.name} at ${fieldName(field.path)} = ${formatNumber(best.at)} ${field.unit || ""}` }] : [];
 }
 
 function optimization(result) {
   if (!result || !result.design) return [];
   const units = result.units || {};
   return [{ name: "objective at the optimum", value: result.objective, unit: units.objective || "", note: `${result.iterations ?? "–"} iterations` },
-          ...Object.entries(result.design).slice(0, 2).map(([path, value]) => ({ name: fieldLabel(path), value, unit: units[path] || "" }))];
+          ...Object.entries(result.design).slice(0, 2).map(([path, value]) => ({ name: fieldName(path), value, unit: units[path] || "" }))];
 }
 
 function impactStudy(result) {

@@ -61,6 +61,36 @@ function padRange(min, max) {
   return [min - pad, max + pad];
 }
 
+// A log axis draws log10 of its values (a value not above 0 is a gap). Its ticks, in log10
+// units: the decades, with 2 and 5 times each when the axis spans few (`minor`: the rest of
+// 2..9 times each decade, grid lines without labels); under a decade, the 1-2-5 ticks of the
+// values themselves. From the last tick at or below `min` to the first at or above `max`.
+export function logTicks(min, max, count = 6) {
+  if (!Number.isFinite(min) || !Number.isFinite(max)) return { major: [], minor: [] };
+  [min, max] = padRange(Math.min(min, max), Math.max(min, max));
+  const first = Math.floor(min + 1e-9), last = Math.ceil(max - 1e-9);
+  if (last - first < 2) { // within about a decade: plain nice values (when they cover it), drawn at their logs
+    const values = niceTicks(10 ** min, 10 ** max, count).filter((v) => v > 0).map(Math.log10);
+    if (values.length >= 2 && values[0] <= min + 1e-9 && values[values.length - 1] >= max - 1e-9) return { major: values, minor: [] };
+  }
+  const every = Math.max(1, Math.ceil((last - first + 1) / Math.max(2, count))); // decades per labelled tick
+  const sub = (last - first) * 3 <= count ? [1, 2, 5] : [1];
+  const major = [], minor = [];
+  for (let k = first; k <= last; k += 1) {
+    for (let m = 1; m < 10; m += 1) {
+      const at = k + Math.log10(m);
+      if ((k - first) % every === 0 && sub.includes(m)) major.push(at); else if (every === 1) minor.push(at);
+    }
+  }
+  const low = Math.max(...major.filter((t) => t <= min + 1e-9)), high = Math.min(...major.filter((t) => t >= max - 1e-9));
+  const within = (t) => t >= low - 1e-9 && t <= high + 1e-9;
+  return { major: major.filter(within), minor: minor.filter(within) };
+}
+
+const logOf = (values) => values.map((v) => (isFiniteNumber(v) && v > 0 ? Math.log10(v) : null));
+// A tick's label: the value itself on a log axis (its log10 is where it is drawn).
+const tickText = (log) => (value) => formatNumber(log ? Number((10 ** value).toPrecision(12)) : value);
+
 function dataExtent(series) {
   let x0 = Infinity, x1 = -Infinity, y0 = Infinity, y1 = -Infinity;
   for (const { x, y } of series) {
@@ -77,14 +107,18 @@ function dataExtent(series) {
 }
 
 // Same-length arrays, a colour and a search strategy per series, whatever the caller passed.
-function normalizeSeries(series) {
+// On a log axis a series is drawn by the log10 of its values; `shownX`, `shownY` keep the
+// values themselves for the read-out.
+function normalizeSeries(series, log = { x: false, y: false }) {
   return (Array.isArray(series) ? series : []).map((s, index) => {
     const x = s && s.x ? s.x : [], y = s && s.y ? s.y : [];
     const length = Math.min(x.length, y.length);
     const name = s && s.name !== undefined ? String(s.name) : `series ${index + 1}`;
     const color = (s && s.color) || PALETTE[index % PALETTE.length];
     const dash = (s && s.dash) || (s && s.dashed ? "6 4" : "");
-    return { name, color, dash, x: x.slice(0, length), y: y.slice(0, length), order: xOrder(x, length) };
+    const shownX = x.slice(0, length), shownY = y.slice(0, length);
+    const drawnX = log.x ? logOf(shownX) : shownX, drawnY = log.y ? logOf(shownY) : shownY;
+    return { name, color, dash, x: drawnX, y: drawnY, shownX, shownY, order: xOrder(drawnX, length) };
   });
 }
 
@@ -140,18 +174,23 @@ function drawLabels(svg, area, { xLabel, yLabel, title, width, height }) {
   if (title) node("text", { x: width / 2, y: 20, "text-anchor": "middle", "font-size": 14, "font-weight": 600, fill: INK, class: "plot-title" }, svg).textContent = title;
 }
 
-function drawTicks(svg, area, scales, xTicks, yTicks) {
+// Ticks are where they are drawn (log10 of the value on a log axis: `text` labels them);
+// `minor` ticks are grid lines alone (a log axis' 2..9 times a decade).
+function drawTicks(svg, area, scales, x, y) {
+  const minorGrid = node("g", { stroke: GRID, "stroke-width": 0.5, "stroke-dasharray": "2 3" }, svg);
   const grid = node("g", { stroke: GRID, "stroke-width": 1 }, svg);
   const labels = node("g", { fill: MUTED }, svg);
-  for (const value of xTicks) {
+  for (const value of x.minor) { const px = fixed(scales.x(value)); node("line", { x1: px, x2: px, y1: area.top, y2: area.bottom }, minorGrid); }
+  for (const value of y.minor) { const py = fixed(scales.y(value)); node("line", { x1: area.left, x2: area.right, y1: py, y2: py }, minorGrid); }
+  for (const value of x.major) {
     const px = fixed(scales.x(value));
     node("line", { x1: px, x2: px, y1: area.top, y2: area.bottom }, grid);
-    node("text", { x: px, y: area.bottom + 15, "text-anchor": "middle" }, labels).textContent = formatNumber(value);
+    node("text", { x: px, y: area.bottom + 15, "text-anchor": "middle", class: "plot-x-tick" }, labels).textContent = x.text(value);
   }
-  for (const value of yTicks) {
+  for (const value of y.major) {
     const py = fixed(scales.y(value));
     node("line", { x1: area.left, x2: area.right, y1: py, y2: py }, grid);
-    node("text", { x: area.left - 6, y: py + 4, "text-anchor": "end" }, labels).textContent = formatNumber(value);
+    node("text", { x: area.left - 6, y: py + 4, "text-anchor": "end", class: "plot-y-tick" }, labels).textContent = y.text(value);
   }
 }
 
@@ -252,7 +291,7 @@ function showPoint(hover, area, scales, s, index) {
   hover.horizontal.setAttribute("y1", fixed(py)); hover.horizontal.setAttribute("y2", fixed(py));
   hover.marker.setAttribute("cx", fixed(px)); hover.marker.setAttribute("cy", fixed(py));
   hover.marker.setAttribute("fill", s.color);
-  const lines = [s.name, `x = ${formatNumber(s.x[index])}`, `y = ${formatNumber(s.y[index])}`];
+  const lines = [s.name, `x = ${formatNumber(s.shownX[index])}`, `y = ${formatNumber(s.shownY[index])}`];
   hover.text.replaceChildren(...lines.map((line, k) => {
     const span = node("tspan", { dy: k ? LINE_HEIGHT : 0, "font-weight": k ? 400 : 600 });
     span.textContent = line;
@@ -320,16 +359,21 @@ function emptyRoot({ width, height, label }) {
 }
 
 // series: [{name, x: number[], y: (number|null)[], color?, dash? (an SVG dash array), dashed?}];
-// returns an <svg> element.
-export function linePlot({ series = [], xLabel = "", yLabel = "", title = "", width = 640, height = 360, points = false } = {}) {
+// xLog, yLog: that axis is logarithmic (values not above 0 are gaps). Returns an <svg> element.
+export function linePlot({ series = [], xLabel = "", yLabel = "", title = "", width = 640, height = 360, points = false,
+                           xLog = false, yLog = false } = {}) {
   const label = title || `${yLabel} against ${xLabel}`;
   const svg = emptyRoot({ width, height, label });
-  const list = normalizeSeries(series);
+  if (xLog) svg.dataset.xScale = "log";
+  if (yLog) svg.dataset.yScale = "log";
+  const list = normalizeSeries(series, { x: xLog, y: yLog });
   const extent = dataExtent(list);
   const legend = legendLayout(list, width);
   const titleHeight = title ? 30 : 12;
-  const yTicks = extent ? niceTicks(extent.y[0], extent.y[1], Math.max(3, Math.round((height - 80) / 50))) : [];
-  const area = layoutOf({ width, height, title, legendRows: legend.rows, yTickLabels: yTicks.map(formatNumber) });
+  const yCount = Math.max(3, Math.round((height - 80) / 50));
+  const yAxis = { minor: [], text: tickText(yLog), ...(!extent ? { major: [] } : yLog ? logTicks(extent.y[0], extent.y[1], yCount) : { major: niceTicks(extent.y[0], extent.y[1], yCount) }) };
+  const yTicks = yAxis.major;
+  const area = layoutOf({ width, height, title, legendRows: legend.rows, yTickLabels: yTicks.map(yAxis.text) });
   drawLabels(svg, area, { xLabel, yLabel, title, width, height });
   if (!extent) {
     drawFrame(svg, area);
@@ -339,9 +383,10 @@ export function linePlot({ series = [], xLabel = "", yLabel = "", title = "", wi
   // y spans whole ticks (lines keep off the frame); x is tight, lines reach both sides.
   const scales = scalesOf(area, extent.x, [yTicks[0], yTicks[yTicks.length - 1]]);
   const span = extent.x[1] - extent.x[0];
-  const xTicks = niceTicks(extent.x[0], extent.x[1], Math.max(2, Math.round(area.width / 90)))
-    .filter((v) => v >= extent.x[0] - span * 1e-9 && v <= extent.x[1] + span * 1e-9);
-  drawTicks(svg, area, scales, xTicks, yTicks);
+  const xCount = Math.max(2, Math.round(area.width / 90));
+  const inside = (v) => v >= extent.x[0] - span * 1e-9 && v <= extent.x[1] + span * 1e-9;
+  const xAxis = { minor: [], text: tickText(xLog), ...(xLog ? logTicks(extent.x[0], extent.x[1], xCount) : { major: niceTicks(extent.x[0], extent.x[1], xCount) }) };
+  drawTicks(svg, area, scales, { ...xAxis, major: xAxis.major.filter(inside), minor: xAxis.minor.filter(inside) }, yAxis);
   drawFrame(svg, area);
   drawSeries(svg, list, scales, area, points);
   drawLegend(svg, legend, titleHeight);

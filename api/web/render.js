@@ -3,6 +3,7 @@
 // of what is shown.
 
 import { overlaid } from "./compare.js";
+import { seriesLabel, seriesName } from "./names.js";
 import { formatNumber, linePlot } from "./plot.js";
 
 const $ = (id) => document.getElementById(id);
@@ -57,14 +58,18 @@ export function renderTables(v) {
   }
 }
 
-function label(v, name) {
+// A CSV header keeps the series' exact key (a field's pointer) with its unit.
+function exactLabel(v, name) {
   return v.units[name] ? `${name} [${v.units[name]}]` : name;
 }
+
+// Whether the series is drawn on a log axis (a view's `logScale`: frequencies).
+const logScaled = (v, name) => Boolean(v.logScale && v.logScale.includes(name));
 
 export function fillCurveChoices(v) {
   const names = Object.keys(v.series);
   for (const [select, index] of [[$("curve-x"), 0], [$("curve-y"), 1]]) {
-    select.replaceChildren(...names.map((name) => new Option(label(v, name), name)));
+    select.replaceChildren(...names.map((name) => new Option(seriesLabel(v, name), name)));
     const chosen = v.defaultCurve ? v.defaultCurve[index] : names[index] ?? names[0];
     if (chosen !== undefined) select.value = chosen;
   }
@@ -77,8 +82,8 @@ export function renderCurve(v) {
   const box = $("curve");
   const series = overlaid(v, x, y);
   if (!series.length) { box.replaceChildren(); return null; }
-  const svg = linePlot({ series, xLabel: label(v, x), yLabel: label(v, y),
-                         title: `${y} against ${x}`, points: Math.max(...series.map((s) => s.x.length)) <= 60 });
+  const svg = linePlot({ series, xLabel: seriesLabel(v, x), yLabel: seriesLabel(v, y), xLog: logScaled(v, x), yLog: logScaled(v, y),
+                         title: `${seriesName(v, y)} against ${seriesName(v, x)}`, points: Math.max(...series.map((s) => s.x.length)) <= 60 });
   box.replaceChildren(svg);
   return svg;
 }
@@ -101,7 +106,7 @@ export function csvOf(v) {
   const names = Object.keys(v.series);
   if (names.length) {
     const rows = v.series[names[0]].map((_, i) => names.map((n) => quote(v.series[n][i])).join(","));
-    return [names.map((n) => quote(label(v, n))).join(","), ...rows].join("\n") + "\n";
+    return [names.map((n) => quote(exactLabel(v, n))).join(","), ...rows].join("\n") + "\n";
   }
   const table = v.tables.find((t) => t && t.rows.length);
   if (!table) return "";

@@ -1,6 +1,6 @@
 // The vibration analyses as the page shows them: the modes' table and each mode swinging in the
 // drawing (frames of the centre lines the report moves along the mode), and a frequency
-// response's curves (amplitude in dB against log10 of the frequency, by default) with its
+// response's curves (amplitude in dB against the frequency on a log axis, by default) with its
 // resonances' table. A report's lists of records become tables as the CLI prints them.
 
 const SWING_FRAMES = 24; // frames of one mode's period
@@ -74,11 +74,12 @@ export function modesTable(report) {
   return recordsTable("Natural modes", rows, { frequency: "Hz", period: "s", effective_mass: (report.units || {}).effective_mass });
 }
 
-// A frequency response's series: frequency and its log10, per output its amplitude, in dB and its phase.
+// A frequency response's series: the frequency (drawn on a log axis), per output its
+// amplitude, in dB and its phase.
 export function responseSeries(v, report) {
   const f = report.frequencies || [];
-  v.series.frequency = f; v.units.frequency = "Hz";
-  v.series["log10 frequency"] = f.map((x) => Math.log10(x)); v.units["log10 frequency"] = "log10 Hz";
+  v.series.frequency = f; v.units.frequency = (report.units || {}).frequency || "Hz";
+  v.logScale = ["frequency"];
   let first = null;
   for (const [name, response] of Object.entries(report.responses || {})) {
     v.series[`${name} amplitude`] = response.amplitude; v.units[`${name} amplitude`] = response.unit;
@@ -86,7 +87,7 @@ export function responseSeries(v, report) {
     v.series[`${name} phase`] = response.phase; v.units[`${name} phase`] = "deg";
     first = first || name;
   }
-  v.defaultCurve = first ? ["log10 frequency", `${first} dB`] : null;
+  v.defaultCurve = first ? ["frequency", `${first} dB`] : null;
   const peaks = report.resonances || [];
   if (peaks.length) {
     const amplitudeUnits = new Set(peaks.map((peak) => ((report.responses || {})[peak.output] || {}).unit));

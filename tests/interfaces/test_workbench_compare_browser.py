@@ -109,7 +109,7 @@ def test_a_run_in_other_units_is_listed_and_not_drawn_and_runs_are_removed(page)
     page.select_option("#curve-y", "end_effector.x")
     item = page.locator("#pinned-list li")
     assert item.count() == 1 and item.get_attribute("data-drawn") == "false"
-    assert f"not drawn: its {ACTUATION} is in uN, the axis in N" in item.text_content()
+    assert "not drawn: its actuation force y is in uN, the axis in N" in item.text_content()
     assert plot.locator("path.plot-series").count() == 1 and plot.locator(".plot-legend text").count() == 0
     screenshot(page, "compare-other-units")
     page.click("#pinned-list button")
