@@ -61,14 +61,16 @@ function play() {
   requestAnimationFrame(tick);
 }
 
-export function setFrames(drawing, frames) {
+// The frames of a result, shown at frame `open` (default the last: where a simulation or a
+// path ends; a modes' animation opens on its first mode).
+export function setFrames(drawing, frames, open = frames.length - 1) {
   stop();
   const every = Math.max(1, Math.floor(frames.length / BOUND_SAMPLES));
   const sampled = frames.filter((_, i) => i % every === 0 || i === frames.length - 1);
   current = { drawing, frames, bounds: frames.length ? sceneBounds(drawing, [null, ...sampled]) : null, playing: false };
   $("animation").hidden = frames.length < 2;
   $("frame").max = String(Math.max(0, frames.length - 1));
-  if (frames.length) showFrame(frames.length - 1);
+  if (frames.length) showFrame(open);
   else $("frame-label").textContent = "";
 }
 

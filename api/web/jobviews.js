@@ -3,7 +3,8 @@
 // anything else as a table of its numbers.
 
 import { contactFrame } from "./contactframes.js";
-import { lengthUnitOf, mostMoving, simulationView } from "./results.js";
+import { fieldName, seriesLabel } from "./names.js";
+import { lengthUnitOf, mostMoving, simulationView, withFieldLoads } from "./results.js";
 import { recordsTable } from "./vibration.js";
 
 const MAX_TABLE_ROWS = 500;
@@ -30,7 +31,7 @@ function pointSeries(v, result, points) {
 function pointsTable(caption, v, points) {
   const names = Object.keys(v.series);
   const rows = points.slice(0, MAX_TABLE_ROWS).map((p, i) => [p.index ?? i, p.status, ...names.map((n) => v.series[n][i])]);
-  return { caption, columns: ["point", "status", ...names.map((n) => (v.units[n] ? `${n} [${v.units[n]}]` : n))], rows };
+  return { caption, columns: ["point", "status", ...names.map((n) => seriesLabel(v, n))], rows };
 }
 
 function sweepView(result) {
@@ -53,11 +54,12 @@ function contactView(result, base) {
   }
   const field = (result.parameters || [])[0] || { path: "", unit: "" };
   const largest = Math.max(0, ...points.flatMap((p) => Object.values(p.pairs || {}).map((q) => Math.hypot(...(q.force || [0, 0])))));
-  v.frames = points.map((p, i) => {
-    const frame = contactFrame(p, `${field.path} = ${+(+p.values[0]).toPrecision(6)} ${field.unit}`, base, result.force_unit);
+  const frames = points.map((p) => {
+    const frame = contactFrame(p, `${fieldName(field.path)} = ${+(+p.values[0]).toPrecision(6)} ${field.unit}`, base, result.force_unit);
     frame.overlay.largestForce = largest;
     return frame;
   });
+  v.frames = withFieldLoads(frames, base, field.path, points.map((p) => p.values[0]));
   v.frameUnit = field.unit;
   return v;
 }

@@ -9,7 +9,8 @@ import { buildRequest, choices, renderForm } from "./forms.js";
 import { jobView } from "./jobviews.js";
 import { cancel, fullResult, follow, jobRequest, showProgress } from "./jobs.js";
 import { csvOf, fillCurveChoices, renderCurve, renderEnergies, renderTables } from "./render.js";
-import { resultView } from "./results.js";
+import { resultView, withFieldLoads } from "./results.js";
+import { fieldName } from "./names.js";
 import { wireModeRows } from "./vibration.js";
 import { drawScene } from "./scene.js";
 import { resetView } from "./zoom.js";
@@ -179,7 +180,7 @@ function showView(view, result) {
   $("download-json").disabled = false;
   $("download-csv").disabled = false;
   if (view.frames.length && state.drawing) {
-    setFrames(state.drawing, view.frames);
+    setFrames(state.drawing, view.frames, view.openAt ?? view.frames.length - 1);
     $("drawing-caption").textContent = view.frames.length === 1 ? "The state found, to scale over the undeformed mechanism (dashed)."
       : `${view.frames.length} states of the result, to scale over the undeformed mechanism (dashed): slide or play.`;
   }
@@ -208,8 +209,9 @@ async function sweepFrames(result) {
   const chosen = values.filter((_, i) => i % every === 0 || i === values.length - 1);
   const answer = await post("/v1/drawings", { document: state.doc, model: $("model").value || undefined, overrides: state.overrides,
                                               state: "path", path: { path: field.path, values: chosen } });
-  const frames = answer.frames.map((f) => ({ elements: f.elements, poses: f.poses, about: "reference",
-                                             label: `${field.path} = ${+(+f.value).toPrecision(5)} ${answer.unit}${f.status === "converged" ? "" : ` (${f.status})`}` }));
+  const states = answer.frames.map((f) => ({ elements: f.elements, poses: f.poses, about: "reference",
+                                             label: `${fieldName(field.path)} = ${+(+f.value).toPrecision(5)} ${answer.unit}${f.status === "converged" ? "" : ` (${f.status})`}` }));
+  const frames = withFieldLoads(states, answer, field.path, answer.frames.map((f) => f.value)); // a swept load at each state's value
   state.drawing = answer;
   setFrames(answer, frames);
   $("drawing-caption").textContent = `${frames.length} states of the sweep, each solved from the one before, over the undeformed mechanism (dashed).`;

@@ -3,6 +3,7 @@
 // the animation (element centre lines and body poses per state, see scene.js).
 
 import { contactFrame } from "./contactframes.js";
+import { fieldName } from "./names.js";
 import { formatNumber } from "./plot.js";
 import { posesAtElementEnds } from "./scene.js";
 import { modeFrames, modesTable, recordsTable, responseSeries } from "./vibration.js";
@@ -11,7 +12,7 @@ const MAX_IMPACT_ROWS = 200;
 const isNumberList = (value) => Array.isArray(value) && value.length > 0 && value.every((v) => v === null || typeof v === "number");
 
 function view() {
-  return { summary: [], tables: [], series: {}, units: {}, defaultCurve: null, energies: null, frames: [], frameUnit: "" };
+  return { summary: [], tables: [], series: {}, units: {}, defaultCurve: null, energies: null, frames: [], frameUnit: "", openAt: null };
 }
 
 function outputsTable(caption, values, units) {
@@ -123,7 +124,7 @@ function simulationFrames(report, drawing) {
   const times = report.times || [];
   if (!drawing) return [];
   if (report.shapes && report.shapes.length) {
-    const loads = loadsInTime(report, drawing);
+    const loads = loadsAlong((report.varying || {}).values || {}, drawing);
     return report.shapes.map((shape, k) => {
       const elements = Object.fromEntries(Object.entries(shape).map(([name, [xs, ys]]) => [name, xs.map((x, i) => [x, ys[i]])]));
       return { elements, poses: posesAtElementEnds(drawing, elements), about: "reference", label: `t = ${+(+times[k]).toPrecision(4)} s`,
@@ -144,27 +145,39 @@ function simulationFrames(report, drawing) {
   return [];
 }
 
-// The loads that histories drive (the report's `varying`: values at each kept state), as a
-// frame draws them: at(k) gives {name: {vector} or {value}} of state k; `largest` is the
-// largest force of the run, drawn or varying, so arrows keep one scale.
-function loadsInTime(report, drawing) {
-  const values = (report.varying || {}).values || {};
-  const varying = drawing.loads.filter((l) => (l.kind === "force" ? [0, 1].some((i) => values[`/loads/${l.name}/force/${i}`]) : values[`/loads/${l.name}/moment`]));
+// The loads as frames draw them when some of their fields take a value per frame (a history's
+// values at each kept state, a swept or traced field's value at each state): `values` maps a
+// field's pointer (/loads/<name>/force/<0|1>, /loads/<name>/moment) to its values, one per
+// frame. at(k) gives {name: {vector} or {value}} of frame k, the other fields as drawn;
+// `largest` is the largest force over the frames, drawn or varying, so arrows keep one scale.
+export function loadsAlong(values, drawing) {
+  const given = (pointer) => Array.isArray(values[pointer]) && values[pointer].length > 0;
+  const varying = drawing.loads.filter((l) => (l.kind === "force" ? [0, 1].some((i) => given(`/loads/${l.name}/force/${i}`)) : given(`/loads/${l.name}/moment`)));
+  const component = (l, i, k) => (given(`/loads/${l.name}/force/${i}`) ? values[`/loads/${l.name}/force/${i}`][k] ?? l.vector[i] : l.vector[i]);
   const at = (k) => {
     if (!varying.length) return undefined;
     return Object.fromEntries(varying.map((l) => [l.name, l.kind === "force"
-      ? { vector: [0, 1].map((i) => (values[`/loads/${l.name}/force/${i}`] || [])[k] ?? l.vector[i]) }
+      ? { vector: [0, 1].map((i) => component(l, i, k)) }
       : { value: values[`/loads/${l.name}/moment`][k] }]));
   };
   let largest = Math.max(0, ...drawing.loads.filter((l) => l.kind === "force" && !varying.includes(l)).map((l) => Math.hypot(...l.vector)));
   for (const l of varying.filter((l) => l.kind === "force")) {
-    const xs = values[`/loads/${l.name}/force/0`], ys = values[`/loads/${l.name}/force/1`];
-    for (let k = 0; k < (xs || ys).length; k += 1) largest = Math.max(largest, Math.hypot(xs ? xs[k] : l.vector[0], ys ? ys[k] : l.vector[1]));
+    const count = Math.max(...[0, 1].map((i) => (given(`/loads/${l.name}/force/${i}`) ? values[`/loads/${l.name}/force/${i}`].length : 0)));
+    for (let k = 0; k < count; k += 1) largest = Math.max(largest, Math.hypot(component(l, 0, k), component(l, 1, k)));
   }
   return { at, largest: largest || undefined };
 }
 
-function traceView(report) {
+// Frames of states along a field (a sweep's, a trace's, a contact path's), each given the
+// loads at its own value of the field (`values`, one per frame): a swept load is drawn at
+// the frame's value, not at the document's.
+export function withFieldLoads(frames, drawing, pointer, values) {
+  if (!drawing || !pointer) return frames;
+  const loads = loadsAlong({ [pointer]: values }, drawing);
+  return frames.map((frame, k) => ({ ...frame, loads: loads.at(k), largestLoad: loads.largest }));
+}
+
+function traceView(report, drawing) {
   const v = view();
   v.summary.push(["status", report.status], ["message", report.message || ""]);
   const field = report.path || "field";
@@ -175,11 +188,12 @@ function traceView(report) {
   const moving = Object.keys(v.series).filter((n) => n !== field && new Set(v.series[n]).size > 1);
   const first = moving.find((n) => n.endsWith(".dy")) || moving[0];
   v.defaultCurve = first ? [first, field] : null;
-  v.frames = (report.frames || []).map((f) => ({ elements: f.elements, poses: f.poses, about: "reference", stresses: f.stresses,
-                                                 label: `${field} = ${+(+f.value).toPrecision(5)} ${report.unit || ""} (point ${f.point})` }));
+  const frames = (report.frames || []).map((f) => ({ elements: f.elements, poses: f.poses, about: "reference", stresses: f.stresses,
+                                                     label: `${fieldName(field)} = ${+(+f.value).toPrecision(5)} ${report.unit || ""} (point ${f.point})` }));
+  v.frames = withFieldLoads(frames, drawing, report.path, (report.frames || []).map((f) => f.value));
   v.frameUnit = report.unit || "";
   if (report.limit_points && report.limit_points.length) {
-    v.tables.push({ caption: "Limit points", columns: ["kind", `${field} [${report.unit || ""}]`, "after point"], rows: report.limit_points.map((lp) => [lp.kind, lp.value, lp.after_point]) });
+    v.tables.push({ caption: "Limit points", columns: ["kind", `${fieldName(field)} [${report.unit || ""}]`, "after point"], rows: report.limit_points.map((lp) => [lp.kind, lp.value, lp.after_point]) });
   }
   return v;
 }
@@ -187,11 +201,12 @@ function traceView(report) {
 export function resultView(kind, result, drawing) {
   if (kind !== "solve") return null;
   if (result.analysis === "simulate") return simulationView(result, drawing);
-  if (result.analysis === "trace") return traceView(result);
+  if (result.analysis === "trace") return traceView(result, drawing);
   const v = solveView(result);
   if (result.analysis === "modes") {
     v.tables.push(modesTable(result));
     v.frames = modeFrames(result);
+    v.openAt = 0; // the first mode, at rest
     return v;
   }
   if (result.analysis === "frequency_response") {
