@@ -14,7 +14,8 @@
 
 Exit codes: 0 success; 1 the solver did not converge (status and diagnostics are printed,
 and --json/--plot files are still written); 2 a problem with the document or the options,
-printed as one line "error: <where>: <problem>" on stderr.
+printed as one line "error: <where>: <problem>" on stderr (a line per field when the document
+has several, each with its suggestion: api.cli.problems).
 
 One module per command; importing it registers the command on the shared typer app. The
 modules import the physics (NumPy, CasADi, the models) in their commands' bodies, not at their

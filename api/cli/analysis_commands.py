@@ -21,7 +21,7 @@ import typer.main
 from pydantic import ValidationError
 from rich.console import Console
 
-from flexmech.api.cli.catalog import command_names
+from flexmech.api.cli.catalog import alias_help, command_names
 from flexmech.api.cli.common import (
     EXIT_NOT_CONVERGED,
     OptionError,
@@ -43,8 +43,11 @@ from flexmech.api.cli.options import (
     mechanism,
     newton_options,
 )
+from flexmech.api.cli.problems import every_problem, in_the_file
 from flexmech.api.cli.record_tables import is_records, records_table
-from flexmech.api.cli.report_tables import print_status
+from flexmech.api.cli.report_tables import print_status, print_stiffness
+from flexmech.api.cli.resonance_tables import resonance_tables
+from flexmech.models import MechanismError
 from flexmech.service.analyses import Analysis, AnalysisRequest
 from flexmech.service.analyses.base import Analyses
 
@@ -73,11 +76,47 @@ def _help(info, choices: tuple | None) -> str:
     return text + "."
 
 
-def option_parameter(name: str, info) -> inspect.Parameter:
+def is_names(info) -> bool:
+    """A field that is a list of words (outputs, JSON pointers): a repeated flag."""
+    kind = _plain(info.annotation)
+    return typing.get_origin(kind) is list and typing.get_args(kind) == (str,)
+
+
+def singular(name: str) -> str:
+    if name.endswith("ies"):
+        return name[:-3] + "y"
+    return name[:-1] if name.endswith("s") and not name.endswith("ss") else name
+
+
+def list_flags(fields: dict[str, Any]) -> dict[str, str]:
+    """Field name -> its repeated flag, for each list of words: the singular of its name
+    (--output for outputs) unless another field or a common option has that flag."""
+    taken = {flag(name) for name in fields} | {flag(name) for name, _ in COMMON} | {"--set", "--json"}
+    out = {}
+    for name, info in fields.items():
+        if is_names(info):
+            one = flag(singular(name))
+            out[name] = one if one not in taken else flag(name)
+    return out
+
+
+def option_flag(fields: dict[str, Any], name: str) -> str:
+    """The flag a field is given by (a problem with the field is named by it)."""
+    return list_flags(fields).get(name, flag(name))
+
+
+def json_name(name: str) -> str:
+    """The parameter of a list's JSON form (--outputs '["a", "b"]', as before the repeated flag)."""
+    return f"{name}__json"
+
+
+def option_parameters(name: str, info, fields: dict[str, Any]) -> list[inspect.Parameter]:
     """The flag of one options field: a bool is --x/--no-x, a number or a word takes its value,
-    a choice names its choices, anything else takes JSON."""
+    a choice names its choices, a list of words is a repeated flag (--output A --output B; its
+    plural, hidden, still takes the list as JSON), anything else takes JSON."""
     kind = _plain(info.annotation)
     choices = typing.get_args(kind) if typing.get_origin(kind) is Literal else None
+    hidden = None
     if kind is bool:
         annotation = Annotated[
             bool | None,
@@ -86,11 +125,48 @@ def option_parameter(name: str, info) -> inspect.Parameter:
     elif kind in (int, float, str) or choices:
         python = str if choices else kind
         annotation = Annotated[python | None, typer.Option(flag(name), help=_help(info, choices), show_default=False)]
+    elif is_names(info):
+        one = option_flag(fields, name)
+        examples = info.examples[0] if info.examples and info.examples[0] else [""]
+        metavar = "POINTER" if str(examples[0]).startswith("/") else "NAME"
+        text = _help(info, None).removesuffix(".") + f"; one {metavar.lower()} per {one}, repeated."
+        annotation = Annotated[list[str] | None, typer.Option(one, metavar=metavar, help=text, show_default=False)]
+        if one != flag(name):
+            hidden = inspect.Parameter(
+                json_name(name),
+                inspect.Parameter.KEYWORD_ONLY,
+                default=None,
+                annotation=Annotated[str | None, typer.Option(flag(name), metavar="JSON", hidden=True)],
+            )
     else:
         annotation = Annotated[
             str | None, typer.Option(flag(name), metavar="JSON", help=_help(info, None), show_default=False)
         ]
-    return inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=None, annotation=annotation)
+    shown_one = inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=None, annotation=annotation)
+    return [shown_one] if hidden is None else [shown_one, hidden]
+
+
+def given_names(fields: dict[str, Any], name: str, repeated: list[str] | None, as_json: str | None) -> list | None:
+    """A list field's words from its repeated flag and its JSON form (a repeated flag's value
+    that is a JSON list counts as its items); None when neither is given."""
+    if repeated is None and as_json is None:
+        return None
+    words: list = []
+    for item in repeated or []:
+        words += _json_list(item, option_flag(fields, name)) if item.lstrip().startswith("[") else [item]
+    if as_json is not None:
+        words += _json_list(as_json, flag(name))
+    return words
+
+
+def _json_list(text: str, where: str) -> list:
+    try:
+        items = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise OptionError(where, f"not JSON: {exc.msg}") from None
+    if not isinstance(items, list):
+        raise OptionError(where, f'expected a JSON list like ["a", "b"], got {text!r}')
+    return items
 
 
 COMMON = [
@@ -113,12 +189,18 @@ COMMON_DEFAULTS = {
 
 
 def typed_options(analysis: Analysis, given: dict[str, Any]):
-    """The options model from the flags given (JSON flags parsed); OptionError names the flag."""
+    """The options model from the flags given (JSON flags parsed, a list's repeated flag and its
+    JSON form joined); OptionError names the flag."""
     fields = {}
+    model = analysis.Options.model_fields
     for name, value in given.items():
+        if name not in model:
+            continue
+        if is_names(model[name]):
+            value = given_names(model, name, value, given.get(json_name(name)))
         if value is None:
             continue
-        kind = _plain(analysis.Options.model_fields[name].annotation)
+        kind = _plain(model[name].annotation)
         if isinstance(value, str) and kind not in (str, int, float, bool) and typing.get_origin(kind) is not Literal:
             try:
                 value = json.loads(value)
@@ -130,7 +212,8 @@ def typed_options(analysis: Analysis, given: dict[str, Any]):
     except ValidationError as exc:
         first = exc.errors()[0]
         inner = "/".join(str(p) for p in first["loc"][1:])
-        raise OptionError(flag(str(first["loc"][0])) + (f" /{inner}" if inner else ""), first["msg"]) from None
+        where = option_flag(model, str(first["loc"][0]))
+        raise OptionError(where + (f" /{inner}" if inner else ""), first["msg"]) from None
 
 
 SHOWN_ELSEWHERE = ("analysis", "name", "status", "message", "iterations", "seconds", "warnings")
@@ -151,13 +234,20 @@ def _scalar_record(row: dict) -> bool:
 
 def print_report(out: Console, report: dict) -> None:
     """The status; then each number, each quantity ({value, unit}) and a table per mapping of
-    named numbers (its units from the report's <key>_units); the rest is named as in --json."""
+    named numbers (its units from the report's <key>_units); the tangent stiffness K_T and its
+    terms as `flexmech solve --stiffness` prints them, the resonances with their units; the rest
+    is named as in --json."""
     print_status(out, report)
     rest = []
     for key, value in report.items():
         if key in SHOWN_ELSEWHERE or key.endswith(("units", "_unit")):
             continue
-        if isinstance(value, (int, float)) and not isinstance(value, bool):
+        if key == "stiffness" and isinstance(value, dict) and "K" in value:
+            print_stiffness(out, value)
+        elif key == "resonances" and is_records(value):
+            for table in resonance_tables(report):
+                out.print(table)
+        elif isinstance(value, (int, float)) and not isinstance(value, bool):
             unit = report.get(f"{key}_unit") or report.get(f"{key.rsplit('_', 1)[0]}_unit")
             out.print(f"{shown(key)}: {number(value, unit if isinstance(unit, str) else None)}")
         elif isinstance(value, str):
@@ -204,7 +294,10 @@ def run_command(
         options = typed_options(analysis, given)
         newton = newton_options(jacobian, line_search, max_iterations)
         mech = mechanism(document, model, sets)
-        report = analysis.run(mech, AnalysisRequest(newton, options))
+        try:
+            report = analysis.run(mech, AnalysisRequest(newton, options))
+        except MechanismError as exc:
+            raise named_by_flag(analysis, options, exc) from None
         out.print(f"[bold]{shown(mech.document.name)}[/bold]  ({shown(str(document))}): {analysis.name}")
         print_report(out, report)
         if json_out is not None:
@@ -218,14 +311,33 @@ def run_command(
         raise typer.Exit(EXIT_NOT_CONVERGED)
 
 
+def named_by_flag(analysis: Analysis, options: Any, exc: MechanismError) -> Exception:
+    """A problem the analysis names by a request's pointer, named as the command line has it:
+    an option by its flag (an item of a repeated flag by its value: --output bodies.nope), a
+    field of the document from the file's root (the request's /document/... is the file)."""
+    parts = exc.pointer.split("/")[1:]
+    fields = analysis.Options.model_fields
+    if parts and parts[0] == "document":
+        return every_problem(in_the_file(exc))
+    if not parts or parts[0] not in fields:
+        return every_problem(exc)
+    where, value = option_flag(fields, parts[0]), getattr(options, parts[0], None)
+    if is_names(fields[parts[0]]) and len(parts) > 1 and parts[1].isdigit() and int(parts[1]) < len(value or []):
+        return OptionError(f"{where} {value[int(parts[1])]}", exc.problem)
+    return OptionError(where + (f" /{'/'.join(parts[1:])}" if len(parts) > 1 else ""), exc.problem)
+
+
 def command_of(analysis: Analysis):
     """The command function, its signature made from the options model (typer reads it)."""
-    option_names = list(analysis.Options.model_fields)
+    fields = analysis.Options.model_fields
+    option_names = list(fields)
 
     def command(**kwargs: Any) -> None:
         common = {name: kwargs.get(name, COMMON_DEFAULTS.get(name)) for name, _ in COMMON}
         figures = {flag: kwargs.get(f"figure_{flag}") for flag, _, _ in analysis.figures}
-        run_command(analysis, **common, given={name: kwargs.get(name) for name in option_names}, figures=figures)
+        given = {name: kwargs.get(name) for name in option_names}
+        given |= {json_name(name): kwargs.get(json_name(name)) for name in list_flags(fields)}
+        run_command(analysis, **common, given=given, figures=figures)
 
     parameters = [
         inspect.Parameter(
@@ -237,9 +349,10 @@ def command_of(analysis: Analysis):
         for name, annotation in COMMON
     ]
     parameters += [
-        option_parameter(name, analysis.Options.model_fields[name])
+        parameter
         for name in option_names
         if name not in COMMON_DEFAULTS and name != "document"
+        for parameter in option_parameters(name, fields[name], fields)
     ]
     parameters += [
         inspect.Parameter(
@@ -274,5 +387,7 @@ def commands_of(analyses: Analyses, taken: Collection[str]) -> dict[str, Any]:
     maker = typer.Typer(add_completion=False)
     for command, name, short in command_names(((a.name, a.summary, a.aliases) for a in analyses), taken):
         function = command_of(analyses.named(name))
-        maker.command(name=command, help=function.__doc__, short_help=short)(function)
+        own = name.replace("_", "-")
+        text = function.__doc__ if command == own else f"{alias_help(own)} {function.__doc__}"
+        maker.command(name=command, help=text, short_help=short)(function)
     return dict(typer.main.get_group(maker).commands) if maker.registered_commands else {}

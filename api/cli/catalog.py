@@ -82,7 +82,7 @@ def command_names(
 ) -> list[tuple[str, str, str]]:
     """(command, analysis, short help) for each (name, summary, aliases) of an analysis whose
     command name (its name with dashes) no command has, and for each of its aliases no command
-    has ("<summary> (as <command>)")."""
+    has ("Alias of <command>.")."""
     named: list[tuple[str, str, str]] = []
     for name, summary, aliases in analyses:
         command = name.replace("_", "-")
@@ -91,8 +91,13 @@ def command_names(
         named.append((command, name, summary))
         for alias in aliases:
             if alias not in taken and all(alias != c for c, _, _ in named):
-                named.append((alias, name, f"{summary} (as {command})"))
+                named.append((alias, name, alias_help(command)))
     return named
+
+
+def alias_help(command: str) -> str:
+    """An alias' line in the list of commands, and the start of its --help."""
+    return f"Alias of {command}."
 
 
 def catalog_entries() -> list[tuple[str, str, tuple[str, ...]]]:

@@ -36,7 +36,26 @@ class Commands(typer.core.TyperGroup):
         name, command, rest = super().resolve_command(ctx, args)
         if isinstance(command, Listed):  # it runs: its options come from the registry
             command = analysis_commands(self.own, load=True)[str(command.name)]
+        if command is not None:
+            plain_flags(command, ctx)
         return name, command, rest
+
+    def get_params(self, ctx: Any) -> list[Any]:
+        params = super().get_params(ctx)
+        plain_flags_of(params)
+        return params
+
+
+def plain_flags(command: Any, ctx: Any) -> None:
+    """A command's flags (--stiffness, --line-search/--no-line-search, --help) take no value:
+    its --help shows no type for them (typer's would be <bool>)."""
+    plain_flags_of(command.get_params(ctx))
+
+
+def plain_flags_of(params: list[Any]) -> None:
+    for param in params:
+        if getattr(param, "is_flag", False) and param.metavar is None:
+            param.metavar = ""
 
 
 def analysis_commands(taken: Collection[str], load: bool = False) -> dict[str, Any]:

@@ -10,6 +10,7 @@ import typer
 
 from flexmech.api.cli.catalog import MODEL_NAMES
 from flexmech.api.cli.common import OptionError
+from flexmech.api.cli.problems import every_problem
 
 if TYPE_CHECKING:  # the models and the solvers are imported when a command runs
     from flexmech.models import Mechanism
@@ -88,11 +89,16 @@ def overrides(sets: list[str] | None) -> dict[str, float | str]:
 
 
 def mechanism(document: Path, model: str | None, sets: list[str] | None) -> Mechanism:
-    from flexmech.models import MODELS, compile_mechanism, load_document
+    """The compiled mechanism of the document, its overrides applied; MechanismError saying
+    every problem the document's reading found (api.cli.problems)."""
+    from flexmech.models import MODELS, MechanismError, compile_mechanism, load_document
 
     choice("--model", model, MODELS)
     given = overrides(sets)
-    mech = compile_mechanism(load_document(document), model=model)
+    try:
+        mech = compile_mechanism(load_document(document), model=model)
+    except MechanismError as exc:
+        raise every_problem(exc) from None
     return mech.with_values(given) if given else mech
 
 

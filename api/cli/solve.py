@@ -37,9 +37,10 @@ from flexmech.api.cli.options import (
     newton_options,
     overrides,
 )
+from flexmech.api.cli.problems import every_problem, in_the_file
 
 if TYPE_CHECKING:  # the analyses and solvers are imported when the command runs
-    from flexmech.models import Mechanism, MechanismError
+    from flexmech.models import Mechanism
     from flexmech.service.analyses import Analysis
     from flexmech.service.solvers.equilibrium import EquilibriumResult
     from flexmech.service.solvers.newton import NewtonOptions
@@ -67,16 +68,6 @@ def analysis_named(name: str) -> Analysis:
         raise OptionError("--analysis", exc.problem) from None
 
 
-def in_the_file(exc: MechanismError) -> MechanismError:
-    """The registry places document errors under /document (the request's field); here the
-    document is the file, whose fields are named from its root."""
-    from flexmech.models import MechanismError
-
-    if exc.pointer == "/document" or exc.pointer.startswith("/document/"):
-        return MechanismError(exc.pointer.removeprefix("/document"), exc.problem)
-    return exc
-
-
 def run_analysis(
     mech: Mechanism, analysis: Analysis, options: NewtonOptions, stiffness: bool
 ) -> tuple[EquilibriumResult | None, dict]:
@@ -91,7 +82,7 @@ def run_analysis(
             asked = {"stiffness": stiffness} if "stiffness" in analysis.Options.model_fields else {}
             return None, analysis.run(mech, AnalysisRequest(options, asked))
         except MechanismError as exc:
-            raise in_the_file(exc) from None
+            raise every_problem(in_the_file(exc)) from None
     result = solver_of(analysis.name)(mech, options)
     report = solution_report(mech, result, analysis.name)
     if stiffness and result.converged:
