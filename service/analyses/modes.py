@@ -76,6 +76,11 @@ class ModesReport(AnalysisResult):
         default_factory=dict,
         description="each drawn element's centre line at the state (its modes' shape.lines move it)",
     )
+    bodies: dict[str, dict[str, Any]] = Field(
+        default_factory=dict,
+        description="each body at the state: its reference point [x, y] (document length units; its modes' "
+        "shape.bodies move it), whether it is fixed, and the element ends it carries [element, start | end]",
+    )
 
 
 def modes_analysis_report(mech: Mechanism, newton: NewtonOptions, options: ModesOptions) -> dict[str, Any]:
@@ -131,7 +136,7 @@ class ModesAnalysis(Analysis):
     Options = ModesOptions
     Result = ModesReport
     figures = (
-        ("plot", (".png", ".svg"), "Draw the mode shapes (up to six) over the mechanism."),
+        ("plot", (".png", ".svg"), "Draw every mode's shape over the mechanism (elements and bodies), a panel each."),
         ("animation", (".gif",), "Animate the first mode through one period."),
     )
 

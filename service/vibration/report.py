@@ -3,7 +3,10 @@ y, the share of its kinetic energy in each body and element, and its shape.
 
 Shapes are mass-normalized in SI (phi^T M phi = 1 with M in kg, kg m and kg m^2), then given in
 the document's length and angle units: the bodies' coordinates, and the displacement of each
-element's mass points (its quadrature points) from where they stand."""
+element's mass points (its quadrature points) from where they stand. With the shapes, the
+state's drawing: each drawn element's centre line (`lines`) and each body where it stands,
+whether it is fixed, and which element ends it carries (`bodies`), so that a figure draws the
+bodies with the elements (service.vibration.figures)."""
 
 from __future__ import annotations
 
@@ -65,6 +68,7 @@ def modes_report(mech: Mechanism, found: MechanismModes, z: np.ndarray, shapes: 
         "modes": modes,
         "points": _points(mech, system) if shapes else {},
         "lines": _lines(mech, lines[0]) if lines is not None else {},
+        "bodies": _bodies(mech, z) if shapes else {},
         "units": {
             "omega": "rad/s",
             "frequency": "Hz",
@@ -115,6 +119,27 @@ def _lines(mech: Mechanism, lines: np.ndarray) -> dict[str, list[list[float]]]:
     return {
         name: lines[:, first : first + columns].T.tolist() for name, first, columns, _, _ in mech.graphs.shape_segments
     }
+
+
+def _bodies(mech: Mechanism, z: np.ndarray) -> dict[str, dict[str, Any]]:
+    """Per body: its reference point at the state [x, y] (document length units), whether it is
+    fixed, and the element ends it carries ([element, "start" | "end"], the ends of `lines`)."""
+    from flexmech.service.units import outputs_in_doc_units
+
+    outputs = outputs_in_doc_units(mech, mech.graphs.outputs(z, mech.p()))
+    structure = mech.structure
+    bodies: dict[str, dict[str, Any]] = {
+        name: {
+            "reference": [outputs[f"bodies.{name}.x"], outputs[f"bodies.{name}.y"]],
+            "fixed": all(v is not None for v in structure.prescribed[b]),
+            "ends": [],
+        }
+        for b, name in enumerate(structure.bodies)
+    }
+    for element, _, _, start, end in mech.graphs.shape_segments:
+        bodies[structure.bodies[start]]["ends"].append([element, "start"])
+        bodies[structure.bodies[end]]["ends"].append([element, "end"])
+    return bodies
 
 
 def _points(mech: Mechanism, system) -> dict[str, list[list[float]]]:
