@@ -17,6 +17,7 @@ import {
 const JSON_LANGUAGE = json(), YAML_LANGUAGE = yaml();
 const language = new Compartment();
 let quiet = false; // text set by the page, not typed: no "input" event
+let opened = ""; // the text the page last set (an example, an upload, a job's document)
 
 // The language follows the text: JSON when it starts with "{", YAML otherwise.
 const languageOfText = EditorState.transactionExtender.of((tr) => {
@@ -70,6 +71,7 @@ const view = new EditorView({
 });
 
 export function setText(source) {
+  opened = source;
   quiet = true;
   try {
     view.dispatch({ changes: { from: 0, to: view.state.doc.length, insert: source }, selection: { anchor: 0 }, scrollIntoView: true });
@@ -80,6 +82,11 @@ export function setText(source) {
 
 export function text() {
   return view.state.doc.toString();
+}
+
+// Whether the text differs from what the page last opened: edits that exist nowhere else.
+export function edited() {
+  return text() !== opened;
 }
 
 // Where JSON.parse stopped ("... at position 42 ...", else the end of the text).

@@ -58,9 +58,11 @@ function pointed(doc, pointer) {
   return pointer.split("/").slice(1).reduce((node, part) => (node && typeof node === "object" ? node[part] : undefined), doc);
 }
 
-// A field starts from the document at its own document_default, else at its key under its
-// group's (`base`).
-function startOf(field, doc, base) {
+// A field starts from the request a job was asked (`asked`, on its page) where that gives it,
+// else from the document at its own document_default, else at its key under its group's (`base`).
+function startOf(field, doc, base, asked = null) {
+  const given = pointed(asked, `/${field.path.join("/")}`);
+  if (given !== undefined) return given;
   const fromDoc = pointed(doc, field.schema.document_default ?? (base ? `${base}/${field.key}` : undefined));
   if (fromDoc !== undefined) return fromDoc;
   if (field.schema.form_default !== undefined) return field.schema.form_default;
@@ -101,14 +103,14 @@ function hinted(element, field) {
   return element;
 }
 
-function leafInput(field, doc, base) {
+function leafInput(field, doc, base, asked) {
   const wrapper = document.createElement("div");
   wrapper.className = "field";
   const caption = document.createElement("label");
   caption.htmlFor = inputId(field.path);
   caption.textContent = field.schema.unit ? `${field.label} [${field.schema.unit}]` : field.label;
   let input;
-  const start = startOf(field, doc, base);
+  const start = startOf(field, doc, base, asked);
   if (field.kind === "select") {
     input = document.createElement("select");
     if (field.optional) input.append(new Option("(default)", ""));
@@ -132,7 +134,7 @@ function leafInput(field, doc, base) {
   return wrapper;
 }
 
-function groupInput(field, doc, base) {
+function groupInput(field, doc, base, asked) {
   const own = field.schema.document_default ?? (base ? `${base}/${field.key}` : undefined);
   const group = document.createElement("fieldset");
   group.className = "group";
@@ -142,7 +144,8 @@ function groupInput(field, doc, base) {
     enabled.type = "checkbox";
     enabled.id = inputId(field.path);
     enabled.dataset.kind = "enable";
-    enabled.checked = pointed(doc, own) !== undefined || field.schema.form_default === true;
+    const given = pointed(asked, `/${field.path.join("/")}`);
+    enabled.checked = asked ? given !== undefined && given !== null : pointed(doc, own) !== undefined || field.schema.form_default === true;
     const caption = document.createElement("label");
     caption.htmlFor = enabled.id;
     caption.textContent = field.label;
@@ -151,18 +154,19 @@ function groupInput(field, doc, base) {
     legend.textContent = field.label;
   }
   group.append(legend);
-  for (const child of field.children) group.append(inputFor(child, doc, own));
+  for (const child of field.children) group.append(inputFor(child, doc, own, asked));
   return group;
 }
 
-function inputFor(field, doc, base) {
-  return field.kind === "group" || field.kind === "list" ? groupInput(field, doc, base) : leafInput(field, doc, base);
+function inputFor(field, doc, base, asked) {
+  return field.kind === "group" || field.kind === "list" ? groupInput(field, doc, base, asked) : leafInput(field, doc, base, asked);
 }
 
-export function renderForm(fieldset, choice, doc) {
+// The choice's form; `asked` (a job's request, on its page): each field as it was asked.
+export function renderForm(fieldset, choice, doc, asked = null) {
   const legend = fieldset.querySelector("legend");
   fieldset.replaceChildren(legend);
-  for (const field of choice.fields) fieldset.append(inputFor(field, doc || {}));
+  for (const field of choice.fields) fieldset.append(inputFor(field, doc || {}, undefined, asked));
   if (!choice.fields.length) {
     const none = document.createElement("p");
     none.className = "hint";

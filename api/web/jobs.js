@@ -37,12 +37,16 @@ export async function fullResult(id) {
   return first;
 }
 
-// Poll until the job is final; resolves its last status. `onTick(status)` runs at each poll.
-export function follow(id, onTick) {
+// Poll until the job is final; resolves its last status. `onTick(status)` runs at each poll;
+// when `wanted()` says the page no longer shows the job (another document), polling stops
+// and resolves null.
+export function follow(id, onTick, wanted = () => true) {
   return new Promise((resolve, reject) => {
     const poll = async () => {
+      if (!wanted()) { resolve(null); return; }
       try {
         const status = await get(`/v1/jobs/${id}`);
+        if (!wanted()) { resolve(null); return; }
         showProgress(status);
         onTick && onTick(status);
         if (FINAL.includes(status.status)) resolve(status);

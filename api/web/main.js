@@ -4,7 +4,7 @@
 
 import { ApiProblem, apiKey, documentPointer, get, post, setApiKey } from "./api.js";
 import { clearFrames, playFrames, setFrames, wireAnimation } from "./animation.js";
-import { readDocument, setText, showProblems } from "./editor.js";
+import { edited, readDocument, setText, showProblems } from "./editor.js";
 import { buildRequest, choices, renderForm } from "./forms.js";
 import { jobView } from "./jobviews.js";
 import { cancel, fullResult, follow, jobRequest, showProgress } from "./jobs.js";
@@ -31,7 +31,7 @@ const PARTIAL_EVERY_MS = 1000;
 const DEFORMING = ["equilibrium", "linearization", "energy"];
 
 const state = { loaded: false, finishedJob: null, overrides: {}, doc: null, drawing: null, view: null, result: null, name: "", choices: [], jobId: null, busy: false,
-                csv: () => (state.view ? csvOf(state.view) : "") };
+                example: "", opened: 0, csv: () => (state.view ? csvOf(state.view) : "") };
 
 // A status line; `style` one of card.js' styles (running, ok, failed, cancelled) or "".
 function say(id, text, style = "") {
@@ -40,15 +40,20 @@ function say(id, text, style = "") {
   $(id).dataset.style = style;
 }
 
+// The Outputs tab's line while it has no result.
+function hintResults(message) {
+  const hint = document.createElement("p");
+  hint.className = "hint";
+  hint.textContent = message;
+  $("panel-table").replaceChildren(hint);
+}
+
 // The results of the last run taken away: a new run or another document shows none until its own.
 function clearResults(message = "Run an analysis to see its outputs.") {
   state.view = null; state.result = null;
   clearFrames();
   clearCard();
-  const hint = document.createElement("p");
-  hint.className = "hint";
-  hint.textContent = message;
-  $("panel-table").replaceChildren(hint);
+  hintResults(message);
   $("curve").replaceChildren();
   $("energy-plot").replaceChildren();
   $("raw").textContent = "";
@@ -71,14 +76,30 @@ function markOption(pointer) {
   }
 }
 
-// A problem from the service or the page, shown at the field it names.
+// Run is refused while a run or a followed job goes on: aria-disabled, not `disabled`, so
+// Enter on Run keeps the focus there.
+function lockRun(locked) {
+  state.busy = locked;
+  if (locked) $("run").setAttribute("aria-disabled", "true");
+  else $("run").removeAttribute("aria-disabled");
+}
+
+// A problem from the service or the page, shown at the field it names. A run the service
+// refused (a 4xx answer: nothing ran) says so under Run, on the card and in the Outputs tab.
 function report(error, where = "run-state") {
-  if (where === "run-state" && state.running) showCard(state.running.source, state.running.title, "failed", null, String(error.message || error));
-  if (!(error instanceof ApiProblem)) { say(where, String(error.message || error), "failed"); return; }
+  const refused = error instanceof ApiProblem && error.status >= 400 && error.status < 500;
+  const running = where === "run-state" && state.running;
+  const message = String(error.message || error);
+  if (running) {
+    showCard(state.running.source, state.running.title, refused ? "refused" : "failed", null, message);
+    if (!state.view) hintResults(refused ? "Not run: the service refused the request (why is under Run)." : "No result: the run failed (why is under Run).");
+  }
+  const prefix = running && refused ? "Refused: " : "";
+  if (!(error instanceof ApiProblem)) { say(where, prefix + message, "failed"); return; }
   const inDocument = documentPointer(error.pointer);
   markOption(inDocument === null ? error.pointer : null);
   showProblems(error.problems.map((p) => ({ ...p, pointer: documentPointer(p.pointer) ?? p.pointer })));
-  say(where, inDocument !== null ? "The document has a problem (listed under it)." : error.message, "failed");
+  say(where, prefix + (inDocument !== null ? "the document has a problem (listed under it)." : error.message), "failed");
   if (inDocument !== null && state.drawing) $("drawing-caption").textContent = "The last drawing of a document that worked.";
 }
 
@@ -120,7 +141,8 @@ function formatSeconds(seconds) {
   return seconds < 1 ? `${+(seconds * 1000).toPrecision(3)} ms` : `${+seconds.toPrecision(3)} s`;
 }
 
-// Another document: the last one's result, errors and job are not shown with it.
+// Another document: the last one's result, errors and job are not shown with it (a job
+// followed is left to run on its page; a run's answer that comes later is not shown).
 function newDocument() {
   clearResults();
   showProblems([]);
@@ -128,6 +150,7 @@ function newDocument() {
   say("document-state", "");
   $("job").hidden = true;
   state.jobId = null;
+  state.opened += 1;
   resetView($("drawing")); // the whole new mechanism, not the last one's zoom
 }
 
@@ -136,7 +159,14 @@ async function openExample(name) {
   newDocument();
   setText(JSON.stringify(doc, null, 2));
   $("example-select").value = name;
+  state.example = name;
   await redraw(true);
+}
+
+// Edits of the document exist only in the editor: another document replaces them only when
+// the user says so (`what` names it).
+function mayReplaceText(what) {
+  return !edited() || window.confirm(`The document "${state.name}" has edits that are saved nowhere. Open ${what} and discard them?`);
 }
 
 function currentChoice() {
@@ -146,7 +176,7 @@ function currentChoice() {
 // The Run menu: what the open document can be asked first; the rest greyed, each saying why
 // not (the service's offers, drawn with the document). `wanted` is chosen if offered; a
 // `fresh` document gets its own first analysis, an edited one keeps the chosen one if it can.
-function offerChoices(wanted = null, fresh = false) {
+function offerChoices(wanted = null, fresh = false, asked = null) {
   const offers = state.drawing && state.drawing.offers;
   const open = state.choices.filter((c) => !whyNot(c, offers)), shut = state.choices.filter((c) => whyNot(c, offers));
   const kept = wanted || $("analysis").value;
@@ -165,7 +195,7 @@ function offerChoices(wanted = null, fresh = false) {
   }
   $("analysis").replaceChildren(...items);
   $("analysis").value = (wanted || !fresh) && open.some((c) => c.id === kept) ? kept : (defaultChoice(open, state.doc) || open[0] || {}).id;
-  renderForm($("options"), currentChoice(), state.doc);
+  renderForm($("options"), currentChoice(), state.doc, asked && currentChoice().id === wanted ? asked : null);
   document.body.dataset.offered = state.name; // the menu and the form are the document's (tests wait for it)
 }
 
@@ -187,7 +217,9 @@ function showView(view, result) {
 }
 
 async function runSolve(choice, request) {
+  const opened = state.opened;
   const report = await post("/v1/solve", request);
+  if (opened !== state.opened) return; // another document is open now: not its result
   showView(resultView("solve", report, state.drawing), report);
   if (report.analysis === "modes" && state.drawing) wireModeRows($("panel-table"), state.drawing, state.view.frames, playFrames);
   const took = report.seconds ? `in ${formatSeconds(report.seconds)}` : "";
@@ -244,7 +276,7 @@ function partialResults(id) {
       shownDone = status.progress.done;
       const view = jobView(status.kind, answer.result, state.drawing);
       showView({ ...view, frames: [] }, answer.result); // the animation comes with the whole result
-      showCard(`job:${status.kind}`, `${status.kind.replace(/_/g, " ")} job`, "running", answer.result, `${Math.round(100 * status.progress.fraction)} %`);
+      showCard(`job:${status.kind}`, `${status.kind.replace(/_/g, " ")} job`, "running", answer.result); // its progress: under Run, one figure
       if (view.frames.length && state.drawing) {  // the latest state drawn while it runs (the slider goes back)
         setFrames(state.drawing, view.frames);
         $("drawing-caption").textContent = `Running: the latest of ${view.frames.length} states so far, over the undeformed mechanism (dashed).`;
@@ -266,13 +298,13 @@ async function runJob(choice, request) {
   showJobPage(status.id);
   showProgress(status);
   say("run-state", `${choice.label} running`, "running");
-  const last = await follow(status.id, partialResults(status.id));
-  await showJobResult(status.id, last);
+  const last = await follow(status.id, partialResults(status.id), () => state.jobId === status.id);
+  if (last) await showJobResult(status.id, last);
 }
 
 async function run() {
   if (state.busy) return;
-  state.busy = true; $("run").setAttribute("aria-disabled", "true"); // not `disabled`: Enter on Run keeps the focus there
+  lockRun(true);
   try {
     let extra;
     try { extra = JSON.parse($("extra").value || "{}"); } catch (error) { throw new ApiProblem(422, `/extra: not JSON (${error.message})`, "/extra"); }
@@ -282,6 +314,7 @@ async function run() {
     const request = buildRequest(choice, $("options"), state.doc, $("model").value, extra);
     state.overrides = request.overrides || {};
     clearResults("Running: the outputs show when the first result comes.");
+    $("job").hidden = true; // an earlier job's progress is not this run's
     state.running = { source: choice.kind === "solve" ? `solve:${choice.analysis}` : `job:${choice.job}`, title: choice.label };
     showCard(state.running.source, choice.label, "running", null);
     revealCard();
@@ -291,7 +324,8 @@ async function run() {
   } catch (error) {
     report(error);
   } finally {
-    state.busy = false; state.running = null; $("run").removeAttribute("aria-disabled");
+    state.running = null;
+    lockRun(false);
   }
 }
 
@@ -313,28 +347,38 @@ async function examples() {
   return list;
 }
 
-// A job's page: its document and model, the menus set to what it runs, its progress, results
-// as they come and the whole result at its end.
+// A job's page: its document and model, the menus and the form set to what it was asked (its
+// request's own options, not the document's), its progress, results as they come and the whole
+// result at its end. Run waits until the job ends.
 async function followJobPage(id) {
-  const asked = await jobRequest(id);
-  state.overrides = asked.overrides || {};
-  setText(JSON.stringify(asked.document, null, 2));
-  if (asked.model) $("model").value = asked.model;
-  const example = [...$("example-select").options].find((o) => o.title === asked.document.name);
-  $("example-select").value = example ? example.value : "";
-  await redraw();
-  const kind = state.jobKinds.find((k) => k.name === asked.kind);
-  const choice = kind && state.choices.find((c) => c.endpoint === kind.route);
-  offerChoices(choice ? choice.id : null);
-  state.jobId = id;
-  state.running = { source: `job:${asked.kind}`, title: `${asked.kind.replace(/_/g, " ")} job` };
-  showCard(state.running.source, state.running.title, "running", null);
-  followToTheEnd(id).catch(report); // the page is ready while the job goes on
+  lockRun(true);
+  try {
+    const asked = await jobRequest(id);
+    state.overrides = asked.overrides || {};
+    setText(JSON.stringify(asked.document, null, 2));
+    if (asked.model) $("model").value = asked.model;
+    const extra = Object.fromEntries(["overrides", "options"].filter((key) => asked[key] && Object.keys(asked[key]).length).map((key) => [key, asked[key]]));
+    $("extra").value = JSON.stringify(extra);
+    const example = [...$("example-select").options].find((o) => o.title === asked.document.name);
+    $("example-select").value = example ? example.value : "";
+    state.example = $("example-select").value;
+    await redraw();
+    const kind = state.jobKinds.find((k) => k.name === asked.kind);
+    const choice = kind && state.choices.find((c) => c.endpoint === kind.route);
+    offerChoices(choice ? choice.id : null, false, asked);
+    state.jobId = id;
+    state.running = { source: `job:${asked.kind}`, title: `${asked.kind.replace(/_/g, " ")} job` };
+    showCard(state.running.source, state.running.title, "running", null);
+  } catch (error) {
+    lockRun(false);
+    throw error;
+  }
+  followToTheEnd(id).catch(report).finally(() => lockRun(false)); // the page is ready while the job goes on
 }
 
 async function followToTheEnd(id) {
-  const last = await follow(id, partialResults(id));
-  await showJobResult(id, last);
+  const last = await follow(id, partialResults(id), () => state.jobId === id);
+  if (last) await showJobResult(id, last);
   state.running = null;
 }
 
@@ -346,6 +390,7 @@ function wire() {
   });
   $("open-example").addEventListener("click", () => {
     const name = $("example-select").value;
+    if (!mayReplaceText(`the example ${name}`)) { $("example-select").value = state.example; return; }
     if (location.pathname !== "/" || new URLSearchParams(location.search).get("example") !== name) history.pushState({ example: name }, "", `/?example=${encodeURIComponent(name)}`);
     openExample(name).catch(report);
   });
@@ -356,7 +401,8 @@ function wire() {
   $("analysis").addEventListener("change", () => { renderForm($("options"), currentChoice(), state.doc); });
   $("upload").addEventListener("change", async () => {
     const file = $("upload").files[0];
-    if (file) { newDocument(); setText(await file.text()); await redraw(true); }
+    if (file && !mayReplaceText(file.name)) { $("upload").value = ""; return; }
+    if (file) { newDocument(); setText(await file.text()); state.example = ""; await redraw(true); }
   });
   let timer = null;
   $("editor").addEventListener("input", () => { clearTimeout(timer); timer = setTimeout(redraw, REDRAW_AFTER_MS); });

@@ -1,5 +1,6 @@
 // The recent jobs of this API key (GET /v1/jobs), newest first: kind, mechanism, status in its
-// style and progress, each a link to its page (/jobs/{id}). Read again while any of them runs.
+// style and progress (but the page's own job's, shown under Run), each a link to its page
+// (/jobs/{id}). Read again while any of them runs.
 
 import { get } from "./api.js";
 import { statusStyle } from "./card.js";
@@ -16,11 +17,13 @@ function itemOf(job) {
   const link = document.createElement("a");
   link.href = `/jobs/${job.id}`;
   link.textContent = `${job.kind.replace(/_/g, " ")}: ${job.name || "mechanism"}`;
-  if (location.pathname === link.pathname) link.setAttribute("aria-current", "page");
+  const here = location.pathname === link.pathname;
+  if (here) link.setAttribute("aria-current", "page");
   const badge = document.createElement("span");
   badge.className = `badge status-${statusStyle(job.status)}`;
   const percent = Math.round(100 * job.progress.fraction);
-  badge.textContent = job.status === "running" ? `running ${percent} %` : job.status;
+  // the job of this page has its progress under Run (one figure, read every poll), not here
+  badge.textContent = job.status === "running" && !here ? `running ${percent} %` : job.status;
   const when = document.createElement("time");
   when.dateTime = job.timings.created_at;
   when.textContent = new Date(job.timings.created_at).toLocaleTimeString();

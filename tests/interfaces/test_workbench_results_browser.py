@@ -202,6 +202,7 @@ def test_status_styles_differ_and_a_new_run_or_document_clears_the_old_one(page,
     failed = page.evaluate("() => getComputedStyle(document.getElementById('run-state')).color")
     assert failed not in (ok, running)
     assert page.locator("#problems li").count() >= 1
+    page.once("dialog", lambda dialog: dialog.accept())  # the edited document is discarded on purpose
     open_fresh(page, "cantilever")
     assert page.locator("#problems li").count() == 0 and page.text_content("#run-state") == ""
     assert page.is_hidden("#result-card") and page.locator("#panel-table table").count() == 0
