@@ -132,6 +132,16 @@ function impactStudy(result) {
   return ranking.length ? [{ name: "fields ranked", value: ranking.length, unit: "", note: `earliest departure: ${ranking[0].field ?? Object.values(ranking[0])[0]}` }] : [];
 }
 
+// An export: the archive's size and the Newton steps per call the export measured (the time
+// per call is not measured on the server: the archive's benchmark measures it).
+function exported(result) {
+  const m = result.manifest, archive = result.archive || {};
+  if (!m) return [];
+  const worst = m.worst_case_iterations || {};
+  return [{ name: "archive", value: archive.bytes / 1000, unit: "kB", note: `${m.tasks.length} functions, ${m.inputs.length} inputs, ${m.outputs.length} outputs` },
+          { name: "Newton steps per call, worst measured", value: worst.equilibrium_warm, unit: "", note: `equilibrium from the last solution; time per call: ./bench of the archive` }];
+}
+
 const READERS = {
   "solve:equilibrium": equilibrium,
   "solve:linearization": equilibrium,
@@ -147,6 +157,7 @@ const READERS = {
   "job:contact": contactPath,
   "job:optimize": optimization,
   "job:impact_study": impactStudy,
+  "job:export": exported,
 };
 
 // The headline of a result: `source` is "solve:<analysis>" or "job:<kind>".

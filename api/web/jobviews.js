@@ -96,7 +96,54 @@ function optimizeView(result) {
   return v;
 }
 
+// What each function of an exported library computes and the arrays it takes and fills
+// (the header's, service/export/templates/header.h.in), from the manifest's counts.
+function exportedFunction(task, m) {
+  const inputs = m.inputs.length, outputs = m.outputs.length, n = ((m.stiffness || {}).coordinates || []).length;
+  const contact = ((m.contact || {}).outputs || []).length;
+  const target = m.target || {};
+  return {
+    equilibrium: ["the equilibrium at the inputs", `in[${inputs}] → out[${outputs}]`],
+    stiffness: ["the tangent stiffness at the equilibrium at the inputs", `in[${inputs}] → K[${n} × ${n}]`],
+    target: [`the ${target.input} that brings ${target.output} to a goal [${target.unit}]`, `in[${inputs}], goal → value, out[${outputs}]`],
+    contact: ["the contact state at the inputs", `in[${inputs}] → out[${contact}]`],
+  }[task] || ["", ""];
+}
+
+// The Newton steps per call of a task, the worst the export measured over its example path.
+function stepsOf(task, worst) {
+  const warm = worst[`${task}_warm`], cold = worst[`${task}_cold`];
+  if (warm !== undefined) return `${warm} from the last solution, ${cold} from rest`;
+  return cold !== undefined && cold !== null ? `${cold} from rest` : "–";
+}
+
+// An export: its functions (what each computes, its arrays, the Newton steps per call the
+// export measured), its inputs and outputs with their units, the archive's size. No time per
+// call is measured on the server (nothing is compiled there): the archive's benchmark is.
+function exportView(result) {
+  const v = emptyView();
+  const m = result && result.manifest;
+  if (!m) { v.summary.push(["status", (result && result.status) || "pending"]); return v; }
+  const worst = m.worst_case_iterations || {};
+  const archive = result.archive || {};
+  v.tables.push({ caption: `Functions (${m.header}); time per call: not measured here, nothing is compiled on the server (make, then ./bench, measures it)`,
+                  columns: ["function", "computes", "arrays", "Newton steps per call (worst measured)"],
+                  rows: m.tasks.map((task) => [`${m.name}_${task}`, ...exportedFunction(task, m), task === "stiffness" ? "the equilibrium's, then one kernel call" : stepsOf(task, worst)]) });
+  const range = (i) => (i.low === null && i.high === null ? "any" : `${i.low_excluded ? "(" : "["}${i.low ?? "−∞"}, ${i.high ?? "∞"}]`);
+  v.tables.push({ caption: "Inputs (in[], in this order)", columns: ["input", "field", "default", "range", "unit"],
+                  rows: m.inputs.map((i) => [i.name, `${fieldName(i.pointer)} (${i.pointer})`, i.default, range(i), i.unit]) });
+  v.tables.push({ caption: "Outputs (out[], in this order)", columns: ["output", "of the document", "unit"],
+                  rows: m.outputs.map((o) => [o.name, o.output, o.unit]) });
+  if (m.contact && m.contact.note) v.summary.push(["contact", m.contact.note]);
+  v.summary.push(["status", result.status], ["archive", `${archive.file || ""}, ${archive.bytes ?? "–"} bytes, SHA-256 ${archive.sha256 || "–"}`],
+                 ["unknowns", m.unknowns], ["steps measured over", worst.measured_over || "–"],
+                 ["kernel calls per call, at most", (m.limits || {}).kernel_calls_per_call_at_most ?? "–"],
+                 ["written in", `${m.export_seconds} s`], ["model", m.model], ["flexmech", m.flexmech], ["CasADi", m.casadi]);
+  return v;
+}
+
 export function jobView(kind, result, drawing) {
+  if (kind === "export") return exportView(result);
   if (kind === "optimize" && result && result.design) return optimizeView(result);
   if (kind === "sweep") return sweepView(result);
   if (kind === "contact") return contactView(result, drawing);
