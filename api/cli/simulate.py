@@ -152,7 +152,7 @@ def _run(mech, spec, out, err, max_steps: int | None, files: Files, document: Pa
                 mech.document, spec, progress=progress.stepping(), max_steps=spec.max_steps or MAX_STEPS
             )
             write_files(progress, files, report, mech, None)
-            progress.finish(f"{report['status']} at t = {report['time_reached']:g} s, {report['steps']} steps")
+            progress.finish(_summary(report), report["seconds"])
         print_impacts(out, report, spec.scheme)
         return report
     report = _links(mech, spec, err, max(MAX_STEPS, max_steps or 0), files, document)
@@ -180,15 +180,15 @@ def _links(mech, spec, err, limit: int, files: Files, document: Path | None) -> 
             if pace is not None and pace.restart:
                 progress.stage(f"compiling its kernels first (about {seconds_text(build.left())} more)")
                 build.wait()
-                progress.finish(f"stopped at t = {report['time_reached']:.4g} s to run compiled")
+                progress.finish(f"stopped at t = {report['time_reached']:.4g} s to run compiled", report["seconds"])
             else:
                 write_files(progress, files, report, mech, history)
-                progress.finish(f"{report['status']} at t = {report['time_reached']:g} s, {report['steps']} steps")
+                progress.finish(_summary(report), report["seconds"])
         if pace is not None and pace.restart:
             with SimulationProgress(err, spec.until, "simulating compiled") as progress:
                 history, report = run_simulation(mech, spec, progress=progress.stepping(), max_steps=limit)
                 write_files(progress, files, report, mech, history)
-                progress.finish(f"{report['status']} at t = {report['time_reached']:g} s, {report['steps']} steps")
+                progress.finish(_summary(report), report["seconds"])
         elif build is not None:
             err.print(
                 f"ran interpreted: its kernels were not compiled (about {seconds_text(missing.seconds)} of gcc, "
@@ -202,6 +202,10 @@ def _links(mech, spec, err, limit: int, files: Files, document: Path | None) -> 
         if build is not None:
             build.end()
     return report
+
+
+def _summary(report: dict) -> str:
+    return f"{report['status']} at t = {report['time_reached']:g} s, {report['steps']} steps"
 
 
 def _check_figures(plot: Path | None, snapshots: Path | None, animation: Path | None) -> None:

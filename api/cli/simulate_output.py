@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 from rich.console import Console
 
 from flexmech.api.cli.common import OptionError, number, print_left_out, shown, table_of, write_json
-from flexmech.api.cli.progress import SimulationProgress
+from flexmech.api.cli.progress import SimulationProgress, seconds_text
 
 if TYPE_CHECKING:  # the models and the dynamics are imported when a run is written
     from flexmech.models import Mechanism
@@ -35,11 +35,12 @@ class Files:
 
 
 def print_run(out: Console, report: dict[str, Any]) -> None:
-    """A run of links, bodies and joints: its status, steps and energy balance, and the first
-    outputs' start, end and range."""
+    """A run of links, bodies and joints: its status, steps (the time they took as the progress's
+    last line gives it: report["seconds"]) and energy balance, and the first outputs' start, end
+    and range."""
     out.print(
         f"[bold]{shown(report['name'])}[/bold]: {report['status']} at t = {report['time_reached']:g} s, "
-        f"{report['steps']} steps in {report['seconds']:.2f} s ({report.get('kernels') or 'interpreted'}); "
+        f"{report['steps']} steps in {seconds_text(report['seconds'])} ({report.get('kernels') or 'interpreted'}); "
         "energy balance error "
         f"{report['energy_balance_error']:.2e}"
     )
@@ -62,7 +63,7 @@ def print_impacts(out: Console, report: dict[str, Any], scheme: str) -> None:
     impacts and the end state's sensitivities."""
     out.print(
         f"[bold]{shown(report['name'])}[/bold]: {report['status']} at t = {report['time_reached']:g} s, "
-        f"{report['steps']} steps ({scheme}) in {report['seconds']:.3f} s; energy balance error "
+        f"{report['steps']} steps ({scheme}) in {seconds_text(report['seconds'])}; energy balance error "
         f"{report['energy_balance_error']:.2e}"
     )
     units = report.get("event_units", {})
