@@ -2,12 +2,12 @@
 (JSON and CSV keep the exact values in the document's units).
 
 A quantity is shown in a display unit: the document's own while the largest magnitude shown
-lies in [0.1, 1e4) (KEPT), else the document's unit with the SI prefix of its first factor
+lies in [0.1, 1e4) (KEPT; not for stresses and energies, ALWAYS_PREFIXED), else the document's unit with the SI prefix of its first factor
 chosen so that it lies in [1, 1000) (0.00147 GPa -> 1.47 MPa, 1.2e-9 kg -> 1.2 ug); an energy
 in J with its prefix (4.77 uN*mm -> 4.77 nJ). Every number has SIGNIFICANT digits, and a
 value below the noise floor of its quantity, NOISE times the largest of its kind in the same
-result (the solver's relative accuracy: its residual tolerance is 1e-10 of the largest force
-it balances), is shown as 0: round-off such as an output of -6.9e-15 mm where the others are
+result (a few times the solver's relative accuracy: its residual tolerance is 1e-10 of the
+largest force it balances), is shown as 0: round-off such as an output of -6.9e-15 mm where the others are
 millimetres is not a result. Residuals and tolerances are not results: they are shown exactly
 (exact()).
 
@@ -25,11 +25,14 @@ from dataclasses import dataclass
 from flexmech.models.units import parse_unit
 
 SIGNIFICANT = 6
-NOISE = 1e-10
+NOISE = 1e-9  # a few times the solver's tolerance: its round-off reaches 2e-10 of the largest
 KEPT = (0.1, 1e4)  # the document's unit is kept while the largest value shown lies in this range
+# ... except for these, which engineers always write with the prefix that puts them in [1, 1000)
+# (a stress of 0.189 GPa is 189 MPa; a document's stress unit is its modulus', not a choice)
+ALWAYS_PREFIXED = ("Pa", "J")
 PREFIXES = ("p", "n", "u", "m", "", "k", "M", "G")
 # units whose first factor takes an SI prefix (a degree, a percent or a turn does not)
-PREFIXED = ("m", "g", "N", "Pa", "J", "Hz", "s", "W", "rad")
+PREFIXED = ("m", "g", "N", "Pa", "J", "Hz", "s", "W")  # not rad: krad/s is no engineer's unit
 _FIRST = re.compile(r"^([A-Za-zµ]+)(.*)$")
 
 
@@ -86,16 +89,22 @@ def _factor(unit: str, to: str) -> float:
     return parse_unit(unit)[0] / parse_unit(to)[0]
 
 
-def display(unit: str, values: Iterable[float | None], kind: str | None = None) -> Display:
+def display(unit: str, values: Iterable[float | None], kind: str | None = None, reference: float = 0.0) -> Display:
     """The display of a quantity in `unit` (the document's) whose values in one result are
-    `values`; `kind` "energy" shows it in J."""
+    `values`; `kind` "energy" shows it in J, "ratio" (a multiplier, a gain) keeps its unit.
+    `reference`: the quantity's scale in the model (one nondimensional unit, to which the
+    solver's tolerance applies), below NOISE times which a value is round-off even when it is
+    the largest shown (a constraint held at 0 ends at 5e-19 mm)."""
     finite = [abs(v) for v in values if v is not None and math.isfinite(v)]
-    largest = max(finite, default=0.0)
-    floor = NOISE * largest
-    base_unit = "J" if kind == "energy" and unit else unit
-    if base_unit == unit and KEPT[0] <= largest < KEPT[1]:
+    floor = NOISE * max(max(finite, default=0.0), reference)
+    largest = max((v for v in finite if v >= floor), default=0.0)
+    if kind == "ratio":
         return Display(unit, 1.0, floor)
+    base_unit = "J" if kind == "energy" and unit else unit
     split = _split(base_unit)
+    always = split is not None and split[1] in ALWAYS_PREFIXED
+    if base_unit == unit and KEPT[0] <= largest < KEPT[1] and not always:
+        return Display(unit, 1.0, floor)
     if split is None or largest == 0:
         if base_unit != unit:
             return Display(base_unit, _factor(unit, base_unit), floor)

@@ -34,6 +34,7 @@ def residual_report(mech: Mechanism, z: np.ndarray, p: np.ndarray | None = None)
         "residual_moment": largest((2,)) / mech.nd_per_doc("moment"),
         "residual_moment_unit": mech.doc_unit("moment"),
         "solver_residual": float(np.abs(R).max()) if R.size else 0.0,
+        "solver_residual_unit": "nondimensional",
     }
 
 

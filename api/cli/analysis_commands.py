@@ -44,6 +44,7 @@ from flexmech.api.cli.options import (
     newton_options,
 )
 from flexmech.api.cli.problems import every_problem, in_the_file
+from flexmech.api.cli.quantities import exact_text, kind_of
 from flexmech.api.cli.record_tables import is_records, records_table
 from flexmech.api.cli.report_tables import print_status, print_stiffness
 from flexmech.api.cli.resonance_tables import resonance_tables
@@ -249,19 +250,23 @@ def print_report(out: Console, report: dict) -> None:
                 out.print(table)
         elif isinstance(value, (int, float)) and not isinstance(value, bool):
             unit = report.get(f"{key}_unit") or report.get(f"{key.rsplit('_', 1)[0]}_unit")
-            out.print(f"{shown(key)}: {number(value, unit if isinstance(unit, str) else None)}")
+            unit = unit if isinstance(unit, str) else None
+            kind = kind_of(key) or ("energy" if key.endswith("energy") else None)
+            if unit == "nondimensional":
+                out.print(f"{shown(key)}: {exact_text(value)} (nondimensional)")
+            else:
+                out.print(f"{shown(key)}: {shown(number(value, unit, kind=kind))}")
         elif isinstance(value, str):
             out.print(f"{shown(key)}: {shown(value)}")
         elif isinstance(value, dict) and "value" in value and "unit" in value:
             status = f" ({value['status']})" if "status" in value else ""
-            out.print(f"{shown(key)}: {number(value['value'], value['unit'])}{shown(status)}")
+            text = number(value["value"], value["unit"], kind=kind_of(key))
+            out.print(f"{shown(key)}: {shown(text)}{shown(status)}")
         elif _named_numbers(value):
             units = report.get(f"{key.removesuffix('s')}_units") or {}
-            table = table_of(key, "name", "value", "unit", text=1)
+            table = table_of(key, "name", "value", "unit", text=1, unit_column=(1, 2))
             for name, v in value.items():
-                table.add_row(
-                    shown(name), number(v), shown(str(units.get(name, "") if isinstance(units, dict) else ""))
-                )
+                table.add_row(shown(name), v, str(units.get(name, "") if isinstance(units, dict) else ""))
             out.print(table)
         elif is_records(value):
             units = report.get("units")

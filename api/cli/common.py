@@ -6,7 +6,6 @@ from __future__ import annotations
 import json
 import os
 import sys
-import unicodedata
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -15,8 +14,8 @@ from typing import TYPE_CHECKING
 import typer
 from rich.console import Console
 from rich.markup import escape
-from rich.table import Table
 
+from flexmech.api.cli.quantities import TextTable, number, without_controls  # noqa: F401 (number: for commands)
 from flexmech.service.drawings.figures import PLOT_SUFFIXES
 
 if TYPE_CHECKING:  # the models are imported when a command runs
@@ -47,29 +46,17 @@ def consoles() -> tuple[Console, Console]:
     return out, Console(stderr=True, highlight=False)
 
 
-class _TextTable(Table):
-    """A table whose text cells never carry a control character to the terminal, whoever forgot
-    to pass a document's name through shown()."""
-
-    def add_row(self, *renderables, **options) -> None:  # type: ignore[override]
-        super().add_row(*(_without_controls(r) if isinstance(r, str) else r for r in renderables), **options)
-
-
-def _without_controls(text: str) -> str:
-    if text.isprintable():
-        return text
-    return "".join(c if c in "\n\t" or unicodedata.category(c) != "Cc" else " " for c in text)
-
-
-def table_of(title: str | None, *columns: str, text: int = 1) -> Table:
+def table_of(title: str | None, *columns: str, text: int = 1, unit_column: tuple[int, int] | None = None) -> TextTable:
     """A table whose first `text` columns are words and the others numbers (right-aligned,
-    folded rather than cut when the console is narrow)."""
-    table = _TextTable(title=shown(title) if title else None, title_justify="left")
+    folded rather than cut when the console is narrow). Numbers given as numbers are shown in
+    their column's display unit (api.cli.quantities); `unit_column` (value column, unit
+    column) when the unit varies by row."""
+    table = TextTable(title=shown(title) if title else None, title_justify="left", unit_column=unit_column)
     for k, head in enumerate(columns):
         if k < text:
-            table.add_column(shown(head))
+            table.add_column(shown(head), raw=head)
         else:
-            table.add_column(shown(head), justify="right", overflow="fold")
+            table.add_column(shown(head), raw=head, justify="right", overflow="fold")
     return table
 
 
@@ -93,7 +80,7 @@ def shown(text: str) -> str:
     """A string from a document, a report or a message, for the terminal: text, never rich
     markup, its control characters as spaces (an escape sequence in a name would be a command
     to the terminal: a title, the clipboard, lines overwritten), its line ends and tabs kept."""
-    return escape(_without_controls(text))
+    return escape(without_controls(text))
 
 
 def print_error(err: Console, text: str) -> None:
@@ -124,13 +111,6 @@ def print_left_out(out: Console, kept: int, total: int, what: str, spread_out: b
     line = left_out(kept, total, what, spread_out)
     if line is not None:
         out.print(shown(line), style="dim")
-
-
-def number(value: float | None, unit: str | None = None) -> str:
-    """Six significant figures, with the unit when given. None is a report's non-finite
-    number (service.solvers.reports.plain)."""
-    text = "-" if value is None else f"{value:.6g}"
-    return f"{text} {unit}" if unit else text
 
 
 # --- files ---------------------------------------------------------------------------------

@@ -24,6 +24,7 @@ from flexmech.api.cli.common import (
     write_json,
 )
 from flexmech.api.cli.options import DocArg, JsonOpt, PlotOpt, SetOpt, choice, mechanism
+from flexmech.service.drawings.figures import field_label
 
 SHOWN_STATES = 8
 
@@ -119,19 +120,30 @@ def _single_state(out, mech, problem, options, json_out) -> bool:
         f"[bold]{shown(mech.document.name)}[/bold]: {report['status']} in {report['iterations']} iterations, "
         f"{report['seconds'] * 1e3:.1f} ms"
     )
-    table = table_of(None, "pair", "state", "F_x", "F_y", "normal", "friction", "point x", "point y", text=2)
     f, length = report["units"]["force"], report["units"]["length"]
+    table = table_of(
+        None,
+        "pair",
+        "state",
+        f"F_x [{f}]",
+        f"F_y [{f}]",
+        f"normal [{f}]",
+        f"friction [{f}]",
+        f"point x [{length}]",
+        f"point y [{length}]",
+        text=2,
+    )
     for name, pair in report["pairs"].items():
         point = pair["point"] or [None, None]
         table.add_row(
             shown(name),
             pair["state"],
-            number(pair["force"][0], f),
-            number(pair["force"][1], f),
-            number(pair["normal_force"], f),
-            number(pair["friction_force"], f),
-            number(point[0], length),
-            number(point[1], length),
+            pair["force"][0],
+            pair["force"][1],
+            pair["normal_force"],
+            pair["friction_force"],
+            point[0],
+            point[1],
         )
     out.print(table)
     for note in report["warnings"]:
@@ -224,18 +236,19 @@ def _print_path(out, mech, fields, records, y_name, problem, label: str) -> None
         f"{len(converged)} of {len(records)} states converged, "
         f"{seconds:.3f} s ({1e3 * seconds / max(len(records), 1):.1f} ms per state)"
     )
-    table = table_of(None, shown(fields.pointers[0]), "pairs", shown(y_name), text=2)
+    table = table_of(None, f"{field_label(fields.pointers[0])} [{unit}]", "pairs", f"{y_name} [{y_unit}]", text=2)
+    table.columns[0].justify = "right"
     step = max(1, len(records) // SHOWN_STATES)
     for r in records[::step]:
         states = ", ".join(f"{name} {pair['state']}" for name, pair in r["pairs"].items())
-        table.add_row(number(r["values"][0], unit), states, number(r["outputs"].get(y_name), y_unit))
+        table.add_row(r["values"][0], states, r["outputs"].get(y_name))
     out.print(table)
     print_left_out(out, len(records[::step]), len(records), "states", spread_out=True)
     values = np.array([r["outputs"][y_name] if r["status"] == "converged" else np.nan for r in records])
     if np.isfinite(values).any():
         k = int(np.nanargmax(np.abs(values)))
         out.print(
-            f"largest |{shown(y_name)}| = {number(abs(values[k]), y_unit)} at {shown(fields.pointers[0])} = "
+            f"largest |{shown(y_name)}| = {number(abs(values[k]), y_unit)} at {shown(field_label(fields.pointers[0]))} = "
             f"{number(records[k]['values'][0], unit)}"
         )
     failed = [r for r in records if r["status"] != "converged"]
@@ -248,7 +261,6 @@ def _plot_path(mech, problem, fields, runs, y_name, plot) -> None:
     import numpy as np
 
     from flexmech.service.contact.plots import plot_path
-    from flexmech.service.drawings.figures import field_label
 
     unit = mech.doc_unit(mech.parameter_kind(fields.pointers[0]))
     y_unit = mech.doc_unit(problem.output_kinds[problem.output_names.index(y_name)])

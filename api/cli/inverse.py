@@ -54,17 +54,20 @@ def print_link_inverse(out: Console, mech: Mechanism, forces: dict, result: Link
     )
     if not result.converged:
         return
-    table = table_of("unknown loads", "field", "value")
+    table = table_of("unknown loads", "field", "value", "unit", unit_column=(1, 2))
     for pointer, value in result.loads.items():
-        table.add_row(shown(pointer), number(value, mech.doc_unit(mech.parameter_kind(pointer))))
+        table.add_row(shown(pointer), value, mech.doc_unit(mech.parameter_kind(pointer)))
     out.print(table)
-    table = table_of("links", "link", "h", "v", "M start", "M end", "eta(0) [rad]", "eta(1) [rad]")
+    F, M = mech.doc_unit("force"), mech.doc_unit("moment")
+    table = table_of(
+        "links", "link", f"h [{F}]", f"v [{F}]", f"M start [{M}]", f"M end [{M}]", "eta(0) [rad]", "eta(1) [rad]"
+    )
     for name, values in result.links.items():
         table.add_row(
             shown(name),
-            *(number(values[k]) for k in ("h", "v", "M_start", "M_end")),
-            number(values["eta"][0]),
-            number(values["eta"][-1]),
+            *(values[k] for k in ("h", "v", "M_start", "M_end")),
+            values["eta"][0],
+            values["eta"][-1],
         )
     out.print(table)
 

@@ -16,7 +16,6 @@ from flexmech.api.cli.common import (
     EXIT_NOT_CONVERGED,
     OptionError,
     consoles,
-    number,
     shown,
     table_of,
     user_errors,
@@ -163,9 +162,22 @@ def print_state_space(out: Console, space: dict[str, Any]) -> None:
     if gain is None:
         out.print("static gain: none (a rigid mode: no static equilibrium)")
         return
-    table = table_of("static gain (output per input)", "output", *space["inputs"])
-    for name, unit, row in zip(space["outputs"], units["outputs"], gain):
-        table.add_row(shown(name), *(number(v, f"{unit}/{u}") for v, u in zip(row, units["inputs"])))
+    from flexmech.service.display import display
+    from flexmech.service.drawings.figures import field_label
+
+    cell_units = [[f"{unit}/{u}" for u in units["inputs"]] for unit in units["outputs"]]
+    by_unit: dict[str, list[float | None]] = {}
+    for row, row_units in zip(gain, cell_units):
+        for value, unit in zip(row, row_units):
+            by_unit.setdefault(unit, []).append(value)
+    shown_as = {unit: display(unit, values) for unit, values in by_unit.items()}
+    table = table_of(
+        "static gain (output per input)",
+        "output",
+        *(field_label(pointer) for pointer in space["inputs"]),
+    )
+    for name, row, row_units in zip(space["outputs"], gain, cell_units):
+        table.add_row(shown(name), *(shown_as[u].text(v, with_unit=True) for v, u in zip(row, row_units)))
     out.print(table)
 
 
@@ -174,10 +186,10 @@ def _print_modes(out: Console, space: dict[str, Any]) -> None:
         f"state space: {len(space['states'])} states (the modes' coordinates and rates), "
         f"{len(space['inputs'])} inputs, {len(space['outputs'])} outputs; time in s"
     )
-    table = table_of("modes", "mode", "kind", "frequency (Hz)", "damping ratio", text=2)
+    table = table_of("modes", "mode", "kind", "frequency (Hz)", "damping ratio (relative)", text=2)
     for k, (kind, f, zeta) in enumerate(zip(space["kinds"], space["frequencies"], space["damping_ratios"])):
         if k < SHOWN_MODES:
-            table.add_row(str(k + 1), kind, number(f), number(zeta))
+            table.add_row(str(k + 1), kind, f, zeta)
     out.print(table)
     if len(space["kinds"]) > SHOWN_MODES:
         out.print(f"... and {len(space['kinds']) - SHOWN_MODES} more modes (the file has them all)", style="dim")

@@ -10,6 +10,7 @@ from rich.console import Console
 from flexmech.api.cli.application import app
 from flexmech.api.cli.common import EXIT_NOT_CONVERGED, consoles, number, shown, table_of, user_errors, write_json
 from flexmech.api.cli.options import DocArg, JsonOpt, SetOpt, mechanism
+from flexmech.api.cli.quantities import exact_text, row_texts
 
 if TYPE_CHECKING:  # the optimizer is imported when the command runs
     from flexmech.service.design.optimize import OptimizationResult, Prepared, StartResult
@@ -29,39 +30,85 @@ def run_starts(err: Console, prepared: Prepared, starts: int) -> OptimizationRes
 
 
 def print_optimum(out: Console, problem: DesignProblem, best: StartResult) -> None:
-    """The objective, the design against its bounds and the constraints at the optimum."""
+    """The objective, the design against its bounds and the constraints at the optimum; each
+    row's numbers in one display of its quantity (round-off below the model's scale as 0), a
+    multiplier in objective unit per unit, those of inactive bounds (IPOPT's 1e-13) as 0."""
     mech = problem.mechanism
+    objective_unit = _unit(problem, problem.objective)
     out.print(
         f"objective {problem.spec.objective.output}: "
-        f"{number(best.objective, mech.doc_unit(problem.objective.kind))}  "
+        f"{shown(number(best.objective, objective_unit, reference=_scale(problem, problem.objective)))}  "
         f"({best.iterations} IPOPT iterations, {best.seconds:.3g} s, equilibrium residual "
-        f"{best.equilibrium_residual:.2g})"
+        f"{exact_text(best.equilibrium_residual)} (nondimensional))"
     )
     table = table_of("design", "field", "start", "optimum", "lower", "upper", "multiplier")
+    kinds = [mech.parameter_kind(path) for path in problem.paths]
+    multipliers = _multiplier_texts(
+        best.multipliers["design"],
+        [_per(objective_unit, mech.doc_unit(kind)) for kind in kinds],
+        [mech.nd_per_doc(kind) * _scale(problem, problem.objective) for kind in kinds],
+    )
     for k, path in enumerate(problem.paths):
-        unit = mech.doc_unit(mech.parameter_kind(path))
-        table.add_row(
-            shown(path),
-            number(best.design_start[path], unit),
-            number(best.design[path], unit),
-            number(problem.lower[k]),
-            number(problem.upper[k]),
-            number(best.multipliers["design"][k]),
-        )
+        values = [best.design_start[path], best.design[path], problem.lower[k], problem.upper[k]]
+        table.add_row(shown(path), *row_texts(values, mech.doc_unit(kinds[k])), shown(multipliers[k]))
     out.print(table)
     if best.constraints:
+        refs = [c.output for c in problem.constraints]
+        multipliers = _multiplier_texts(
+            [row["multiplier"] for row in best.constraints],
+            [_per(objective_unit, _unit(problem, ref)) for ref in refs],
+            [_scale(problem, problem.objective) / (_scale(problem, ref) or 1.0) for ref in refs],
+        )
         table = table_of("constraints", "output", "case", "value", "lower", "upper", "active", "multiplier")
-        for row in best.constraints:
+        for row, ref, multiplier in zip(best.constraints, refs, multipliers):
+            value, lower, upper = row_texts(
+                [row["value"], row["lower"], row["upper"]], _unit(problem, ref), reference=_scale(problem, ref)
+            )
             table.add_row(
                 shown(row["output"]),
                 shown(row["case"]),
-                number(row["value"]),
-                "-" if row["lower"] is None else number(row["lower"]),
-                "-" if row["upper"] is None else number(row["upper"]),
+                shown(value),
+                "-" if row["lower"] is None else shown(lower),
+                "-" if row["upper"] is None else shown(upper),
                 "yes" if row["active"] else "no",
-                number(row["multiplier"]),
+                shown(multiplier),
             )
         out.print(table)
+
+
+def _scale(problem: DesignProblem, ref) -> float:
+    """One nondimensional unit of a design output, in its document unit (0 for a response)."""
+    return 0.0 if ref.source == "response" else 1.0 / problem.mechanism.nd_per_doc(ref.kind)
+
+
+def _multiplier_texts(values: list[float], units: list[str], references: list[float]) -> list[str]:
+    """Multipliers with their units, each below NOISE of the largest of its unit (or of its
+    scale, objective scale per the bound's) as 0."""
+    from flexmech.service.display import display
+
+    by_unit: dict[str, list[float]] = {}
+    for value, unit in zip(values, units):
+        by_unit.setdefault(unit, []).append(value)
+    texts = []
+    for value, unit, reference in zip(values, units, references):
+        shown = display(unit, by_unit[unit], "ratio", reference)
+        texts.append(shown.text(value, with_unit=True))
+    return texts
+
+
+def _unit(problem: DesignProblem, ref) -> str:
+    """The document unit of a design output (a response's own unit)."""
+    return ref.unit if ref.source == "response" else problem.mechanism.doc_unit(ref.kind)
+
+
+def _per(numerator: str, denominator: str) -> str:
+    if not denominator:
+        return numerator
+    return (
+        f"{numerator or '1'}/({denominator})"
+        if "*" in denominator or "/" in denominator
+        else f"{numerator or '1'}/{denominator}"
+    )
 
 
 def print_sensitivities(out: Console, prepared: Prepared, best: StartResult, fields: list[str]) -> dict:
@@ -71,7 +118,7 @@ def print_sensitivities(out: Console, prepared: Prepared, best: StartResult, fie
     sens = optimum_sensitivities(prepared, best, fields)
     table = table_of("sensitivities of the optimum", "of", *fields)
     for name, row, row_units in zip(sens.outputs, sens.matrix, sens.units):
-        table.add_row(shown(name), *(number(v, u) for v, u in zip(row, row_units)))
+        table.add_row(shown(name), *(shown(number(v, u)) for v, u in zip(row, row_units)))
     out.print(table)
     return sens.to_dict()
 

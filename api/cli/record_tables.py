@@ -9,7 +9,7 @@ from typing import Any
 
 from rich.table import Table
 
-from flexmech.api.cli.common import number, shown, table_of
+from flexmech.api.cli.common import shown, table_of
 
 
 def _scalar(value: Any) -> bool:
@@ -34,8 +34,13 @@ def _columns(rows: list[dict]) -> list[tuple[str, str | None]]:
     return columns
 
 
+# Fields a table leaves to --json: omega and its square say what the frequency in Hz says, in
+# magnitudes (3.6e5 rad/s, 1.3e11 rad^2/s^2) no engineer reads.
+LEFT_TO_JSON = ("omega", "omega_squared")
+
+
 def records_table(title: str, rows: list[dict], units: dict[str, str]) -> Table:
-    columns = _columns(rows)
+    columns = [c for c in _columns(rows) if c[0] not in LEFT_TO_JSON or "frequency" not in rows[0]]
     heads = []
     for key, entry in columns:
         unit = units.get(key)
@@ -46,6 +51,6 @@ def records_table(title: str, rows: list[dict], units: dict[str, str]) -> Table:
         cells = []
         for key, entry in columns:
             value = row.get(key) if entry is None else row[key].get(entry)
-            cells.append(shown(value) if isinstance(value, str) else number(value))
+            cells.append(shown(value) if isinstance(value, str) else value)
         table.add_row(*cells)
     return table

@@ -7,6 +7,7 @@ from rich.console import Console
 from rich.table import Table
 
 from flexmech.api.cli.common import number, shown, table_of
+from flexmech.api.cli.quantities import exact_text
 from flexmech.models import Mechanism
 from flexmech.models.elements import FAMILIES
 from flexmech.service.drawings.plotting import output_unit
@@ -15,20 +16,20 @@ from flexmech.service.drawings.plotting import output_unit
 def print_status(out: Console, report: dict) -> None:
     """Status, iterations, residual and time, as far as the analysis reports them; the
     diagnostics when it did not converge."""
-    converged = report["status"] == "converged"
+    converged = report["status"] in ("converged", "finished")
     colour = "green" if converged else "red"
     line = f"status: [bold {colour}]{report['status']}[/bold {colour}]"
     if "iterations" in report:
         line += f" after {report['iterations']} iterations"
     if "residual_norm" in report:
-        line += f", residual {number(report['residual_norm'], report['residual_unit'])}"
+        line += f", residual {number(report['residual_norm'], report['residual_unit'], kind='exact')}"
     if "seconds" in report:
         line += f", {report['seconds']:.3g} s"
     out.print(line)
     if not converged:
         line = f"diagnostics: {shown(report.get('message') or 'no message')}"
         if report.get("history"):
-            line += f"; residual history (nondimensional) {', '.join(number(h) for h in report['history'][-6:])}"
+            line += f"; residual history (nondimensional) {', '.join(exact_text(h) for h in report['history'][-6:])}"
         out.print(line)
 
 
@@ -43,7 +44,7 @@ def print_solution(out: Console, mech: Mechanism, report: dict) -> None:
     ):
         if table is not None:
             out.print(table)
-    out.print(f"strain energy: {number(values['energy'], mech.doc_unit('energy'))}")
+    out.print(f"strain energy: {number(values['energy'], mech.doc_unit('energy'), kind='energy')}")
 
 
 def bodies_table(mech: Mechanism, values: dict) -> Table:
@@ -69,18 +70,18 @@ def bodies_table(mech: Mechanism, values: dict) -> Table:
         x, y, angle = (values[f"bodies.{name}.{c}"] for c in ("x", "y", "angle"))
         x0, y0 = mech.value(f"/bodies/{name}/position/0"), mech.value(f"/bodies/{name}/position/1")
         angle0 = mech.value(f"/bodies/{name}/angle")
-        table.add_row(shown(name), support, *(number(v) for v in (x, y, angle, x - x0, y - y0, angle - angle0)))
+        table.add_row(shown(name), support, x, y, angle, x - x0, y - y0, angle - angle0)
     return table
 
 
 def outputs_table(mech: Mechanism, values: dict) -> Table | None:
     """The outputs the document names (None if it names none)."""
-    table = table_of("outputs", "output", "value", "unit")
+    table = table_of("outputs", "output", "value", "unit", unit_column=(1, 2))
     table.columns[2].justify = "left"
     table.columns[2].overflow = "ellipsis"
     for name in mech.graphs.output_names:
         if name.split(".", 1)[0] in mech.document.outputs:
-            table.add_row(shown(name), number(values[name]), shown(output_unit(mech, name)))
+            table.add_row(shown(name), values[name], output_unit(mech, name))
     return table if table.row_count else None
 
 
@@ -95,7 +96,7 @@ def reactions_table(mech: Mechanism, values: dict) -> Table | None:
         "support reactions (about the body's reference point)", "body", f"Fx [{F}]", f"Fy [{F}]", f"M [{M}]"
     )
     for name in supported:
-        table.add_row(shown(name), *(number(values[f"reactions.{name}.{q}"]) for q in ("Fx", "Fy", "M")))
+        table.add_row(shown(name), *(values[f"reactions.{name}.{q}"] for q in ("Fx", "Fy", "M")))
     return table
 
 
@@ -124,7 +125,7 @@ def flexures_table(mech: Mechanism, values: dict) -> Table | None:
         e = f"elements.{f.name}"
         cells = [shown(f.name), shown(f"{structure.bodies[f.start_body]}→{structure.bodies[f.end_body]}")]
         cells += [f.model] if mixed else []
-        cells += [number(values[f"{e}.{q}"]) for q in FAMILIES.of(f).flexure_outputs]
+        cells += [values[f"{e}.{q}"] for q in FAMILIES.of(f).flexure_outputs]
         table.add_row(*cells)
     return table
 
@@ -149,21 +150,42 @@ def print_stiffness(out: Console, stiffness: dict) -> None:
             "coordinate i, column j a displacement; K[i, j] in (row unit)/(column unit)"
         )
     )
-    print_matrix(out, stiffness, stiffness["K"])
+    if not stiffness["coordinates"]:
+        out.print("K_T is empty: no body coordinate is free (every body is fixed or has a prescribed motion)")
+        return
+    floors = matrix_floors(stiffness)
+    print_matrix(out, stiffness, stiffness["K"], floors)
     terms = stiffness.get("terms") or {}
     nonzero = {name for name, term in terms.items() if any(value != 0 for row in term for value in row)}
     for name, title in STIFFNESS_TERMS.items():
         if name in nonzero:
             out.print(shown(f"{title} (same units; the terms sum to K_T)"))
-            print_matrix(out, stiffness, terms[name])
+            print_matrix(out, stiffness, terms[name], floors)
     zero = [name for name in STIFFNESS_TERMS if name in terms and name not in nonzero]
     if zero:
         out.print(f"zero term{'s' if len(zero) > 1 else ''} of K_T here: {', '.join(zero)}")
 
 
-def print_matrix(out: Console, stiffness: dict, K: list[list[float | None]]) -> None:
+def matrix_floors(stiffness: dict) -> dict[tuple[str, str], float]:
+    """The noise floor of K_T's entries per (row unit, column unit): NOISE times the largest
+    such entry of K_T (its terms' round-off, 3e-15 uN/deg beside entries of hundreds, is 0)."""
+    from flexmech.service.display import NOISE
+
+    largest: dict[tuple[str, str], float] = {}
+    for i, row in enumerate(stiffness["K"]):
+        for j, value in enumerate(row):
+            key = (stiffness["row_units"][i], stiffness["column_units"][j])
+            largest[key] = max(largest.get(key, 0.0), abs(value or 0.0))
+    return {key: NOISE * value for key, value in largest.items()}
+
+
+def print_matrix(
+    out: Console, stiffness: dict, K: list[list[float | None]], floors: dict[tuple[str, str], float]
+) -> None:
     """A matrix over the coordinates of `stiffness` (its units), in blocks of columns that fit
-    the console."""
+    the console; entries below their unit's floor (matrix_floors) as 0."""
+    from flexmech.service.display import Display
+
     coordinates, rows, columns = (stiffness[k] for k in ("coordinates", "row_units", "column_units"))
     n = len(coordinates)
     label = max((len(f"{c} [{u}]") for c, u in zip(coordinates, rows)), default=0) + 3
@@ -172,7 +194,8 @@ def print_matrix(out: Console, stiffness: dict, K: list[list[float | None]]) -> 
         block = range(first, min(n, first + per_block))
         table = table_of(None, "R \\ z", *(f"{coordinates[j]} [{columns[j]}]" for j in block))
         for i in range(n):
-            table.add_row(shown(f"{coordinates[i]} [{rows[i]}]"), *(number(K[i][j]) for j in block))
+            cells = (Display("", floor=floors.get((rows[i], columns[j]), 0.0)).text(K[i][j]) for j in block)
+            table.add_row(shown(f"{coordinates[i]} [{rows[i]}]"), *cells)
         out.print(table)
 
 
@@ -187,5 +210,5 @@ def print_wrenches(out: Console, report: dict) -> None:
         f"M [{units['M']}]",
     )
     for body, wrench in report["wrenches"].items():
-        table.add_row(shown(body), *(number(wrench[q]) for q in ("Fx", "Fy", "M")))
+        table.add_row(shown(body), *(wrench[q] for q in ("Fx", "Fy", "M")))
     out.print(table)

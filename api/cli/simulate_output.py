@@ -11,8 +11,9 @@ from typing import TYPE_CHECKING, Any
 
 from rich.console import Console
 
-from flexmech.api.cli.common import OptionError, number, print_left_out, shown, table_of, write_json
+from flexmech.api.cli.common import OptionError, print_left_out, shown, table_of, write_json
 from flexmech.api.cli.progress import SimulationProgress, seconds_text
+from flexmech.api.cli.quantities import row_texts
 
 if TYPE_CHECKING:  # the models and the dynamics are imported when a run is written
     from flexmech.models import Mechanism
@@ -21,6 +22,14 @@ if TYPE_CHECKING:  # the models and the dynamics are imported when a run is writ
 SHOWN_OUTPUTS = 18  # rows of the outputs' table
 SHOWN_IMPACTS = 6  # rows of the impacts' table
 PLOTTED_OUTPUTS = 6  # curves of --plot
+
+
+def balance_text(error: float | None) -> str:
+    """The energy balance error, a relative measure: the balance's largest change over the
+    largest energy or work of the run (service.dynamics.run.with_balance)."""
+    if error is None:
+        return "- (no steps)"
+    return f"{100 * error:.3g} % of the largest energy (relative)"
 
 
 @dataclass(frozen=True)
@@ -41,19 +50,18 @@ def print_run(out: Console, report: dict[str, Any]) -> None:
     out.print(
         f"[bold]{shown(report['name'])}[/bold]: {report['status']} at t = {report['time_reached']:g} s, "
         f"{report['steps']} steps in {seconds_text(report['seconds'])} ({report.get('kernels') or 'interpreted'}); "
-        "energy balance error "
-        f"{report['energy_balance_error']:.2e}"
+        f"energy balance error {balance_text(report['energy_balance_error'])}"
     )
     if report["message"]:
         out.print(shown(report["message"]))
     units = report.get("output_units", {})
-    table = table_of(None, "output", "start", "end", "min", "max", "unit", text=1)
-    table.columns[5].justify = "left"
+    table = table_of(None, "output", "start", "end", "min", "max", text=1)
     outputs = list(report["outputs"].items())
     for name, values in outputs[:SHOWN_OUTPUTS]:
         if values:
-            numbers = (number(v) for v in (values[0], values[-1], min(values), max(values)))
-            table.add_row(shown(name), *numbers, shown(units.get(name, "")))
+            table.add_row(
+                shown(name), *row_texts([values[0], values[-1], min(values), max(values)], units.get(name, ""))
+            )
     out.print(table)
     print_left_out(out, min(SHOWN_OUTPUTS, len(outputs)), len(outputs), "outputs")
 
@@ -64,7 +72,7 @@ def print_impacts(out: Console, report: dict[str, Any], scheme: str) -> None:
     out.print(
         f"[bold]{shown(report['name'])}[/bold]: {report['status']} at t = {report['time_reached']:g} s, "
         f"{report['steps']} steps ({scheme}) in {seconds_text(report['seconds'])}; energy balance error "
-        f"{report['energy_balance_error']:.2e}"
+        f"{balance_text(report['energy_balance_error'])}"
     )
     units = report.get("event_units", {})
 
@@ -78,7 +86,7 @@ def print_impacts(out: Console, report: dict[str, Any], scheme: str) -> None:
         "time (s)",
         head("impact speed", "impact_speed"),
         head("exit speed", "exit_speed"),
-        "ratio",
+        "rebound (exit/impact)",
         text=2,
     )
     impacts = report["impacts"]
@@ -87,7 +95,9 @@ def print_impacts(out: Console, report: dict[str, Any], scheme: str) -> None:
             str(k + 1),
             shown(hit["pair"]),
             f"{hit['time']:.7f}",
-            *(number(hit[key], "") for key in ("impact_speed", "exit_speed", "rebound_ratio")),
+            hit["impact_speed"],
+            hit["exit_speed"],
+            hit["rebound_ratio"],
         )
     out.print(table)
     print_left_out(out, min(SHOWN_IMPACTS, len(impacts)), len(impacts), "impacts")
@@ -107,7 +117,7 @@ def print_sensitivities(out: Console, sensitivities: dict[str, Any]) -> None:
         text=2,
     )
     for pointer, values in fields.items():
-        row = [number(values["coordinates"][name], "") for name in names]
+        row = [values["coordinates"][name] for name in names]
         table.add_row(shown(pointer), shown(values["unit"]), *row)
     out.print(table)
     for warning in sensitivities["warnings"]:

@@ -38,6 +38,7 @@ from flexmech.api.cli.options import (
     overrides,
 )
 from flexmech.api.cli.problems import every_problem, in_the_file
+from flexmech.service.drawings.figures import field_label
 
 if TYPE_CHECKING:  # the analyses and solvers are imported when the command runs
     from flexmech.models import Mechanism
@@ -48,6 +49,7 @@ if TYPE_CHECKING:  # the analyses and solvers are imported when the command runs
 # The analyses whose report is a solution (an EquilibriumResult): the CLI calls their solver
 # itself, for the result that --plot draws, and builds the same report the registry does.
 SOLVERS = ("equilibrium", "energy")
+FINE = ("converged", "finished")  # a solve's, a run's status that is a result (exit 0)
 
 
 def solver_of(name: str):
@@ -93,6 +95,19 @@ def run_analysis(
 def print_report(out: Console, mech: Mechanism, report: dict, stiffness: bool) -> None:
     from flexmech.api.cli.report_tables import print_solution, print_status, print_stiffness, print_wrenches
 
+    if report["analysis"] not in SOLVERS and "limit_points" not in report and "wrenches" not in report:
+        from flexmech.api.cli.analysis_commands import print_report as print_analysis
+        from flexmech.api.cli.simulate_output import print_impacts, print_run
+
+        if report["analysis"] == "simulate" and "impacts" in report:  # as flexmech simulate prints it
+            print_impacts(out, report, report["scheme"]["name"])
+        elif report["analysis"] == "simulate":
+            print_run(out, report)
+        else:
+            print_analysis(out, report)  # as its own command prints it (flexmech modes ...)
+        if stiffness and "stiffness" not in report and report["status"] in FINE:
+            out.print(f"[yellow]warning:[/yellow] --stiffness: the {report['analysis']} analysis reports no stiffness")
+        return
     print_status(out, report)
     if report["analysis"] in SOLVERS:
         if report["status"] == "converged":
@@ -121,9 +136,9 @@ def print_path_summary(out: Console, report: dict) -> None:
             f"{number(values[0], unit)} to {number(values[-1], unit)}, {len(limits)} limit points"
         )
     if limits:
-        table = table_of("limit points", "kind", f"{report['path']} [{unit}]", "after point")
+        table = table_of("limit points", "kind", f"{field_label(report['path'])} [{unit}]", "after point")
         for lp in limits:
-            table.add_row(lp["kind"], number(lp["value"]), str(lp["after_point"]))
+            table.add_row(lp["kind"], lp["value"], str(lp["after_point"]))
         out.print(table)
 
 
@@ -177,5 +192,5 @@ def solve(
 
             save_plot(plot_configuration, result, plot)
             out.print(f"wrote {shown(str(plot))}")
-    if report["status"] != "converged":
+    if report["status"] not in FINE:
         raise typer.Exit(EXIT_NOT_CONVERGED)

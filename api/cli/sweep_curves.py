@@ -42,7 +42,7 @@ def sweep_table(mech: Mechanism, label: str, result: SweepResult, x_output: str,
     table = table_of(
         f"{label}: {n} points, {converged} converged, {result.seconds:.3g} s",
         "point",
-        f"{result.path} [{unit}]",
+        f"{field_label(result.path)} [{unit}]",
         f"{x_output} [{output_unit(mech, x_output)}]",
         f"{y_output} [{output_unit(mech, y_output)}]",
         "status",
@@ -54,9 +54,9 @@ def sweep_table(mech: Mechanism, label: str, result: SweepResult, x_output: str,
     for i in rows:
         table.add_row(
             str(i),
-            number(result.values[i]),
-            number(result.outputs[x_output][i]),
-            number(result.outputs[y_output][i]),
+            result.values[i],
+            result.outputs[x_output][i],
+            result.outputs[y_output][i],
             result.status[i],
             str(result.iterations[i]),
         )

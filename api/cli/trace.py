@@ -15,7 +15,6 @@ from flexmech.api.cli.common import (
     check_plot_option,
     consoles,
     default_xy,
-    number,
     print_left_out,
     save_plot,
     shown,
@@ -25,6 +24,7 @@ from flexmech.api.cli.common import (
     write_json,
 )
 from flexmech.api.cli.options import DocArg, JsonOpt, SetOpt, mechanism
+from flexmech.service.drawings.figures import field_label
 
 if TYPE_CHECKING:  # continuation is imported when the command runs
     from flexmech.models import Mechanism
@@ -48,10 +48,10 @@ def print_path(out: Console, mech: Mechanism, path: str, result: PathResult) -> 
     from flexmech.service.drawings.plotting import output_unit
 
     watched = shown_output(mech)
-    field, output = f"{path} [{result.unit}]", f"{watched} [{output_unit(mech, watched)}]"
+    field, output = f"{field_label(path)} [{result.unit}]", f"{watched} [{output_unit(mech, watched)}]"
     table = table_of("limit points", "kind", field, output, "after point")
     for lp in result.limit_points:
-        table.add_row(lp.kind, number(lp.value), number(lp.outputs[watched]), str(lp.after_point))
+        table.add_row(lp.kind, lp.value, lp.outputs[watched], str(lp.after_point))
     out.print(table)
     table = table_of("path", "point", field, output, "stable")
     rows = spread(len(result.points), SHOWN_POINTS)
@@ -59,8 +59,8 @@ def print_path(out: Console, mech: Mechanism, path: str, result: PathResult) -> 
         pt = result.points[i]
         table.add_row(
             str(i),
-            number(pt.value),
-            number(pt.outputs[watched]),
+            pt.value,
+            pt.outputs[watched],
             {True: "yes", False: "no", None: "?"}[pt.stability.stable],
         )
     out.print(table)

@@ -29,6 +29,8 @@ def condensed(K: np.ndarray, n_bodies: int) -> np.ndarray:
     bodies' balance, not by its own kinematics.)"""
     if K.shape[0] == n_bodies:
         return K
+    if n_bodies == 0:  # every body fixed or prescribed: nothing left to be stiff
+        return np.zeros((0, 0))
     compliance = np.linalg.inv(K)[:n_bodies, :n_bodies]
     singular = np.linalg.svd(compliance, compute_uv=False)
     if singular[-1] <= 1e-12 * singular[0]:
@@ -58,7 +60,7 @@ def tangent_stiffness(mech: Mechanism, z: np.ndarray | None = None) -> TangentSt
         terms = {name: matrix_to_doc(mech, np.asarray(t)) for name, t in zip(("I", "II", "III", "load"), parts)}
     rows, cols = coordinate_kinds(mech)
     K = condensed(np.asarray(K), n_bodies)  # nondimensional: lengths and forces alike, angles in rad
-    symmetric = bool(np.allclose(K, K.T, rtol=1e-9, atol=1e-12 * np.abs(K).max()))
+    symmetric = bool(K.size == 0 or np.allclose(K, K.T, rtol=1e-9, atol=1e-12 * np.abs(K).max()))
     return TangentStiffness(
         mech.free_coordinates,
         matrix_to_doc(mech, K),

@@ -22,6 +22,7 @@ SHOWN = (
     "residual_moment",
     "residual_moment_unit",
     "solver_residual",
+    "solver_residual_unit",
 )
 
 

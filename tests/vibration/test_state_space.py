@@ -152,7 +152,9 @@ def test_flexmech_linearize_writes_a_mat_file_matlab_reads_and_names_a_bad_outpu
     args = ["linearize", str(ROD), "--at", "undeformed", "--input", FY, "--output", "bodies.tip.y", "--modes", "3"]
     result = CliRunner().invoke(app, [*args, "--state-space", str(out)], env={"COLUMNS": "200", "NO_COLOR": "1"})
     assert result.exit_code == 0, result.output
-    assert "2.11769" in result.output and "0.0657276 m/N" in result.output  # the first mode (Hz), the static gain
+    assert (
+        "2.11769" in result.output and "65.7276 mm/N" in result.output
+    )  # the first mode (Hz), the static gain (0.0657 m/N in mm/N, service.display)
     mat = scipy.io.loadmat(out)
     shapes = {name: mat[name].shape for name in ("A", "B", "C", "D", "M", "K", "Dmp", "Phi", "poles", "static_gain")}
     assert shapes == {
