@@ -262,7 +262,8 @@ def _string_to_si(value: str, kind: str, default_unit: str, pointer: str) -> flo
     except ValueError as exc:
         raise MechanismError(pointer, f"cannot read {_shown(value)} as a quantity: {exc}") from None
     if dimension != dimension_of(kind):
-        raise MechanismError(pointer, f"{_shown(value)} is not a {kind} (expected units like {default_unit})")
+        article = "an" if kind[:1] in "aeiou" else "a"  # "is not an angle"
+        raise MechanismError(pointer, f"{_shown(value)} is not {article} {kind} (expected units like {default_unit})")
     return number * size
 
 

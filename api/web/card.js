@@ -2,7 +2,7 @@
 // failed, cancelled each in its own style), its headline quantities with units, and its
 // warnings styled as warnings. A new run empties it until its own first result.
 
-import { formatNumber } from "./plot.js";
+import { display } from "./display.js";
 import { headline } from "./headline.js";
 
 const $ = (id) => document.getElementById(id);
@@ -19,14 +19,13 @@ export function statusStyle(status) {
   return "failed";
 }
 
-// A number as the card shows it: four significant digits, the target's five (read against
-// the core to 1e-3 of its value).
-function shown(item) {
-  if (item.id === "target") {
-    const rounded = Number(item.value.toPrecision(5));
-    return rounded !== 0 && (Math.abs(rounded) < 1e-3 || Math.abs(rounded) >= 1e6) ? rounded.toExponential(4) : String(rounded);
-  }
-  return Number.isInteger(item.value) && Math.abs(item.value) < 1e6 ? String(item.value) : formatNumber(item.value);
+// A number as the card shows it: in its quantity's display unit with six significant digits
+// (display.js, the command line's rules: 1.2e-9 kg is 1.21946 ug, 77.0346 uN on every card);
+// a count as itself.
+function shownAs(item) {
+  if (Number.isInteger(item.value) && !item.unit && Math.abs(item.value) < 1e6) return { text: String(item.value), unit: "" };
+  const shown = display(item.unit || "", [item.value], item.kind || null);
+  return { text: shown.text(item.value), unit: shown.unit };
 }
 
 function badge(status) {
@@ -45,13 +44,14 @@ function itemOf(item) {
   name.textContent = item.name;
   const value = document.createElement("dd");
   const number = document.createElement("strong");
-  number.textContent = shown(item);
+  const shown = shownAs(item);
+  number.textContent = shown.text;
   if (item.id) number.id = `${item.id}-value`;
   value.append(number);
-  if (item.unit) {
+  if (shown.unit) {
     const unit = document.createElement("span");
     unit.className = "unit";
-    unit.textContent = ` ${item.unit}`;
+    unit.textContent = ` ${shown.unit}`;
     value.append(unit);
   }
   box.append(name, value);

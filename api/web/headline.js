@@ -5,8 +5,11 @@
 // {items: [{name, value, unit, note, id}], warnings: [...]}; the card (card.js) draws it.
 
 import { fieldName } from "./names.js";
-import { formatNumber } from "./plot.js";
+import { display } from "./display.js";
 import { lengthUnitOf } from "./results.js";
+
+// A value with its unit, in its display unit (display.js): "0.336 mm/uN", "1.21946 ug".
+const quantity = (value, unit) => display(unit || "", [value]).text(value, true);
 
 const finite = (x) => typeof x === "number" && Number.isFinite(x);
 
@@ -28,7 +31,7 @@ function equilibrium(report) {
   const items = [];
   const target = report.target;
   if (target) {
-    const reaches = target.output ? `${target.output} = ${formatNumber(target.equals)} ${target.output_unit || ""}`.trim() : "the target";
+    const reaches = target.output ? `${target.output} = ${quantity(target.equals, target.output_unit)}` : "the target";
     items.push({ id: "target", name: fieldName(target.path), value: target.value, unit: target.unit,
                  note: target.status === "converged" ? `brings ${reaches} (${target.path})` : `target ${target.status.replace(/_/g, " ")}` });
   }
@@ -69,22 +72,25 @@ function modes(report) {
   return items;
 }
 
+// A resonance's amplitude unit: its output's per the input's (the response's own unit).
+const amplitudeUnit = (report, peak) => ((report.responses || {})[peak.output] || {}).unit || (report.units || {}).amplitude || "";
+
 function frequencyResponse(report) {
   const peaks = report.resonances || [];
   const units = report.units || {};
   return peaks.slice(0, 2).map((peak, k) => ({ name: k ? "second resonance" : "first resonance", value: peak.frequency, unit: units.frequency || "Hz",
-                                               note: finite(peak.amplitude) ? `amplitude ${formatNumber(peak.amplitude)} ${units.amplitude || ""}`.trim() : "" }));
+                                               note: finite(peak.amplitude) ? `amplitude ${quantity(peak.amplitude, amplitudeUnit(report, peak))}` : "" }));
 }
 
 function simulation(report) {
   const items = [];
   const units = report.units || {};
   if (finite(report.time_reached)) items.push({ name: "time reached", value: report.time_reached, unit: "s", note: finite(report.steps) ? `${report.steps} steps` : "" });
-  if (finite(report.energy_balance_error)) items.push({ name: "energy balance error", value: 100 * report.energy_balance_error, unit: "%", note: "of the largest energy" });
+  if (finite(report.energy_balance_error)) items.push({ name: "energy balance error (relative)", value: 100 * report.energy_balance_error, unit: "%", note: "of the largest energy" });
   const impacts = report.impacts || [];
   if (impacts.length) {
     const peak = largestBy(impacts, (impact) => impact.peak_force);
-    items.push({ name: "impacts", value: impacts.length, unit: "", note: peak ? `peak force ${formatNumber(peak.peak_force)} ${units.force}` : "" });
+    items.push({ name: "impacts", value: impacts.length, unit: "", note: peak ? `peak force ${quantity(peak.peak_force, units.force)}` : "" });
   }
   return items;
 }
@@ -98,7 +104,7 @@ function sweep(result) {
   const until = result.until;
   const reached = until && finite(until.value);  // swept until an output reached a value: where it did
   const items = [reached
-    ? { name: `${fieldName(until.path)} at ${until.output} = ${formatNumber(until.equals)} ${units[until.output] || ""}`.trim(), value: until.value, unit: until.unit, note: `${points.length} points` }
+    ? { name: `${fieldName(until.path)} at ${until.output} = ${quantity(until.equals, units[until.output])}`, value: until.value, unit: until.unit, note: `${points.length} points` }
     : { name: `${fieldName(field.path)} at the last point`, value: last.values[0], unit: field.unit, note: `${points.length} points` }];
   const target = result.until && result.until.output;  // a sweep until an output reaches a value: that output
   const lengthUnit = lengthUnitOf(units);
@@ -117,7 +123,7 @@ function contactPath(result) {
     }
   }
   const field = (result.parameters || [])[0] || {};
-  return best ? [{ name: "peak contact force", value: best.force, unit: result.force_unit, note: `pair ${best.name} at ${fieldName(field.path)} = ${formatNumber(best.at)} ${field.unit || ""}` }] : [];
+  return best ? [{ name: "peak contact force", value: best.force, unit: result.force_unit, note: `pair ${best.name} at ${fieldName(field.path)} = ${quantity(best.at, field.unit)}` }] : [];
 }
 
 function optimization(result) {

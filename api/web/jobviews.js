@@ -6,6 +6,7 @@ import { contactFrame } from "./contactframes.js";
 import { fieldName, seriesLabel } from "./names.js";
 import { lengthUnitOf, mostMoving, simulationView, withFieldLoads } from "./results.js";
 import { recordsTable } from "./vibration.js";
+import { numberText } from "./display.js";
 
 const MAX_TABLE_ROWS = 500;
 
@@ -55,7 +56,7 @@ function contactView(result, base) {
   const field = (result.parameters || [])[0] || { path: "", unit: "" };
   const largest = Math.max(0, ...points.flatMap((p) => Object.values(p.pairs || {}).map((q) => Math.hypot(...(q.force || [0, 0])))));
   const frames = points.map((p) => {
-    const frame = contactFrame(p, `${fieldName(field.path)} = ${+(+p.values[0]).toPrecision(6)} ${field.unit}`, base, result.force_unit);
+    const frame = contactFrame(p, `${fieldName(field.path)} = ${numberText(+p.values[0])} ${field.unit}`, base, result.force_unit);
     frame.overlay.largestForce = largest;
     return frame;
   });

@@ -21,6 +21,7 @@ import { defaultChoice, whyNot } from "./offers.js";
 import { wireTabs } from "./tabs.js";
 import { wireCompare } from "./compare.js";
 import { refreshPickers, wirePickers } from "./pickers.js";
+import { numberText } from "./display.js";
 
 const $ = (id) => document.getElementById(id);
 const DEFAULT_EXAMPLE = "gripper";
@@ -242,7 +243,7 @@ async function sweepFrames(result) {
   const answer = await post("/v1/drawings", { document: state.doc, model: $("model").value || undefined, overrides: state.overrides,
                                               state: "path", path: { path: field.path, values: chosen } });
   const states = answer.frames.map((f) => ({ elements: f.elements, poses: f.poses, about: "reference",
-                                             label: `${fieldName(field.path)} = ${+(+f.value).toPrecision(5)} ${answer.unit}${f.status === "converged" ? "" : ` (${f.status})`}` }));
+                                             label: `${fieldName(field.path)} = ${numberText(+f.value)} ${answer.unit}${f.status === "converged" ? "" : ` (${f.status})`}` }));
   const frames = withFieldLoads(states, answer, field.path, answer.frames.map((f) => f.value)); // a swept load at each state's value
   state.drawing = answer;
   setFrames(answer, frames);

@@ -4,29 +4,33 @@
 
 import { overlaid } from "./compare.js";
 import { seriesLabel, seriesName } from "./names.js";
-import { formatNumber, linePlot } from "./plot.js";
+import { exactText, numberText, shownTable } from "./display.js";
+import { linePlot } from "./plot.js";
 
 const $ = (id) => document.getElementById(id);
 
-function cell(row, value, header = false) {
+// A cell: a number as display.js shows it (its exact value in the title), else the text.
+function cell(row, value, header = false, exact = null) {
   const element = document.createElement(header ? "th" : "td");
-  if (typeof value === "number") { element.textContent = formatNumber(value); element.className = "number"; element.title = String(value); }
+  if (exact !== null) { element.textContent = value; element.className = "number"; element.title = String(exact); }
   else element.textContent = value === null || value === undefined ? "–" : String(value);
   row.append(element);
 }
 
-function tableOf({ caption, columns, rows }) {
-  const table = document.createElement("table");
-  table.createCaption().textContent = caption;
-  const head = table.createTHead().insertRow();
-  for (const column of columns) { cell(head, column, true); head.lastChild.scope = "col"; }
-  const body = table.createTBody();
-  for (const values of rows) {
+function tableOf(table) {
+  const { caption, rows } = table;
+  const shown = shownTable(table);
+  const element = document.createElement("table");
+  element.createCaption().textContent = caption;
+  const head = element.createTHead().insertRow();
+  for (const column of shown.columns) { cell(head, column, true); head.lastChild.scope = "col"; }
+  const body = element.createTBody();
+  rows.forEach((values, r) => {
     const row = body.insertRow();
-    values.forEach((value, i) => cell(row, value, i === 0 && columns[0] !== "point"));
+    values.forEach((value, i) => cell(row, shown.rows[r][i], i === 0 && table.columns[0] !== "point", shown.numeric[r][i] ? value : null));
     if (typeof values[0] === "string") row.dataset.name = values[0];
-  }
-  return table;
+  });
+  return element;
 }
 
 function summaryOf(v) {
@@ -35,7 +39,7 @@ function summaryOf(v) {
   for (const [term, detail] of v.summary) {
     const dt = document.createElement("dt"), dd = document.createElement("dd");
     dt.textContent = term;
-    dd.textContent = typeof detail === "number" ? formatNumber(detail) : String(detail);
+    dd.textContent = typeof detail !== "number" ? String(detail) : /residual|tolerance/.test(term) ? exactText(detail) : numberText(detail);
     if (term === "status") dd.className = ["converged", "finished", "succeeded"].includes(detail) ? "status-ok" : "status-bad";
     list.append(dt, dd);
   }

@@ -4,9 +4,9 @@
 
 import { contactFrame } from "./contactframes.js";
 import { fieldName } from "./names.js";
-import { formatNumber } from "./plot.js";
 import { posesAtElementEnds } from "./scene.js";
 import { modeFrames, modesTable, recordsTable, responseSeries } from "./vibration.js";
+import { display, exactText, numberText } from "./display.js";
 
 const MAX_IMPACT_ROWS = 200;
 const isNumberList = (value) => Array.isArray(value) && value.length > 0 && value.every((v) => v === null || typeof v === "number");
@@ -25,8 +25,8 @@ function solveView(report) {
   v.summary.push(["status", report.status], ["analysis", report.analysis]);
   if (report.message) v.summary.push(["message", report.message]);
   if (report.iterations) v.summary.push(["iterations", report.iterations]);
-  if (report.residual_norm !== null && report.residual_norm !== undefined) v.summary.push(["largest unbalanced force", quantity(report.residual_norm, report.residual_unit)]);
-  if (report.residual_moment !== null && report.residual_moment !== undefined) v.summary.push(["largest unbalanced moment", quantity(report.residual_moment, report.residual_moment_unit)]);
+  if (report.residual_norm !== null && report.residual_norm !== undefined) v.summary.push(["largest unbalanced force", quantity(report.residual_norm, report.residual_unit, true)]);
+  if (report.residual_moment !== null && report.residual_moment !== undefined) v.summary.push(["largest unbalanced moment", quantity(report.residual_moment, report.residual_moment_unit, true)]);
   v.tables.push(outputsTable("Outputs", report.outputs, report.output_units), outputsTable("Displacements", report.displacements, report.displacement_units));
   if (report.pairs) {
     const u = report.units || {};
@@ -39,7 +39,7 @@ function solveView(report) {
                     rows: Object.entries(report.wrenches).map(([name, w]) => [name, w.Fx, w.Fy, w.M]) });
   }
   for (const [key, value] of Object.entries(report)) {  // an analysis' own numbers (a plugin's too)
-    if (typeof value === "number" && !SHOWN_NUMBERS.has(key)) v.summary.push([key.replace(/_/g, " "), quantity(value, report[`${key}_unit`] ?? UNITS_OF[key] ?? "")]);
+    if (typeof value === "number" && !SHOWN_NUMBERS.has(key)) v.summary.push([key.replace(/_/g, " "), quantity(value, report[`${key}_unit`] ?? UNITS_OF[key] ?? "", /residual|tolerance/.test(key))]);
   }
   if (report.stiffness && report.stiffness.coordinates) {
     const k = report.stiffness;
@@ -58,15 +58,18 @@ const UNITS_OF = { seconds: "s", solver_residual: "1", kkt_residual: "1", approa
                    time_reached: "s", step: "s", energy_balance_error: "1", trial_steps: "1", steps: "1", rescued_steps: "1",
                    damping: "1/s", clearance: "" };
 
-// A number with its unit, four significant digits: "4.698e-13 uN".
-export function quantity(value, unit) {
-  return `${formatNumber(value)}${unit && unit !== "1" ? ` ${unit}` : ""}`;
+// A number with its unit in its display unit (display.js: "1.21946 ug", "4.77266 nJ"); a
+// residual or a tolerance exactly, four digits ("4.698e-13 uN").
+export function quantity(value, unit, exactly = false) {
+  const shownUnit = unit && unit !== "1" ? unit : "";
+  if (exactly) return `${exactText(value)}${shownUnit ? ` ${shownUnit}` : ""}`;
+  return display(shownUnit, [value]).text(value, true);
 }
 
 export function simulationView(report, drawing) {
   const v = view();
   v.summary.push(["status", report.status], ["message", report.message || "–"], ["reached", quantity(report.time_reached, "s")], ["steps", report.steps ?? "–"]);
-  if (typeof report.energy_balance_error === "number") v.summary.push(["energy balance error", quantity(100 * report.energy_balance_error, "%")]);
+  if (typeof report.energy_balance_error === "number") v.summary.push(["energy balance error (relative)", `${numberText(100 * report.energy_balance_error)} % of the largest energy`]);
   const times = report.times || [];
   v.series.time = times; v.units.time = "s";
   for (const [name, values] of Object.entries(report.outputs || {})) if (isNumberList(values)) { v.series[name] = values; v.units[name] = (report.output_units || {})[name] || ""; }
@@ -189,7 +192,7 @@ function traceView(report, drawing) {
   const first = moving.find((n) => n.endsWith(".dy")) || moving[0];
   v.defaultCurve = first ? [first, field] : null;
   const frames = (report.frames || []).map((f) => ({ elements: f.elements, poses: f.poses, about: "reference", stresses: f.stresses,
-                                                     label: `${fieldName(field)} = ${+(+f.value).toPrecision(5)} ${report.unit || ""} (point ${f.point})` }));
+                                                     label: `${fieldName(field)} = ${numberText(+f.value)} ${report.unit || ""} (point ${f.point})` }));
   v.frames = withFieldLoads(frames, drawing, report.path, (report.frames || []).map((f) => f.value));
   v.frameUnit = report.unit || "";
   if (report.limit_points && report.limit_points.length) {

@@ -207,7 +207,7 @@ def test_it_is_a_command_with_its_flags(tmp_path):
     )
     assert ran.exit_code == 0, ran.output
     assert json.loads(out.read_text())["stiffness"] == pytest.approx(ALONG, rel=1e-6)
-    assert "stiffness: 2e+07 N/m" in ran.output
+    assert "stiffness: 20 MN/m" in ran.output  # 2e7 N/m in its display unit (service.display)
     refused = CliRunner().invoke(app, ["body-stiffness", str(document), "--body", "tip", "--direction", "z"])
     assert refused.exit_code == 2 and refused.stderr.startswith("error: --direction: Input should be 'x' or 'y'")
 

@@ -146,3 +146,16 @@ def test_the_acceptance_lines_print_stresses_in_mpa_masses_in_micrograms_and_ene
     assert re.search(r"residual_moment: [-\d.e]+ uN\*mm", modes)
     _, linear = _run(["linearization", str(EXAMPLES / "gripper.json"), "--at", "undeformed"])
     assert "tangent stiffness K_T" in linear and "input.x [uN]" in linear
+
+
+def test_a_unit_of_the_wrong_kind_is_named_in_english():
+    """'3 mm' for an angle: "is not an angle" (issue 49 found "is not a angle")."""
+    import json
+
+    from flexmech import MechanismError
+
+    document = json.loads((EXAMPLES / "gripper.json").read_text())
+    document["bodies"]["input"]["angle"] = "3 mm"
+    with pytest.raises(MechanismError) as raised:
+        load(document)
+    assert "'3 mm' is not an angle (expected units like deg)" in str(raised.value)

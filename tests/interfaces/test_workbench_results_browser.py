@@ -43,7 +43,13 @@ UNIT_CHECK = """() => {
   return problems;
 }"""
 SHOWN_TEXT = "() => document.getElementById('run-panel').innerText + '\\n' + document.getElementById('view').innerText"
-FLOAT_NOISE = re.compile(r"\d\.\d{8,}")
+DECIMAL = re.compile(r"\d+\.\d+")
+
+
+def float_noise(text: str) -> list[str]:
+    """Numbers shown with more than six significant digits (0.30000000000000004): a float's
+    round-off printed, not a number as display.js shows it."""
+    return [n for n in DECIMAL.findall(text) if len(n.replace(".", "").lstrip("0")) > 6]
 
 
 def open_fresh(page, name: str) -> str:
@@ -71,7 +77,10 @@ def cancel_if_running(page) -> None:
         )
 
 
-def test_every_example_shows_its_headline_with_units_above_the_fold(page):
+def test_every_example_shows_its_headline_with_units_above_the_fold(page, log):
+    # a job that ends between cancel_if_running's look and its click is answered 409 (the API's
+    # "cancelling a finished job"): the race a loaded machine runs into, not the page's error
+    log.answered = (409,)
     page.set_viewport_size(FOLD)
     seen = {}
     for path in sorted(EXAMPLES.glob("*.json")):
@@ -91,7 +100,7 @@ def test_every_example_shows_its_headline_with_units_above_the_fold(page):
         assert page.evaluate(UNIT_CHECK) == [], name
         shown = page.evaluate(SHOWN_TEXT)
         assert "undefined" not in shown and "NaN" not in shown, name
-        assert not FLOAT_NOISE.findall(shown), (name, FLOAT_NOISE.findall(shown))
+        assert not float_noise(shown), (name, float_noise(shown))
         seen[name] = (choice, items.first.text_content())
         if name in ("gripper", "csfh_central_impact", "gripper_modes", "rod_free_vibration"):
             screenshot(page, f"results-card-{name}")

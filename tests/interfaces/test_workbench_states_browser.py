@@ -26,6 +26,8 @@ from workbench import (  # noqa: F401 (fixtures by name)
     set_document_text,
 )
 
+from flexmech.service.display import number_text
+
 FOLD = {"width": 1400, "height": 900}
 DRAWN_LOADS = "() => Object.fromEntries([...document.querySelectorAll('#drawing g[data-load]')].map((g) => [g.dataset.load, g.textContent]))"
 # Every visible text of the page that shows a whole percentage ("41 %"), with the id (or class)
@@ -37,7 +39,7 @@ PERCENT_PLACES = r"""() => {
   while (walker.nextNode()) {
     const text = walker.currentNode, element = text.parentElement, entry = element.closest('#recent-list li');
     if (element.closest('[hidden]') || !element.getClientRects().length || (entry && entry.dataset.job !== job)) continue;
-    if (/(^|[^\d.])\d{1,3} %/.test(text.textContent)) found.push(element.id || element.className || element.tagName);
+    if (/(^|[^\d.])\d{1,3} %/.test(text.textContent)) found.push(element.id || element.className || `${element.tagName}: ${text.textContent}`);
   }
   return found;
 }"""
@@ -269,6 +271,6 @@ def test_an_export_job_shows_its_summary(page):
     assert outputs == {o["name"]: o["unit"] for o in manifest["outputs"]} and outputs["anchor_m"] == "uN*mm"
     assert "?" not in page.text_content("#panel-table")
     assert page.text_content("#result-card .headline-item:first-child").startswith(
-        f"archive{archive['bytes'] / 1000:.4g} kB"
+        f"archive{number_text(archive['bytes'] / 1000)} kB"  # six digits, as every number (service.display)
     )
     screenshot(page, "states-export-summary")

@@ -554,7 +554,8 @@ def test_cli_single_state_prints_the_pair(run):
     rows = [line for line in result.stdout.splitlines() if "insertion" in line]
     assert len(rows) == 1, result.stdout
     assert pair["state"] == "frictionless" and "frictionless" in rows[0]
-    assert f"{pair['normal_force']:.6g} N" in rows[0] and f"{pair['force'][0]:.6g} N" in rows[0], rows[0]
+    assert f" {pair['normal_force']:.6g} " in rows[0] and f" {pair['force'][0]:.6g} " in rows[0], rows[0]
+    assert "normal [N]" in result.stdout and "F_x [N]" in result.stdout  # the unit in the column's head
     assert "converged" in result.stdout
 
 
