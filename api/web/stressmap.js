@@ -4,6 +4,7 @@
 // the smallest material limit when that is larger; a segment above its element's limit
 // (`stress_limit`) drawn in the warning style; a colour bar with its scale, unit and the limit.
 
+import { display } from "./display.js";
 import { formatNumber } from "./plot.js";
 
 const SVG = "http://www.w3.org/2000/svg";
@@ -30,15 +31,19 @@ export function viridis(t) {
   return `rgb(${a.map((v, i) => Math.round(v + f * (b[i] - v))).join(",")})`;
 }
 
-// {top, limit, unit} of a frame's stresses, or null when it has none: the scale's end is the
-// largest stress, or the smallest limit of a stressed element when that is larger.
+// {top, limit, unit, shown} of a frame's stresses, or null when it has none: the scale's end is
+// the largest stress, or the smallest limit of a stressed element when that is larger; `shown`
+// is the display its labels use (display.js: MPa where the document's stresses are 0.19 GPa, as
+// the tables show them); the data attributes keep the document's unit.
 export function stressScale(drawing, frame) {
   const stresses = frame && frame.stresses;
   if (!stresses || !Object.keys(stresses).length) return null;
   const largest = Math.max(0, ...Object.values(stresses).flat().filter(Number.isFinite));
   const limits = drawing.elements.filter((e) => stresses[e.name] && e.stress_limit > 0).map((e) => e.stress_limit);
   const limit = limits.length ? Math.min(...limits) : null;
-  return { top: Math.max(largest, limit || 0) || 1, largest, limit, unit: (drawing.units && drawing.units.stress) || "" };
+  const unit = (drawing.units && drawing.units.stress) || "";
+  const top = Math.max(largest, limit || 0) || 1;
+  return { top, largest, limit, unit, shown: display(unit, [top]) };
 }
 
 // One element's deformed centre line as segments coloured by stress; each segment takes the
@@ -56,10 +61,10 @@ export function drawStressedElement(layer, element, points, stresses, scale, pat
                    stroke: over ? OVER_LIMIT : viridis(stress / scale.top), "stroke-width": over ? "4.4" : "3.2",
                    ...(over ? { "stroke-dasharray": "5 2.5", class: "over-limit" } : {}) }, group);
   }
-  const against = limit !== null ? ` (limit ${formatNumber(limit)} ${scale.unit}${largest > limit ? ": exceeded" : ""})` : "";
+  const against = limit !== null ? ` (limit ${scale.shown.text(limit, true)}${largest > limit ? ": exceeded" : ""})` : "";
   const line = node("path", { d: pathOf(points), fill: "none", stroke: "transparent", "stroke-width": "9", "stroke-linecap": "round",
                               "pointer-events": "stroke", "data-element": element.name }, group);
-  node("title", {}, line).textContent = `element ${element.name} (${element.from} to ${element.to}): largest stress ${formatNumber(largest)} ${scale.unit}${against}`;
+  node("title", {}, line).textContent = `element ${element.name} (${element.from} to ${element.to}): largest stress ${scale.shown.text(largest, true)}${against}`;
   return group;
 }
 
@@ -72,22 +77,22 @@ export function drawColourBar(svg, scale, box) {
                           transform: `translate(${box.right} ${box.top}) scale(${grow}) translate(${-box.right} ${-box.top})` }, svg);
   const width = 14, height = 150, x = box.right - 74, y = box.top + 52; // below a frame's label
   node("rect", { x: x - 46, y: y - 26, width: 116, height: height + 56, fill: "#fff", "fill-opacity": "0.86", stroke: "#d5dae2", rx: 3 }, bar);
-  node("text", { x: x + width / 2, y: y - 10, "text-anchor": "middle", class: "colour-bar-title", "font-weight": "600" }, bar).textContent = `stress [${scale.unit}]`;
+  node("text", { x: x + width / 2, y: y - 10, "text-anchor": "middle", class: "colour-bar-title", "font-weight": "600" }, bar).textContent = `stress [${scale.shown.unit}]`;
   const gradient = node("linearGradient", { id: "stress-scale", x1: "0", y1: "1", x2: "0", y2: "0" }, node("defs", {}, bar));
   VIRIDIS.forEach((colour, k) => node("stop", { offset: String(k / (VIRIDIS.length - 1)), "stop-color": colour }, gradient));
   node("rect", { x, y, width, height, fill: "url(#stress-scale)", stroke: "#5b6575", "stroke-width": "0.6" }, bar);
   for (const k of [0, 0.25, 0.5, 0.75, 1]) {
     const ty = y + height * (1 - k);
     node("line", { x1: x + width, x2: x + width + 4, y1: ty, y2: ty, stroke: "#5b6575" }, bar);
-    node("text", { x: x + width + 7, y: ty + 4, class: "colour-bar-tick" }, bar).textContent = formatNumber(Number((scale.top * k).toPrecision(3)));
+    node("text", { x: x + width + 7, y: ty + 4, class: "colour-bar-tick" }, bar).textContent = formatNumber(Number(scale.shown.value(scale.top * k).toPrecision(3)));
   }
   if (scale.limit !== null) {
     const ly = y + height * (1 - scale.limit / scale.top);
     const mark = node("g", { class: "limit-mark", "data-limit": String(scale.limit) }, bar);
     node("line", { x1: x - 6, x2: x + width + 2, y1: ly, y2: ly, stroke: OVER_LIMIT, "stroke-width": "2.2" }, mark);
     node("text", { x: x - 8, y: ly + 4, "text-anchor": "end", fill: OVER_LIMIT, "font-weight": "600" }, mark).textContent = "limit";
-    node("title", {}, mark).textContent = `material limit ${formatNumber(scale.limit)} ${scale.unit}`;
+    node("title", {}, mark).textContent = `material limit ${scale.shown.text(scale.limit, true)}`;
   }
-  node("text", { x: x - 40, y: y + height + 22, class: "colour-bar-largest" }, bar).textContent = `max ${formatNumber(scale.largest)}`;
+  node("text", { x: x - 40, y: y + height + 22, class: "colour-bar-largest" }, bar).textContent = `max ${scale.shown.text(scale.largest)}`;
   return bar;
 }

@@ -25,9 +25,10 @@ SHOWN = 2e-3  # relative: the Outputs table shows four significant digits
 OUTPUT_VALUES = """() => {
   const table = [...document.querySelectorAll('#panel-table table')].find((t) => t.caption && t.caption.textContent.startsWith('Outputs'));
   const values = {};
-  for (const row of table.tBodies[0].rows) values[row.cells[0].textContent] = Number(row.cells[1].textContent.replace('\\u2212', '-'));
+  for (const row of table.tBodies[0].rows) values[row.cells[0].textContent] = [Number(row.cells[1].textContent.replace('\\u2212', '-')), row.cells[row.cells.length - 1].textContent];
   return values;
 }"""
+IN_GPA = {"GPa": 1.0, "MPa": 1e-3}  # a shown stress's unit, in the document's
 DRAWN = """() => [...document.querySelectorAll('#drawing g.stressed')].map((g) => ({
   name: g.dataset.stressed,
   largest: Number(g.dataset.stressMax),
@@ -53,15 +54,16 @@ def test_the_gripper_equilibrium_is_coloured_by_its_flexures_stress(page):
     solved(page, "gripper")
     bar = page.locator("#drawing .colour-bar")
     assert bar.count() == 1
-    assert page.text_content("#drawing .colour-bar-title") == "stress [GPa]"
+    assert page.text_content("#drawing .colour-bar-title") == "stress [MPa]"  # 0.19 GPa shown as the tables show it
     assert page.locator("#drawing .colour-bar .limit-mark").count() == 0  # gripper.json gives no limit
     drawn, outputs = page.evaluate(DRAWN), page.evaluate(OUTPUT_VALUES)
     assert sorted(d["name"] for d in drawn) == ["a", "b", "c", "d"]
     for element in drawn:
         assert max(element["segments"]) == element["largest"]
-        assert element["largest"] == pytest.approx(outputs[f"elements.{element['name']}.stress_max"], rel=SHOWN)
+        value, unit = outputs[f"elements.{element['name']}.stress_max"]
+        assert element["largest"] == pytest.approx(value * IN_GPA[unit], rel=SHOWN)  # data-stress in the document's GPa
         assert element["colours"] > 3  # a map, not one colour
-        assert "largest stress" in element["title"] and "GPa" in element["title"]
+        assert "largest stress" in element["title"] and "MPa" in element["title"]
     top = float(bar.get_attribute("data-top"))
     assert top == pytest.approx(max(d["largest"] for d in drawn))
     screenshot(page, "drawing-gripper-stress")
