@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from flexmech.service.display import on_axis
 from flexmech.service.drawings.configuration_plot import configuration_figure, load_point, plot_configuration
 from flexmech.service.drawings.figures import (
     PLOT_SUFFIXES,
@@ -75,6 +76,7 @@ def sweeps_figure(
 
     fig = new_figure(11.0, 4.6)
     left, right = fig.subplots(1, 2)
+    drawn = []
     for label, result in curves:
         ok = np.array([s == "converged" for s in result.status])
         x = np.where(ok, result.outputs[x_output], np.nan)
@@ -83,6 +85,12 @@ def sweeps_figure(
         if secant:
             with np.errstate(divide="ignore", invalid="ignore"):
                 values = np.where(values != values[0], (y - y[0]) / (values - values[0]), np.nan)
+        drawn.append((label, ok, x, y, values))
+    # each axis in its display unit (service.display), as the tables show the same numbers
+    x_unit, xs = on_axis(output_unit(mech, x_output), [d[2] for d in drawn])
+    y_unit, ys = on_axis(output_unit(mech, y_output), [d[3] for d in drawn])
+    right_unit, rights = on_axis(right_unit, [d[4] for d in drawn])
+    for (label, ok, _, _, _), x, y, values in zip(drawn, xs, ys, rights):
         (line,) = left.plot(x, y, label=label)
         right.plot(x, values, label=label, color=line.get_color())
         if ok.any():  # the end of the path, e.g. the closed gripper
@@ -94,13 +102,13 @@ def sweeps_figure(
     trajectory = component == "x" and y_output == f"{point}.y"
     set_labels(
         left,
-        f"{x_output} [{output_unit(mech, x_output)}]",
-        f"{y_output} [{output_unit(mech, y_output)}]",
+        f"{x_output} [{x_unit}]",
+        f"{y_output} [{y_unit}]",
         f"trajectory of {point}" if trajectory else f"{y_output} against {x_output}",
     )
     set_labels(
         right,
-        f"{x_output} [{output_unit(mech, x_output)}]",
+        f"{x_output} [{x_unit}]",
         f"{right_name} [{right_unit}]",
         f"{right_name} against {x_output}",
     )

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from flexmech.models import Mechanism
+from flexmech.service.display import on_axis
 from flexmech.service.dynamics.integrate import History
 from flexmech.service.dynamics.state_map import state_map
 
@@ -24,25 +25,31 @@ def plot_history(report: dict, outputs: list[str], path: Path) -> None:
         top.plot(t, report["outputs"][name], label=name)
     top.set_ylabel("outputs (document units)")
     top.legend(fontsize=8)
-    energies, unit = report["energies"], report["units"]["energy"]
-    for key, label in (
-        ("kinetic", "kinetic T"),
-        ("potential", "strain and gravity V"),
-        ("input_work", "work of inputs"),
-        ("damping_work", "work of damping"),
-        ("friction_work", "work of friction"),
-        ("contact_damping_work", "work of contact damping"),
-        ("balance", "balance"),
-    ):
-        if np.any(np.array(energies.get(key, [0])) != 0):
-            bottom.plot(t, energies[key], label=label)
+    energies = report["energies"]
+    keys = [k for k in ENERGY_CURVES if np.any(np.array(energies.get(k, [0])) != 0)]
+    unit, shown = on_axis(report["units"]["energy"], [energies[k] for k in keys], "energy")  # in J
+    for key, values in zip(keys, shown):
+        bottom.plot(t, values, label=ENERGY_CURVES[key])
     bottom.set_xlabel("t (s)")
     bottom.set_ylabel(f"energy ({unit})")
     bottom.legend(fontsize=8)
-    top.set_title(f"{report['name']}: {report['status']}, energy balance {report['energy_balance_error']:.2e}")
+    error = report["energy_balance_error"]
+    balance = "-" if error is None else f"{100 * error:.3g} % of the largest energy (relative)"
+    top.set_title(f"{report['name']}\n{report['status']}, energy balance error {balance}", fontsize=10)
     fig.tight_layout()
     fig.savefig(path)
     plt.close(fig)
+
+
+ENERGY_CURVES = {
+    "kinetic": "kinetic T",
+    "potential": "strain and gravity V",
+    "input_work": "work of inputs",
+    "damping_work": "work of damping",
+    "friction_work": "work of friction",
+    "contact_damping_work": "work of contact damping",
+    "balance": "balance",
+}
 
 
 def _centre_lines(mech: Mechanism, history: History, chosen) -> list[np.ndarray]:

@@ -50,3 +50,18 @@ def test_names_sharing_a_unit_share_a_display_chosen_from_all_their_values():
 def test_a_residual_is_shown_exactly_with_its_unit():
     assert exact(1.4456028966473384e-14, "uN*mm") == "1.446e-14 uN*mm"
     assert exact(None) == "-"
+
+
+def test_a_plotted_quantity_is_on_the_axis_the_tables_use():
+    """on_axis: 0.19 GPa stresses on an MPa axis, scaled; a point left out (NaN) stays out;
+    round-off beside them is 0; energies in J."""
+    import numpy as np
+
+    from flexmech.service.display import on_axis
+
+    unit, (first, second) = on_axis("GPa", [np.array([0.188765, np.nan]), np.array([1.46703e-3, 3e-17])])
+    assert unit == "MPa"
+    assert first[0] == 188.765 and np.isnan(first[1])
+    assert second.tolist() == [1.46703, 0.0]
+    unit, (energy,) = on_axis("uN*mm", [np.array([4.77266, 1.0])], "energy")
+    assert unit == "nJ" and energy.tolist() == [4.77266, 1.0]
