@@ -1,0 +1,234 @@
+"""Work-precision of link dynamics against Exudyn, at equal accuracy (issue 50, Deliver 1; the rod
+of Lan 2005 Ex. I.1 so far: the four-bar and Exudyn's ANCF element are still to come).
+
+    pip install exudyn            # the peer (written against exudyn 1.13)
+    python -m benchmarks.work_precision [--quick]
+
+The same physics on both sides: the clamped steel rod of examples/rod_free_vibration.json
+(bending, shear with kappa = 5/6, axial strain, rotary inertia), bent by its tip force in a static
+solve and released from rest at t = 0; generalized-alpha with rho_inf = 0.95, fixed steps. Each
+side is free to choose its discretization: flexmech's cubic link elements (intervals) and
+Exudyn's 2-node GeometricallyExactBeam2D elements, each swept over element counts and steps.
+
+Two measures, against converged references computed on both sides and cross-checked (the
+agreement is printed):
+- first period: the time between the tip's first two downward zero crossings of y, relative;
+- tip history: the largest tip deviation over [0, UNTIL] at common times (every 2 ms), over the
+  tip's largest motion.
+A configuration qualifies for a target only if it and every smaller step with the same elements
+meet it (a lucky cancellation does not count). Cost: seconds of wall time per simulated second,
+"warm" (a repeat run in the same process) and "cold" (the first run of the configuration in this
+process: flexmech's graph and kernel-window builds, and compiles unless the disk cache of
+compiled kernels has them; Exudyn's model build and static solve). Each side's cheapest qualifying configuration per target is printed with the ratio.
+
+Exudyn's settings: EigenSparse with reuseAnalyzedPattern above 16 elements, dense below; Newton
+tolerances relative 1e-6, absolute 1e-8 N (its defaults, 1e-8 and 1e-10, stop its Newton at 64
+elements and more: round-off; the run prints how far ten times tighter ones move the measures);
+one thread.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROD_DOCUMENT = Path(__file__).resolve().parents[1] / "examples" / "rod_free_vibration.json"
+UNTIL = 0.8  # s: two periods of the first mode (0.354 s)
+SAMPLE = 2e-3  # s: the common times the histories are compared at
+KAPPA = 5.0 / 6.0
+TARGETS = (1e-3, 1e-4, 1e-5)
+RHO_INF = 0.95
+
+
+# --- measures ---------------------------------------------------------------------------------------
+def first_period(times: np.ndarray, y: np.ndarray) -> float:
+    down = np.nonzero((y[:-1] > 0.0) & (y[1:] <= 0.0))[0]
+    if len(down) < 2:
+        return float("nan")
+    crossings = times[down] + (times[down + 1] - times[down]) * y[down] / (y[down] - y[down + 1])
+    return float(crossings[1] - crossings[0])
+
+
+def sampled(times: np.ndarray, tip: np.ndarray) -> np.ndarray:
+    """The tip at every SAMPLE (the runs' steps divide it: no interpolation)."""
+    wanted = np.arange(0.0, UNTIL + 1e-12, SAMPLE)
+    at = np.searchsorted(times, wanted - 1e-9)
+    assert np.allclose(times[at], wanted, atol=1e-9), "a step that does not divide the sample time"
+    return tip[at]
+
+
+def errors(run: dict, reference: dict) -> tuple[float, float]:
+    """(first period, tip history) relative errors of a run against a reference."""
+    period = abs(run["period"] / reference["period"] - 1.0)
+    motion = np.abs(reference["tip"] - reference["tip"][0]).max()
+    history = float(np.abs(run["tip"] - reference["tip"]).max() / motion)
+    return period, history
+
+
+# --- flexmech -----------------------------------------------------------------------------------------
+def flexmech_run(intervals: int, step: float) -> dict:
+    import flexmech
+
+    document = json.loads(ROD_DOCUMENT.read_text())
+    document["elements"]["rod"]["intervals"] = intervals
+    document["sections"]["rod"]["shear_factor"] = KAPPA
+    document["simulate"].update({"until": UNTIL, "step": step, "every": 1})
+    document["simulate"].pop("tolerance", None)
+    timings = []
+    for _ in range(2):  # cold, then warm
+        started = time.perf_counter()
+        report = flexmech.simulate(flexmech.load(document)).report
+        timings.append(time.perf_counter() - started)
+    assert report["status"] == "finished", report["message"]
+    times = np.asarray(report["times"])
+    tip = np.c_[report["outputs"]["bodies.tip.x"], report["outputs"]["bodies.tip.y"]]
+    return {
+        "tip": sampled(times, tip),
+        "period": first_period(times, tip[:, 1]),
+        "cold": timings[0] / UNTIL,
+        "warm": timings[1] / UNTIL,
+    }
+
+
+# --- Exudyn ---------------------------------------------------------------------------------------------
+def exudyn_run(elements: int, step: float, rel_tol: float = 1e-6, abs_tol: float = 1e-8) -> dict:
+    import exudyn as exu
+
+    from benchmarks.exudyn_peer import ROD, ROD_TIP_FORCE, _clamp, _Link, _settings
+
+    def model(init=None, force=None):
+        import exudyn.itemInterface as eii
+
+        container = exu.SystemContainer()
+        mbs = container.AddSystem()
+        A, I = ROD["b"] * ROD["h"], ROD["b"] * ROD["h"] ** 3 / 12
+        rod = _Link(mbs, (0.0, 0.0), (ROD["L"], 0.0), elements, ROD["E"], ROD["G"], ROD["rho"], A, I, KAPPA, init)
+        _clamp(mbs, rod.nodes[0], (0, 1, 2))
+        if force is not None:
+            marker = mbs.AddMarker(eii.MarkerNodePosition(nodeNumber=rod.nodes[-1]))
+            mbs.AddLoad(eii.LoadForceVector(markerNumber=marker, loadVector=[*force, 0.0]))
+        return container, mbs, rod
+
+    def settings():
+        s = _settings(step, UNTIL, RHO_INF, rel_tol, abs_tol)
+        if elements <= 16:
+            s.linearSolver.solverType = exu.LinearSolverType.EXUdense
+        else:
+            s.linearSolver.reuseAnalyzedPattern = True
+        s.parallel.numberOfThreads = 1
+        return s
+
+    timings = []
+    for _ in range(2):  # cold (model, static solve, run), then warm (the run again)
+        started = time.perf_counter()
+        if not timings:
+            _cs, static, rod_s = model(force=ROD_TIP_FORCE)
+            static.Assemble()
+            s = settings()
+            s.staticSolver.numberOfLoadSteps = 20
+            if not static.SolveStatic(s, showHints=False, showCausingItems=False):
+                raise RuntimeError("Exudyn static solver failed")
+            shape = np.array([static.GetNodeOutput(n, exu.OutputVariableType.Coordinates) for n in rod_s.nodes])
+        container, mbs, rod = model(init=shape)
+        rod.add_sensors(mbs)
+        mbs.Assemble()
+        if timings:
+            started = time.perf_counter()  # warm: the run alone
+        if not mbs.SolveDynamic(settings(), showHints=False, showCausingItems=False):
+            raise RuntimeError("Exudyn dynamic solver failed")
+        timings.append(time.perf_counter() - started)
+        times, q, _ = rod.histories(mbs)
+    tip = rod.ref[None, -1, :2] + q[:, -1, :2]
+    return {
+        "tip": sampled(times, tip),
+        "period": first_period(times, tip[:, 1]),
+        "cold": timings[0] / UNTIL,
+        "warm": timings[1] / UNTIL,
+    }
+
+
+# --- the sweep ----------------------------------------------------------------------------------------
+def attempt(run, elements: int, step: float) -> dict | None:
+    """A configuration's run, or None when its solver gives up (it qualifies for nothing)."""
+    try:
+        return run(elements, step)
+    except Exception as exc:  # noqa: BLE001 (either side's solver failure, named in the table)
+        print(f"{run.__name__} {elements} el @ {step * 1e3:g} ms failed: {exc}")
+        return None
+
+
+def cheapest(runs: dict, reference: dict, measure: int, target: float, cost: str) -> tuple | None:
+    """(elements, step, seconds per second) of the cheapest configuration that meets `target` with
+    every smaller step of its element count."""
+    best = None
+    for (elements, step), run in runs.items():
+        smaller = [r for (e, s), r in runs.items() if e == elements and s <= step]
+        if all(r is not None and errors(r, reference)[measure] <= target for r in smaller):
+            if best is None or run[cost] < best[2]:
+                best = (elements, step, run[cost])
+    return best
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="fewer configurations (a smoke run)")
+    quick = parser.parse_args().quick
+    steps = (2e-3, 1e-3, 5e-4) if quick else (2e-3, 1e-3, 5e-4, 2.5e-4)
+    ours_elements = (1, 2, 4) if quick else (1, 2, 4, 8)
+    peer_elements = (8, 16, 32) if quick else (8, 16, 32, 64, 128)
+
+    print(
+        f"model: clamped steel rod {ROD_DOCUMENT.name}, kappa {KAPPA:.4f}, released at t = 0, "
+        f"generalized-alpha rho_inf {RHO_INF}, until {UNTIL} s"
+    )
+    ours_ref = flexmech_run(16, 1.25e-4)
+    peer_ref = exudyn_run(256, 1.25e-4)
+    period_gap, history_gap = errors(peer_ref, ours_ref)
+    print(
+        f"references: flexmech 16 cubic elements @ 0.125 ms, period {ours_ref['period']:.7f} s; Exudyn 256 "
+        f"GE elements @ 0.125 ms, period {peer_ref['period']:.7f} s; they agree to {period_gap:.1e} (period) "
+        f"and {history_gap:.1e} (tip history)"
+    )
+    reference = ours_ref
+    loose, tight = exudyn_run(32, 5e-4), exudyn_run(32, 5e-4, 1e-7, 1e-9)
+    moved = errors(loose, tight)
+    print(
+        f"Exudyn's tolerances: ten times tighter ones move 32 el @ 0.5 ms by {moved[0]:.1e} (period) and "
+        f"{moved[1]:.1e} (tip history)"
+    )
+    ours = {(e, s): attempt(flexmech_run, e, s) for e in ours_elements for s in steps}
+    peer = {(e, s): attempt(exudyn_run, e, s) for e in peer_elements for s in steps}
+    print("\nconfiguration                 period err  history err  cold s/s  warm s/s")
+    for name, runs in (("flexmech", ours), ("Exudyn GE", peer)):
+        for (e, s), run in runs.items():
+            if run is None:
+                print(f"{name:10s} {e:4d} el @ {s * 1e3:5.3f} ms  failed")
+                continue
+            p, h = errors(run, reference)
+            print(
+                f"{name:10s} {e:4d} el @ {s * 1e3:5.3f} ms  {p:10.2e}  {h:11.2e}  {run['cold']:8.3f}  {run['warm']:8.3f}"
+            )
+    print("\ntarget   measure       flexmech (cheapest, warm)   Exudyn GE (cheapest, warm)   ratio  | cold ratio")
+    for target in TARGETS:
+        for measure, label in ((0, "first period"), (1, "tip history")):
+            row = []
+            for cost in ("warm", "cold"):
+                a = cheapest(ours, reference, measure, target, cost)
+                b = cheapest(peer, reference, measure, target, cost)
+                row.append((a, b))
+            (a, b), (ac, bc) = row
+
+            def text(best):
+                return "not reached" if best is None else f"{best[0]} el @ {best[1] * 1e3:g} ms, {best[2]:.3f} s/s"
+
+            ratio = f"{b[2] / a[2]:.2f}x" if a and b else "-"
+            cold = f"{bc[2] / ac[2]:.2f}x" if ac and bc else "-"
+            print(f"{target:6.0e}  {label:12s}  {text(a):27s}  {text(b):27s}  {ratio:>6s} | {cold}")
+
+
+if __name__ == "__main__":
+    main()
