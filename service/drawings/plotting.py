@@ -76,16 +76,7 @@ def sweeps_figure(
 
     fig = new_figure(11.0, 4.6)
     left, right = fig.subplots(1, 2)
-    drawn = []
-    for label, result in curves:
-        ok = np.array([s == "converged" for s in result.status])
-        x = np.where(ok, result.outputs[x_output], np.nan)
-        y = np.where(ok, result.outputs[y_output], np.nan)
-        values = np.where(ok, result.values, np.nan)
-        if secant:
-            with np.errstate(divide="ignore", invalid="ignore"):
-                values = np.where(values != values[0], (y - y[0]) / (values - values[0]), np.nan)
-        drawn.append((label, ok, x, y, values))
+    drawn = [_curve(label, result, x_output, y_output, secant) for label, result in curves]
     # each axis in its display unit (service.display), as the tables show the same numbers
     x_unit, xs = on_axis(output_unit(mech, x_output), [d[2] for d in drawn])
     y_unit, ys = on_axis(output_unit(mech, y_output), [d[3] for d in drawn])
@@ -114,6 +105,18 @@ def sweeps_figure(
     )
     fig.suptitle(mech.document.name, fontsize=11)
     return fig
+
+
+def _curve(label: str, result: SweepResult, x_output: str, y_output: str, secant: bool) -> tuple:
+    """(label, converged, x, y, right-hand values) of one sweep, NaN where it did not converge."""
+    ok = np.array([s == "converged" for s in result.status])
+    x = np.where(ok, result.outputs[x_output], np.nan)
+    y = np.where(ok, result.outputs[y_output], np.nan)
+    values = np.where(ok, result.values, np.nan)
+    if secant:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            values = np.where(values != values[0], (y - y[0]) / (values - values[0]), np.nan)
+    return label, ok, x, y, values
 
 
 def plot_sweeps(
