@@ -81,8 +81,8 @@ class RadauStepper:
         a = ca.DM(COEFFICIENTS)
         V = ca.repmat(v0, 1, STAGES) + h * ca.mtimes(A, a.T)
         # GGL: x' = v - G^T mu keeps x on g = 0 and v on G v + g_p pdot = 0, an index-2 system on
-        # which the stage positions and velocities both reach order 2s - 1 (mu is zero in the
-        # exact solution)
+        # which positions and velocities both reach order 2s - 1 where the problem is not stiff
+        # (mu is zero in the exact solution; the stiff rod keeps order 3-4: module docstring)
         xs, p_sym = ca.SX.sym("xs", n), ca.SX.sym("ps", n_p)
         g_of = form.constraints(xs, p_sym)
         G_of = ca.Function("G", [xs, p_sym], [ca.jacobian(g_of, xs)])
