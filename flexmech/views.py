@@ -4,6 +4,7 @@ units, and print as tables in a terminal (repr) and in Jupyter (_repr_html_)."""
 from __future__ import annotations
 
 import html
+from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -56,11 +57,12 @@ class Table:
         return f"<p><b>{html.escape(self.title)}</b></p><table><tr>{head}</tr>{body}</table>{note}"
 
 
-class Printed:
+class Printed(ABC):
     """A result that prints as its tables."""
 
+    @abstractmethod
     def tables(self) -> list[Table]:
-        raise NotImplementedError
+        """The tables it prints as."""
 
     def __repr__(self) -> str:
         return "\n\n".join(t.text() for t in self.tables())
