@@ -251,7 +251,7 @@ def print_report(out: Console, report: dict) -> None:
         elif isinstance(value, (int, float)) and not isinstance(value, bool):
             unit = report.get(f"{key}_unit") or report.get(f"{key.rsplit('_', 1)[0]}_unit")
             unit = unit if isinstance(unit, str) else None
-            kind = kind_of(key) or ("energy" if key.endswith("energy") else None)
+            kind = kind_of(key)
             if unit == "nondimensional":
                 out.print(f"{shown(key)}: {exact_text(value)} (nondimensional)")
             else:

@@ -162,22 +162,19 @@ def print_state_space(out: Console, space: dict[str, Any]) -> None:
     if gain is None:
         out.print("static gain: none (a rigid mode: no static equilibrium)")
         return
-    from flexmech.service.display import display
+    from flexmech.service.display import displays
     from flexmech.service.drawings.figures import field_label
 
-    cell_units = [[f"{unit}/{u}" for u in units["inputs"]] for unit in units["outputs"]]
-    by_unit: dict[str, list[float | None]] = {}
-    for row, row_units in zip(gain, cell_units):
-        for value, unit in zip(row, row_units):
-            by_unit.setdefault(unit, []).append(value)
-    shown_as = {unit: display(unit, values) for unit, values in by_unit.items()}
+    cells = {(i, j): value for i, row in enumerate(gain) for j, value in enumerate(row)}
+    cell_units = {(i, j): f"{units['outputs'][i]}/{units['inputs'][j]}" for i, j in cells}
+    shown_as = displays(cells, cell_units)  # one display per unit (output per input)
     table = table_of(
         "static gain (output per input)",
         "output",
         *(field_label(pointer) for pointer in space["inputs"]),
     )
-    for name, row, row_units in zip(space["outputs"], gain, cell_units):
-        table.add_row(shown(name), *(shown_as[u].text(v, with_unit=True) for v, u in zip(row, row_units)))
+    for i, name in enumerate(space["outputs"]):
+        table.add_row(shown(name), *(shown_as[(i, j)].text(v, with_unit=True) for j, v in enumerate(gain[i])))
     out.print(table)
 
 

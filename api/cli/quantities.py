@@ -55,7 +55,9 @@ def number(value: float | None, unit: str | None = None, kind: str | None = None
 
 def exact_text(value: float | None, unit: str = "") -> str:
     """A residual or a tolerance: exactly (service.display.exact)."""
-    return number(value, unit or None, kind="exact") if unit else f"{value:.4g}" if value is not None else "-"
+    from flexmech.service.display import exact
+
+    return exact(value, unit)
 
 
 def row_texts(values: list[float | None], unit: str, kind: str | None = None, reference: float = 0.0) -> list[str]:
@@ -82,6 +84,7 @@ class TextTable(Table):
         self._numbers: dict[tuple[int, int], float | None] = {}
         self._heads: dict[int, str] = {}
         self._row_units: list[str] | None = None  # the unit column as added
+        self._shown_for = -1  # the row count the numbers were last shown for (rich measures, then renders)
 
     def add_column(self, header: Any = "", *args, raw: str | None = None, **options) -> None:  # type: ignore[override]
         """`raw`: the head as written (`header` is it made safe for rich markup)."""
@@ -104,6 +107,9 @@ class TextTable(Table):
         display with the other such columns of the table)."""
         from flexmech.service.display import display, exact
 
+        if self._shown_for == len(self.rows):
+            return
+        self._shown_for = len(self.rows)
         by_column: dict[int, list[int]] = {}
         for row, col in self._numbers:
             by_column.setdefault(col, []).append(row)
