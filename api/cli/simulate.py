@@ -56,13 +56,16 @@ BuildOpt = Annotated[
 ]
 
 
+SCHEMES = "generalized_alpha | newmark | sdirk4 | event_driven | moreau."
+
+
 @app.command()
 def simulate(
     document: DocArg,
     sets: SetOpt = None,
     until: Annotated[float | None, typer.Option(help="End time (s).")] = None,
     step: Annotated[float | None, typer.Option(help="Time step (s).")] = None,
-    scheme: Annotated[str | None, typer.Option(help="generalized_alpha | newmark | event_driven | moreau.")] = None,
+    scheme: Annotated[str | None, typer.Option(help=SCHEMES)] = None,
     damping: Annotated[float | None, typer.Option(help="Mass-proportional damping (1/s).")] = None,
     max_steps: Annotated[
         int | None,

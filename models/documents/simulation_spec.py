@@ -43,9 +43,10 @@ class SimulateSpec(StrictModel):
         allow_inf_nan=False,
         description="adaptive and event_driven: the longest step (s; event_driven's default: until / 500)",
     )
-    scheme: Literal["generalized_alpha", "newmark", "event_driven", "moreau"] = Field(
+    scheme: Literal["generalized_alpha", "newmark", "sdirk4", "event_driven", "moreau"] = Field(
         default="generalized_alpha",
-        description="generalized-alpha (second order, rho_inf), or Newmark (a1, a2); "
+        description="generalized-alpha (second order, rho_inf), Newmark (a1, a2), or sdirk4 (fourth order, "
+        "L-stable, five implicit stages a step: long steps where the motion is smooth); "
         "for rigid bodies with impacts: event_driven (adaptive Dormand-Prince with located contact events) or "
         "moreau (Moreau-Jean midpoint time stepping, `step`)",
     )

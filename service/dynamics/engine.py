@@ -24,7 +24,8 @@ from flexmech.service.dynamics.kernel_groups import padded
 from flexmech.service.dynamics.kernel_records import Factors
 from flexmech.service.dynamics.kernel_system import NEWTON_TOLERANCE, StepSystem
 from flexmech.service.dynamics.kernel_window import Stepper
-from flexmech.service.dynamics.schemes import Scheme
+from flexmech.service.dynamics.schemes import Scheme, StageScheme
+from flexmech.service.dynamics.stage_window import StageStepper
 
 WINDOW_ACCEPTANCE = 10 * NEWTON_TOLERANCE  # a window's step whose residual is below this counts
 RESCUE_ITERATIONS = 16  # full Newton, for a step that the window's factors do not settle
@@ -35,13 +36,13 @@ RECHECK = 2.0  # seconds between looks for a window's library while it runs inte
 @dataclass
 class Engine:
     structure: Structure
-    scheme: Scheme
+    scheme: Scheme | StageScheme
     moving: tuple[int, ...]
     compiled: dict = field(default_factory=dict)  # ChainSignature -> compiled Chunks
 
     def __post_init__(self):
         self.system = StepSystem(self.structure, self.moving, compiled=self.compiled)
-        self.stepper = Stepper(self.system, self.scheme)
+        self.stepper = stepper_of(self.system, self.scheme)
         self._windows: dict[int, tuple[ca.Function, bool]] = {}  # steps -> (window, compiled as a whole)
         self._glue: dict[int, ca.Function] = {}  # steps -> the window on its kernels, glue interpreted
         self._keys: dict[int, str] = {}
@@ -115,17 +116,22 @@ class Engine:
         if steps not in self._glue:
             st = self.stepper
             state, h, p, pdot, pddot, damping, mask, data = st._symbols()
-            P, PD, PDD = (ca.MX.sym(name, q.numel(), steps) for name, q in (("P", p), ("PDOT", pdot), ("PDDOT", pddot)))
+            S = stages_of(self.scheme)
+            P, PD, PDD = (
+                ca.MX.sym(name, q.numel(), steps * S) for name, q in (("P", p), ("PDOT", pdot), ("PDDOT", pddot))
+            )
+
+            def columns_of(j):  # step j's columns: its end, or its stages
+                return (P[:, j], PD[:, j], PDD[:, j]) if S == 1 else (q[:, j * S : (j + 1) * S] for q in (P, PD, PDD))
+
             count = ca.MX.sym("count")
-            first = st.first_step_function(state, h, P[:, 0], PD[:, 0], PDD[:, 0], damping, mask, *data)
+            first = st.first_step_function(state, h, *columns_of(0), damping, mask, *data)
             s, monitor, norm, used = first[:4]
             factors = first[4:]
             columns = [[s], [monitor], [norm], [used]]
             for j in range(1, steps):
                 alive = (norm <= WINDOW_ACCEPTANCE) * (count > j)
-                s, monitor, norm, used = st.step_function(
-                    *factors, alive, s, h, P[:, j], PD[:, j], PDD[:, j], damping, mask, *data
-                )
+                s, monitor, norm, used = st.step_function(*factors, alive, s, h, *columns_of(j), damping, mask, *data)
                 for column, value in zip(columns, (s, monitor, norm, used)):
                     column.append(value)
             window = ca.Function(
@@ -141,8 +147,13 @@ class Engine:
     @cached_property
     def rescue(self) -> ca.Function:
         """(s0, h, p, pdot, pddot, damping, mask, data...) -> (state, monitor, norm): one step by
-        Newton, its factors made at every iteration (a step the window's factors do not settle)."""
+        Newton, its factors made at every iteration (a step the window's factors do not settle).
+        A stage scheme's: the step with factors made at its first stage (p, pdot, pddot per stage)."""
         st, sys = self.stepper, self.system
+        if isinstance(st, StageStepper):
+            state, h, P, PD, PDD, damping, mask, data = st._stage_symbols()
+            out = st.first_step_function(state, h, P, PD, PDD, damping, mask, *data)
+            return ca.Function("stage_rescue", [state, h, P, PD, PDD, damping, mask, *data], out[:3])
         state, h, p, pdot, pddot, damping, mask, data = st._symbols()
         fa, k = st.coefficients(h)
         affine, c_a1 = st._affine(state, h)
@@ -206,6 +217,15 @@ class Engine:
             [x, v, p, pdot, pddot, damping, mask, *data],
             [Z[: self.n_x], Z[self.n_x :], ev.norm, st.monitor(ev, si)],
         )
+
+
+def stepper_of(system: StepSystem, scheme: Scheme | StageScheme) -> Stepper:
+    return StageStepper(system, scheme) if isinstance(scheme, StageScheme) else Stepper(system, scheme)
+
+
+def stages_of(scheme: Scheme | StageScheme) -> int:
+    """The columns of loads and motions a step takes: one (its end), or one per stage."""
+    return scheme.stages if isinstance(scheme, StageScheme) else 1
 
 
 _engines: OrderedDict[tuple, Engine] = OrderedDict()

@@ -21,7 +21,7 @@ from flexmech.service.dynamics.adaptive import Tolerance
 from flexmech.service.dynamics.histories import Histories, read_histories, varying_values
 from flexmech.service.dynamics.integrate import History, integrate
 from flexmech.service.dynamics.onsets import Onsets
-from flexmech.service.dynamics.schemes import Scheme, generalized_alpha, newmark
+from flexmech.service.dynamics.schemes import Scheme, StageScheme, generalized_alpha, newmark, sdirk4
 from flexmech.service.dynamics.state_map import state_map
 from flexmech.service.dynamics.static_start import static_shape
 from flexmech.service.dynamics.stepping import engine_of
@@ -49,10 +49,27 @@ def simulation_spec(mech: Mechanism, overrides: dict | None = None) -> SimulateS
     return spec
 
 
-def scheme_of(spec: SimulateSpec) -> Scheme:
+def scheme_of(spec: SimulateSpec) -> Scheme | StageScheme:
     if spec.scheme == "newmark":
         return newmark(spec.a1, spec.a2 / 2)
+    if spec.scheme == "sdirk4":
+        return sdirk4()
     return generalized_alpha(spec.rho_inf)
+
+
+def check_stage_scheme(mech: Mechanism, spec: SimulateSpec, histories: Histories) -> None:
+    """What sdirk4 does not do yet: adaptive steps, and damped contacts (whose onsets the
+    generalized-alpha steps locate)."""
+    if spec.scheme != "sdirk4":
+        return
+    if spec.adaptive:
+        raise MechanismError(
+            "/simulate/adaptive", "sdirk4 runs in fixed steps: set adaptive to false (or use generalized_alpha)"
+        )
+    if Onsets(mech.structure, histories.moving):
+        raise MechanismError(
+            "/simulate/scheme", "sdirk4 does not step onto damped contacts' onsets: use generalized_alpha"
+        )
 
 
 def simulated(mech: Mechanism) -> Mechanism:
@@ -89,14 +106,18 @@ def step_limit(spec: SimulateSpec, max_steps: int) -> int:
 
 
 def check_steps(spec: SimulateSpec, max_steps: int) -> int:
+    """The run's steps; refused over the limit, which counts a stage scheme's implicit stages
+    (each costs about one generalized-alpha step)."""
     steps = int(round(spec.until / spec.step))
     limit = step_limit(spec, max_steps)
     if steps < 1:
         raise MechanismError("/simulate/step", f"the step {spec.step:g} s is longer than the run ({spec.until:g} s)")
-    if steps > limit and not spec.adaptive:
+    stages = sdirk4().stages if spec.scheme == "sdirk4" else 1
+    if steps * stages > limit and not spec.adaptive:
+        solves = f" ({steps * stages} implicit stage solves)" if stages > 1 else ""
         raise MechanismError(
             "/simulate/step",
-            f"the run needs {steps} steps of {spec.step:g} s, over the limit of "
+            f"the run needs {steps} steps of {spec.step:g} s{solves}, over the limit of "
             f"{limit}: take a longer step or a shorter run",
         )
     return steps
@@ -151,6 +172,7 @@ def run_simulation(
     histories = read_histories(mech, spec.histories, spec.until, "/simulate/histories")
     x0, start_note = start_shape(mech, spec, histories)
     check_scheme(mech, spec, x0)
+    check_stage_scheme(mech, spec, histories)
     n, p = len(x0), mech.p()
     history = integrate(
         mech.structure,
@@ -332,4 +354,6 @@ def report(mech: Mechanism, spec: SimulateSpec, history: History, histories, sta
 def scheme_summary(spec: SimulateSpec) -> dict:
     if spec.scheme == "newmark":
         return {"name": "newmark", "a1": spec.a1, "a2": spec.a2}
+    if spec.scheme == "sdirk4":
+        return {"name": "sdirk4", "order": 4, "stages": sdirk4().stages}
     return {"name": "generalized_alpha", "rho_inf": spec.rho_inf}

@@ -20,7 +20,7 @@ from flexmech.models import MechanismError
 from flexmech.models.graph.structure import Structure
 from flexmech.models.kernels.layout import layout_of
 from flexmech.service.buffered import BufferedCall
-from flexmech.service.dynamics.engine import WINDOW_ACCEPTANCE, Engine, engine_for
+from flexmech.service.dynamics.engine import WINDOW_ACCEPTANCE, Engine, engine_for, stages_of
 from flexmech.service.dynamics.histories import Histories
 from flexmech.service.dynamics.onsets import Onsets, crossing, step_onto_onset
 from flexmech.service.kernels import compiled_for
@@ -167,11 +167,36 @@ class StepRunner:
         )
         self.until, self.every, self.steps = until, every, int(round(until / h))
         self.engine = engine_of(structure, scheme, histories)
+        self.stages = stages_of(scheme)  # columns of loads and motions per step
         self.n = self.engine.n_x
         self.mask = histories.load_mask(len(p))
         self.data = self.engine.data(histories.at(p, 0.0)[0])
         self._buffered: BufferedCall | None = None
         self.onsets = Onsets(structure, histories.moving)
+
+    def column_times(self, start: float, h: float, size: int, steps: int) -> np.ndarray:
+        """The times of a window's columns of loads and motions: each step's end or, for a stage
+        scheme, its stages; the columns after the first `steps` repeat the last step's."""
+        if self.stages == 1:
+            return start + h * np.minimum(np.arange(1, size + 1), steps)
+        step = np.minimum(np.arange(size), steps - 1)
+        return (start + h * (step[:, None] + np.asarray(self.scheme.nodes)[None, :])).ravel()
+
+    def step_columns(self, q: np.ndarray, j: int) -> np.ndarray:
+        """Step j's columns of a window's loads or motions."""
+        return q[:, j] if self.stages == 1 else q[:, j * self.stages : (j + 1) * self.stages]
+
+    def end_column(self, q: np.ndarray, j: int) -> np.ndarray:
+        """Step j's loads or motions at its end."""
+        return q[:, j * self.stages + self.stages - 1]
+
+    def work_increments(self, previous: np.ndarray, monitors: np.ndarray, h: float) -> np.ndarray:
+        """The works of steps h (columns) from their monitors' powers: the trapezoidal rule on the
+        powers at the steps' ends, or h times a stage scheme's mean power over the step
+        (service.dynamics.stage_window)."""
+        if self.stages == 1:
+            return 0.5 * h * (monitors[2:6] + previous[2:6])
+        return h * monitors[2:6]
 
     def done(self, at: Resume) -> bool:
         return at.step - at.inserted >= self.steps
@@ -194,7 +219,7 @@ class StepRunner:
         """The window's inputs (columns P, PD, PDD), states, monitors, iterations and how many
         steps settled, for its first `steps` steps."""
         size = self.window_steps
-        P, PD, PDD = self.histories.at_times(self.p, at.time + h * np.minimum(np.arange(1, size + 1), steps))
+        P, PD, PDD = self.histories.at_times(self.p, self.column_times(at.time, h, size, steps))
         if self.onsets:
             P = self.onsets.apply(P, self.speeds(at))
         try:
@@ -224,7 +249,7 @@ class StepRunner:
         if entering is not None:
             return step_onto_onset(self, history, at, entering[1], entering[2], self.h)
         if not self.done(at) and settled < steps:  # the window's factors did not settle this step: full Newton
-            step_inputs = tuple(q[:, settled] for q in inputs)
+            step_inputs = tuple(self.step_columns(q, settled) for q in inputs)
             state, monitor, norm = self.rescue(at, step_inputs, self.h)
             history.newton_iterations += 1
             # a step that enters a damped contact (whose last onset's speed made it hard): onto the onset,
@@ -240,7 +265,7 @@ class StepRunner:
                     f"(residual {norm:.3g} after full Newton): try a smaller step"
                 )
                 return at
-            at = self.advance(history, at, state, monitor, self.h, p=step_inputs[0])
+            at = self.advance(history, at, state, monitor, self.h, p=self.end_column(inputs[0], settled))
         return at
 
     def rescue(self, at: Resume, step_inputs, h: float):
@@ -256,7 +281,7 @@ class StepRunner:
         if count == 0:
             return at
         previous = np.column_stack([at.monitor, monitors[:, : count - 1]])
-        works = at.works[:, None] + np.cumsum(0.5 * h * (monitors[2:6, :count] + previous[2:6]), axis=1)
+        works = at.works[:, None] + np.cumsum(self.work_increments(previous, monitors[:, :count], h), axis=1)
         start = at
         for j in range(count):
             step, last = start.step + j + 1, j == count - 1
@@ -274,7 +299,7 @@ class StepRunner:
                     start.onset_speeds,
                 )
             if kept:
-                self.keep(history, at, P[:, j])
+                self.keep(history, at, self.end_column(P, j))
         return at
 
     def advance(
@@ -293,7 +318,7 @@ class StepRunner:
     ) -> Resume:
         """One step h on from `at`; `time`, `speeds` and `inserted` given for a step onto a
         contact's onset (service.dynamics.onsets), which is `kept`."""
-        works = at.works + 0.5 * h * (monitor[2:6] + at.monitor[2:6])
+        works = at.works + self.work_increments(np.asarray(at.monitor), np.asarray(monitor), h)
         step = at.step + 1
         now = Resume(
             step,

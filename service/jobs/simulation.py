@@ -27,6 +27,7 @@ from flexmech.service.dynamics.run import (
     MAX_STEPS,
     check_masses,
     check_scheme,
+    check_stage_scheme,
     check_steps,
     kept_state_numbers,
     records,
@@ -103,7 +104,8 @@ class SimulationJob(InOrder):
             raise under("/document", exc) from None
         steps = check_steps(simulate, limits.max_simulation_steps)  # adaptive: as many as the first step makes
         check_scheme(mech, simulate)
-        read_histories(mech, simulate.histories, simulate.until, "/simulate/histories")
+        histories = read_histories(mech, simulate.histories, simulate.until, "/simulate/histories")
+        check_stage_scheme(mech, simulate, histories)
         outputs = wanted_outputs(mech, simulate)
         kept = steps // simulate.every + 2
         check_result_size(kept, kept_state_numbers(mech, simulate), limits, "/simulate/every")

@@ -61,7 +61,7 @@ def test_simulate_refuses_bad_options_naming_them(tmp_path):
         (["--until", "0"], "/simulate/until: Input should be greater than 0"),
         (
             ["--scheme", "euler"],
-            "/simulate/scheme: Input should be 'generalized_alpha', 'newmark', 'event_driven' or 'moreau'",
+            "/simulate/scheme: Input should be 'generalized_alpha', 'newmark', 'sdirk4', 'event_driven' or 'moreau'",
         ),
     ]:
         result = CliRunner().invoke(app, ["simulate", SPIN, *arguments], env=ENV)

@@ -1,0 +1,118 @@
+"""The time step of a stage scheme (service.dynamics.schemes.StageScheme, SDIRK) on the kernel
+system, as Functions of the same shapes as the generalized-alpha step's (kernel_window.Stepper)
+but for the loads and motions, which come per stage: P, PDOT, PDDOT of a step are (n, stages)
+columns at t_n + c_i h.
+
+Each stage is the generalized-alpha step's Newton problem with its own affine parts (the
+positions and velocities that the stages before it give) and the same coefficients
+k = (h^2 gamma^2, h gamma, 1, h^2 gamma^2): the window's factors, made at its first stage,
+serve every stage of every step (modified Newton, accelerated as in kernel_window). A stage
+starts from the stage before's accelerations and multipliers.
+
+The state is the generalized-alpha one, [x; v; a; qdd; lam], with a = qdd = the last stage's
+accelerations. The monitor's energies and the motions' forces are the step's end (the last
+stage); its powers are the stages' powers weighted by the scheme's b, the mean power over the
+step, so that h times them is the step's work to the scheme's order (the runner sums them so:
+service.dynamics.stepping.work_increments)."""
+
+from __future__ import annotations
+
+from functools import cached_property
+
+import casadi as ca
+
+from flexmech.service.dynamics.kernel_records import Evaluation, Factors
+from flexmech.service.dynamics.kernel_window import MAX_ITERATIONS, Stepper
+from flexmech.service.dynamics.schemes import StageScheme
+
+POWERS = slice(2, 6)  # the monitor's rows of powers (inputs, damping, contacts' friction and damping)
+
+
+class StageStepper(Stepper):
+    scheme: StageScheme
+
+    @property
+    def stages(self) -> int:
+        return self.scheme.stages
+
+    def coefficients(self, h):
+        g = self.scheme.gamma
+        kx = (h * g) ** 2
+        return None, ca.vertcat(kx, h * g, 1, kx)
+
+    def _affine(self, state, h):
+        """The first stage's affine parts (their shapes serve the iteration's symbols)."""
+        x, v, _, _, _ = self.state.split(state)
+        g = self.scheme.gamma
+        return (x + h * g * v, v, ca.MX.zeros(self.state.n_x)), None
+
+    def _stage_symbols(self):
+        state, h, p, pdot, pddot, damping, mask, data = self._symbols()
+        S = self.stages
+        P, PD, PDD = (ca.MX.sym(name, q.numel(), S) for name, q in (("P", p), ("PD", pdot), ("PDD", pddot)))
+        return state, h, P, PD, PDD, damping, mask, data
+
+    @cached_property
+    def step_function(self) -> ca.Function:
+        """(factors..., alive, state, h, P, PD, PDD, damping, mask, data...) -> (state, monitor,
+        norm, iterations), as kernel_window.Stepper.step_function with per-stage columns."""
+        f = self._factor_symbols()
+        state, h, P, PD, PDD, damping, mask, data = self._stage_symbols()
+        inputs = [*f.parts(), state, h, P, PD, PDD, damping, mask, *data]
+        new_state, monitor, norm, used, _ = self._step(f, state, h, P, PD, PDD, damping, mask, data)
+        live = ca.Function("stage_step_live", inputs, [new_state, monitor, norm, used])
+        dead = ca.Function("stage_step_dead", inputs, [state, ca.MX.zeros(monitor.shape), ca.MX(ca.inf), ca.MX(0)])
+        branch = ca.Function.if_else("stage_step_branch", live, dead)
+        alive = ca.MX.sym("alive")
+        return ca.Function("stage_step", [*f.parts(), alive, *inputs[len(f.parts()) :]], branch(alive, *inputs))
+
+    @cached_property
+    def first_step_function(self) -> ca.Function:
+        """(state, h, P, PD, PDD, damping, mask, data...) -> (state, monitor, norm, iterations,
+        factors...): a step that makes the factors at its first stage's predictor."""
+        state, h, P, PD, PDD, damping, mask, data = self._stage_symbols()
+        out = self._step(None, state, h, P, PD, PDD, damping, mask, data)
+        return ca.Function(
+            "stage_first_step", [state, h, P, PD, PDD, damping, mask, *data], [*out[:4], *out[4].parts()]
+        )
+
+    @cached_property
+    def stage_evaluation(self) -> ca.Function:
+        """(kept_rev..., the stage's inputs..., Z) -> the evaluation's parts: a stage's first
+        evaluation (expanded when the kernels run interpreted, as kernel_window's)."""
+        f, _, made = self._iteration_symbols()
+        si = made.symbols()
+        Z = ca.MX.sym("Z", self.system.n_z)
+        ev = self.system.evaluate(Z, ca.MX(1), si, f.kept_reverse)
+        fn = ca.Function("stage_evaluation", [*f.kept_reverse, *si.parts(), Z], ev.parts())
+        return fn.expand() if self.expanded else fn
+
+    def _step(self, factors: Factors | None, state, h, P, PD, PDD, damping, mask, data):
+        sys, sc = self.system, self.scheme
+        _, k = self.coefficients(h)
+        x, v, _, qdd, lam = self.state.split(state)
+        Z = ca.vertcat(qdd, lam)  # the first stage's predictor: the last accelerations and multipliers
+        n_x = self.state.n_x
+        stage_accelerations, power, norm, used_all = [], 0, ca.MX(0), ca.MX(0)
+        for i in range(self.stages):
+            cX = x + sc.nodes[i] * h * v
+            cV = v
+            for j, A_j in enumerate(stage_accelerations):
+                cX = cX + (h**2 * sc.squared[i][j]) * A_j
+                cV = cV + (h * sc.a[i][j]) * A_j
+            si = sys.step_inputs((cX, cV, ca.MX.zeros(n_x)), k, P[:, i], PD[:, i], PDD[:, i], damping, mask, data)
+            if factors is None:
+                factors = sys.factorize(Z, si)
+            ev = Evaluation.of(self.stage_evaluation(*factors.kept_reverse, *si.parts(), Z), self.n_groups)
+            carry = [Z, ca.MX.zeros(sys.n_z), ca.MX.zeros(sys.n_z), ca.MX(0), ca.MX(0), *ev.parts()]
+            for _ in range(MAX_ITERATIONS):
+                carry = self.gated_iteration(*factors.parts(), *si.parts(), *carry)
+            Z, used, ev = carry[0], carry[4], Evaluation.of(carry[5:], self.n_groups)
+            stage_accelerations.append(Z[:n_x])
+            monitor = self.monitor(ev, si)
+            power = power + sc.weights[i] * monitor[POWERS]
+            norm, used_all = ca.fmax(norm, ev.norm), used_all + used
+        u = Z[:n_x]
+        new_state = ca.vertcat(cX + k[0] * u, cV + k[1] * u, u, u, Z[n_x:])
+        monitor = ca.vertcat(monitor[:2], power, monitor[6:])
+        return new_state, monitor, norm, used_all, factors
