@@ -43,7 +43,16 @@ class AdaptiveRunner(StepRunner):
     def __init__(self, *args, tolerance: Tolerance):
         super().__init__(*args)
         self.tolerance = tolerance
-        self.factor = abs(self.scheme.beta - 1 / 6)
+        # the local error grows as h^(order + 1) of the estimate's lower-order solution
+        self.exponent = 1 / 3 if self.stages == 1 else 1 / self.scheme.order
+
+    def local_errors(self, at: Resume, S: np.ndarray, count: int, h: float) -> np.ndarray:
+        """Each of the window's first `count` steps' local error estimate (nondimensional)."""
+        n = self.n
+        if self.stages > 1:  # a stage scheme's embedded estimate, in the state (service.dynamics.stage_window)
+            return np.abs(S[2 * n : 3 * n, :count]).max(axis=0, initial=0.0)
+        accelerations = np.column_stack([at.state[3 * n : 4 * n], S[3 * n : 4 * n, :count]])
+        return abs(self.scheme.beta - 1 / 6) * h**2 * np.abs(np.diff(accelerations, axis=1)).max(axis=0, initial=0.0)
 
     def done(self, at: Resume) -> bool:
         return at.time >= self.until * (1 - 1e-12)
@@ -53,7 +62,7 @@ class AdaptiveRunner(StepRunner):
         return self.until if abs(t - self.until) <= 1e-9 * self.until else t  # the last step ends on until
 
     def window(self, history: History, at: Resume) -> Resume:
-        h, tol, n = min(at.h or self.h, self.tolerance.max_step), self.tolerance.local, self.n
+        h, tol = min(at.h or self.h, self.tolerance.max_step), self.tolerance.local
         left = self.tolerance.max_steps - at.step
         if left <= 0:
             history.status = "step_limit"
@@ -80,13 +89,12 @@ class AdaptiveRunner(StepRunner):
             if S is None:
                 h = 0.5 * h_use
                 continue
-            accelerations = np.column_stack([at.state[3 * n : 4 * n], S[3 * n : 4 * n, :count]])
-            errors = self.factor * h_use**2 * np.abs(np.diff(accelerations, axis=1)).max(axis=0, initial=0.0)
+            errors = self.local_errors(at, S, count, h_use)
             too_large = [j for j in range(settled) if not errors[j] <= tol]
             first_bad = too_large[0] if too_large else settled
             if first_bad == 0:
                 # not settled on the window's first factors (made at this very step), or too large
-                h = h_use * (0.5 if not too_large or not np.isfinite(errors[0]) else _shrink(tol, errors[0]))
+                h = h_use * (0.5 if not too_large or not np.isfinite(errors[0]) else _shrink(tol, errors[0], self.exponent))
                 continue
             entering = crossing(self, at, inputs, S, first_bad)
             if entering is not None:  # a damped contact begins within a step: step onto its onset
@@ -98,11 +106,11 @@ class AdaptiveRunner(StepRunner):
             history.iterations += int(iterations[:first_bad].sum())
             at = self.accept(history, at, S, monitors, inputs[0], first_bad, h_use, first_bad == count == needed)
             if too_large:
-                grow = _shrink(tol, errors[first_bad])
+                grow = _shrink(tol, errors[first_bad], self.exponent)
             elif settled < count:  # the window's factors aged: the next window makes new ones, same step
                 grow = 1.0
             else:
-                grow = min(GROW_AT_MOST, _ratio(tol, errors[:count].max()))
+                grow = min(GROW_AT_MOST, _ratio(tol, errors[:count].max(), self.exponent))
             at.h = min(h_use * grow, self.tolerance.max_step)
             return at
         history.status = "not_converged"
@@ -113,9 +121,9 @@ class AdaptiveRunner(StepRunner):
         return at
 
 
-def _ratio(tol: float, error: float) -> float:
-    return SAFETY * (tol / max(error, 1e-300)) ** (1 / 3)
+def _ratio(tol: float, error: float, exponent: float) -> float:
+    return SAFETY * (tol / max(error, 1e-300)) ** exponent
 
 
-def _shrink(tol: float, error: float) -> float:
-    return max(SHRINK_AT_MOST, min(SAFETY, _ratio(tol, error)))
+def _shrink(tol: float, error: float, exponent: float) -> float:
+    return max(SHRINK_AT_MOST, min(SAFETY, _ratio(tol, error, exponent)))

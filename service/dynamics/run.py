@@ -58,14 +58,10 @@ def scheme_of(spec: SimulateSpec) -> Scheme | StageScheme:
 
 
 def check_stage_scheme(mech: Mechanism, spec: SimulateSpec, histories: Histories) -> None:
-    """What sdirk4 does not do yet: adaptive steps, and damped contacts (whose onsets the
-    generalized-alpha steps locate)."""
+    """What sdirk4 does not do yet: damped contacts (whose onsets the generalized-alpha steps
+    locate)."""
     if spec.scheme != "sdirk4":
         return
-    if spec.adaptive:
-        raise MechanismError(
-            "/simulate/adaptive", "sdirk4 runs in fixed steps: set adaptive to false (or use generalized_alpha)"
-        )
     if Onsets(mech.structure, histories.moving):
         raise MechanismError(
             "/simulate/scheme", "sdirk4 does not step onto damped contacts' onsets: use generalized_alpha"

@@ -81,6 +81,13 @@ class StageScheme:
         return self.a[-1]  # stiffly accurate
 
     @property
+    def error_weights(self) -> tuple[float, ...]:
+        """d: the positions' local error estimate h^2 sum_j d_j A_j, the step's positions less the
+        embedded solution's, d = (b - b_embedded) a."""
+        s = self.stages
+        return tuple(sum((self.weights[i] - self.embedded[i]) * self.a[i][j] for i in range(s)) for j in range(s))
+
+    @property
     def squared(self) -> tuple[tuple[float, ...], ...]:
         """a^2: the positions' coefficients of the stage accelerations."""
         s = self.stages
