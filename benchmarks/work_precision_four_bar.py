@@ -1,0 +1,192 @@
+"""Work-precision of link dynamics against Exudyn on the compliant four-bar (Lan 2005 Ex. II.2,
+examples/four_bar_dynamics.json), at equal accuracy (issue 50, Deliver 1; the rod is
+benchmarks/work_precision.py, whose rules this follows).
+
+    pip install exudyn            # the peer (written against exudyn 1.13)
+    python -m benchmarks.work_precision_four_bar [--quick]
+
+The same physics on both sides (benchmarks/exudyn_peer.four_bar: the document's links, shear factor
+0.9, G = E / 2.6, the drive moment's ramp table, no gravity), from rest to 0.5 s. Each side is free
+to choose its discretization: flexmech's cubic link elements (crank/coupler/follower intervals) in
+generalized-alpha 0.95 and sdirk4, fixed steps and adaptive; Exudyn's GeometricallyExactBeam2D
+elements in generalized-alpha 0.95, fixed steps (the fastest settings of exudyn_peer.four_bar).
+
+Two measures at 0.5 s, relative, against a converged reference (flexmech sdirk4, 4/8/8 elements,
+0.0625 ms), cross-checked against generalized-alpha's and Exudyn's finest runs (printed):
+- crank angle: the crank's rotation at its pivot;
+- input work: the drive moment's work since t = 0.
+A fixed-step configuration qualifies for a target only if every smaller step with the same
+elements also meets it; an adaptive one, if every tighter tolerance does. Cost: wall seconds per
+simulated second, warm (a repeat in the same process) and cold (the first run of the
+configuration in the process, builds counted).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+from pathlib import Path
+
+FOUR_BAR_DOCUMENT = Path(__file__).resolve().parents[1] / "examples" / "four_bar_dynamics.json"
+UNTIL = 0.5  # s
+TARGETS = (1e-3, 1e-4, 1e-5)
+LINKS = ("crank", "coupler", "follower")
+
+
+def _document(elements: tuple[int, int, int], step: float, scheme: str, tolerance: float | None) -> dict:
+    document = json.loads(FOUR_BAR_DOCUMENT.read_text())
+    for name, count in zip(LINKS, elements):
+        document["elements"][name]["intervals"] = count
+    simulate = document["simulate"]
+    simulate.update({"until": UNTIL, "step": step, "every": 10**6, "scheme": scheme, "rho_inf": 0.95})
+    simulate.update({"adaptive": tolerance is not None, "tolerance": tolerance or 1e-6})
+    return document
+
+
+def _measures(report: dict) -> dict:
+    assert report["status"] == "finished", report["message"]
+    angle = report["outputs"]["bodies.crank_pivot.angle"][-1]
+    return {
+        "angle": math.radians(angle) if report["units"]["angle"] == "deg" else angle,
+        "work": report["energies"]["input_work"][-1],
+        "steps": report["steps"],
+    }
+
+
+def flexmech_run(elements: tuple[int, int, int], step: float, scheme: str, tolerance: float | None = None) -> dict:
+    import flexmech
+
+    document = _document(elements, step, scheme, tolerance)
+    timings = []
+    for _ in range(2):  # cold, then warm
+        started = time.perf_counter()
+        report = flexmech.simulate(flexmech.load(document)).report
+        timings.append(time.perf_counter() - started)
+    return {**_measures(report), "cold": timings[0] / UNTIL, "warm": timings[1] / UNTIL}
+
+
+def flexmech_reference(elements: tuple[int, int, int], step: float) -> dict:
+    """sdirk4 past a call's step limit."""
+    import flexmech
+    from flexmech.service.dynamics.run import run_simulation, simulation_spec
+
+    mech = flexmech.load(_document(elements, step, "sdirk4", None))
+    _, report = run_simulation(mech, simulation_spec(mech), max_steps=10**6)
+    return {**_measures(report), "cold": 0.0, "warm": 0.0}
+
+
+def exudyn_run(elements: tuple[int, int, int], step: float) -> dict:
+    from benchmarks.exudyn_peer import four_bar
+
+    timings = []
+    for _ in range(2):
+        started = time.perf_counter()
+        run = four_bar(elements, step, UNTIL)
+        timings.append(time.perf_counter() - started)
+    return {
+        "angle": float(run["crank_angle"][-1]),
+        "work": float(run["input_work"][-1]),
+        "steps": None,
+        **{
+            "cold": timings[0] / UNTIL,
+            "warm": timings[1] / UNTIL,
+        },
+    }
+
+
+def error(run: dict, reference: dict, measure: str) -> float:
+    return abs(run[measure] / reference[measure] - 1.0)
+
+
+def attempt(run, *args) -> dict | None:
+    """A configuration's run, or None when its solver gives up (it qualifies for nothing)."""
+    try:
+        return run(*args)
+    except Exception as exc:  # noqa: BLE001 (either side's solver failure, named in the table)
+        print(f"{getattr(run, '__name__', run)} {args} failed: {str(exc).splitlines()[0][:120]}")
+        return None
+
+
+def cheapest(runs: dict, reference: dict, measure: str, target: float, cost: str) -> tuple | None:
+    """(configuration, seconds per second) of the cheapest one that meets `target` with every
+    finer setting of its element counts (smaller step or tighter tolerance)."""
+    best = None
+    for (elements, setting), run in runs.items():
+        finer = [r for (e, s), r in runs.items() if e == elements and s <= setting]
+        if all(r is not None and error(r, reference, measure) <= target for r in finer):
+            if best is None or run[cost] < best[1]:
+                best = ((elements, setting), run[cost])
+    return best
+
+
+def sweep(quick: bool) -> dict[str, dict]:
+    steps = (2e-3, 1e-3, 5e-4) if quick else (2e-3, 1e-3, 5e-4, 2.5e-4)
+    tolerances = (1e-4, 1e-5, 1e-6) if quick else (1e-4, 1e-5, 1e-6, 1e-7)
+    ours = ((1, 2, 2), (2, 4, 4)) if quick else ((1, 2, 2), (2, 4, 4), (4, 8, 8))
+    peer = ((8, 16, 16), (16, 32, 32)) if quick else ((8, 16, 16), (16, 32, 32), (32, 64, 64))
+    runs = {}
+    for scheme in ("generalized_alpha", "sdirk4"):
+        runs[f"{scheme} fixed"] = {(e, s): attempt(flexmech_run, e, s, scheme) for e in ours for s in steps}
+        runs[f"{scheme} adaptive"] = {
+            (e, t): attempt(flexmech_run, e, 1e-3, scheme, t) for e in ours for t in tolerances
+        }
+    runs["Exudyn GE fixed"] = {(e, s): attempt(exudyn_run, e, s) for e in peer for s in steps}
+    return runs
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="fewer configurations (a smoke run)")
+    quick = parser.parse_args().quick
+    print(f"model: {FOUR_BAR_DOCUMENT.name} (Lan 2005 Ex. II.2), from rest to {UNTIL} s")
+    reference = flexmech_reference((4, 8, 8), 6.25e-5)
+    print(
+        f"reference flexmech sdirk4 4/8/8 @ 0.0625 ms: crank {reference['angle']:.9f} rad, work {reference['work']:.9f} J"
+    )
+    for name, other in (
+        ("flexmech generalized-alpha 4/8/8 @ 0.125 ms", flexmech_run((4, 8, 8), 1.25e-4, "generalized_alpha")),
+        ("Exudyn GE 64/128/128 @ 0.125 ms", exudyn_run((64, 128, 128), 1.25e-4)),
+    ):
+        print(
+            f"  against {name}: crank {error(other, reference, 'angle'):.1e}, work {error(other, reference, 'work'):.1e}"
+        )
+    runs = sweep(quick)
+    print("\nside                        configuration        crank err   work err   cold s/s  warm s/s")
+    for side, table in runs.items():
+        for (elements, setting), run in table.items():
+            label = f"{'/'.join(map(str, elements))} {'tol' if 'adaptive' in side else '@'} {setting:g}"
+            if run is None:
+                print(f"{side:27s} {label:20s} failed")
+                continue
+            print(
+                f"{side:27s} {label:20s} {error(run, reference, 'angle'):9.2e}  {error(run, reference, 'work'):9.2e}"
+                f"  {run['cold']:8.3f}  {run['warm']:8.3f}"
+            )
+    print(
+        "\ntarget  measure  flexmech (cheapest, warm)                      Exudyn GE (cheapest, warm)       ratio | cold"
+    )
+    for target in TARGETS:
+        for measure in ("angle", "work"):
+            row = []
+            for cost in ("warm", "cold"):
+                ours = [
+                    (side, cheapest(t, reference, measure, target, cost))
+                    for side, t in runs.items()
+                    if "Exudyn" not in side
+                ]
+                ours = [(side, best) for side, best in ours if best is not None]
+                a = min(ours, key=lambda sb: sb[1][1], default=None)
+                b = cheapest(runs["Exudyn GE fixed"], reference, measure, target, cost)
+                row.append((a, b))
+            (a, b), (ac, bc) = row
+            text_a = "not reached" if a is None else f"{a[0]} {a[1][0]}, {a[1][1]:.3f} s/s"
+            text_b = "not reached" if b is None else f"{b[0]}, {b[1]:.3f} s/s"
+            ratio = f"{b[1] / a[1][1]:.2f}x" if a and b else "-"
+            cold = f"{bc[1] / ac[1][1]:.2f}x" if ac and bc else "-"
+            print(f"{target:6.0e}  {measure:7s}  {text_a:45s}  {text_b:31s}  {ratio:>6s} | {cold}")
+
+
+if __name__ == "__main__":
+    main()
