@@ -4,9 +4,11 @@ family's (Zienkiewicz and Xie 1991)
     e = |beta - 1/6| h^2 |qdd_{n+1} - qdd_n|_inf,
 
 the difference between the scheme's displacement and a third-order one (nondimensional:
-lengths per the mechanism's length scale, angles in rad). A window of up to ADAPTIVE_WINDOW
-steps is run in one step size; its steps are accepted up to the first whose error exceeds the
-tolerance, and the next step is h (tol / e)^(1/3) with a safety factor, at most twice the last
+lengths per the mechanism's length scale, angles in rad), or a stage scheme's embedded
+estimate (service.dynamics.stage_window). A window of up to ADAPTIVE_WINDOW steps (a stage
+scheme's: fewer, service.dynamics.stepping.window_length) is run in one step size; its steps
+are accepted up to the first whose error exceeds the tolerance, and the next step is
+h (tol / e)^(1/3) (a stage scheme's: ^(1/order)) with a safety factor, at most twice the last
 and at most max_step. A step that the window's factors did not settle (they were made at the
 window's first step) is no error: the next window starts there with the same step and new
 factors. The last window ends on `until` exactly. A step that enters a damped contact is
@@ -75,7 +77,8 @@ class AdaptiveRunner(StepRunner):
         for _ in range(MAX_REJECTIONS):
             remaining = self.until - at.time
             needed = math.ceil(min(remaining / h, 1e15) - 1e-9)  # never an infinite count
-            count, h_use = (needed, remaining / needed) if needed <= ADAPTIVE_WINDOW else (ADAPTIVE_WINDOW, h)
+            size = self.window_steps
+            count, h_use = (needed, remaining / needed) if needed <= size else (size, h)
             count = min(count, left)
             if h_use < self.tolerance.min_step:
                 history.status = "min_step"
@@ -94,7 +97,9 @@ class AdaptiveRunner(StepRunner):
             first_bad = too_large[0] if too_large else settled
             if first_bad == 0:
                 # not settled on the window's first factors (made at this very step), or too large
-                h = h_use * (0.5 if not too_large or not np.isfinite(errors[0]) else _shrink(tol, errors[0], self.exponent))
+                h = h_use * (
+                    0.5 if not too_large or not np.isfinite(errors[0]) else _shrink(tol, errors[0], self.exponent)
+                )
                 continue
             entering = crossing(self, at, inputs, S, first_bad)
             if entering is not None:  # a damped contact begins within a step: step onto its onset

@@ -97,6 +97,13 @@ class Resume:
         )
 
 
+def window_length(scheme, steps: int) -> int:
+    """Steps per window Function: `steps`, divided by a stage scheme's stages, so that a window
+    holds as many implicit solves (and as much generated glue, service.kernels.windows) as a
+    window of generalized-alpha steps."""
+    return max(1, steps // stages_of(scheme))
+
+
 def engine_of(structure: Structure, scheme, histories: Histories) -> Engine:
     """The structure's engine, on the compiled kernels the cache has; the others run
     interpreted, and a server's build queue is asked for them (service.kernels.queue)."""
@@ -168,6 +175,7 @@ class StepRunner:
         self.until, self.every, self.steps = until, every, int(round(until / h))
         self.engine = engine_of(structure, scheme, histories)
         self.stages = stages_of(scheme)  # columns of loads and motions per step
+        self.window_steps = window_length(scheme, type(self).window_steps)
         self.n = self.engine.n_x
         self.mask = histories.load_mask(len(p))
         self.data = self.engine.data(histories.at(p, 0.0)[0])
@@ -215,7 +223,7 @@ class StepRunner:
         p = self.histories.at(self.p, at.time)[0] if p is None else p
         _keep(history, at.time, at.state, self.n, p, at.monitor, at.works)
 
-    def run_window(self, at: Resume, h: float, steps: int = WINDOW):
+    def run_window(self, at: Resume, h: float, steps: int):
         """The window's inputs (columns P, PD, PDD), states, monitors, iterations and how many
         steps settled, for its first `steps` steps."""
         size = self.window_steps
@@ -239,7 +247,7 @@ class StepRunner:
         return self._buffered
 
     def window(self, history: History, at: Resume) -> Resume:
-        steps = min(WINDOW, self.steps - (at.step - at.inserted))
+        steps = min(self.window_steps, self.steps - (at.step - at.inserted))
         inputs, S, monitors, iterations, settled = self.run_window(at, self.h, steps)
         entering = crossing(self, at, inputs, S, settled)
         if entering is not None:  # a damped contact begins within that step: step onto its onset

@@ -68,7 +68,7 @@ def window_builds(mech: Mechanism) -> list[Build]:
     from flexmech.service.dynamics.adaptive import ADAPTIVE_WINDOW
     from flexmech.service.dynamics.histories import read_histories
     from flexmech.service.dynamics.run import scheme_of, simulation_spec
-    from flexmech.service.dynamics.stepping import WINDOW, engine_of
+    from flexmech.service.dynamics.stepping import WINDOW, engine_of, window_length
     from flexmech.service.kernels.windows import links, window_key
 
     if mech.document.simulate is None or mech.document.simulate.scheme in ("event_driven", "moreau"):
@@ -84,6 +84,6 @@ def window_builds(mech: Mechanism) -> list[Build]:
     signatures = [g.signature for g in engine.system.layout.groups]
     if any(s not in engine.compiled for s in signatures):
         return []
-    fn = engine.glue_window(ADAPTIVE_WINDOW if spec.adaptive else WINDOW)
+    fn = engine.glue_window(window_length(engine.scheme, ADAPTIVE_WINDOW if spec.adaptive else WINDOW))
     target = function_library(fn, window_key(fn))
     return [Build(f"window_{target.stem}", [("window", fn, target)], note_of(target), link=links(signatures))]

@@ -34,11 +34,12 @@ def cache(tmp_path_factory):
         accept_requests(False)
 
 
-def _rod(rename: bool = False, intervals: int = 4):
+def _rod(rename: bool = False, intervals: int = 4, scheme: str = "generalized_alpha"):
     """The rod of Example I.1 on the cheapest kernels there are (linear elements, no shear or
     axial strain: a second or two of gcc)."""
     doc = json.loads((EXAMPLES / "rod_free_vibration.json").read_text())
     doc["elements"]["rod"].update(degree=1, shear=False, axial=False, intervals=intervals)
+    doc["simulate"]["scheme"] = scheme
     if rename:
         doc["elements"]["beam"] = doc["elements"].pop("rod")
         doc["bodies"]["end"] = doc["bodies"].pop("tip")
@@ -94,5 +95,34 @@ def test_the_queue_builds_a_window_that_steps_as_its_interpreted_glue_does(cache
     S_native, _, norms, iterations = (np.asarray(q) for q in native(*args))
     S_glue, _, _, iterations_glue = (np.asarray(q) for q in engine.glue_window(WINDOW)(*args))
     assert np.all(norms <= engine_module.WINDOW_ACCEPTANCE) and iterations.sum() > WINDOW  # real Newton work
+    np.testing.assert_array_equal(iterations, iterations_glue)
+    np.testing.assert_allclose(S_native, S_glue, rtol=0, atol=1e-12 * np.abs(S_glue).max())
+
+
+def test_an_sdirk4_window_holds_a_window_s_solves_and_compiled_steps_as_its_glue(cache):
+    """sdirk4's window is a fifth as long (four steps of five stages: the implicit solves, and the
+    glue, of twenty generalized-alpha steps); `flexmech build` compiles it, and it takes the
+    same iterations to the same states as its glue interpreted, with the loads at the stages'
+    times."""
+    mech = _rod(scheme="sdirk4")
+    [build] = window_builds(mech)
+    [(_, fn, target)] = build.functions
+    assert fn.name() == f"kernel_window_{WINDOW // 5}"
+    assert Compiler().build(fn, target, BuildLimits(), link=build.link).ok
+    spec = simulation_spec(mech, {"until": 0.1})
+    histories = read_histories(mech, spec.histories, spec.until)
+    x0, _ = start_shape(mech, spec, histories)
+    p, scheme = mech.p(), scheme_of(spec)
+    start = start_of(mech.structure, p, x0, 0 * x0, histories, 0.0, scheme)
+    runner = StepRunner(mech.structure, p, spec.step, scheme, 0.0, histories, spec.until, 1)
+    assert runner.window_steps == WINDOW // 5
+    P, PD, PDD = histories.at_times(p, runner.column_times(0.0, spec.step, 4, 4))
+    assert P.shape[1] == 20
+    args = [start.state, spec.step, P, PD, PDD, 0.0, runner.mask, 4, *runner.data]
+    native = runner.engine.window(4)
+    assert native.is_a("External")
+    S_native, _, norms, iterations = (np.asarray(q) for q in native(*args))
+    S_glue, _, _, iterations_glue = (np.asarray(q) for q in runner.engine.glue_window(4)(*args))
+    assert np.all(norms <= engine_module.WINDOW_ACCEPTANCE) and iterations.sum() > 20
     np.testing.assert_array_equal(iterations, iterations_glue)
     np.testing.assert_allclose(S_native, S_glue, rtol=0, atol=1e-12 * np.abs(S_glue).max())
