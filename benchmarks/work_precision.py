@@ -187,7 +187,7 @@ def attempt(run, elements: int, step: float) -> dict | None:
     try:
         return run(elements, step)
     except Exception as exc:  # noqa: BLE001 (either side's solver failure, named in the table)
-        print(f"{run.__name__} {elements} el @ {step * 1e3:g} ms failed: {exc}")
+        print(f"{run.__name__} {elements} el @ {step * 1e3:g} ms failed: {str(exc).splitlines()[0][:160]}")
         return None
 
 
@@ -203,84 +203,126 @@ def cheapest(runs: dict, reference: dict, measure: int, target: float, cost: str
     return best
 
 
-def labelled(best: tuple | None, scheme: str) -> tuple | None:
-    return None if best is None else (*best, scheme)
+def best_of(sides: dict, names: list[str], reference: dict, measure: int, target: float, cost: str):
+    """(side, (elements, step, seconds per second)) of the cheapest qualifying configuration of
+    the named sides; None if none reaches the target."""
+    found = [(name, cheapest(sides[name], reference, measure, target, cost)) for name in names if name in sides]
+    found = [(name, best) for name, best in found if best is not None]
+    return min(found, key=lambda nb: nb[1][2], default=None)
 
 
-def cheaper(a: tuple | None, b: tuple | None) -> tuple | None:
-    """The cheaper of two sides' configurations (either may be None: not reached)."""
-    return min((x for x in (a, b) if x is not None), key=lambda x: x[2], default=None)
+def sweep(quick: bool) -> dict[str, dict]:
+    """Every side's runs, {side: {(elements, step): run or None}}."""
+    steps = (2e-3, 1e-3, 5e-4) if quick else (2e-3, 1e-3, 5e-4, 2.5e-4)
+    ours_elements = (1, 2, 4) if quick else (1, 2, 4, 8, 16)
+    peer_elements = (8, 16, 32) if quick else (8, 16, 32, 64, 128)
+    sides = {
+        "flexmech g-alpha": {(e, s): attempt(flexmech_run, e, s) for e in ours_elements for s in steps},
+        "flexmech sdirk4": {(e, s): attempt(sdirk4_run, e, s) for e in ours_elements for s in steps},
+        "Exudyn GE": {(e, s): attempt(exudyn_run, e, s) for e in peer_elements for s in steps},
+    }
+    try:
+        from benchmarks.exudyn_ancf import ancf_rod_run
+    except ImportError:  # the ANCF peer is optional
+        return sides
+
+    def ancf(elements: int, step: float) -> dict:
+        return ancf_rod_run(elements, step, UNTIL, SAMPLE)
+
+    sides["Exudyn ANCF"] = {(e, s): attempt(ancf, e, s) for e in peer_elements for s in steps}
+    return sides
+
+
+def references() -> dict:
+    """flexmech's sdirk4 reference, cross-checked against the second-order finest runs."""
+    reference = flexmech_reference(16, 6.25e-5)
+    others = (
+        ("flexmech generalized-alpha 16 el @ 0.125 ms", attempt(flexmech_run, 16, 1.25e-4)),
+        ("Exudyn 256 GE @ 0.125 ms", attempt(exudyn_run, 256, 1.25e-4)),
+    )
+    for name, other in others:
+        if other is not None:
+            period_gap, history_gap = errors(other, reference)
+            print(
+                f"reference flexmech sdirk4 16 cubic elements @ 0.0625 ms (period {reference['period']:.7f} s) against "
+                f"{name} (period {other['period']:.7f} s): {period_gap:.1e} (period), {history_gap:.1e} (tip history)"
+            )
+    return reference
+
+
+def print_runs(sides: dict, reference: dict) -> None:
+    print("\nconfiguration                        period err  history err  cold s/s  warm s/s  compile s")
+    for name, runs in sides.items():
+        for (e, s), run in runs.items():
+            where = f"{name:17s} {e:4d} el @ {s * 1e3:5.3f} ms"
+            if run is None:
+                print(f"{where}  failed")
+                continue
+            p, h = errors(run, reference)
+            print(
+                f"{where}  {p:10.2e}  {h:11.2e}  {run['cold']:8.3f}  {run['warm']:8.3f}  {run.get('compile', 0.0):9.1f}"
+            )
+
+
+def print_targets(sides: dict, reference: dict) -> None:
+    ours = [name for name in sides if name.startswith("flexmech")]
+    peers = [name for name in sides if name.startswith("Exudyn")]
+    print(
+        "\ntarget  measure       flexmech (cheapest, warm)             Exudyn (cheapest, warm)               ratio | cold"
+    )
+
+    def text(best) -> str:
+        return (
+            "not reached" if best is None else f"{best[0]} {best[1][0]} el @ {best[1][1] * 1e3:g} ms, {best[1][2]:.3f}"
+        )
+
+    for target in TARGETS:
+        for measure, label in ((0, "first period"), (1, "tip history")):
+            a, b = (best_of(sides, names, reference, measure, target, "warm") for names in (ours, peers))
+            ac, bc = (best_of(sides, names, reference, measure, target, "cold") for names in (ours, peers))
+            ratio = f"{b[1][2] / a[1][2]:.2f}x" if a and b else "-"
+            cold = f"{bc[1][2] / ac[1][2]:.2f}x" if ac and bc else "-"
+            print(f"{target:6.0e}  {label:12s}  {text(a):36s}  {text(b):36s}  {ratio:>6s} | {cold}")
+
+
+def plot(sides: dict, reference: dict, path: str) -> None:
+    """Error against warm seconds per simulated second, one panel per measure, every run."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    for measure, (ax, label) in enumerate(zip(axes, ("first period", "tip history over 0.8 s"))):
+        for name, runs in sides.items():
+            done = [run for run in runs.values() if run is not None]
+            ax.loglog([run["warm"] for run in done], [errors(run, reference)[measure] for run in done], "o", label=name)
+        ax.set(xlabel="wall s per simulated s (warm)", ylabel="relative error", title=f"rod: {label}")
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0].legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    print(f"\nplot: {path}")
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="fewer configurations (a smoke run)")
-    quick = parser.parse_args().quick
-    steps = (2e-3, 1e-3, 5e-4) if quick else (2e-3, 1e-3, 5e-4, 2.5e-4)
-    ours_elements = (1, 2, 4) if quick else (1, 2, 4, 8)
-    peer_elements = (8, 16, 32) if quick else (8, 16, 32, 64, 128)
-
-    print(
-        f"model: clamped steel rod {ROD_DOCUMENT.name}, kappa {KAPPA:.4f}, released at t = 0, "
-        f"generalized-alpha rho_inf {RHO_INF}, until {UNTIL} s"
-    )
-    ours_ref = flexmech_reference(16, 6.25e-5)
-    alpha_ref = flexmech_run(16, 1.25e-4)
-    peer_ref = exudyn_run(256, 1.25e-4)
-    for name, other in (
-        ("flexmech generalized-alpha 16 el @ 0.125 ms", alpha_ref),
-        ("Exudyn 256 GE @ 0.125 ms", peer_ref),
-    ):
-        period_gap, history_gap = errors(other, ours_ref)
-        print(
-            f"reference flexmech sdirk4 16 cubic elements @ 0.0625 ms (period {ours_ref['period']:.7f} s) against "
-            f"{name} (period {other['period']:.7f} s): {period_gap:.1e} (period), {history_gap:.1e} (tip history)"
-        )
-    reference = ours_ref
+    parser.add_argument("--plot", metavar="PNG", help="write the work-precision plot there")
+    args = parser.parse_args()
+    print(f"model: clamped steel rod {ROD_DOCUMENT.name}, kappa {KAPPA:.4f}, released at t = 0, until {UNTIL} s")
+    reference = references()
     loose, tight = exudyn_run(32, 5e-4), exudyn_run(32, 5e-4, 1e-7, 1e-9)
     moved = errors(loose, tight)
     print(
         f"Exudyn's tolerances: ten times tighter ones move 32 el @ 0.5 ms by {moved[0]:.1e} (period) and "
         f"{moved[1]:.1e} (tip history)"
     )
-    ours = {(e, s): attempt(flexmech_run, e, s) for e in ours_elements for s in steps}
-    stages = {(e, s): attempt(sdirk4_run, e, s) for e in ours_elements for s in steps}
-    peer = {(e, s): attempt(exudyn_run, e, s) for e in peer_elements for s in steps}
-    print("\nconfiguration                 period err  history err  cold s/s  warm s/s  compile s")
-    for name, runs in (("flexmech", ours), ("fm sdirk4", stages), ("Exudyn GE", peer)):
-        for (e, s), run in runs.items():
-            if run is None:
-                print(f"{name:10s} {e:4d} el @ {s * 1e3:5.3f} ms  failed")
-                continue
-            p, h = errors(run, reference)
-            print(
-                f"{name:10s} {e:4d} el @ {s * 1e3:5.3f} ms  {p:10.2e}  {h:11.2e}  {run['cold']:8.3f}  {run['warm']:8.3f}"
-                f"  {run.get('compile', 0.0):9.1f}"
-            )
-    print(
-        "\ntarget   measure       flexmech (cheapest, warm)          Exudyn GE (cheapest, warm)   ratio  | cold ratio"
-    )
-    for target in TARGETS:
-        for measure, label in ((0, "first period"), (1, "tip history")):
-            row = []
-            for cost in ("warm", "cold"):
-                a = cheaper(
-                    labelled(cheapest(ours, reference, measure, target, cost), "g-alpha"),
-                    labelled(cheapest(stages, reference, measure, target, cost), "sdirk4"),
-                )
-                b = cheapest(peer, reference, measure, target, cost)
-                row.append((a, b))
-            (a, b), (ac, bc) = row
-
-            def text(best):
-                if best is None:
-                    return "not reached"
-                scheme = f" {best[3]}" if len(best) > 3 else ""
-                return f"{best[0]} el @ {best[1] * 1e3:g} ms{scheme}, {best[2]:.3f} s/s"
-
-            ratio = f"{b[2] / a[2]:.2f}x" if a and b else "-"
-            cold = f"{bc[2] / ac[2]:.2f}x" if ac and bc else "-"
-            print(f"{target:6.0e}  {label:12s}  {text(a):34s}  {text(b):27s}  {ratio:>6s} | {cold}")
+    sides = sweep(args.quick)
+    print_runs(sides, reference)
+    print_targets(sides, reference)
+    if args.plot:
+        plot(sides, reference, args.plot)
 
 
 if __name__ == "__main__":
