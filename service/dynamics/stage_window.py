@@ -6,15 +6,17 @@ columns at t_n + c_i h.
 Each stage is the generalized-alpha step's Newton problem with its own affine parts (the
 positions and velocities that the stages before it give) and the same coefficients
 k = (h^2 gamma^2, h gamma, 1, h^2 gamma^2): the window's factors, made at its first stage,
-serve every stage of every step (modified Newton, accelerated as in kernel_window). A stage
-starts from the stage before's accelerations and multipliers.
+serve every stage of every step (modified Newton, accelerated as in kernel_window). A stage's
+first guess is the line through the two known nodes nearest its own (the step's start and the
+stages before it; predictor()).
 
 The state has the generalized-alpha one's layout, [x; v; e; qdd; lam], qdd the last stage's
 accelerations and e, in place of generalized-alpha's acceleration-like variable, the step's
-local error estimate: its positions less the embedded third-order solution's (the adaptive
-steps follow it, service.dynamics.adaptive). The monitor's energies and the motions' forces are the step's end (the last
-stage); its powers are the stages' powers weighted by the scheme's b, the mean power over the
-step, so that h times them is the step's work to the scheme's order (the runner sums them so:
+local error estimate: its positions less the embedded third-order solution's, filtered on the
+stiff modes (_filtered; the adaptive steps follow it, service.dynamics.adaptive). The monitor's
+energies and the motions' forces are the step's end (the last stage); its powers are the
+stages' powers weighted by the scheme's b, the mean power over the step, so that h times them
+is the step's work to the scheme's order (the runner sums them so:
 service.dynamics.stepping.work_increments)."""
 
 from __future__ import annotations
