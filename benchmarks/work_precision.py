@@ -325,8 +325,10 @@ def plot(sides: dict, reference: dict, path: str) -> None:
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
     for measure, (ax, label) in enumerate(zip(axes, ("first period", "tip history over 0.8 s"))):
         for name, runs in sides.items():
-            done = [run for run in runs.values() if run is not None]
-            ax.loglog([run["warm"] for run in done], [errors(run, reference)[measure] for run in done], "o", label=name)
+            done = sorted((run["warm"], errors(run, reference)[measure]) for run in runs.values() if run is not None)
+            (dots,) = ax.loglog(*zip(*done), "o", alpha=0.5, label=name)
+            front = [(c, e) for k, (c, e) in enumerate(done) if e < min((q for _, q in done[:k]), default=np.inf)]
+            ax.loglog(*zip(*front), "-", drawstyle="steps-post", color=dots.get_color())  # the cheapest per error
         ax.set(xlabel="wall s per simulated s (warm)", ylabel="relative error", title=f"rod: {label}")
         ax.grid(True, which="both", alpha=0.3)
     axes[0].legend()
