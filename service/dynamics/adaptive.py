@@ -56,6 +56,9 @@ class AdaptiveRunner(StepRunner):
         accelerations = np.column_stack([at.state[3 * n : 4 * n], S[3 * n : 4 * n, :count]])
         return abs(self.scheme.beta - 1 / 6) * h**2 * np.abs(np.diff(accelerations, axis=1)).max(axis=0, initial=0.0)
 
+    def _shrink(self, error: float) -> float:
+        return _shrink(self.tolerance.local, error, self.exponent)
+
     def done(self, at: Resume) -> bool:
         return at.time >= self.until * (1 - 1e-12)
 
@@ -97,9 +100,7 @@ class AdaptiveRunner(StepRunner):
             first_bad = too_large[0] if too_large else settled
             if first_bad == 0:
                 # not settled on the window's first factors (made at this very step), or too large
-                h = h_use * (
-                    0.5 if not too_large or not np.isfinite(errors[0]) else _shrink(tol, errors[0], self.exponent)
-                )
+                h = h_use * (0.5 if not too_large or not np.isfinite(errors[0]) else self._shrink(errors[0]))
                 continue
             entering = crossing(self, at, inputs, S, first_bad)
             if entering is not None:  # a damped contact begins within a step: step onto its onset
@@ -111,7 +112,7 @@ class AdaptiveRunner(StepRunner):
             history.iterations += int(iterations[:first_bad].sum())
             at = self.accept(history, at, S, monitors, inputs[0], first_bad, h_use, first_bad == count == needed)
             if too_large:
-                grow = _shrink(tol, errors[first_bad], self.exponent)
+                grow = self._shrink(errors[first_bad])
             elif settled < count:  # the window's factors aged: the next window makes new ones, same step
                 grow = 1.0
             else:
