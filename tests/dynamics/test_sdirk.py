@@ -90,7 +90,7 @@ def test_sdirk4_damping_work_is_generalized_alpha_s():
 
 def test_adaptive_sdirk4_meets_its_tolerance_in_fewer_steps_than_generalized_alpha(reference):
     """Adaptive steps on the embedded third-order estimate, filtered on the stiff modes: at a
-    local tolerance of 1e-6 the tip history is within 1e-5 of the motion (measured 3.4e-7, the
+    local tolerance of 1e-6 the tip history is within 1e-5 of the motion (measured 1.2e-6 in 47 steps, the
     interpolation's own error onto the reference's times included), where generalized-alpha at
     the same tolerance takes more steps and is 8.5e-5 off."""
     mech, ref_times = _rod(), reference[0]
