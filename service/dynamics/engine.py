@@ -151,7 +151,7 @@ class Engine:
         A stage scheme's: the step with factors made at its first stage (p, pdot, pddot per stage)."""
         st, sys = self.stepper, self.system
         if isinstance(st, StageStepper):
-            state, h, P, PD, PDD, damping, mask, data = st._stage_symbols()
+            state, h, P, PD, PDD, damping, mask, data = st._step_symbols()
             out = st.first_step_function(state, h, P, PD, PDD, damping, mask, *data)
             return ca.Function("stage_rescue", [state, h, P, PD, PDD, damping, mask, *data], out[:3])
         state, h, p, pdot, pddot, damping, mask, data = st._symbols()

@@ -81,6 +81,11 @@ class Stepper:
             data,
         )
 
+    def _step_symbols(self):
+        """The step Functions' inputs: _symbols(), with the loads and motions at the step's end (a
+        stage scheme's: at its stages, stage_window.StageStepper)."""
+        return self._symbols()
+
     def _iteration_symbols(self):
         """(factors, a step's symbols, the step's shared inputs from them), made in this order."""
         f = self._factor_symbols()
@@ -124,7 +129,7 @@ class Stepper:
         monitor, norm, iterations): one step on given factors; alive = 0 (a step before it in
         the window did not settle) computes nothing and reports an infinite norm."""
         f = self._factor_symbols()
-        state, h, p, pdot, pddot, damping, mask, data = self._symbols()
+        state, h, p, pdot, pddot, damping, mask, data = self._step_symbols()
         inputs = [*f.parts(), state, h, p, pdot, pddot, damping, mask, *data]
         new_state, monitor, norm, used, _ = self._step(f, state, h, p, pdot, pddot, damping, mask, data)
         live = ca.Function("kernel_step_live", inputs, [new_state, monitor, norm, used])
@@ -138,7 +143,7 @@ class Stepper:
     def first_step_function(self) -> ca.Function:
         """(state, h, p, pdot, pddot, damping, mask, data...) -> (state, monitor, norm,
         iterations, factors...): a step that makes the factors at its predictor."""
-        state, h, p, pdot, pddot, damping, mask, data = self._symbols()
+        state, h, p, pdot, pddot, damping, mask, data = self._step_symbols()
         out = self._step(None, state, h, p, pdot, pddot, damping, mask, data)
         return ca.Function(
             "kernel_first_step", [state, h, p, pdot, pddot, damping, mask, *data], [*out[:4], *out[4].parts()]

@@ -50,35 +50,13 @@ class StageStepper(Stepper):
         g = self.scheme.gamma
         return (x + h * g * v, v, ca.MX.zeros(self.state.n_x)), None
 
-    def _stage_symbols(self):
+    def _step_symbols(self):
+        """_symbols() with the loads and motions as (n, stages) columns: the step Functions
+        (step_function, first_step_function) take them so."""
         state, h, p, pdot, pddot, damping, mask, data = self._symbols()
         S = self.stages
         P, PD, PDD = (ca.MX.sym(name, q.numel(), S) for name, q in (("P", p), ("PD", pdot), ("PDD", pddot)))
         return state, h, P, PD, PDD, damping, mask, data
-
-    @cached_property
-    def step_function(self) -> ca.Function:
-        """(factors..., alive, state, h, P, PD, PDD, damping, mask, data...) -> (state, monitor,
-        norm, iterations), as kernel_window.Stepper.step_function with per-stage columns."""
-        f = self._factor_symbols()
-        state, h, P, PD, PDD, damping, mask, data = self._stage_symbols()
-        inputs = [*f.parts(), state, h, P, PD, PDD, damping, mask, *data]
-        new_state, monitor, norm, used, _ = self._step(f, state, h, P, PD, PDD, damping, mask, data)
-        live = ca.Function("stage_step_live", inputs, [new_state, monitor, norm, used])
-        dead = ca.Function("stage_step_dead", inputs, [state, ca.MX.zeros(monitor.shape), ca.MX(ca.inf), ca.MX(0)])
-        branch = ca.Function.if_else("stage_step_branch", live, dead)
-        alive = ca.MX.sym("alive")
-        return ca.Function("stage_step", [*f.parts(), alive, *inputs[len(f.parts()) :]], branch(alive, *inputs))
-
-    @cached_property
-    def first_step_function(self) -> ca.Function:
-        """(state, h, P, PD, PDD, damping, mask, data...) -> (state, monitor, norm, iterations,
-        factors...): a step that makes the factors at its first stage's predictor."""
-        state, h, P, PD, PDD, damping, mask, data = self._stage_symbols()
-        out = self._step(None, state, h, P, PD, PDD, damping, mask, data)
-        return ca.Function(
-            "stage_first_step", [state, h, P, PD, PDD, damping, mask, *data], [*out[:4], *out[4].parts()]
-        )
 
     @cached_property
     def stage_evaluation(self) -> ca.Function:

@@ -56,16 +56,16 @@ def _build_kernels(mech) -> None:
             assert compiler.build(fn, target, BuildLimits()).ok
 
 
-def _first_window(mech):
-    """(engine, the window's inputs from the static start)."""
+def _first_window(mech, steps: int = WINDOW):
+    """(runner, the inputs of a window of `steps` from the static start)."""
     spec = simulation_spec(mech, {"until": 0.1})
     histories = read_histories(mech, spec.histories, spec.until)
     x0, _ = start_shape(mech, spec, histories)
     p, scheme = mech.p(), scheme_of(spec)
     start = start_of(mech.structure, p, x0, 0 * x0, histories, 0.0, scheme)
     runner = StepRunner(mech.structure, p, spec.step, scheme, 0.0, histories, spec.until, 1)
-    P, PD, PDD = histories.at_times(p, spec.step * np.arange(1, WINDOW + 1))
-    return runner.engine, [start.state, spec.step, P, PD, PDD, 0.0, runner.mask, WINDOW, *runner.data]
+    P, PD, PDD = histories.at_times(p, runner.column_times(0.0, spec.step, steps, steps))
+    return runner, [start.state, spec.step, P, PD, PDD, 0.0, runner.mask, steps, *runner.data]
 
 
 def test_a_renamed_structure_shares_the_window_and_another_count_does_not(cache):
@@ -83,7 +83,8 @@ def test_the_queue_builds_a_window_that_steps_as_its_interpreted_glue_does(cache
     monkeypatch.setattr(engine_module, "RECHECK", 0.0)
     mech = _rod()
     accept_requests(True)
-    engine, args = _first_window(mech)
+    runner, args = _first_window(mech)
+    engine = runner.engine
     assert not engine.window(WINDOW).is_a("External")
     [request] = [json.loads(p.read_text()) for p in queue_dir().glob("*.json")]
     assert request["kind"] == "function" and len(request["link"]) == 5
@@ -109,16 +110,9 @@ def test_an_sdirk4_window_holds_a_window_s_solves_and_compiled_steps_as_its_glue
     [(_, fn, target)] = build.functions
     assert fn.name() == f"kernel_window_{WINDOW // 5}"
     assert Compiler().build(fn, target, BuildLimits(), link=build.link).ok
-    spec = simulation_spec(mech, {"until": 0.1})
-    histories = read_histories(mech, spec.histories, spec.until)
-    x0, _ = start_shape(mech, spec, histories)
-    p, scheme = mech.p(), scheme_of(spec)
-    start = start_of(mech.structure, p, x0, 0 * x0, histories, 0.0, scheme)
-    runner = StepRunner(mech.structure, p, spec.step, scheme, 0.0, histories, spec.until, 1)
+    runner, args = _first_window(mech, 4)
     assert runner.window_steps == WINDOW // 5
-    P, PD, PDD = histories.at_times(p, runner.column_times(0.0, spec.step, 4, 4))
-    assert P.shape[1] == 20
-    args = [start.state, spec.step, P, PD, PDD, 0.0, runner.mask, 4, *runner.data]
+    assert args[2].shape[1] == 20
     native = runner.engine.window(4)
     assert native.is_a("External")
     S_native, _, norms, iterations = (np.asarray(q) for q in native(*args))
