@@ -92,16 +92,18 @@ class BuilderProcess:
         return self.proc is not None and self.proc.poll() is None
 
     def state(self) -> dict[str, int | bool | str | None]:
-        """For /v1/health: pid, running, queued, restarts, and while it is down, why."""
-        running = self.running()
+        """For /v1/health: pid, running, queued, restarts, and while it is down, why. The process
+        is read once: the watcher may start a new one meanwhile, and a reason read from that one
+        would say a dead builder "is running"."""
+        proc = self.proc
+        running = proc is not None and proc.poll() is None
         out: dict[str, int | bool | str | None] = {
-            "pid": self.pid,
+            "pid": proc.pid if proc is not None else None,
             "running": running,
             "queued": self.queued(),
             "restarts": self.restarts,
         }
         if not running:
-            proc = self.proc
             ended = f"the builder (pid {proc.pid}) {_how_it_ended(proc.returncode)}" if proc else "not started"
             out["reason"] = self.reason or f"{ended}; it is started again shortly"
         return out
