@@ -63,6 +63,9 @@ def time_left(
     return (until - t) * (now - then[0]) / (t - then[1])
 
 
+REPORT_STAGE = "building the report"
+
+
 class SimulationProgress:
     """A context manager; calling it with (t, steps) reports the stepping has reached t (s);
     stage(name) starts a part of the run after it; finish() prints the last line. `clock` gives
@@ -133,11 +136,21 @@ class SimulationProgress:
         them, building the report, has begun."""
 
         def heard(t: float, steps: int | None = None) -> None:
+            if t < END * self.until and [name for name, _ in self.stages] == [REPORT_STAGE]:
+                self.again()  # another run began (an accuracy target's next)
             self(t, steps)
             if t >= END * self.until and not self.stages:
-                self.stage("building the report")
+                self.stage(REPORT_STAGE)
 
         return heard
+
+    def again(self) -> None:
+        """The stepping goes on with another run: its report's stage was not the last part."""
+        self.stages.clear()
+        self.heard.clear()
+        self.first_heard, self.last_tenth = None, -1
+        if self.bar is not None:
+            self.bar.update(self.task, description=self.label, total=self.until)
 
     def stage(self, name: str) -> None:
         """A part of the run after the stepping begins (and the one before it, if any, ends)."""

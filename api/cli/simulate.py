@@ -56,6 +56,22 @@ BuildOpt = Annotated[
 ]
 
 
+AccuracyOpt = Annotated[
+    float | None,
+    typer.Option(
+        help="Refine the links' elements and the steps until the named outputs' (/simulate/outputs) "
+        "estimated errors, relative to their excursions, are within this; report the estimates."
+    ),
+]
+MaxStepsOpt = Annotated[
+    int | None,
+    typer.Option(
+        "--max-steps",
+        help="The most time steps (adaptive and "
+        "impacts: accepted steps); default the service's limit, "
+        "which this raises for a run on this machine.",
+    ),
+]
 SCHEMES = "generalized_alpha | newmark | sdirk4 | event_driven | moreau."
 
 
@@ -67,15 +83,8 @@ def simulate(
     step: Annotated[float | None, typer.Option(help="Time step (s).")] = None,
     scheme: Annotated[str | None, typer.Option(help=SCHEMES)] = None,
     damping: Annotated[float | None, typer.Option(help="Mass-proportional damping (1/s).")] = None,
-    max_steps: Annotated[
-        int | None,
-        typer.Option(
-            "--max-steps",
-            help="The most time steps (adaptive and "
-            "impacts: accepted steps); default the service's limit, "
-            "which this raises for a run on this machine.",
-        ),
-    ] = None,
+    accuracy: AccuracyOpt = None,
+    max_steps: MaxStepsOpt = None,
     sensitivity: Annotated[
         list[str] | None,
         typer.Option(
@@ -112,6 +121,7 @@ def simulate(
         _check_figures(plot, snapshots, animation)
         mech = mechanism(document, None, sets)
         given = {"until": until, "step": step, "scheme": scheme, "damping": damping, "max_steps": max_steps}
+        given |= {"accuracy": accuracy}
         given |= {"every": every, "max_points": max_points, "sensitivities": sensitivity or None}
         spec = _spec(mech, err, compiled, given)
         files = Files(json_out, csv_out, plot, snapshots, animation)
@@ -155,7 +165,7 @@ def _run(mech, spec, out, err, max_steps: int | None, files: Files, document: Pa
                 mech.document, spec, progress=progress.stepping(), max_steps=spec.max_steps or MAX_STEPS
             )
             write_files(progress, files, report, mech, None)
-            progress.finish(_summary(report), report["seconds"])
+            progress.finish(_summary(report), _stepping(report))
         print_impacts(out, report, spec.scheme)
         return report
     report = _links(mech, spec, err, max(MAX_STEPS, max_steps or 0), files, document)
@@ -186,12 +196,12 @@ def _links(mech, spec, err, limit: int, files: Files, document: Path | None) -> 
                 progress.finish(f"stopped at t = {report['time_reached']:.4g} s to run compiled", report["seconds"])
             else:
                 write_files(progress, files, report, mech, history)
-                progress.finish(_summary(report), report["seconds"])
+                progress.finish(_summary(report), _stepping(report))
         if pace is not None and pace.restart:
             with SimulationProgress(err, spec.until, "simulating compiled") as progress:
                 history, report = run_simulation(mech, spec, progress=progress.stepping(), max_steps=limit)
                 write_files(progress, files, report, mech, history)
-                progress.finish(_summary(report), report["seconds"])
+                progress.finish(_summary(report), _stepping(report))
         elif build is not None:
             err.print(
                 f"ran interpreted: its kernels were not compiled (about {seconds_text(missing.seconds)} of gcc, "
@@ -208,7 +218,14 @@ def _links(mech, spec, err, limit: int, files: Files, document: Path | None) -> 
 
 
 def _summary(report: dict) -> str:
-    return f"{report['status']} at t = {report['time_reached']:g} s, {report['steps']} steps"
+    runs = len(report["accuracy"]["runs"]) if report.get("accuracy") else 1
+    checked = f" (of {runs} runs to the accuracy target)" if runs > 1 else ""
+    return f"{report['status']} at t = {report['time_reached']:g} s, {report['steps']} steps{checked}"
+
+
+def _stepping(report: dict) -> float:
+    """The steps' time: of every run an accuracy target made."""
+    return report["accuracy"]["seconds"] if report.get("accuracy") else report["seconds"]
 
 
 def _check_figures(plot: Path | None, snapshots: Path | None, animation: Path | None) -> None:

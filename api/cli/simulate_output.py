@@ -54,6 +54,8 @@ def print_run(out: Console, report: dict[str, Any]) -> None:
     )
     if report["message"]:
         out.print(shown(report["message"]))
+    if report.get("accuracy"):
+        print_accuracy(out, report["accuracy"])
     units = report.get("output_units", {})
     table = table_of(None, "output", "start", "end", "min", "max", text=1)
     outputs = list(report["outputs"].items())
@@ -64,6 +66,25 @@ def print_run(out: Console, report: dict[str, Any]) -> None:
             )
     out.print(table)
     print_left_out(out, min(SHOWN_OUTPUTS, len(outputs)), len(outputs), "outputs")
+
+
+def print_accuracy(out: Console, accuracy: dict[str, Any]) -> None:
+    """The discretization an accuracy target chose, and each output's estimated error."""
+    steps = f"step {accuracy['step']:g} s" if "step" in accuracy else f"tolerance {accuracy['tolerance']:.3g}"
+    elements = ", ".join(f"{shown(name)} {n}" for name, n in accuracy["intervals"].items()) or "no link elements"
+    out.print(
+        f"accuracy target {accuracy['target']:g} {'met' if accuracy['met'] else 'not met'}: elements {elements}; "
+        f"{steps}; {len(accuracy['runs'])} runs in {seconds_text(accuracy['seconds'])}"
+    )
+    table = table_of(None, "output", "estimated error", "elements' part", "steps' part", text=1)
+    for name, estimate in accuracy["estimated_errors"].items():
+        table.add_row(
+            shown(name),
+            f"{estimate:.2g}",
+            f"{accuracy['space_errors'][name]:.2g}",
+            f"{accuracy['time_errors'][name]:.2g}",
+        )
+    out.print(table)
 
 
 def print_impacts(out: Console, report: dict[str, Any], scheme: str) -> None:

@@ -50,6 +50,15 @@ class SimulateSpec(StrictModel):
         "for rigid bodies with impacts: event_driven (adaptive Dormand-Prince with located contact events) or "
         "moreau (Moreau-Jean midpoint time stepping, `step`)",
     )
+    accuracy: float | None = Field(
+        default=None,
+        gt=0,
+        le=1e-1,
+        allow_inf_nan=False,
+        description="a target for the error of the named `outputs`, each relative to its largest excursion "
+        "from its start value: the run picks its links' element counts and its adaptive steps' tolerance, "
+        "checks them by one refinement of each, and reports each output's estimated error (link schemes)",
+    )
     rho_inf: float = Field(
         default=0.95,
         ge=0,
@@ -146,6 +155,17 @@ class SimulateSpec(StrictModel):
                 f"the numbers); the {scheme} scheme has none: set scheme to event_driven"
             )
         return [pointer if pointer.startswith("/") else f"/{pointer}" for pointer in pointers]
+
+    @field_validator("accuracy")
+    @classmethod
+    def _of_link_schemes(cls, accuracy: float | None, info: ValidationInfo) -> float | None:
+        scheme = info.data.get("scheme")
+        if accuracy is not None and scheme in IMPACT_SCHEMES:
+            raise ValueError(
+                f"an accuracy target picks the links' elements and steps; the {scheme} scheme of rigid bodies "
+                "follows its own `tolerance`"
+            )
+        return accuracy
 
     @field_validator("max_points")
     @classmethod

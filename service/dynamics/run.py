@@ -160,7 +160,15 @@ def start_shape(mech: Mechanism, spec: SimulateSpec, histories: Histories | None
 def run_simulation(
     mech: Mechanism, spec: SimulateSpec, stop=None, progress=None, max_steps: int = MAX_STEPS
 ) -> tuple[History, dict]:
-    """(the raw history, the report)."""
+    """(the raw history, the report). With an accuracy target, of the run that meets it
+    (service.dynamics.accuracy)."""
+    if spec.accuracy is not None:
+        from flexmech.service.dynamics.accuracy import run_to_accuracy  # it calls back here, per run
+
+        def run(m: Mechanism, s: SimulateSpec) -> tuple[History, dict]:
+            return run_simulation(m, s, stop, progress, max_steps)
+
+        return run_to_accuracy(mech, spec, run, stop)
     simulated(mech)
     check_masses(mech)
     check_link_dynamics(mech.document)  # its contact pairs: elastic, frictionless

@@ -97,6 +97,13 @@ class SimulationJob(InOrder):
                 "/v1/solve (analysis simulate: a second of motion takes milliseconds); the impact "
                 "study job (/v1/impact-studies) runs many",
             )
+        if simulate.accuracy is not None:
+            raise MechanismError(
+                "/simulate/accuracy",
+                "an accuracy target compares whole runs, which a job's stored windows are not: run it by "
+                "/v1/solve (analysis simulate) or `flexmech simulate --accuracy`, then start the job with the "
+                "elements and step it reports",
+            )
         try:
             check_masses(mech)
             check_link_dynamics(mech.document)  # its contact pairs' laws, as a call of /v1/solve checks them

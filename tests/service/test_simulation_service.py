@@ -131,3 +131,12 @@ def test_a_killed_server_resumes_the_simulation_from_its_last_window(deployment)
     # the one-call run goes through the server's own process (its BLAS threads sum in another order)
     np.testing.assert_allclose(after.result["outputs"]["C.y"], one["outputs"]["C.y"], rtol=1e-12)
     np.testing.assert_allclose(after.result["energies"]["input_work"], one["energies"]["input_work"], rtol=1e-10)
+
+
+def test_a_simulation_job_refuses_an_accuracy_target_and_says_where_it_runs(api_server):
+    simulate = {"accuracy": 1e-3, "outputs": ["bodies.tip.x"]}
+    r = httpx.post(f"{api_server.url}/v1/simulations", json={"example": "rod_free_vibration", "simulate": simulate})
+    assert r.status_code == 422, r.text
+    error = r.json()["error"]
+    assert error["pointer"] == "/simulate/accuracy"
+    assert "/v1/solve (analysis simulate)" in error["message"]
