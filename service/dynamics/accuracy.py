@@ -18,9 +18,11 @@ differences was 0.82 and 0.95 of the error at 4 elements (1 and 2 ms), 1.16 and 
 (4 and 2 ms); the factor covers the first.
 
 The run starts from the document's own elements and steps (its a priori choice). Over the
-target, every part whose estimate is above half of it is refined (the larger one where
-neither is) and the new run is checked in turn, for at most ROUNDS rounds; each run stays under
-the step limit and the caller's stop. A target still missed is a result: status
+target, every part whose estimate is above half of it is refined by what its order predicts
+brings it under half (a power of 2 up to MAX_JUMP: the elements' order 4, the scheme's, or
+after two checks the order observed between them), the larger one by 2 where neither is, and
+the new run is checked in turn, for at most ROUNDS rounds; each run stays under the step limit
+and the caller's stop. A target still missed is a result: status
 `accuracy_not_reached`, with the estimates and every run made."""
 
 from __future__ import annotations
@@ -36,11 +38,15 @@ from flexmech.models import Mechanism, MechanismError, compile_mechanism
 from flexmech.models.documents.simulation_spec import SimulateSpec
 from flexmech.models.elements import FAMILIES
 
-ROUNDS = 6  # of checks: each refines by 2 (elements) or 2-10 (steps); the step limit bounds them too
-SPACE_FACTOR = 2  # a refinement's elements per link element
-STEP_FACTOR = 2  # fixed steps: a refinement's steps per step
-TOLERANCE_FACTOR = 10.0  # adaptive steps: a refinement's tolerance is the run's over this
+ROUNDS = 6  # of checks; the step limit bounds them too
+SPACE_FACTOR = 2  # a check's elements per link element
+STEP_FACTOR = 2  # fixed steps: a check's steps per step
+TOLERANCE_FACTOR = 10.0  # adaptive steps: a check's tolerance is the run's over this
 TIME_SAFETY = 2.0  # the time part's estimate over its difference: a refinement that halves it (see above)
+MAX_JUMP = 8  # the most one round multiplies the elements, or divides the step, by
+SPACE_ORDER = 4.0  # cubic elements' displacements: error ~ (element length)^4
+TIME_ORDERS = {"sdirk4": 4.0}  # the schemes' orders; the others 2
+CONTROLLER_ORDERS = {"sdirk4": 4.0}  # adaptive steps: h ~ tolerance^(1/this); the others 3
 
 
 @dataclass(frozen=True)
@@ -52,33 +58,62 @@ class Plan:
     step: float
     tolerance: float | None  # None: fixed steps
 
-    def finer_time(self) -> Plan:
+    def finer_time(self, factor: float = STEP_FACTOR, controller: float = 3.0) -> Plan:
+        """Steps `factor` times shorter: fixed ones divided, an adaptive tolerance divided by
+        factor^controller (and at least by TOLERANCE_FACTOR)."""
         if self.tolerance is None:
-            return replace(self, step=self.step / STEP_FACTOR)
-        return replace(self, tolerance=self.tolerance / TOLERANCE_FACTOR)
+            return replace(self, step=_rounded(self.step / factor))
+        divisor = TOLERANCE_FACTOR if factor == STEP_FACTOR else max(TOLERANCE_FACTOR, factor**controller)
+        return replace(self, tolerance=_rounded(self.tolerance / divisor))
 
     def time_refinement(self) -> str:
         return f"step / {STEP_FACTOR}" if self.tolerance is None else f"tolerance / {TOLERANCE_FACTOR:g}"
 
-    def finer_space(self, mech: Mechanism) -> Plan | None:
-        """Every link's elements doubled; None where a link is at its document's limit (or the
-        mechanism has no link elements)."""
-        if not self.intervals:
-            return None
-        doubled = tuple((name, SPACE_FACTOR * n) for name, n in self.intervals)
-        elements = mech.document.elements
-        for name, n in doubled:
-            element = elements[name]
-            try:
-                type(element).model_validate({**element.model_dump(exclude_unset=True), "intervals": n})
-            except ValidationError:
-                return None
-        return replace(self, intervals=doubled)
+    def finer_space(self, mech: Mechanism, factor: int = SPACE_FACTOR) -> Plan | None:
+        """Every link's elements times `factor` (the largest power of 2 up to it that every link's
+        document allows); None where even a doubling is over a link's limit (or the mechanism
+        has no link elements)."""
+        while factor >= SPACE_FACTOR and self.intervals:
+            refined = tuple((name, factor * n) for name, n in self.intervals)
+            if all(_allowed(mech, name, n) for name, n in refined):
+                return replace(self, intervals=refined)
+            factor //= 2
+        return None
 
     def summary(self) -> dict:
         if self.tolerance is None:
             return {"intervals": dict(self.intervals), "step": self.step}
         return {"intervals": dict(self.intervals), "tolerance": self.tolerance}
+
+
+def _rounded(value: float) -> float:
+    """To 12 digits: a tenth of 1e-5 is 1e-6, not 1.0000000000000002e-06, in the report."""
+    return float(f"{value:.12g}")
+
+
+def _allowed(mech: Mechanism, name: str, intervals: int) -> bool:
+    element = mech.document.elements[name]
+    try:
+        type(element).model_validate({**element.model_dump(exclude_unset=True), "intervals": intervals})
+    except ValidationError:
+        return False
+    return True
+
+
+def jump(part: float, allowed: float, order: float) -> int:
+    """The refinement (a power of 2, from 2 to MAX_JUMP) that brings `part` under `allowed` where
+    it falls as the refinement^order."""
+    if not math.isfinite(part) or part <= allowed:
+        return 2
+    return int(min(MAX_JUMP, 2 ** math.ceil(math.log2((part / allowed) ** (1 / order)))))
+
+
+def observed_order(before: float, after: float, refinement: float, nominal: float) -> float:
+    """The order a part fell at between two checks (refinement: of elements or of steps), within
+    [1, nominal]; nominal where it did not change."""
+    if refinement <= 1 or before <= 0 or after <= 0 or not math.isfinite(before / after):
+        return nominal
+    return min(nominal, max(1.0, math.log(before / after) / math.log(refinement)))
 
 
 def link_intervals(mech: Mechanism) -> tuple[tuple[str, int], ...]:
@@ -135,6 +170,7 @@ class AccuracyRuns:
         self.names = list(spec.outputs)
         self.target = float(spec.accuracy or 0.0)
         self.log: list[dict] = []
+        self.rounds: list[tuple[Plan, float, float]] = []  # each check's plan and worst parts
         self._made: dict[tuple[Plan, int], tuple] = {}
 
     def run(self, plan: Plan, role: str, every: int | None = None) -> tuple:
@@ -178,16 +214,39 @@ class AccuracyRuns:
         return space, differences(report, by_time, self.names), None
 
     def refined(self, plan: Plan, space: dict, time: dict) -> Plan | None:
-        """The next plan: every part over half the target refined (the larger where neither
-        is); None when that is the elements' and a link is at its limit."""
-        worst_space, worst_time = max(space.values(), default=0.0), max(time.values(), default=0.0)
-        over_space, over_time = worst_space > self.target / 2, worst_time > self.target / 2
+        """The next plan: each part over half the target refined by what its order predicts
+        brings it under (jump), the larger one by 2 where neither is over; None when that is
+        the elements' and a link is at its limit."""
+        parts = max(space.values(), default=0.0), TIME_SAFETY * max(time.values(), default=0.0)
+        self.rounds.append((plan, *parts))
+        space_order, time_order = self.orders()
+        allowed = self.target / 2
+        over_space, over_time = parts[0] > allowed, parts[1] > allowed
         if not (over_space or over_time):  # their sum is over the target
-            over_space, over_time = worst_space >= worst_time, worst_space < worst_time
-        finer = plan.finer_space(self.mech) if over_space else plan
+            over_space, over_time = parts[0] >= parts[1], parts[0] < parts[1]
+        finer = plan.finer_space(self.mech, jump(parts[0], allowed, space_order)) if over_space else plan
         if finer is None:
             return None
-        return finer.finer_time() if over_time else finer
+        if not over_time:
+            return finer
+        return finer.finer_time(jump(parts[1], allowed, time_order), CONTROLLER_ORDERS.get(self.spec.scheme, 3.0))
+
+    def orders(self) -> tuple[float, float]:
+        """(elements', steps') orders: as observed between the last two checks where a part was
+        refined, else nominal (SPACE_ORDER, the scheme's)."""
+        nominal = SPACE_ORDER, TIME_ORDERS.get(self.spec.scheme, 2.0)
+        if len(self.rounds) < 2:
+            return nominal
+        (before, space_before, time_before), (after, space_after, time_after) = self.rounds[-2:]
+        elements = after.intervals[0][1] / before.intervals[0][1] if after.intervals else 1.0
+        if after.tolerance is None:
+            steps = before.step / after.step
+        else:
+            steps = (before.tolerance / after.tolerance) ** (1 / CONTROLLER_ORDERS.get(self.spec.scheme, 3.0))
+        return (
+            observed_order(space_before, space_after, elements, nominal[0]),
+            observed_order(time_before, time_after, steps, nominal[1]),
+        )
 
 
 def run_to_accuracy(mech: Mechanism, spec: SimulateSpec, run, stop=None) -> tuple:
@@ -196,21 +255,20 @@ def run_to_accuracy(mech: Mechanism, spec: SimulateSpec, run, stop=None) -> tupl
     runs = AccuracyRuns(mech, spec, run)
     plan = Plan(link_intervals(mech), spec.step, spec.tolerance if spec.adaptive else None)
     history, report = runs.run(plan, "run")
-    space: dict = {}
-    time: dict = {}
+    if report["status"] != "finished":  # the document's own run: its status as it is
+        return history, _with_accuracy(report, runs, plan, {}, {}, None)
     for round in range(ROUNDS):
-        if report["status"] != "finished":
-            break
         space, time, failed = runs.checks(plan, report)
         if failed is not None:
-            return history, _with_accuracy(report, runs, plan, space, time, failed)
+            return history, _with_accuracy(report, runs, plan, {}, {}, failed)
         met = max(space[n] + TIME_SAFETY * time[n] for n in runs.names) <= runs.target
         finer = runs.refined(plan, space, time)
         if met or finer is None or round == ROUNDS - 1 or (stop is not None and stop()):
             break
-        plan = finer
-        history, report = runs.run(plan, "run")
-        space, time = {}, {}
+        finer_history, finer_report = runs.run(finer, "run")
+        if finer_report["status"] != "finished":  # this run and its estimates stand
+            return history, _with_accuracy(report, runs, plan, space, time, finer_report)
+        plan, history, report = finer, finer_history, finer_report
     return history, _with_accuracy(report, runs, plan, space, time, None)
 
 
@@ -233,17 +291,16 @@ def _with_accuracy(report: dict, runs: AccuracyRuns, plan: Plan, space: dict, ti
     if report["status"] != "finished" or met:
         return out
     if failed is not None:
-        why = f"its check ({failed['status']}: {failed['message']}) did not finish"
-    elif estimates:
+        estimated = f" (estimated error {max(estimates.values()):.2g})" if estimates else ""
+        why = f"a finer run ({failed['status']}: {failed['message']}) did not finish{estimated}"
+    else:  # checked, and over the target at its last check
         worst = max(estimates, key=estimates.__getitem__)
         why = (
             f"the estimated error of {worst} is {estimates[worst]:.2g} (elements {space[worst]:.2g}, steps "
             f"{time[worst]:.2g}) after {len(runs.log)} runs"
         )
-    else:
-        why = "the refinements were stopped before a check"
     out["status"] = "accuracy_not_reached"
     out["message"] = (
-        f"the accuracy target {runs.target:g} was not reached: {why} ({plan.summary()}); the report is of the last run"
+        f"the accuracy target {runs.target:g} was not reached: {why}; the report is of the run at {plan.summary()}"
     )
     return out
