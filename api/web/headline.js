@@ -87,6 +87,13 @@ function simulation(report) {
   const units = report.units || {};
   if (finite(report.time_reached)) items.push({ name: "time reached", value: report.time_reached, unit: "s", note: finite(report.steps) ? `${report.steps} steps` : "" });
   if (finite(report.energy_balance_error)) items.push({ name: "energy balance error (relative)", value: 100 * report.energy_balance_error, unit: "%", note: "of the largest energy" });
+  const accuracy = report.accuracy;
+  if (accuracy && accuracy.estimated_errors) {  // a run to an accuracy target: its largest estimate and what it chose
+    const worst = largestBy(Object.entries(accuracy.estimated_errors), ([, estimate]) => estimate);
+    const elements = Object.entries(accuracy.intervals || {}).map(([name, n]) => `${name} ${n}`).join(", ");
+    const steps = "step" in accuracy ? `step ${accuracy.step} s` : `tolerance ${accuracy.tolerance}`;
+    if (worst) items.push({ name: `estimated error of ${worst[0]} (relative)`, value: worst[1], unit: "", note: `target ${accuracy.target} ${accuracy.met ? "met" : "not met"}; elements ${elements || "none"}; ${steps}` });
+  }
   const impacts = report.impacts || [];
   if (impacts.length) {
     const peak = largestBy(impacts, (impact) => impact.peak_force);
