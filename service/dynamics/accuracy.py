@@ -174,7 +174,7 @@ class AccuracyRuns:
         self._made: dict[tuple[Plan, int], tuple] = {}
 
     def run(self, plan: Plan, role: str, every: int | None = None) -> tuple:
-        """One run of the plan (adaptive steps at its tolerance), logged."""
+        """One run of the plan (its fixed step, or its adaptive steps' tolerance), logged."""
         every = every or self.spec.every
         if (plan, every) in self._made:  # a check's refinement that became the run (every step kept)
             return self._made[(plan, every)]
