@@ -148,12 +148,12 @@ class Engine:
     def rescue(self) -> ca.Function:
         """(s0, h, p, pdot, pddot, damping, mask, data...) -> (state, monitor, norm): one step by
         Newton, its factors made at every iteration (a step the window's factors do not settle).
-        A stage scheme's: the step with factors made at its first stage (p, pdot, pddot per stage)."""
+        A stage scheme's: each stage by full Newton (p, pdot, pddot per stage)."""
         st, sys = self.stepper, self.system
         if isinstance(st, StageStepper):
             state, h, P, PD, PDD, damping, mask, data = st._step_symbols()
-            out = st.first_step_function(state, h, P, PD, PDD, damping, mask, *data)
-            return ca.Function("stage_rescue", [state, h, P, PD, PDD, damping, mask, *data], out[:3])
+            out = st.rescue_step(state, h, P, PD, PDD, damping, mask, data, RESCUE_ITERATIONS)
+            return ca.Function("stage_rescue", [state, h, P, PD, PDD, damping, mask, *data], list(out))
         state, h, p, pdot, pddot, damping, mask, data = st._symbols()
         fa, k = st.coefficients(h)
         affine, c_a1 = st._affine(state, h)

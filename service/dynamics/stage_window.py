@@ -26,6 +26,7 @@ from functools import cached_property
 import casadi as ca
 
 from flexmech.service.dynamics.kernel_records import Evaluation, Factors
+from flexmech.service.dynamics.kernel_system import NEWTON_TOLERANCE
 from flexmech.service.dynamics.kernel_window import MAX_ITERATIONS, Stepper
 from flexmech.service.dynamics.schemes import StageScheme
 
@@ -69,7 +70,14 @@ class StageStepper(Stepper):
         fn = ca.Function("stage_evaluation", [*f.kept_reverse, *si.parts(), Z], ev.parts())
         return fn.expand() if self.expanded else fn
 
-    def _step(self, factors: Factors | None, state, h, P, PD, PDD, damping, mask, data):
+    def rescue_step(self, state, h, P, PD, PDD, damping, mask, data, iterations: int):
+        """(state, monitor, norm): the step by full Newton on every stage, its factors made again
+        at every iteration (a step the window's factors do not settle: the four-bar's coupler
+        buckling, where modified Newton stalls near a residual of 1e-9); the error filter on
+        the last stage's factors."""
+        return self._step(None, state, h, P, PD, PDD, damping, mask, data, full_newton=iterations)[:3]
+
+    def _step(self, factors: Factors | None, state, h, P, PD, PDD, damping, mask, data, full_newton: int = 0):
         sys, sc = self.system, self.scheme
         _, k = self.coefficients(h)
         x, v, _, qdd, lam = self.state.split(state)
@@ -85,13 +93,17 @@ class StageStepper(Stepper):
             si = sys.step_inputs((cX, cV, ca.MX.zeros(n_x)), k, P[:, i], PD[:, i], PDD[:, i], damping, mask, data)
             known = [ca.vertcat(qdd, lam)] + stage_unknowns
             Z = sum(w * known[j] for j, w in predictor(sc.nodes, i))
-            if factors is None:
-                factors = sys.factorize(Z, si)
-            ev = Evaluation.of(self.stage_evaluation(*factors.kept_reverse, *si.parts(), Z), self.n_groups)
-            carry = [Z, ca.MX.zeros(sys.n_z), ca.MX.zeros(sys.n_z), ca.MX(0), ca.MX(0), *ev.parts()]
-            for _ in range(MAX_ITERATIONS):
-                carry = self.gated_iteration(*factors.parts(), *si.parts(), *carry)
-            Z, used, ev = carry[0], carry[4], Evaluation.of(carry[5:], self.n_groups)
+            if full_newton:
+                Z, factors, ev = self._newton(Z, si, full_newton)
+                used = ca.MX(full_newton)
+            else:
+                if factors is None:
+                    factors = sys.factorize(Z, si)
+                ev = Evaluation.of(self.stage_evaluation(*factors.kept_reverse, *si.parts(), Z), self.n_groups)
+                carry = [Z, ca.MX.zeros(sys.n_z), ca.MX.zeros(sys.n_z), ca.MX(0), ca.MX(0), *ev.parts()]
+                for _ in range(MAX_ITERATIONS):
+                    carry = self.gated_iteration(*factors.parts(), *si.parts(), *carry)
+                Z, used, ev = carry[0], carry[4], Evaluation.of(carry[5:], self.n_groups)
             stage_accelerations.append(Z[:n_x])
             stage_unknowns.append(Z)
             monitor = self.monitor(ev, si)
@@ -104,6 +116,17 @@ class StageStepper(Stepper):
         new_state = ca.vertcat(x_end, v_end, self._filtered(error, k, factors, ends), u, Z[n_x:])
         monitor = ca.vertcat(monitor[:2], power, monitor[6:])
         return new_state, monitor, norm, used_all, factors
+
+    def _newton(self, Z, si, iterations: int):
+        """(Z, its factors, its evaluation) after `iterations` full Newton iterations on a stage
+        (each skipped once the residual is below the tolerance)."""
+        sys, one = self.system, ca.MX(1)
+        for _ in range(iterations):
+            factors = sys.factorize(Z, si)
+            ev = sys.evaluate(Z, one, si, factors.kept_reverse)
+            Z = ca.if_else(ev.norm > NEWTON_TOLERANCE, Z - sys.solve(ev, one, factors), Z)
+        factors = sys.factorize(Z, si)
+        return Z, factors, sys.evaluate(Z, one, si, factors.kept_reverse)
 
     def _filtered(self, error, k, factors: Factors, ends) -> ca.MX:
         """The embedded estimate e filtered as W^-1 M e (Hairer and Wanner, Sec. IV.8, for stiff
