@@ -18,6 +18,8 @@ def plain(obj: Any) -> Any:
     if isinstance(obj, dict):
         return {str(k): plain(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
+        if obj and all(type(v) is float for v in obj):  # a curve of floats (a simulation's: 20k numbers)
+            return list(obj) if math.isfinite(sum(obj)) else [v if math.isfinite(v) else None for v in obj]
         return [plain(v) for v in obj]
     if isinstance(obj, np.ndarray):
         if obj.dtype.kind == "f" and np.isfinite(obj).all():

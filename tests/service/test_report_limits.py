@@ -170,3 +170,16 @@ def test_the_size_checks_name_the_field_and_the_figures():
     with pytest.raises(MechanismError) as encoded:
         check_response_bytes(1_000_001, limits, "/outputs")
     assert encoded.value.pointer == "/outputs" and encoded.value.problem.startswith("the report is 1 MB of JSON")
+
+
+def test_a_report_s_curves_are_json_with_every_non_finite_number_as_null():
+    """plain() takes a list of floats whole when their sum is finite; a NaN, an infinity, or a
+    sum that overflows (finite numbers: kept) is looked at number by number."""
+    from flexmech.service.solvers.reports import plain
+
+    nan, inf = float("nan"), float("inf")
+    assert plain({"y": [1.0, nan, 2.0], "z": (inf, -inf)}) == {"y": [1.0, None, 2.0], "z": [None, None]}
+    assert plain([1e308, 1e308]) == [1e308, 1e308]
+    assert plain([1, 2.5, np.float64(nan), True]) == [1, 2.5, None, True]
+    curve = [0.5] * 3
+    assert plain(curve) == curve and plain(curve) is not curve  # a copy: the report's lists are its own
