@@ -159,14 +159,7 @@ class Engine:
         affine, c_a1 = st._affine(state, h)
         _, _, _, qdd, lam = st.state.split(state)
         si = sys.step_inputs(affine, k, p, pdot, pddot, damping, mask, data)
-        Z = ca.vertcat(qdd, lam)
-        one = ca.MX(1)
-        for _ in range(RESCUE_ITERATIONS):
-            factors = sys.factorize(Z, si)
-            ev = sys.evaluate(Z, one, si, factors.kept_reverse)
-            Z = ca.if_else(ev.norm > NEWTON_TOLERANCE, Z - sys.solve(ev, one, factors), Z)
-        factors = sys.factorize(Z, si)
-        ev = sys.evaluate(Z, one, si, factors.kept_reverse)
+        Z, _, ev = sys.newton(ca.vertcat(qdd, lam), si, RESCUE_ITERATIONS)
         u = Z[: self.n_x]
         cX, cV, _ = affine
         new_state = ca.vertcat(cX + k[0] * u, cV + k[1] * u, c_a1 + fa * u, u, Z[self.n_x :])

@@ -243,6 +243,18 @@ class StepSystem:
         norm = ca.mmax(ca.vertcat(*norms)) if norms else ca.MX(0)
         return Evaluation(ys, rhs, all_rows, routed_v, energies, global_energies, norm)
 
+    def newton(self, Z, si: StepInputs, iterations: int) -> tuple[ca.MX, Factors, Evaluation]:
+        """(Z, its factors, its evaluation) after `iterations` iterations of full Newton from Z,
+        the factors made again at every one (each a no-op once the residual is below the
+        tolerance): a step that modified Newton on older factors does not settle."""
+        one = ca.MX(1)
+        for _ in range(iterations):
+            factors = self.factorize(Z, si)
+            ev = self.evaluate(Z, one, si, factors.kept_reverse)
+            Z = ca.if_else(ev.norm > NEWTON_TOLERANCE, Z - self.solve(ev, one, factors), Z)
+        factors = self.factorize(Z, si)
+        return Z, factors, self.evaluate(Z, one, si, factors.kept_reverse)
+
     def factorize(self, Z, si: StepInputs) -> Factors:
         """The factors of the Newton system at Z."""
         L = self.layout

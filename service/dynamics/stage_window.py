@@ -26,7 +26,6 @@ from functools import cached_property
 import casadi as ca
 
 from flexmech.service.dynamics.kernel_records import Evaluation, Factors
-from flexmech.service.dynamics.kernel_system import NEWTON_TOLERANCE
 from flexmech.service.dynamics.kernel_window import MAX_ITERATIONS, Stepper
 from flexmech.service.dynamics.schemes import StageScheme
 
@@ -94,7 +93,7 @@ class StageStepper(Stepper):
             known = [ca.vertcat(qdd, lam)] + stage_unknowns
             Z = sum(w * known[j] for j, w in predictor(sc.nodes, i))
             if full_newton:
-                Z, factors, ev = self._newton(Z, si, full_newton)
+                Z, factors, ev = sys.newton(Z, si, full_newton)
                 used = ca.MX(full_newton)
             else:
                 if factors is None:
@@ -116,17 +115,6 @@ class StageStepper(Stepper):
         new_state = ca.vertcat(x_end, v_end, self._filtered(error, k, factors, ends), u, Z[n_x:])
         monitor = ca.vertcat(monitor[:2], power, monitor[6:])
         return new_state, monitor, norm, used_all, factors
-
-    def _newton(self, Z, si, iterations: int):
-        """(Z, its factors, its evaluation) after `iterations` full Newton iterations on a stage
-        (each skipped once the residual is below the tolerance)."""
-        sys, one = self.system, ca.MX(1)
-        for _ in range(iterations):
-            factors = sys.factorize(Z, si)
-            ev = sys.evaluate(Z, one, si, factors.kept_reverse)
-            Z = ca.if_else(ev.norm > NEWTON_TOLERANCE, Z - sys.solve(ev, one, factors), Z)
-        factors = sys.factorize(Z, si)
-        return Z, factors, sys.evaluate(Z, one, si, factors.kept_reverse)
 
     def _filtered(self, error, k, factors: Factors, ends) -> ca.MX:
         """The embedded estimate e filtered as W^-1 M e (Hairer and Wanner, Sec. IV.8, for stiff
