@@ -29,7 +29,10 @@ SAFETY = 0.9
 ADAPTIVE_WINDOW = 50  # steps per window of one step size: the step controller adapts once per window
 MAX_REJECTIONS = 12  # in a row: then the run ends, not_converged
 SHRINK_AT_MOST, GROW_AT_MOST = 0.2, 2.0
-REJECTED_AGAIN = 0.5  # a stage scheme's second rejection in a row at least halves its step
+# A stage scheme's second rejection in a row at least halves its step: where its error falls
+# slower than its order says (sdirk4's h^4 is h^1.5 while the four-bar's coupler buckles), the
+# order's shrink, 3 % a try there, would spend every try.
+REJECTED_AGAIN = 0.5
 
 
 @dataclass(frozen=True)
@@ -56,6 +59,13 @@ class AdaptiveRunner(StepRunner):
             return np.abs(S[2 * n : 3 * n, :count]).max(axis=0, initial=0.0)
         accelerations = np.column_stack([at.state[3 * n : 4 * n], S[3 * n : 4 * n, :count]])
         return abs(self.scheme.beta - 1 / 6) * h**2 * np.abs(np.diff(accelerations, axis=1)).max(axis=0, initial=0.0)
+
+    def _retry(self, h: float, error: float | None, again: bool) -> float:
+        """The step after a rejected first step h: halved where it did not settle (error None)
+        or its error is not finite, else shrunk by the error; a stage scheme's rejected again at
+        least halved (REJECTED_AGAIN)."""
+        shrink = 0.5 if error is None or not np.isfinite(error) else self._shrink(error)
+        return h * (min(shrink, REJECTED_AGAIN) if again and self.stages > 1 else shrink)
 
     def _shrink(self, error: float) -> float:
         return _shrink(self.tolerance.local, error, self.exponent)
@@ -100,12 +110,8 @@ class AdaptiveRunner(StepRunner):
             too_large = [j for j in range(settled) if not errors[j] <= tol]
             first_bad = too_large[0] if too_large else settled
             if first_bad == 0:
-                # not settled on the window's first factors (made at this very step), or too large;
-                # a stage scheme's rejected again, at least halved: where its error falls slower
-                # than its order says (sdirk4's 4 is 1.5 while the four-bar's coupler buckles) the
-                # order's shrink, 3 % a try there, would spend every try
-                shrink = 0.5 if not too_large or not np.isfinite(errors[0]) else self._shrink(errors[0])
-                h = h_use * (min(shrink, REJECTED_AGAIN) if rejected and self.stages > 1 else shrink)
+                # not settled on the window's first factors (made at this very step), or too large
+                h = self._retry(h_use, errors[0] if too_large else None, rejected > 0)
                 continue
             entering = crossing(self, at, inputs, S, first_bad)
             if entering is not None:  # a damped contact begins within a step: step onto its onset

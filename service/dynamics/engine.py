@@ -20,6 +20,7 @@ import numpy as np
 from flexmech.models.graph.context import AssemblyContext
 from flexmech.models.graph.structure import Structure
 from flexmech.models.kernels.link_data import link_data
+from flexmech.service.dynamics.full_newton import newton
 from flexmech.service.dynamics.kernel_groups import padded
 from flexmech.service.dynamics.kernel_records import Factors
 from flexmech.service.dynamics.kernel_system import NEWTON_TOLERANCE, StepSystem
@@ -159,7 +160,7 @@ class Engine:
         affine, c_a1 = st._affine(state, h)
         _, _, _, qdd, lam = st.state.split(state)
         si = sys.step_inputs(affine, k, p, pdot, pddot, damping, mask, data)
-        Z, _, ev = sys.newton(ca.vertcat(qdd, lam), si, RESCUE_ITERATIONS)
+        Z, _, ev = newton(sys, ca.vertcat(qdd, lam), si, RESCUE_ITERATIONS)
         u = Z[: self.n_x]
         cX, cV, _ = affine
         new_state = ca.vertcat(cX + k[0] * u, cV + k[1] * u, c_a1 + fa * u, u, Z[self.n_x :])

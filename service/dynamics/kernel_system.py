@@ -69,6 +69,7 @@ class StepSystem:
         self.global_part = _gated(global_part(self.layout, moving, level))
         self.start_nodes = _gated(start_nodes(self.layout, moving))
         self.prescribed_angles: list[tuple[int | None, int | None]] = []  # (p index, moving k) of clamped starts
+        self.newton_iterations: dict[tuple, ca.Function] = {}  # by the shapes of a step's inputs (full_newton)
         self.groups = [group_index(self.layout, g, self.n_z, self._prescribed_angle) for g in self.layout.groups]
         self._global_indices()
 
@@ -242,18 +243,6 @@ class StepSystem:
         rhs = all_rows[self.newton_rows] + ca.mtimes(self.rhs_scatter, ca.vertcat(routed_v, border_v))
         norm = ca.mmax(ca.vertcat(*norms)) if norms else ca.MX(0)
         return Evaluation(ys, rhs, all_rows, routed_v, energies, global_energies, norm)
-
-    def newton(self, Z, si: StepInputs, iterations: int) -> tuple[ca.MX, Factors, Evaluation]:
-        """(Z, its factors, its evaluation) after `iterations` iterations of full Newton from Z,
-        the factors made again at every one (each a no-op once the residual is below the
-        tolerance): a step that modified Newton on older factors does not settle."""
-        one = ca.MX(1)
-        for _ in range(iterations):
-            factors = self.factorize(Z, si)
-            ev = self.evaluate(Z, one, si, factors.kept_reverse)
-            Z = ca.if_else(ev.norm > NEWTON_TOLERANCE, Z - self.solve(ev, one, factors), Z)
-        factors = self.factorize(Z, si)
-        return Z, factors, self.evaluate(Z, one, si, factors.kept_reverse)
 
     def factorize(self, Z, si: StepInputs) -> Factors:
         """The factors of the Newton system at Z."""

@@ -25,6 +25,7 @@ from functools import cached_property
 
 import casadi as ca
 
+from flexmech.service.dynamics.full_newton import newton
 from flexmech.service.dynamics.kernel_records import Evaluation, Factors
 from flexmech.service.dynamics.kernel_window import MAX_ITERATIONS, Stepper
 from flexmech.service.dynamics.schemes import StageScheme
@@ -93,7 +94,7 @@ class StageStepper(Stepper):
             known = [ca.vertcat(qdd, lam)] + stage_unknowns
             Z = sum(w * known[j] for j, w in predictor(sc.nodes, i))
             if full_newton:
-                Z, factors, ev = sys.newton(Z, si, full_newton)
+                Z, factors, ev = newton(sys, Z, si, full_newton)
                 used = ca.MX(full_newton)
             else:
                 if factors is None:
