@@ -56,8 +56,9 @@ class SimulateSpec(StrictModel):
         le=1e-1,
         allow_inf_nan=False,
         description="a target for the error of the named `outputs`, each relative to its largest excursion "
-        "from its start value: the run picks its links' element counts and its adaptive steps' tolerance, "
-        "checks them by one refinement of each, and reports each output's estimated error (link schemes)",
+        "from its start value: from the document's own, the run refines its links' elements and its steps (the "
+        "step, or the adaptive steps' tolerance) until the estimate (one refinement of each) is within it, and "
+        "reports each output's estimate (link schemes)",
     )
     rho_inf: float = Field(
         default=0.95,
