@@ -171,17 +171,22 @@ class AccuracyRuns:
         self.target = float(spec.accuracy or 0.0)
         self.log: list[dict] = []
         self.rounds: list[tuple[Plan, float, float]] = []  # each check's plan and worst parts
-        self._made: dict[tuple[Plan, int], tuple] = {}
+        self._made: dict[tuple, tuple] = {}  # (plan, every, shapes) -> (history, report)
+        self._mechanisms: dict[tuple, Mechanism] = {}  # by element counts: compiled once
 
-    def run(self, plan: Plan, role: str, every: int | None = None) -> tuple:
-        """One run of the plan (its fixed step, or its adaptive steps' tolerance), logged."""
-        every = every or self.spec.every
-        if (plan, every) in self._made:  # a check's refinement that became the run (every step kept)
-            return self._made[(plan, every)]
+    def run(self, plan: Plan, role: str, check: bool = False) -> tuple:
+        """One run of the plan (its fixed step, or its adaptive steps' tolerance), logged. A
+        check keeps every step (compared through a spline) and no shapes (nothing draws it)."""
+        kept = {"every": 1, "shapes": False} if check else {"every": self.spec.every, "shapes": self.spec.shapes}
+        key = (plan, kept["every"], kept["shapes"])
+        if key in self._made:  # a check's refinement that became the run
+            return self._made[key]
         steps = {"step": plan.step} if plan.tolerance is None else {"tolerance": plan.tolerance}
-        spec = self.spec.model_copy(update={"accuracy": None, **steps, "every": every})
+        spec = self.spec.model_copy(update={"accuracy": None, **steps, **kept})
+        if plan.intervals not in self._mechanisms:
+            self._mechanisms[plan.intervals] = mechanism_of(self.mech, plan)
         try:
-            history, report = self._run(mechanism_of(self.mech, plan), spec)
+            history, report = self._run(self._mechanisms[plan.intervals], spec)
         except MechanismError as exc:
             if exc.pointer != "/simulate/step" or not self.log:  # the first run's own limit: the document's error
                 raise
@@ -195,19 +200,19 @@ class AccuracyRuns:
                 "seconds": report["seconds"],
             }
         )
-        self._made[(plan, every)] = (history, report)
+        self._made[key] = (history, report)
         return history, report
 
     def checks(self, plan: Plan, report: dict) -> tuple[dict, dict, dict | None]:
         """(space part, time part, a failed refinement's report or None) of the run's error."""
         self._made = {}  # this round's refinements alone: a run's history is large
         time_plan, space_plan = plan.finer_time(), plan.finer_space(self.mech)
-        _, by_time = self.run(time_plan, time_plan.time_refinement(), every=1)
+        _, by_time = self.run(time_plan, time_plan.time_refinement(), check=True)
         if by_time["status"] != "finished":
             return {}, {}, by_time
         space = dict.fromkeys(self.names, 0.0)
         if space_plan is not None:
-            _, by_space = self.run(space_plan, f"elements x {SPACE_FACTOR}", every=1)
+            _, by_space = self.run(space_plan, f"elements x {SPACE_FACTOR}", check=True)
             if by_space["status"] != "finished":
                 return {}, {}, by_space
             space = differences(report, by_space, self.names)
