@@ -23,6 +23,7 @@ from flexmech.models.documents.optimize_spec import OptimizeSpec
 from flexmech.models.documents.reading import parse_json, parse_yaml
 from flexmech.models.documents.sections import Section
 from flexmech.models.documents.simulation_spec import SimulateSpec
+from flexmech.models.documents.tolerances import TolerancesSpec
 from flexmech.models.elements import FAMILIES
 from flexmech.models.elements.link_schema import SHAPE_TYPES
 from flexmech.models.errors import MechanismError, pointer_of
@@ -210,6 +211,9 @@ class MechanismDocument(StrictModel):
     inverse: InverseSpec | None = None
     optimize: OptimizeSpec | None = None
     simulate: SimulateSpec | None = Field(default=None, description="a time simulation (the simulate analysis)")
+    tolerances: TolerancesSpec | None = Field(
+        default=None, description="how the made part scatters, and the specs it must meet (the tolerance analysis)"
+    )
 
     @field_validator("impacts")
     @classmethod
