@@ -48,6 +48,7 @@ from flexmech.api.cli.quantities import exact_text, kind_of
 from flexmech.api.cli.record_tables import is_records, records_table
 from flexmech.api.cli.report_tables import print_status, print_stiffness
 from flexmech.api.cli.resonance_tables import resonance_tables
+from flexmech.api.cli.tolerance_tables import print_tolerance
 from flexmech.models import MechanismError
 from flexmech.service.analyses import Analysis, AnalysisRequest
 from flexmech.service.analyses.base import Analyses
@@ -239,9 +240,9 @@ def print_report(out: Console, report: dict) -> None:
     terms as `flexmech solve --stiffness` prints them, the resonances with their units; the rest
     is named as in --json."""
     print_status(out, report)
-    rest = []
+    rest, shown_already = [], print_tolerance(out, report)
     for key, value in report.items():
-        if key in SHOWN_ELSEWHERE or key.endswith(("units", "_unit")):
+        if key in SHOWN_ELSEWHERE or key.endswith(("units", "_unit")) or key in shown_already:
             continue
         if key == "stiffness" and isinstance(value, dict) and "K" in value:
             print_stiffness(out, value)

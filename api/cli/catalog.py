@@ -33,6 +33,7 @@ ANALYSIS_NAMES = (
     "simulate",
     "modes",
     "frequency_response",
+    "tolerance",
 )
 # ... and (summary, aliases) of each that has no command of its own: a command made from its options
 ANALYSIS_COMMANDS = {
@@ -57,6 +58,11 @@ ANALYSIS_COMMANDS = {
     "frequency_response": (
         "Amplitude and phase of outputs under a harmonic load over a frequency range, with resonance peaks",
         ("frf",),
+    ),
+    "tolerance": (
+        "How the document's tolerances scatter its responses: first order from exact sensitivities (each field's "
+        "share ranked), Monte Carlo of seeded samples, and the yield against the specs",
+        (),
     ),
 }
 

@@ -12,6 +12,7 @@ from flexmech.service.analyses.inverse import INVERSE
 from flexmech.service.analyses.linearization import LINEARIZATION
 from flexmech.service.analyses.modes import MODES
 from flexmech.service.analyses.simulate import SIMULATE
+from flexmech.service.analyses.tolerance import TOLERANCE
 from flexmech.service.analyses.trace import TRACE
 
 ANALYSES = Analyses(
@@ -25,6 +26,7 @@ ANALYSES = Analyses(
         SIMULATE,
         MODES,
         FREQUENCY_RESPONSE,
+        TOLERANCE,
     ]
 )
 

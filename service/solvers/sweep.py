@@ -106,7 +106,7 @@ def sweep(
 
 
 @lru_cache(maxsize=32)
-def _target_function(graphs: Graphs, parameter: int, output: int, n_free: int, n_params: int) -> ca.Function:
+def target_function(graphs: Graphs, parameter: int, output: int, n_free: int, n_params: int) -> ca.Function:
     """(x=[z; lambda], p, target) -> (G, dG/dx): equilibrium with parameter `parameter` set to
     lambda, and output `output` equal to target."""
     x = ca.SX.sym("x", n_free + 1)
@@ -144,7 +144,7 @@ def solve_for_target(
         )
     k = mech.parameter_index(path)
     m = names.index(output)
-    f = _target_function(mech.graphs, k, m, mech.n_free, len(mech.parameters))
+    f = target_function(mech.graphs, k, m, mech.n_free, len(mech.parameters))
     p = mech.p()
     check_constrained(mech, p)
     start = newton(mech, p, np.zeros(mech.n_free), options)

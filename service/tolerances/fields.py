@@ -136,8 +136,9 @@ def _leaders(spec: TolerancesSpec) -> dict[str, str]:
             )
         if spec.fields[other].kind != distribution.kind:
             raise MechanismError(
-                where, f"'{other}' has a {spec.fields[other].kind} scatter and this one a {distribution.kind}: "
-                "fields that move together need the same kind"
+                where,
+                f"'{other}' has a {spec.fields[other].kind} scatter and this one a {distribution.kind}: "
+                "fields that move together need the same kind",
             )
         leaders[path] = other
     return leaders
