@@ -106,6 +106,12 @@ def _optimization(mech: Mechanism) -> str | None:
     return _statics(mech)
 
 
+def _tolerances(mech: Mechanism) -> str | None:
+    if mech.document.tolerances is None:
+        return "the document has no tolerances section"
+    return _statics(mech)
+
+
 ANALYSIS_CHECKS: dict[str, Check] = {
     "equilibrium": _statics,
     "linearization": _statics,
@@ -116,6 +122,7 @@ ANALYSIS_CHECKS: dict[str, Check] = {
     "simulate": _simulate,
     "modes": _vibration,
     "frequency_response": _vibration,
+    "tolerance": _tolerances,
 }
 JOB_CHECKS: dict[str, Check] = {
     "sweep": _statics,

@@ -155,6 +155,15 @@ function exported(result) {
           { name: "Newton steps per call, worst measured", value: worst.equilibrium_warm, unit: "", note: `equilibrium from the last solution; time per call: ./bench of the archive` }];
 }
 
+// A tolerance analysis: the yield against the specs, and the scatter of the responses the specs
+// bound (else of the first ones).
+function tolerance(result) {
+  const found = result.yield, responses = Object.entries(result.responses || {}).sort(([, a], [, b]) => Boolean(b.spec) - Boolean(a.spec));
+  const items = found ? [{ name: "yield", value: 100 * found.monte_carlo, unit: "%", note: `of ${found.samples} samples, first order ${(100 * found.first_order).toFixed(1)} %` }] : [];
+  for (const [name, entry] of responses.slice(0, 2)) items.push({ name: `${name} standard deviation`, value: entry.first_order.std, unit: entry.unit, note: `nominal ${quantity(entry.nominal, entry.unit)}` });
+  return items;
+}
+
 const READERS = {
   "solve:equilibrium": equilibrium,
   "solve:linearization": equilibrium,
@@ -164,6 +173,7 @@ const READERS = {
   "solve:contact": (r) => [...contactItems(r.pairs, (r.units || {}).force), ...equilibrium(r)],
   "solve:modes": modes,
   "solve:frequency_response": frequencyResponse,
+  "solve:tolerance": tolerance,
   "solve:simulate": simulation,
   "job:simulation": simulation,
   "job:sweep": sweep,

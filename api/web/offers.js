@@ -10,7 +10,7 @@ export function whyNot(choice, offers) {
 
 // The first analysis of a document: its simulation (the simulate analysis for an impact
 // scheme, which takes milliseconds; a job for link dynamics, which takes seconds), its contact
-// state, its optimization, its modes (offered where it has mass), else its equilibrium.
+// state, its optimization, its tolerances, its modes (offered where it has mass), else its equilibrium.
 export function defaultChoice(open, doc) {
   const simulate = (doc && doc.simulate) || null;
   const impact = simulate && ["event_driven", "moreau"].includes(simulate.scheme);
@@ -18,6 +18,7 @@ export function defaultChoice(open, doc) {
   if (simulate && simulate.until) order.push(impact ? "solve:simulate" : "job:simulation");
   if (doc && doc.contacts && doc.contacts.pairs && Object.keys(doc.contacts.pairs).length) order.push("solve:contact");
   if (doc && doc.optimize) order.push("job:optimization");
+  if (doc && doc.tolerances) order.push("solve:tolerance");
   order.push("solve:modes", "solve:equilibrium");
   for (const id of order) {
     const found = open.find((c) => c.id === id);

@@ -52,6 +52,7 @@ export function renderTables(v) {
   const panel = $("panel-table");
   panel.replaceChildren();
   for (const table of v.tables) if (table && table.rows.length) panel.append(tableOf(table));
+  for (const chart of v.charts || []) panel.append(chart()); // an analysis' own figures (tolerances.js)
   if (v.summary.length) {
     const folded = document.createElement("details");
     folded.className = "diagnostics";

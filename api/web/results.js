@@ -5,6 +5,7 @@
 import { contactFrame } from "./contactframes.js";
 import { fieldName } from "./names.js";
 import { posesAtElementEnds } from "./scene.js";
+import { toleranceView } from "./tolerances.js";
 import { modeFrames, modesTable, recordsTable, responseSeries } from "./vibration.js";
 import { display, exactText, numberText } from "./display.js";
 
@@ -216,6 +217,7 @@ export function resultView(kind, result, drawing) {
     responseSeries(v, result);
     return v;
   }
+  if (result.analysis === "tolerance") return toleranceView(v, result);
   for (const [key, value] of Object.entries(result)) {  // an analysis' own lists of records (a plugin's too)
     if (Array.isArray(value) && value.length && value.every((row) => row && typeof row === "object" && !Array.isArray(row))) v.tables.push(recordsTable(key, value, result.units || {}));
   }

@@ -102,7 +102,11 @@ def test_every_example_shows_its_headline_with_units_above_the_fold(page, log):
         assert "undefined" not in shown and "NaN" not in shown, name
         assert not float_noise(shown), (name, float_noise(shown))
         seen[name] = (choice, items.first.text_content())
-        if name in ("gripper", "csfh_central_impact", "gripper_modes", "rod_free_vibration"):
+        if name == "gripper_tolerances":  # its charts: a histogram and a tornado per response
+            charts = page.evaluate("() => [...document.querySelectorAll('#panel-table svg')].map((s) => s.getAttribute('class'))")
+            assert charts.count("tornado") >= 2 and charts.count("line-plot") >= 2, charts
+            assert page.locator("#panel-table svg.tornado rect.tornado-bar").count() >= 2
+        if name in ("gripper", "csfh_central_impact", "gripper_modes", "rod_free_vibration", "gripper_tolerances"):
             screenshot(page, f"results-card-{name}")
         cancel_if_running(page)
     assert seen["gripper"][0] == "solve:equilibrium" and seen["gripper"][1].startswith("actuation force y77.03")
@@ -110,6 +114,7 @@ def test_every_example_shows_its_headline_with_units_above_the_fold(page, log):
     assert seen["rod_free_vibration"][0] == "job:simulation"
     assert seen["gripper_modes"][1].startswith("first frequency")
     assert seen["gripper_jaw_contact"][0] == "solve:contact"
+    assert seen["gripper_tolerances"][0] == "solve:tolerance" and seen["gripper_tolerances"][1].startswith("yield")
 
 
 def frame_loads(page, k: int) -> tuple[str, list[str]]:
