@@ -99,4 +99,3 @@ class TolerancesSpec(StrictModel):
     target: ToleranceTarget | None = Field(
         default=None, description="a target solved for in every sample (its field's value is a response)"
     )
-
