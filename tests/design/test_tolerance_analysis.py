@@ -152,3 +152,46 @@ def test_a_spec_on_an_unknown_response_names_it():
         tolerance(mech, samples=0)
     assert info.value.pointer == "/document/tolerances/specs/end_efector.x"
     assert "unknown response 'end_efector.x'" in info.value.problem
+
+
+def test_frequencies_scatter_as_their_exact_derivatives_say():
+    document = json.loads((EXAMPLES / "gripper_modes.json").read_text())
+    document["tolerances"] = {"fields": {H: {"sigma": "0.1 um"}}}
+    mech = flexmech.load(document)
+    found = run_analysis(mech, "tolerance", NewtonOptions(), {"of": "modes", "count": 2, "samples": 8, "seed": 1})
+    step = 2e-6
+    up, down = (
+        [
+            m["frequency"]
+            for m in flexmech.modes(mech.with_values({H: 0.005 + s}), count=2, shapes=False).report["modes"]
+        ]
+        for s in (step, -step)
+    )
+    for k in (1, 2):
+        by_differences = abs(up[k - 1] - down[k - 1]) / (2 * step) * SIGMA
+        entry = found["responses"][f"frequency.{k}"]
+        assert entry["unit"] == "Hz" and entry["first_order"]["std"] == pytest.approx(by_differences, rel=1e-4)
+    assert found["samples"] == 8 and found["unsolved_samples"] == 0
+
+
+def test_contact_forces_scatter_as_their_exact_derivatives_say():
+    """The jaw pressed onto its fixture, the fixture's place toleranced (0.05 mm): the normal
+    force's first order against central differences of contact solves."""
+    document = json.loads((EXAMPLES / "gripper_jaw_contact.json").read_text())
+    centre = "/contacts/objects/fixture/centre/0"
+    document["contacts"]["objects"]["fixture"]["centre"][0] = 67.4
+    document["tolerances"] = {"fields": {centre: {"sigma": 0.05}}}
+    mech = flexmech.load(document)
+    found = run_analysis(mech, "tolerance", NewtonOptions(), {"of": "contact", "samples": 10, "seed": 1})
+    force = "contacts.insertion.normal_force"
+
+    def normal_force(x: float) -> float:
+        report = run_analysis(mech.with_values({centre: x}), "contact", NewtonOptions())
+        return report["pairs"]["insertion"]["normal_force"]
+
+    step = 1e-3
+    by_differences = abs(normal_force(67.4 + step) - normal_force(67.4 - step)) / (2 * step) * 0.05
+    entry = found["responses"][force]
+    assert entry["nominal"] == pytest.approx(normal_force(67.4), rel=1e-6) and entry["nominal"] > 1.0
+    assert entry["first_order"]["std"] == pytest.approx(by_differences, rel=1e-3)
+    assert found["unsolved_samples"] == 0 and entry["monte_carlo"]["samples"] == 10
