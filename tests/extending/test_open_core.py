@@ -124,7 +124,7 @@ def test_an_unknown_analysis_names_the_field_and_the_choices(api_server):
     assert error["pointer"] == "/analysis"
     assert error["message"] == (
         "/analysis: unknown analysis 'simulation' (analyses: equilibrium, linearization, "
-        "trace, inverse, energy, contact, simulate, modes, frequency_response)"
+        "trace, inverse, energy, contact, simulate, modes, frequency_response, tolerance)"
     )
     schema = httpx.get(api_server.url + "/openapi.json").json()["components"]["schemas"]
     assert list(schema["SolveRequest"]["discriminator"]["mapping"]) == [
@@ -137,6 +137,7 @@ def test_an_unknown_analysis_names_the_field_and_the_choices(api_server):
         "simulate",
         "modes",
         "frequency_response",
+        "tolerance",
     ]
     assert schema["TraceSolve"]["properties"]["analysis"]["const"] == "trace"
     assert "trace" in schema["TraceSolve"]["properties"] and "trace" not in schema["EquilibriumSolve"]["properties"]
