@@ -57,7 +57,15 @@ def _tornado(ax, name: str, entry: dict[str, Any]) -> None:
     ax.barh(range(len(moves)), moves, color=["C0" if m >= 0 else "C1" for m in moves])
     ax.set_yticks(range(len(moves)), labels, fontsize="small")
     ax.axvline(0.0, color="k", linewidth=0.8)
+    reach = 1.35 * max((abs(m) for m in moves), default=1.0) or 1.0  # room for the shares' labels
+    ax.set_xlim(-reach if min(moves, default=0.0) < 0 else 0.0, reach if max(moves, default=0.0) > 0 else 0.0)
     unit = entry["unit"]
     ax.set_xlabel(f"{name} per standard deviation ({unit})" if unit else f"{name} per standard deviation")
     for k, c in enumerate(contributions):
-        ax.annotate(f"{100 * c['share']:.1f} %", (moves[k], k), fontsize="x-small", va="center")
+        ax.annotate(
+            f" {100 * c['share']:.1f} % ",
+            (moves[k], k),
+            fontsize="x-small",
+            va="center",
+            ha="left" if moves[k] >= 0 else "right",
+        )
