@@ -40,6 +40,17 @@ class DrawingRequest(DocumentRequest):
         return self
 
 
+class FabricationRequest(DocumentRequest):
+    """The fabricated outlines of every body and flexure (service.drawings.fabrication) as a DXF
+    (true arcs) or GDSII file (polygons within the chord error), in the document's length unit."""
+
+    format: Literal["dxf", "gds"] = Field("dxf", description="dxf (for the shop) or gds (for a mask)")
+    deformed: bool = Field(False, description="also the centre lines at the equilibrium under the document's loads")
+    chord_error: float = Field(
+        1e-4, gt=0, le=1, description="the farthest a polygon may leave a true arc (GDS, round corners), length unit"
+    )
+
+
 class DocumentText(BaseModel):
     """A document as text, read as JSON or YAML ("auto": JSON when it starts with '{')."""
 

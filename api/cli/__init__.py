@@ -39,6 +39,7 @@ from flexmech.api.cli import linearize  # noqa: F401
 from flexmech.api.cli import build  # noqa: F401
 from flexmech.api.cli import upgrade  # noqa: F401
 from flexmech.api.cli import export  # noqa: F401
+from flexmech.api.cli import drawing  # noqa: F401
 from flexmech.api.cli.leaving import main
 
 __all__ = ["app", "main"]

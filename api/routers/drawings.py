@@ -6,12 +6,12 @@ from __future__ import annotations
 
 from typing import Any
 
-from fastapi import APIRouter
+from fastapi import APIRouter, Response
 from fastapi.concurrency import run_in_threadpool
 
 from flexmech.api.deps import OwnerDep, ServicesDep
 from flexmech.api.documents import request_document
-from flexmech.api.drawing_schemas import DocumentText, DocumentUpgrade, DrawingRequest
+from flexmech.api.drawing_schemas import DocumentText, DocumentUpgrade, DrawingRequest, FabricationRequest
 from flexmech.api.parsed_route import ParsedBodyRoute
 from flexmech.api.responses import ERRORS
 from flexmech.models import MechanismError
@@ -66,6 +66,42 @@ async def draw(request: DrawingRequest, services: ServicesDep, _owner: OwnerDep)
     return await services.solver.call(
         _drawing, request, document, services.limits, time_limit=services.limits.solve_time_limit
     )
+
+
+def _fabrication(request: FabricationRequest, document: dict, limits: Limits) -> tuple[str, bytes]:
+    from flexmech.service.drawings.fabrication import fabrication
+    from flexmech.service.drawings.fabrication_files import dxf_bytes, file_stem, gds_bytes
+
+    mech = compile_request(document, request.model, request.overrides, limits)
+    drawn = fabrication(mech, request.deformed, request.chord_error)
+    data = dxf_bytes(drawn) if request.format == "dxf" else gds_bytes(drawn)
+    return f"{file_stem(mech.document.name)}.{request.format}", data
+
+
+@router.post(
+    "/drawings/fabrication",
+    operation_id="draw_for_fabrication",
+    response_class=Response,
+    responses={
+        200: {
+            "description": "The DXF or GDSII file, its name in Content-Disposition",
+            "content": {
+                "application/dxf": {},
+                "application/octet-stream": {"schema": {"type": "string", "format": "binary"}},
+            },
+        },
+        **ERRORS,
+    },
+    summary="The fabricated outlines of every body and flexure as a DXF or GDSII file (document length unit)",
+)
+async def draw_for_fabrication(request: FabricationRequest, services: ServicesDep, _owner: OwnerDep) -> Response:
+    """Layers bodies, flexures, anchors (and deformed); in GDS the layers 1 to 4 in that order."""
+    document = request_document(request, services)
+    name, data = await services.solver.call(
+        _fabrication, request, document, services.limits, time_limit=services.limits.solve_time_limit
+    )
+    media = "application/dxf" if request.format == "dxf" else "application/octet-stream"
+    return Response(data, media_type=media, headers={"Content-Disposition": f'attachment; filename="{name}"'})
 
 
 def _parsed(request: DocumentText) -> dict:

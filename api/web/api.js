@@ -43,10 +43,12 @@ async function call(method, path, body) {
   return data;
 }
 
-// A file the service sends (a job's archive): its bytes and the name it gives in Content-Disposition.
-export async function getFile(path) {
+// A file the service sends (a job's archive; a drawing for fabrication, asked by POST with a
+// body): its bytes and the name it gives in Content-Disposition.
+export async function getFile(path, body = null) {
   const headers = apiKey() ? { "X-API-Key": apiKey() } : {};
-  const response = await fetch(path, { headers });
+  if (body) headers["Content-Type"] = "application/json";
+  const response = await fetch(path, body ? { method: "POST", headers, body: JSON.stringify(body) } : { headers });
   if (!response.ok) {
     let message = `${response.status} ${response.statusText}`;
     try { message = (await response.json()).error.message || message; } catch { /* not JSON */ }

@@ -1,5 +1,6 @@
 // Downloads of what the page shows: the result as JSON, its series or table as CSV, and the
-// visible figure (drawing, curve or energies) as SVG or PNG. Files are made in the browser.
+// visible figure (drawing, curve or energies) as SVG or PNG, made in the browser; the document's
+// fabricated outlines as DXF or GDS, made by the service.
 
 import { getFile } from "./api.js";
 import { svgMarkup, svgToPngBlob } from "./plot.js";
@@ -38,6 +39,22 @@ export function wireDownloads(state) {
     const svg = visibleFigure();
     if (svg) save(await svgToPngBlob(svg), `${name()}.png`);
   });
+}
+
+// The open document's fabricated outlines as DXF or GDS (POST /v1/drawings/fabrication), with
+// the model and overrides the page runs with.
+export function wireFabrication(state, onProblem) {
+  for (const format of ["dxf", "gds"]) {
+    document.getElementById(`download-${format}`).addEventListener("click", async () => {
+      try {
+        const model = document.getElementById("model").value || undefined;
+        const file = await getFile("/v1/drawings/fabrication", { document: state.doc, model, overrides: state.overrides || {}, format });
+        save(file.blob, file.name);
+      } catch (problem) {
+        onProblem(problem.message);
+      }
+    });
+  }
 }
 
 // A job whose result is files (an export's C library): its archive, fetched with the API key.

@@ -14,7 +14,7 @@ import { fieldName } from "./names.js";
 import { wireModeRows } from "./vibration.js";
 import { drawScene } from "./scene.js";
 import { resetView } from "./zoom.js";
-import { offerArchive, wireDownloads } from "./downloads.js";
+import { offerArchive, wireDownloads, wireFabrication } from "./downloads.js";
 import { clearCard, showCard, statusStyle } from "./card.js";
 import { showRecentJobs } from "./recent.js";
 import { defaultChoice, whyNot } from "./offers.js";
@@ -410,6 +410,7 @@ function wire() {
   for (const id of ["curve-x", "curve-y"]) $(id).addEventListener("change", () => renderCurve(state.view));
   wireAnimation();
   wireDownloads(state);
+  wireFabrication(state, (message) => say("run-state", message, "error"));
   wireTabs(() => { renderCurve(state.view); renderEnergies(state.view); });
   wireCompare(() => state.view, () => renderCurve(state.view));
   wirePickers($("drawing"));

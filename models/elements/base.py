@@ -178,7 +178,8 @@ class ElementFamily(Protocol):
     impact_flexure, impact_constraint, impact_by_statics (models.impacts.families);
     stress_along(P, topology, outputs, points) -> array | None (the outer-fibre stress at each
     deformed centre-line sample of a solved state, nondimensional; P numeric Params, outputs its
-    own by short name: models.elements.fibre_stress)."""
+    own by short name: models.elements.fibre_stress); fabricated (attribute: "arc" or
+    "centre_line", how a fabrication drawing outlines its material: service.drawings.fabrication)."""
 
     type: str
     schema: builtins.type[TwoBodyElement] | None  # builtins': `type` is the family's name here

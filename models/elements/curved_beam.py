@@ -103,6 +103,7 @@ class ArcGeometry:
 class CurvedBeamFamily:
     type = "curved_beam"
     schema = CurvedBeam
+    fabricated = "arc"  # its material is an annular sector (service.drawings.fabrication)
 
     def discretization(self, el: CurvedBeam, model: str | None) -> Discretization | None:
         """The exact model is a link inside (by shooting or by elements); the others have no

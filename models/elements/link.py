@@ -133,6 +133,7 @@ class LinkFamily:
     schema = Link
     centre_line_sites = True  # contact sites lie on its centre line (models.contact)
     invertible = True  # the link inverse (models.beams.link_inverse) solves its shape by shooting
+    fabricated = "centre_line"  # its material is its centre line grown by +-h/2 (service.drawings.fabrication)
 
     def discretization(self, el: Link, model: str | None) -> Discretization:
         return beam_discretization(el)
