@@ -141,9 +141,14 @@ def responses_of(mech: Mechanism, scatter: Scatter, options: ToleranceOptions, n
     if target is not None:
         raise MechanismError("/tolerances/target", f"a target is solved for in statics only, not with of={options.of}")
     if options.of == "modes":
+        from flexmech.service.analyses.base import AnalysisRequest
+        from flexmech.service.analyses.modes import MODES
         from flexmech.service.tolerances.states import modes_responses
 
-        return modes_responses(mech, scatter, options.outputs, options.count, newton)
+        def run_modes(sample: Mechanism, settings: dict[str, Any]) -> dict[str, Any]:
+            return MODES.run(sample, AnalysisRequest(newton, settings))
+
+        return modes_responses(mech, scatter, options.outputs, options.count, run_modes)
     from flexmech.service.tolerances.states import contact_responses
 
     return contact_responses(mech, scatter, options.outputs, newton)

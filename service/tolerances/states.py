@@ -16,28 +16,28 @@ from flexmech.service.tolerances.responses import Responses
 
 
 def modes_responses(
-    mech: Mechanism, scatter: Scatter, outputs: list[str] | None, count: int, newton: NewtonOptions
+    mech: Mechanism,
+    scatter: Scatter,
+    outputs: list[str] | None,
+    count: int,
+    run_modes: Callable[[Mechanism, dict], dict],
 ) -> Responses:
-    """frequency.1 ... frequency.<count> (Hz) about the equilibrium under the document's loads."""
-    from flexmech.service.analyses import ANALYSES, AnalysisRequest
-
+    """frequency.1 ... frequency.<count> (Hz) about the equilibrium under the document's loads;
+    run_modes(mechanism, options) is the modes analysis' report (service.analyses.modes)."""
     every = [f"frequency.{k + 1}" for k in range(count)]
     names = every if outputs is None else outputs
     for k, name in enumerate(names):
         if name not in every:
             raise MechanismError(f"/outputs/{k}", f"unknown response '{name}' (with count {count}: {', '.join(every)})")
     rows = [every.index(name) for name in names]
-    modes = ANALYSES.named("modes")
-    nominal = modes.run(
-        mech, AnalysisRequest(newton, {"count": count, "shapes": False, "sensitivities": scatter.paths})
-    )
+    nominal = run_modes(mech, {"count": count, "shapes": False, "sensitivities": scatter.paths})
     if nominal["status"] != "converged":
         raise MechanismError("/document", f"the nominal design's modes: {nominal['status']}")
     found = [nominal["modes"][r] for r in rows]
     jacobian = np.array([[mode["sensitivities"][path] or np.nan for path in scatter.paths] for mode in found])
 
     def solve(sample: Mechanism) -> tuple[str, np.ndarray]:
-        report = modes.run(sample, AnalysisRequest(newton, {"count": count, "shapes": False}))
+        report = run_modes(sample, {"count": count, "shapes": False})
         frequencies = [report["modes"][r]["frequency"] if r < len(report["modes"]) else None for r in rows]
         return report["status"], np.array([np.nan if f is None else f for f in frequencies], dtype=float)
 
@@ -49,12 +49,12 @@ def modes_responses(
 def contact_responses(mech: Mechanism, scatter: Scatter, outputs: list[str] | None, newton: NewtonOptions) -> Responses:
     """A frictionless contact state's outputs (default: every pair's normal force, and the
     document's named outputs) under the document's loads."""
-    from flexmech.service.analyses.contact import problem_of
+    from flexmech.service.contact.problem import contact_problem
     from flexmech.service.contact.sensitivity import contact_sensitivities
     from flexmech.service.contact.solve import ContactOptions, solve_state
     from flexmech.service.tolerances.statics import default_outputs
 
-    problem = problem_of(mech)
+    problem = contact_problem(mech.structure)
     pairs = [f"contacts.{name}.normal_force" for name in mech.document.contacts.pairs] if mech.document.contacts else []
     names = [*pairs, *default_outputs(mech)] if outputs is None else outputs
     for k, name in enumerate(names):

@@ -103,7 +103,9 @@ def test_every_example_shows_its_headline_with_units_above_the_fold(page, log):
         assert not float_noise(shown), (name, float_noise(shown))
         seen[name] = (choice, items.first.text_content())
         if name == "gripper_tolerances":  # its charts: a histogram and a tornado per response
-            charts = page.evaluate("() => [...document.querySelectorAll('#panel-table svg')].map((s) => s.getAttribute('class'))")
+            charts = page.evaluate(
+                "() => [...document.querySelectorAll('#panel-table svg')].map((s) => s.getAttribute('class'))"
+            )
             assert charts.count("tornado") >= 2 and charts.count("line-plot") >= 2, charts
             assert page.locator("#panel-table svg.tornado rect.tornado-bar").count() >= 2
         if name in ("gripper", "csfh_central_impact", "gripper_modes", "rod_free_vibration", "gripper_tolerances"):
