@@ -20,9 +20,19 @@ class DesignVariable(StrictModel):
 
 
 class OptimizationObjective(StrictModel):
-    output: str = Field(description="an output name, as /v1/solve reports them (e.g. reactions.tip.Fy)")
+    output: str = Field(
+        description="an output name, as /v1/solve reports them (e.g. reactions.tip.Fy), or yield (the first-order "
+        "share of parts meeting the tolerances' specs)"
+    )
     case: str | None = Field(default=None, description="load case (required with more than one)")
     sense: Literal["minimize", "maximize"] = "minimize"
+    sigmas: float | None = Field(
+        default=None,
+        ge=0,
+        le=10,
+        description="robust: mean + k sigma (minimize) or mean - k sigma (maximize), first order over the "
+        "document's tolerances",
+    )
 
 
 class OptimizationConstraint(StrictModel):
@@ -33,6 +43,13 @@ class OptimizationConstraint(StrictModel):
     lower: float | None = None
     upper: float | None = None
     equals: float | None = None
+    sigmas: float | None = Field(
+        default=None,
+        ge=0,
+        le=10,
+        description="robust: mean + k sigma <= upper and mean - k sigma >= lower, first order over the document's "
+        "tolerances",
+    )
 
     @model_validator(mode="after")
     def _some_bound(self):

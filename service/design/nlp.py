@@ -25,6 +25,7 @@ import numpy as np
 
 from flexmech.models.graph.assembly import graphs_for
 from flexmech.service.design.problem import DesignProblem, OutputRef
+from flexmech.service.design.robust import first_order_yield, sigma
 from flexmech.service.solvers.ipopt import nlp_solver, solve
 
 
@@ -107,6 +108,11 @@ def _design_nlp(key: tuple) -> DesignNlp:
 
     def value(ref: OutputRef) -> ca.SX:
         c = ref.case
+        if ref.source == "yield":
+            return first_order_yield(structure, ref.robust, zs[c], ps[c])
+        if ref.sigmas:
+            mean, spread = sigma(structure, ref.robust, zs[c], ps[c], ref.index)
+            return mean + ref.sigmas * spread
         if ref.source == "frequency":
             return omegas[frequencies.index(ref)] / (2 * np.pi)
         if ref.source == "response":

@@ -334,7 +334,7 @@ def _multipliers(prepared: Prepared, lam_g: np.ndarray, lam_x: np.ndarray) -> di
 
 
 def constraint_report(prepared: Prepared, x: np.ndarray, lam_g: np.ndarray) -> list[dict]:
-    """Each constraint's value, bounds, violation and whether it is active (document units)."""
+    """Each constraint's value, bounds, violation, whether active (document units; a yield as itself, not the ln the NLP holds)."""
     problem, nlp = prepared.problem, prepared.nlp
     _, g = nlp.evaluate(x, prepared.P)
     g = np.asarray(g).ravel()[nlp.n_residuals :]
@@ -342,15 +342,15 @@ def constraint_report(prepared: Prepared, x: np.ndarray, lam_g: np.ndarray) -> l
     rows = []
     for k, c in enumerate(problem.constraints):
         value = g[k] * prepared.constraint_scales[k] / problem.output_factor(c.output)
-        violation = max(c.lower - value, value - c.upper, 0.0)
+        violation, shown = max(c.lower - value, value - c.upper, 0.0), np.exp if c.output.source == "yield" else float
         scaled_gap = min(abs(g[k] - prepared.lbg[nlp.n_residuals + k]), abs(g[k] - prepared.ubg[nlp.n_residuals + k]))
         rows.append(
             {
                 "output": c.output.name,
                 "case": problem.case_names[c.output.case],
-                "value": float(value),
-                "lower": c.lower if np.isfinite(c.lower) else None,
-                "upper": c.upper if np.isfinite(c.upper) else None,
+                "value": float(shown(value)),
+                "lower": float(shown(c.lower)) if np.isfinite(c.lower) else None,
+                "upper": float(shown(c.upper)) if np.isfinite(c.upper) else None,
                 "violation": float(violation),
                 "active": bool(scaled_gap <= ACTIVE_TOLERANCE),
                 "multiplier": float(multipliers[k]),

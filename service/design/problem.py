@@ -15,7 +15,7 @@ Every problem names its field under `pointer` (e.g. /optimize/design/0/lower).
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -23,6 +23,7 @@ from flexmech.models import Mechanism, MechanismError
 from flexmech.models.documents.optimize_spec import OptimizeSpec
 from flexmech.models.graph.structure import COORDINATES
 from flexmech.service.contact.outputs import PAIR_OUTPUTS
+from flexmech.service.design.robust import Robustness, robustness
 
 STIFFNESS_PREFIX = "stiffness."
 FREQUENCY_PREFIX = "frequency."
@@ -42,6 +43,8 @@ class OutputRef:
     input: int = -1  # a response's load parameter
     frequency: float = 0.0  # a response's frequency (Hz)
     unit: str = ""  # a response's unit (its value is in it: no kind converts it)
+    sigmas: float = 0.0  # robust: mean + sigmas * sigma (signed), first order (service.design.robust)
+    robust: Robustness | None = None  # the scatter (and, for the yield, the specs) it needs
 
 
 @dataclass(frozen=True)
@@ -101,18 +104,11 @@ def design_problem(mech: Mechanism, spec: OptimizeSpec, pointer: str = "/optimiz
         start.append(value)
 
     case_names, case_p = _cases(mech, spec, pointer, set(paths))
-    objective = _output(mech, spec.objective.output, spec.objective.case, case_names, f"{pointer}/objective")
-    constraints = []
-    for k, con in enumerate(spec.constraints):
-        here = f"{pointer}/constraints/{k}"
-        ref = _output(mech, con.output, con.case, case_names, here)
-        lo = con.equals if con.equals is not None else con.lower
-        hi = con.equals if con.equals is not None else con.upper
-        lo = -np.inf if lo is None else float(lo)
-        hi = np.inf if hi is None else float(hi)
-        if lo > hi:
-            raise MechanismError(f"{here}/lower", f"lower bound {lo:g} is above the upper bound {hi:g}")
-        constraints.append(Bounded(ref, lo, hi, here))
+    here = f"{pointer}/objective"
+    objective = _output(mech, spec.objective.output, spec.objective.case, case_names, here)
+    sign = 1.0 if spec.objective.sense == "minimize" else -1.0
+    objective = _robust(mech, objective, sign * (spec.objective.sigmas or 0.0), here)
+    constraints = _constraints(mech, spec, case_names, pointer)
     return DesignProblem(
         mech,
         spec,
@@ -126,9 +122,48 @@ def design_problem(mech: Mechanism, spec: OptimizeSpec, pointer: str = "/optimiz
         case_names,
         case_p,
         objective,
-        1.0 if spec.objective.sense == "minimize" else -1.0,
+        sign,
         tuple(constraints),
     )
+
+
+def _constraints(mech: Mechanism, spec: OptimizeSpec, case_names: tuple[str, ...], pointer: str) -> list[Bounded]:
+    """The bounded outputs: a robust one (sigmas) bounds mean + k sigma above and mean - k sigma
+    below, a row each; a yield's bounds are on its logarithm, which the NLP holds."""
+    constraints: list[Bounded] = []
+    for k, con in enumerate(spec.constraints):
+        here = f"{pointer}/constraints/{k}"
+        ref = _output(mech, con.output, con.case, case_names, here)
+        lo = con.equals if con.equals is not None else con.lower
+        hi = con.equals if con.equals is not None else con.upper
+        lo = -np.inf if lo is None else float(lo)
+        hi = np.inf if hi is None else float(hi)
+        if lo > hi:
+            raise MechanismError(f"{here}/lower", f"lower bound {lo:g} is above the upper bound {hi:g}")
+        if ref.source == "yield":  # the NLP bounds its logarithm (service.design.robust)
+            constraints.append(Bounded(ref, *(np.log(b) if b > 0 else -np.inf for b in (lo, hi)), here))
+            continue
+        if not con.sigmas:
+            constraints.append(Bounded(ref, lo, hi, here))
+            continue
+        if con.equals is not None:
+            raise MechanismError(f"{here}/sigmas", "a scattered output cannot equal a value: give lower and/or upper")
+        for bound, k_sign in ((hi, 1.0), (lo, -1.0)):  # mean + k sigma <= upper, mean - k sigma >= lower
+            if np.isfinite(bound):
+                one = _robust(mech, ref, k_sign * con.sigmas, here)
+                constraints.append(
+                    Bounded(one, bound if k_sign < 0 else -np.inf, bound if k_sign > 0 else np.inf, here)
+                )
+    return constraints
+
+
+def _robust(mech: Mechanism, ref: OutputRef, sigmas: float, here: str) -> OutputRef:
+    """The output as mean + sigmas * sigma (first order) when sigmas is not zero."""
+    if not sigmas:
+        return ref
+    if ref.source != "output":
+        raise MechanismError(f"{here}/sigmas", f"mean + k sigma is given for the solve's outputs, not for '{ref.name}'")
+    return replace(ref, sigmas=sigmas, robust=robustness(mech, f"{here}/sigmas"))
 
 
 def _typical(value: float, lo: float, hi: float) -> float:
@@ -195,6 +230,10 @@ def _output(mech: Mechanism, name: str, case: str | None, case_names: tuple[str,
         pair, _, quantity = name[len("contacts.") :].rpartition(".")
         if pair in [p.name for p in mech.structure.contacts.pairs] and quantity in kinds:
             return OutputRef(name, c, "contact", 0, kinds[quantity])
+    if name == "yield":
+        return OutputRef(
+            name, c, "yield", 0, "dimensionless", robust=robustness(mech, f"{here}/output", with_specs=True)
+        )
     if name.startswith("/"):
         try:
             k = mech.parameter_index(name)
