@@ -9,13 +9,19 @@ length unit (service.drawings.fabrication_files writes them).
   closed across its ends; the centre line sampled as the drawing samples it, its largest chord
   deviation reported.
 - A body: a document gives no body outline, so the drawing makes one: the convex hull of its
-  reference point and the points its flexures, links and point outputs attach at, grown by
-  MARGIN_WIDTHS times the widest section attached to it (at least MARGIN_SPAN of the drawing's
-  extent); round corners as polygons within the chord error. A fixed body is on the anchors layer.
-- Springs, pins and sliders are no material: they are not drawn.
+  reference point, the points its flexures, links and point outputs attach at and the closed
+  contact outlines it carries (a jaw polygon, a pin's circle, a hole: the material around it;
+  the hole itself is not cut), grown by MARGIN_WIDTHS times the widest section attached to it
+  (at least MARGIN_SPAN of the drawing's extent); round corners as polygons within the chord
+  error. A fixed body is on the anchors layer.
+- Springs, pins, sliders and contact objects on no body are no material: they are not drawn.
 The layers: bodies, flexures (curved beams and links), anchors, and deformed (the centre lines at
-the equilibrium under the document's loads, when asked). Names in the document are never layer or
-block names: they are data, and stay out of the files' structure."""
+the equilibrium under the document's loads, when asked). Names in the document are never layer
+or block names: they are data, and stay out of the files' structure.
+
+The work is costed before a vertex is made (service.drawings.fabrication_costs): at most 8190
+vertices in an outline (GDSII's most in a boundary) and 200 000 in all, arcs as GDS polygons; the
+GDS grid; a chord error that needs more is refused with one that fits."""
 
 from __future__ import annotations
 
@@ -27,6 +33,8 @@ import numpy as np
 from flexmech.models import Mechanism, MechanismError
 from flexmech.models.elements import FAMILIES
 from flexmech.service.drawings.drawing import mechanism_drawing
+from flexmech.service.drawings.fabrication_costs import check_costs, gds_grid
+from flexmech.service.drawings.fabrication_geometry import convex_hull, grown_hull
 
 LAYERS = ("bodies", "flexures", "anchors", "deformed")
 CHORD_ERROR = 1e-4  # of the length unit: the default distance a polygon may leave a true arc
@@ -41,6 +49,7 @@ class Outline:
 
     layer: str
     kind: str  # curved_beam, link, body, deformed
+    pointer: str  # of the element or body it draws: where a refusal points
     points: np.ndarray  # (n, 2)
     bulges: np.ndarray  # (n,)
     closed: bool = True
@@ -53,6 +62,7 @@ class Fabrication:
     chord_error: float
     outlines: list[Outline]
     link_chord_error: float  # the largest deviation of a link's sampled centre line from its chords
+    grid: float  # the GDS grid (database unit), length unit: gds_grid
 
     def on(self, layer: str) -> list[Outline]:
         return [o for o in self.outlines if o.layer == layer]
@@ -60,10 +70,29 @@ class Fabrication:
 
 def fabrication(mech: Mechanism, deformed: bool = False, chord_error: float = CHORD_ERROR) -> Fabrication:
     """The fabricated outlines of `mech` (its overrides applied); with `deformed`, also the centre
-    lines at the equilibrium under the document's loads (MechanismError when it does not solve)."""
-    if not chord_error > 0:
-        raise MechanismError("/chord_error", f"must be positive, got {chord_error:g}")
+    lines at the equilibrium under the document's loads (MechanismError when it does not solve).
+    A MechanismError at /chord_error when the outlines would need too many vertices or a finer
+    grid than GDSII holds (service.drawings.fabrication_costs), counted before they are made."""
+    if not (chord_error > 0 and math.isfinite(chord_error)):
+        raise MechanismError("/chord_error", f"must be a positive number, got {chord_error:g}")
+    unit = mech.doc_unit("length")
     drawing = mechanism_drawing(mech)
+    outlines, widths, worst = _flexures(mech, drawing)
+    hulls = _body_hulls(drawing, widths)
+    far = max([_farthest(o) for o in outlines] + [np.max(np.abs(h)) + m for h, m, _ in hulls.values()])
+    grid = gds_grid(far, chord_error, unit)
+    check_costs(outlines, [(h, m) for h, m, _ in hulls.values()], chord_error, far, unit)
+    for body, (hull, margin, fixed) in hulls.items():
+        loop = grown_hull(hull, margin, chord_error - grid)
+        outlines.append(Outline("anchors" if fixed else "bodies", "body", f"/bodies/{body}", loop, np.zeros(len(loop))))
+    if deformed:
+        outlines += _deformed(mech)
+    return Fabrication(unit, chord_error, outlines, worst, grid)
+
+
+def _flexures(mech: Mechanism, drawing: dict) -> tuple[list[Outline], dict[str, float], float]:
+    """The outline of every curved beam and link; per body the widest section attached to it;
+    the largest deviation of a link's samples from its centre line."""
     outlines, widths, worst = [], {}, 0.0
     points_of = {e["name"]: np.array(e["points"]) for e in drawing["elements"]}
     for name, element in mech.document.elements.items():
@@ -74,22 +103,21 @@ def fabrication(mech: Mechanism, deformed: bool = False, chord_error: float = CH
         elif drawn_as == "centre_line":
             h0, h1 = _widths(mech, element.section, f"/elements/{name}/section")
             h_end = h0 if h1 is None else h1
-            outline, deviation = _link(points_of[name], h0, h_end)
+            outline, deviation = _link(points_of[name], h0, h_end, f"/elements/{name}")
             outlines.append(outline)
             worst, h = max(worst, deviation), max(h0, h_end)
         else:
             continue
         for body in (element.from_, element.to):
             widths[body] = max(widths.get(body, 0.0), h)
-    span = _span(drawing)
-    for body, data in drawing["bodies"].items():
-        margin = max(MARGIN_WIDTHS * widths.get(body, 0.0), MARGIN_SPAN * span)
-        hull = [data["reference"], *data["skeleton"]]
-        layer = "anchors" if data["fixed"] else "bodies"
-        outlines.append(Outline(layer, "body", *_grown_hull(np.array(hull), margin, chord_error)))
-    if deformed:
-        outlines += _deformed(mech)
-    return Fabrication(mech.doc_unit("length"), chord_error, outlines, worst)
+    return outlines, widths, worst
+
+
+def _farthest(outline: Outline) -> float:
+    """The largest |x| or |y| the outline reaches (its arcs' too)."""
+    reach = [float(np.max(np.abs(outline.points)))]
+    reach += [max(abs(cx), abs(cy)) + r for cx, cy, r, _, _ in outline.arcs]
+    return max(reach)
 
 
 def _width(mech: Mechanism, section: str, pointer: str) -> float:
@@ -133,12 +161,11 @@ def _curved_beam(mech: Mechanism, name: str, element, h: float) -> Outline:
     points = np.array([at(outer, start), at(outer, end), at(inner, end), at(inner, start)])
     bulges = np.array([sign * bulge, 0.0, -sign * bulge, 0.0])
     low, high = (start, end) if sign > 0 else (end, start)
-    return Outline(
-        "flexures", "curved_beam", points, bulges, True, [(cx, cy, outer, low, high), (cx, cy, inner, low, high)]
-    )
+    arcs = [(cx, cy, outer, low, high), (cx, cy, inner, low, high)]
+    return Outline("flexures", "curved_beam", base, points, bulges, True, arcs)
 
 
-def _link(points: np.ndarray, h0: float, h1: float) -> tuple[Outline, float]:
+def _link(points: np.ndarray, h0: float, h1: float, pointer: str) -> tuple[Outline, float]:
     """The centre line's samples offset by half the width (linear from h0 to h1 along the length)."""
     steps = np.diff(points, axis=0)
     lengths = np.hypot(*steps.T)
@@ -152,65 +179,25 @@ def _link(points: np.ndarray, h0: float, h1: float) -> tuple[Outline, float]:
     loop = np.vstack([points + half * normals, (points - half * normals)[::-1]])
     turns = np.abs(np.diff(np.unwrap(np.arctan2(steps[:, 1], steps[:, 0])))) if len(steps) > 1 else np.zeros(1)
     deviation = float(np.max(lengths[:-1] * turns / 8.0, initial=0.0))  # sagitta of a segment on a circle
-    return Outline("flexures", "link", loop, np.zeros(len(loop))), deviation
+    return Outline("flexures", "link", pointer, loop, np.zeros(len(loop))), deviation
 
 
-def _grown_hull(points: np.ndarray, margin: float, chord_error: float) -> tuple[np.ndarray, np.ndarray]:
-    """The convex hull of `points` offset by `margin`: straight edges and round corners, the
-    corners as polygons whose chords stay within chord_error of the true circle."""
-    hull = _convex_hull(points)
-    step = 2 * math.acos(max(-1.0, 1 - chord_error / margin)) if chord_error < margin else math.pi / 2
-    out = []
-    n = len(hull)
-    for k in range(n):
-        before, here, after = hull[k - 1], hull[k], hull[(k + 1) % n]
-        a0 = _outward(before, here) if n > 1 else 0.0
-        a1 = _outward(here, after) if n > 1 else 2 * math.pi
-        a1 = a1 if a1 >= a0 else a1 + 2 * math.pi
-        count = max(1, math.ceil((a1 - a0) / step)) if n > 1 else max(8, math.ceil(2 * math.pi / step))
-        angles = np.linspace(a0, a1, count + 1)[: None if n > 1 else -1]
-        axes = np.pi / 2 * np.arange(math.ceil(a0 / (np.pi / 2)), math.floor(a1 / (np.pi / 2)) + 1)
-        axes = axes[axes < a1 - 1e-12] if n == 1 else axes  # a whole circle: 2 pi is its start again
-        for angle in np.unique(np.round(np.concatenate([angles, axes]), 12)):  # the axis directions too: an exact box
-            out.append(here + margin * np.array([math.cos(angle), math.sin(angle)]))
-    loop = np.array(out)
-    return loop, np.zeros(len(loop))
-
-
-def _outward(a: np.ndarray, b: np.ndarray) -> float:
-    """The direction of the outward normal of the counter-clockwise edge a -> b."""
-    d = b - a
-    return math.atan2(-d[0], d[1])
-
-
-def _convex_hull(points: np.ndarray) -> np.ndarray:
-    """Counter-clockwise hull (Andrew's monotone chain), duplicates dropped."""
-    unique = sorted({(round(float(x), 12), round(float(y), 12)) for x, y in points})
-    if len(unique) <= 2:
-        return np.array(unique)
-
-    def half(sequence):
-        chain: list = []
-        for p in sequence:
-            while len(chain) >= 2 and _cross(chain[-2], chain[-1], p) <= 0:
-                chain.pop()
-            chain.append(p)
-        return chain
-
-    lower, upper = half(unique), half(reversed(unique))
-    return np.array(lower[:-1] + upper[:-1])
-
-
-def _cross(o, a, b) -> float:
-    return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
-
-
-def _span(drawing: dict) -> float:
-    points = [p for e in drawing["elements"] for p in e["points"]] + [
-        b["reference"] for b in drawing["bodies"].values()
-    ]
-    array = np.array(points)
-    return float(np.max(array.max(axis=0) - array.min(axis=0))) if len(array) else 1.0
+def _body_hulls(drawing: dict, widths: dict[str, float]) -> dict[str, tuple[np.ndarray, float, bool]]:
+    """Per body: the convex hull of its reference point, skeleton and closed carried outlines, the
+    margin it is grown by, and whether it is fixed."""
+    carried: dict[str, list] = {}
+    for outline in drawing["outlines"]:
+        if outline.get("body") is not None and outline.get("closed"):
+            carried.setdefault(outline["body"], []).extend(outline["points"])
+    every = [p for e in drawing["elements"] for p in e["points"]] + [p for ps in carried.values() for p in ps]
+    every += [b["reference"] for b in drawing["bodies"].values()]
+    span = float(np.max(np.ptp(np.array(every), axis=0)))
+    hulls = {}
+    for body, data in drawing["bodies"].items():
+        margin = max(MARGIN_WIDTHS * widths.get(body, 0.0), MARGIN_SPAN * span) or 1.0  # 1: a drawing of no size
+        points = np.array([data["reference"], *data["skeleton"], *carried.get(body, [])])
+        hulls[body] = (convex_hull(points), margin, data["fixed"])
+    return hulls
 
 
 def _deformed(mech: Mechanism) -> list[Outline]:
@@ -220,4 +207,7 @@ def _deformed(mech: Mechanism) -> list[Outline]:
     if not state.converged:
         raise MechanismError("/deformed", f"the equilibrium under the document's loads did not solve: {state.status}")
     lines = mechanism_drawing(mech, state.z)["deformed"]["elements"]
-    return [Outline("deformed", "deformed", np.array(line), np.zeros(len(line)), False) for line in lines.values()]
+    return [
+        Outline("deformed", "deformed", f"/elements/{name}", np.array(line), np.zeros(len(line)), False)
+        for name, line in lines.items()
+    ]

@@ -1,14 +1,16 @@
 """A mechanism's fabricated outlines (service.drawings.fabrication) as files: DXF by ezdxf (closed
 LWPOLYLINEs, the curved beams' arcs as bulges: true arcs) and GDSII by gdstk (polygons; arcs
 within the chord error). Coordinates in the document's length unit: DXF's $INSUNITS names it where
-DXF has a code for it, GDS's library unit is it in metres. Layer names are fixed (LAYERS); GDS
-layers are their numbers there, 1 to 4. Nothing of the document but its numbers enters a file."""
+DXF has a code for its size, GDS's library unit is it in metres and its database unit the grid
+(service.drawings.fabrication_costs). Layer names are fixed (LAYERS); GDS layers are their
+numbers there, 1 to 4. Nothing of the document but its numbers enters a file; the file name a
+service gives is the document's name through the one file-name mangling
+(service.export.encoders.c_identifier)."""
 
 from __future__ import annotations
 
 import io
 import math
-import re
 import tempfile
 from pathlib import Path
 
@@ -16,25 +18,53 @@ import numpy as np
 
 from flexmech.models.units import unit_factor
 from flexmech.service.drawings.fabrication import LAYERS, Fabrication, Outline
+from flexmech.service.drawings.fabrication_costs import MAX_OUTLINE_POINTS
+from flexmech.service.drawings.fabrication_geometry import arc_points
+from flexmech.service.export.encoders import c_identifier
 
 GDS_LAYERS = {name: k + 1 for k, name in enumerate(LAYERS)}  # bodies 1, flexures 2, anchors 3, deformed 4
 CELL = "MECHANISM"
-MAX_POINTS = 8190  # GDSII's most vertices in one boundary
-_INSUNITS = {"in": 1, "ft": 2, "mm": 4, "cm": 5, "m": 6, "km": 7, "um": 13, "nm": 12}
+MAX_STEM = 60  # characters of a file name before its extension
+# DXF's $INSUNITS codes by the unit's size in metres (0, none of these: unitless)
+_INSUNITS = {
+    0.0254: 1,  # inch
+    0.3048: 2,  # foot
+    1609.344: 3,  # mile
+    1e-3: 4,
+    1e-2: 5,
+    1.0: 6,
+    1e3: 7,
+    2.54e-8: 8,  # microinch
+    2.54e-5: 9,  # mil
+    0.9144: 10,  # yard
+    1e-10: 11,  # angstrom
+    1e-9: 12,
+    1e-6: 13,
+    0.1: 14,
+    10.0: 15,
+    100.0: 16,
+}
 
 
 def file_stem(name: str) -> str:
-    """A file name from a document's name: letters, digits, '-', '_' and '.' only (the rest '_'),
-    at most 60 characters, never empty or hidden."""
-    stem = re.sub(r"[^A-Za-z0-9._-]+", "_", name).strip("._")[:60]
-    return stem or "mechanism"
+    """A file name (before its extension) from a document's name: the one file-name mangling,
+    lower-case ASCII letters, digits and single underscores, at most MAX_STEM characters;
+    "mechanism" for a name with no ASCII letter or digit."""
+    stem = c_identifier(name)[:MAX_STEM].rstrip("_")
+    return stem if any(ch.isalnum() for ch in name if ch.isascii()) else "mechanism"
+
+
+def insunits(unit: str) -> int:
+    """DXF's $INSUNITS code of a length unit (0: unitless, when DXF has no code for its size)."""
+    metres = unit_factor(unit, "length", "/units/length")
+    return next((code for size, code in _INSUNITS.items() if math.isclose(size, metres, rel_tol=1e-12)), 0)
 
 
 def dxf_bytes(drawn: Fabrication) -> bytes:
     import ezdxf
 
     doc = ezdxf.new("R2010")
-    doc.header["$INSUNITS"] = _INSUNITS.get(drawn.unit.strip(), 0)  # 0: unitless (the unit is in the notes)
+    doc.header["$INSUNITS"] = insunits(drawn.unit)
     doc.header["$MEASUREMENT"] = 1
     for k, name in enumerate(LAYERS):
         doc.layers.add(name, color=k + 1)
@@ -51,47 +81,31 @@ def gds_bytes(drawn: Fabrication) -> bytes:
     import gdstk
 
     unit = unit_factor(drawn.unit, "length", "/units/length")
-    library = gdstk.Library("FLEXMECH", unit=unit, precision=unit * min(1e-6, drawn.chord_error / 100))
+    library = gdstk.Library("FLEXMECH", unit=unit, precision=unit * drawn.grid)
     cell = library.new_cell(CELL)
     for outline in drawn.outlines:
-        points = polygon(outline, drawn.chord_error)
+        points = polygon(outline, drawn.chord_error - drawn.grid)  # rounded to the grid: within the chord error
         layer = GDS_LAYERS[outline.layer]
         if outline.closed:
             cell.add(gdstk.Polygon(points, layer=layer))
-        else:  # a deformed centre line: a path of no width is no mask shape, a thin one is
-            cell.add(gdstk.FlexPath(points, drawn.chord_error * 10, layer=layer))
+        else:  # a deformed centre line: a GDSII PATH of width 0, a line and no mask shape
+            cell.add(gdstk.FlexPath(points, 0, simple_path=True, layer=layer))
     with tempfile.TemporaryDirectory(prefix="flexmech-gds-") as folder:
         path = Path(folder) / "drawing.gds"
-        library.write_gds(path, max_points=MAX_POINTS)  # more would split an outline in two
+        library.write_gds(path, max_points=MAX_OUTLINE_POINTS)  # fabrication() allows no more in an outline
         return path.read_bytes()
 
 
-def polygon(outline: Outline, chord_error: float) -> np.ndarray:
+def polygon(outline: Outline, tolerance: float) -> np.ndarray:
     """The outline's vertices with every bulged segment replaced by points on its arc, so that no
-    chord leaves the arc by more than chord_error."""
+    chord leaves the arc by more than tolerance."""
     out = []
     n = len(outline.points)
     for k in range(n if outline.closed else n - 1):
         a, b, bulge = outline.points[k], outline.points[(k + 1) % n], outline.bulges[k]
         out.append(a)
         if bulge:
-            out.extend(_arc_points(a, b, bulge, chord_error))
+            out.extend(arc_points(a, b, bulge, tolerance))
     if not outline.closed:
         out.append(outline.points[-1])
     return np.array(out)
-
-
-def _arc_points(a: np.ndarray, b: np.ndarray, bulge: float, chord_error: float) -> list[np.ndarray]:
-    """Points strictly between a and b on the arc of this bulge."""
-    theta = 4.0 * math.atan(bulge)  # included angle, signed (positive: counter-clockwise)
-    chord = float(np.hypot(*(b - a)))
-    radius = chord / (2.0 * abs(math.sin(theta / 2.0)))
-    middle, normal = (a + b) / 2.0, np.array([-(b - a)[1], (b - a)[0]]) / chord
-    centre = middle + normal * (chord / 2.0) / math.tan(theta / 2.0)  # left of a -> b for a ccw arc under 180 deg
-    start = math.atan2(*(a - centre)[::-1])
-    step = 2 * math.acos(max(-1.0, 1 - chord_error / radius)) if chord_error < radius else math.pi / 4
-    count = max(2, math.ceil(abs(theta) / step))
-    return [
-        centre + radius * np.array([math.cos(start + theta * j / count), math.sin(start + theta * j / count)])
-        for j in range(1, count)
-    ]

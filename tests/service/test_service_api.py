@@ -176,6 +176,7 @@ def test_openapi_operation_ids_are_stable(api_server):
         "create_export",
         "create_analysis_job",
         "draw",
+        "draw_for_fabrication",
         "parse_document",
         "upgrade_document",
         "list_jobs",
