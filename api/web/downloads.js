@@ -42,13 +42,14 @@ export function wireDownloads(state) {
 }
 
 // The open document's fabricated outlines as DXF or GDS (POST /v1/drawings/fabrication), with
-// the model and overrides the page runs with.
+// the model and overrides the page runs with, and an optimization's design once it shows one.
 export function wireFabrication(state, onProblem) {
   for (const format of ["dxf", "gds"]) {
     document.getElementById(`download-${format}`).addEventListener("click", async () => {
       try {
         const model = document.getElementById("model").value || undefined;
-        const file = await getFile("/v1/drawings/fabrication", { document: state.doc, model, overrides: state.overrides || {}, format });
+        const overrides = { ...(state.overrides || {}), ...(state.design || {}) };
+        const file = await getFile("/v1/drawings/fabrication", { document: state.doc, model, overrides, format });
         save(file.blob, file.name);
       } catch (problem) {
         onProblem(problem.message);

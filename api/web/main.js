@@ -152,6 +152,8 @@ function newDocument() {
   $("job").hidden = true;
   state.jobId = null;
   state.opened += 1;
+  state.overrides = {}; // the last document's run values are not this one's
+  state.design = null;
   resetView($("drawing")); // the whole new mechanism, not the last one's zoom
 }
 
@@ -255,6 +257,7 @@ async function showJobResult(id, status) {
   const answer = await fullResult(id);
   const view = jobView(status.kind, answer.result, state.drawing);
   showView(view, answer.result);
+  state.design = view.design || null; // the fabrication drawings draw the optimum shown
   if (view.design && state.doc) await draw({ overrides: view.design }); // the optimum, deformed
   if (status.kind === "sweep") await sweepFrames(answer.result);
   showCard(`job:${status.kind}`, `${status.kind.replace(/_/g, " ")} job`, status.status, answer.result, status.error || "");
@@ -314,6 +317,7 @@ async function run() {
     const choice = currentChoice();
     const request = buildRequest(choice, $("options"), state.doc, $("model").value, extra);
     state.overrides = request.overrides || {};
+    state.design = null; // an optimum found before is not this run's
     clearResults("Running: the outputs show when the first result comes.");
     $("job").hidden = true; // an earlier job's progress is not this run's
     state.running = { source: choice.kind === "solve" ? `solve:${choice.analysis}` : `job:${choice.job}`, title: choice.label };

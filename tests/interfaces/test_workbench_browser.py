@@ -5,9 +5,11 @@ request of the page may leave the machine, and no page may log an error or a war
 
 from __future__ import annotations
 
+import io
 import json
 import re
 
+import ezdxf
 import pytest
 from browser import screenshot
 from conftest import ACTUATION, EXAMPLES
@@ -320,6 +322,11 @@ def test_an_optimization_shows_its_design_and_draws_the_optimum(page):
     start, optimum = (float(row.nth(k).get_attribute("title")) for k in (0, 1))
     assert start == pytest.approx(0.005) and optimum > start  # thicker flexures than the start
     page.wait_for_function("() => document.getElementById('drawing-caption').textContent.startsWith('Deformed')")
+    with page.expect_download() as info:  # the DXF for the shop draws the optimum, not the start
+        page.click("#download-dxf")
+    space = ezdxf.read(io.StringIO(info.value.path().read_text())).modelspace()
+    radii = {round(v.dxf.radius, 9) for e in space for v in e.virtual_entities() if v.dxftype() == "ARC"}
+    assert sorted(radii) == pytest.approx([0.2 - optimum / 2, 0.2 + optimum / 2], abs=1e-9)
     screenshot(page, "17-optimization")
 
 
@@ -334,16 +341,21 @@ def test_a_yaml_upload_is_drawn_and_downloads_are_made(page, tmp_path, closing_f
     page.wait_for_function("() => document.getElementById('mechanism-name').textContent === 'uploaded gripper'")
     assert document_text(page).startswith("schema_version: 1")
     run_and_wait(page, "equilibrium: converged")
-    downloads = {}
-    for kind in ("json", "csv", "svg", "png"):
+    downloads, names = {}, {}
+    for kind in ("json", "csv", "svg", "png", "dxf", "gds"):
         with page.expect_download() as info:
             page.click(f"#download-{kind}")
-        downloads[kind] = info.value.path().read_bytes()
+        downloads[kind], names[kind] = info.value.path().read_bytes(), info.value.suggested_filename
     answer = json.loads(downloads["json"])
     assert answer["target"]["value"] == pytest.approx(closing_force, rel=1e-9)
     assert downloads["csv"].startswith(b"output,value,unit\n")
     assert b"<svg" in downloads["svg"] and b"x [mm]" in downloads["svg"]
     assert downloads["png"].startswith(b"\x89PNG")
+    # the fabricated outlines, made by the service: DXF text with its layers, a GDSII HEADER record
+    assert (
+        names["dxf"] == "uploaded_gripper.dxf" and b"LWPOLYLINE" in downloads["dxf"] and b"flexures" in downloads["dxf"]
+    )
+    assert names["gds"] == "uploaded_gripper.gds" and downloads["gds"][:4] == b"\x00\x06\x00\x02"
     screenshot(page, "18-yaml-upload")
 
 
