@@ -59,9 +59,10 @@ def drawing(
         mech = mech.with_values(values) if values else mech
         try:
             drawn = fabrication(mech, deformed, chord_error)
-        except MechanismError as exc:
-            if exc.pointer == "/chord_error":
-                raise OptionError("--chord-error", exc.problem) from None
+        except MechanismError as exc:  # the request's fields are this command's options
+            option = {"/chord_error": "--chord-error", "/deformed": "--deformed"}.get(exc.pointer)
+            if option is not None:
+                raise OptionError(option, exc.problem) from None
             raise
         for option, path, write in (("--dxf", dxf, dxf_bytes), ("--gds", gds, gds_bytes)):
             if path is None:

@@ -267,6 +267,10 @@ def test_the_command_writes_both_files_twice_draws_a_design_and_says_what_is_wro
         ),
         (["--dxf", str(tmp_path / "r.dxf"), "--design", str(tmp_path / "0.dxf")], "--design: "),
         (["--dxf", str(tmp_path / "no" / "r.dxf")], "--dxf: cannot write"),
+        (
+            ["--dxf", str(tmp_path / "d.dxf"), "--deformed", "--set", "/loads/actuation/force/1=1e9"],
+            "--deformed: the equilibrium under the document's loads did not solve",
+        ),
     ):
         refused = runner.invoke(app, ["drawing", "gripper", *arguments], env=ENV)
         assert refused.exit_code == 2 and message in refused.output and "Traceback" not in refused.output
