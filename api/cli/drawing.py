@@ -103,7 +103,7 @@ def summary(drawn, chord_error: float) -> str:
     counts = {layer: len(drawn.on(layer)) for layer in ("bodies", "anchors", "flexures", "deformed")}
     unit = shown(drawn.unit)
     line = ", ".join(f"{n} {layer}" for layer, n in counts.items() if n)
-    line += f"; length unit {unit}; arcs in GDS within {chord_error:g} {unit} (grid {drawn.grid:g} {unit})"
-    if drawn.link_chord_error:
-        line += f"; links' centre lines within {drawn.link_chord_error:.2g} of their chords"
+    line += f"; length unit {unit}; polygons within {chord_error:g} {unit} of the arcs and splines (GDS grid {drawn.grid:g} {unit})"
+    if drawn.link_error:
+        line += f"; links' splines about {drawn.link_error:.2g} {unit} from their centre lines"
     return line

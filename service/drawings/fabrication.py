@@ -6,8 +6,9 @@ length unit (service.drawings.fabrication_files writes them).
   its ends by radial segments (the arcs are exact: DXF keeps them as arcs; GDS, which has none,
   takes polygons whose vertices lie on them, within the chord error).
 - A link: its centre line offset by +-h/2 along its normals (h varying along a tapered section),
-  closed across its ends; the centre line sampled as the drawing samples it, its largest chord
-  deviation reported.
+  closed across its ends, within the chord error of the cubic spline through the drawing's
+  samples of the centre line (service.drawings.fabrication_links; the spline's own distance from
+  the line estimated and reported).
 - A body: a document gives no body outline, so the drawing makes one: the convex hull of its
   reference point, the points its flexures, links and point outputs attach at and the closed
   contact outlines it carries (a jaw polygon, a pin's circle, a hole: the material around it;
@@ -35,6 +36,7 @@ from flexmech.models.elements import FAMILIES
 from flexmech.service.drawings.drawing import mechanism_drawing
 from flexmech.service.drawings.fabrication_costs import check_costs, gds_grid
 from flexmech.service.drawings.fabrication_geometry import convex_hull, grown_hull
+from flexmech.service.drawings.fabrication_links import interpolation_error, link_outline
 
 LAYERS = ("bodies", "flexures", "anchors", "deformed")
 CHORD_ERROR = 1e-4  # of the length unit: the default distance a polygon may leave a true arc
@@ -61,7 +63,7 @@ class Fabrication:
     unit: str
     chord_error: float
     outlines: list[Outline]
-    link_chord_error: float  # the largest deviation of a link's sampled centre line from its chords
+    link_error: float  # the largest estimated distance of a link's spline from its centre line
     grid: float  # the GDS grid (database unit), length unit: gds_grid
 
     def on(self, layer: str) -> list[Outline]:
@@ -77,7 +79,7 @@ def fabrication(mech: Mechanism, deformed: bool = False, chord_error: float = CH
         raise MechanismError("/chord_error", f"must be a positive number, got {chord_error:g}")
     unit = mech.doc_unit("length")
     drawing = mechanism_drawing(mech)
-    outlines, widths, worst = _flexures(mech, drawing)
+    outlines, widths, worst = _flexures(mech, drawing, chord_error)
     hulls = _body_hulls(drawing, widths)
     far = max([_farthest(o) for o in outlines] + [np.max(np.abs(h)) + m for h, m, _ in hulls.values()])
     grid = gds_grid(far, chord_error, unit)
@@ -90,9 +92,9 @@ def fabrication(mech: Mechanism, deformed: bool = False, chord_error: float = CH
     return Fabrication(unit, chord_error, outlines, worst, grid)
 
 
-def _flexures(mech: Mechanism, drawing: dict) -> tuple[list[Outline], dict[str, float], float]:
+def _flexures(mech: Mechanism, drawing: dict, chord_error: float) -> tuple[list[Outline], dict[str, float], float]:
     """The outline of every curved beam and link; per body the widest section attached to it;
-    the largest deviation of a link's samples from its centre line."""
+    the largest estimated distance of a link's spline from its centre line."""
     outlines, widths, worst = [], {}, 0.0
     points_of = {e["name"]: np.array(e["points"]) for e in drawing["elements"]}
     for name, element in mech.document.elements.items():
@@ -103,9 +105,10 @@ def _flexures(mech: Mechanism, drawing: dict) -> tuple[list[Outline], dict[str, 
         elif drawn_as == "centre_line":
             h0, h1 = _widths(mech, element.section, f"/elements/{name}/section")
             h_end = h0 if h1 is None else h1
-            outline, deviation = _link(points_of[name], h0, h_end, f"/elements/{name}")
-            outlines.append(outline)
-            worst, h = max(worst, deviation), max(h0, h_end)
+            pointer, samples = f"/elements/{name}", points_of[name]
+            loop = link_outline(samples, h0, h_end, chord_error, mech.doc_unit("length"), pointer)
+            outlines.append(Outline("flexures", "link", pointer, loop, np.zeros(len(loop))))
+            worst, h = max(worst, interpolation_error(samples, pointer)), max(h0, h_end)
         else:
             continue
         for body in (element.from_, element.to):
@@ -163,23 +166,6 @@ def _curved_beam(mech: Mechanism, name: str, element, h: float) -> Outline:
     low, high = (start, end) if sign > 0 else (end, start)
     arcs = [(cx, cy, outer, low, high), (cx, cy, inner, low, high)]
     return Outline("flexures", "curved_beam", base, points, bulges, True, arcs)
-
-
-def _link(points: np.ndarray, h0: float, h1: float, pointer: str) -> tuple[Outline, float]:
-    """The centre line's samples offset by half the width (linear from h0 to h1 along the length)."""
-    steps = np.diff(points, axis=0)
-    lengths = np.hypot(*steps.T)
-    along = np.concatenate([[0.0], np.cumsum(lengths)]) / max(lengths.sum(), 1e-300)
-    tangents = np.zeros_like(points)
-    tangents[:-1] += steps / lengths[:, None]
-    tangents[1:] += steps / lengths[:, None]
-    tangents /= np.hypot(*tangents.T)[:, None]
-    normals = np.c_[-tangents[:, 1], tangents[:, 0]]
-    half = 0.5 * (h0 + (h1 - h0) * along)[:, None]
-    loop = np.vstack([points + half * normals, (points - half * normals)[::-1]])
-    turns = np.abs(np.diff(np.unwrap(np.arctan2(steps[:, 1], steps[:, 0])))) if len(steps) > 1 else np.zeros(1)
-    deviation = float(np.max(lengths[:-1] * turns / 8.0, initial=0.0))  # sagitta of a segment on a circle
-    return Outline("flexures", "link", pointer, loop, np.zeros(len(loop))), deviation
 
 
 def _body_hulls(drawing: dict, widths: dict[str, float]) -> dict[str, tuple[np.ndarray, float, bool]]:

@@ -86,13 +86,13 @@ def check_costs(outlines: list, hulls: list[Hull], chord_error: float, far: floa
         if largest > MAX_OUTLINE_POINTS
         else f"{total} vertices in all, more than {MAX_POINTS}"
     )
-    enough = _fitting(lambda ce: (lambda c: c[0] <= MAX_OUTLINE_POINTS and c[1] <= MAX_POINTS)(counts(ce)), chord_error)
+    enough = fitting(lambda ce: (lambda c: c[0] <= MAX_OUTLINE_POINTS and c[1] <= MAX_POINTS)(counts(ce)), chord_error)
     if enough is None:
         raise MechanismError("/elements", f"the outlines need {where} at any chord error: draw fewer or shorter links")
     raise MechanismError("/chord_error", f"{chord_error:g} {unit} needs {where}: take at least {enough:g} {unit}")
 
 
-def _fitting(fits: Callable[[float], bool], chord_error: float) -> float | None:
+def fitting(fits: Callable[[float], bool], chord_error: float) -> float | None:
     """The smallest chord error above `chord_error` that fits, to two significant digits rounded
     up (bisection in its logarithm; the counts fall as it grows); None when none does."""
     low, high = chord_error, chord_error * 2

@@ -132,7 +132,7 @@ def test_the_gds_polygons_stay_within_the_chord_error_of_the_arcs(tmp_path):
     assert [x0, y0, x1, y1] == pytest.approx([*expected_box()[0], *expected_box()[1]], abs=CHORD_ERROR)
 
 
-def test_links_are_drawn_their_width_apart_a_tapered_one_too_and_a_general_section_is_refused():
+def test_links_are_drawn_their_width_apart_a_tapered_one_too_a_curved_one_within_the_chord_error():
     for name in ("grasper_shape", "gripper_ellipse_contact"):
         document = json.loads((EXAMPLES / f"{name}.json").read_text())
         drawn = fabrication(flexmech.load(document))
@@ -152,6 +152,16 @@ def test_links_are_drawn_their_width_apart_a_tapered_one_too_and_a_general_secti
         along /= along[-1]
         h0, h1 = section.get("h_start", section.get("h")), section.get("h_end", section.get("h"))
         assert np.hypot(*(side - other).T) == pytest.approx(h0 + (h1 - h0) * along, rel=1e-9)
+    rim = json.loads((EXAMPLES / "curved_indexer.json").read_text())["elements"]["rim"]  # an arc from (0, 0) along x
+    radius = rim["length"] / math.radians(
+        rim["shape"]["sweep"]
+    )  # 10 mm about (0, 10): its chords within the chord error
+    loop = next(o for o in fabrication(flexmech.load("curved_indexer")).outlines if o.pointer == "/elements/rim").points
+    n, centre = len(loop) // 2, np.array([0.0, radius])
+    for side, r in ((loop[:n], radius - 0.25), (loop[n:], radius + 0.25)):  # h = 0.5 mm; the inner side first
+        middles = (side[1:] + side[:-1]) / 2
+        for reach in (np.hypot(*(side - centre).T), np.hypot(*(middles - centre).T)):
+            assert np.abs(reach - r).max() <= CHORD_ERROR
     with pytest.raises(flexmech.MechanismError) as info:
         fabrication(flexmech.load("cantilever"))
     assert info.value.pointer == "/elements/beam/section" and "no in-plane width h" in info.value.problem
