@@ -56,8 +56,9 @@ class ToleranceReport(AnalysisResult):
     )
     sources: list[str] = Field(description="the independent sources, each named by its leading field")
     responses: dict[str, dict[str, Any]] = Field(
-        description="per response: unit, nominal, first_order (mean, std, contributions ranked), monte_carlo "
-        "(mean, std, their standard errors, percentiles, histogram, near_linear and why), spec"
+        description="per response: unit, nominal, first_order (mean, std, contributions ranked), linearity (the "
+        "curvature's mean shift, near_linear and why), monte_carlo (mean, std, their standard errors, percentiles, "
+        "histogram, agreement with first order), spec"
     )
     yield_: dict[str, Any] | None = Field(
         None,
@@ -132,7 +133,7 @@ class ToleranceAnalysis(Analysis):
 
 
 def responses_of(mech: Mechanism, scatter: Scatter, options: ToleranceOptions, newton: NewtonOptions) -> Responses:
-    """The responses the options ask for (service.tolerances.statics, .modes, .contact)."""
+    """The responses the options ask for (service.tolerances.statics; .states for contact and modes)."""
     target = mech.document.tolerances.target if mech.document.tolerances is not None else None
     if options.of == "equilibrium":
         from flexmech.service.tolerances.statics import statics_responses
