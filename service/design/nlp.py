@@ -1,13 +1,15 @@
 """The design NLP of a DesignProblem (simultaneous approach), as CasADi graphs.
 
-Unknowns x = [d; z_1; ...; z_C; e_1; ...; e_F]: the scaled design variables (document value /
-scale), the equilibrium state of every load case, and for every natural frequency the problem
-names, its mode e = [v; l] (a right vector over z, and omega^2 / omega_0^2). Constraints
-g = [R(z_1, p_1); ...; R(z_C, p_C); per frequency (K_T v - omega_0^2 l M_z v) and
-v.M_z v / m_0 - 1; outputs of the constraints / their scales]; the residuals and the
-eigenproblems are equalities. The objective is (+-) its output over its scale. Every number
-(the cases' parameters, the design scales, the output scales, each frequency's omega_0^2 and
-m_0) is an NLP parameter, so one solver serves every start and every value.
+Unknowns x = [d; z_1; ...; z_C; e_1; ...; e_F; X_1; ...; S_1; ...]: the scaled design variables
+(document value / scale), the equilibrium state of every load case, for every natural frequency
+the problem names its mode e = [v; l] (a right vector over z, and omega^2 / omega_0^2), every
+frequency response's amplitude X, and every first-order block S of the robust outputs
+(service.design.robust_nlp). Constraints g = [R(z_1, p_1); ...; R(z_C, p_C); per frequency
+(K_T v - omega_0^2 l M_z v) and v.M_z v / m_0 - 1; the responses' rows; K S + R_p L per block;
+outputs of the constraints / their scales]; all but the last are equalities. The objective is
+(+-) its output over its scale. Every number (the cases' parameters, the design scales, the
+output scales, each frequency's omega_0^2 and m_0) is an NLP parameter, so one solver serves
+every start and every value; the scatter's loadings and the specs are part of the key.
 
 A frequency's eigenpair is followed from the start's k-th mode by continuity: where modes cross
 on the way, it may end as another (service.design.optimize checks the optimum by a fresh modes
@@ -25,7 +27,8 @@ import numpy as np
 
 from flexmech.models.graph.assembly import graphs_for
 from flexmech.service.design.problem import DesignProblem, OutputRef
-from flexmech.service.design.robust import first_order_yield, sigma
+from flexmech.service.design.robust import log_yield, robust_output
+from flexmech.service.design.robust_nlp import block_of, block_size, sensitivity_blocks, sensitivity_rows
 from flexmech.service.solvers.ipopt import nlp_solver, solve
 
 
@@ -39,6 +42,8 @@ class DesignNlp:
     n_residuals: int  # rows of g that are equalities (equilibrium residuals, eigenproblems)
     frequencies: tuple[OutputRef, ...]  # the frequencies named, each with its mode among the unknowns
     responses: tuple[OutputRef, ...]  # the frequency responses named, each with its amplitude's unknowns
+    sensitivities: tuple  # the (case, scatter) blocks of first-order moves the robust outputs need
+    n_sensitivity: int  # their unknowns (the tail of x)
     evaluate: ca.Function  # (x, P) -> (f, g)
     kkt: ca.Function  # (x, P, lam_g) -> (H, L_xp, J, g_p, f_p): for sensitivities of the optimum
     x: ca.SX
@@ -89,6 +94,7 @@ def _design_nlp(key: tuple) -> DesignNlp:
     zs = [ca.SX.sym(f"z{c}", n_state) for c in range(n_cases)]
     modes = [ca.SX.sym(f"mode{j}", n_state + 1) for j in range(len(frequencies))]
     amplitudes = [ca.SX.sym(f"response{j}", 2 * n_state) for j in range(len(responses))]
+    blocks = sensitivity_blocks(refs)
     n_fixed = n_params * n_cases + n_design + 1 + len(refs) - 1
     n_eigen = 2 * len(frequencies)
     P = ca.SX.sym("P", n_fixed + n_eigen + (len(responses) + 2 if responses else 0))
@@ -104,15 +110,15 @@ def _design_nlp(key: tuple) -> DesignNlp:
     residuals = [graphs.residual(zs[c], ps[c]) for c in range(n_cases)]
     eigen_rows, omegas = _eigenproblems(structure, frequencies, zs, ps, modes, P[n_fixed : n_fixed + n_eigen])
     response_rows, magnitudes = _responses(structure, responses, zs, ps, amplitudes, P[n_fixed + n_eigen :])
+    sensitivities, sensitivity_eqs, firsts = sensitivity_rows(structure, blocks, zs, ps)
     outputs: dict[int, ca.SX] = {}
 
     def value(ref: OutputRef) -> ca.SX:
         c = ref.case
         if ref.source == "yield":
-            return first_order_yield(structure, ref.robust, zs[c], ps[c])
+            return log_yield(*firsts[block_of(ref)], ref.robust.specs)
         if ref.sigmas:
-            mean, spread = sigma(structure, ref.robust, zs[c], ps[c], ref.index)
-            return mean + ref.sigmas * spread
+            return robust_output(*firsts[block_of(ref)], ref.index, ref.sigmas)
         if ref.source == "frequency":
             return omegas[frequencies.index(ref)] / (2 * np.pi)
         if ref.source == "response":
@@ -130,13 +136,13 @@ def _design_nlp(key: tuple) -> DesignNlp:
 
     f = value(refs[0]) / objective_scale
     constraint_rows = [value(ref) / constraint_scales[k] for k, ref in enumerate(refs[1:])]
-    x = ca.vertcat(d, *zs, *modes, *amplitudes)
-    g = ca.vertcat(*residuals, *eigen_rows, *response_rows, *constraint_rows)
+    x = ca.vertcat(d, *zs, *modes, *amplitudes, *sensitivities)
+    g = ca.vertcat(*residuals, *eigen_rows, *response_rows, *sensitivity_eqs, *constraint_rows)
     evaluate, kkt = _functions(x, P, f, g)
-    n_equalities = n_state * n_cases + (n_state + 1) * len(frequencies) + 2 * n_state * len(responses)
-    return DesignNlp(
-        key, n_design, n_state, n_cases, n_params, n_equalities, frequencies, responses, evaluate, kkt, x, P, f, g
-    )
+    n_sensitivity = sum(block_size(structure, block) for block in blocks)
+    n_equalities = n_state * n_cases + (n_state + 1) * len(frequencies) + 2 * n_state * len(responses) + n_sensitivity
+    counts = (n_design, n_state, n_cases, n_params, n_equalities)
+    return DesignNlp(key, *counts, frequencies, responses, blocks, n_sensitivity, evaluate, kkt, x, P, f, g)
 
 
 def _functions(x: ca.SX, P: ca.SX, f: ca.SX, g: ca.SX) -> tuple[ca.Function, ca.Function]:

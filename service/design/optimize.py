@@ -19,15 +19,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flexmech.service.contact.design import run_contact_start, uses_contact
-from flexmech.service.design.frequencies import (
-    disagreements,
-    eigen_scales,
-    response_scales,
-    unknown_bounds,
-    vibration_start,
-)
+from flexmech.service.design.frequencies import disagreements, eigen_scales, response_scales
 from flexmech.service.design.nlp import DesignNlp, design_nlp, least_violation, solver_for
 from flexmech.service.design.problem import DesignProblem, OutputRef
+from flexmech.service.design.robust_nlp import polished_tail, tail_bounds, tail_start
+from flexmech.service.design.robust_report import robust_report, yield_bound
 from flexmech.service.design.states import case_outputs, case_params, equilibria, output_value, polished_states
 from flexmech.service.solvers.ipopt import solve
 
@@ -95,6 +91,8 @@ class OptimizationResult:
         if best is not None:
             report.update({k: v for k, v in best.summary().items() if k not in ("status", "message", "seconds")})
             report["outputs"] = self.outputs()
+            if robust := robust_report(self.problem, best.x):  # mean -+ k sigma, yields (first order)
+                report["robust"] = robust
         report["starts"] = [
             {
                 "start": s.start,
@@ -163,7 +161,7 @@ def prepare(problem: DesignProblem) -> Prepared:
         response_scales(problem, nlp.responses),
     )
     n_z = nlp.n_state * nlp.n_cases
-    mode_lower, mode_upper = unknown_bounds(nlp.frequencies, nlp.n_state, len(nlp.responses))
+    mode_lower, mode_upper = tail_bounds(nlp)  # modes, amplitudes, first-order blocks
     lbx = np.concatenate([problem.lower / problem.scale, np.full(n_z, -np.inf), mode_lower])
     ubx = np.concatenate([problem.upper / problem.scale, np.full(n_z, np.inf), mode_upper])
     factors = np.array([problem.output_factor(c.output) for c in problem.constraints])
@@ -198,7 +196,7 @@ def run_start(prepared: Prepared, start: int, stop: Callable[[], bool] | None = 
     started = time.perf_counter()
     design0 = start_design(problem, start)
     guesses = [z if status == "converged" else np.zeros(nlp.n_state) for status, z in equilibria(problem, design0)]
-    vibration0 = vibration_start(problem, nlp, prepared.P, guesses, case_params(problem, design0))
+    vibration0 = tail_start(problem, nlp, prepared.P, guesses, case_params(problem, design0))
     x0 = np.concatenate([design0 / problem.scale, *guesses, vibration0])
     run = solve(
         solver_for(nlp, spec.max_iterations, spec.tolerance),
@@ -221,7 +219,7 @@ def run_start(prepared: Prepared, start: int, stop: Callable[[], bool] | None = 
         ),
         default=0.0,
     )
-    x = np.concatenate([design / problem.scale, *zs, x[nlp.n_states :]])
+    x = np.concatenate([design / problem.scale, *zs, polished_tail(problem, nlp, x, zs, case_params(problem, design))])
     f, _ = nlp.evaluate(x, prepared.P)
     status, message = _checked(prepared, status, message, on_branch, x, zs, design)
     return StartResult(
@@ -304,7 +302,8 @@ def _judged(prepared: Prepared, run, x0: np.ndarray, stop: Callable[[], bool] | 
 
 def _objective_doc(prepared: Prepared, f: float) -> float:
     problem = prepared.problem
-    return f * prepared.objective_scale / problem.output_factor(problem.objective)
+    value = f * prepared.objective_scale / problem.output_factor(problem.objective)
+    return float(np.exp(value)) if problem.objective.source == "yield" else value  # the NLP holds ln(yield)
 
 
 def _history(prepared: Prepared, it: dict) -> list[dict]:
@@ -327,6 +326,7 @@ def _multipliers(prepared: Prepared, lam_g: np.ndarray, lam_x: np.ndarray) -> di
         float(lam_g[nlp.n_residuals + k])
         * per_objective
         / (prepared.constraint_scales[k] / problem.output_factor(c.output))
+        / yield_bound(c, float(lam_g[nlp.n_residuals + k]))
         for k, c in enumerate(problem.constraints)
     ]
     design = (lam_x[: nlp.n_design] * per_objective / problem.scale).tolist()

@@ -109,6 +109,7 @@ def design_problem(mech: Mechanism, spec: OptimizeSpec, pointer: str = "/optimiz
     sign = 1.0 if spec.objective.sense == "minimize" else -1.0
     objective = _robust(mech, objective, sign * (spec.objective.sigmas or 0.0), here)
     constraints = _constraints(mech, spec, case_names, pointer)
+    _robust_without_contact(objective, here, constraints)
     return DesignProblem(
         mech,
         spec,
@@ -164,6 +165,20 @@ def _robust(mech: Mechanism, ref: OutputRef, sigmas: float, here: str) -> Output
     if ref.source != "output":
         raise MechanismError(f"{here}/sigmas", f"mean + k sigma is given for the solve's outputs, not for '{ref.name}'")
     return replace(ref, sigmas=sigmas, robust=robustness(mech, f"{here}/sigmas"))
+
+
+def _robust_without_contact(objective: OutputRef, here: str, constraints: list[Bounded]) -> None:
+    """A problem over contact states (service.contact.design) has no first-order blocks: refuse
+    a robust output there rather than optimize its nominal value."""
+    named = [(objective, here), *((c.output, c.pointer) for c in constraints)]
+    if not any(ref.source == "contact" for ref, _ in named):
+        return
+    for ref, where in named:
+        if ref.robust is not None:
+            field = "output" if ref.source == "yield" else "sigmas"
+            raise MechanismError(
+                f"{where}/{field}", "robust design (sigmas, yield) is not available in a problem on contact results"
+            )
 
 
 def _typical(value: float, lo: float, hi: float) -> float:

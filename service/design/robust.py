@@ -3,15 +3,16 @@ yield against the document's tolerance specs, with exact gradients.
 
 First order at a load case's equilibrium z(p): the toleranced parameters move by L xi (xi the
 standardized sources, L their loadings, service.tolerances.fields), so the output y moves by
-  dy/dxi = y_z S + y_p L,   K S = -R_p L   (K = dR/dz),
-its mean is its nominal value and sigma = |dy/dxi|. A robust output is mean + k sigma (k signed:
-an upper bound and a minimized objective take +k, a lower bound and a maximized objective -k).
-The yield is the product over the specs of P(min <= y <= max) for y normal(mean, sigma): the
-specs taken as independent, which over-counts the failures of outputs that move together (a
-lower bound on the true yield when they fail together). All of it is one CasADi graph of the
-case's (z, p), so IPOPT gets its exact derivatives through the design variables and the state;
-the loadings and spec bounds are constants of the graph (the design NLP is built per structure,
-scatter and specs: service.design.nlp's key)."""
+  dy/dxi = y_z S + y_p L,   K S + R_p L = 0   (K = dR/dz, R_p = dR/dp),
+its mean is its nominal value and sigma = |dy/dxi| (a uniform source counts by its standard
+deviation). A robust output is mean + k sigma (k signed: an upper bound and a minimized objective
+take +k, a lower bound and a maximized objective -k). The yield is the product over the specs of
+P(min <= y <= max) for y normal(mean, sigma): the specs taken as independent (outputs that move
+with the same source fail together, so the product is then a lower bound of the first-order share
+that meets them all). In the design NLP S is an unknown block of its own, with K S + R_p L = 0 as
+equality rows (service.design.robust_nlp): sparse, and IPOPT gets exact derivatives through the
+design variables, the state and S. Here: the terms (y, K, R_p L, y_z, y_p L) of a case, the
+numbers at a state, and the formulas on (y, dy/dxi) that the NLP and the reports share."""
 
 from __future__ import annotations
 
@@ -24,7 +25,8 @@ import numpy as np
 from flexmech.models import Mechanism, MechanismError
 from flexmech.models.units import quantity_to_si
 
-TAIL = -7.0  # where ln Phi changes from erf to the asymptotic series
+TAIL = -3.0  # where ln Phi changes from erf to the tail's continued fraction
+TAIL_LEVELS = 40  # of the continued fraction
 TINY = 1e-30  # in sigma^2 (nondimensional): sigma stays differentiable where no field moves it
 
 
@@ -37,6 +39,15 @@ class Robustness:
     loadings: tuple[tuple[float, ...], ...]  # slots x sources
     specs: tuple[tuple[int, float, float], ...] = ()
 
+    @property
+    def scatter(self) -> tuple:
+        """What the first-order terms depend on (not the specs)."""
+        return self.slots, self.loadings
+
+    @property
+    def n_sources(self) -> int:
+        return len(self.loadings[0])
+
 
 def robustness(mech: Mechanism, here: str, with_specs: bool = False) -> Robustness:
     """The document's tolerances for a robust objective or constraint named at `here`."""
@@ -45,10 +56,7 @@ def robustness(mech: Mechanism, here: str, with_specs: bool = False) -> Robustne
     spec = mech.document.tolerances
     if spec is None:
         raise MechanismError(here, "a robust objective or constraint needs the document's tolerances section")
-    try:
-        scatter = resolve_scatter(mech, spec)
-    except MechanismError as exc:
-        raise MechanismError(exc.pointer, exc.problem) from None
+    scatter = resolve_scatter(mech, spec)
     factors = np.array([mech.nd_per_doc(f.kind) for f in scatter.fields])
     loadings = scatter.loadings() * factors[:, None]
     specs = _specs(mech, spec, here) if with_specs else ()
@@ -61,7 +69,11 @@ def _specs(mech: Mechanism, spec, here: str) -> tuple[tuple[int, float, float], 
     for key, limits in spec.specs.items():
         where = "/tolerances/specs/" + key.replace("~", "~0").replace("/", "~1")
         if key not in names:
-            raise MechanismError(where, f"'{key}' is not an output: a yield in design counts the outputs' specs")
+            raise MechanismError(
+                where,
+                f"'{key}' is not an output: a yield in design counts the specs on outputs (a target's field or a "
+                "frequency is for the tolerance analysis)",
+            )
         k = names.index(key)
         kind, unit = kinds[k], mech.doc_unit(kinds[k])
         bounds = []
@@ -79,56 +91,94 @@ def _specs(mech: Mechanism, spec, here: str) -> tuple[tuple[int, float, float], 
 
 
 @lru_cache(maxsize=16)
-def _first_order(structure, robust: Robustness) -> ca.Function:
-    """(z, p) -> (y, dy/dxi): every output and its move per source's standard deviation."""
+def first_order_terms(structure, scatter: tuple) -> ca.Function:
+    """(z, p) -> (y, K, R_p L, y_z, y_p L) of a structure and a scatter (Robustness.scatter):
+    the outputs, the tangent, and the terms of K S + R_p L = 0 and dy/dxi = y_z S + y_p L."""
     from flexmech.models.graph.assembly import graphs_for
 
+    slots, loadings = scatter
     graphs = graphs_for(structure)
     z = ca.SX.sym("z", structure.n_unknowns)
     p = ca.SX.sym("p", len(structure.parameters))
     R, y = graphs.residual(z, p), graphs.outputs(z, p)
-    L = ca.DM.zeros(len(structure.parameters), len(robust.loadings[0]))
-    for row, slot in enumerate(robust.slots):
-        L[slot, :] = ca.DM(robust.loadings[row]).T
-    S = -ca.solve(ca.jacobian(R, z), ca.mtimes(ca.jacobian(R, p), L))
-    moves = ca.mtimes(ca.jacobian(y, z), S) + ca.mtimes(ca.jacobian(y, p), L)
-    return ca.Function("first_order_scatter", [z, p], [y, moves])
+    L = ca.DM.zeros(len(structure.parameters), len(loadings[0]))
+    for row, slot in enumerate(slots):
+        L[slot, :] = ca.DM(loadings[row]).T
+    terms = ca.Function(
+        "first_order_terms",
+        [z, p],
+        [y, ca.jacobian(R, z), ca.mtimes(ca.jacobian(R, p), L), ca.jacobian(y, z), ca.mtimes(ca.jacobian(y, p), L)],
+        ["z", "p"],
+        ["y", "K", "R_pL", "y_z", "y_pL"],
+        dict(cse=True),
+    )
+    if terms.has_free():
+        raise RuntimeError(f"graph first_order_terms has free symbols {terms.get_free()}")
+    return terms
 
 
-def sigma(structure, robust: Robustness, z, p, index: int):
-    """(mean, sigma) of output `index` at the case's (z, p), nondimensional."""
-    y, moves = _first_order(structure, robust)(z, p)
-    return y[index], ca.sqrt(ca.sumsqr(moves[index, :]) + TINY)
+def first_order(structure, robust: Robustness, z: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(y, dy/dxi) at an equilibrium (z, p): every output and its move per source's standard
+    deviation (nondimensional; outputs x sources)."""
+    y, K, R_pL, y_z, y_pL = (np.asarray(a, dtype=float) for a in first_order_terms(structure, robust.scatter)(z, p))
+    S = -np.linalg.solve(K, R_pL)
+    return y.ravel(), y_z @ S + y_pL
 
 
-def first_order_yield(structure, robust: Robustness, z, p):
+def spread(moves):
+    """sigma of an output from its row of dy/dxi: smooth where nothing moves it."""
+    return ca.sqrt(ca.sumsqr(moves) + TINY)
+
+
+def robust_output(y, moves, index: int, sigmas: float):
+    """mean + sigmas * sigma of output `index` (sigmas signed)."""
+    return y[index] + sigmas * spread(moves[index, :])
+
+
+def log_yield(y, moves, specs) -> ca.SX | ca.DM:
     """ln of the product over the specs of the normal share within their bounds: the logarithm
     keeps a slope where the share is a tail of 1e-17 (a start far from the specs)."""
-    y, moves = _first_order(structure, robust)(z, p)
-    log_share = 0
-    for index, low, high in robust.specs:
-        mean, spread = y[index], ca.sqrt(ca.sumsqr(moves[index, :]) + TINY)
-        upper = 0 if not np.isfinite(high) else log_phi((high - mean) / spread)
-        if np.isfinite(low):  # Phi(b) - Phi(a) = Phi(b) (1 - Phi(a) / Phi(b))
-            upper = upper + ca.log(1 - ca.exp(log_phi((low - mean) / spread) - upper))
-        log_share = log_share + upper
-    return log_share
+    total = 0
+    for index, low, high in specs:
+        total = total + log_share(y[index], spread(moves[index, :]), low, high)
+    return total
+
+
+def log_share(mean, sigma, low: float, high: float):
+    """ln P(low <= y <= high) for y normal(mean, sigma). Two-sided, as Phi(far) (1 - Phi(near) /
+    Phi(far)) on the side away from the mean (mirrored when the mean is below the middle), so
+    that neither difference of two shares near one loses its digits."""
+    if not np.isfinite(low):
+        return log_phi((high - mean) / sigma) if np.isfinite(high) else 0
+    if not np.isfinite(high):
+        return log_phi((mean - low) / sigma)
+    a, b = (low - mean) / sigma, (high - mean) / sigma
+    below = mean < (low + high) / 2
+    far, near = ca.if_else(below, -a, b), ca.if_else(below, -b, a)
+    top = log_phi(far)
+    return top + ca.log(-ca.expm1(log_phi(near) - top))
 
 
 def log_phi(x):
-    """ln Phi(x), the standard normal's: by erf down to x = -7 (where 1 + erf keeps 1e-4 of its
-    digits), below by the tail's asymptotic series (4 terms: 1e-4 at -7), each branch clamped to
-    its side so that neither makes an infinity."""
-    near = ca.log(0.5 * (1 + ca.erf(ca.fmax(x, TAIL) / np.sqrt(2))))
-    t = -ca.fmin(x, TAIL)
-    far = -(t**2) / 2 - ca.log(t * np.sqrt(2 * np.pi)) + ca.log(1 - 1 / t**2 + 3 / t**4 - 15 / t**6)
-    return ca.if_else(x >= TAIL, near, far)
+    """ln Phi(x), the standard normal's, to about 1e-13 for every x: by erf down to x = -3 (where
+    1 + erf keeps 13 digits), below as ln(phi(x) R(-x)) with Mills' ratio R(t) by Laplace's
+    continued fraction 1 / (t + 1 / (t + 2 / (t + ...))) of TAIL_LEVELS levels (1e-14 at t = 3,
+    better beyond), each branch clamped to its side so that neither makes an infinity or a NaN."""
+    above = x >= TAIL
+    near = ca.log(0.5 * (1 + ca.erf(ca.if_else(above, x, TAIL) / np.sqrt(2))))
+    t = -ca.if_else(above, TAIL, x)
+    fraction = t
+    for level in range(TAIL_LEVELS, 0, -1):
+        fraction = t + level / fraction
+    far = -(t**2) / 2 - np.log(np.sqrt(2 * np.pi)) - ca.log(fraction)
+    return ca.if_else(above, near, far)
 
 
 def robust_value(structure, ref, z: np.ndarray, p: np.ndarray) -> float:
-    """A robust output's value at a state as the NLP holds it: mean + k sigma (nondimensional),
-    or the yield's logarithm."""
+    """A robust output's value at an equilibrium (z, p) as the NLP holds it: mean + k sigma
+    (nondimensional), or the yield's logarithm."""
+    y, moves = first_order(structure, ref.robust, z, p)
+    y, moves = ca.DM(y), ca.DM(moves)
     if ref.source == "yield":
-        return float(first_order_yield(structure, ref.robust, z, p))
-    mean, spread = sigma(structure, ref.robust, z, p, ref.index)
-    return float(mean + ref.sigmas * spread)
+        return float(log_yield(y, moves, ref.robust.specs))
+    return float(robust_output(y, moves, ref.index, ref.sigmas))
