@@ -36,7 +36,7 @@ def print_optimum(out: Console, problem: DesignProblem, best: StartResult) -> No
     mech = problem.mechanism
     objective_unit = _unit(problem, problem.objective)
     out.print(
-        f"objective {problem.spec.objective.output}: "
+        f"objective {shown(_label(problem.spec.objective.output, problem.objective))}: "
         f"{shown(number(best.objective, objective_unit, reference=_scale(problem, problem.objective)))}  "
         f"({best.iterations} IPOPT iterations, {best.seconds:.3g} s, equilibrium residual "
         f"{exact_text(best.equilibrium_residual)} (nondimensional))"
@@ -55,17 +55,20 @@ def print_optimum(out: Console, problem: DesignProblem, best: StartResult) -> No
     if best.constraints:
         refs = [c.output for c in problem.constraints]
         multipliers = _multiplier_texts(
-            [row["multiplier"] for row in best.constraints],
+            [row["multiplier"] / _shown_per(ref) for row, ref in zip(best.constraints, refs)],
             [_per(objective_unit, _unit(problem, ref)) for ref in refs],
-            [_scale(problem, problem.objective) / (_scale(problem, ref) or 1.0) for ref in refs],
+            [_scale(problem, problem.objective) / (_scale(problem, ref) * _shown_per(ref) or 1.0) for ref in refs],
         )
         table = table_of("constraints", "output", "case", "value", "lower", "upper", "active", "multiplier")
         for row, ref, multiplier in zip(best.constraints, refs, multipliers):
+            per = _shown_per(ref)
             value, lower, upper = row_texts(
-                [row["value"], row["lower"], row["upper"]], _unit(problem, ref), reference=_scale(problem, ref)
+                [None if row[k] is None else row[k] * per for k in ("value", "lower", "upper")],
+                _unit(problem, ref),
+                reference=_scale(problem, ref) * per,
             )
             table.add_row(
-                shown(row["output"]),
+                shown(_label(row["output"], ref)),
                 shown(row["case"]),
                 shown(value),
                 "-" if row["lower"] is None else shown(lower),
@@ -74,6 +77,63 @@ def print_optimum(out: Console, problem: DesignProblem, best: StartResult) -> No
                 shown(multiplier),
             )
         out.print(table)
+
+
+def print_robust(out: Console, entries: list[dict]) -> None:
+    """The robust objective and constraints at the optimum (first order over the tolerances):
+    each output's nominal value, sigma and mean -+ k sigma, and each yield with its specs' shares."""
+    sigmas = [e for e in entries if "sigma" in e]
+    if sigmas:
+        table = table_of(
+            "robust (first order)",
+            "of",
+            "output",
+            "case",
+            "nominal",
+            "sigma",
+            "k (sigmas)",
+            "mean - k sigma",
+            "mean + k sigma",
+        )
+        for e in sigmas:
+            values = row_texts([e["nominal"], e["sigma"], e["mean_minus_k_sigma"], e["mean_plus_k_sigma"]], e["unit"])
+            table.add_row(
+                shown(e["of"]), shown(e["output"]), shown(e["case"]), *values[:2], f"{e['sigmas']:g}", *values[2:]
+            )
+        out.print(table)
+    for e in (e for e in entries if e["output"] == "yield"):
+        table = table_of(
+            f"{e['of']}: yield {100 * e['yield']:.4g} % (first order, {e['case']})",
+            "spec",
+            "nominal",
+            "sigma",
+            "min",
+            "max",
+            "share (%)",
+        )
+        for name, spec in e["specs"].items():
+            nominal, sigma, low, high = row_texts(
+                [spec["nominal"], spec["sigma"], spec["min"], spec["max"]], spec["unit"]
+            )
+            table.add_row(
+                shown(name),
+                nominal,
+                sigma,
+                "-" if spec["min"] is None else low,
+                "-" if spec["max"] is None else high,
+                f"{100 * spec['share']:.4g}",
+            )
+        out.print(table)
+
+
+def _shown_per(ref) -> float:
+    """Shown units per document unit: a yield (a share of one) in %."""
+    return 100.0 if ref.source == "yield" else 1.0
+
+
+def _label(name: str, ref) -> str:
+    """An output as the problem holds it: a robust one's mean + k sigma or mean - k sigma."""
+    return f"{name} {'+' if ref.sigmas > 0 else '-'} {abs(ref.sigmas):g} sigma" if ref.sigmas else name
 
 
 def _scale(problem: DesignProblem, ref) -> float:
@@ -97,7 +157,9 @@ def _multiplier_texts(values: list[float], units: list[str], references: list[fl
 
 
 def _unit(problem: DesignProblem, ref) -> str:
-    """The document unit of a design output (a response's own unit)."""
+    """The document unit of a design output (a response's own unit; a yield in %)."""
+    if ref.source == "yield":
+        return "%"
     return ref.unit if ref.source == "response" else problem.mechanism.doc_unit(ref.kind)
 
 
@@ -161,6 +223,7 @@ def optimize(
         report = result.summary()
         if best is not None:
             print_optimum(out, problem, best)
+            print_robust(out, report.get("robust", []))
             if sensitivity and best.succeeded:
                 report["sensitivities"] = print_sensitivities(out, prepared, best, list(sensitivity))
         if json_out is not None:
