@@ -20,7 +20,7 @@ from flexmech.api.answer_cache import AnswerCache
 from flexmech.api.errors import install_error_handlers
 from flexmech.api.headers import SecurityHeaders
 from flexmech.api.limits import BodySizeLimit, JsonBody
-from flexmech.api.routers import drawings, examples, health, jobs
+from flexmech.api.routers import drawings, examples, health, jobs, usage
 from flexmech.api.routers.job_routes import job_router
 from flexmech.api.routers.solve import solve_router
 from flexmech.api.routers.workbench import mount_workbench
@@ -30,6 +30,7 @@ from flexmech.service.analyses import ANALYSES
 from flexmech.service.examples import ExampleLibrary, examples_directory
 from flexmech.service.jobs.executors import make_executor
 from flexmech.service.jobs.kinds import job_kinds
+from flexmech.service.jobs.retention import RetentionPurge
 from flexmech.service.jobs.runner import JobRunner
 from flexmech.service.jobs.store import JobStore
 from flexmech.service.kernels.builder_process import BuilderProcess
@@ -49,12 +50,14 @@ offending field of the request body, when there is one.
 
 
 def _services(settings: Settings) -> Services:
-    store = JobStore(settings.resolved_database_url())
+    store = JobStore(settings.resolved_database_url(), settings.quotas())
     executor = make_executor(settings.dask_address, settings.workers, settings.data_dir)
     runner = JobRunner(store, executor, settings.chunk_size, settings.job_time_limit)
     limits = settings.limits()
     library = ExampleLibrary(examples_directory(settings.examples_dir))
-    return Services(settings, limits, store, executor, runner, SolverPool(settings.solver_workers), library)
+    services = Services(settings, limits, store, executor, runner, SolverPool(settings.solver_workers), library)
+    services.retention = RetentionPurge(store, settings.job_retention)
+    return services
 
 
 def _builder(settings: Settings) -> BuilderProcess | None:
@@ -87,6 +90,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         services.builder = builder
         app.state.services = services
         services.runner.start()
+        services.retention.start()
         log.info(
             "flexmech serving: store %s, %s",
             services.store.engine.url.render_as_string(hide_password=True),
@@ -95,6 +99,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         try:
             yield
         finally:
+            services.retention.stop()
             services.runner.stop()
             if builder is not None:
                 builder.stop()
@@ -108,7 +113,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     install_error_handlers(app)
     app.include_router(solve_router())
     app.include_router(job_router())
-    for module in (jobs, examples, drawings, health):
+    for module in (jobs, usage, examples, drawings, health):
         app.include_router(module.router)
     mount_workbench(app)
     app.add_middleware(JsonBody)  # the body parsed, once no kept answer was given

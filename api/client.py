@@ -16,15 +16,25 @@ server uses before they are sent, and responses come back as those schemas' mode
 from __future__ import annotations
 
 import asyncio
-import os
 import time
-from collections.abc import Callable
-from typing import Any, TypeVar
+from typing import Any
 
 import httpx
-from pydantic import BaseModel, TypeAdapter
+from pydantic import TypeAdapter
 
 from flexmech.api.analysis_methods import Analyses
+from flexmech.api.client_support import (
+    FlexmechError,
+    JobTimeout,
+    Progress,
+    bytes_of,
+    finished,
+    headers,
+    page,
+    parse,
+    request_body,
+    where,
+)
 from flexmech.api.drawing_schemas import DrawingRequest
 from flexmech.api.job_schemas import (
     ContactPathRequest,
@@ -38,92 +48,12 @@ from flexmech.api.job_schemas import (
     SimulationRequest,
     SweepRequest,
 )
-from flexmech.api.schemas import AnalysisReport, ExampleSummary, HealthResponse, SolveRequest, SolveResponse
+from flexmech.api.schemas import AnalysisReport, ExampleSummary, SolveRequest, SolveResponse
+from flexmech.api.store_schemas import HealthReport, JobDeletedResponse, UsageResponse
 
-T = TypeVar("T")
-Progress = Callable[[JobStatusResponse], None]
-DEFAULT_URL = "http://127.0.0.1:8000"
+__all__ = ["AsyncClient", "Client", "FlexmechError", "JobTimeout"]
+
 _EXAMPLES = TypeAdapter(list[ExampleSummary])
-
-
-class FlexmechError(Exception):
-    """An error answer of the API: its status, code, message and the request field's pointer."""
-
-    def __init__(self, status: int, code: str, message: str, pointer: str | None = None):
-        self.status = status
-        self.code = code
-        self.message = message
-        self.pointer = pointer
-        super().__init__(f"{status} {code}: {message}")
-
-
-class JobTimeout(TimeoutError):
-    """wait() gave up before the job finished; the job goes on on the server."""
-
-    def __init__(self, status: JobStatusResponse):
-        self.status = status
-        super().__init__(
-            f"job {status.id} still {status.status} after waiting "
-            f"({status.progress.done} of {status.progress.total} points)"
-        )
-
-
-def _error_of(response: httpx.Response) -> FlexmechError:
-    try:
-        body = response.json()["error"]
-        return FlexmechError(body["status"], body["code"], body["message"], body.get("pointer"))
-    except (ValueError, KeyError, TypeError):
-        return FlexmechError(response.status_code, "http_error", response.text[:500] or response.reason_phrase)
-
-
-def _parse(response: httpx.Response, model: type[T] | TypeAdapter) -> T:
-    if response.status_code >= 400:
-        raise _error_of(response)
-    data = response.json()
-    if isinstance(model, TypeAdapter):
-        return model.validate_python(data)
-    if model in (dict, list):
-        return data
-    return model.model_validate(data)
-
-
-def _bytes(response: httpx.Response) -> bytes:
-    if response.status_code >= 400:
-        raise _error_of(response)
-    return response.content
-
-
-def _request_body(model: type[BaseModel], request: BaseModel | None, fields: dict[str, Any]) -> dict:
-    if request is None:
-        request = model(**fields)
-    elif fields:
-        raise TypeError("give a request object or keyword fields, not both")
-    return request.model_dump(mode="json", exclude_none=True)
-
-
-def _finished(status: JobStatusResponse, deadline: float | None, progress: Progress | None) -> bool:
-    """One step of wait(): report progress; True once the job has finished; JobTimeout past
-    the deadline."""
-    if progress is not None:
-        progress(status)
-    if status.finished:
-        return True
-    if deadline is not None and time.monotonic() >= deadline:
-        raise JobTimeout(status)
-    return False
-
-
-def _page(offset: int, limit: int | None) -> dict[str, int]:
-    return {"offset": offset} | ({"limit": limit} if limit is not None else {})
-
-
-def _where(base_url: str | None, api_key: str | None) -> tuple[str, str | None]:
-    """The server and key: as given, else $FLEXMECH_URL and $FLEXMECH_API_KEY, else the local server."""
-    return base_url or os.environ.get("FLEXMECH_URL") or DEFAULT_URL, api_key or os.environ.get("FLEXMECH_API_KEY")
-
-
-def _headers(api_key: str | None) -> dict[str, str]:
-    return {"X-API-Key": api_key} if api_key else {}
 
 
 class Client:
@@ -136,8 +66,8 @@ class Client:
         timeout: float = 60.0,
         transport: httpx.BaseTransport | None = None,
     ):
-        url, key = _where(base_url, api_key)
-        self._http = httpx.Client(base_url=url, headers=_headers(key), timeout=timeout, transport=transport)
+        url, key = where(base_url, api_key)
+        self._http = httpx.Client(base_url=url, headers=headers(key), timeout=timeout, transport=transport)
         self._analyze: Analyses | None = None
         self._jobs: Analyses | None = None
 
@@ -150,26 +80,30 @@ class Client:
     def close(self) -> None:
         self._http.close()
 
-    def health(self) -> HealthResponse:
-        return _parse(self._http.get("/v1/health"), HealthResponse)
+    def health(self) -> HealthReport:
+        return parse(self._http.get("/v1/health"), HealthReport)
+
+    def usage(self) -> UsageResponse:
+        """This key's stored jobs, running jobs and bytes against its quotas."""
+        return parse(self._http.get("/v1/usage"), UsageResponse)
 
     def examples(self) -> list[ExampleSummary]:
-        return _parse(self._http.get("/v1/examples"), _EXAMPLES)
+        return parse(self._http.get("/v1/examples"), _EXAMPLES)
 
     def example(self, name: str) -> dict:
-        return _parse(self._http.get(f"/v1/examples/{name}"), dict)
+        return parse(self._http.get(f"/v1/examples/{name}"), dict)
 
     def solve(self, request: SolveRequest | None = None, **fields: Any) -> SolveResponse:
         """One analysis; fields as in SolveRequest (document or example, analysis, overrides, ...)
         and the analysis' own options (see `analyses()`, or call it as `analyze.<name>(...)`)."""
-        return _parse(self._http.post("/v1/solve", json=_request_body(SolveRequest, request, fields)), SolveResponse)
+        return parse(self._http.post("/v1/solve", json=request_body(SolveRequest, request, fields)), SolveResponse)
 
     def _report(self, **fields: Any) -> AnalysisReport:
-        return _parse(self._http.post("/v1/solve", json=_request_body(SolveRequest, None, fields)), AnalysisReport)
+        return parse(self._http.post("/v1/solve", json=request_body(SolveRequest, None, fields)), AnalysisReport)
 
     def job_kinds(self) -> list[dict]:
         """The server's job kinds: name, route, summary and their options' JSON schema."""
-        return _parse(self._http.get("/v1/job-kinds"), list)
+        return parse(self._http.get("/v1/job-kinds"), list)
 
     @property
     def jobs(self) -> Analyses:
@@ -180,8 +114,8 @@ class Client:
             routes = {kind["name"]: kind["route"] for kind in self.job_kinds()}
 
             def start(kind: str, **fields: Any) -> JobStatusResponse:
-                body = _request_body(JobRequest, None, fields)
-                return _parse(self._http.post(routes[kind], json=body), JobStatusResponse)
+                body = request_body(JobRequest, None, fields)
+                return parse(self._http.post(routes[kind], json=body), JobStatusResponse)
 
             self._jobs = Analyses(self.job_kinds, start, "job kind", "the new job's status (JobStatusResponse)")
         return self._jobs
@@ -189,7 +123,7 @@ class Client:
     def analyses(self) -> list[dict]:
         """The server's analyses: name, summary, sweepable, and their options' and results'
         JSON schemas."""
-        return _parse(self._http.get("/v1/analyses"), list)
+        return parse(self._http.get("/v1/analyses"), list)
 
     @property
     def analyze(self) -> Analyses:
@@ -201,33 +135,31 @@ class Client:
 
     def sweep(self, request: SweepRequest | None = None, **fields: Any) -> JobStatusResponse:
         """Start a sweep job; fields as in SweepRequest. Returns the new job's status."""
-        return _parse(
-            self._http.post("/v1/sweeps", json=_request_body(SweepRequest, request, fields)), JobStatusResponse
-        )
+        return parse(self._http.post("/v1/sweeps", json=request_body(SweepRequest, request, fields)), JobStatusResponse)
 
     def optimize(self, request: OptimizeRequest | None = None, **fields: Any) -> JobStatusResponse:
         """Start an optimization job; fields as in OptimizeRequest. Returns the new job's status."""
-        return _parse(
-            self._http.post("/v1/optimize", json=_request_body(OptimizeRequest, request, fields)), JobStatusResponse
+        return parse(
+            self._http.post("/v1/optimize", json=request_body(OptimizeRequest, request, fields)), JobStatusResponse
         )
 
     def contact_path(self, request: ContactPathRequest | None = None, **fields: Any) -> JobStatusResponse:
         """Start a contact path job; fields as in ContactPathRequest. Returns the new job's status."""
-        return _parse(
-            self._http.post("/v1/contacts", json=_request_body(ContactPathRequest, request, fields)), JobStatusResponse
+        return parse(
+            self._http.post("/v1/contacts", json=request_body(ContactPathRequest, request, fields)), JobStatusResponse
         )
 
     def simulation(self, request: SimulationRequest | None = None, **fields: Any) -> JobStatusResponse:
         """Start a simulation job; fields as in SimulationRequest. Returns the new job's status."""
-        return _parse(
-            self._http.post("/v1/simulations", json=_request_body(SimulationRequest, request, fields)),
+        return parse(
+            self._http.post("/v1/simulations", json=request_body(SimulationRequest, request, fields)),
             JobStatusResponse,
         )
 
     def impact_study(self, request: ImpactStudyRequest | None = None, **fields: Any) -> JobStatusResponse:
         """Start a parametric study of an impact simulation; fields as in ImpactStudyRequest."""
-        return _parse(
-            self._http.post("/v1/impact-studies", json=_request_body(ImpactStudyRequest, request, fields)),
+        return parse(
+            self._http.post("/v1/impact-studies", json=request_body(ImpactStudyRequest, request, fields)),
             JobStatusResponse,
         )
 
@@ -235,13 +167,13 @@ class Client:
         """Start an export of the mechanism's solver as a C99 library; fields as in ExportRequest
         (document or example, model, name, inputs, outputs, ranges, target {output, equals, by},
         max_iterations, tolerance). Its archive: `export_archive(job.id)`."""
-        return _parse(
-            self._http.post("/v1/exports", json=_request_body(ExportRequest, request, fields)), JobStatusResponse
+        return parse(
+            self._http.post("/v1/exports", json=request_body(ExportRequest, request, fields)), JobStatusResponse
         )
 
     def archive(self, job_id: str) -> bytes:
         """The job's archive (.tar.gz bytes); FlexmechError 409 while it is not stored."""
-        return _bytes(self._http.get(f"/v1/jobs/{job_id}/archive"))
+        return bytes_of(self._http.get(f"/v1/jobs/{job_id}/archive"))
 
     def export_archive(self, job_id: str, timeout: float | None = None, poll: float = 0.2) -> bytes:
         """Wait for an export job, then its archive (.tar.gz bytes); FlexmechError if it failed."""
@@ -251,29 +183,34 @@ class Client:
     def drawing(self, request: DrawingRequest | None = None, **fields: Any) -> dict:
         """The mechanism drawn to scale as data; fields as in DrawingRequest (state
         undeformed, equilibrium or path)."""
-        return _parse(self._http.post("/v1/drawings", json=_request_body(DrawingRequest, request, fields)), dict)
+        return parse(self._http.post("/v1/drawings", json=request_body(DrawingRequest, request, fields)), dict)
 
     def upgrade_document(self, document: dict) -> dict:
         """{document: in today's shape, changes: what changed} for a document of an older shape."""
-        return _parse(self._http.post("/v1/documents/upgrade", json={"document": document}), dict)
+        return parse(self._http.post("/v1/documents/upgrade", json={"document": document}), dict)
 
     def job(self, job_id: str) -> JobStatusResponse:
-        return _parse(self._http.get(f"/v1/jobs/{job_id}"), JobStatusResponse)
+        return parse(self._http.get(f"/v1/jobs/{job_id}"), JobStatusResponse)
 
     def recent_jobs(self, limit: int = 20) -> JobListResponse:
         """This key's newest jobs first, with status, progress and the document's name."""
-        return _parse(self._http.get("/v1/jobs", params={"limit": limit}), JobListResponse)
+        return parse(self._http.get("/v1/jobs", params={"limit": limit}), JobListResponse)
 
     def job_request(self, job_id: str) -> dict:
         """What the job was asked: its document and fields."""
-        return _parse(self._http.get(f"/v1/jobs/{job_id}/request"), dict)
+        return parse(self._http.get(f"/v1/jobs/{job_id}/request"), dict)
 
     def result(self, job_id: str, offset: int = 0, limit: int | None = None) -> JobResultResponse:
         """The job's result; a sweep's points a page at a time (offset, limit: at most 10,000)."""
-        return _parse(self._http.get(f"/v1/jobs/{job_id}/result", params=_page(offset, limit)), JobResultResponse)
+        return parse(self._http.get(f"/v1/jobs/{job_id}/result", params=page(offset, limit)), JobResultResponse)
 
     def cancel(self, job_id: str) -> JobStatusResponse:
-        return _parse(self._http.delete(f"/v1/jobs/{job_id}"), JobStatusResponse)
+        """Stop a queued or running job; its points so far stay readable."""
+        return parse(self._http.post(f"/v1/jobs/{job_id}/cancel"), JobStatusResponse)
+
+    def delete(self, job_id: str) -> JobDeletedResponse:
+        """Delete a job and all it stored (cancelled first if it runs): its bytes are freed."""
+        return parse(self._http.delete(f"/v1/jobs/{job_id}"), JobDeletedResponse)
 
     def wait(
         self, job_id: str, timeout: float | None = None, poll: float = 0.2, progress: Progress | None = None
@@ -281,7 +218,7 @@ class Client:
         """Poll until the job has finished (succeeded, failed or cancelled) and return its
         status. progress(status) is called after every poll. JobTimeout after `timeout` s."""
         deadline = None if timeout is None else time.monotonic() + timeout
-        while not _finished(status := self.job(job_id), deadline, progress):
+        while not finished(status := self.job(job_id), deadline, progress):
             time.sleep(poll)
         return status
 
@@ -296,8 +233,8 @@ class AsyncClient:
         timeout: float = 60.0,
         transport: httpx.AsyncBaseTransport | None = None,
     ):
-        url, key = _where(base_url, api_key)
-        self._http = httpx.AsyncClient(base_url=url, headers=_headers(key), timeout=timeout, transport=transport)
+        url, key = where(base_url, api_key)
+        self._http = httpx.AsyncClient(base_url=url, headers=headers(key), timeout=timeout, transport=transport)
 
     async def __aenter__(self) -> AsyncClient:
         return self
@@ -308,22 +245,25 @@ class AsyncClient:
     async def aclose(self) -> None:
         await self._http.aclose()
 
-    async def health(self) -> HealthResponse:
-        return _parse(await self._http.get("/v1/health"), HealthResponse)
+    async def health(self) -> HealthReport:
+        return parse(await self._http.get("/v1/health"), HealthReport)
+
+    async def usage(self) -> UsageResponse:
+        return parse(await self._http.get("/v1/usage"), UsageResponse)
 
     async def examples(self) -> list[ExampleSummary]:
-        return _parse(await self._http.get("/v1/examples"), _EXAMPLES)
+        return parse(await self._http.get("/v1/examples"), _EXAMPLES)
 
     async def example(self, name: str) -> dict:
-        return _parse(await self._http.get(f"/v1/examples/{name}"), dict)
+        return parse(await self._http.get(f"/v1/examples/{name}"), dict)
 
     async def solve(self, request: SolveRequest | None = None, **fields: Any) -> SolveResponse:
-        body = _request_body(SolveRequest, request, fields)
-        return _parse(await self._http.post("/v1/solve", json=body), SolveResponse)
+        body = request_body(SolveRequest, request, fields)
+        return parse(await self._http.post("/v1/solve", json=body), SolveResponse)
 
     async def analyses(self) -> list[dict]:
         """The server's analyses (as Client.analyses)."""
-        return _parse(await self._http.get("/v1/analyses"), list)
+        return parse(await self._http.get("/v1/analyses"), list)
 
     async def analyzer(self) -> Analyses:
         """A method per analysis of the server, each returning a coroutine of its report:
@@ -331,67 +271,70 @@ class AsyncClient:
         listing = await self.analyses()
 
         async def report(**fields: Any) -> AnalysisReport:
-            body = _request_body(SolveRequest, None, fields)
-            return _parse(await self._http.post("/v1/solve", json=body), AnalysisReport)
+            body = request_body(SolveRequest, None, fields)
+            return parse(await self._http.post("/v1/solve", json=body), AnalysisReport)
 
         return Analyses(lambda: listing, lambda name, **fields: report(analysis=name, **fields))
 
     async def sweep(self, request: SweepRequest | None = None, **fields: Any) -> JobStatusResponse:
-        body = _request_body(SweepRequest, request, fields)
-        return _parse(await self._http.post("/v1/sweeps", json=body), JobStatusResponse)
+        body = request_body(SweepRequest, request, fields)
+        return parse(await self._http.post("/v1/sweeps", json=body), JobStatusResponse)
 
     async def optimize(self, request: OptimizeRequest | None = None, **fields: Any) -> JobStatusResponse:
-        body = _request_body(OptimizeRequest, request, fields)
-        return _parse(await self._http.post("/v1/optimize", json=body), JobStatusResponse)
+        body = request_body(OptimizeRequest, request, fields)
+        return parse(await self._http.post("/v1/optimize", json=body), JobStatusResponse)
 
     async def contact_path(self, request: ContactPathRequest | None = None, **fields: Any) -> JobStatusResponse:
-        body = _request_body(ContactPathRequest, request, fields)
-        return _parse(await self._http.post("/v1/contacts", json=body), JobStatusResponse)
+        body = request_body(ContactPathRequest, request, fields)
+        return parse(await self._http.post("/v1/contacts", json=body), JobStatusResponse)
 
     async def simulation(self, request: SimulationRequest | None = None, **fields: Any) -> JobStatusResponse:
-        body = _request_body(SimulationRequest, request, fields)
-        return _parse(await self._http.post("/v1/simulations", json=body), JobStatusResponse)
+        body = request_body(SimulationRequest, request, fields)
+        return parse(await self._http.post("/v1/simulations", json=body), JobStatusResponse)
 
     async def impact_study(self, request: ImpactStudyRequest | None = None, **fields: Any) -> JobStatusResponse:
-        body = _request_body(ImpactStudyRequest, request, fields)
-        return _parse(await self._http.post("/v1/impact-studies", json=body), JobStatusResponse)
+        body = request_body(ImpactStudyRequest, request, fields)
+        return parse(await self._http.post("/v1/impact-studies", json=body), JobStatusResponse)
 
     async def export(self, request: ExportRequest | None = None, **fields: Any) -> JobStatusResponse:
-        body = _request_body(ExportRequest, request, fields)
-        return _parse(await self._http.post("/v1/exports", json=body), JobStatusResponse)
+        body = request_body(ExportRequest, request, fields)
+        return parse(await self._http.post("/v1/exports", json=body), JobStatusResponse)
 
     async def archive(self, job_id: str) -> bytes:
-        return _bytes(await self._http.get(f"/v1/jobs/{job_id}/archive"))
+        return bytes_of(await self._http.get(f"/v1/jobs/{job_id}/archive"))
 
     async def export_archive(self, job_id: str, timeout: float | None = None, poll: float = 0.2) -> bytes:
         await self.wait(job_id, timeout, poll)
         return await self.archive(job_id)
 
     async def drawing(self, request: DrawingRequest | None = None, **fields: Any) -> dict:
-        return _parse(await self._http.post("/v1/drawings", json=_request_body(DrawingRequest, request, fields)), dict)
+        return parse(await self._http.post("/v1/drawings", json=request_body(DrawingRequest, request, fields)), dict)
 
     async def upgrade_document(self, document: dict) -> dict:
-        return _parse(await self._http.post("/v1/documents/upgrade", json={"document": document}), dict)
+        return parse(await self._http.post("/v1/documents/upgrade", json={"document": document}), dict)
 
     async def job(self, job_id: str) -> JobStatusResponse:
-        return _parse(await self._http.get(f"/v1/jobs/{job_id}"), JobStatusResponse)
+        return parse(await self._http.get(f"/v1/jobs/{job_id}"), JobStatusResponse)
 
     async def recent_jobs(self, limit: int = 20) -> JobListResponse:
-        return _parse(await self._http.get("/v1/jobs", params={"limit": limit}), JobListResponse)
+        return parse(await self._http.get("/v1/jobs", params={"limit": limit}), JobListResponse)
 
     async def job_request(self, job_id: str) -> dict:
-        return _parse(await self._http.get(f"/v1/jobs/{job_id}/request"), dict)
+        return parse(await self._http.get(f"/v1/jobs/{job_id}/request"), dict)
 
     async def result(self, job_id: str, offset: int = 0, limit: int | None = None) -> JobResultResponse:
-        return _parse(await self._http.get(f"/v1/jobs/{job_id}/result", params=_page(offset, limit)), JobResultResponse)
+        return parse(await self._http.get(f"/v1/jobs/{job_id}/result", params=page(offset, limit)), JobResultResponse)
 
     async def cancel(self, job_id: str) -> JobStatusResponse:
-        return _parse(await self._http.delete(f"/v1/jobs/{job_id}"), JobStatusResponse)
+        return parse(await self._http.post(f"/v1/jobs/{job_id}/cancel"), JobStatusResponse)
+
+    async def delete(self, job_id: str) -> JobDeletedResponse:
+        return parse(await self._http.delete(f"/v1/jobs/{job_id}"), JobDeletedResponse)
 
     async def wait(
         self, job_id: str, timeout: float | None = None, poll: float = 0.2, progress: Progress | None = None
     ) -> JobStatusResponse:
         deadline = None if timeout is None else time.monotonic() + timeout
-        while not _finished(status := await self.job(job_id), deadline, progress):
+        while not finished(status := await self.job(job_id), deadline, progress):
             await asyncio.sleep(poll)
         return status

@@ -16,6 +16,8 @@ and pointer name first: [{"pointer": "/document/...", "message": "..."}, ...].
     422 duplicate_key      a key given twice in one object of the body (the message names it)
     408 request_timeout    the body did not arrive within FLEXMECH_REQUEST_READ_TIMEOUT
     409 conflict           e.g. cancelling a job that has finished
+    429 quota_exceeded     a new job would pass one of the key's quotas (service.jobs.quotas): the
+                           error's "quota" says which, with "used", "limit" and how to "free" it
     503 store_unavailable  the job store is locked or its disk full (Retry-After); nothing is lost
     500 internal_error     a bug: logged with its traceback, never shown to the caller
 """
@@ -39,6 +41,7 @@ from flexmech.models import MechanismError
 from flexmech.models.errors import pointer_of
 from flexmech.service.analyses import ANALYSES
 from flexmech.service.jobs.kinds import job_kinds
+from flexmech.service.jobs.quotas import QuotaExceeded
 
 log = logging.getLogger("flexmech.api")
 
@@ -75,10 +78,12 @@ def error_response(
     pointer: str | None = None,
     headers: dict | None = None,
     problems: list[tuple[str, str]] | None = None,
+    details: dict | None = None,
 ) -> JSONResponse:
-    """The error's body; `problems` (pointer, message) of every field, kept when more than one."""
+    """The error's body; `problems` (pointer, message) of every field, kept when more than one;
+    `details`, further fields of the error (a quota's use and limit)."""
     pointer = None if pointer is None else excerpt(pointer)
-    error: dict = {"status": status, "code": code, "message": excerpt(message), "pointer": pointer}
+    error: dict = {"status": status, "code": code, "message": excerpt(message), "pointer": pointer, **(details or {})}
     if problems and len(problems) > 1:
         error["problems"] = [{"pointer": excerpt(where), "message": excerpt(what)} for where, what in problems]
     return JSONResponse({"error": error}, status_code=status, headers=headers)
@@ -227,6 +232,11 @@ def _on_api_error(_request: Request, exc: ApiError) -> JSONResponse:
 _HTTP_CODES = {404: "not_found", 405: "method_not_allowed", 400: "bad_request", 413: "body_too_large"}
 
 
+def _on_quota_exceeded(_request: Request, exc: QuotaExceeded) -> JSONResponse:
+    headers = {"Retry-After": "10"} if exc.quota == "running" else None  # the others wait for a DELETE
+    return error_response(429, "quota_exceeded", str(exc), headers=headers, details=exc.details())
+
+
 def _on_http_error(_request: Request, exc: StarletteHTTPException) -> JSONResponse:
     code = _HTTP_CODES.get(exc.status_code, "http_error")
     message = exc.detail if isinstance(exc.detail, str) else "error"
@@ -253,6 +263,7 @@ def install_error_handlers(app: FastAPI) -> None:
     app.add_exception_handler(RequestValidationError, _on_validation_error)
     app.add_exception_handler(MechanismError, _on_mechanism_error)
     app.add_exception_handler(ApiError, _on_api_error)
+    app.add_exception_handler(QuotaExceeded, _on_quota_exceeded)
     app.add_exception_handler(StarletteHTTPException, _on_http_error)
     app.add_exception_handler(SQLAlchemyError, _on_store_error)
     app.add_exception_handler(Exception, _on_unexpected)

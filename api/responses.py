@@ -11,6 +11,7 @@ _TEXT = {
     409: "The job is not in a state for it (cancelling a finished job; the archive of a job not succeeded)",
     413: "Request body over the size limit",
     422: "The request or its mechanism cannot be used; `pointer` names the field",
+    429: "A quota of the key is full (`quota`, `used`, `limit`; `free` says how to free it): a new job is refused",
 }
 
 
@@ -19,3 +20,4 @@ def errors(*statuses: int) -> dict:
 
 
 ERRORS = errors(400, 401, 413, 422)
+JOB_ERRORS = errors(400, 401, 413, 422, 429)  # creating a job: quotas too

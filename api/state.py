@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from flexmech.api.solver_pool import SolverPool
 from flexmech.service.examples import ExampleLibrary
 from flexmech.service.jobs.executors import TaskExecutor
+from flexmech.service.jobs.retention import RetentionPurge
 from flexmech.service.jobs.runner import JobRunner
 from flexmech.service.jobs.store import JobStore
 from flexmech.service.kernels.builder_process import BuilderProcess
@@ -25,6 +26,7 @@ class Services:
     solver: SolverPool
     examples: ExampleLibrary
     builder: BuilderProcess | None = None
+    retention: RetentionPurge | None = None
 
     def owner_of(self, api_key: str | None) -> str:
         """Who owns the jobs a key makes: a digest of the key (the key itself is never stored);

@@ -3,18 +3,21 @@
 FLEXMECH_DATABASE_URL=postgresql+psycopg://user:pw@db/flexmech   (default: SQLite file)
 FLEXMECH_DASK_ADDRESS=tcp://scheduler:8786                        (default: a process pool)
 FLEXMECH_API_KEYS=key-one,key-two                                 (default: no keys, open)
+FLEXMECH_KEY_MAX_BYTES=500MB  FLEXMECH_JOB_RETENTION=P7D            (quotas per key, retention)
 """
 
 from __future__ import annotations
 
 import os
+from datetime import timedelta
 from pathlib import Path
 from typing import Annotated, Literal
 
-from pydantic import Field, field_validator
+from pydantic import ByteSize, Field, field_validator
 from pydantic_settings import BaseSettings, NoDecode, SettingsConfigDict
 
 from flexmech.service.costs import Limits
+from flexmech.service.jobs.quotas import Quotas
 
 
 def default_data_dir() -> Path:
@@ -42,6 +45,20 @@ class Settings(BaseSettings):
 
     # Access: with keys set, every /v1 request but /v1/health needs X-API-Key.
     api_keys: Annotated[list[str], NoDecode] = Field(default_factory=list)
+
+    # What one key may keep in the job store (service.jobs.quotas); without keys, the service
+    key_max_jobs: int = Field(10_000, ge=1, description="jobs one key may keep stored")
+    key_max_bytes: ByteSize = Field(
+        ByteSize(1_000_000_000),
+        ge=100_000,
+        description="bytes one key may keep stored (specs, documents, results, archives); 1GB, 500MiB, or bytes",
+    )
+    key_max_running: int = Field(20, ge=1, description="jobs one key may have queued or running")
+    job_retention: timedelta = Field(
+        timedelta(days=30),
+        gt=timedelta(0),
+        description="how long a job is kept after it ends (seconds, or ISO 8601 like P30D); then it is purged",
+    )
 
     # Limits (service.costs): every request is costed against them before anything is built
     max_request_bytes: int = Field(1_000_000, ge=1024)
@@ -93,6 +110,17 @@ class Settings(BaseSettings):
     )
     log_level: Literal["debug", "info", "warning", "error"] = "info"
 
+    @field_validator("job_retention", mode="before")
+    @classmethod
+    def _seconds(cls, value):
+        """A bare number is seconds (pydantic reads only ISO 8601 and [D days,] HH:MM:SS from text)."""
+        if isinstance(value, str):
+            try:
+                return float(value)
+            except ValueError:
+                return value
+        return value
+
     @field_validator("api_keys", mode="before")
     @classmethod
     def _split_keys(cls, value):
@@ -129,6 +157,9 @@ class Settings(BaseSettings):
             max_export_unknowns=self.max_export_unknowns,
             max_response_bytes=self.max_response_bytes,
         )
+
+    def quotas(self) -> Quotas:
+        return Quotas(self.key_max_jobs, int(self.key_max_bytes), self.key_max_running)
 
     def resolved_database_url(self) -> str:
         if self.database_url:

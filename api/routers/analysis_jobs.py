@@ -15,7 +15,7 @@ from flexmech.api.deps import OwnerDep, ServicesDep
 from flexmech.api.documents import request_document
 from flexmech.api.job_creation import JOB_LINKS, create_job
 from flexmech.api.job_schemas import JobStatusResponse
-from flexmech.api.responses import ERRORS
+from flexmech.api.responses import JOB_ERRORS
 from flexmech.service.analyses import ANALYSES
 from flexmech.service.jobs.kinds import kind_named
 
@@ -29,7 +29,7 @@ def add_analysis_job_route(router: APIRouter, body: Any) -> None:
         operation_id=kind.operation_id,
         status_code=202,
         response_model=JobStatusResponse,
-        responses={**ERRORS, 202: {"description": "The job, queued", "links": JOB_LINKS}},
+        responses={**JOB_ERRORS, 202: {"description": "The job, queued", "links": JOB_LINKS}},
         summary=kind.title,
     )
     async def analysis_job(

@@ -16,7 +16,7 @@ from flexmech.api.documents import request_document
 from flexmech.api.job_creation import JOB_LINKS, create_job
 from flexmech.api.job_schemas import JobStatusResponse
 from flexmech.api.parsed_route import ParsedBodyRoute
-from flexmech.api.responses import ERRORS
+from flexmech.api.responses import JOB_ERRORS
 from flexmech.api.schemas import DocumentRequest
 from flexmech.service.jobs.base import JobKind
 from flexmech.service.jobs.kinds import job_kinds
@@ -63,7 +63,7 @@ def _add_route(router: APIRouter, kind: JobKind) -> None:
         operation_id=kind.operation_id,
         status_code=202,
         response_model=JobStatusResponse,
-        responses={**ERRORS, 202: {"description": "The job, queued", "links": JOB_LINKS}},
+        responses={**JOB_ERRORS, 202: {"description": "The job, queued", "links": JOB_LINKS}},
         summary=kind.title,
         name=kind.operation_id,
     )

@@ -1,4 +1,4 @@
-"""/v1/jobs/{id}: status and progress, result, cancel. Jobs of any kind."""
+"""/v1/jobs/{id}: status and progress, result, cancel, delete. Jobs of any kind."""
 
 from __future__ import annotations
 
@@ -12,6 +12,8 @@ from flexmech.api.deps import OwnerDep, ServicesDep
 from flexmech.api.errors import ApiError, not_found
 from flexmech.api.job_schemas import JobListResponse, JobResultResponse, JobStatusResponse, JobSummary
 from flexmech.api.responses import errors
+from flexmech.api.routers.usage import usage_response
+from flexmech.api.store_schemas import JobDeletedResponse
 from flexmech.service.jobs.kinds import job_kinds, kind_named
 from flexmech.service.jobs.store import FINAL, Job
 
@@ -185,21 +187,48 @@ async def get_job_archive(services: ServicesDep, owner: OwnerDep, job_id: str = 
     )
 
 
-@router.delete(
-    "/{job_id}",
+def _cancel(services, job: Job) -> Job:
+    """Cancel the job (409 when it has already finished); the runner stops its tasks."""
+    cancelled = job.status not in FINAL and services.store.finish(job.id, "cancelled", "cancelled by the caller")
+    current = services.store.get(job.id) or job
+    if not cancelled:
+        raise ApiError(409, "conflict", f"job '{job.id}' has already {current.status}")
+    services.runner.wake()
+    return current
+
+
+@router.post(
+    "/{job_id}/cancel",
     operation_id="cancel_job",
     response_model=JobStatusResponse,
     responses=errors(401, 404, 409),
-    summary="Cancel a queued or running job",
+    summary="Cancel a queued or running job (its points so far are kept)",
 )
 async def cancel_job(services: ServicesDep, owner: OwnerDep, job_id: str = JobId) -> JobStatusResponse:
-    """Stored points are kept and stay readable at /result."""
+    """Stored points are kept and stay readable at /result; DELETE removes the job."""
     job = await run_in_threadpool(_owned, services, job_id, owner)
-    cancelled = job.status not in FINAL and await run_in_threadpool(
-        services.store.finish, job.id, "cancelled", "cancelled by the caller"
-    )
-    job = await run_in_threadpool(services.store.get, job_id)
-    if not cancelled:
-        raise ApiError(409, "conflict", f"job '{job_id}' has already {job.status}")
-    services.runner.wake()
-    return job_status(job)
+    return job_status(await run_in_threadpool(_cancel, services, job))
+
+
+def _delete(services, job: Job, owner: str) -> JobDeletedResponse:
+    if job.status not in FINAL:
+        services.store.finish(job.id, "cancelled", "deleted by the caller")
+        services.runner.wake()
+    freed = services.store.delete(job.id)
+    if freed is None:  # deleted by another request (or purged) meanwhile
+        raise not_found(f"no job '{job.id}'")
+    return JobDeletedResponse(id=job.id, status=job.status, freed_bytes=freed, usage=usage_response(services, owner))
+
+
+@router.delete(
+    "/{job_id}",
+    operation_id="delete_job",
+    response_model=JobDeletedResponse,
+    responses=errors(401, 404),
+    summary="Delete a job and everything it stored (a queued or running job is cancelled first)",
+)
+async def delete_job(services: ServicesDep, owner: OwnerDep, job_id: str = JobId) -> JobDeletedResponse:
+    """Its spec, points and archive are gone at once and their bytes count no more against
+    the key's quota (its document's too, unless another of the key's jobs uses it)."""
+    job = await run_in_threadpool(_owned, services, job_id, owner)
+    return await run_in_threadpool(_delete, services, job, owner)

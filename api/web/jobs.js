@@ -2,7 +2,7 @@
 // a page at a time, and Cancel (DELETE); its request (/request) draws its mechanism on its
 // own page (/jobs/{id}).
 
-import { get, remove } from "./api.js";
+import { get, post } from "./api.js";
 
 const $ = (id) => document.getElementById(id);
 const POLL_MS = 250;
@@ -60,7 +60,7 @@ export function follow(id, onTick, wanted = () => true) {
 }
 
 export async function cancel(id) {
-  const status = await remove(`/v1/jobs/${id}`);
+  const status = await post(`/v1/jobs/${id}/cancel`);
   showProgress(status);
   return status;
 }

@@ -122,7 +122,8 @@ class JobRunner:
             self._wake.wait(self.poll_seconds)
         for active in list(self._active.values()):
             self._save(active)
-            self._maybe_complete(active)
+            if active.job.id in self._active:  # not stopped by its key's byte quota
+                self._maybe_complete(active)
         self._write_final_statuses()
         self._reap_stopping()
 
@@ -152,9 +153,9 @@ class JobRunner:
     def _drop_finished_jobs(self) -> None:
         """Jobs cancelled through the API (their status is final in the store), and jobs over
         their time limit."""
+        statuses = self.store.statuses(self._active)
         for job_id, active in list(self._active.items()):
-            current = self.store.get(job_id)
-            if current is None or current.status not in ("queued", "running"):
+            if statuses.get(job_id) not in ("queued", "running"):  # cancelled, or deleted
                 self._stop_job(active)
             elif time.monotonic() - active.activated > self.job_time_limit:
                 self._stop_job(active)
@@ -229,9 +230,29 @@ class JobRunner:
                 return
             active.unsaved.popleft()
             active.finished.update(points)
+            if self._over_byte_quota(active):
+                return
             active.pending.extend(
                 active.kind.follow_up(active.job.spec, active.job.plan, task, active.finished, self.chunk_size)
             )
+
+    def _over_byte_quota(self, active: _ActiveJob) -> bool:
+        """A job whose points took its key past the byte quota stops there, its points kept."""
+        quotas = self.store.quotas
+        if quotas is None:
+            return False
+        used = self.store.usage(active.job.owner).bytes
+        if used <= quotas.max_bytes:
+            return False
+        self._stop_job(active)
+        self._finish(
+            active.job.id,
+            "failed",
+            f"stopped by the key's quota of stored bytes: {used} used of {quotas.max_bytes}; "
+            f"{len(active.finished)} of {active.job.total} points are stored. To free space, delete "
+            "jobs you no longer need (DELETE /v1/jobs/{id})",
+        )
+        return True
 
     def _task_failed(self, active: _ActiveJob, task: dict, error: BaseException, born: int) -> None:
         if isinstance(error, BrokenProcessPool):

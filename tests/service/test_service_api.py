@@ -185,6 +185,8 @@ def test_openapi_operation_ids_are_stable(api_server):
         "get_job_request",
         "get_job_archive",
         "cancel_job",
+        "delete_job",
+        "get_usage",
         "list_examples",
         "get_example",
         "health",

@@ -1,0 +1,113 @@
+"""What the job store holds and how it lets go of it: usage against quotas, deleting a job,
+purging jobs past their retention, and giving the freed pages back (SQLite)."""
+
+from __future__ import annotations
+
+from datetime import datetime
+from pathlib import Path
+
+from sqlalchemy import case, delete, func, select, text
+from sqlalchemy.engine import Engine, make_url
+from sqlalchemy.orm import sessionmaker
+
+from flexmech.service.jobs.quotas import Usage
+from flexmech.service.jobs.store_accounting import drop_unused_documents, owner_uses_document, usage_of
+from flexmech.service.jobs.store_schema import ACTIVE, FINAL, DocumentRow, JobRow, PointRow
+
+PURGE_BATCH = 200  # jobs deleted per transaction of a purge: a purge never holds the store long
+
+
+class StoreHousekeeping:
+    engine: Engine
+    url: str
+    _session: sessionmaker
+
+    def usage(self, owner: str) -> Usage:
+        with self._session() as s:
+            return usage_of(s, owner)
+
+    def totals(self) -> dict:
+        """The whole store: jobs, those queued or running, documents, the bytes they hold (as
+        quotas count them) and the database's own size on disk (pages, indexes, log)."""
+        with self._session() as s:
+            jobs, running, job_bytes = s.execute(
+                select(
+                    func.count(JobRow.id),
+                    func.coalesce(func.sum(case((JobRow.status.in_(ACTIVE), 1), else_=0)), 0),
+                    func.coalesce(func.sum(JobRow.bytes), 0),
+                )
+            ).one()
+            documents, document_bytes = s.execute(
+                select(func.count(DocumentRow.digest), func.coalesce(func.sum(DocumentRow.bytes), 0))
+            ).one()
+        return {
+            "jobs": int(jobs),
+            "running": int(running),
+            "documents": int(documents),
+            "bytes": int(job_bytes) + int(document_bytes),
+            "database_bytes": self.database_bytes(),
+        }
+
+    def database_bytes(self) -> int | None:
+        """The database's size: SQLite's file and its write-ahead log; PostgreSQL's database."""
+        if self.engine.dialect.name == "sqlite":
+            path = make_url(self.url).database
+            if not path or path == ":memory:":
+                return None
+            return sum(p.stat().st_size for p in (Path(path), Path(path + "-wal")) if p.exists())
+        with self.engine.connect() as connection:
+            return int(connection.execute(text("SELECT pg_database_size(current_database())")).scalar_one())
+
+    def delete(self, job_id: str) -> int | None:
+        """Delete a job with its points (and its document, when no other job uses it); the
+        bytes its owner gets back, None when there was no such job."""
+        with self._session.begin() as s:
+            row = s.get(JobRow, job_id)
+            if row is None:
+                return None
+            s.execute(delete(PointRow).where(PointRow.job_id == job_id))
+            s.execute(delete(JobRow).where(JobRow.id == job_id))
+            freed = row.bytes
+            if row.document is not None and not owner_uses_document(s, row.owner, row.document):
+                freed += s.scalar(select(DocumentRow.bytes).where(DocumentRow.digest == row.document)) or 0
+            drop_unused_documents(s, {row.document} if row.document else set())
+        self.vacuum()
+        return freed
+
+    def purge_ended_before(self, cutoff: datetime, batch: int = PURGE_BATCH) -> int:
+        """Delete up to `batch` jobs that ended before `cutoff` (oldest first), as delete()
+        does; how many. A job still queued or running is never purged."""
+        with self._session.begin() as s:
+            ids = list(
+                s.scalars(
+                    select(JobRow.id)
+                    .where(JobRow.status.in_(FINAL), JobRow.finished_at < cutoff)
+                    .order_by(JobRow.finished_at)
+                    .limit(batch)
+                )
+            )
+            if not ids:
+                return 0
+            digests = set(s.scalars(select(JobRow.document).where(JobRow.id.in_(ids), JobRow.document.is_not(None))))
+            s.execute(delete(PointRow).where(PointRow.job_id.in_(ids)))
+            s.execute(delete(JobRow).where(JobRow.id.in_(ids)))
+            drop_unused_documents(s, digests)
+        self.vacuum()
+        return len(ids)
+
+    def vacuum(self) -> None:
+        """SQLite: hand the pages deleted rows left free back to the file system (a file made
+        with incremental auto-vacuum; an older file reuses them for new rows instead)."""
+        if self.engine.dialect.name != "sqlite":
+            return
+        with self.engine.connect() as connection:
+            connection.exec_driver_sql("PRAGMA incremental_vacuum")
+            connection.exec_driver_sql("PRAGMA wal_checkpoint(PASSIVE)")
+            connection.commit()
+
+    def compact(self) -> None:
+        """After an outage: fold SQLite's write-ahead log back into the database file and
+        truncate it (a full disk may have left it large). Nothing to do on PostgreSQL."""
+        if self.engine.dialect.name == "sqlite":
+            with self.engine.connect() as connection:
+                connection.exec_driver_sql("PRAGMA wal_checkpoint(TRUNCATE)")
