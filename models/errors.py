@@ -19,6 +19,20 @@ class MechanismError(ValueError):
         where = pointer if pointer else "document"
         super().__init__(f"{where}: {problem}")
 
+    def __reduce__(self):
+        """Pickled with its fields: a job worker's error reaches the server as the same error
+        (pickle's default would call __init__ with the message alone, and the pool would break)."""
+        return (type(self), (self.pointer, self.problem, self.problems))
+
+    def __eq__(self, other: object) -> bool:
+        return type(other) is type(self) and (self.pointer, self.problem, self.problems) == (
+            other.pointer,  # type: ignore[attr-defined]
+            other.problem,  # type: ignore[attr-defined]
+            other.problems,  # type: ignore[attr-defined]
+        )
+
+    __hash__ = ValueError.__hash__
+
 
 def pointer_of(location: tuple) -> str:
     """JSON pointer (RFC 6901) of a pydantic error location."""

@@ -167,6 +167,41 @@ def check_export_unknowns(unknowns: int, limits: Limits, pointer: str = "/docume
         )
 
 
+# What checking an export costs: its Python twin of the C iteration runs over the example path
+# (service.export.measure), warm and cold at each point, each run at most 1 + max_iterations x
+# (line_search_halvings + 1) kernel calls. A call took 52 us for the gripper (9 unknowns) and
+# 394 us for gripper_exact (137), about 28 + 2.7 x unknowns us.
+EXPORT_CHECK_SECONDS = 60.0  # the worst case the check may take
+EXPORT_PATH_POINTS = 100  # points of the example path (service.export.sources.ExamplePath)
+EXPORT_RUNS_PER_POINT = {"equilibrium": 2, "contact": 4}  # warm and cold; contact falls back to cold
+TWIN_CALL_SECONDS, TWIN_CALL_SECONDS_PER_UNKNOWN = 28e-6, 2.7e-6
+# A nondimensional residual of order one reaches about 1e-15 in double precision, reliably 1e-14:
+# below that a Newton run never converges and runs to max_iterations at every point.
+MIN_EXPORT_TOLERANCE = 1e-14
+
+
+def check_export_iteration(unknowns: int, max_iterations: int, halvings: int, tolerance: float, contact: bool) -> None:
+    """An export's iteration options, costed: a tolerance double precision can reach, and the
+    worst case of checking it over the example path within EXPORT_CHECK_SECONDS."""
+    if tolerance < MIN_EXPORT_TOLERANCE:
+        raise MechanismError(
+            "/tolerance",
+            f"{tolerance:g} is below what double precision reaches (a nondimensional |R|_inf of about "
+            f"{MIN_EXPORT_TOLERANCE:g}): give at least {MIN_EXPORT_TOLERANCE:g}",
+        )
+    runs = EXPORT_PATH_POINTS * sum(EXPORT_RUNS_PER_POINT[t] for t in ("equilibrium", "contact")[: 1 + contact])
+    calls = runs * (1 + max_iterations * (halvings + 1))
+    seconds = calls * (TWIN_CALL_SECONDS + TWIN_CALL_SECONDS_PER_UNKNOWN * unknowns)
+    if seconds > EXPORT_CHECK_SECONDS:
+        pointer = "/max_iterations" if max_iterations > 30 or halvings <= 6 else "/line_search_halvings"
+        raise MechanismError(
+            pointer,
+            f"{max_iterations} Newton steps x {halvings + 1} line-search trials x {runs} runs over the example path "
+            f"= {calls} kernel calls of {unknowns} unknowns to check the export, about {seconds:.0f} s at worst: "
+            f"the limit is {EXPORT_CHECK_SECONDS:.0f} s; ask fewer steps or halvings",
+        )
+
+
 def check_result_size(points: int, per_point: int, limits: Limits, pointer: str = "/outputs") -> None:
     if points * per_point > limits.max_result_values:
         raise MechanismError(

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from contextlib import contextmanager
 
 
@@ -57,5 +58,27 @@ def ends_after(seconds: float | None) -> float:
     return _scope.deadline
 
 
+_stopped: Callable[[], bool] | None = None  # inside a job task: whether its job was cancelled
+
+
+@contextmanager
+def stop_scope(stopped: Callable[[], bool]):
+    """Inside a job task (service.jobs.kinds.run_task): every loop that asks passed() (or
+    stop_requested()) also ends when `stopped()` says the job was cancelled or is out of time (a cheap look: service.jobs.control reads its
+    signal at most every 0.2 s), so a cancel ends a Newton run, a trace or a simulation window
+    within a moment, not at its own time limit."""
+    global _stopped
+    _stopped = stopped
+    try:
+        yield
+    finally:
+        _stopped = None
+
+
+def stop_requested() -> bool:
+    """Inside a job task: whether its job was cancelled or is out of time (else False)."""
+    return _stopped is not None and _stopped()
+
+
 def passed(end: float) -> bool:
-    return time.monotonic() > end
+    return time.monotonic() > end or stop_requested()

@@ -15,6 +15,7 @@ import casadi as ca
 import numpy as np
 
 from flexmech.models import Mechanism, MechanismError
+from flexmech.service.deadline import stop_requested
 from flexmech.service.export.direction import direction
 from flexmech.service.export.plan import ExportPlan
 from flexmech.service.units import matrix_to_doc
@@ -183,7 +184,7 @@ def iterate(step, x0: np.ndarray, args: tuple, plan: ExportPlan) -> Iteration:
             return Iteration(4, x, k)
         if norm[0] <= options.tolerance:
             return Iteration(0, x, k)
-        if k == options.max_iterations:
+        if k == options.max_iterations or stop_requested():  # a job's export stops when cancelled or out of time
             break
         t = 1.0
         for halving in range(options.line_search_halvings + 1):

@@ -89,7 +89,7 @@ class AnalysisJob:
 
     def run(self, stored: JSON, task: JSON) -> list[tuple[int, JSON]]:
         control = TaskControl(task)
-        if control.should_stop():
+        if control.between_points():  # cancelled, or asked to yield before it began: it runs later
             return []
         spec = read_spec(AnalysisJobSpec, stored)
         analysis = ANALYSES.named(spec.analysis)

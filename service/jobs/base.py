@@ -117,3 +117,29 @@ class InOrder(ABC):
         self, spec: JSON, plan: JSON, task: JSON, finished: Mapping[int, JSON], chunk_size: int
     ) -> list[JSON]:
         return self.tasks(spec, plan, finished, chunk_size)
+
+
+def unfinished_part(task: JSON, finished: Mapping[int, JSON]) -> JSON | None:
+    """The task with only its unfinished points (`indices`, and `values` beside them when it
+    carries them); None when none is left."""
+    keep = [k for k, i in enumerate(task["indices"]) if i not in finished]
+    if not keep:
+        return None
+    rest = dict(task, indices=[task["indices"][k] for k in keep])
+    if isinstance(task.get("values"), list):
+        rest["values"] = [task["values"][k] for k in keep]
+    return rest
+
+
+def task_remainder(kind: Any, task: JSON, finished: Mapping[int, JSON]) -> JSON | None:
+    """What a task that gave its worker up (service.jobs.fair_share) leaves to do, once its points
+    are stored: None for a kind whose points run in order (its follow_up plans the next chunk
+    from the stored points), else the task's unfinished points, as the kind's `remainder` says
+    if it has one."""
+    own = getattr(kind, "remainder", None)
+    if own is not None:
+        rest: JSON | None = own(task, finished)
+        return rest
+    if isinstance(kind, InOrder):
+        return None
+    return unfinished_part(task, finished)

@@ -167,6 +167,8 @@ class ContactJob(InOrder):
         try:
             for index, state in follow(mech, problem, fields, task["indices"], previous, options, control.should_stop):
                 points.append((index, state_record(mech, problem, state, fields.at(index), outputs)))
+                if control.should_yield():  # another key's job waits: the path goes on from here later
+                    break
         except PenetratingStart as error:
             raise penetration_error(mech, error) from None
         return points

@@ -1,5 +1,6 @@
 """In a worker: whether the running task should stop, because its job was cancelled or is out
-of time. A task carries its job's deadline (time.time() seconds) and a stop signal (a flag
+of time, or because the runner asked it to give its worker to another key's job (it then
+returns the points it has; the runner keeps them and queues the rest: service.jobs.fair_share). A task carries its job's deadline (time.time() seconds) and a stop signal (a flag
 file for the process pool, a Dask Event on a cluster: service.jobs.executors). Kinds check
 between points, give Newton the time left, and hand should_stop to IPOPT's iteration hook.
 """
@@ -21,23 +22,37 @@ class TaskControl:
         signal = task.get("control") or {}
         self._file = signal.get("file")
         self._event = signal.get("dask_event")
-        self._checked, self._cancelled = 0.0, False
+        self._yield_file = signal.get("yield_file")
+        self._yield_event = signal.get("yield_event")
+        self._checked, self._cancelled, self._yield = 0.0, False, False
 
     def remaining(self) -> float | None:
         """Seconds until the job's deadline (None: no deadline)."""
         return None if self.deadline is None else self.deadline - time.time()
 
     def cancelled(self) -> bool:
+        self._look()
+        return self._cancelled
+
+    def should_yield(self) -> bool:
+        """Whether the runner asked this task to give its worker to another key's job: checked
+        between points (a point in progress is finished, so its result is whole)."""
+        self._look()
+        return self._yield
+
+    def _look(self) -> None:
         if self._cancelled or time.monotonic() - self._checked < CHECK_EVERY:
-            return self._cancelled
+            return
         self._checked = time.monotonic()
         if self._file is not None:
             self._cancelled = os.path.exists(self._file)
+            self._yield = self._yield or bool(self._yield_file and os.path.exists(self._yield_file))
         elif self._event is not None:
             from distributed import Event, get_client
 
-            self._cancelled = Event(self._event, client=get_client()).is_set()
-        return self._cancelled
+            client = get_client()
+            self._cancelled = Event(self._event, client=client).is_set()
+            self._yield = self._yield or bool(self._yield_event and Event(self._yield_event, client=client).is_set())
 
     def stop_reason(self) -> str | None:
         """'cancelled', 'time_limit' or None."""
@@ -48,6 +63,10 @@ class TaskControl:
 
     def should_stop(self) -> bool:
         return self.stop_reason() is not None
+
+    def between_points(self) -> bool:
+        """Whether to end the task before its next point: stopped, or asked to yield."""
+        return self.should_stop() or self.should_yield()
 
     def time_limit(self, per_solve: float | None) -> float | None:
         """The time a solve may take: its own limit, within what is left of the job's."""

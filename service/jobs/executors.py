@@ -32,7 +32,8 @@ class TaskExecutor(ABC):
     """Owns a concurrent.futures executor and knows how to make a new one if it breaks."""
 
     description: str
-    capacity: int  # tasks worth keeping in flight
+    workers: int  # tasks that run at once
+    capacity: int  # tasks worth keeping in flight (some wait in the executor's queue)
 
     def __init__(self):
         self._signalled: dict[str, float] = {}  # job id -> time.monotonic() of its stop signal
@@ -55,6 +56,18 @@ class TaskExecutor(ABC):
     def stop(self, job_id: str) -> None:
         """Tell the job's running tasks to stop."""
         self._signalled[job_id] = time.monotonic()
+
+    @abstractmethod
+    def yield_signal_for(self, task_id: str) -> dict:
+        """What one task carries to learn that it should give its worker up (JSON)."""
+
+    @abstractmethod
+    def ask_to_yield(self, task_id: str) -> None:
+        """Tell one task to end after the point in progress (its points so far are kept)."""
+
+    @abstractmethod
+    def forget_task(self, task_id: str) -> None:
+        """The task has ended: drop its yield signal."""
 
     def signalled_before(self, moment: float) -> list[str]:
         """Jobs whose stop signal was given before `moment` (time.monotonic())."""
@@ -116,6 +129,15 @@ class ProcessPool(TaskExecutor):
     def control_for(self, job_id: str) -> dict:
         return {"file": str(self._flags / f"{job_id}.stop")}
 
+    def yield_signal_for(self, task_id: str) -> dict:
+        return {"yield_file": str(self._flags / f"{task_id}.yield")}
+
+    def ask_to_yield(self, task_id: str) -> None:
+        (self._flags / f"{task_id}.yield").touch()
+
+    def forget_task(self, task_id: str) -> None:
+        (self._flags / f"{task_id}.yield").unlink(missing_ok=True)
+
     def stop(self, job_id: str) -> None:
         super().stop(job_id)
         (self._flags / f"{job_id}.stop").touch()
@@ -138,6 +160,7 @@ class DaskCluster(TaskExecutor):
         self.address = address
         self._client = Client(address, timeout=timeout, set_as_default=False)
         workers = max(1, len(self._client.scheduler_info(n_workers=-1).get("workers", {})))
+        self.workers = workers
         self.capacity = 2 * workers
         # /v1/health shows this to anyone: the cluster's address stays in the server's log
         self.description = f"Dask cluster ({workers} workers)"
@@ -149,6 +172,19 @@ class DaskCluster(TaskExecutor):
 
     def control_for(self, job_id: str) -> dict:
         return {"dask_event": f"flexmech-stop-{job_id}"}
+
+    def yield_signal_for(self, task_id: str) -> dict:
+        return {"yield_event": f"flexmech-yield-{task_id}"}
+
+    def ask_to_yield(self, task_id: str) -> None:
+        from distributed import Event
+
+        Event(f"flexmech-yield-{task_id}", client=self._client).set()
+
+    def forget_task(self, task_id: str) -> None:
+        from distributed import Event
+
+        Event(f"flexmech-yield-{task_id}", client=self._client).clear()
 
     def stop(self, job_id: str) -> None:
         from distributed import Event

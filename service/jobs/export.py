@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Annotated, Literal
 from pydantic import BaseModel, ConfigDict, Field
 
 from flexmech.models import Mechanism, MechanismError
-from flexmech.service.costs import Limits, check_export_unknowns
+from flexmech.service.costs import Limits, check_export_iteration, check_export_unknowns
 from flexmech.service.jobs.base import JSON, JobOptions, Plan, StoredJob, read_spec
 from flexmech.service.jobs.control import TaskControl
 from flexmech.service.requests import compile_request, escape_pointer_part
@@ -167,7 +167,11 @@ def _checked(spec: ExportSpec, mech: Mechanism, limits: Limits) -> ExportPlan:
         raise MechanismError("/document/bodies", "nothing moves: every body is fixed or prescribed, nothing to export")
     check_export_unknowns(mech.n_free, limits)
     try:
-        return export_plan(mech, spec.model or AS_IN_THE_DOCUMENT, export_options(spec))
+        plan = export_plan(mech, spec.model or AS_IN_THE_DOCUMENT, export_options(spec))
+        check_export_iteration(
+            mech.n_free, spec.max_iterations, spec.line_search_halvings, spec.tolerance, bool(plan.contact_outputs)
+        )
+        return plan
     except MechanismError as exc:
         fields = {p: _in_request(p, spec) for p, _ in exc.problems} | {exc.pointer: _in_request(exc.pointer, spec)}
 
@@ -248,9 +252,14 @@ class ExportJob:
 
     def run(self, stored: JSON, task: JSON) -> list[tuple[int, JSON]]:
         control = TaskControl(task)
-        if control.should_stop():
+        if control.between_points():  # cancelled, or asked to yield before it began: it runs later
             return []
-        point = export_point(read_spec(ExportSpec, stored))
+        try:
+            point = export_point(read_spec(ExportSpec, stored))
+        except MechanismError:
+            if control.should_stop():  # its check was cut short by the stop: no finding of the export's
+                return []
+            raise
         return [] if control.should_stop() else [(0, point)]  # stopped meanwhile: not stored
 
     def failed(self, point: JSON) -> bool:

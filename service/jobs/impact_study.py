@@ -147,7 +147,7 @@ class ImpactStudyJob:
         tolerance = spec.study.tolerance
         points = []
         for index in task["indices"]:
-            if control.should_stop():
+            if control.between_points():  # cancelled or out of time, or asked to yield its worker
                 break
             pointer, change = runs[index]
             run = study_point(

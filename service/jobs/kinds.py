@@ -9,7 +9,9 @@ from __future__ import annotations
 
 from functools import lru_cache
 
+from flexmech.service.deadline import stop_scope
 from flexmech.service.jobs.base import JobKind, Plan
+from flexmech.service.jobs.control import TaskControl
 from flexmech.service.threads import single_threaded_blas
 
 __all__ = ["JobKind", "Plan", "job_kinds", "kind_named", "register_job_kind", "run_task"]
@@ -69,4 +71,5 @@ def kind_named(name: str) -> JobKind:
 def run_task(kind: str, spec: dict, task: dict) -> list[tuple[int, dict]]:
     """The function workers execute (a module-level name, so pools and Dask can ship it)."""
     single_threaded_blas()
-    return kind_named(kind).run(spec, task)
+    with stop_scope(TaskControl(task).should_stop):  # Newton and the other loops end on a cancel too
+        return kind_named(kind).run(spec, task)

@@ -145,7 +145,7 @@ class OptimizeJob:
         points = []
         control = TaskControl(task)
         for k in task["indices"]:
-            if control.should_stop():  # cancelled, or out of the job's time: the runner drops the rest
+            if control.between_points():  # cancelled or out of time (the rest is dropped), or asked to yield
                 break
             start = run_start(prepared, k, stop=control.should_stop)
             points.append(

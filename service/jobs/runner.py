@@ -24,34 +24,20 @@ import threading
 import time
 from collections import deque
 from concurrent.futures import FIRST_COMPLETED, Future, wait
-from concurrent.futures.process import BrokenProcessPool
-from dataclasses import dataclass, field
 
+from flexmech.service.jobs.base import task_remainder
 from flexmech.service.jobs.executors import TaskExecutor
-from flexmech.service.jobs.kinds import JobKind, kind_named, run_task
-from flexmech.service.jobs.store import Job, JobStore
+from flexmech.service.jobs.kinds import kind_named
+from flexmech.service.jobs.runner_tasks import ActiveJob, TaskFeeding
+from flexmech.service.jobs.store import JobStore
 from flexmech.service.jobs.store_guard import StoreGuard
 
 log = logging.getLogger("flexmech.runner")
 
-MAX_TASK_ATTEMPTS = 2  # a task whose worker died is tried once more before its job fails
 STOP_GRACE = 5.0  # seconds a told-to-stop task may run on before its workers are killed
 
 
-@dataclass
-class _ActiveJob:
-    job: Job
-    kind: JobKind
-    finished: dict[int, dict]
-    pending: deque
-    activated: float  # time.monotonic() when this process took the job up
-    deadline: float  # time.time() by which its tasks must end (the job time limit)
-    in_flight: dict[Future, dict] = field(default_factory=dict)
-    attempts: dict[int, int] = field(default_factory=dict)  # id(task) -> attempts
-    unsaved: deque = field(default_factory=deque)  # (task, points) whose points are not stored yet
-
-
-class JobRunner:
+class JobRunner(TaskFeeding):
     def __init__(
         self,
         store: JobStore,
@@ -66,7 +52,7 @@ class JobRunner:
         self.chunk_size = chunk_size
         self.job_time_limit = job_time_limit
         self.poll_seconds = poll_seconds
-        self._active: dict[str, _ActiveJob] = {}
+        self._active: dict[str, ActiveJob] = {}
         self._wake = threading.Event()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -76,6 +62,7 @@ class JobRunner:
         self._stopping: dict[Future, float] = {}  # told-to-stop tasks, and when they were told
         self._finishing: dict[str, tuple[str, str | None]] = {}  # final statuses not written yet
         self._last_look = -float("inf")  # when the store was last asked for new and cancelled jobs
+        self._init_feeding()
 
     # --- control ---------------------------------------------------------------------------
     def start(self) -> None:
@@ -146,7 +133,7 @@ class JobRunner:
             self.store.mark_started(job.id, resumed)
             if resumed:
                 log.info("resuming job %s: %d of %d points already stored", job.id, len(finished), job.total)
-            self._active[job.id] = _ActiveJob(
+            self._active[job.id] = ActiveJob(
                 job, kind, finished, deque(tasks), time.monotonic(), time.time() + self.job_time_limit
             )
 
@@ -161,7 +148,7 @@ class JobRunner:
                 self._stop_job(active)
                 self._finish(job_id, "failed", self._out_of_time(active))
 
-    def _stop_job(self, active: _ActiveJob) -> None:
+    def _stop_job(self, active: ActiveJob) -> None:
         """No more tasks; the running ones are told to stop. Their points, and any the store
         has not taken yet, are dropped: a stopped job's stored points do not change."""
         self.executor.stop(active.job.id)
@@ -175,6 +162,7 @@ class JobRunner:
         for future in [f for f in self._stopping if f.done()]:
             del self._stopping[future]
             self._born.pop(future, None)
+            self._forget_future(future)
         overdue = [f for f, told in self._stopping.items() if time.monotonic() - told > STOP_GRACE]
         if overdue and self.executor.kill():
             log.warning("%d stopped task(s) ran on for %.0f s: their workers were killed", len(overdue), STOP_GRACE)
@@ -186,57 +174,25 @@ class JobRunner:
         for job_id in self.executor.signalled_before(time.monotonic() - self.job_time_limit - STOP_GRACE):
             self.executor.forget(job_id)
 
-    # --- tasks -----------------------------------------------------------------------------
-    def _submit(self) -> None:
-        in_flight = sum(len(a.in_flight) for a in self._active.values())
-        progressed = True
-        while in_flight < self.executor.capacity and progressed:
-            progressed = False
-            for active in list(self._active.values()):  # one task per job per round: fair sharing
-                if active.pending and in_flight < self.executor.capacity:
-                    task = active.pending[0]
-                    sent = {**task, "deadline": active.deadline, "control": self.executor.control_for(active.job.id)}
-                    try:
-                        future = self.executor.executor().submit(run_task, active.job.kind, active.job.spec, sent)
-                    except BrokenProcessPool:  # a worker died since the last look: new pool, same task
-                        self._renew_executor()
-                        return
-                    active.pending.popleft()
-                    active.in_flight[future] = task
-                    self._born[future] = self._generation
-                    in_flight += 1
-                    progressed = True
-
-    def _collect(self, future: Future) -> None:
-        owner = next((a for a in self._active.values() if future in a.in_flight), None)
-        if owner is None:
-            return
-        task = owner.in_flight.pop(future)
-        born = self._born.pop(future, self._generation)
-        if future.cancelled():
-            return
-        error = future.exception()
-        if error is not None:
-            self._task_failed(owner, task, error, born)
-            return
-        owner.unsaved.append((task, future.result()))
-        self._save(owner)
-
-    def _save(self, active: _ActiveJob) -> None:
+    # --- points --------------------------------------------------------------------------
+    def _save(self, active: ActiveJob) -> None:
         """Store the job's computed points (in order), each write retried until it lands."""
         while active.unsaved and self.guard.ready():
-            task, points = active.unsaved[0]
+            task, points, yielded = active.unsaved[0]
             if not self.guard.attempt(self.store.add_points, active.job.id, points, active.kind.failed):
                 return
             active.unsaved.popleft()
             active.finished.update(points)
             if self._over_byte_quota(active):
                 return
+            rest = task_remainder(active.kind, task, active.finished) if yielded else None
+            if rest is not None:  # it gave its worker to another key: the rest of it runs later
+                active.pending.appendleft(rest)
             active.pending.extend(
                 active.kind.follow_up(active.job.spec, active.job.plan, task, active.finished, self.chunk_size)
             )
 
-    def _over_byte_quota(self, active: _ActiveJob) -> bool:
+    def _over_byte_quota(self, active: ActiveJob) -> bool:
         """A job whose points took its key past the byte quota stops there, its points kept."""
         quotas = self.store.quotas
         if quotas is None:
@@ -254,28 +210,8 @@ class JobRunner:
         )
         return True
 
-    def _task_failed(self, active: _ActiveJob, task: dict, error: BaseException, born: int) -> None:
-        if isinstance(error, BrokenProcessPool):
-            if born in self._killed:  # killed on purpose to stop another job's task: not this task's fault
-                active.pending.appendleft(task)
-                return
-            key = id(task)
-            active.attempts[key] = active.attempts.get(key, 0) + 1
-            if born == self._generation:  # the first to notice renews the pool, for every job
-                self._renew_executor()
-            if active.attempts[key] < MAX_TASK_ATTEMPTS:
-                active.pending.appendleft(task)
-                return
-        log.error("job %s: task failed: %r", active.job.id, error)
-        self._stop_job(active)
-        self._finish(active.job.id, "failed", f"a task failed: {type(error).__name__}: {error}")
-
-    def _renew_executor(self) -> None:
-        self.executor.renew()
-        self._generation += 1
-
     # --- the end of a job --------------------------------------------------------------------
-    def _maybe_complete(self, active: _ActiveJob) -> None:
+    def _maybe_complete(self, active: ActiveJob) -> None:
         if active.pending or active.in_flight or active.unsaved:
             return
         stored = len(active.finished)
@@ -287,7 +223,7 @@ class JobRunner:
         else:
             self._finish(active.job.id, "failed", f"only {stored} of {active.job.total} points could be computed")
 
-    def _out_of_time(self, active: _ActiveJob) -> str:
+    def _out_of_time(self, active: ActiveJob) -> str:
         return (
             f"stopped by the job time limit of {self.job_time_limit:g} s; {len(active.finished)} of "
             f"{active.job.total} points are stored"

@@ -163,6 +163,8 @@ class SimulationJob(InOrder):
         x0 = start_shape(mech, simulate, histories)[0] if at is None else None
         points = []
         for index in task["indices"]:
+            if control.between_points():  # cancelled or out of time, or asked to yield: the next window waits
+                break
             end = min((index + 1) * task["span"], simulate.until)
             started = 0.0 if at is None else at.time
             history = integrate(

@@ -33,7 +33,7 @@ import numpy as np
 from flexmech.models import Mechanism, MechanismError
 from flexmech.service.analyses import ANALYSES
 from flexmech.service.costs import Limits, check_result_size
-from flexmech.service.jobs.base import JSON, Plan, StoredJob, read_spec
+from flexmech.service.jobs.base import JSON, Plan, StoredJob, read_spec, unfinished_part
 from flexmech.service.jobs.control import TaskControl
 from flexmech.service.jobs.grids import grid_shape, grid_size, load_paths, point_values
 from flexmech.service.jobs.sweep_options import SWEEP_EXAMPLES, SweepOptions, SweepSpec
@@ -195,6 +195,12 @@ class SweepJob:
         return [self._with_values(nxt, spec, plan)] if nxt is not None else []
 
     @staticmethod
+    def remainder(task: JSON, finished: Mapping[int, JSON]) -> JSON | None:
+        """A load path's chunk: None (follow_up goes on from its last stored point); an
+        independent chunk: its unfinished points."""
+        return None if task.get("line") is not None else unfinished_part(task, finished)
+
+    @staticmethod
     def _with_values(task: JSON, spec: SweepSpec, plan: Mapping[str, Any]) -> JSON:
         """The task with its points' values (the plan's grid) and the solve time limit."""
         values = [p["values"] for p in plan["parameters"]]
@@ -239,7 +245,7 @@ class SweepJob:
         along_path = task.get("line") is not None
         points = []
         for index in task["indices"]:
-            if control.should_stop():  # cancelled, or out of the job's time: the runner drops the rest
+            if control.between_points():  # cancelled or out of time (the rest is dropped), or asked to yield
                 break
             options = newton_options(spec.options, control.time_limit(task.get("time_limit")))
             here = at[index]
