@@ -34,7 +34,7 @@ from flexmech.service.jobs.store_guard import StoreGuard
 
 log = logging.getLogger("flexmech.runner")
 
-STOP_GRACE = 5.0  # seconds a told-to-stop task may run on before its workers are killed
+STOP_GRACE = 1.5  # seconds a told-to-stop task may run on before its workers are killed (theirs run again)
 
 
 class JobRunner(TaskFeeding):
@@ -165,7 +165,7 @@ class JobRunner(TaskFeeding):
             self._forget_future(future)
         overdue = [f for f, told in self._stopping.items() if time.monotonic() - told > STOP_GRACE]
         if overdue and self.executor.kill():
-            log.warning("%d stopped task(s) ran on for %.0f s: their workers were killed", len(overdue), STOP_GRACE)
+            log.warning("%d stopped task(s) ran on for %.1f s: their workers were killed", len(overdue), STOP_GRACE)
             self._killed.add(self._generation)
             self._generation += 1
             self._stopping.clear()
