@@ -30,6 +30,9 @@ class FlexmechError(Exception):
         self.details = details or {}
         super().__init__(f"{status} {code}: {message}")
 
+    def __reduce__(self):  # pickled with its fields (a client used from worker processes)
+        return (FlexmechError, (self.status, self.code, self.message, self.pointer, self.details))
+
 
 class JobTimeout(TimeoutError):
     """wait() gave up before the job finished; the job goes on on the server."""
@@ -40,6 +43,9 @@ class JobTimeout(TimeoutError):
             f"job {status.id} still {status.status} after waiting "
             f"({status.progress.done} of {status.progress.total} points)"
         )
+
+    def __reduce__(self):
+        return (JobTimeout, (self.status,))
 
 
 def error_of(response: httpx.Response) -> FlexmechError:

@@ -54,6 +54,9 @@ class ApiError(Exception):
         self.pointer = pointer
         super().__init__(message)
 
+    def __reduce__(self):
+        return (ApiError, (self.status, self.code, self.message, self.pointer))
+
 
 def not_found(what: str) -> ApiError:
     return ApiError(404, "not_found", what)

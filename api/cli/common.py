@@ -34,6 +34,9 @@ class OptionError(Exception):
         self.problem = problem
         super().__init__(f"{where}: {problem}")
 
+    def __reduce__(self):
+        return (OptionError, (self.where, self.problem))
+
 
 # --- console and errors --------------------------------------------------------------------
 def consoles() -> tuple[Console, Console]:

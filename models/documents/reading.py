@@ -19,6 +19,9 @@ class DuplicateKey(ValueError):
         self.key = key
         super().__init__(f"duplicate key '{key}' in one object")
 
+    def __reduce__(self):  # pickled with its field (pickle's default passes the message as the key)
+        return (DuplicateKey, (self.key,))
+
 
 def _no_duplicates(pairs: list[tuple[str, Any]]) -> dict:
     out: dict = {}

@@ -42,6 +42,9 @@ class PenetratingStart(Exception):
         self.pair, self.depth = pair, depth
         super().__init__(f"pair {pair} penetrates by {depth:g}")
 
+    def __reduce__(self):  # pickled with its fields, so it crosses from a worker process whole
+        return (PenetratingStart, (self.pair, self.depth))
+
 
 @dataclass(frozen=True)
 class ContactOptions:

@@ -17,6 +17,7 @@ from __future__ import annotations
 import logging
 import multiprocessing
 import shutil
+import signal
 import tempfile
 import time
 from abc import ABC, abstractmethod
@@ -69,6 +70,14 @@ class TaskExecutor(ABC):
     def forget_task(self, task_id: str) -> None:
         """The task has ended: drop its yield signal."""
 
+    def died_running(self, task_id: str) -> bool:
+        """Whether the task's own worker died under it (not one stopped because another worker
+        died). By default every task lost with a broken executor is taken as its cause."""
+        return True
+
+    def task_ended(self, task_id: str) -> None:  # noqa: B027 (an optional hook)
+        """The task has ended, however: drop what the executor kept of it."""
+
     def signalled_before(self, moment: float) -> list[str]:
         """Jobs whose stop signal was given before `moment` (time.monotonic())."""
         return sorted(job_id for job_id, when in self._signalled.items() if when < moment)
@@ -91,6 +100,7 @@ class ProcessPool(TaskExecutor):
         if flags is not None:
             flags.mkdir(parents=True, exist_ok=True)
         self._flags = Path(tempfile.mkdtemp(prefix="stop-", dir=flags))
+        self._known: dict[int, multiprocessing.process.BaseProcess] = {}  # every worker, by pid (exit codes)
         self._pool = self._new()
 
     def _new(self) -> ProcessPoolExecutor:
@@ -100,6 +110,7 @@ class ProcessPool(TaskExecutor):
         )
 
     def executor(self) -> Executor:
+        self._known.update(self._pool._processes or {})  # workers started since the last look
         return self._pool
 
     def renew(self) -> None:
@@ -130,13 +141,30 @@ class ProcessPool(TaskExecutor):
         return {"file": str(self._flags / f"{job_id}.stop")}
 
     def yield_signal_for(self, task_id: str) -> dict:
-        return {"yield_file": str(self._flags / f"{task_id}.yield")}
+        # the task writes its worker's pid beside: when the pool breaks, the dead worker's task is known
+        return {"yield_file": str(self._flags / f"{task_id}.yield"), "pid_file": str(self._flags / f"{task_id}.pid")}
+
+    def died_running(self, task_id: str) -> bool:
+        """The task's worker (its pid file) ended other than by the pool's own terminate: it died
+        under that task (killed, crashed, out of memory). A task not yet started, or whose
+        worker the broken pool terminated, is not the cause."""
+        try:
+            pid = int((self._flags / f"{task_id}.pid").read_text())
+        except (OSError, ValueError):
+            return False
+        self._known.update(self._pool._processes or {})
+        process = self._known.get(pid)
+        code = process.exitcode if process is not None else None
+        return code is not None and code != -signal.SIGTERM
 
     def ask_to_yield(self, task_id: str) -> None:
         (self._flags / f"{task_id}.yield").touch()
 
     def forget_task(self, task_id: str) -> None:
         (self._flags / f"{task_id}.yield").unlink(missing_ok=True)
+
+    def task_ended(self, task_id: str) -> None:
+        (self._flags / f"{task_id}.pid").unlink(missing_ok=True)
 
     def stop(self, job_id: str) -> None:
         super().stop(job_id)

@@ -7,11 +7,14 @@ adds its own with one line, `register_job_kind(...)`. The contract is service.jo
 
 from __future__ import annotations
 
+import os
 from functools import lru_cache
+from pathlib import Path
 
 from flexmech.service.deadline import stop_scope
 from flexmech.service.jobs.base import JobKind, Plan
 from flexmech.service.jobs.control import TaskControl
+from flexmech.service.jobs.failures import failure_record
 from flexmech.service.threads import single_threaded_blas
 
 __all__ = ["JobKind", "Plan", "job_kinds", "kind_named", "register_job_kind", "run_task"]
@@ -68,8 +71,15 @@ def kind_named(name: str) -> JobKind:
         raise KeyError(f"unknown job kind '{name}' (kinds: {', '.join(sorted(kinds))})") from None
 
 
-def run_task(kind: str, spec: dict, task: dict) -> list[tuple[int, dict]]:
-    """The function workers execute (a module-level name, so pools and Dask can ship it)."""
+def run_task(kind: str, spec: dict, task: dict) -> list[tuple[int, dict]] | dict:
+    """The function workers execute (a module-level name, so pools and Dask can ship it): the
+    task's points, or a failure record (service.jobs.failures) when it raised."""
     single_threaded_blas()
+    pid_file = (task.get("control") or {}).get("pid_file")
+    if pid_file:  # which worker runs it: if that worker dies, the runner charges this task only
+        Path(pid_file).write_text(str(os.getpid()))
     with stop_scope(TaskControl(task).should_stop):  # Newton and the other loops end on a cancel too
-        return kind_named(kind).run(spec, task)
+        try:
+            return kind_named(kind).run(spec, task)
+        except Exception as error:  # as data: an error that cannot cross would break the pool (issue 54)
+            return failure_record(error)

@@ -18,6 +18,7 @@ from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 
 from flexmech.service.jobs.executors import TaskExecutor
+from flexmech.service.jobs.failures import TaskFailed, failure_in
 from flexmech.service.jobs.fair_share import shares, submission_order
 from flexmech.service.jobs.kinds import JobKind, run_task
 from flexmech.service.jobs.store import Job
@@ -120,17 +121,22 @@ class TaskFeeding:
     def _collect(self, future: Future) -> None:
         owner = next((a for a in self._active.values() if future in a.in_flight), None)
         yielded = future in self._yielding
-        self._forget_future(future)
-        if owner is None:
-            return
+        task_id = self._task_ids.get(future, "")
+        try:
+            if owner is not None:
+                self._take_back(owner, future, yielded, task_id)
+        finally:
+            self._forget_future(future)
+
+    def _take_back(self, owner: ActiveJob, future: Future, yielded: bool, task_id: str) -> None:
         task = owner.in_flight.pop(future)
         born = self._born.pop(future, self._generation)
         if future.cancelled():  # the pool was killed (another job's task would not stop) before it ran
             owner.pending.appendleft(task)
             return
-        error = future.exception()
+        error = future.exception() or failure_in(future.result())
         if error is not None:
-            self._task_failed(owner, task, error, born)
+            self._task_failed(owner, task, error, born, task_id)
             return
         owner.unsaved.append((task, future.result(), yielded))
         self._save(owner)
@@ -138,26 +144,33 @@ class TaskFeeding:
     def _forget_future(self, future: Future) -> None:
         task_id = self._task_ids.pop(future, None)
         self._sent_at.pop(future, None)
+        if task_id is not None:
+            self.executor.task_ended(task_id)
         if future in self._yielding:
             self._yielding.discard(future)
             if task_id is not None:
                 self.executor.forget_task(task_id)
 
-    def _task_failed(self, active: ActiveJob, task: dict, error: BaseException, born: int) -> None:
+    def _task_failed(self, active: ActiveJob, task: dict, error: BaseException, born: int, task_id: str) -> None:
+        """A task's own error fails its job; a task lost with a broken pool runs again (charged
+        an attempt only when its own worker died under it)."""
         if isinstance(error, BrokenProcessPool):
-            if born in self._killed:  # killed on purpose to stop another job's task: not this task's fault
+            innocent = born in self._killed or not self.executor.died_running(task_id)
+            if born == self._generation:  # the first to notice renews the pool, for every job
+                self._renew_executor()
+            if innocent:  # killed on purpose, or stopped because another worker died
                 active.pending.appendleft(task)
                 return
             key = id(task)
             active.attempts[key] = active.attempts.get(key, 0) + 1
-            if born == self._generation:  # the first to notice renews the pool, for every job
-                self._renew_executor()
+            log.warning("job %s: the worker running its task died (attempt %d)", active.job.id, active.attempts[key])
             if active.attempts[key] < MAX_TASK_ATTEMPTS:
                 active.pending.appendleft(task)
                 return
-        log.error("job %s: task failed: %r", active.job.id, error)
+        log.error("job %s: task failed: %s", active.job.id, error)
+        said = str(error) if isinstance(error, TaskFailed) else f"{type(error).__name__}: {error}"
         self._stop_job(active)
-        self._finish(active.job.id, "failed", f"a task failed: {type(error).__name__}: {error}")
+        self._finish(active.job.id, "failed", f"a task failed: {said}")
 
     def _renew_executor(self) -> None:
         self.executor.renew()

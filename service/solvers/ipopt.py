@@ -61,6 +61,10 @@ class IpoptOptionError(ValueError):
     def __init__(self, option: str, problem: str):
         self.option = option
         super().__init__(f"{option}: {problem}")
+        self.problem = problem
+
+    def __reduce__(self):  # pickled with its fields, so it crosses from a worker process whole
+        return (IpoptOptionError, (self.option, self.problem))
 
 
 def checked_options(options: dict[str, Any]) -> tuple[tuple[str, Any], ...]:
