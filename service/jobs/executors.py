@@ -158,7 +158,10 @@ class ProcessPool(TaskExecutor):
         return code is not None and code != -signal.SIGTERM
 
     def ask_to_yield(self, task_id: str) -> None:
-        (self._flags / f"{task_id}.yield").touch()
+        try:
+            (self._flags / f"{task_id}.yield").touch()
+        except OSError as exc:  # a full disk: the task runs on, and the waiting key waits for it
+            log.warning("cannot ask a task to yield: %s", exc)
 
     def forget_task(self, task_id: str) -> None:
         (self._flags / f"{task_id}.yield").unlink(missing_ok=True)

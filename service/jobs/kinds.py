@@ -7,6 +7,7 @@ adds its own with one line, `register_job_kind(...)`. The contract is service.jo
 
 from __future__ import annotations
 
+import contextlib
 import os
 from functools import lru_cache
 from pathlib import Path
@@ -77,7 +78,8 @@ def run_task(kind: str, spec: dict, task: dict) -> list[tuple[int, dict]] | dict
     single_threaded_blas()
     pid_file = (task.get("control") or {}).get("pid_file")
     if pid_file:  # which worker runs it: if that worker dies, the runner charges this task only
-        Path(pid_file).write_text(str(os.getpid()))
+        with contextlib.suppress(OSError):  # a full disk: the task runs, uncharged if its worker dies
+            Path(pid_file).write_text(str(os.getpid()))
     with stop_scope(TaskControl(task).should_stop):  # Newton and the other loops end on a cancel too
         try:
             return kind_named(kind).run(spec, task)

@@ -130,7 +130,7 @@ def test_a_full_data_folder_loses_no_point(tmp_path):
             for other in accepted:
                 extra = client.wait(other, timeout=300)
                 assert extra.status == "succeeded" and extra.progress.done == 3
-        assert final.status == "succeeded" and final.progress.done == 3000
+        assert final.status == "succeeded" and final.progress.done == 3000, final.error
         assert stored_indices(disk / "data" / "flexmech.db", job.id) == list(range(3000))
         log = server.output(tail=None)
         assert "job store unavailable" in log and "Traceback" not in log
