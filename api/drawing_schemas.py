@@ -7,7 +7,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from flexmech.api.schemas import DocumentRequest
+from flexmech.api.schemas import MAX_POINTER_CHARS, DocumentRequest, Name
 
 MAX_DOCUMENT_TEXT = 2_000_000  # characters; the request body limit applies as well
 
@@ -17,7 +17,7 @@ class DrawnPath(BaseModel):
 
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
-    path: str = Field(pattern=r"^/", max_length=256, description="JSON pointer of a numeric field")
+    path: str = Field(pattern=r"^/", max_length=MAX_POINTER_CHARS, description="JSON pointer of a numeric field")
     values: list[float] = Field(min_length=1, max_length=400, description="document units, in path order")
 
 
@@ -65,4 +65,4 @@ class DocumentUpgrade(BaseModel):
 
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
-    document: dict[str, Any]
+    document: dict[Name, Any]

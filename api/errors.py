@@ -38,6 +38,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from flexmech.api import job_schemas, schemas
 from flexmech.models import MechanismError
+from flexmech.models.documents.text_bounds import too_long
 from flexmech.models.errors import pointer_of
 from flexmech.service.analyses import ANALYSES
 from flexmech.service.jobs.kinds import job_kinds
@@ -92,15 +93,16 @@ def error_response(
     return JSONResponse({"error": error}, status_code=status, headers=headers)
 
 
+_UNION_MEMBERS = ("float", "str", "int", "bool", "constrained-str")
+
+
 def _validation_pointer(loc: tuple) -> str:
     parts = list(loc)
     if parts and parts[0] in ("body", "query", "path", "header"):
         parts = parts[1:]
     # pydantic names union members and validator types in locations; they are not fields
     parts = [
-        p
-        for p in parts
-        if not (isinstance(p, str) and (p.startswith("function-") or "[" in p or p in ("float", "str", "int", "bool")))
+        p for p in parts if not (isinstance(p, str) and (p.startswith("function-") or "[" in p or p in _UNION_MEMBERS))
     ]
     return pointer_of(tuple(parts))
 
@@ -121,7 +123,10 @@ def _unwrapped_document(body) -> bool:
 def _error_pointer(error: dict) -> str:
     if error.get("type", "").startswith("union_tag_"):  # the solve request's tag: its analysis
         return "/analysis"
-    return _validation_pointer(tuple(error.get("loc", ())))
+    loc = tuple(error.get("loc", ()))
+    if loc[-1:] == ("[key]",):  # a key too long: its object's error, the key not echoed
+        loc = loc[:-2]
+    return _validation_pointer(loc)
 
 
 def _fields_of(models: list[type[BaseModel]]) -> dict[str, type[BaseModel]]:
@@ -176,6 +181,9 @@ def _message(first: dict) -> str:
     kind = first.get("type")
     if kind == "missing":
         return "required field is missing"
+    if kind == "string_too_long":  # never the text itself: its length
+        key = tuple(first.get("loc", ()))[-1:] == ("[key]",)
+        return too_long(first["ctx"]["max_length"], len(first.get("input") or ""), key)
     if kind == "union_tag_invalid":  # the solve request's tag (api.analysis_requests)
         return f"unknown analysis '{first['ctx']['tag'].strip('[]')}' (analyses: {', '.join(ANALYSES.names())})"
     if kind == "union_tag_not_found":
@@ -210,7 +218,9 @@ def _on_validation_error(_request: Request, exc: RequestValidationError) -> JSON
             '{"document": <the document>} (or name one of GET /v1/examples as {"example": "<name>"})',
             "",
         )
-    first = next((e for e in errors if e.get("type") == "extra_forbidden"), errors[0])
+    first = next((e for e in errors if e.get("type") == "extra_forbidden"), None)
+    # a text too long is told before its union's other members' complaints (a quantity's "not a float")
+    first = first or next((e for e in errors if e.get("type") == "string_too_long"), errors[0])
     pointer = _error_pointer(first)
     message = _message(first)
     problems = {pointer: message}

@@ -5,13 +5,23 @@ in the units the mechanism document declares (its `units`), and each response sa
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, StringConstraints, model_validator
 
 # The models of a curved beam: models.MODELS, which a test pins this list to (the client does not import the core).
 Model = Literal["linear", "partial_nonlinear", "exact", "conservative"]
 PointStatus = Literal["converged", "not_converged", "singular", "time_limit", "infeasible"]
+
+# The document's bounds on text (models.documents.fields, which a test pins these to; the client
+# does not import the core): a request's own text is bounded as the document's is.
+MAX_NAME_CHARS = 200  # a name, and a key of the document (its fields, a named collection's objects)
+MAX_DESCRIPTION_CHARS = 20_000  # the document's description
+MAX_POINTER_CHARS = 256  # a JSON pointer to a field of the document
+MAX_QUANTITY_CHARS = 100  # a number with its unit, "25 um"
+Name = Annotated[str, StringConstraints(max_length=MAX_NAME_CHARS)]
+Pointer = Annotated[str, StringConstraints(max_length=MAX_POINTER_CHARS)]
+Quantity = Annotated[str, StringConstraints(max_length=MAX_QUANTITY_CHARS)]
 
 
 class RequestModel(BaseModel):
@@ -42,8 +52,11 @@ class NewtonOptionsIn(RequestModel):
 
 
 class DocumentRequest(RequestModel):
-    document: dict[str, Any] | None = Field(
-        None, description="A mechanism document (JSON object). Give this or `example`."
+    document: dict[Name, Any] | None = Field(
+        None,
+        description="A mechanism document (JSON object). Give this or `example`. Its texts are bounded: its name "
+        f"at most {MAX_NAME_CHARS} characters, its description {MAX_DESCRIPTION_CHARS}, every other text as the "
+        "document's schema says (a text over its bound is a 422 naming the field)",
     )
     example: str | None = Field(
         None,
@@ -53,7 +66,7 @@ class DocumentRequest(RequestModel):
         description="The name of an example document (GET /v1/examples)",
     )
     model: Model | None = Field(None, description="Model of every curved beam (default: as in the document)")
-    overrides: dict[str, float | str] = Field(
+    overrides: dict[Pointer, float | Quantity] = Field(
         default_factory=dict,
         description="Numeric fields replaced, by JSON pointer into the document",
         examples=[{"/loads/actuation/force/1": 50}],
@@ -91,6 +104,10 @@ class ErrorBody(BaseModel):
     problems: list[Problem] | None = Field(
         None, description="every field with a problem, when more than one has (the one `pointer` names first)"
     )
+    quota: str | None = Field(None, description="429: the quota that is full (jobs, bytes or running)")
+    used: int | None = Field(None, description="429: what the key uses of it")
+    limit: int | None = Field(None, description="429: the quota's limit")
+    free: str | None = Field(None, description="429: how to free it")
 
 
 class ErrorResponse(BaseModel):

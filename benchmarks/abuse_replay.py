@@ -165,7 +165,7 @@ def reproductions(data_dir: Path) -> list[Case]:
             ),
         ),
         Case("a 100,000-character name (answer under 2 kB)", 422, long_name),
-        Case("a 0.9 MB body", 200, large_body),
+        Case("a 0.9 MB description (at most 20,000 characters: refused at the door)", 422, large_body),
         Case("a locked job store (503 with Retry-After)", 503, locked_store(data_dir)),
     ]
 

@@ -3,8 +3,9 @@ eight clients (each its own process and keep-alive connection) post 0.9 MB reque
 to back, against a real uvicorn server.
 
 Two bodies, both under the size limit: a solve request whose document has a 0.9 MB
-`description` (one long string: a light parse), and one whose document carries some ten thousand
-materials (many small objects: a heavy parse, and a heavy compile). Both are solved. The prober sends one health
+`description` (one long string: a light parse, then a 422 on the request's thread, as a description
+is at most 20,000 characters), and one whose document carries some ten thousand materials (many
+small objects: a heavy parse, and a heavy compile), which is solved. The prober sends one health
 request every 20 ms from its own process and prints p50, p99 and max, first on an idle server,
 then under each load (the target: p99 < 100 ms).
 

@@ -18,7 +18,7 @@ from flexmech.api.cli.common import (
 )
 from flexmech.api.cli.options import RESTARTS, choice, newton_options
 from flexmech.models import COMPARED_MODELS, Mechanism, MechanismError
-from flexmech.models.documents.document import SweepSpec, SweepUntil
+from flexmech.models.documents.sweep_spec import SweepSpec, SweepUntil
 from flexmech.models.units import quantity_to_si
 from flexmech.service.drawings.plotting import output_unit
 from flexmech.service.solvers.newton import NewtonOptions

@@ -25,13 +25,21 @@ from typing import Annotated, Literal
 
 from pydantic import Field
 
-from flexmech.models.documents.fields import Number, StrictModel, Vec2
+from flexmech.models.documents.fields import (
+    MAX_POINTER_CHARS,
+    Expression,
+    Name,
+    Number,
+    OutputName,
+    StrictModel,
+    Vec2,
+)
 
 MAX_VERTICES = 64
 
 
 class _OnBody(StrictModel):
-    body: str | None = Field(
+    body: Name | None = Field(
         default=None, description="the pose is in this body's axes and moves with it (default: fixed, global)"
     )
 
@@ -80,7 +88,7 @@ class ImplicitObject(_OnBody):
     (document length units), placed at `position` turned by `angle`; g >= 0 is free space."""
 
     type: Literal["implicit"]
-    expression: str
+    expression: Expression
     position: Vec2 = (0.0, 0.0)
     angle: Number = 0.0
 
@@ -97,8 +105,8 @@ class JawSite(StrictModel):
     a link's end section (origin on the centre line, x along the tangent)."""
 
     type: Literal["jaw"]
-    body: str | None = None
-    link: str | None = None
+    body: Name | None = None
+    link: Name | None = None
     end: Literal["start", "end"] = Field(default="end", description="which end section of `link` carries it")
     vertices: list[Vec2] = Field(min_length=1, max_length=MAX_VERTICES)
     closed: bool | None = Field(
@@ -111,7 +119,7 @@ class SurfaceSite(StrictModel):
     half the local thickness away along the cross-section normal, or the centre line."""
 
     type: Literal["surface"]
-    link: str
+    link: Name
     side: Literal["left", "right", "centre_line"]
 
 
@@ -120,7 +128,7 @@ class CircleSite(StrictModel):
     reference point: it touches circles from outside, holes from inside and half-planes."""
 
     type: Literal["circle"]
-    body: str
+    body: Name
     centre: Vec2 = (0.0, 0.0)
     radius: Number
 
@@ -135,7 +143,7 @@ class ComputedStiffness(StrictModel):
     or two cylinders of contact length L (Eq. 16, pi E* L / 4)."""
 
     contact: Literal["spheres", "cylinders"]
-    materials: tuple[str, str] = Field(description="the two bodies' materials (E and nu)")
+    materials: tuple[Name, Name] = Field(description="the two bodies' materials (E and nu)")
     radius: Literal["external", "conformal"] = Field(
         default="conformal", description="spheres: which effective radius (Table 2 of seed 004 uses external)"
     )
@@ -154,7 +162,7 @@ class NormalLawFields(StrictModel):
     restitution: float = Field(default=0.9, description="c_r in (0, 1]: the damped laws' damping; moreau's e_N")
     damping: Number | None = Field(default=None, description="linear: the dashpot's c (force s / length)")
     length: Number | None = Field(default=None, description="lna_esdu: the contact length L of Eq. 18")
-    materials: tuple[str, str] | None = Field(default=None, description="lna_esdu: the two materials (Eq. 18)")
+    materials: tuple[Name, Name] | None = Field(default=None, description="lna_esdu: the two materials (Eq. 18)")
 
 
 class FrictionFields(StrictModel):
@@ -169,8 +177,8 @@ class FrictionFields(StrictModel):
 
 
 class ContactPair(StrictModel):
-    site: str
-    object: str
+    site: Name
+    object: Name
     normal: NormalLawFields = Field(
         default_factory=NormalLawFields,
         description="the normal law (default: unilateral, the exact contact of quasi-static solves)",
@@ -190,7 +198,7 @@ class ContactPair(StrictModel):
 class PathParameter(StrictModel):
     """A numeric field along the path: its values, or start, stop and equal steps (document units)."""
 
-    path: str = Field(pattern=r"^/", max_length=256)
+    path: str = Field(pattern=r"^/", max_length=MAX_POINTER_CHARS)
     values: list[float] | None = Field(default=None, min_length=1)
     start: float | None = None
     stop: float | None = None
@@ -202,7 +210,7 @@ class ContactPath(StrictModel):
     solved from the one before (`flexmech contact`, POST /v1/contacts)."""
 
     parameters: list[PathParameter] = Field(min_length=1, max_length=8)
-    outputs: list[str] | None = Field(
+    outputs: list[OutputName] | None = Field(
         default=None,
         min_length=1,
         max_length=256,
@@ -211,7 +219,7 @@ class ContactPath(StrictModel):
 
 
 class Contacts(StrictModel):
-    objects: dict[str, ContactObject] = Field(default={}, max_length=64)
-    sites: dict[str, ContactSite] = Field(default={}, max_length=64)
-    pairs: dict[str, ContactPair] = Field(default={}, max_length=256)
+    objects: dict[Name, ContactObject] = Field(default={}, max_length=64)
+    sites: dict[Name, ContactSite] = Field(default={}, max_length=64)
+    pairs: dict[Name, ContactPair] = Field(default={}, max_length=256)
     path: ContactPath | None = None

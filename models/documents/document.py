@@ -18,11 +18,22 @@ from typing import Annotated, Any, Literal, Union
 from pydantic import Field, ValidationError, field_validator, model_validator
 
 from flexmech.models.contact.schema import OBJECT_TYPES, SITE_TYPES, Contacts
-from flexmech.models.documents.fields import MAX_QUANTITY_CHARS, Number, StrictModel, Vec2
+from flexmech.models.documents.fields import (
+    MAX_QUANTITY_CHARS,
+    Description,
+    Name,
+    Number,
+    Pointer,
+    StrictModel,
+    UnitName,
+    Vec2,
+)
 from flexmech.models.documents.optimize_spec import OptimizeSpec
 from flexmech.models.documents.reading import parse_json, parse_yaml
 from flexmech.models.documents.sections import Section
 from flexmech.models.documents.simulation_spec import SimulateSpec
+from flexmech.models.documents.sweep_spec import SweepSpec
+from flexmech.models.documents.text_bounds import too_long
 from flexmech.models.documents.tolerances import TolerancesSpec
 from flexmech.models.elements import FAMILIES
 from flexmech.models.elements.link_schema import SHAPE_TYPES
@@ -33,11 +44,11 @@ from flexmech.models.units import quantity_to_si
 class Units(StrictModel):
     """Units of the bare numbers in the document; results come back in the same units."""
 
-    length: str = "m"
-    force: str = "N"
-    stress: str = "Pa"
-    angle: str = "deg"
-    mass: str = "kg"
+    length: UnitName = "m"
+    force: UnitName = "N"
+    stress: UnitName = "Pa"
+    angle: UnitName = "deg"
+    mass: UnitName = "kg"
 
 
 class Material(StrictModel):
@@ -101,7 +112,7 @@ Element = _element_union()
 
 
 class _PointOnBody(StrictModel):
-    body: str
+    body: Name
     at: Vec2 | None = Field(default=None, description="global point, undeformed configuration")
     offset: Vec2 | None = Field(default=None, description="from the body reference point, body axes")
 
@@ -121,7 +132,7 @@ class ForceLoad(_PointOnBody):
 
 class MomentLoad(StrictModel):
     type: Literal["moment"]
-    body: str
+    body: Name
     moment: Number
 
 
@@ -129,7 +140,7 @@ class PrescribedDisplacement(StrictModel):
     """Prescribed motion of a body's reference point; a component left out stays free."""
 
     type: Literal["displacement"]
-    body: str
+    body: Name
     dx: Number | None = None
     dy: Number | None = None
     rotation: Number | None = None
@@ -150,32 +161,10 @@ class PointOutput(_PointOnBody):
 
 class ReactionOutput(StrictModel):
     type: Literal["reaction"]
-    body: str
+    body: Name
 
 
 Output = Annotated[PointOutput | ReactionOutput, Field(discriminator="type")]
-
-
-class SweepUntil(StrictModel):
-    output: str = Field(description="scalar output name, e.g. end_effector.x")
-    equals: Number
-
-
-class SweepSpec(StrictModel):
-    """A load path: `path` (a numeric field) goes from start to stop in `steps` steps; with
-    `until`, the path ends where the named output reaches the given value."""
-
-    path: str
-    start: Number
-    stop: Number | None = None
-    steps: int = Field(default=100, ge=1)
-    until: SweepUntil | None = None
-
-    @model_validator(mode="after")
-    def _an_end(self):
-        if self.stop is None and self.until is None:
-            raise ValueError("give 'stop' or 'until'")
-        return self
 
 
 class InverseSpec(StrictModel):
@@ -183,26 +172,26 @@ class InverseSpec(StrictModel):
     ({"polynomial": [c0, ...]} or {"samples": [...], "u": [...]}, radians), internal forces
     ({link: {"h": value, "v": value}}) and the load components they determine."""
 
-    shapes: dict[str, Any]
-    internal_forces: dict[str, Any] = {}
-    unknown_loads: list[str] = []
+    shapes: dict[Name, Any]
+    internal_forces: dict[Name, Any] = {}
+    unknown_loads: list[Pointer] = []
 
 
 class MechanismDocument(StrictModel):
     schema_version: Literal[1] = 1
-    name: str = "mechanism"
-    description: str = ""
+    name: Name = "mechanism"
+    description: Description = ""
     units: Units = Units()
-    materials: dict[str, Material] = {}
-    sections: dict[str, Section] = {}
-    bodies: dict[str, Body]
+    materials: dict[Name, Material] = {}
+    sections: dict[Name, Section] = {}
+    bodies: dict[Name, Body]
     gravity: Vec2 | None = Field(
         default=None,
         description="acceleration of gravity (length unit / s^2): body masses and links with a density weigh",
     )
-    elements: dict[str, Element] = {}
-    loads: dict[str, Load] = {}
-    outputs: dict[str, Output] = {}
+    elements: dict[Name, Element] = {}
+    loads: dict[Name, Load] = {}
+    outputs: dict[Name, Output] = {}
     contacts: Contacts | None = Field(
         default=None, description="rigid objects, contact sites and pairs (the contact analysis)"
     )
@@ -229,7 +218,7 @@ class MechanismDocument(StrictModel):
 def _families_changed() -> None:
     """A family registered (or removed) after import: the document's elements take its
     section (pydantic builds the validator again from the new union)."""
-    MechanismDocument.model_fields["elements"].annotation = dict[str, _element_union()]
+    MechanismDocument.model_fields["elements"].annotation = dict[Name, _element_union()]
     MechanismDocument.model_rebuild(force=True)
     _field_names.cache_clear()
 
@@ -279,6 +268,10 @@ def _problem(error: dict, errors: list[dict]) -> tuple[tuple, str]:
         message = unknown_field_message(str(location[-1]) if location else "")
     elif error["type"] in ("union_tag_invalid", "union_tag_not_found"):
         location, message = _tag_problem(error, location)
+    elif all(e["type"] == "string_too_long" for e in here):  # a text (not a Number's quantity, also a float)
+        key = error["loc"][-1] == "[key]"  # a key too long: the error is its object's, the key not echoed
+        location = _field_location(error["loc"][:-2]) if key else location
+        message = too_long(error["ctx"]["max_length"], len(error["input"]), key)
     elif all(e["type"] in _NOT_A_NUMBER for e in here):
         message = (
             f"expected a number (or a quantity string like '25 um', at most {MAX_QUANTITY_CHARS} "

@@ -15,6 +15,7 @@ from collections.abc import Callable
 
 import casadi as ca
 
+from flexmech.models.documents.fields import MAX_EXPRESSION_CHARS
 from flexmech.models.errors import MechanismError
 
 FUNCTIONS: dict[str, Callable] = {
@@ -42,7 +43,7 @@ _OPERATORS = {
     ast.Div: lambda a, b: a / b,
     ast.Pow: lambda a, b: a**b,
 }
-MAX_LENGTH = 2000
+MAX_LENGTH = MAX_EXPRESSION_CHARS  # a document's expression fields are bounded by it too
 MAX_DEPTH = 50  # nesting of operations and calls; Python's own recursion would overflow far later
 
 

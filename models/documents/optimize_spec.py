@@ -7,24 +7,24 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
-from flexmech.models.documents.fields import Number, StrictModel
+from flexmech.models.documents.fields import MAX_POINTER_CHARS, Name, Number, OutputName, Pointer, StrictModel
 
 
 class DesignVariable(StrictModel):
     """A numeric field of the document that the optimizer may change, in document units."""
 
-    path: str = Field(pattern=r"^/", max_length=256, description="JSON pointer of a numeric field")
+    path: str = Field(pattern=r"^/", max_length=MAX_POINTER_CHARS, description="JSON pointer of a numeric field")
     lower: float | None = Field(default=None, description="lower bound, document units")
     upper: float | None = Field(default=None, description="upper bound, document units")
     scale: float | None = Field(default=None, gt=0, description="typical size (default: the start value)")
 
 
 class OptimizationObjective(StrictModel):
-    output: str = Field(
+    output: OutputName = Field(
         description="an output name, as /v1/solve reports them (e.g. reactions.tip.Fy), or yield (the first-order "
         "share of parts meeting the tolerances' specs)"
     )
-    case: str | None = Field(default=None, description="load case (required with more than one)")
+    case: Name | None = Field(default=None, description="load case (required with more than one)")
     sense: Literal["minimize", "maximize"] = "minimize"
     sigmas: float | None = Field(
         default=None,
@@ -38,8 +38,8 @@ class OptimizationObjective(StrictModel):
 class OptimizationConstraint(StrictModel):
     """lower <= output <= upper, or output = equals (document units)."""
 
-    output: str
-    case: str | None = None
+    output: OutputName
+    case: Name | None = None
     lower: float | None = None
     upper: float | None = None
     equals: float | None = None
@@ -63,7 +63,7 @@ class OptimizationConstraint(StrictModel):
 class LoadCase(StrictModel):
     """The document with some numeric fields changed (document units)."""
 
-    overrides: dict[str, Number] = {}
+    overrides: dict[Pointer, Number] = {}
 
 
 class ResponseDamping(StrictModel):
@@ -80,7 +80,7 @@ class OptimizeSpec(StrictModel):
     design: list[DesignVariable] = Field(min_length=1, max_length=64)
     objective: OptimizationObjective
     constraints: list[OptimizationConstraint] = Field(default=[], max_length=256)
-    cases: dict[str, LoadCase] = Field(default={}, description="load cases (default: the document as it is)")
+    cases: dict[Name, LoadCase] = Field(default={}, description="load cases (default: the document as it is)")
     starts: int = Field(
         default=1, ge=1, le=64, description="multi-start: the document's values, then random points in the bounds"
     )

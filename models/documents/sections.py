@@ -17,7 +17,7 @@ import casadi as ca
 from pydantic import Discriminator, Field, Tag
 
 from flexmech.models.documents.expression import compile_expression, finite_on
-from flexmech.models.documents.fields import Number, StrictModel
+from flexmech.models.documents.fields import Expression, Number, StrictModel
 
 if TYPE_CHECKING:
     from flexmech.models.graph.collector import Collector
@@ -42,7 +42,7 @@ class TaperedRectangularSection(StrictModel):
 
 
 class SectionExpression(StrictModel):
-    expression: str = Field(description="safe math expression in u (0..1 along the link)")
+    expression: Expression = Field(description="safe math expression in u (0..1 along the link)")
 
 
 class GeneralSection(StrictModel):

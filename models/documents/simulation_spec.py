@@ -8,7 +8,7 @@ from typing import Any, Literal
 
 from pydantic import Field, ValidationInfo, field_validator
 
-from flexmech.models.documents.fields import StrictModel
+from flexmech.models.documents.fields import Name, OutputName, Pointer, StrictModel
 
 
 class BodyStart(StrictModel):
@@ -86,13 +86,13 @@ class SimulateSpec(StrictModel):
         description="rest: undeformed and still; equilibrium: the static state under the "
         "document's values, released at t = 0 into the histories",
     )
-    histories: dict[str, Any] = Field(
+    histories: dict[Pointer, Any] = Field(
         default={},
         max_length=256,
         description="field pointer -> a number, an "
         "expression in t, {table: [[t, value], ...]} or {pieces: [{until, value}, ...]}",
     )
-    initial: dict[str, BodyStart] = Field(
+    initial: dict[Name, BodyStart] = Field(
         default={}, max_length=64, description="impact simulations: body name -> its start displacement and velocity"
     )
     flexure_stiffness: Literal["constant", "turning"] = Field(
@@ -100,7 +100,7 @@ class SimulateSpec(StrictModel):
         description="curved beams in impact simulations: the closed-form stiffness of seed 000 "
         "constant in space (conservative, the default), or turning with the body (seed 004 Eq. 8, not conservative)",
     )
-    sensitivities: list[str] = Field(
+    sensitivities: list[Pointer] = Field(
         default=[],
         max_length=16,
         description="event_driven: numbers of the "
@@ -116,7 +116,9 @@ class SimulateSpec(StrictModel):
         "the states the report keeps, spread evenly over the run (after `every`), and besides "
         "them the states around each contact's onset and end",
     )
-    outputs: list[str] | None = Field(default=None, max_length=512, description="outputs to record (default: all)")
+    outputs: list[OutputName] | None = Field(
+        default=None, max_length=512, description="outputs to record (default: all)"
+    )
     shapes: bool = Field(
         default=False, description="also the links' deformed centre lines at every kept state (snapshots, animation)"
     )

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from pydantic import Field, model_validator
 
-from flexmech.models.documents.fields import Number, StrictModel
+from flexmech.models.documents.fields import MAX_POINTER_CHARS, Number, OutputName, Pointer, StrictModel
 
 MAX_TOLERANCED = 64  # fields with a distribution
 MAX_SPECS = 64
@@ -42,7 +42,7 @@ class Distribution(StrictModel):
     correlated_with: str | None = Field(
         default=None,
         pattern=r"^/",
-        max_length=256,
+        max_length=MAX_POINTER_CHARS,
         description="another toleranced field this one moves with (the same standardized draw: correlation 1)",
     )
 
@@ -84,16 +84,18 @@ class Spec(StrictModel):
 class ToleranceTarget(StrictModel):
     """Solve, sample by sample, for the value of numeric field `path` at which `output` equals `equals`."""
 
-    path: str = Field(pattern=r"^/", max_length=256, description="JSON pointer of the numeric field solved for")
-    output: str = Field(max_length=128, description="the output that reaches the value")
+    path: str = Field(
+        pattern=r"^/", max_length=MAX_POINTER_CHARS, description="JSON pointer of the numeric field solved for"
+    )
+    output: OutputName = Field(description="the output that reaches the value")
     equals: Number = Field(description="the output's value, in its document unit")
 
 
 class TolerancesSpec(StrictModel):
-    fields: dict[str, Distribution] = Field(
+    fields: dict[Pointer, Distribution] = Field(
         min_length=1, max_length=MAX_TOLERANCED, description="numeric field (JSON pointer) -> its scatter"
     )
-    specs: dict[str, Spec] = Field(
+    specs: dict[OutputName, Spec] = Field(
         default={}, max_length=MAX_SPECS, description="response name -> its acceptable range (the yield counts these)"
     )
     target: ToleranceTarget | None = Field(

@@ -36,7 +36,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import casadi as ca
 from pydantic import Field
 
-from flexmech.models.documents.fields import StrictModel
+from flexmech.models.documents.fields import Name, StrictModel
 from flexmech.models.graph.structure import ElementTopology
 
 if TYPE_CHECKING:
@@ -47,8 +47,8 @@ if TYPE_CHECKING:
 class TwoBodyElement(StrictModel):
     """Every element joins body `from` to body `to`."""
 
-    from_: str = Field(alias="from")
-    to: str
+    from_: Name = Field(alias="from")
+    to: Name
 
 
 @dataclass

@@ -23,7 +23,7 @@ import numpy as np
 from pydantic import Field
 
 from flexmech.models.beams import curved_beam_closed_form as kernel
-from flexmech.models.documents.fields import Number, Vec2
+from flexmech.models.documents.fields import Name, Number, Vec2
 from flexmech.models.documents.sections import RectangularSection, SectionTopology, nominal_EI
 from flexmech.models.elements.base import (
     CentreLine,
@@ -58,8 +58,8 @@ class CurvedBeam(TwoBodyElement):
     start_angle: Number
     arc_angle: Number
     direction: Literal["ccw", "cw"] = "ccw"
-    material: str
-    section: str
+    material: Name
+    section: Name
     model: Literal["linear", "partial_nonlinear", "exact", "conservative"] = "partial_nonlinear"
     intervals: int = Field(default=8, ge=1, le=64, description="shooting intervals, or elements (exact model)")
     order: int = Field(default=8, ge=2, le=12, description="integration order, even (exact model by shooting)")

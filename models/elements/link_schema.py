@@ -7,7 +7,7 @@ from typing import Literal
 
 from pydantic import Field
 
-from flexmech.models.documents.fields import Number, StrictModel, Vec2
+from flexmech.models.documents.fields import Expression, Name, Number, StrictModel, Vec2
 from flexmech.models.elements.base import TwoBodyElement
 
 
@@ -45,7 +45,7 @@ class ExpressionShape(StrictModel):
     """eta(u), radians, as a safe math expression in u."""
 
     type: Literal["expression"]
-    expression: str
+    expression: Expression
 
 
 Shape = StraightShape | ArcShape | PolynomialShape | FourierSineShape | ExpressionShape
@@ -64,8 +64,8 @@ class Link(TwoBodyElement):
     at: Vec2 | None = None
     length: Number
     shape: Shape = Field(default=StraightShape(type="straight"), discriminator="type")
-    material: str
-    section: str
+    material: Name
+    section: Name
     start: Literal["clamped", "pinned"] = "clamped"
     end: Literal["clamped", "pinned"] = "clamped"
     shear: bool = Field(default=False, description="Timoshenko shear strain (Lan 2005 Eq. 5.1)")

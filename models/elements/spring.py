@@ -26,7 +26,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from flexmech.models.documents.expression import CONSTANTS, FUNCTIONS, compile_expression, finite_on
-from flexmech.models.documents.fields import Number, Vec2
+from flexmech.models.documents.fields import MAX_EXPRESSION_CHARS, Name, Number, Vec2
 from flexmech.models.elements.base import Connector, Contribution, EnergyTerms, ScaleHint, SiValues, TwoBodyElement
 from flexmech.models.errors import MechanismError
 from flexmech.models.graph.context import AssemblyContext
@@ -50,10 +50,10 @@ class Spring(TwoBodyElement):
     stiffness: Number | None = Field(default=None, description="force per length, or moment per angle")
     law: str | None = Field(
         default=None,
-        max_length=2000,
+        max_length=MAX_EXPRESSION_CHARS,
         description="force (moment) as a safe expression in x, the extension (rotation) in document units",
     )
-    parameters: dict[str, Number] = Field(default={}, description="named numbers of the law")
+    parameters: dict[Name, Number] = Field(default={}, description="named numbers of the law")
     rest: Number | None = Field(
         default=None,
         description="rest length (translational, default: as drawn) or rest rotation (torsional, default 0)",

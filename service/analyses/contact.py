@@ -12,6 +12,7 @@ import numpy as np
 from pydantic import Field
 
 from flexmech.models import Mechanism, MechanismError
+from flexmech.models.documents.fields import Pointer
 from flexmech.service.analyses.base import (
     Analysis,
     AnalysisOptions,
@@ -60,7 +61,7 @@ class ContactAnalysisOptions(AnalysisOptions):
         description="an object inside a site in the undeformed state is approached from outside "
         "(relaxed, then tightened in steps), or refused naming the pair and depth",
     )
-    motion: dict[str, float] | None = Field(
+    motion: dict[Pointer, float] | None = Field(
         None,
         max_length=64,
         description="how the moving fields change (document units per unit of progress): "

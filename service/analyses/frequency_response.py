@@ -15,6 +15,7 @@ import numpy as np
 from pydantic import BaseModel, Field, ValidationInfo, field_validator
 
 from flexmech.models import Mechanism, MechanismError
+from flexmech.models.documents.fields import Pointer
 from flexmech.service.analyses.base import Analysis, AnalysisOptions, AnalysisResult, ReportSize
 from flexmech.service.analyses.shared_options import MAX_NAMES, Names
 from flexmech.service.solvers.newton import NewtonOptions
@@ -27,7 +28,7 @@ from flexmech.service.vibration.state import vibration_state
 
 
 class FrequencyResponseOptions(AnalysisOptions):
-    input: str = Field(
+    input: Pointer = Field(
         description="the harmonic input, amplitude one document unit: a load's component or a prescribed "
         "displacement's (JSON pointer)",
         examples=["/loads/actuation/force/1"],

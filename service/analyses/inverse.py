@@ -8,6 +8,7 @@ from typing import Any
 from pydantic import Field
 
 from flexmech.models import Mechanism
+from flexmech.models.documents.fields import Name
 from flexmech.service.analyses.base import Analysis, AnalysisOptions, AnalysisResult
 from flexmech.service.solvers.inverse import inverse_wrenches
 from flexmech.service.solvers.newton import NewtonOptions
@@ -32,7 +33,7 @@ def inverse_report(mech: Mechanism, displacements: dict[str, Any]) -> dict:
 
 
 class InverseOptions(AnalysisOptions):
-    displacements: dict[str, tuple[float, float, float]] = Field(
+    displacements: dict[Name, tuple[float, float, float]] = Field(
         description="[dx, dy, rotation] of bodies (document units); bodies not named stay put",
         examples=[{"input": [0.001, 0, 0]}],
     )

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
-from pydantic import BeforeValidator, Field
+from pydantic import BeforeValidator, Field, StringConstraints
 
+from flexmech.models.documents.fields import MAX_OUTPUT_CHARS, MAX_POINTER_CHARS, OutputName
 from flexmech.service.analyses.base import AnalysisOptions
 
 MAX_NAMES = 1000  # distinct outputs or fields one request may watch
@@ -20,7 +21,8 @@ def _distinct(value: Any) -> Any:
     return value
 
 
-Names = Annotated[list[str], BeforeValidator(_distinct)]
+NameOrPointer = Annotated[str, StringConstraints(max_length=max(MAX_OUTPUT_CHARS, MAX_POINTER_CHARS))]
+Names = Annotated[list[NameOrPointer], BeforeValidator(_distinct)]
 """A list of output names or JSON pointers, each kept once (its limits, checked after, count
 distinct names)."""
 
@@ -30,12 +32,12 @@ class Target(AnalysisOptions):
 
     path: str = Field(
         pattern=r"^/",
-        max_length=256,
+        max_length=MAX_POINTER_CHARS,
         description="JSON pointer of the numeric field solved for",
         examples=["/loads/actuation/force/1"],
         json_schema_extra={"document_default": "/sweep/path"},
     )
-    output: str = Field(max_length=128, description="the output that reaches the value", examples=["end_effector.x"])
+    output: OutputName = Field(description="the output that reaches the value", examples=["end_effector.x"])
     equals: float = Field(description="the output's value, in its document unit")
 
 

@@ -24,6 +24,7 @@ import numpy as np
 from pydantic import Field
 
 from flexmech.models import Mechanism, MechanismError
+from flexmech.models.documents.fields import MAX_POINTER_CHARS
 from flexmech.models.units import quantity_to_si
 from flexmech.service.analyses.base import (
     Analysis,
@@ -63,7 +64,7 @@ class TraceIn(AnalysisOptions):
 
     path: str = Field(
         pattern=r"^/",
-        max_length=256,
+        max_length=MAX_POINTER_CHARS,
         description="JSON pointer of the numeric field followed",
         examples=["/loads/P/force/1"],
     )

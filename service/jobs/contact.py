@@ -19,6 +19,7 @@ from pydantic import ConfigDict, Field
 
 from flexmech.models import Mechanism, MechanismError
 from flexmech.models.contact.schema import PathParameter
+from flexmech.models.documents.fields import OutputName
 from flexmech.service.contact.path import (
     default_outputs,
     follow,
@@ -47,7 +48,7 @@ class ContactPathOptions(JobOptions):
         description="fields that change together along the path",
         json_schema_extra={"document_default": "/contacts/path/parameters/0"},
     )
-    outputs: list[str] | None = Field(
+    outputs: list[OutputName] | None = Field(
         None, min_length=1, max_length=256, description="outputs kept per state (default: every pair's results)"
     )
     penetrating_start: Literal["approach", "refuse"] = Field(

@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Annotated, Literal
 from pydantic import BaseModel, ConfigDict, Field
 
 from flexmech.models import Mechanism, MechanismError
+from flexmech.models.documents.fields import MAX_POINTER_CHARS
 from flexmech.service.costs import Limits, check_export_iteration, check_export_unknowns
 from flexmech.service.jobs.base import JSON, JobOptions, Plan, StoredJob, read_spec
 from flexmech.service.jobs.control import TaskControl
@@ -34,7 +35,7 @@ from flexmech.service.solvers.reports import plain
 if TYPE_CHECKING:  # the export's code generation is imported when a job is prepared or run
     from flexmech.service.export.plan import ExportOptions, ExportPlan
 
-Pointer = Annotated[str, Field(pattern=r"^/", max_length=256)]
+Pointer = Annotated[str, Field(pattern=r"^/", max_length=MAX_POINTER_CHARS)]
 OutputName = Annotated[str, Field(min_length=1, max_length=128)]
 AS_IN_THE_DOCUMENT = "as in the document"  # the manifest's model when the request names none
 
@@ -46,7 +47,7 @@ class ExportTarget(BaseModel):
     equals: float = Field(description="the output's goal, in its unit (the document's units)")
     by: str = Field(
         pattern=r"^/",
-        max_length=256,
+        max_length=MAX_POINTER_CHARS,
         description="the exported input (JSON pointer) the target task solves for",
         examples=["/loads/actuation/force/1"],
     )

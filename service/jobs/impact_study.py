@@ -16,6 +16,7 @@ from typing import Any
 from pydantic import BaseModel, ConfigDict, Field
 
 from flexmech.models import MechanismError
+from flexmech.models.documents.fields import MAX_POINTER_CHARS
 from flexmech.models.documents.simulation_spec import IMPACT_SCHEMES
 from flexmech.service.analyses.simulate import SimulateOverrides
 from flexmech.service.costs import Limits, check_grid_size
@@ -33,7 +34,9 @@ RUN_BYTES = 192 * 2**20  # the memory one run's states may take (a task holds th
 class StudyField(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
-    path: str = Field(pattern=r"^/", max_length=256, description="a number of the document, by JSON pointer")
+    path: str = Field(
+        pattern=r"^/", max_length=MAX_POINTER_CHARS, description="a number of the document, by JSON pointer"
+    )
     step: float = Field(description="it moves by +step and by -step, in the document's units")
 
 

@@ -20,6 +20,7 @@ from pydantic import ConfigDict, Field
 
 from flexmech.models import MechanismError
 from flexmech.models.documents.document import parse_optimize_spec
+from flexmech.models.documents.fields import Name
 from flexmech.service.design.optimize import Prepared, StartResult, combine, prepare, run_start
 from flexmech.service.design.problem import DesignProblem, design_problem
 from flexmech.service.jobs.base import JSON, JobOptions, Plan, StoredJob, read_spec
@@ -29,7 +30,7 @@ from flexmech.service.solvers.reports import plain
 
 
 class OptimizeOptions(JobOptions):
-    problem: dict[str, Any] | None = Field(
+    problem: dict[Name, Any] | None = Field(
         None,
         description="design problem, in the shape of the document's optimize section (checked as it is): design "
         "[{path, lower, upper, scale}], objective {output, case, sense}, constraints [{output, case, lower, upper | "

@@ -7,6 +7,7 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from flexmech.models.documents.fields import MAX_POINTER_CHARS, OutputName, Pointer
 from flexmech.service.jobs.base import JobOptions, StoredJob
 
 
@@ -16,7 +17,7 @@ class SweepParameter(BaseModel):
 
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
-    path: str = Field(pattern=r"^/", max_length=256, description="JSON pointer of a numeric field")
+    path: str = Field(pattern=r"^/", max_length=MAX_POINTER_CHARS, description="JSON pointer of a numeric field")
     values: list[float] | None = Field(None, min_length=1, description="document units")
     start: float | None = Field(None, description="document units")
     stop: float | None = Field(None, description="document units (with `until`: found)")
@@ -38,7 +39,7 @@ class SweepUntil(BaseModel):
 
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
-    output: str = Field(max_length=128, description="the output", examples=["end_effector.x"])
+    output: OutputName = Field(description="the output", examples=["end_effector.x"])
     equals: float = Field(description="its value, in its document unit")
 
 
@@ -47,7 +48,7 @@ class SweepOptions(JobOptions):
         min_length=1, max_length=8, json_schema_extra={"document_default": "/sweep"}
     )
     grid: Literal["cartesian", "zip"] = "cartesian"
-    continuation: str | None = Field(
+    continuation: Pointer | None = Field(
         None,
         description="path of the swept parameter that is a load path: solved in order, each point from the previous one",
         json_schema_extra={"document_default": "/sweep/path"},
@@ -57,7 +58,7 @@ class SweepOptions(JobOptions):
         description="stop where an output reaches a value (one ranged parameter)",
         json_schema_extra={"document_default": "/sweep/until"},
     )
-    outputs: list[str] | None = Field(None, min_length=1, description="outputs to keep (default: all)")
+    outputs: list[OutputName] | None = Field(None, min_length=1, description="outputs to keep (default: all)")
     analysis: str = Field(
         "equilibrium",
         min_length=1,

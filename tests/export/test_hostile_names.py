@@ -2,11 +2,13 @@
 strings reach the export's C sources, header, build files and loader. A corpus of hostile names
 (line ends, NUL, comment delimiters, every trigraph, printf conversions, preprocessor lines,
 make and shell syntax, rich markup, the templates' own placeholders, non-ASCII, terminal escapes,
-the longest name, C keywords, the library's own file names) in one small document whose 100 kB
-title carries the issue's attack: exported over HTTP and by the CLI to the same sources, built
+the longest name, C keywords, the library's own file names) in one small document whose title
+(as long as a name may be: 200 characters, issue 52) carries injections into every file the
+export writes: exported over HTTP and by the CLI to the same sources, built
 by make with the strict flags and by CMake, its example and checks run, its library loaded
 through its loader, every header macro used in a user's translation unit; a canary (code that
-would create a file) never fires. The issue's reproductions each have a case of their own;
+would create a file) never fires. The issue's reproductions each have a case of their own (its
+title within a name's 200 characters: the issue's own, longer, is refused at the door);
 names that cannot become the library's are a 422 naming the field."""
 
 from __future__ import annotations
@@ -73,42 +75,41 @@ BODIES = ['b1\r*??(%n"\\', "*b2`$(x)`ü\x00", "int"]
 SWEPT = NAMES[6]  # the example's sweep and the target task: the printf name
 
 
-def constructor(canary: Path) -> str:
-    """C that creates `canary` when a program or library holding it starts (no quote in it:
-    the old escaper would have spoiled a string)."""
-    command = ",".join(str(byte) for byte in f"touch {canary}".encode()) + ",0"
+# The file a hostile title's command would create, in the folder the build or the run it
+# ends up in works in (fired() looks there): a title holds 200 characters, no absolute path.
+CANARY = "canary"
+
+
+def constructor() -> str:
+    """C that creates CANARY when a program or library holding it starts (no quote in it: the
+    old escaper would have spoiled a string)."""
+    command = ",".join(str(byte) for byte in f"touch {CANARY}".encode()) + ",0"
     return (
-        "__attribute__((constructor)) static void canary(void) { static const char c[] = {"
-        + command
-        + "}; if (system(c)) {} }"
+        "__attribute__((constructor)) static void k(void) {static const char c[]={" + command + "}; if (system(c)) {}}"
     )
 
 
-def issue_title(canary: Path) -> str:
-    """The issue's title: end the header's first comment, a CR (a line end to gcc), declare
-    system() and define a constructor, once per translation unit, and open a comment again.
-    (The issue's included <stdlib.h>; a declaration keeps every file of the old export building,
-    bench.c's feature macro included, so that the canary is what tells.)"""
-    declared = "int system(const char *command);"
-    return f"Hostile */\r#ifndef PWNED\r#define PWNED\r{declared}\r{constructor(canary)}\r#endif\r/* "
+def issue_title() -> str:
+    """The issue's title, within a name's 200 characters: end the header's first comment, a CR (a
+    line end to gcc), declare system() and define a constructor, once per translation unit, and
+    open a comment again. (The issue's included <stdlib.h>; a declaration keeps every file of the
+    old export building, bench.c's feature macro included, so that the canary is what tells.)"""
+    return f"*/\r#ifndef PWN\r#define PWN\rint system(const char*);\r{constructor()}\r#endif\r/*"
 
 
-def hostile_title(canary: Path) -> str:
+def hostile_title() -> str:
     return "".join(
         [
-            issue_title(canary),
-            f'\r"""\rimport os; os.system("touch {canary}")\r"""\r',  # the loader's docstring
-            f"\\\n$(shell touch {canary})\r`touch {canary}`\rexecute_process(COMMAND touch {canary})\r",  # make, CMake
-            "@NAME@ @SET_PATH@ @INPUT_LINES@ ??/ ",
-            *NAMES,
-            "x" * 100_000,
+            f'*/\r"""\rimport os; os.system("touch {CANARY}")\r"""\r',  # a comment's end, the loader's docstring
+            f"\\\n$(shell touch {CANARY})\r`touch {CANARY}`\rexecute_process(COMMAND touch {CANARY})\r",  # make, CMake
+            "@NAME@ @SET_PATH@ @INPUT_LINES@ ??/ /*",  # the templates' placeholders, the trigraph of a backslash
         ]
     )
 
 
-def hostile_document(canary: Path) -> dict:
+def hostile_document() -> dict:
     doc = sprung_bodies(BODIES, ground="g??=*")
-    doc["name"] = hostile_title(canary)
+    doc["name"] = hostile_title()
     for k, name in enumerate(NAMES):
         doc["loads"][name] = {"type": "force", "body": BODIES[k % 3], "force": [0.0, 0.0]}
         doc["outputs"][name] = {"type": "point", "body": BODIES[k % 3]}
@@ -144,7 +145,7 @@ def server(tmp_path_factory):
 def hostile(server, tmp_path_factory) -> Hostile:
     root = tmp_path_factory.mktemp("hostile")
     canary = root / "canary"
-    doc = hostile_document(canary)
+    doc = hostile_document()
     with Client(server.url) as client:
         job = client.export(document=doc, name=LIBRARY)
         data = client.export_archive(job.id, timeout=120)
@@ -161,7 +162,7 @@ def hostile(server, tmp_path_factory) -> Hostile:
 
 
 def fired(canary: Path, *folders: Path) -> list[Path]:
-    """The canary, and any file the names' own commands (touch canary) would have made."""
+    """The canary, and any file the names' and the titles' own commands (touch canary) would have made."""
     return [path for path in (canary, *(folder / "canary" for folder in folders)) if path.exists()]
 
 
@@ -229,7 +230,7 @@ def test_over_http_and_by_the_cli_the_hostile_document_gives_the_same_ascii_sour
     for manifest in manifests:
         manifest.pop("export_seconds")
     assert manifests[0] == manifests[1]
-    assert manifests[0]["title"] == hostile_title(hostile.canary)  # the manifest keeps it whole (JSON)
+    assert manifests[0]["title"] == hostile_title()  # the manifest keeps it whole (JSON)
     assert [o["output"] for o in manifests[0]["outputs"]][:2] == [f"{NAMES[0]}.x", f"{NAMES[0]}.y"]
 
 
@@ -289,7 +290,9 @@ def _one_body(load: str = "F", output: str = "tip") -> dict:
 def test_the_issues_title_stays_a_comment_and_its_constructor_never_runs(tmp_path):
     canary = tmp_path / "canary"
     doc = _one_body()
-    doc["name"] = issue_title(canary)
+    with pytest.raises(MechanismError, match=r"^/name: at most 200 characters \(got 100200\)$"):
+        load_document(dict(doc, name=issue_title() + "x" * 100_000))  # a longer title is refused at the door
+    doc["name"] = issue_title()
     folder = _exported(tmp_path, doc, "titled")
     make(folder, "all")
     run([str(folder / "example")], folder)
@@ -298,8 +301,8 @@ def test_the_issues_title_stays_a_comment_and_its_constructor_never_runs(tmp_pat
     header = (folder / "titled.h").read_text()
     first = header.splitlines()[0]
     assert first.startswith(
-        '/* titled.h: the exported solver of "Hostile * / #ifndef PWNED #define PWNED int system(const char *command); '
-        "__attribute__((constructor)) static void canary(void) { static const char c[] = {116,111,117,99,104,"
+        '/* titled.h: the exported solver of "* / #ifndef PWN #define PWN int system(const char*); '
+        "__attribute__((constructor)) static void k(void) {static const char c[]={116,111,117,99,104,"
     )
     assert "\r" not in header and header.index("*/") > header.index("generated, do not edit")
 

@@ -312,7 +312,8 @@ HOSTILE = [
 def hostile_gripper() -> dict:
     names = dict(zip(["frame", "input", "coupler", "follower", "a", "b", "c", "d"], HOSTILE + ["d"]))
     document = copy.deepcopy(GRIPPER)
-    document["name"] = '../../etc/passwd"\r\nX-Evil: 1\n<script>alert(1)</script>' + "x" * 50_000
+    # 194 characters: a name's limit is 200
+    document["name"] = '../../etc/passwd"\r\nX-Evil: 1\n<script>alert(1)</script>' + "x" * 140
     document["bodies"] = {names[k]: v for k, v in document["bodies"].items()}
     document["elements"] = {names[k]: v for k, v in document["elements"].items()}
     for item in (*document["elements"].values(), *document["loads"].values(), *document["outputs"].values()):
