@@ -7,7 +7,8 @@ are computed (the kind decides the tasks from the stored points).
 
 Stopping: every task carries its job's deadline and a stop signal (service.jobs.control). A
 cancelled job, or one over its time limit, stops getting tasks; its running tasks are told to
-stop (they check between points, Newton by its time limit, IPOPT every iteration), and a task
+stop (they check between points; Newton and the other timed loops see the stop as their time
+limit, IPOPT every iteration), and a task
 that has not stopped after STOP_GRACE seconds has its workers killed (a process pool is
 renewed; tasks of other jobs lost that way are run again, not counted as failures). After the
 cancel is seen, the job's stored points do not change.
@@ -15,6 +16,10 @@ cancel is seen, the job's stored points do not change.
 The store may fail (a locked SQLite file, a full disk): points that could not be written are
 kept and written again with backoff (service.jobs.store_guard), so none is lost, and a job
 is finished only once all its points are stored.
+
+Tasks are sent fairly between keys, and taken back without loss (service.jobs.runner_tasks,
+service.jobs.fair_share); a job whose points take its key past the byte quota stops there
+(service.jobs.quotas).
 """
 
 from __future__ import annotations
@@ -168,6 +173,8 @@ class JobRunner(TaskFeeding):
             log.warning("%d stopped task(s) ran on for %.1f s: their workers were killed", len(overdue), STOP_GRACE)
             self._killed.add(self._generation)
             self._generation += 1
+            for future in self._stopping:
+                self._forget_future(future)
             self._stopping.clear()
         # A stop signal outlives every task that may read it: a Dask future reports itself
         # cancelled while its function still runs, so the signal is kept past the job's deadline.

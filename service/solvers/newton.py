@@ -75,7 +75,12 @@ def iterate(
         if k == options.max_iterations:
             break
         if passed(end):
-            return "time_limit", z, norm, k, history, f"stopped by the time limit of {options.time_limit:g} s"
+            said = (
+                f"stopped by the time limit of {options.time_limit:g} s"
+                if options.time_limit is not None
+                else "stopped: its job was cancelled or ran out of time"
+            )
+            return "time_limit", z, norm, k, history, said
         dz = direction(z, R)
         if dz is None:
             return "singular", z, norm, k, history, f"tangent stiffness singular at iteration {k}"

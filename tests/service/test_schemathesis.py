@@ -40,6 +40,8 @@ def test_no_generated_request_gets_a_5xx(tmp_path):
                 "not_a_server_error",
                 "--max-examples",
                 "100",
+                "--workers",
+                "2",  # two requests at once: the server answers while it checks (and CI keeps its time)
                 "--seed",
                 "20261121",
                 "--generation-database",
