@@ -81,7 +81,11 @@ def _help(info, choices: tuple | None) -> str:
 def is_names(info) -> bool:
     """A field that is a list of words (outputs, JSON pointers): a repeated flag."""
     kind = _plain(info.annotation)
-    return typing.get_origin(kind) is list and typing.get_args(kind) == (str,)
+    items = typing.get_args(kind) if typing.get_origin(kind) is list else ()
+    word = items[0] if len(items) == 1 else None
+    if typing.get_origin(word) is Annotated:  # a bounded word (service.analyses.shared_options)
+        word = typing.get_args(word)[0]
+    return word is str
 
 
 def singular(name: str) -> str:
