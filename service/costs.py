@@ -156,14 +156,58 @@ def check_grid_size(counts: list[int], limits: Limits, pointer: str = "/paramete
     return total
 
 
+# What building an export costs, predicted from the mechanism's elements before any code is
+# generated (service.export.size_model, fitted to python3 -m benchmarks.export_size): gcc -O2's time
+# and memory grow about as the square of the largest generated function (a link's own rows), so
+# neither the C's size nor the unknowns bound them. A builder takes 60 s and 1 GB on 2 cores: the
+# predicted build stays within these less the model's error on the measured links (-19% in memory;
+# -31% in time for a link of order 4, where the memory binds first, else -24%): the largest links it
+# takes built in 41 s and 863 MB at most. A function above the model's measured range is refused.
+EXPORT_BUILD_SECONDS = 45.0
+EXPORT_BUILD_MEGABYTES = 800.0
+
+
+def check_export_build(mech, pointer: str = "/document/elements") -> None:
+    """The export of a compiled mechanism (models.Mechanism) within EXPORT_BUILD_SECONDS and
+    EXPORT_BUILD_MEGABYTES of gcc -O2 as predicted, else MechanismError saying the predicted C
+    size, compile time and memory, and what drives them."""
+    from flexmech.service.export.size_model import BODY_ROWS, GCC_PREDICTED_UP_TO, predicted_size
+
+    size = predicted_size(mech.structure)
+    fits = size.gcc_seconds <= EXPORT_BUILD_SECONDS and size.gcc_megabytes <= EXPORT_BUILD_MEGABYTES
+    if fits and not size.beyond:
+        return
+    largest = size.largest
+    build = f"about {size.gcc_seconds:.0f} s and {size.gcc_megabytes:,.0f} MB to build it"
+    if size.beyond:  # gcc's regime there is its own choice: the faster one's figures, or minutes
+        build += (
+            " if it drops its quadratic passes for a function this large (as for a link of 56 x 12), far more if not"
+        )
+    else:
+        build += " (a function's build grows about as the square of its size)"
+    change = (
+        "use fewer elements"
+        if largest.what == BODY_ROWS
+        else "use fewer intervals or a lower order (degree), or split the link in two at a body"
+    )
+    raise MechanismError(
+        pointer,
+        f"an export of this mechanism writes about {size.c_bytes / 1e6:.1f} MB of C, with {largest.what} in one "
+        f"function of about {largest.instructions:,} instructions: gcc -O2 needs {build}; the limit is "
+        f"{EXPORT_BUILD_SECONDS:.0f} s and {EXPORT_BUILD_MEGABYTES:.0f} MB as predicted, and functions of at most "
+        f"{GCC_PREDICTED_UP_TO:,} instructions (a builder's 60 s and 1 GB, less the prediction's error); {change}",
+    )
+
+
 def check_export_unknowns(unknowns: int, limits: Limits, pointer: str = "/document/elements") -> None:
-    """An export's generated C grows with the mechanism's unknowns, about 10 kB each (the gripper's
-    exact curved beams: 137 unknowns, 1.5 MB of C written in 0.6 s; its archive 0.25 MB)."""
+    """An export's unknowns: its stiffness task condenses them densely and its check runs the
+    kernels over them (check_export_iteration); writing 582 took 61 s. What its build costs is
+    check_export_build's."""
     if unknowns > limits.max_export_unknowns:
         raise MechanismError(
             pointer,
-            f"{unknowns} unknowns: an export takes at most {limits.max_export_unknowns} (its C grows about 10 kB "
-            "per unknown); use fewer elements or intervals (a curved beam's partial_nonlinear model adds none)",
+            f"{unknowns} unknowns: an export takes at most {limits.max_export_unknowns}; use fewer elements or "
+            "intervals (a curved beam's partial_nonlinear model adds none)",
         )
 
 

@@ -79,13 +79,10 @@ def _help(info, choices: tuple | None) -> str:
 
 
 def is_names(info) -> bool:
-    """A field that is a list of words (outputs, JSON pointers): a repeated flag."""
+    """A field that is a list of words, bounded or not (outputs, JSON pointers): a repeated flag."""
     kind = _plain(info.annotation)
-    items = typing.get_args(kind) if typing.get_origin(kind) is list else ()
-    word = items[0] if len(items) == 1 else None
-    if typing.get_origin(word) is Annotated:  # a bounded word (service.analyses.shared_options)
-        word = typing.get_args(word)[0]
-    return word is str
+    word = typing.get_args(kind)[0] if typing.get_origin(kind) is list else None
+    return word is str or (typing.get_origin(word) is Annotated and typing.get_args(word)[0] is str)
 
 
 def singular(name: str) -> str:

@@ -26,7 +26,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from flexmech.models import Mechanism, MechanismError
 from flexmech.models.documents.fields import MAX_POINTER_CHARS
-from flexmech.service.costs import Limits, check_export_iteration, check_export_unknowns
+from flexmech.service.costs import Limits, check_export_build, check_export_iteration, check_export_unknowns
 from flexmech.service.jobs.base import JSON, JobOptions, Plan, StoredJob, read_spec
 from flexmech.service.jobs.control import TaskControl
 from flexmech.service.requests import compile_request, escape_pointer_part
@@ -167,6 +167,7 @@ def _checked(spec: ExportSpec, mech: Mechanism, limits: Limits) -> ExportPlan:
     if mech.n_free == 0:
         raise MechanismError("/document/bodies", "nothing moves: every body is fixed or prescribed, nothing to export")
     check_export_unknowns(mech.n_free, limits)
+    check_export_build(mech)
     try:
         plan = export_plan(mech, spec.model or AS_IN_THE_DOCUMENT, export_options(spec))
         check_export_iteration(
