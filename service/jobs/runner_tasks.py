@@ -13,6 +13,7 @@ import logging
 import time
 import uuid
 from collections import deque
+from collections.abc import Callable
 from concurrent.futures import Future
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
@@ -176,12 +177,7 @@ class TaskFeeding:
         self.executor.renew()
         self._generation += 1
 
-    # provided by JobRunner
-    def _save(self, active: ActiveJob) -> None:
-        raise NotImplementedError
-
-    def _stop_job(self, active: ActiveJob) -> None:
-        raise NotImplementedError
-
-    def _finish(self, job_id: str, status: str, error: str | None = None) -> None:
-        raise NotImplementedError
+    # provided by JobRunner (declared here for the type checker; the runner defines them)
+    _save: Callable[[ActiveJob], None]
+    _stop_job: Callable[[ActiveJob], None]
+    _finish: Callable[..., None]
