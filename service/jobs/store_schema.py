@@ -122,7 +122,10 @@ def make_engine(url: str) -> Engine:
     @event.listens_for(engine, "connect")
     def _pragmas(conn, _record):
         cur = conn.cursor()
-        cur.execute("PRAGMA auto_vacuum=INCREMENTAL")
+        # Setting auto_vacuum takes the write lock, even to its current value: a connection
+        # opened while another holds that lock would fail on it, so only a new file is set.
+        if cur.execute("PRAGMA page_count").fetchone()[0] == 0:
+            cur.execute("PRAGMA auto_vacuum=INCREMENTAL")
         cur.execute("PRAGMA journal_mode=WAL")
         cur.execute(f"PRAGMA journal_size_limit={WAL_LIMIT_BYTES}")
         cur.execute("PRAGMA foreign_keys=ON")

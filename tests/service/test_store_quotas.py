@@ -3,6 +3,7 @@ PostgreSQL, through service.jobs.store (no server: the HTTP side is test_store_l
 
 from __future__ import annotations
 
+import sqlite3
 import threading
 import uuid
 from datetime import timedelta
@@ -158,6 +159,23 @@ def test_an_sqlite_file_stops_growing_when_jobs_are_deleted(tmp_path):
     database = Path(tmp_path / "jobs.db").stat().st_size
     assert database < 300_000, (database, sizes)
     store.close()
+
+
+def test_a_store_opened_while_another_process_holds_the_write_lock_still_reads(tmp_path):
+    """A new connection of the pool, opened while a writer holds SQLite's lock, reads the jobs:
+    its settings must not need the lock (setting auto_vacuum did, and failed as 'locked')."""
+    path = tmp_path / "jobs.db"
+    JobStore(f"sqlite:///{path}").create("sweep", "a", {}, {}, 2, document=DOCUMENT)
+    lock = sqlite3.connect(path, isolation_level=None)
+    lock.execute("BEGIN EXCLUSIVE")
+    try:
+        reader = JobStore(f"sqlite:///{path}")  # its first connection opens under the lock
+        assert reader.usage("a").jobs == 1
+        assert sqlite3.connect(path).execute("PRAGMA auto_vacuum").fetchone()[0] == 2  # incremental
+        reader.close()
+    finally:
+        lock.execute("COMMIT")
+        lock.close()
 
 
 OLD_SCHEMA = [
