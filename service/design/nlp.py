@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cached_property, lru_cache
 
 import casadi as ca
 import numpy as np
@@ -45,11 +45,17 @@ class DesignNlp:
     sensitivities: tuple  # the (case, scatter) blocks of first-order moves the robust outputs need
     n_sensitivity: int  # their unknowns (the tail of x)
     evaluate: ca.Function  # (x, P) -> (f, g)
-    kkt: ca.Function  # (x, P, lam_g) -> (H, L_xp, J, g_p, f_p): for sensitivities of the optimum
     x: ca.SX
     P: ca.SX
     f: ca.SX
     g: ca.SX
+
+    @cached_property
+    def kkt(self) -> ca.Function:
+        """(x, P, lam_g) -> (H, L_xp, J, g_p, f_p): for sensitivities of the optimum. Built when
+        first asked (an optimization never needs it: building it took 1.6 s of a start, with
+        CSE, time a cancel had to wait for in one C++ call)."""
+        return kkt_function(self.x, self.P, self.f, self.g)
 
     @property
     def n_states(self) -> int:
@@ -138,16 +144,17 @@ def _design_nlp(key: tuple) -> DesignNlp:
     constraint_rows = [value(ref) / constraint_scales[k] for k, ref in enumerate(refs[1:])]
     x = ca.vertcat(d, *zs, *modes, *amplitudes, *sensitivities)
     g = ca.vertcat(*residuals, *eigen_rows, *response_rows, *sensitivity_eqs, *constraint_rows)
-    evaluate, kkt = _functions(x, P, f, g)
+    evaluate = ca.Function("design_nlp", [x, P], [f, g], ["x", "P"], ["f", "g"], dict(cse=True))
+    _no_free_symbols(evaluate)
     n_sensitivity = sum(block_size(structure, block) for block in blocks)
     n_equalities = n_state * n_cases + (n_state + 1) * len(frequencies) + 2 * n_state * len(responses) + n_sensitivity
     counts = (n_design, n_state, n_cases, n_params, n_equalities)
-    return DesignNlp(key, *counts, frequencies, responses, blocks, n_sensitivity, evaluate, kkt, x, P, f, g)
+    return DesignNlp(key, *counts, frequencies, responses, blocks, n_sensitivity, evaluate, x, P, f, g)
 
 
-def _functions(x: ca.SX, P: ca.SX, f: ca.SX, g: ca.SX) -> tuple[ca.Function, ca.Function]:
-    """(x, P) -> (f, g), and the KKT terms (x, P, lam_g) -> (H, L_xp, J, g_p, f_p) for sensitivities."""
-    evaluate = ca.Function("design_nlp", [x, P], [f, g], ["x", "P"], ["f", "g"], dict(cse=True))
+def kkt_function(x: ca.SX, P: ca.SX, f: ca.SX, g: ca.SX) -> ca.Function:
+    """The KKT terms (x, P, lam_g) -> (H, L_xp, J, g_p, f_p) for sensitivities of an optimum:
+    without CSE, which took seconds to build for a Function evaluated once per analysis."""
     lam = ca.SX.sym("lam_g", g.shape[0])
     gradient = ca.gradient(f + ca.dot(lam, g), x)
     kkt = ca.Function(
@@ -156,12 +163,14 @@ def _functions(x: ca.SX, P: ca.SX, f: ca.SX, g: ca.SX) -> tuple[ca.Function, ca.
         [ca.jacobian(gradient, x), ca.jacobian(gradient, P), ca.jacobian(g, x), ca.jacobian(g, P), ca.gradient(f, P)],
         ["x", "P", "lam_g"],
         ["H", "L_xp", "J", "g_p", "f_p"],
-        dict(cse=True),
     )
-    for fn in (evaluate, kkt):
-        if fn.has_free():
-            raise RuntimeError(f"graph {fn.name()} has free symbols {fn.get_free()}")
-    return evaluate, kkt
+    _no_free_symbols(kkt)
+    return kkt
+
+
+def _no_free_symbols(fn: ca.Function) -> None:
+    if fn.has_free():
+        raise RuntimeError(f"graph {fn.name()} has free symbols {fn.get_free()}")
 
 
 def _responses(structure, responses, zs, ps, amplitudes, scales) -> tuple[list[ca.SX], list[ca.SX]]:

@@ -20,6 +20,7 @@ from flexmech.service.impacts.kept_rows import reported_rows
 from flexmech.service.impacts.stepping import Trace
 
 MAPS_KEPT = 64  # mapped Functions kept (per structure, size and thread)
+MAP_COLUMNS = 1 << 15  # states per mapped call at most: a run's stop is looked at between calls
 _MAPPED: dict[tuple, ca.Function] = {}
 _LOCK = threading.Lock()  # threads share the dictionary, never their CasADi objects
 
@@ -48,13 +49,32 @@ def mapped(model: ImpactModel, function, count: int) -> ca.Function:
     return fn
 
 
-def evaluated(model: ImpactModel, function, columns: list, p: np.ndarray) -> list[np.ndarray]:
+class RunStopped(Exception):
+    """A run's histories were abandoned half-evaluated: its stop() said its job was cancelled
+    or ran out of time."""
+
+
+def evaluated(model: ImpactModel, function, columns: list, p: np.ndarray, stop=None) -> list[np.ndarray]:
     """The outputs of function(model) at every column of `columns` (arrays of shape (rows, count)
-    or (count,)), p the same for all: arrays of `count` columns."""
-    count = np.shape(columns[0])[-1]
+    or (count,)), p the same for all: arrays of `count` columns. Evaluated MAP_COLUMNS states
+    per call (two million states take seconds), raising RunStopped between calls once stop()."""
+    columns = [np.atleast_2d(c) for c in columns]
+    count = columns[0].shape[1]
+    if count <= MAP_COLUMNS:
+        return _evaluated_at_once(model, function, columns, p)
+    parts = []
+    for start in range(0, count, MAP_COLUMNS):
+        if stop is not None and stop():
+            raise RunStopped(f"stopped while evaluating states {start} of {count}")
+        parts.append(_evaluated_at_once(model, function, [c[:, start : start + MAP_COLUMNS] for c in columns], p))
+    return [np.concatenate(outputs, axis=1) for outputs in zip(*parts)]
+
+
+def _evaluated_at_once(model: ImpactModel, function, columns: list[np.ndarray], p: np.ndarray) -> list[np.ndarray]:
+    count = columns[0].shape[1]
     fn = mapped(model, function, count)
     size = fn.size2_in(0)
-    padded = [np.pad(np.atleast_2d(c), ((0, 0), (0, size - count)), mode="edge") for c in columns]
+    padded = [np.pad(c, ((0, 0), (0, size - count)), mode="edge") for c in columns]
     return [np.asarray(out)[:, :count] for out in fn.call([*padded, p])]
 
 
@@ -78,14 +98,15 @@ class Histories:
         return self.states[:, 0]
 
 
-def histories(model: ImpactModel, spec: SimulateSpec, trace: Trace, p: np.ndarray) -> Histories:
+def histories(model: ImpactModel, spec: SimulateSpec, trace: Trace, p: np.ndarray, stop=None) -> Histories:
+    """Every state's histories and events; stop (looked at between mapped calls) raises RunStopped."""
     states = np.vstack(trace.states)
     n = model.bodies.size
     per = {kind: 1 / model.book.si(1.0, kind, "/units") for kind in ("length", "angle", "force", "energy")}
     if spec.scheme == "moreau":
         pairs, events, impacts, joints, event_rows = _moreau_pairs(model, spec, np.vstack(trace.extras), states, per)
     else:
-        pairs, events, impacts, joints, event_rows = _event_pairs(model, states, p, per)
+        pairs, events, impacts, joints, event_rows = _event_pairs(model, states, p, per, stop)
     coordinates, velocities = {}, {}
     for k, name in enumerate(model.coordinate_names()):
         scale = per["angle"] if name.endswith(".theta") else per["length"]
@@ -233,14 +254,14 @@ def _clearance(model: ImpactModel) -> float:
     return 0.0
 
 
-def _event_pairs(model: ImpactModel, states: np.ndarray, p: np.ndarray, per: dict):
+def _event_pairs(model: ImpactModel, states: np.ndarray, p: np.ndarray, per: dict, stop=None):
     n, P = model.bodies.size, len(model.pairs)
     L = EventLayout(n, P)
     cols = [states[:, L.at(k)].T for k in ("contact", "beyond_v0", "beyond_v1", "speed")]
     _, _, F_N, F_T, rate, v_T, pins = evaluated(
-        model, rhs_function, [states[:, 1 : 1 + n].T, states[:, 1 + n : 1 + 2 * n].T, states[:, 0], *cols], p
+        model, rhs_function, [states[:, 1 : 1 + n].T, states[:, 1 + n : 1 + 2 * n].T, states[:, 0], *cols], p, stop
     )
-    pen = evaluated(model, depth_function, [states[:, 1 : 1 + n].T, states[:, 0]], p)[0]
+    pen = evaluated(model, depth_function, [states[:, 1 : 1 + n].T, states[:, 0]], p, stop)[0]
     pairs, events, impacts = {}, [], []
     for k, pair in enumerate(model.pairs):
         pairs[pair.name] = {

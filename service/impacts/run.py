@@ -18,7 +18,7 @@ from flexmech.models.impacts.model import DAMPING, WORKS, ImpactModel, impact_mo
 from flexmech.models.units import document_unit, quantity_to_si
 from flexmech.service.dynamics.histories import history_expression
 from flexmech.service.impacts.event_driven import EventLayout
-from flexmech.service.impacts.report import Histories, depth_function, histories, report
+from flexmech.service.impacts.report import Histories, RunStopped, depth_function, histories, report
 from flexmech.service.impacts.state_sensitivity import check_fields, end_state_derivatives, parameter_directions
 from flexmech.service.impacts.stepping import KEPT_EVENT_ROWS, Trace, run_events, run_moreau
 
@@ -134,10 +134,17 @@ def run_impacts(
 
 def run_with_histories(
     document: MechanismDocument, spec: SimulateSpec, stop=None, max_steps: int = 2_000_000
-) -> tuple[Histories, dict]:
-    """(the histories at every state the run holds, the report)."""
+) -> tuple[Histories | None, dict]:
+    """(the histories at every state the run holds, the report); a run `stop` ended has no
+    histories (None) and a report of its status alone: evaluating the contacts at its states
+    takes seconds (two million states), which a cancel must not wait for."""
     model, p, trace = integrate(document, spec, stop, max_steps)
-    full = histories(model, spec, trace, p)
+    if trace.status == "stopped":
+        return None, {"status": "stopped", "message": trace.message, "seconds": trace.seconds}
+    try:
+        full = histories(model, spec, trace, p, stop)
+    except RunStopped as stopped:  # stop() came while its states were evaluated
+        return None, {"status": "stopped", "message": str(stopped), "seconds": trace.seconds}
     return full, report(model, spec, trace, p, full=full)
 
 

@@ -103,22 +103,25 @@ _NOMINALS: OrderedDict[str, tuple[Histories, dict]] = OrderedDict()
 _LOCK = threading.Lock()
 
 
-def _run(document: dict, simulate: dict | None, stop, max_steps: int) -> tuple[Histories, dict]:
+def _run(document: dict, simulate: dict | None, stop, max_steps: int) -> tuple[Histories | None, dict]:
     doc = MechanismDocument.model_validate(document)
     base = doc.simulate.model_dump() if doc.simulate is not None else {}
     spec = SimulateSpec.model_validate({**base, **{k: v for k, v in (simulate or {}).items() if v is not None}})
     return run_with_histories(doc, spec, stop=stop, max_steps=max_steps)
 
 
-def nominal_run(document: dict, simulate: dict | None, stop=None, max_steps: int = 2_000_000) -> tuple[Histories, dict]:
+def nominal_run(
+    document: dict, simulate: dict | None, stop=None, max_steps: int = 2_000_000
+) -> tuple[Histories | None, dict]:
+    """The study's run of the document as given, kept (a stopped one, without histories, is not)."""
     key = json.dumps([document, simulate], sort_keys=True)
     with _LOCK:
         kept = _NOMINALS.get(key)
     if kept is not None:
         return kept
     full, report = _run(document, simulate, stop, max_steps)
-    if report["status"] == "stopped":
-        return full, report  # not kept: a later task runs it whole
+    if full is None:
+        return full, report  # stopped, not kept: a later task runs it whole
     with _LOCK:
         if len(_NOMINALS) >= NOMINALS_KEPT:
             _NOMINALS.popitem(last=False)
@@ -142,6 +145,8 @@ def study_point(
         if pointer is None
         else _run(variant(document, pointer, change), simulate, stop, max_steps)
     )
+    if full is None:  # stopped (cancelled or out of time): the job keeps no point of it
+        return {"status": "stopped", "message": report["message"]}
     point = {
         "status": report["status"],
         "message": report["message"],
@@ -150,9 +155,9 @@ def study_point(
         "impacts": len(report["impacts"]),
         "contacts": contact_summary(full),
     }
-    if pointer is not None and report["status"] != "stopped":
-        nominal, nominal_report = nominal_run(document, simulate, stop, max_steps)
-        if nominal_report["status"] == "stopped":
+    if pointer is not None:
+        nominal, _ = nominal_run(document, simulate, stop, max_steps)
+        if nominal is None:
             point["status"] = "stopped"
         else:
             point["influence"] = compared(nominal, full, tolerance)

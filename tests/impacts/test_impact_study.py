@@ -4,6 +4,7 @@ each run's contacts from its events (service.impacts.study)."""
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from impact_cases import csfh
 
@@ -95,3 +96,51 @@ def test_a_job_resumed_across_versions_answers_with_the_points_it_can_compare():
     assert result["fields"]["/a"]["+"]["influence"] == {}
     assert result["fields"]["/a"]["-"]["influence"] == new["influence"]
     assert result["ranking"] == [{"path": "/a", "earliest_departure": 1.0, "largest_rms": 0.2}]
+
+
+def test_a_stopped_run_is_reported_stopped_at_once_and_its_nominal_is_not_kept(moreau):
+    """A cancel mid-run (stop() true): no contacts are evaluated at its states (seconds for two
+    million of them) and the stopped nominal run is not kept, so the next task runs it whole."""
+    stopped = study_point(moreau, None, SLIDING, 0.05, TOLERANCE, stop=lambda: True)
+    assert stopped["status"] == "stopped" and stopped["message"].startswith("stopped at t = ")
+    assert "contacts" not in stopped
+    document = {**moreau, "name": "not kept when stopped"}  # a key of its own among the kept runs
+    assert nominal_run(document, None, stop=lambda: True)[0] is None
+    full, report = nominal_run(document, None)
+    assert report["status"] == "finished" and full is not None and len(onsets(document)) >= 3
+
+
+def test_histories_evaluated_in_parts_are_the_same_and_a_stop_between_parts_ends_them(monkeypatch):
+    """Event-driven csfh (scenario 6.3, 0.3 s): its states' contacts evaluated 64 states per
+    mapped call equal those of one call, and a stop() that turns true after the first parts
+    ends the run's histories (RunStopped, reported as a stopped run without histories)."""
+    import flexmech.service.impacts.report as report_module
+    from flexmech.models.documents.document import MechanismDocument
+    import flexmech.service.impacts.run as run_module
+    from flexmech.service.impacts.run import integrate
+
+    document = MechanismDocument.model_validate(csfh("6.3", until=0.3))
+    spec = document.simulate
+    model, p, trace = integrate(document, spec)
+    whole = report_module.histories(model, spec, trace, p)
+    monkeypatch.setattr(report_module, "MAP_COLUMNS", 64)
+    assert len(whole.states) > 4 * 64
+    parts = report_module.histories(model, spec, trace, p)
+    for name, values in whole.pairs.items():
+        for quantity, series in values.items():
+            assert np.array_equal(parts.pairs[name][quantity], series), (name, quantity)
+    assert parts.events == whole.events and parts.impacts == whole.impacts
+    looks = iter([False, False])
+    with pytest.raises(report_module.RunStopped, match="stopped while evaluating states 128 of"):
+        report_module.histories(model, spec, trace, p, stop=lambda: next(looks, True))
+    stepped = []  # the run's stepping has ended: its stop() says so from then on
+
+    def integrated(*args):
+        done = integrate(*args)
+        stepped.append(True)
+        return done
+
+    monkeypatch.setattr(run_module, "integrate", integrated)
+    full, report = run_module.run_with_histories(document, spec, stop=lambda: bool(stepped))
+    assert full is None and report["status"] == "stopped"
+    assert report["message"].startswith("stopped while evaluating states 0 of")

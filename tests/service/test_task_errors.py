@@ -58,6 +58,7 @@ SAMPLES = {  # every exception class of ours: the arguments of one
     "OptionError": lambda: ("--samples", "must be positive"),
     "TaskFailed": lambda: ({"type": "MechanismError", "message": "/a: b", "pointer": "/a", "problem": "b"},),
     "_Unsafe": lambda: ("a call",),
+    "RunStopped": lambda: ("stopped while evaluating states 32768 of 2000000",),
 }
 
 
