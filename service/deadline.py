@@ -68,11 +68,11 @@ def stop_scope(stopped: Callable[[], bool]):
     signal at most every 0.2 s), so a cancel ends a Newton run, a trace or a simulation window
     within a moment, not at its own time limit."""
     global _stopped
-    _stopped = stopped
+    outer, _stopped = _stopped, stopped
     try:
         yield
     finally:
-        _stopped = None
+        _stopped = outer  # a scope within a task's (an export's, asked to yield too) gives it back
 
 
 def stop_requested() -> bool:

@@ -144,8 +144,7 @@ def _design_nlp(key: tuple) -> DesignNlp:
     constraint_rows = [value(ref) / constraint_scales[k] for k, ref in enumerate(refs[1:])]
     x = ca.vertcat(d, *zs, *modes, *amplitudes, *sensitivities)
     g = ca.vertcat(*residuals, *eigen_rows, *response_rows, *sensitivity_eqs, *constraint_rows)
-    evaluate = ca.Function("design_nlp", [x, P], [f, g], ["x", "P"], ["f", "g"], dict(cse=True))
-    _no_free_symbols(evaluate)
+    evaluate = _no_free_symbols(ca.Function("design_nlp", [x, P], [f, g], ["x", "P"], ["f", "g"], dict(cse=True)))
     n_sensitivity = sum(block_size(structure, block) for block in blocks)
     n_equalities = n_state * n_cases + (n_state + 1) * len(frequencies) + 2 * n_state * len(responses) + n_sensitivity
     counts = (n_design, n_state, n_cases, n_params, n_equalities)
@@ -164,13 +163,13 @@ def kkt_function(x: ca.SX, P: ca.SX, f: ca.SX, g: ca.SX) -> ca.Function:
         ["x", "P", "lam_g"],
         ["H", "L_xp", "J", "g_p", "f_p"],
     )
-    _no_free_symbols(kkt)
-    return kkt
+    return _no_free_symbols(kkt)
 
 
-def _no_free_symbols(fn: ca.Function) -> None:
+def _no_free_symbols(fn: ca.Function) -> ca.Function:
     if fn.has_free():
         raise RuntimeError(f"graph {fn.name()} has free symbols {fn.get_free()}")
+    return fn
 
 
 def _responses(structure, responses, zs, ps, amplitudes, scales) -> tuple[list[ca.SX], list[ca.SX]]:

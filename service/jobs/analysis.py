@@ -21,6 +21,7 @@ from pydantic import ConfigDict, Field
 
 from flexmech.service.analyses import ANALYSES, AnalysisRequest
 from flexmech.service.costs import Limits, check_report_size
+from flexmech.service.deadline import stop_scope
 from flexmech.service.jobs.base import JSON, JobOptions, Plan, StoredJob, read_spec
 from flexmech.service.jobs.control import TaskControl
 from flexmech.service.jobs.sweep import mechanism_of
@@ -94,8 +95,10 @@ class AnalysisJob:
         spec = read_spec(AnalysisJobSpec, stored)
         analysis = ANALYSES.named(spec.analysis)
         newton = newton_options(spec.options, control.time_limit(None))
-        report = analysis.run(mechanism_of(spec), AnalysisRequest(newton, spec.settings))
-        return [] if control.should_stop() else [(0, report)]  # stopped meanwhile: not stored
+        # Asked to yield while it runs, it ends like a cancelled one and runs again later, whole.
+        with stop_scope(control.stop_or_yield):
+            report = analysis.run(mechanism_of(spec), AnalysisRequest(newton, spec.settings))
+        return [] if control.interrupted or control.should_stop() else [(0, report)]  # cut short: not stored
 
     def failed(self, point: JSON) -> bool:
         return point.get("status") not in ("converged", "finished")

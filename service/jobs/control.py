@@ -25,6 +25,7 @@ class TaskControl:
         self._yield_file = signal.get("yield_file")
         self._yield_event = signal.get("yield_event")
         self._checked, self._cancelled, self._yield = 0.0, False, False
+        self.interrupted = False  # stop_or_yield() said True to a loop
 
     def remaining(self) -> float | None:
         """Seconds until the job's deadline (None: no deadline)."""
@@ -67,6 +68,14 @@ class TaskControl:
     def between_points(self) -> bool:
         """Whether to end the task before its next point: stopped, or asked to yield."""
         return self.should_stop() or self.should_yield()
+
+    def stop_or_yield(self) -> bool:
+        """The stop of a task whose work cannot be kept in part (an export, an analysis job):
+        its loops end when it is stopped or asked to yield, and it runs again from its start
+        later. `interrupted` remembers that a loop was told so, and its work is incomplete."""
+        if self.between_points():
+            self.interrupted = True
+        return self.interrupted
 
     def time_limit(self, per_solve: float | None) -> float | None:
         """The time a solve may take: its own limit, within what is left of the job's."""

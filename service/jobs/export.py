@@ -27,6 +27,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from flexmech.models import Mechanism, MechanismError
 from flexmech.models.documents.fields import MAX_POINTER_CHARS
 from flexmech.service.costs import Limits, check_export_build, check_export_iteration, check_export_unknowns
+from flexmech.service.deadline import stop_scope
 from flexmech.service.jobs.base import JSON, JobOptions, Plan, StoredJob, read_spec
 from flexmech.service.jobs.control import TaskControl
 from flexmech.service.requests import compile_request, escape_pointer_part
@@ -256,13 +257,15 @@ class ExportJob:
         control = TaskControl(task)
         if control.between_points():  # cancelled, or asked to yield before it began: it runs later
             return []
-        try:
-            point = export_point(read_spec(ExportSpec, stored))
-        except MechanismError:
-            if control.should_stop():  # its check was cut short by the stop: no finding of the export's
-                return []
-            raise
-        return [] if control.should_stop() else [(0, point)]  # stopped meanwhile: not stored
+        # Asked to yield while it runs, it ends like a cancelled one and runs again later, whole.
+        with stop_scope(control.stop_or_yield):
+            try:
+                point = export_point(read_spec(ExportSpec, stored))
+            except MechanismError:
+                if control.interrupted:  # its check was cut short: no finding of the export's
+                    return []
+                raise
+        return [] if control.interrupted or control.should_stop() else [(0, point)]  # cut short: not stored
 
     def failed(self, point: JSON) -> bool:
         return False  # an export that cannot be written fails its task, and so its job

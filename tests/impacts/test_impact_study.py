@@ -115,8 +115,8 @@ def test_histories_evaluated_in_parts_are_the_same_and_a_stop_between_parts_ends
     mapped call equal those of one call, and a stop() that turns true after the first parts
     ends the run's histories (RunStopped, reported as a stopped run without histories)."""
     import flexmech.service.impacts.report as report_module
-    from flexmech.models.documents.document import MechanismDocument
     import flexmech.service.impacts.run as run_module
+    from flexmech.models.documents.document import MechanismDocument
     from flexmech.service.impacts.run import integrate
 
     document = MechanismDocument.model_validate(csfh("6.3", until=0.3))

@@ -4,12 +4,13 @@ queued task sends that task again."""
 
 from __future__ import annotations
 
+import json
 import time
 from collections import deque
 from concurrent.futures import Future
 
 import pytest
-from conftest import ACTUATION, make_deployment
+from conftest import ACTUATION, EXAMPLES, make_deployment
 
 from flexmech.api.client import Client
 from flexmech.service.jobs.base import task_remainder
@@ -142,3 +143,39 @@ def test_cancelling_one_keys_jobs_leaves_another_keys_sweep_whole(backend, reque
     print(f"\n{backend}: key B's sweep ({at_cancel} points at the cancel) done {took:.1f} s after it")
     assert final.status == "succeeded", final.error
     assert indices == list(range(100))
+
+
+def _rod_simulation(until: float) -> dict:
+    """An analysis job of one task: the rod of 64 elements simulated `until` s in 1e-4 s steps
+    (0.6 s: 6000 steps, about 7 s here)."""
+    document = json.loads((EXAMPLES / "rod_free_vibration.json").read_text())
+    document["elements"]["rod"]["intervals"] = 64
+    return {"document": document, "analysis": "simulate", "simulate": {"until": until, "step": 1e-4, "every": 100}}
+
+
+def test_a_running_one_task_job_yields_to_another_keys_sweep_and_runs_again_whole(request, tmp_path):
+    """Key A's two analysis jobs (one task each, which cannot be kept in part) hold both workers;
+    key B's sweep takes the worker of A's newer job, which stops at once and runs again from its
+    start afterwards: B's sweep succeeds before either of A's jobs, and both of A's succeed whole."""
+    server = make_deployment("sqlite", request, tmp_path).start(FLEXMECH_API_KEYS=",".join(KEYS))
+    try:
+        with Client(server.url, api_key=KEYS[0]) as first, Client(server.url, api_key=KEYS[1]) as second:
+            long = [first.jobs.analysis(**_rod_simulation(0.6)) for _ in range(2)]
+            while not all(first.job(job.id).status == "running" for job in long):
+                time.sleep(0.1)
+            time.sleep(1.0)
+            started = time.perf_counter()
+            quick = second.wait(second.sweep(**QUICK).id, timeout=300)
+            took = time.perf_counter() - started
+            beside = [first.job(job.id).status for job in long]
+            finals = [first.wait(job.id, timeout=300) for job in long]
+            reports = [first.result(job.id).result["report"] for job in long]
+    finally:
+        server.stop()
+    print(f"\nkey B's sweep took {took:.1f} s beside key A's two analysis jobs")
+    assert quick.status == "succeeded" and quick.progress.done == 100
+    assert beside == ["running", "running"]  # B did not wait for one of A's jobs to end
+    assert [final.status for final in finals] == ["succeeded"] * 2, [final.error for final in finals]
+    assert [report["status"] for report in reports] == ["finished"] * 2
+    assert [(report["time_reached"], report["steps"]) for report in reports] == [(0.6, 6000)] * 2
+    assert reports[0]["outputs"] == reports[1]["outputs"]  # the one that yielded ran again whole
