@@ -70,12 +70,16 @@ class TaskControl:
         return self.should_stop() or self.should_yield()
 
     def stop_or_yield(self) -> bool:
-        """The stop of a task whose work cannot be kept in part (an export, an analysis job):
-        its loops end when it is stopped or asked to yield, and it runs again from its start
-        later. `interrupted` remembers that a loop was told so, and its work is incomplete."""
+        """The stop of work that cannot be kept in part (an export, an analysis job, an
+        optimization's start, an impact run): it ends when stopped or asked to yield, and runs
+        again from its start later. `interrupted` remembers that a loop was told so."""
         if self.between_points():
             self.interrupted = True
         return self.interrupted
+
+    def yielded_midway(self) -> bool:
+        """Whether stop_or_yield() ended a loop for a yield (not a cancel or the time limit)."""
+        return self.interrupted and not self.should_stop()
 
     def time_limit(self, per_solve: float | None) -> float | None:
         """The time a solve may take: its own limit, within what is left of the job's."""

@@ -159,10 +159,10 @@ class ImpactStudyJob:
                 pointer,
                 change,
                 tolerance,
-                control.should_stop,
+                control.stop_or_yield,  # asked to yield, a run ends too: it runs again, whole
                 task.get("max_steps", 2_000_000),
             )
-            if run["status"] == "stopped":  # cancelled or out of time: not stored, so a restart runs it again
+            if run["status"] == "stopped":  # cancelled, out of time or yielding: not stored, so it runs again
                 break
             points.append((index, {"path": pointer, "change": change, **run}))
         return points

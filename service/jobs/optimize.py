@@ -148,7 +148,9 @@ class OptimizeJob:
         for k in task["indices"]:
             if control.between_points():  # cancelled or out of time (the rest is dropped), or asked to yield
                 break
-            start = run_start(prepared, k, stop=control.should_stop)
+            start = run_start(prepared, k, stop=control.stop_or_yield)  # a yield ends a start too
+            if control.yielded_midway():  # its worker given to another key: the start runs again, whole
+                break
             points.append(
                 (k, plain({**start.summary(), "start": k, "x": start.x, "lam_g": start.lam_g, "lam_x": start.lam_x}))
             )
