@@ -230,18 +230,21 @@ def _input(mech: Mechanism, pointer: str, where: str, given: tuple[float, float]
 
 def _outputs(mech: Mechanism, chosen: tuple[str, ...]) -> list[tuple[str, Output]]:
     """(field, output) of the chosen outputs: field /outputs/k of the given ones; of the default
-    ones (the document's named outputs, else the free body coordinates), the document's output
-    or body they belong to."""
+    ones (the document's named outputs, else the free body coordinates, else, every body held
+    or moved by the document, their reactions: the forces its motion takes), the document's
+    output or body they belong to."""
     names = mech.graphs.output_names
     if not chosen:
         own = [n for n in names if not n.startswith(("bodies.", "reactions.", "elements.")) and n != "energy"]
         if own:  # an output's name has no '.': the part before the first one is its name
             return [(f"/outputs/{n.split('.')[0]}", _output(mech, n)) for n in own]
         bodies = mech.structure.bodies
-        return [
+        free = [
             (f"/bodies/{bodies[b]}", _output(mech, _as_output(names, mech.structure.coordinate_name(b, c))))
             for b, c in mech.structure.free
         ]
+        held = [(f"/bodies/{n.split('.')[1]}", _output(mech, n)) for n in names if n.startswith("reactions.")]
+        return free or held  # without outputs, C has no zero-length arrays: one of them is never empty
     out = []
     for k, name in enumerate(chosen):
         if name not in names:

@@ -219,3 +219,28 @@ def test_without_a_sweep_the_example_path_applies_the_documents_loads(tmp_path):
     moved = {item["name"]: (item["start"], item["stop"]) for item in manifest["example_path"]["inputs"]}
     assert moved == {"hold_force_x": (0.0, 7.919276), "hold_force_y": (0.0, 10.998155)}
     assert manifest["worst_case_iterations"]["failed_points"] == 0
+
+
+def test_a_mechanism_without_outputs_or_free_bodies_exports_its_reactions_and_compiles(tmp_path):
+    """grasper_shape names no outputs and holds or moves both its bodies: its export's outputs
+    are the bodies' reactions (before, none: zero-length arrays that gcc refused), it builds with
+    the strict flags, and its reactions at the full push equal flexmech's own."""
+    folder = tmp_path / "grasper"
+    manifest = export_document(load_document(EXAMPLES / "grasper_shape.json"), folder, None, ExportOptions())
+    reactions = [f"reactions.{body}.{part}" for body in ("base", "tip") for part in ("Fx", "Fy", "M")]
+    assert [output["output"] for output in manifest["outputs"]] == reactions
+    done = subprocess.run(
+        ["make", "-C", str(folder), f"CFLAGS={STRICT}", "CC=gcc", "all"], capture_output=True, text=True, timeout=600
+    )
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
+    solver = _solver(folder, "grasper")
+    status, outputs, _ = solver.equilibrium(push_dy=0.0127)
+    reference = sweep(
+        compile_mechanism(load_document(EXAMPLES / "grasper_shape.json"), None), "/loads/push/dy", [0.0127]
+    )
+    assert status == 0 and reference.status == ["converged"]
+    found = dict(zip(reactions, (outputs[name] for name in solver.output_names)))
+    for name in reactions:
+        assert found[name] == pytest.approx(reference.outputs[name][0], rel=1e-10, abs=1e-12), name
+    assert found["reactions.tip.Fy"] == pytest.approx(-found["reactions.base.Fy"], rel=1e-9)  # balanced
+    assert found["reactions.tip.Fy"] > 0.5  # N: a push of 12.7 mm takes a force (not a zero passing)
