@@ -171,12 +171,28 @@ def check_export_build(mech, pointer: str = "/document/elements") -> None:
     """The export of a compiled mechanism (models.Mechanism) within EXPORT_BUILD_SECONDS and
     EXPORT_BUILD_MEGABYTES of gcc -O2 as predicted, else MechanismError saying the predicted C
     size, compile time and memory, and what drives them."""
-    from flexmech.service.export.size_model import BODY_ROWS, GCC_PREDICTED_UP_TO, predicted_size
+    from flexmech.service.export.size_model import BODY_ROWS, predicted_size
 
     size = predicted_size(mech.structure)
+    over = build_over_limits(size)
+    if over is None:
+        return
+    change = (
+        "use fewer elements"
+        if size.largest.what == BODY_ROWS
+        else "use fewer intervals or a lower order (degree), or split the link in two at a body"
+    )
+    raise MechanismError(pointer, f"{over}; {change}")
+
+
+def build_over_limits(size) -> str | None:
+    """None when an export's predicted build (service.export.size_model.ExportSize) is within
+    the limits, else what it would write and take, against them."""
+    from flexmech.service.export.size_model import GCC_PREDICTED_UP_TO
+
     fits = size.gcc_seconds <= EXPORT_BUILD_SECONDS and size.gcc_megabytes <= EXPORT_BUILD_MEGABYTES
     if fits and not size.beyond:
-        return
+        return None
     largest = size.largest
     build = f"about {size.gcc_seconds:.0f} s and {size.gcc_megabytes:,.0f} MB to build it"
     if size.beyond:  # gcc's regime there is its own choice: the faster one's figures, or minutes
@@ -185,17 +201,11 @@ def check_export_build(mech, pointer: str = "/document/elements") -> None:
         )
     else:
         build += " (a function's build grows about as the square of its size)"
-    change = (
-        "use fewer elements"
-        if largest.what == BODY_ROWS
-        else "use fewer intervals or a lower order (degree), or split the link in two at a body"
-    )
-    raise MechanismError(
-        pointer,
+    return (
         f"an export of this mechanism writes about {size.c_bytes / 1e6:.1f} MB of C, with {largest.what} in one "
         f"function of about {largest.instructions:,} instructions: gcc -O2 needs {build}; the limit is "
         f"{EXPORT_BUILD_SECONDS:.0f} s and {EXPORT_BUILD_MEGABYTES:.0f} MB as predicted, and functions of at most "
-        f"{GCC_PREDICTED_UP_TO:,} instructions (a builder's 60 s and 1 GB, less the prediction's error); {change}",
+        f"{GCC_PREDICTED_UP_TO:,} instructions (a builder's 60 s and 1 GB, less the prediction's error)"
     )
 
 

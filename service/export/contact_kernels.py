@@ -10,9 +10,10 @@ of the generalized Jacobian is taken. A separating axis (a polygon site's) whose
 apart (no row carries force) sits where it separates best: nothing else determines it then.
 
 What is not exported: friction (a sticking contact depends on the path it came along, which one
-call does not know: MechanismError naming the field), and contact rows whose KKT kernel would be
-larger than MAX_INSTRUCTIONS (link surfaces against curved objects: one row per surface point,
-each with its second derivatives, tens of MB of C): the manifest then says why.
+call does not know: MechanismError naming the field), and contact rows whose KKT kernel would
+take the export past its build limits (service.costs.build_over_limits, the kernel one more
+function of the size model: link surfaces against curved objects have one row per surface point,
+each with its second derivatives): the manifest then says why, with the predicted build.
 """
 
 from __future__ import annotations
@@ -21,12 +22,13 @@ import casadi as ca
 import numpy as np
 
 from flexmech.models import Mechanism, MechanismError
+from flexmech.service.costs import build_over_limits
 from flexmech.service.export.direction import direction
+from flexmech.service.export.size_model import RowGroup, row_groups, size_of
 
 GAP_FLOOR = 1e-300  # below it r counts as zero
 FORCE_FLOOR = 1e-10  # nondimensional: a row carrying less is apart for its axis (rounding leaves ~1e-16)
 SHARPNESS = 1e3  # of the soft minimum of gaps (nondimensional: lengths / the largest element)
-MAX_INSTRUCTIONS = 200_000  # of the KKT kernel: about 2 MB of C, a few seconds of gcc -O2
 
 
 def _checked_problem(mech: Mechanism):
@@ -100,22 +102,32 @@ def _best_line(problem, v, gaps, rows: list[int], first: int):
     return (ca.SX(0), unit), (site - other, ca.jacobian(site - other, v))
 
 
-def contact_functions(mech: Mechanism, names: tuple[str, ...], base: str):
-    """(step (v, p) -> (dv, norm), outputs (v, p) -> y in document units named `names` (as
-    service.export.plan.contact_outputs chose them), units, n_v, start (p) -> v0: undeformed and
-    apart, each separating axis at its guess) of the contact state; None without contacts; a str
-    (why) when it is too large."""
+def contact_kernel(mech: Mechanism, base: str = "x"):
+    """(the contact problem, v, p, its KKT system (v, p) -> (F, J), and that system as the size
+    model counts it: one more generated function, of its instructions and v's size); None
+    without contacts. Seconds for many rows: its second derivatives are built."""
     if mech.structure.contacts is None or not mech.structure.contacts.pairs:
         return None
     problem = _checked_problem(mech)
     v, p, F, J = _kkt(mech, problem)
     F, J = _fischer_burmeister(problem, v, F, J)
     system = ca.Function(f"{base}_contact_system", [v, p], [F, J], ["v", "p"], ["F", "J"])
-    if system.n_instructions() > MAX_INSTRUCTIONS:
-        return (
-            f"its KKT kernel would be {system.n_instructions():,} instructions ({problem.n_in} contact rows with "
-            f"their second derivatives), above the export's limit of {MAX_INSTRUCTIONS:,} (about 2 MB of C)"
-        )
+    kernel = RowGroup(f"the contact KKT kernel ({problem.n_in} rows)", system.n_instructions(), v.numel())
+    return problem, v, p, system, kernel
+
+
+def contact_functions(mech: Mechanism, names: tuple[str, ...], base: str):
+    """(step (v, p) -> (dv, norm), outputs (v, p) -> y in document units named `names` (as
+    service.export.plan.contact_outputs chose them), units, n_v, start (p) -> v0: undeformed and
+    apart, each separating axis at its guess) of the contact state; None without contacts; a str
+    (why) when it is too large."""
+    built = contact_kernel(mech, base)
+    if built is None:
+        return None
+    problem, v, p, system, kernel = built
+    over = build_over_limits(size_of((*row_groups(mech.structure), kernel)))
+    if over is not None:
+        return f"its KKT kernel ({problem.n_in} contact rows with their second derivatives) would be too large: {over}"
     vm, pm = ca.MX.sym("v", v.numel()), ca.MX.sym("p", p.numel())
     Fm, Jm = system(vm, pm)
     step = ca.Function(f"{base}_contact_step", [vm, pm], [*direction(Fm, Jm)], ["v", "p"], ["dv", "norm"])
