@@ -299,7 +299,10 @@ def contact_outputs(mech: Mechanism, options: ExportOptions) -> tuple[ContactOut
         chosen = [
             (f"/contacts/pairs/{p.name}", f"contacts.{p.name}.{q}") for p in structure.pairs for q, _ in PAIR_OUTPUTS
         ]
-        chosen += [("/outputs/contacts", n) for n in mech.graphs.output_names if n.startswith("contacts.")]
+        pairs = {n for _, n in chosen}  # a structure may name a pair's result too (gripper_grasp_dynamics)
+        chosen += [
+            ("/outputs/contacts", n) for n in mech.graphs.output_names if n.startswith("contacts.") and n not in pairs
+        ]
     return tuple(ContactOutput(n, c_identifier(n.removeprefix("contacts.")), where) for where, n in chosen)
 
 

@@ -128,3 +128,16 @@ def test_a_contact_kernel_past_the_build_limits_is_left_out_with_its_predicted_b
     assert "the limit is 45 s and 800 MB as predicted" in note, note
     with pytest.raises(MechanismError, match="would be too large"):
         export_document(_ellipse_finger(4), tmp_path / "yes", None, ExportOptions(name="yes", contact="yes"))
+
+
+def test_a_document_output_that_is_also_a_pairs_result_is_exported_once(tmp_path):
+    """gripper_grasp_dynamics names `contacts.grip.normal_force`, also one of the pair's own
+    results: the contact outputs hold it once (it was refused as two outputs of one C name), and
+    the rest of the mechanism is exported, its frictional contact task left out with the reason."""
+    manifest = export_document(
+        load_document(EXAMPLES / "gripper_grasp_dynamics.json"), tmp_path / "grasp", None, ExportOptions(name="g")
+    )
+    assert "equilibrium" in manifest["tasks"] and "contact" not in manifest["tasks"]
+    assert "/contacts/pairs/grip/friction/sliding" in manifest["contact"]["note"]
+    names = [output["output"] for output in manifest["outputs"]]
+    assert names.count("contacts.grip.normal_force") == 1, names
