@@ -61,21 +61,28 @@ def unpacked_point(data: dict, packed: bytes | None) -> dict:
     return data if packed is None else json.loads(zlib.decompress(packed))
 
 
-def usage_of(s: Session, owner: str) -> Usage:
-    """The owner's jobs, those queued or running, and its bytes (each document once)."""
+def job_counts(s: Session, *where) -> tuple[int, int, int]:
+    """(jobs, those queued or running, the bytes the jobs hold) of the jobs `where` selects
+    (all without a condition); their documents' bytes are apart."""
     jobs, running, job_bytes = s.execute(
         select(
             func.count(JobRow.id),
             func.coalesce(func.sum(case((JobRow.status.in_(ACTIVE), 1), else_=0)), 0),
             func.coalesce(func.sum(JobRow.bytes), 0),
-        ).where(JobRow.owner == owner)
+        ).where(*where)
     ).one()
+    return int(jobs), int(running), int(job_bytes)
+
+
+def usage_of(s: Session, owner: str) -> Usage:
+    """The owner's jobs, those queued or running, and its bytes (each document once)."""
+    jobs, running, job_bytes = job_counts(s, JobRow.owner == owner)
     document_bytes = s.scalar(
         select(func.coalesce(func.sum(DocumentRow.bytes), 0)).where(
             DocumentRow.digest.in_(select(JobRow.document).where(JobRow.owner == owner))
         )
     )
-    return Usage(int(jobs), int(running), int(job_bytes) + int(document_bytes or 0))
+    return Usage(jobs, running, job_bytes + int(document_bytes or 0))
 
 
 def owner_uses_document(s: Session, owner: str, digest: str) -> bool:

@@ -7,14 +7,14 @@ import logging
 from datetime import datetime
 from pathlib import Path
 
-from sqlalchemy import case, delete, func, select, text
+from sqlalchemy import delete, func, select, text
 from sqlalchemy.engine import Engine, make_url
 from sqlalchemy.exc import SQLAlchemyError
 from sqlalchemy.orm import sessionmaker
 
 from flexmech.service.jobs.quotas import Usage
-from flexmech.service.jobs.store_accounting import drop_unused_documents, owner_uses_document, usage_of
-from flexmech.service.jobs.store_schema import ACTIVE, FINAL, DocumentRow, JobRow, PointRow
+from flexmech.service.jobs.store_accounting import drop_unused_documents, job_counts, owner_uses_document, usage_of
+from flexmech.service.jobs.store_schema import FINAL, DocumentRow, JobRow, PointRow
 
 log = logging.getLogger("flexmech.store")
 
@@ -34,21 +34,15 @@ class StoreHousekeeping:
         """The whole store: jobs, those queued or running, documents, the bytes they hold (as
         quotas count them) and the database's own size on disk (pages, indexes, log)."""
         with self._session() as s:
-            jobs, running, job_bytes = s.execute(
-                select(
-                    func.count(JobRow.id),
-                    func.coalesce(func.sum(case((JobRow.status.in_(ACTIVE), 1), else_=0)), 0),
-                    func.coalesce(func.sum(JobRow.bytes), 0),
-                )
-            ).one()
+            jobs, running, job_bytes = job_counts(s)
             documents, document_bytes = s.execute(
                 select(func.count(DocumentRow.digest), func.coalesce(func.sum(DocumentRow.bytes), 0))
             ).one()
         return {
-            "jobs": int(jobs),
-            "running": int(running),
+            "jobs": jobs,
+            "running": running,
             "documents": int(documents),
-            "bytes": int(job_bytes) + int(document_bytes),
+            "bytes": job_bytes + int(document_bytes),
             "database_bytes": self.database_bytes(),
         }
 
@@ -69,12 +63,11 @@ class StoreHousekeeping:
             row = s.get(JobRow, job_id)
             if row is None:
                 return None
-            s.execute(delete(PointRow).where(PointRow.job_id == job_id))
-            s.execute(delete(JobRow).where(JobRow.id == job_id))
-            freed = row.bytes
-            if row.document is not None and not owner_uses_document(s, row.owner, row.document):
-                freed += s.scalar(select(DocumentRow.bytes).where(DocumentRow.digest == row.document)) or 0
-            drop_unused_documents(s, {row.document} if row.document else set())
+            owner, digest, freed = row.owner, row.document, row.bytes
+            _delete_jobs(s, [job_id])
+            if digest is not None and not owner_uses_document(s, owner, digest):
+                freed += s.scalar(select(DocumentRow.bytes).where(DocumentRow.digest == digest)) or 0
+            drop_unused_documents(s, {digest} if digest else set())
         self.vacuum()
         return freed
 
@@ -93,8 +86,7 @@ class StoreHousekeeping:
             if not ids:
                 return 0
             digests = set(s.scalars(select(JobRow.document).where(JobRow.id.in_(ids), JobRow.document.is_not(None))))
-            s.execute(delete(PointRow).where(PointRow.job_id.in_(ids)))
-            s.execute(delete(JobRow).where(JobRow.id.in_(ids)))
+            _delete_jobs(s, ids)
             drop_unused_documents(s, digests)
         self.vacuum()
         return len(ids)
@@ -118,3 +110,9 @@ class StoreHousekeeping:
         if self.engine.dialect.name == "sqlite":
             with self.engine.connect() as connection:
                 connection.exec_driver_sql("PRAGMA wal_checkpoint(TRUNCATE)")
+
+
+def _delete_jobs(s, ids: list[str]) -> None:
+    """The jobs and their points (their documents are the caller's to drop once unused)."""
+    s.execute(delete(PointRow).where(PointRow.job_id.in_(ids)))
+    s.execute(delete(JobRow).where(JobRow.id.in_(ids)))
